@@ -1,0 +1,45 @@
+#pragma once
+// Time is injected: logic that tests must drive takes a Clock&, never reads a global clock.
+#include <chrono>
+#include <cstdint>
+#include <mutex>
+
+namespace dw {
+
+// Nanoseconds since the Unix epoch (wall time, what goes into message stamps).
+using Nanos = std::int64_t;
+
+class Clock {
+public:
+    virtual ~Clock() = default;
+    // Wall-clock time stamped into messages.
+    virtual Nanos now_ns() const = 0;
+    // Monotonic time for timeouts and rates (never jumps).
+    virtual Nanos monotonic_ns() const = 0;
+};
+
+class SystemClock final : public Clock {
+public:
+    Nanos now_ns() const override;
+    Nanos monotonic_ns() const override;
+    static SystemClock& instance();
+};
+
+// A clock that moves only when told to; both time bases advance together.
+class ManualClock final : public Clock {
+public:
+    explicit ManualClock(Nanos start_ns = 1'700'000'000'000'000'000) : now_(start_ns) {}
+    Nanos now_ns() const override;
+    Nanos monotonic_ns() const override;
+    void advance(std::chrono::nanoseconds d);
+    void set(Nanos t);
+
+private:
+    mutable std::mutex mutex_;
+    Nanos now_;
+};
+
+inline double to_seconds(Nanos ns) { return static_cast<double>(ns) * 1e-9; }
+inline Nanos from_seconds(double s) { return static_cast<Nanos>(s * 1e9); }
+
+}  // namespace dw

@@ -1,0 +1,41 @@
+#pragma once
+// YAML configuration files with errors that say where: "lab.yaml:3:12: dds.domain: expected an
+// integer". Loading is all-or-nothing; a missing optional key keeps its default.
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/errors.hpp"
+
+namespace dw {
+
+class ConfigFile {
+public:
+    ConfigFile() = default;  // empty: every key absent
+    // Throws dw::InputError when the file is unreadable or not valid YAML.
+    static ConfigFile load(const std::string& path);
+    static ConfigFile parse(const std::string& text, const std::string& name);
+
+    const std::string& path() const { return path_; }
+    bool empty() const { return !root_ || root_.IsNull(); }
+    // The node at a dotted path ("dds.domain"), or an undefined node.
+    YAML::Node at(const std::string& dotted) const;
+
+    // Typed reads of an optional key: nullopt when absent, InputError when of the wrong type.
+    std::optional<long long> get_int(const std::string& dotted) const;
+    std::optional<double> get_double(const std::string& dotted) const;
+    std::optional<bool> get_bool(const std::string& dotted) const;
+    std::optional<std::string> get_string(const std::string& dotted) const;
+    std::optional<std::vector<std::string>> get_strings(const std::string& dotted) const;
+
+    // "file:line:col: key: problem" for a problem with a key (the key's position if known).
+    [[noreturn]] void fail(const std::string& dotted, const std::string& problem) const;
+
+private:
+    std::string path_;
+    YAML::Node root_;
+};
+
+}  // namespace dw

@@ -1,0 +1,34 @@
+#pragma once
+// A tiny leveled logger writing one line per event to stderr, safe from several threads.
+#include <sstream>
+#include <string>
+#include <string_view>
+
+namespace dw::log {
+
+enum class Level { trace, debug, info, warn, error, off };
+
+// Throws dw::InputError naming the accepted levels.
+Level parse_level(std::string_view text);
+void set_level(Level level);
+Level level();
+// The program name printed before each line ("dw-probe: ...").
+void set_program(std::string name);
+const std::string& program();
+
+void write(Level level, std::string_view message);
+
+template <class... Args>
+std::string cat(const Args&... args) {
+    std::ostringstream out;
+    (out << ... << args);
+    return out.str();
+}
+
+template <class... Args> void trace(const Args&... a) { if (level() <= Level::trace) write(Level::trace, cat(a...)); }
+template <class... Args> void debug(const Args&... a) { if (level() <= Level::debug) write(Level::debug, cat(a...)); }
+template <class... Args> void info(const Args&... a) { if (level() <= Level::info) write(Level::info, cat(a...)); }
+template <class... Args> void warn(const Args&... a) { if (level() <= Level::warn) write(Level::warn, cat(a...)); }
+template <class... Args> void error(const Args&... a) { if (level() <= Level::error) write(Level::error, cat(a...)); }
+
+}  // namespace dw::log

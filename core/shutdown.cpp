@@ -1,0 +1,66 @@
+#include "core/shutdown.hpp"
+
+#include <pthread.h>
+#include <signal.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+namespace dw {
+namespace {
+std::mutex g_mutex;
+std::condition_variable g_cv;
+bool g_requested = false;
+std::atomic<int> g_signal{0};
+std::once_flag g_once;
+
+void wait_for_signals(sigset_t set) {
+    for (;;) {
+        int sig = 0;
+        if (sigwait(&set, &sig) != 0) continue;
+        Shutdown::instance().request(sig);
+    }
+}
+}  // namespace
+
+Shutdown& Shutdown::instance() {
+    static Shutdown s;
+    return s;
+}
+
+Shutdown& Shutdown::install() {
+    std::call_once(g_once, [] {
+        sigset_t set;
+        sigemptyset(&set);
+        sigaddset(&set, SIGINT);
+        sigaddset(&set, SIGTERM);
+        pthread_sigmask(SIG_BLOCK, &set, nullptr);
+        std::thread(wait_for_signals, set).detach();
+    });
+    return instance();
+}
+
+bool Shutdown::requested() const {
+    std::lock_guard lock(g_mutex);
+    return g_requested;
+}
+
+bool Shutdown::wait_for(std::chrono::nanoseconds d) const {
+    std::unique_lock lock(g_mutex);
+    return g_cv.wait_for(lock, d, [] { return g_requested; });
+}
+
+void Shutdown::request(int signal_number) {
+    {
+        std::lock_guard lock(g_mutex);
+        if (!g_requested) g_signal = signal_number;
+        g_requested = true;
+    }
+    g_cv.notify_all();
+}
+
+int Shutdown::signal_number() const { return g_signal; }
+
+}  // namespace dw

@@ -1,0 +1,130 @@
+#include "core/subprocess.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "core/errors.hpp"
+
+extern char** environ;
+
+namespace dw {
+namespace {
+int decode_status(int raw) {
+    if (WIFEXITED(raw)) return WEXITSTATUS(raw);
+    if (WIFSIGNALED(raw)) return 128 + WTERMSIG(raw);
+    return -1;
+}
+}  // namespace
+
+Subprocess::Subprocess(const SpawnOptions& options) {
+    if (options.argv.empty()) throw RuntimeError("spawn: empty command line");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    if (!options.stdout_path.empty()) {
+        posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, options.stdout_path.c_str(),
+                                         O_WRONLY | O_CREAT | O_TRUNC | O_APPEND, 0644);
+    }
+    if (!options.stderr_path.empty()) {
+        if (options.stderr_path == options.stdout_path) {
+            posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+        } else {
+            posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, options.stderr_path.c_str(),
+                                             O_WRONLY | O_CREAT | O_TRUNC | O_APPEND, 0644);
+        }
+    }
+    // The parent may block SIGINT/SIGTERM (dw::Shutdown); children start with a clean mask.
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    sigset_t empty;
+    sigemptyset(&empty);
+    posix_spawnattr_setsigmask(&attr, &empty);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
+
+    std::vector<std::string> env_strings;
+    for (char** e = environ; *e != nullptr; ++e) env_strings.emplace_back(*e);
+    for (const auto& extra : options.env) env_strings.push_back(extra);
+    std::vector<char*> envp;
+    for (auto& e : env_strings) envp.push_back(e.data());
+    envp.push_back(nullptr);
+    std::vector<std::string> args = options.argv;
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+
+    const int rc = posix_spawnp(&pid_, argv[0], &actions, &attr, argv.data(), envp.data());
+    posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attr);
+    if (rc != 0) {
+        pid_ = -1;
+        throw RuntimeError("cannot start '" + options.argv[0] + "': " + std::strerror(rc));
+    }
+}
+
+Subprocess::Subprocess(Subprocess&& other) noexcept : pid_(other.pid_), status_(other.status_) {
+    other.pid_ = -1;
+}
+
+Subprocess::~Subprocess() {
+    if (pid_ > 0 && !status_) {
+        ::kill(pid_, SIGKILL);
+        int raw = 0;
+        ::waitpid(pid_, &raw, 0);
+    }
+}
+
+void Subprocess::signal(int sig) const {
+    if (pid_ > 0 && !status_) ::kill(pid_, sig);
+}
+
+std::optional<int> Subprocess::poll() {
+    if (status_ || pid_ <= 0) return status_;
+    int raw = 0;
+    const pid_t r = ::waitpid(pid_, &raw, WNOHANG);
+    if (r == pid_) status_ = decode_status(raw);
+    return status_;
+}
+
+std::optional<int> Subprocess::wait_for(std::chrono::milliseconds d) {
+    const auto deadline = std::chrono::steady_clock::now() + d;
+    while (!poll()) {
+        if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return status_;
+}
+
+bool Subprocess::running() { return !poll(); }
+
+int Subprocess::stop(std::chrono::milliseconds grace) {
+    signal(SIGTERM);
+    if (auto s = wait_for(grace)) return *s;
+    signal(SIGKILL);
+    return wait_for(std::chrono::milliseconds(5000)).value_or(-1);
+}
+
+std::string executable_dir() {
+    char buf[4096];
+    const ssize_t n = ::readlink("/proc/self/exe", buf, sizeof(buf) - 1);
+    if (n <= 0) return ".";
+    std::string path(buf, static_cast<std::size_t>(n));
+    return path.substr(0, path.find_last_of('/'));
+}
+
+std::string read_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw RuntimeError("cannot read " + path + ": " + std::strerror(errno));
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+}  // namespace dw

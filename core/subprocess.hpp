@@ -1,0 +1,47 @@
+#pragma once
+// Starting and supervising child processes (the lab launcher, integration tests).
+#include <sys/types.h>
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dw {
+
+struct SpawnOptions {
+    std::vector<std::string> argv;      // argv[0] is the program (a path, or a name on PATH)
+    std::string stdout_path;            // "" = inherit
+    std::string stderr_path;            // "" = inherit; may equal stdout_path
+    std::vector<std::string> env;       // extra NAME=VALUE entries
+};
+
+class Subprocess {
+public:
+    // Throws dw::RuntimeError when the program cannot be started.
+    explicit Subprocess(const SpawnOptions& options);
+    ~Subprocess();  // kills (SIGKILL) and reaps a child still running
+    Subprocess(const Subprocess&) = delete;
+    Subprocess& operator=(const Subprocess&) = delete;
+    Subprocess(Subprocess&& other) noexcept;
+    Subprocess& operator=(Subprocess&&) = delete;
+
+    pid_t pid() const { return pid_; }
+    void signal(int sig) const;
+    // The exit status (exit code, or 128 + signal) once the child ended within d, else nullopt.
+    std::optional<int> wait_for(std::chrono::milliseconds d);
+    std::optional<int> poll();
+    // SIGTERM, then SIGKILL after grace; returns the exit status.
+    int stop(std::chrono::milliseconds grace = std::chrono::milliseconds(3000));
+    bool running();
+
+private:
+    pid_t pid_ = -1;
+    std::optional<int> status_;
+};
+
+// The directory holding the running executable (siblings live there).
+std::string executable_dir();
+std::string read_file(const std::string& path);
+
+}  // namespace dw

@@ -1,0 +1,207 @@
+#include "dds/config.hpp"
+
+#include <arpa/inet.h>
+
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+
+#include "core/log.hpp"
+
+namespace dw::dds {
+namespace fdds = eprosima::fastdds::dds;
+namespace frtps = eprosima::fastrtps::rtps;
+
+namespace {
+constexpr std::uint32_t kSocketBuffer = 4 * 1024 * 1024;  // large samples over UDP need it
+constexpr std::uint32_t kInitialPeersRange = 32;         // participants per host reachable
+
+std::string prefix(std::string_view where) {
+    return where.empty() ? std::string() : std::string(where) + ": ";
+}
+
+bool is_ipv4(const std::string& text) {
+    in_addr addr{};
+    return inet_pton(AF_INET, text.c_str(), &addr) == 1;
+}
+
+// "ip" or "ip:port" -> (ip, port or 0). Throws InputError.
+std::pair<std::string, std::uint32_t> split_address(const std::string& text, bool need_port,
+                                                    const std::string& field) {
+    const auto colon = text.find(':');
+    std::string ip = text.substr(0, colon);
+    std::uint32_t port = 0;
+    if (!is_ipv4(ip)) {
+        throw InputError(log::cat(field, ": '", text, "' is not an IPv4 address"));
+    }
+    if (colon != std::string::npos) {
+        const std::string p = text.substr(colon + 1);
+        char* end = nullptr;
+        const long v = std::strtol(p.c_str(), &end, 10);
+        if (p.empty() || *end != '\0' || v <= 0 || v > 65535) {
+            throw InputError(log::cat(field, ": '", text, "' has no valid port (1-65535)"));
+        }
+        port = static_cast<std::uint32_t>(v);
+    } else if (need_port) {
+        throw InputError(log::cat(field, ": '", text, "' needs a port, as in 127.0.0.1:11811"));
+    }
+    return {ip, port};
+}
+}  // namespace
+
+Profile parse_profile(std::string_view text) {
+    if (text == "local") return Profile::local;
+    if (text == "lab") return Profile::lab;
+    throw InputError(log::cat("unknown DDS profile '", text, "' (expected local or lab)"));
+}
+
+Transport parse_transport(std::string_view text) {
+    if (text == "default") return Transport::default_;
+    if (text == "shm") return Transport::shm;
+    if (text == "udp") return Transport::udp;
+    throw InputError(log::cat("unknown transport '", text, "' (expected default, shm or udp)"));
+}
+
+std::string to_string(Profile p) { return p == Profile::local ? "local" : "lab"; }
+std::string to_string(Transport t) {
+    switch (t) {
+        case Transport::default_: return "default";
+        case Transport::shm: return "shm";
+        case Transport::udp: return "udp";
+    }
+    return "?";
+}
+
+void validate(const DdsConfig& c, std::string_view where) {
+    const std::string p = prefix(where);
+    if (c.domain < 0 || c.domain > kMaxDomainId) {
+        throw InputError(log::cat(p, "domain id ", c.domain, " is out of range (0-", kMaxDomainId, ")"));
+    }
+    try {
+        for (const auto& peer : c.initial_peers) split_address(peer, false, "initial peer");
+        if (!c.discovery_server.empty()) split_address(c.discovery_server, true, "discovery server");
+        for (const auto& iface : c.interfaces) split_address(iface, false, "interface");
+    } catch (const InputError& e) {
+        throw InputError(p + e.what());
+    }
+    if (c.profile == Profile::local && !c.discovery_server.empty()) {
+        throw InputError(p + "a discovery server needs the lab profile (--profile lab)");
+    }
+    if (c.profile == Profile::local && !c.interfaces.empty()) {
+        throw InputError(p + "the local profile always uses loopback; interfaces need --profile lab");
+    }
+    if (c.transport == Transport::shm && !c.discovery_server.empty()) {
+        throw InputError(p + "a discovery server cannot be reached over shared memory only");
+    }
+    if (c.ns.empty() || c.ns.find_first_of(" \t/") != std::string::npos) {
+        throw InputError(log::cat(p, "namespace '", c.ns, "' must be one non-empty word without '/'"));
+    }
+}
+
+void add_cli_options(CLI::App& app, DdsCliOptions& o) {
+    app.add_option("--domain", o.domain, "DDS domain id (0-232)")->type_name("ID");
+    app.add_option("--profile", o.profile, "local (loopback only, default) or lab (real network)")
+        ->type_name("NAME");
+    app.add_option("--transport", o.transport, "default (UDP+SHM), shm or udp")->type_name("NAME");
+    app.add_option("--peer", o.peers, "initial peer ip[:port] (repeatable)")->type_name("ADDR");
+    app.add_option("--discovery-server", o.discovery_server, "discovery server ip:port (lab profile)")
+        ->type_name("ADDR");
+    app.add_option("--namespace", o.ns, "topic namespace: topics are rt/<ns>/... (default lab)")
+        ->type_name("NS");
+}
+
+DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
+    DdsConfig c;
+    // File values first, each wrapped so errors name file, line and key.
+    auto in_file = [&](const std::string& key, auto&& apply) {
+        try {
+            apply();
+        } catch (const InputError& e) {
+            const std::string msg = e.what();
+            if (msg.rfind(file.path(), 0) == 0) throw;  // already located
+            file.fail("dds." + key, msg);
+        }
+    };
+    if (!file.empty()) {
+        in_file("domain", [&] {
+            if (auto v = file.get_int("dds.domain")) {
+                if (*v < 0 || *v > kMaxDomainId) {
+                    throw InputError(log::cat("domain id ", *v, " is out of range (0-", kMaxDomainId, ")"));
+                }
+                c.domain = static_cast<int>(*v);
+            }
+        });
+        in_file("profile", [&] { if (auto v = file.get_string("dds.profile")) c.profile = parse_profile(*v); });
+        in_file("transport", [&] { if (auto v = file.get_string("dds.transport")) c.transport = parse_transport(*v); });
+        in_file("initial_peers", [&] { if (auto v = file.get_strings("dds.initial_peers")) c.initial_peers = *v; });
+        in_file("discovery_server", [&] { if (auto v = file.get_string("dds.discovery_server")) c.discovery_server = *v; });
+        in_file("interfaces", [&] { if (auto v = file.get_strings("dds.interfaces")) c.interfaces = *v; });
+        in_file("namespace", [&] { if (auto v = file.get_string("dds.namespace")) c.ns = *v; });
+        validate(c, file.path());
+    }
+    if (cli.domain) c.domain = *cli.domain;
+    if (cli.profile) c.profile = parse_profile(*cli.profile);
+    if (cli.transport) c.transport = parse_transport(*cli.transport);
+    if (!cli.peers.empty()) c.initial_peers = cli.peers;
+    if (cli.discovery_server) c.discovery_server = *cli.discovery_server;
+    if (cli.ns) c.ns = *cli.ns;
+    validate(c);
+    return c;
+}
+
+fdds::DomainParticipantQos participant_qos(const DdsConfig& c, const std::string& name) {
+    validate(c);
+    fdds::DomainParticipantQos qos = fdds::PARTICIPANT_QOS_DEFAULT;
+    qos.name(name);
+    auto& transport = qos.transport();
+    const bool want_udp = c.transport != Transport::shm;
+    const bool want_shm = c.transport != Transport::udp;
+    transport.use_builtin_transports = false;
+    if (want_udp) {
+        auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+        udp->sendBufferSize = kSocketBuffer;
+        udp->receiveBufferSize = kSocketBuffer;
+        udp->maxInitialPeersRange = kInitialPeersRange;
+        if (c.profile == Profile::local) {
+            udp->interfaceWhiteList = {"127.0.0.1"};
+        } else {
+            udp->interfaceWhiteList = c.interfaces;
+        }
+        transport.user_transports.push_back(udp);
+    }
+    if (want_shm) {
+        transport.user_transports.push_back(
+            std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+    }
+
+    auto& builtin = qos.wire_protocol().builtin;
+    std::vector<std::string> peers = c.initial_peers;
+    if (c.profile == Profile::local && want_udp) peers.emplace_back("127.0.0.1");
+    for (const auto& peer : peers) {
+        auto [ip, port] = split_address(peer, false, "initial peer");
+        frtps::Locator_t loc;
+        frtps::IPLocator::setIPv4(loc, ip);
+        loc.port = port;  // 0: every participant port of the domain on that host
+        builtin.initialPeersList.push_back(loc);
+    }
+    if (!c.discovery_server.empty()) {
+        auto [ip, port] = split_address(c.discovery_server, true, "discovery server");
+        builtin.discovery_config.discoveryProtocol = frtps::DiscoveryProtocol_t::CLIENT;
+        eprosima::fastdds::rtps::RemoteServerAttributes server;
+        // The server's GUID prefix is mandatory in 2.9: the ROS 2 pattern for server id 0, as
+        // `fast-discovery-server -i 0` uses.
+        server.ReadguidPrefix("44.53.00.5f.45.50.52.4f.53.49.4d.41");
+        frtps::Locator_t loc;
+        frtps::IPLocator::setIPv4(loc, ip);
+        loc.port = port;
+        server.metatrafficUnicastLocatorList.push_back(loc);
+        builtin.discovery_config.m_DiscoveryServers.push_back(server);
+    }
+    // Lets a peer that vanishes without saying goodbye be dropped within a few seconds.
+    builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(5, 0);
+    builtin.discovery_config.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(1, 0);
+    return qos;
+}
+
+}  // namespace dw::dds

@@ -1,0 +1,61 @@
+#pragma once
+// How a process joins the lab's DDS domain: from defaults, a config file's `dds:` section and CLI
+// flags (in that order of precedence, flags last).
+#include <CLI/CLI.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/config.hpp"
+
+namespace dw::dds {
+
+// local: everything on loopback (the default on one machine and in every test; nothing leaves the
+// host). lab: the real network, multicast discovery or a discovery server.
+enum class Profile { local, lab };
+// default: UDP + shared memory; shm: shared memory only (one host); udp: UDP only.
+enum class Transport { default_, shm, udp };
+
+inline constexpr int kMaxDomainId = 232;  // RTPS port mapping: 7400 + 250 * domain must fit
+inline constexpr std::string_view kDefaultNamespace = "lab";
+
+struct DdsConfig {
+    int domain = 0;
+    Profile profile = Profile::local;
+    Transport transport = Transport::default_;
+    std::vector<std::string> initial_peers;   // "ip" or "ip:port"; local adds 127.0.0.1
+    std::string discovery_server;             // "ip:port" (lab profile); "" = multicast discovery
+    std::vector<std::string> interfaces;      // lab profile: UDP interface whitelist (addresses)
+    std::string ns{kDefaultNamespace};        // topics are rt/<ns>/...
+};
+
+Profile parse_profile(std::string_view text);
+Transport parse_transport(std::string_view text);
+std::string to_string(Profile p);
+std::string to_string(Transport t);
+
+// Validates every field; throws dw::InputError naming the field (and `where`, e.g. a file).
+void validate(const DdsConfig& config, std::string_view where = "");
+
+// Raw CLI values; empty/absent = not given on the command line.
+struct DdsCliOptions {
+    std::optional<int> domain;
+    std::optional<std::string> profile;
+    std::optional<std::string> transport;
+    std::vector<std::string> peers;
+    std::optional<std::string> discovery_server;
+    std::optional<std::string> ns;
+};
+
+void add_cli_options(CLI::App& app, DdsCliOptions& options);
+// Merges defaults < config file `dds:` section < CLI flags, validated.
+DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file);
+
+// The Fast DDS participant QoS for a configuration (also used by the raw-DDS benchmark, so
+// both sides of a comparison use the same transports).
+eprosima::fastdds::dds::DomainParticipantQos participant_qos(const DdsConfig& config,
+                                                             const std::string& name);
+
+}  // namespace dw::dds

@@ -1,0 +1,205 @@
+#pragma once
+// Typed writer and reader over one lab topic. The topic's QoS profile comes from topics.hpp;
+// an incompatible peer is reported through Participant::report_problem, never silent.
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "core/errors.hpp"
+#include "dds/participant.hpp"
+
+namespace dw::dds {
+
+namespace detail {
+// Waits until `count()` reaches n, or the timeout passes.
+template <class F>
+bool wait_until_count(F&& count, int n, std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (count() < n) {
+        if (std::chrono::steady_clock::now() >= deadline) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return true;
+}
+}  // namespace detail
+
+template <class T>
+class Writer final : private eprosima::fastdds::dds::DataWriterListener {
+public:
+    Writer(Participant& p, const Topic<T>& spec, const QosOverrides& overrides = {})
+        : participant_(p), spec_(spec), name_(p.topic_name(spec.suffix)),
+          stats_(p.add_endpoint(name_, true)) {
+        namespace fdds = eprosima::fastdds::dds;
+        qos_ = writer_qos(spec.qos, overrides);
+        writer_ = p.publisher().create_datawriter(&p.topic(spec), qos_, this,
+                                                  fdds::StatusMask::publication_matched() <<
+                                                      fdds::StatusMask::offered_incompatible_qos());
+        if (writer_ == nullptr) throw RuntimeError("cannot create a DDS writer on " + name_);
+    }
+    ~Writer() override {
+        writer_->set_listener(nullptr);
+        participant_.publisher().delete_datawriter(writer_);
+    }
+    Writer(const Writer&) = delete;
+    Writer& operator=(const Writer&) = delete;
+
+    // Publishes the sample; its header.seq is set to this writer's next sequence number.
+    bool write(T& sample) {
+        sample.header().seq(next_seq_++);
+        const bool ok = writer_->write(&sample);
+        if (ok) {
+            stats_->samples.fetch_add(1, std::memory_order_relaxed);
+        } else {
+            stats_->lost.fetch_add(1, std::memory_order_relaxed);
+        }
+        return ok;
+    }
+
+    int matched() const { return matched_.load(); }
+    bool wait_for_readers(int n, std::chrono::milliseconds timeout) const {
+        return detail::wait_until_count([this] { return matched(); }, n, timeout);
+    }
+    const std::string& name() const { return name_; }
+    const Topic<T>& spec() const { return spec_; }
+    std::string qos_text() const { return describe(qos_); }
+    eprosima::fastdds::dds::DataWriter& native() { return *writer_; }
+
+private:
+    void on_publication_matched(eprosima::fastdds::dds::DataWriter*,
+                                const eprosima::fastdds::dds::PublicationMatchedStatus& s) override {
+        matched_ = s.current_count;
+    }
+    void on_offered_incompatible_qos(eprosima::fastdds::dds::DataWriter*,
+                                     const eprosima::fastdds::dds::OfferedIncompatibleQosStatus& s) override {
+        participant_.report_problem(qos_mismatch_line(name_, spec_.type_name, false, describe(qos_),
+                                                      s.last_policy_id, s.total_count));
+    }
+
+    Participant& participant_;
+    Topic<T> spec_;
+    std::string name_;
+    std::shared_ptr<EndpointStats> stats_;
+    eprosima::fastdds::dds::DataWriterQos qos_;
+    eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+    std::atomic<int> matched_{0};
+    std::uint64_t next_seq_ = 0;
+};
+
+// What a reader knows about a sample besides its content.
+struct SampleMeta {
+    Nanos source_time_ns = 0;       // the writer's DDS source timestamp
+    Nanos reception_time_ns = 0;    // when Fast DDS received it
+    eprosima::fastdds::dds::InstanceHandle_t writer;  // which writer sent it
+};
+
+template <class T>
+class Reader final : private eprosima::fastdds::dds::DataReaderListener {
+public:
+    using Callback = std::function<void(const T&, const SampleMeta&)>;
+    using WriterGone = std::function<void(const eprosima::fastdds::dds::InstanceHandle_t&)>;
+
+    // `on_sample` runs on a Fast DDS thread, one sample at a time.
+    Reader(Participant& p, const Topic<T>& spec, Callback on_sample, const QosOverrides& overrides = {})
+        : participant_(p), spec_(spec), name_(p.topic_name(spec.suffix)),
+          stats_(p.add_endpoint(name_, false)), on_sample_(std::move(on_sample)) {
+        namespace fdds = eprosima::fastdds::dds;
+        qos_ = reader_qos(spec.qos, overrides);
+        reader_ = p.subscriber().create_datareader(
+            &p.topic(spec), qos_, this,
+            fdds::StatusMask::data_available() << fdds::StatusMask::subscription_matched()
+                << fdds::StatusMask::requested_incompatible_qos() << fdds::StatusMask::liveliness_changed()
+                << fdds::StatusMask::sample_lost());
+        if (reader_ == nullptr) throw RuntimeError("cannot create a DDS reader on " + name_);
+    }
+    ~Reader() override {
+        reader_->set_listener(nullptr);
+        participant_.subscriber().delete_datareader(reader_);
+    }
+    Reader(const Reader&) = delete;
+    Reader& operator=(const Reader&) = delete;
+
+    // Called when a writer unmatches or loses liveliness (a peer process vanished).
+    void on_writer_gone(WriterGone f) {
+        std::lock_guard lock(mutex_);
+        on_writer_gone_ = std::move(f);
+    }
+
+    int matched() const { return matched_.load(); }
+    bool wait_for_writers(int n, std::chrono::milliseconds timeout) const {
+        return detail::wait_until_count([this] { return matched(); }, n, timeout);
+    }
+    std::uint64_t received() const { return stats_->samples.load(); }
+    // Samples missing from the writers' header.seq sequences.
+    std::uint64_t lost() const { return stats_->lost.load(); }
+    const std::string& name() const { return name_; }
+    const Topic<T>& spec() const { return spec_; }
+    std::string qos_text() const { return describe(qos_); }
+
+private:
+    void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+        eprosima::fastdds::dds::SampleInfo info;
+        while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
+            if (!info.valid_data) continue;
+            SampleMeta meta;
+            meta.source_time_ns = info.source_timestamp.to_ns();
+            meta.reception_time_ns = info.reception_timestamp.to_ns();
+            meta.writer = info.publication_handle;
+            account(meta.writer, sample_.header().seq());
+            on_sample_(sample_, meta);
+        }
+    }
+    void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
+                                 const eprosima::fastdds::dds::SubscriptionMatchedStatus& s) override {
+        matched_ = s.current_count;
+        if (s.current_count_change < 0) writer_gone(s.last_publication_handle);
+    }
+    void on_liveliness_changed(eprosima::fastdds::dds::DataReader*,
+                               const eprosima::fastdds::dds::LivelinessChangedStatus& s) override {
+        if (s.not_alive_count_change > 0) writer_gone(s.last_publication_handle);
+    }
+    void on_requested_incompatible_qos(eprosima::fastdds::dds::DataReader*,
+                                       const eprosima::fastdds::dds::RequestedIncompatibleQosStatus& s) override {
+        participant_.report_problem(qos_mismatch_line(name_, spec_.type_name, true, describe(qos_),
+                                                      s.last_policy_id, s.total_count));
+    }
+
+    void account(const eprosima::fastdds::dds::InstanceHandle_t& writer, std::uint64_t seq) {
+        stats_->samples.fetch_add(1, std::memory_order_relaxed);
+        auto [it, first] = next_seq_.try_emplace(writer, seq + 1);
+        if (!first) {
+            if (seq > it->second) stats_->lost.fetch_add(seq - it->second, std::memory_order_relaxed);
+            if (seq >= it->second) it->second = seq + 1;
+        }
+    }
+    void writer_gone(const eprosima::fastdds::dds::InstanceHandle_t& handle) {
+        WriterGone f;
+        {
+            std::lock_guard lock(mutex_);
+            f = on_writer_gone_;
+        }
+        if (f) f(handle);
+    }
+
+    Participant& participant_;
+    Topic<T> spec_;
+    std::string name_;
+    std::shared_ptr<EndpointStats> stats_;
+    Callback on_sample_;
+    eprosima::fastdds::dds::DataReaderQos qos_;
+    eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+    T sample_;  // reused: take_next_sample fills it, no allocation per sample for fixed types
+    std::atomic<int> matched_{0};
+    std::map<eprosima::fastdds::dds::InstanceHandle_t, std::uint64_t> next_seq_;  // listener thread only
+    std::mutex mutex_;
+    WriterGone on_writer_gone_;
+};
+
+}  // namespace dw::dds

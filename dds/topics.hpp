@@ -1,0 +1,86 @@
+#pragma once
+// Every lab topic, its type and its QoS profile, in one place. Names follow the ROS 2 convention
+// rt/<namespace>/<suffix> (namespace "lab" by default), so ROS 2 tools on the same domain list
+// them. Add a topic here and every tool that visits all topics (dw-probe, the recorder) gets it.
+#include <string_view>
+
+#include "dds/qos.hpp"
+#include "dw/msg/ExperimentPubSubTypes.h"
+#include "dw/msg/MocapPubSubTypes.h"
+#include "dw/msg/PredictionPubSubTypes.h"
+#include "dw/msg/StandPubSubTypes.h"
+#include "dw/msg/StatusPubSubTypes.h"
+#include "dw/msg/VehiclePubSubTypes.h"
+#include "dw/msg/WrenchPubSubTypes.h"
+
+namespace dw::dds {
+
+// The Fast DDS type support of a message type.
+template <class T> struct PubSubOf;
+#define DW_PUBSUB(T) template <> struct PubSubOf<msg::T> { using type = msg::T##PubSubType; }
+DW_PUBSUB(WrenchStamped);
+DW_PUBSUB(LoadCellFrame);
+DW_PUBSUB(StandStatus);
+DW_PUBSUB(MocapFrame);
+DW_PUBSUB(VehicleState);
+DW_PUBSUB(VehicleSetpoint);
+DW_PUBSUB(ExperimentPlan);
+DW_PUBSUB(ExperimentCommand);
+DW_PUBSUB(ExperimentState);
+DW_PUBSUB(WrenchPrediction);
+DW_PUBSUB(ProcessStatus);
+#undef DW_PUBSUB
+
+template <class T>
+struct Topic {
+    using type = T;
+    std::string_view suffix;       // after rt/<namespace>/
+    QosProfile qos;
+    std::string_view type_name;    // the scoped IDL name, as registered with DDS
+    std::string_view description;
+};
+
+namespace topics {
+using namespace dw::msg;
+inline constexpr Topic<WrenchStamped> stand_wrench{"stand/wrench", QosProfile::sensor,
+    "dw::msg::WrenchStamped", "calibrated 6-DOF wrench on the sufferer (80 Hz)"};
+inline constexpr Topic<LoadCellFrame> stand_cells{"stand/cells", QosProfile::sensor,
+    "dw::msg::LoadCellFrame", "raw counts of the 8 load cells (80 Hz)"};
+inline constexpr Topic<StandStatus> stand_status{"stand/status", QosProfile::state,
+    "dw::msg::StandStatus", "stand agent state, faults and tare (latched)"};
+inline constexpr Topic<MocapFrame> mocap_frame{"mocap/frame", QosProfile::sensor,
+    "dw::msg::MocapFrame", "one motion-capture frame, every rigid body (180 Hz)"};
+inline constexpr Topic<VehicleState> vehicle_state{"vehicles/state", QosProfile::sensor,
+    "dw::msg::VehicleState", "per-vehicle pose and velocity (keyed by vehicle_id)"};
+inline constexpr Topic<VehicleSetpoint> vehicle_setpoint{"vehicles/setpoint", QosProfile::sensor,
+    "dw::msg::VehicleSetpoint", "per-vehicle trajectory setpoint (keyed by vehicle_id, >= 50 Hz)"};
+inline constexpr Topic<ExperimentPlan> experiment_plan{"experiment/plan", QosProfile::state,
+    "dw::msg::ExperimentPlan", "the experiment's formation and legs (latched)"};
+inline constexpr Topic<ExperimentCommand> experiment_command{"experiment/command", QosProfile::command,
+    "dw::msg::ExperimentCommand", "operator/planner commands: start, calibrate, pause, abort"};
+inline constexpr Topic<ExperimentState> experiment_state{"experiment/state", QosProfile::state,
+    "dw::msg::ExperimentState", "experiment phase, leg and progress (latched)"};
+inline constexpr Topic<WrenchPrediction> wrench_prediction{"predictor/wrench", QosProfile::sensor,
+    "dw::msg::WrenchPrediction", "predicted wrench on the sufferer, per model"};
+inline constexpr Topic<ProcessStatus> process_status{"lab/status", QosProfile::heartbeat,
+    "dw::msg::ProcessStatus", "heartbeat and status of every lab process (keyed by process)"};
+
+// Calls f(topic) for every lab topic, in a fixed order.
+template <class F>
+void for_each(F&& f) {
+    f(stand_wrench);
+    f(stand_cells);
+    f(stand_status);
+    f(mocap_frame);
+    f(vehicle_state);
+    f(vehicle_setpoint);
+    f(experiment_plan);
+    f(experiment_command);
+    f(experiment_state);
+    f(wrench_prediction);
+    f(process_status);
+}
+inline constexpr int kTopicCount = 11;
+}  // namespace topics
+
+}  // namespace dw::dds

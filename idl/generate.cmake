@@ -1,0 +1,21 @@
+# Run by idl/CMakeLists.txt at build time: one fastddsgen call for all IDL files.
+file(REMOVE_RECURSE ${TMP_DIR})
+file(MAKE_DIRECTORY ${TMP_DIR} ${OUT_DIR})
+set(files "")
+foreach(name IN LISTS IDL_NAMES)
+  list(APPEND files ${IDL_DIR}/${name}.idl)
+endforeach()
+execute_process(
+  COMMAND ${FASTDDSGEN} -replace -cs -d ${TMP_DIR} -I ${IDL_DIR} ${files}
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR err MATCHES "ERROR")
+  message(FATAL_ERROR "fastddsgen failed (${rc}):\n${out}\n${err}")
+endif()
+file(GLOB generated ${TMP_DIR}/*)
+foreach(f IN LISTS generated)
+  file(READ ${f} text)
+  string(REGEX REPLACE "(com\\.eprosima\\.[A-Za-z.]+)@[0-9a-f]+" "\\1" text "${text}")
+  get_filename_component(base ${f} NAME)
+  file(WRITE ${TMP_DIR}/${base}.clean "${text}")
+  execute_process(COMMAND ${CMAKE_COMMAND} -E copy_if_different ${TMP_DIR}/${base}.clean ${OUT_DIR}/${base})
+endforeach()
