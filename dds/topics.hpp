@@ -62,7 +62,7 @@ inline constexpr Topic<ExperimentState> experiment_state{"experiment/state", Qos
     "dw::msg::ExperimentState", "experiment phase, leg and progress (latched)"};
 inline constexpr Topic<WrenchPrediction> wrench_prediction{"predictor/wrench", QosProfile::sensor,
     "dw::msg::WrenchPrediction", "predicted wrench on the sufferer, per model"};
-inline constexpr Topic<ProcessStatus> process_status{"lab/status", QosProfile::heartbeat,
+inline constexpr Topic<ProcessStatus> process_status{"processes/status", QosProfile::heartbeat,
     "dw::msg::ProcessStatus", "heartbeat and status of every lab process (keyed by process)"};
 
 // Calls f(topic) for every lab topic, in a fixed order.

@@ -1,0 +1,123 @@
+// dw-probe: list the lab's topics, publish test samples on them, echo them with an integrity check.
+#include <unistd.h>
+
+#include <fstream>
+#include <iostream>
+
+#include "core/cli.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+#include "dds/heartbeat.hpp"
+#include "probe/probe.hpp"
+
+namespace {
+
+dw::dds::QosOverrides qos_overrides(const std::string& reliability, const std::string& durability) {
+    dw::dds::QosOverrides q;
+    if (reliability == "reliable") q.reliable = true;
+    else if (reliability == "best_effort") q.reliable = false;
+    else if (!reliability.empty())
+        throw dw::InputError("--reliability: '" + reliability + "' (expected reliable or best_effort)");
+    if (durability == "transient_local") q.transient_local = true;
+    else if (durability == "volatile") q.transient_local = false;
+    else if (!durability.empty())
+        throw dw::InputError("--durability: '" + durability + "' (expected volatile or transient_local)");
+    return q;
+}
+
+int run(int argc, char** argv) {
+    dw::Shutdown::install();
+    CLI::App app{"dw-probe: list the lab's DDS topics, publish test samples, echo and check them"};
+    dw::cli::BaseOptions base;
+    dw::dds::DdsCliOptions dds_cli;
+    dw::cli::configure(app, base);
+    dw::dds::add_cli_options(app, dds_cli);
+    std::string name = "probe-" + std::to_string(::getpid());
+    app.add_option("--name", name, "process name in heartbeats");
+    app.require_subcommand(1);
+
+    auto* list = app.add_subcommand("list", "list every lab topic with its type and QoS");
+
+    std::vector<std::string> topics;
+    std::string reliability, durability;
+    auto add_topic_options = [&](CLI::App* sub) {
+        sub->add_option("topics", topics, "topic suffixes (stand/wrench), full names, or all (default)");
+        sub->add_option("--reliability", reliability, "override: reliable or best_effort");
+        sub->add_option("--durability", durability, "override: volatile or transient_local");
+    };
+
+    dw::probe::PubOptions pub;
+    double linger_s = 0.0;
+    double wait_timeout_s = 10.0;
+    auto* pub_cmd = app.add_subcommand("pub", "publish deterministic samples on lab topics");
+    add_topic_options(pub_cmd);
+    pub_cmd->add_option("--count", pub.count, "samples per topic")->check(CLI::Range(1, 100000000));
+    pub_cmd->add_option("--rate", pub.rate_hz, "rounds per second (one sample per topic each)")
+        ->check(CLI::Range(0.0, 100000.0));
+    pub_cmd->add_option("--wait-readers", pub.wait_readers, "wait for this many readers per topic first");
+    pub_cmd->add_option("--wait-timeout", wait_timeout_s, "seconds to wait for readers");
+    pub_cmd->add_option("--linger", linger_s, "seconds to stay after publishing (latched topics), -1 = until stopped");
+    pub_cmd->add_flag("--quiet", pub.quiet, "do not print each sample");
+
+    dw::probe::EchoOptions echo;
+    double timeout_s = 0.0;
+    std::string summary_path;
+    auto* echo_cmd = app.add_subcommand("echo", "print samples of lab topics and check their content");
+    add_topic_options(echo_cmd);
+    echo_cmd->add_option("--expect", echo.expect, "end after this many intact samples per topic");
+    echo_cmd->add_option("--expect-latched", echo.expect_latched, "the same for latched topics (default: --expect)");
+    echo_cmd->add_option("--timeout", timeout_s, "give up after this many seconds (exit 1)");
+    echo_cmd->add_option("--summary", summary_path, "write a JSON summary here");
+    echo_cmd->add_flag("--quiet", echo.quiet, "print only the summary table");
+
+    dw::cli::parse(app, argc, argv);
+    dw::log::set_level(dw::log::parse_level(base.log_level));
+    const dw::ConfigFile config = base.config_path.empty() ? dw::ConfigFile() : dw::ConfigFile::load(base.config_path);
+    const dw::dds::DdsConfig dds_config = dw::dds::resolve(dds_cli, config);
+
+    if (list->parsed()) {
+        dw::dds::topics::for_each([&](const auto& spec) {
+            std::cout << "rt/" << dds_config.ns << "/" << spec.suffix << "  " << spec.type_name << "  "
+                      << dw::dds::to_string(spec.qos) << "  " << spec.description << "\n";
+        });
+        return 0;
+    }
+
+    const auto selected = dw::probe::select_topics(topics, dds_config.ns);
+    const auto qos = qos_overrides(reliability, durability);
+    dw::dds::Participant participant(dds_config, name);
+    dw::dds::Heartbeat heartbeat(participant);
+    heartbeat.set_state(dw::msg::PROC_RUNNING);
+
+    if (pub_cmd->parsed()) {
+        pub.topics = selected;
+        pub.qos = qos;
+        pub.wait_timeout = std::chrono::milliseconds(static_cast<long>(wait_timeout_s * 1000));
+        if (!dw::probe::run_pub(participant, pub, std::cout)) return dw::kExitRuntime;
+        if (linger_s < 0) {
+            while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
+        } else if (linger_s > 0) {
+            dw::Shutdown::instance().wait_for(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                std::chrono::duration<double>(linger_s)));
+        }
+        return 0;
+    }
+
+    echo.topics = selected;
+    echo.qos = qos;
+    echo.timeout = std::chrono::milliseconds(static_cast<long>(timeout_s * 1000));
+    const auto report = dw::probe::run_echo(participant, echo, std::cout);
+    dw::probe::print_table(report, std::cout);
+    if (!summary_path.empty()) {
+        std::ofstream out(summary_path);
+        if (!out) throw dw::RuntimeError("cannot write the summary " + summary_path);
+        out << report.to_json() << "\n";
+    }
+    return report.ok() ? 0 : dw::kExitRuntime;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    return dw::cli::run_main("dw-probe", [&] { return run(argc, argv); });
+}

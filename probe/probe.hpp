@@ -1,0 +1,69 @@
+#pragma once
+// dw-probe's logic: publish deterministic samples on lab topics and echo them back with an
+// integrity check, for every topic type. Used by the loopback session, the integration and
+// multi-host tests, and by people checking a lab network by hand.
+#include <chrono>
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "dds/participant.hpp"
+
+namespace dw::probe {
+
+// Topic suffixes ("stand/wrench") of every lab topic, in registry order.
+std::vector<std::string> all_topics();
+// Accepts suffixes, full names (rt/<ns>/...) or "all"; throws dw::InputError for unknown ones.
+std::vector<std::string> select_topics(const std::vector<std::string>& requested, const std::string& ns);
+
+struct PubOptions {
+    std::vector<std::string> topics;           // suffixes
+    std::uint64_t count = 10;                  // samples per topic
+    double rate_hz = 50.0;                     // rounds per second (one sample per topic a round)
+    int wait_readers = 0;                      // wait until each writer has this many readers
+    std::chrono::milliseconds wait_timeout{10000};
+    dds::QosOverrides qos;
+    bool quiet = false;
+};
+
+// Publishes; returns false when the readers did not show up in time (nothing is published then).
+bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out);
+
+struct TopicResult {
+    std::string topic;
+    std::string type;
+    std::string qos;
+    std::uint64_t received = 0;      // probe samples (run id "probe")
+    std::uint64_t other = 0;         // real lab traffic on the topic (not checked)
+    std::uint64_t intact = 0;
+    std::uint64_t corrupt = 0;
+    std::uint64_t lost = 0;          // gaps in header.seq
+    std::uint64_t first_seq = 0;
+    std::uint64_t last_seq = 0;
+    bool in_order = true;
+    bool met = false;                // expectation reached
+};
+
+struct EchoOptions {
+    std::vector<std::string> topics;
+    std::uint64_t expect = 0;            // samples per topic before the echo ends (0 = run until stopped)
+    std::int64_t expect_latched = -1;    // for latched (state) topics; -1 = same as expect
+    std::chrono::milliseconds timeout{0};  // 0 = none
+    dds::QosOverrides qos;
+    bool quiet = false;
+};
+
+struct EchoReport {
+    std::vector<TopicResult> topics;
+    bool timed_out = false;
+    bool ok() const;                 // every expectation met and nothing corrupt
+    std::string to_json() const;
+};
+
+// Echoes until every expectation is met, the timeout passes or shutdown is requested.
+EchoReport run_echo(dds::Participant& p, const EchoOptions& o, std::ostream& out);
+
+void print_table(const EchoReport& report, std::ostream& out);
+
+}  // namespace dw::probe
