@@ -27,6 +27,7 @@ std::uint64_t handle_key(const eprosima::fastdds::dds::InstanceHandle_t& h) {
 Heartbeat::Heartbeat(Participant& p, std::chrono::milliseconds period)
     : participant_(p), period_(period), writer_(p, topics::process_status), host_(hostname()) {
     last_snapshot_ns_ = p.clock().monotonic_ns();
+    publish_now();  // peers hear of us at once; the thread publishes every period after this
     thread_ = std::thread([this] { loop(); });
 }
 
@@ -93,11 +94,10 @@ void Heartbeat::publish_now() {
 
 void Heartbeat::loop() {
     std::unique_lock lock(mutex_);
-    while (!stop_) {
+    while (!cv_.wait_for(lock, period_, [this] { return stop_; })) {
         lock.unlock();
         publish_now();
         lock.lock();
-        cv_.wait_for(lock, period_, [this] { return stop_; });
     }
 }
 

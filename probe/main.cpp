@@ -93,14 +93,8 @@ int run(int argc, char** argv) {
         pub.topics = selected;
         pub.qos = qos;
         pub.wait_timeout = std::chrono::milliseconds(static_cast<long>(wait_timeout_s * 1000));
-        if (!dw::probe::run_pub(participant, pub, std::cout)) return dw::kExitRuntime;
-        if (linger_s < 0) {
-            while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
-        } else if (linger_s > 0) {
-            dw::Shutdown::instance().wait_for(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                std::chrono::duration<double>(linger_s)));
-        }
-        return 0;
+        pub.linger = std::chrono::milliseconds(static_cast<long>(linger_s * 1000));
+        return dw::probe::run_pub(participant, pub, std::cout) ? 0 : dw::kExitRuntime;
     }
 
     echo.topics = selected;

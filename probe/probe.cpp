@@ -177,6 +177,11 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
         std::this_thread::sleep_until(next);
     }
     out.flush();
+    if (o.linger.count() < 0) {
+        while (!Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
+    } else if (o.linger.count() > 0) {
+        Shutdown::instance().wait_for(o.linger);
+    }
     return true;
 }
 

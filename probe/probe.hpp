@@ -25,9 +25,12 @@ struct PubOptions {
     std::chrono::milliseconds wait_timeout{10000};
     dds::QosOverrides qos;
     bool quiet = false;
+    // After publishing, keep the writers (and so the latched samples) alive this long;
+    // negative = until shutdown is requested.
+    std::chrono::milliseconds linger{0};
 };
 
-// Publishes; returns false when the readers did not show up in time (nothing is published then).
+// Publishes, then lingers; returns false when the readers did not show up in time (nothing is published then).
 bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out);
 
 struct TopicResult {

@@ -1,0 +1,69 @@
+#pragma once
+// Helpers for tests that start the lab's executables as separate processes.
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/subprocess.hpp"
+
+namespace dw::test {
+
+// Where the lab's executables were built.
+inline std::string bin(const std::string& name) { return std::string(DW_BIN_DIR) + "/" + name; }
+
+// A domain id of this test process's own, so tests run in parallel do not hear each other.
+inline int test_domain() { return 100 + static_cast<int>(::getpid() % 120); }
+
+// A fresh temporary directory, removed with the object.
+class TempDir {
+public:
+    TempDir() {
+        std::string pattern = (std::filesystem::temp_directory_path() / "dwtest-XXXXXX").string();
+        path_ = ::mkdtemp(pattern.data());
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+private:
+    std::filesystem::path path_;
+};
+
+struct RunResult {
+    int status = -1;
+    std::string out;
+    std::string err;
+};
+
+// Runs a command to completion (killed after `limit`, a safety net, not a performance bound).
+inline RunResult run(const std::vector<std::string>& argv, const TempDir& dir,
+                     std::chrono::milliseconds limit = std::chrono::milliseconds(120000)) {
+    static int counter = 0;
+    const std::string tag = std::to_string(counter++);
+    Subprocess p({argv, dir.file("out" + tag), dir.file("err" + tag), {}});
+    auto status = p.wait_for(limit);
+    RunResult r;
+    r.status = status ? *status : p.stop();
+    r.out = read_file(dir.file("out" + tag));
+    r.err = read_file(dir.file("err" + tag));
+    return r;
+}
+
+inline std::vector<std::string> lines(const std::string& text) {
+    std::vector<std::string> out;
+    std::size_t start = 0;
+    while (start < text.size()) {
+        const auto end = text.find('\n', start);
+        out.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+        if (end == std::string::npos) break;
+        start = end + 1;
+    }
+    return out;
+}
+
+}  // namespace dw::test

@@ -1,0 +1,73 @@
+// Bad input to the lab's executables: one clear line on stderr and exit code 2, never a crash.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "support.hpp"
+
+using dw::test::bin;
+using dw::test::lines;
+using dw::test::run;
+using dw::test::TempDir;
+
+namespace {
+void expect_one_line_exit_2(const dw::test::RunResult& r, const std::string& needle) {
+    EXPECT_EQ(r.status, 2) << r.err;
+    const auto l = lines(r.err);
+    ASSERT_EQ(l.size(), 1u) << r.err;
+    EXPECT_NE(l[0].find(needle), std::string::npos) << l[0];
+}
+void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+}  // namespace
+
+TEST(Cli, UnknownTransport) {
+    TempDir d;
+    expect_one_line_exit_2(run({bin("dw-probe"), "--transport", "carrier-pigeon", "list"}, d),
+                           "dw-probe: error: unknown transport 'carrier-pigeon' (expected default, shm or udp)");
+    expect_one_line_exit_2(run({bin("dw-lab"), "loopback", "--transport", "tcp"}, d), "unknown transport 'tcp'");
+}
+
+TEST(Cli, DomainOutOfRange) {
+    TempDir d;
+    expect_one_line_exit_2(run({bin("dw-probe"), "--domain", "233", "list"}, d), "domain id 233 is out of range (0-232)");
+    expect_one_line_exit_2(run({bin("dw-probe"), "--domain", "-4", "list"}, d), "out of range");
+}
+
+TEST(Cli, UnreadableConfig) {
+    TempDir d;
+    expect_one_line_exit_2(run({bin("dw-probe"), "--config", d.file("missing.yaml"), "list"}, d),
+                           "missing.yaml: cannot read the file");
+}
+
+TEST(Cli, MalformedConfigNamesFileAndLine) {
+    TempDir d;
+    write(d.file("bad.yaml"), "dds:\n  domain: 3\n  initial_peers: [127.0.0.1\n");
+    expect_one_line_exit_2(run({bin("dw-probe"), "--config", d.file("bad.yaml"), "list"}, d), "bad.yaml:");
+    write(d.file("type.yaml"), "dds:\n  domain: three\n");
+    expect_one_line_exit_2(run({bin("dw-lab"), "--config", d.file("type.yaml"), "loopback"}, d),
+                           "type.yaml:2:11: dds.domain: expected an integer, got 'three'");
+    write(d.file("transport.yaml"), "dds:\n  transport: carrier-pigeon\n");
+    expect_one_line_exit_2(run({bin("dw-probe"), "--config", d.file("transport.yaml"), "list"}, d),
+                           "transport.yaml:2:14: dds.transport: unknown transport 'carrier-pigeon'");
+}
+
+TEST(Cli, UsageErrors) {
+    TempDir d;
+    expect_one_line_exit_2(run({bin("dw-probe"), "list", "--frobnicate"}, d), "--frobnicate");
+    expect_one_line_exit_2(run({bin("dw-probe")}, d), "subcommand");
+    expect_one_line_exit_2(run({bin("dw-probe"), "echo", "stand/nothing"}, d), "unknown topic 'stand/nothing'");
+    expect_one_line_exit_2(run({bin("dw-probe"), "--log-level", "loud", "list"}, d), "unknown log level 'loud'");
+    expect_one_line_exit_2(run({bin("dw-probe"), "pub", "--reliability", "mostly"}, d), "--reliability");
+}
+
+TEST(Cli, HelpExitsZeroAndListsTheCommonOptions) {
+    TempDir d;
+    const auto r = run({bin("dw-probe"), "--help"}, d);
+    EXPECT_EQ(r.status, 0);
+    for (const char* opt : {"--help", "--domain", "--config", "--log-level", "--transport", "--profile"}) {
+        EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
+    }
+    const auto sub = run({bin("dw-lab"), "loopback", "--help"}, d);
+    EXPECT_EQ(sub.status, 0);
+    EXPECT_NE(sub.out.find("--count"), std::string::npos) << sub.out;
+}

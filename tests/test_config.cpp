@@ -1,0 +1,163 @@
+// Unit tests of configuration: YAML files with located errors, DDS config resolution/validation.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/config.hpp"
+#include "dds/config.hpp"
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+
+#include "support.hpp"
+
+using dw::ConfigFile;
+using dw::InputError;
+using dw::dds::DdsCliOptions;
+using dw::dds::DdsConfig;
+
+namespace {
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+}  // namespace
+
+TEST(ConfigFile, ReadsTypedValuesAtDottedPaths) {
+    const auto c = ConfigFile::parse("dds:\n  domain: 7\n  transport: udp\n  initial_peers: [127.0.0.1, 10.0.0.2]\n", "t.yaml");
+    EXPECT_EQ(c.get_int("dds.domain"), 7);
+    EXPECT_EQ(c.get_string("dds.transport"), "udp");
+    EXPECT_EQ(c.get_strings("dds.initial_peers")->size(), 2u);
+    EXPECT_FALSE(c.get_int("dds.missing").has_value());
+    EXPECT_FALSE(c.get_int("nothing.here").has_value());
+}
+
+TEST(ConfigFile, LookupsDoNotInsertKeys) {
+    const auto c = ConfigFile::parse("dds:\n  domain: 7\n", "t.yaml");
+    EXPECT_FALSE(c.get_int("dds.nope").has_value());
+    EXPECT_FALSE(c.at("dds.nope"));
+    EXPECT_EQ(c.at("dds").size(), 1u);
+}
+
+TEST(ConfigFile, MalformedYamlNamesFileLineAndColumn) {
+    const std::string e = error_of([] { ConfigFile::parse("dds:\n  domain: [1, 2\n", "bad.yaml"); });
+    EXPECT_NE(e.find("bad.yaml:"), std::string::npos) << e;
+    EXPECT_NE(e.find("not valid YAML"), std::string::npos) << e;
+}
+
+TEST(ConfigFile, WrongTypeNamesKeyAndLine) {
+    const auto c = ConfigFile::parse("dds:\n  domain: seven\n", "t.yaml");
+    const std::string e = error_of([&] { (void)c.get_int("dds.domain"); });
+    EXPECT_EQ(e, "t.yaml:2:11: dds.domain: expected an integer, got 'seven'");
+}
+
+TEST(ConfigFile, UnreadableFileIsAnInputError) {
+    const std::string e = error_of([] { ConfigFile::load("/nonexistent/lab.yaml"); });
+    EXPECT_EQ(e, "config /nonexistent/lab.yaml: cannot read the file");
+}
+
+TEST(ConfigFile, TopLevelMustBeAMapping) {
+    EXPECT_NE(error_of([] { ConfigFile::parse("- a\n- b\n", "l.yaml"); }).find("l.yaml:1:1"), std::string::npos);
+}
+
+TEST(DdsConfig, DefaultsAreLocalDomainZeroNamespaceLab) {
+    const DdsConfig c = dw::dds::resolve({}, ConfigFile());
+    EXPECT_EQ(c.domain, 0);
+    EXPECT_EQ(c.profile, dw::dds::Profile::local);
+    EXPECT_EQ(c.transport, dw::dds::Transport::default_);
+    EXPECT_EQ(c.ns, "lab");
+}
+
+TEST(DdsConfig, CliOverridesFileOverridesDefaults) {
+    const auto file = ConfigFile::parse("dds:\n  domain: 7\n  transport: udp\n  namespace: bench\n", "f.yaml");
+    DdsCliOptions cli;
+    cli.domain = 9;
+    const DdsConfig c = dw::dds::resolve(cli, file);
+    EXPECT_EQ(c.domain, 9);
+    EXPECT_EQ(c.transport, dw::dds::Transport::udp);
+    EXPECT_EQ(c.ns, "bench");
+}
+
+TEST(DdsConfig, UnknownTransportIsOneClearLine) {
+    DdsCliOptions cli;
+    cli.transport = "carrier-pigeon";
+    EXPECT_EQ(error_of([&] { dw::dds::resolve(cli, ConfigFile()); }),
+              "unknown transport 'carrier-pigeon' (expected default, shm or udp)");
+}
+
+TEST(DdsConfig, UnknownTransportInFileNamesFileLineAndKey) {
+    const auto file = ConfigFile::parse("dds:\n  transport: tcp\n", "lab.yaml");
+    EXPECT_EQ(error_of([&] { dw::dds::resolve({}, file); }),
+              "lab.yaml:2:14: dds.transport: unknown transport 'tcp' (expected default, shm or udp)");
+}
+
+TEST(DdsConfig, DomainOutOfRange) {
+    for (int bad : {-1, 233, 1000}) {
+        DdsCliOptions cli;
+        cli.domain = bad;
+        EXPECT_NE(error_of([&] { dw::dds::resolve(cli, ConfigFile()); }).find("out of range (0-232)"),
+                  std::string::npos);
+    }
+    const auto file = ConfigFile::parse("dds:\n  domain: 500\n", "lab.yaml");
+    EXPECT_EQ(error_of([&] { dw::dds::resolve({}, file); }), "lab.yaml:2:11: dds.domain: domain id 500 is out of range (0-232)");
+    DdsCliOptions ok;
+    ok.domain = 232;
+    EXPECT_EQ(dw::dds::resolve(ok, ConfigFile()).domain, 232);
+}
+
+TEST(DdsConfig, AddressesAreChecked) {
+    DdsCliOptions cli;
+    cli.peers = {"not-an-ip"};
+    EXPECT_NE(error_of([&] { dw::dds::resolve(cli, ConfigFile()); }).find("not an IPv4 address"), std::string::npos);
+    DdsCliOptions ds;
+    ds.profile = "lab";
+    ds.discovery_server = "127.0.0.1";
+    EXPECT_NE(error_of([&] { dw::dds::resolve(ds, ConfigFile()); }).find("needs a port"), std::string::npos);
+    ds.discovery_server = "127.0.0.1:11811";
+    EXPECT_EQ(dw::dds::resolve(ds, ConfigFile()).discovery_server, "127.0.0.1:11811");
+}
+
+TEST(DdsConfig, DiscoveryServerNeedsLabProfile) {
+    DdsCliOptions cli;
+    cli.discovery_server = "127.0.0.1:11811";
+    EXPECT_NE(error_of([&] { dw::dds::resolve(cli, ConfigFile()); }).find("needs the lab profile"), std::string::npos);
+}
+
+TEST(DdsConfig, LocalProfileKeepsUdpOnLoopback) {
+    DdsConfig c;
+    const auto qos = dw::dds::participant_qos(c, "t");
+    EXPECT_FALSE(qos.transport().use_builtin_transports);
+    bool saw_udp = false;
+    for (const auto& t : qos.transport().user_transports) {
+        if (auto udp = std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(t)) {
+            saw_udp = true;
+            ASSERT_EQ(udp->interfaceWhiteList.size(), 1u);
+            EXPECT_EQ(udp->interfaceWhiteList[0], "127.0.0.1");
+        }
+    }
+    EXPECT_TRUE(saw_udp);
+    ASSERT_EQ(qos.wire_protocol().builtin.initialPeersList.size(), 1u);
+}
+
+TEST(DdsConfig, ShmTransportHasNoUdp) {
+    DdsConfig c;
+    c.transport = dw::dds::Transport::shm;
+    const auto qos = dw::dds::participant_qos(c, "t");
+    ASSERT_EQ(qos.transport().user_transports.size(), 1u);
+    EXPECT_TRUE(std::dynamic_pointer_cast<eprosima::fastdds::rtps::SharedMemTransportDescriptor>(
+        qos.transport().user_transports[0]));
+}
+
+TEST(DdsConfig, DiscoveryServerMakesAClient) {
+    DdsConfig c;
+    c.profile = dw::dds::Profile::lab;
+    c.discovery_server = "127.0.0.1:11811";
+    const auto qos = dw::dds::participant_qos(c, "t");
+    const auto& d = qos.wire_protocol().builtin.discovery_config;
+    EXPECT_EQ(d.discoveryProtocol, eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT);
+    ASSERT_EQ(d.m_DiscoveryServers.size(), 1u);
+    EXPECT_EQ(d.m_DiscoveryServers.front().metatrafficUnicastLocatorList.begin()->port, 11811u);
+}

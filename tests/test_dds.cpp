@@ -1,0 +1,263 @@
+// Unit tests of the DDS layer, in one process: QoS profiles, typed endpoints, mismatch reports,
+// heartbeats and peer monitoring.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <mutex>
+#include <thread>
+
+#include "dds/endpoint.hpp"
+#include "dds/heartbeat.hpp"
+#include "dds/time.hpp"
+#include "probe/samples.hpp"
+#include "support.hpp"
+
+using namespace std::chrono_literals;
+using dw::dds::Participant;
+namespace topics = dw::dds::topics;
+
+namespace {
+dw::dds::DdsConfig test_config() {
+    dw::dds::DdsConfig c;
+    c.domain = dw::test::test_domain();
+    c.ns = "unit" + std::to_string(::getpid());
+    return c;
+}
+
+// Polls `done` until true or a generous safety limit; functional, not a timing assertion.
+template <class F>
+bool eventually(F&& done, std::chrono::milliseconds limit = 20000ms) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (!done()) {
+        if (std::chrono::steady_clock::now() > end) return false;
+        std::this_thread::sleep_for(5ms);
+    }
+    return true;
+}
+}  // namespace
+
+TEST(Time, RoundTripsAndFloorsNegativeTimes) {
+    EXPECT_EQ(dw::dds::from_msg(dw::dds::to_msg(1'700'000'000'123'456'789)), 1'700'000'000'123'456'789);
+    const auto m = dw::dds::to_msg(-1);
+    EXPECT_EQ(m.sec(), -1);
+    EXPECT_EQ(m.nanosec(), 999'999'999u);
+    EXPECT_EQ(dw::dds::from_msg(m), -1);
+}
+
+TEST(Qos, ProfilesHaveTheDocumentedShape) {
+    namespace fdds = eprosima::fastdds::dds;
+    const auto sensor = dw::dds::writer_qos(dw::dds::QosProfile::sensor);
+    EXPECT_EQ(sensor.reliability().kind, fdds::BEST_EFFORT_RELIABILITY_QOS);
+    EXPECT_EQ(sensor.durability().kind, fdds::VOLATILE_DURABILITY_QOS);
+    EXPECT_EQ(sensor.history().kind, fdds::KEEP_LAST_HISTORY_QOS);
+    const auto state = dw::dds::reader_qos(dw::dds::QosProfile::state);
+    EXPECT_EQ(state.reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);
+    EXPECT_EQ(state.durability().kind, fdds::TRANSIENT_LOCAL_DURABILITY_QOS);
+    EXPECT_EQ(state.history().depth, 1);
+    const auto command = dw::dds::writer_qos(dw::dds::QosProfile::command);
+    EXPECT_EQ(command.reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);
+    EXPECT_EQ(command.durability().kind, fdds::VOLATILE_DURABILITY_QOS);
+    EXPECT_EQ(dw::dds::describe(state), "RELIABLE TRANSIENT_LOCAL KEEP_LAST(1)");
+    dw::dds::QosOverrides o;
+    o.reliable = true;
+    EXPECT_EQ(dw::dds::writer_qos(dw::dds::QosProfile::sensor, o).reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);
+}
+
+TEST(Qos, MismatchLineIsOneClearLine) {
+    const std::string line = dw::dds::qos_mismatch_line("rt/lab/stand/wrench", "dw::msg::WrenchStamped", true,
+                                                         "RELIABLE VOLATILE KEEP_LAST(16)", 11, 1);
+    EXPECT_EQ(line, "QoS mismatch on rt/lab/stand/wrench (dw::msg::WrenchStamped): this reader requests "
+                    "RELIABLE VOLATILE KEEP_LAST(16) but a writer offers an incompatible RELIABILITY; no "
+                    "samples flow between them (1 incompatible peer so far)");
+    EXPECT_EQ(line.find('\n'), std::string::npos);
+    EXPECT_EQ(dw::dds::policy_name(2), "DURABILITY");
+}
+
+TEST(Topics, NamesFollowRos2ConventionAndAreUnique) {
+    Participant p(test_config(), "names");
+    std::set<std::string> names;
+    topics::for_each([&](const auto& spec) {
+        const std::string n = p.topic_name(spec.suffix);
+        EXPECT_EQ(n.rfind("rt/" + p.config().ns + "/", 0), 0u) << n;
+        names.insert(n);
+    });
+    EXPECT_EQ(static_cast<int>(names.size()), topics::kTopicCount);
+}
+
+TEST(Endpoints, WriterToReaderDeliversIntactSamplesWithMeta) {
+    Participant a(test_config(), "writer");
+    Participant b(test_config(), "reader");
+    std::mutex m;
+    std::vector<dw::msg::MocapFrame> got;
+    std::vector<dw::dds::SampleMeta> metas;
+    dw::dds::Reader<dw::msg::MocapFrame> reader(b, topics::mocap_frame,
+        [&](const dw::msg::MocapFrame& f, const dw::dds::SampleMeta& meta) {
+            std::lock_guard lock(m);
+            got.push_back(f);
+            metas.push_back(meta);
+        });
+    dw::dds::Writer<dw::msg::MocapFrame> writer(a, topics::mocap_frame);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
+    ASSERT_TRUE(reader.wait_for_writers(1, 20000ms));
+    for (std::uint64_t i = 0; i < 20; ++i) {
+        auto f = dw::probe::make_sample<dw::msg::MocapFrame>(i);
+        ASSERT_TRUE(writer.write(f));
+        std::this_thread::sleep_for(2ms);
+    }
+    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return got.size() == 20; }));
+    std::lock_guard lock(m);
+    for (std::uint64_t i = 0; i < 20; ++i) {
+        EXPECT_EQ(got[i], dw::probe::make_sample<dw::msg::MocapFrame>(i));
+        EXPECT_GT(metas[i].source_time_ns, 0);
+        EXPECT_GE(metas[i].reception_time_ns, metas[i].source_time_ns);
+    }
+    EXPECT_EQ(reader.received(), 20u);
+    EXPECT_EQ(reader.lost(), 0u);
+}
+
+TEST(Endpoints, WriterNumbersSamplesAndReaderCountsGaps) {
+    Participant a(test_config(), "writer");
+    Participant b(test_config(), "reader");
+    std::atomic<int> n{0};
+    dw::dds::Reader<dw::msg::ExperimentCommand> reader(b, topics::experiment_command,
+        [&](const dw::msg::ExperimentCommand&, const dw::dds::SampleMeta&) { ++n; });
+    dw::dds::Writer<dw::msg::ExperimentCommand> writer(a, topics::experiment_command);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
+    dw::msg::ExperimentCommand c;
+    ASSERT_TRUE(writer.write(c));
+    EXPECT_EQ(c.header().seq(), 0u);
+    ASSERT_TRUE(writer.write(c));
+    EXPECT_EQ(c.header().seq(), 1u);
+    // A writer that lost samples 2-4 (written past the layer, which always numbers in order).
+    c.header().seq(5);
+    ASSERT_TRUE(writer.native().write(&c));
+    ASSERT_TRUE(eventually([&] { return n == 3; }));
+    EXPECT_EQ(reader.lost(), 3u);
+    EXPECT_EQ(reader.received(), 3u);
+}
+
+TEST(Endpoints, QosMismatchIsReportedOnBothSidesInOneLine) {
+    Participant a(test_config(), "writer");
+    Participant b(test_config(), "reader");
+    std::mutex m;
+    std::vector<std::string> problems_a, problems_b;
+    a.on_problem([&](const std::string& l) { std::lock_guard lock(m); problems_a.push_back(l); });
+    b.on_problem([&](const std::string& l) { std::lock_guard lock(m); problems_b.push_back(l); });
+    dw::dds::QosOverrides best_effort;
+    best_effort.reliable = false;
+    dw::dds::Writer<dw::msg::StandStatus> writer(a, topics::stand_status, best_effort);
+    dw::dds::Reader<dw::msg::StandStatus> reader(b, topics::stand_status,
+        [](const dw::msg::StandStatus&, const dw::dds::SampleMeta&) {});
+    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return !problems_a.empty() && !problems_b.empty(); }));
+    std::lock_guard lock(m);
+    EXPECT_NE(problems_b[0].find("QoS mismatch on " + b.topic_name("stand/status")), std::string::npos) << problems_b[0];
+    EXPECT_NE(problems_b[0].find("this reader requests RELIABLE"), std::string::npos) << problems_b[0];
+    EXPECT_NE(problems_b[0].find("RELIABILITY"), std::string::npos);
+    EXPECT_NE(problems_a[0].find("this writer offers BEST_EFFORT"), std::string::npos) << problems_a[0];
+    EXPECT_EQ(writer.matched(), 0);
+    EXPECT_EQ(b.problem_count(), problems_b.size());
+}
+
+TEST(Endpoints, LatchedStateReachesALateReader) {
+    Participant a(test_config(), "writer");
+    dw::dds::Writer<dw::msg::ExperimentState> writer(a, topics::experiment_state);
+    for (std::uint64_t i = 0; i < 5; ++i) {
+        auto s = dw::probe::make_sample<dw::msg::ExperimentState>(i);
+        writer.write(s);
+    }
+    Participant b(test_config(), "late");
+    std::mutex m;
+    std::vector<dw::msg::ExperimentState> got;
+    dw::dds::Reader<dw::msg::ExperimentState> reader(b, topics::experiment_state,
+        [&](const dw::msg::ExperimentState& s, const dw::dds::SampleMeta&) { std::lock_guard lock(m); got.push_back(s); });
+    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return !got.empty(); }));
+    std::this_thread::sleep_for(200ms);  // anything older would have arrived with the last one
+    std::lock_guard lock(m);
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(got[0], dw::probe::make_sample<dw::msg::ExperimentState>(4));
+}
+
+TEST(PeerTable, AppearsThenExpiresAfterThreePeriods) {
+    dw::dds::PeerTable t;
+    dw::msg::ProcessStatus s;
+    s.process("stand_agent");
+    s.host("pi");
+    s.period_s(0.5);
+    s.state(dw::msg::PROC_RUNNING);
+    const dw::Nanos t0 = 1'000'000'000;
+    auto e = t.observe(s, 42, t0);
+    ASSERT_TRUE(e);
+    EXPECT_EQ(e->kind, dw::dds::PeerEvent::Kind::appeared);
+    EXPECT_FALSE(t.observe(s, 42, t0 + 400'000'000));  // still alive: no new event
+    EXPECT_TRUE(t.expire(t0 + 1'800'000'000).empty());  // 1.4 s silent < 1.5 s
+    auto lost = t.expire(t0 + 2'000'000'000);           // 1.6 s silent > 3 periods
+    ASSERT_EQ(lost.size(), 1u);
+    EXPECT_EQ(lost[0].process, "stand_agent");
+    EXPECT_NE(lost[0].reason.find("no heartbeat"), std::string::npos);
+    EXPECT_TRUE(t.alive().empty());
+    auto back = t.observe(s, 43, t0 + 3'000'000'000);
+    ASSERT_TRUE(back);
+    EXPECT_EQ(back->kind, dw::dds::PeerEvent::Kind::appeared);
+}
+
+TEST(PeerTable, WriterGoneAndStoppingEndAPeerAtOnce) {
+    dw::dds::PeerTable t;
+    dw::msg::ProcessStatus s;
+    s.process("mocap_bridge");
+    s.period_s(0.5);
+    s.state(dw::msg::PROC_RUNNING);
+    t.observe(s, 7, 0);
+    EXPECT_FALSE(t.writer_gone(8, "left"));
+    auto e = t.writer_gone(7, "left the domain");
+    ASSERT_TRUE(e);
+    EXPECT_EQ(e->kind, dw::dds::PeerEvent::Kind::lost);
+    t.observe(s, 9, 10);
+    s.state(dw::msg::PROC_STOPPING);
+    auto stop = t.observe(s, 9, 20);
+    ASSERT_TRUE(stop);
+    EXPECT_EQ(stop->reason, "stopped");
+}
+
+TEST(Heartbeat, MonitorSeesAPeerComeAndGo) {
+    Participant watcher(test_config(), "watcher");
+    std::mutex m;
+    std::vector<dw::dds::PeerEvent> events;
+    dw::dds::PeerMonitor monitor(watcher, [&](const dw::dds::PeerEvent& e) { std::lock_guard lock(m); events.push_back(e); });
+    {
+        Participant peer(test_config(), "stand_agent");
+        dw::dds::Heartbeat hb(peer, 100ms);
+        hb.set_state(dw::msg::PROC_RUNNING, "sampling");
+        ASSERT_TRUE(monitor.wait_for({"stand_agent"}, 20000ms));
+        ASSERT_TRUE(eventually([&] {
+            auto s = monitor.last("stand_agent");
+            return s && s->state() == dw::msg::PROC_RUNNING && s->message() == "sampling";
+        }));
+        EXPECT_EQ(monitor.last("stand_agent")->pid(), ::getpid());
+    }
+    ASSERT_TRUE(eventually([&] {
+        std::lock_guard lock(m);
+        return std::any_of(events.begin(), events.end(), [](const auto& e) {
+            return e.kind == dw::dds::PeerEvent::Kind::lost && e.process == "stand_agent";
+        });
+    }));
+    EXPECT_TRUE(monitor.alive().empty());
+}
+
+TEST(Heartbeat, ReportsEndpointRates) {
+    dw::ManualClock clock;
+    Participant p(test_config(), "rates", clock);
+    dw::dds::Writer<dw::msg::WrenchStamped> w(p, topics::stand_wrench);
+    dw::dds::Heartbeat hb(p, 10000ms);
+    (void)hb.snapshot();
+    for (int i = 0; i < 80; ++i) {
+        dw::msg::WrenchStamped s;
+        w.write(s);
+    }
+    clock.advance(1s);
+    const auto s = hb.snapshot();
+    ASSERT_EQ(s.rates().size(), 1u);
+    EXPECT_EQ(s.rates()[0].topic(), p.topic_name("stand/wrench"));
+    EXPECT_TRUE(s.rates()[0].outgoing());
+    EXPECT_DOUBLE_EQ(s.rates()[0].rate_hz(), 80.0);
+    EXPECT_EQ(s.rates()[0].samples(), 80u);
+}
