@@ -173,11 +173,14 @@ private:
 
     void account(const eprosima::fastdds::dds::InstanceHandle_t& writer, std::uint64_t seq) {
         stats_->samples.fetch_add(1, std::memory_order_relaxed);
-        auto [it, first] = next_seq_.try_emplace(writer, seq + 1);
-        if (!first) {
-            if (seq > it->second) stats_->lost.fetch_add(seq - it->second, std::memory_order_relaxed);
-            if (seq >= it->second) it->second = seq + 1;
+        // Most topics have one writer: skip the map lookup while the writer stays the same.
+        if (next_ == nullptr || !(last_writer_ == writer)) {
+            auto [it, first] = next_seq_.try_emplace(writer, seq);
+            last_writer_ = writer;
+            next_ = &it->second;
         }
+        if (seq > *next_) stats_->lost.fetch_add(seq - *next_, std::memory_order_relaxed);
+        if (seq >= *next_) *next_ = seq + 1;
     }
     void writer_gone(const eprosima::fastdds::dds::InstanceHandle_t& handle) {
         WriterGone f;
@@ -197,7 +200,10 @@ private:
     eprosima::fastdds::dds::DataReader* reader_ = nullptr;
     T sample_;  // reused: take_next_sample fills it, no allocation per sample for fixed types
     std::atomic<int> matched_{0};
-    std::map<eprosima::fastdds::dds::InstanceHandle_t, std::uint64_t> next_seq_;  // listener thread only
+    // Next expected header.seq per writer; listener thread only.
+    std::map<eprosima::fastdds::dds::InstanceHandle_t, std::uint64_t> next_seq_;
+    eprosima::fastdds::dds::InstanceHandle_t last_writer_;
+    std::uint64_t* next_ = nullptr;
     std::mutex mutex_;
     WriterGone on_writer_gone_;
 };

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Runs the benchmarks that feed docs/BENCHMARKS.md (after scripts/setup.sh has built them).
+# Run on an otherwise idle machine; each prints a Markdown table.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+for transport in shm udp; do
+  "$here/build/bin/dw-bench-pingpong" --transport "$transport" --rounds 10 --per-round 2000 2>/dev/null
+  echo
+done
