@@ -14,7 +14,7 @@
 #include <iostream>
 #include <numeric>
 
-#include "core/cli.hpp"
+#include "dds/process_cli.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
@@ -147,27 +147,22 @@ int run_pong(const dw::dds::DdsConfig& cfg) {
 
 int run(int argc, char** argv) {
     dw::Shutdown::install();
-    CLI::App app{"dw-bench-pingpong: DDS round-trip latency, lab layer vs raw Fast DDS"};
-    dw::cli::BaseOptions base;
-    dw::dds::DdsCliOptions dds_cli;
-    dw::cli::configure(app, base);
-    dw::dds::add_cli_options(app, dds_cli);
+    dw::dds::ProcessCli cli("dw-bench-pingpong: DDS round-trip latency, lab layer vs raw Fast DDS");
+    CLI::App& app = cli.app();
     bool pong = false;
     int rounds = 10;
     std::size_t per_round = 2000;
     app.add_flag("--pong", pong, "(internal) run the echo side");
     app.add_option("--rounds", rounds, "alternating raw/layer rounds")->check(CLI::Range(1, 1000));
     app.add_option("--per-round", per_round, "round trips per round")->check(CLI::Range(10, 1000000));
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
-    if (!dds_cli.domain) dds_cli.domain = 200 + static_cast<int>(::getpid() % 30);
-    if (!dds_cli.ns) dds_cli.ns = "bench" + std::to_string(::getpid());
-    const auto cfg = dw::dds::resolve(dds_cli, dw::ConfigFile());
+    cli.parse(argc, argv);
+    dw::dds::DdsConfig cfg = cli.dds();
     if (pong) return run_pong(cfg);
+    // A namespace of its own, so a running lab on the same domain is not disturbed.
+    if (cfg.ns == dw::dds::kDefaultNamespace) cfg.ns = "bench" + std::to_string(::getpid());
 
-    std::vector<std::string> args{dw::executable_dir() + "/dw-bench-pingpong", "--pong",
-                                  "--domain", std::to_string(cfg.domain), "--namespace", cfg.ns,
-                                  "--transport", dw::dds::to_string(cfg.transport)};
+    std::vector<std::string> args{dw::executable_dir() + "/dw-bench-pingpong", "--pong"};
+    for (const auto& a : dw::dds::to_args(cfg)) args.push_back(a);
     dw::Subprocess ponger({args, "", "", {}});
 
     Pinger<RawEndpoint> raw;

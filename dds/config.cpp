@@ -150,6 +150,14 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
     return c;
 }
 
+std::vector<std::string> to_args(const DdsConfig& c) {
+    std::vector<std::string> a{"--domain", std::to_string(c.domain), "--profile", to_string(c.profile),
+                               "--transport", to_string(c.transport), "--namespace", c.ns};
+    for (const auto& peer : c.initial_peers) a.insert(a.end(), {"--peer", peer});
+    if (!c.discovery_server.empty()) a.insert(a.end(), {"--discovery-server", c.discovery_server});
+    return a;
+}
+
 fdds::DomainParticipantQos participant_qos(const DdsConfig& c, const std::string& name) {
     validate(c);
     fdds::DomainParticipantQos qos = fdds::PARTICIPANT_QOS_DEFAULT;

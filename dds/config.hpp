@@ -53,6 +53,9 @@ void add_cli_options(CLI::App& app, DdsCliOptions& options);
 // Merges defaults < config file `dds:` section < CLI flags, validated.
 DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file);
 
+// The configuration as command-line flags, to hand to a child process.
+std::vector<std::string> to_args(const DdsConfig& config);
+
 // The Fast DDS participant QoS for a configuration (also used by the raw-DDS benchmark, so
 // both sides of a comparison use the same transports).
 eprosima::fastdds::dds::DomainParticipantQos participant_qos(const DdsConfig& config,

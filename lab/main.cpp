@@ -6,18 +6,15 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
-#include "dds/config.hpp"
+#include "dds/process_cli.hpp"
 #include "lab/loopback.hpp"
 
 namespace {
 
 int run(int argc, char** argv) {
     dw::Shutdown::install();
-    CLI::App app{"dw-lab: run the Downwash Lab's processes"};
-    dw::cli::BaseOptions base;
-    dw::dds::DdsCliOptions dds_cli;
-    dw::cli::configure(app, base);
-    dw::dds::add_cli_options(app, dds_cli);
+    dw::dds::ProcessCli cli("dw-lab: run the Downwash Lab's processes");
+    CLI::App& app = cli.app();
     app.require_subcommand(1);
 
     dw::lab::LoopbackOptions lo;
@@ -28,17 +25,9 @@ int run(int argc, char** argv) {
     loopback->add_option("--summary", lo.summary_path, "write the JSON summary here");
     loopback->add_flag("--quiet", lo.quiet, "show only the summary table");
 
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
-    const dw::ConfigFile config = base.config_path.empty() ? dw::ConfigFile() : dw::ConfigFile::load(base.config_path);
-    const dw::dds::DdsConfig dds = dw::dds::resolve(dds_cli, config);  // validated here, once
-
+    cli.parse(argc, argv);  // validates the DDS settings once, before any child starts
     lo.probe_path = dw::executable_dir() + "/dw-probe";
-    lo.dds_args = {"--domain", std::to_string(dds.domain), "--profile", dw::dds::to_string(dds.profile),
-                   "--transport", dw::dds::to_string(dds.transport), "--namespace", dds.ns,
-                   "--log-level", base.log_level};
-    for (const auto& peer : dds.initial_peers) lo.dds_args.insert(lo.dds_args.end(), {"--peer", peer});
-    if (!dds.discovery_server.empty()) lo.dds_args.insert(lo.dds_args.end(), {"--discovery-server", dds.discovery_server});
+    lo.dds_args = cli.dds_args();
     return dw::lab::run_loopback(lo);
 }
 

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "core/cli.hpp"
+#include "dds/process_cli.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
@@ -27,11 +27,8 @@ dw::dds::QosOverrides qos_overrides(const std::string& reliability, const std::s
 
 int run(int argc, char** argv) {
     dw::Shutdown::install();
-    CLI::App app{"dw-probe: list the lab's DDS topics, publish test samples, echo and check them"};
-    dw::cli::BaseOptions base;
-    dw::dds::DdsCliOptions dds_cli;
-    dw::cli::configure(app, base);
-    dw::dds::add_cli_options(app, dds_cli);
+    dw::dds::ProcessCli cli("dw-probe: list the lab's DDS topics, publish test samples, echo and check them");
+    CLI::App& app = cli.app();
     std::string name = "probe-" + std::to_string(::getpid());
     app.add_option("--name", name, "process name in heartbeats");
     app.require_subcommand(1);
@@ -70,10 +67,8 @@ int run(int argc, char** argv) {
     echo_cmd->add_option("--summary", summary_path, "write a JSON summary here");
     echo_cmd->add_flag("--quiet", echo.quiet, "print only the summary table");
 
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
-    const dw::ConfigFile config = base.config_path.empty() ? dw::ConfigFile() : dw::ConfigFile::load(base.config_path);
-    const dw::dds::DdsConfig dds_config = dw::dds::resolve(dds_cli, config);
+    cli.parse(argc, argv);
+    const dw::dds::DdsConfig& dds_config = cli.dds();
 
     if (list->parsed()) {
         dw::dds::topics::for_each([&](const auto& spec) {
