@@ -1,0 +1,361 @@
+#include "flight/flight.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+
+namespace dw::flight {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::uint16_t Flight::body_index(const std::string& name) {
+    const int i = find_body(name);
+    if (i >= 0) return static_cast<std::uint16_t>(i);
+    bodies.push_back(name);
+    return static_cast<std::uint16_t>(bodies.size() - 1);
+}
+
+int Flight::find_body(const std::string& name) const {
+    auto it = std::find(bodies.begin(), bodies.end(), name);
+    return it == bodies.end() ? -1 : static_cast<int>(it - bodies.begin());
+}
+
+namespace {
+
+std::string slurp(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(log::cat(path.string(), ": cannot read the file"));
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+// Splits CSV text into lines of fields; the first line is the header.
+class CsvReader {
+public:
+    CsvReader(std::string text, std::string file) : text_(std::move(text)), file_(std::move(file)) {}
+
+    void expect_header(const std::vector<std::string>& columns) {
+        std::vector<std::string_view> fields;
+        if (!next(fields)) fail(1, "the file is empty (expected the header line)");
+        std::string want, got;
+        for (const auto& c : columns) want += (want.empty() ? "" : ",") + c;
+        for (auto f : fields) got += (got.empty() ? "" : ",") + std::string(f);
+        if (want != got) fail(line_, log::cat("header is '", got, "', expected '", want, "'"));
+        columns_ = columns;
+    }
+    // Next data row; false at the end. Blank trailing lines are allowed.
+    bool next(std::vector<std::string_view>& fields) {
+        while (pos_ < text_.size()) {
+            std::size_t end = text_.find('\n', pos_);
+            if (end == std::string::npos) end = text_.size();
+            std::string_view row(text_.data() + pos_, end - pos_);
+            pos_ = end + 1;
+            ++line_;
+            if (!row.empty() && row.back() == '\r') row.remove_suffix(1);
+            if (row.empty()) continue;
+            fields.clear();
+            std::size_t start = 0;
+            for (;;) {
+                const std::size_t comma = row.find(',', start);
+                fields.push_back(row.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+                if (comma == std::string_view::npos) break;
+                start = comma + 1;
+            }
+            if (!columns_.empty() && fields.size() != columns_.size()) {
+                fail(line_, log::cat(fields.size(), " fields, expected ", columns_.size(), " (", join_columns(), ")"));
+            }
+            return true;
+        }
+        return false;
+    }
+    double number(std::string_view field, std::size_t column) const {
+        double v = 0;
+        const auto* end = field.data() + field.size();
+        auto [ptr, ec] = std::from_chars(field.data(), end, v);
+        if (ec != std::errc() || ptr != end || field.empty()) {
+            fail(line_, log::cat("column ", columns_[column], ": '", field, "' is not a number"));
+        }
+        if (!std::isfinite(v)) fail(line_, log::cat("column ", columns_[column], ": '", field, "' is not finite"));
+        return v;
+    }
+    [[noreturn]] void fail(std::size_t line, const std::string& what) const {
+        throw InputError(log::cat(file_, ":", line, ": ", what));
+    }
+    std::size_t line() const { return line_; }
+
+private:
+    std::string join_columns() const {
+        std::string s;
+        for (const auto& c : columns_) s += (s.empty() ? "" : ",") + c;
+        return s;
+    }
+    std::string text_;
+    std::string file_;
+    std::size_t pos_ = 0;
+    std::size_t line_ = 0;
+    std::vector<std::string> columns_;
+};
+
+std::string json_location(const std::string& text, std::size_t byte) {
+    std::size_t line = 1, col = 1;
+    for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
+        if (text[i] == '\n') {
+            ++line;
+            col = 1;
+        } else {
+            ++col;
+        }
+    }
+    return log::cat(line, ":", col);
+}
+
+Meta read_meta(const fs::path& path) {
+    const std::string text = slurp(path);
+    const std::string file = path.string();
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw InputError(log::cat(file, ":", json_location(text, e.byte), ": not valid JSON"));
+    }
+    auto fail = [&](const std::string& key, const std::string& what) -> void {
+        throw InputError(log::cat(file, ": field '", key, "': ", what));
+    };
+    if (!j.is_object()) fail("(top)", "expected a JSON object");
+    if (!j.contains("format") || j["format"] != kFormat) {
+        fail("format", log::cat("expected \"", kFormat, "\", got ", j.contains("format") ? j["format"].dump() : "nothing"));
+    }
+    Meta m;
+    auto string_of = [&](const std::string& key) {
+        if (!j.contains(key) || !j[key].is_string()) fail(key, "missing or not a string");
+        return j[key].get<std::string>();
+    };
+    m.sufferer = string_of("sufferer");
+    m.formation = string_of("formation");
+    if (std::find_if(kFormations.begin(), kFormations.end(), [&](const char* f) { return m.formation == f; }) ==
+        kFormations.end()) {
+        fail("formation", log::cat("'", m.formation, "' is not one of single, side_by_side, leader_follower, stack, hybrid, free"));
+    }
+    if (!j.contains("neighbours") || !j["neighbours"].is_array()) fail("neighbours", "missing or not a list");
+    for (const auto& n : j["neighbours"]) {
+        if (!n.is_string()) fail("neighbours", "every entry must be a string");
+        m.neighbours.push_back(n.get<std::string>());
+    }
+    if (j.contains("vehicles")) {
+        if (!j["vehicles"].is_object()) fail("vehicles", "not an object");
+        for (const auto& [name, v] : j["vehicles"].items()) {
+            const std::string key = "vehicles." + name;
+            if (!v.is_object()) fail(key, "not an object");
+            VehicleInfo info;
+            auto num = [&](const char* field, double& out) {
+                if (!v.contains(field)) return;
+                if (!v[field].is_number()) fail(key + "." + field, "not a number");
+                out = v[field].get<double>();
+                if (!(out > 0)) fail(key + "." + field, "must be positive");
+            };
+            num("mass_kg", info.mass_kg);
+            num("prop_radius_m", info.prop_radius_m);
+            num("motor_distance_m", info.motor_distance_m);
+            if (v.contains("rotors")) {
+                if (!v["rotors"].is_number_integer() || v["rotors"].get<int>() < 1) fail(key + ".rotors", "not a positive integer");
+                info.rotors = v["rotors"].get<int>();
+            }
+            m.vehicles[name] = info;
+        }
+    }
+    if (j.contains("stand")) {
+        const auto& s = j["stand"];
+        if (!s.is_object()) fail("stand", "not an object");
+        if (s.contains("height_m")) {
+            if (!s["height_m"].is_number()) fail("stand.height_m", "not a number");
+            m.stand_height_m = s["height_m"].get<double>();
+        }
+    }
+    json extra = json::object();
+    for (const auto& [k, v] : j.items()) {
+        if (k != "format" && k != "sufferer" && k != "neighbours" && k != "formation" && k != "vehicles" && k != "stand") {
+            extra[k] = v;
+        }
+    }
+    m.extra_json = extra.dump();
+    return m;
+}
+
+}  // namespace
+
+Flight read_flight(const std::string& dir) {
+    const fs::path root(dir);
+    if (!fs::is_directory(root)) throw InputError(log::cat(dir, ": not a flight folder (no such directory)"));
+    Flight f;
+    f.meta = read_meta(root / "meta.json");
+
+    {
+        CsvReader csv(slurp(root / "wrench.csv"), (root / "wrench.csv").string());
+        csv.expect_header({"t", "f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"});
+        std::vector<std::string_view> row;
+        while (csv.next(row)) {
+            WrenchSample s;
+            s.t = csv.number(row[0], 0);
+            for (std::size_t i = 0; i < 6; ++i) s.w[i] = csv.number(row[i + 1], i + 1);
+            if (!f.wrench.empty() && s.t < f.wrench.back().t) {
+                csv.fail(csv.line(), log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
+            }
+            f.wrench.push_back(s);
+        }
+        if (f.wrench.empty()) csv.fail(1, "no samples");
+    }
+    {
+        CsvReader csv(slurp(root / "poses.csv"), (root / "poses.csv").string());
+        csv.expect_header({"t", "body", "n", "e", "d", "qw", "qx", "qy", "qz"});
+        std::vector<std::string_view> row;
+        while (csv.next(row)) {
+            PoseSample s;
+            s.t = csv.number(row[0], 0);
+            if (row[1].empty()) csv.fail(csv.line(), "column body: empty");
+            s.body = f.body_index(std::string(row[1]));
+            for (std::size_t i = 0; i < 3; ++i) s.p[i] = csv.number(row[i + 2], i + 2);
+            for (std::size_t i = 0; i < 4; ++i) s.q[i] = csv.number(row[i + 5], i + 5);
+            const double norm = std::sqrt(s.q[0] * s.q[0] + s.q[1] * s.q[1] + s.q[2] * s.q[2] + s.q[3] * s.q[3]);
+            if (std::abs(norm - 1.0) > 1e-3) csv.fail(csv.line(), log::cat("quaternion norm ", norm, " is not 1"));
+            if (!f.poses.empty() && s.t < f.poses.back().t) {
+                csv.fail(csv.line(), log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
+            }
+            f.poses.push_back(s);
+        }
+        if (f.poses.empty()) csv.fail(1, "no samples");
+        if (f.find_body(f.meta.sufferer) < 0) {
+            csv.fail(1, log::cat("the sufferer '", f.meta.sufferer, "' named in meta.json has no pose"));
+        }
+        for (const auto& n : f.meta.neighbours) {
+            if (f.find_body(n) < 0) csv.fail(1, log::cat("neighbour '", n, "' named in meta.json has no pose"));
+        }
+    }
+    if (fs::exists(root / "legs.csv")) {
+        CsvReader csv(slurp(root / "legs.csv"), (root / "legs.csv").string());
+        csv.expect_header({"leg", "t_start", "t_end"});
+        std::vector<std::string_view> row;
+        std::vector<Leg> legs;
+        while (csv.next(row)) {
+            Leg l;
+            const double id = csv.number(row[0], 0);
+            if (id != std::floor(id) || id < 0) csv.fail(csv.line(), log::cat("column leg: '", row[0], "' is not a leg number"));
+            l.leg = static_cast<int>(id);
+            l.t_start = csv.number(row[1], 1);
+            l.t_end = csv.number(row[2], 2);
+            if (l.t_end <= l.t_start) csv.fail(csv.line(), "t_end is not after t_start");
+            if (!legs.empty() && l.t_start < legs.back().t_start) csv.fail(csv.line(), "legs must be sorted by t_start");
+            legs.push_back(l);
+        }
+        f.legs = std::move(legs);
+    }
+    return f;
+}
+
+namespace {
+void write_text(const fs::path& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary);
+    if (!out) throw RuntimeError(log::cat("cannot write ", path.string()));
+    out << text;
+    if (!out) throw RuntimeError(log::cat("writing ", path.string(), " failed"));
+}
+
+void append(std::string& s, const char* fmt, double v) {
+    char buf[48];
+    const int n = std::snprintf(buf, sizeof(buf), fmt, v);
+    s.append(buf, static_cast<std::size_t>(n));
+}
+}  // namespace
+
+void write_flight(const Flight& f, const std::string& dir) {
+    const fs::path root(dir);
+    fs::create_directories(root);
+    json meta = json::parse(f.meta.extra_json);
+    meta["format"] = kFormat;
+    meta["sufferer"] = f.meta.sufferer;
+    meta["neighbours"] = f.meta.neighbours;
+    meta["formation"] = f.meta.formation;
+    json vehicles = json::object();
+    for (const auto& [name, v] : f.meta.vehicles) {
+        vehicles[name] = {{"mass_kg", v.mass_kg}, {"rotors", v.rotors}, {"prop_radius_m", v.prop_radius_m},
+                          {"motor_distance_m", v.motor_distance_m}};
+    }
+    meta["vehicles"] = vehicles;
+    meta["stand"] = {{"height_m", f.meta.stand_height_m}};
+    write_text(root / "meta.json", meta.dump(2) + "\n");
+
+    std::string w = "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
+    w.reserve(f.wrench.size() * 80);
+    for (const auto& s : f.wrench) {
+        append(w, "%.6f", s.t);
+        for (double v : s.w) {
+            w += ',';
+            append(w, "%.6f", v);
+        }
+        w += '\n';
+    }
+    write_text(root / "wrench.csv", w);
+
+    std::string p = "t,body,n,e,d,qw,qx,qy,qz\n";
+    p.reserve(f.poses.size() * 90);
+    for (const auto& s : f.poses) {
+        append(p, "%.6f", s.t);
+        p += ',';
+        p += f.bodies.at(s.body);
+        for (double v : s.p) {
+            p += ',';
+            append(p, "%.6f", v);
+        }
+        for (double v : s.q) {
+            p += ',';
+            append(p, "%.8f", v);
+        }
+        p += '\n';
+    }
+    write_text(root / "poses.csv", p);
+
+    if (f.legs) {
+        std::string l = "leg,t_start,t_end\n";
+        for (const auto& leg : *f.legs) {
+            l += std::to_string(leg.leg) + ",";
+            append(l, "%.6f", leg.t_start);
+            l += ',';
+            append(l, "%.6f", leg.t_end);
+            l += '\n';
+        }
+        write_text(root / "legs.csv", l);
+    }
+}
+
+std::array<double, 3> Track::position_at(double time) const {
+    if (t.empty()) return {0, 0, 0};
+    if (time <= t.front()) return p.front();
+    if (time >= t.back()) return p.back();
+    const auto it = std::upper_bound(t.begin(), t.end(), time);
+    const std::size_t i = static_cast<std::size_t>(it - t.begin());
+    const double a = (time - t[i - 1]) / (t[i] - t[i - 1]);
+    return {p[i - 1][0] + a * (p[i][0] - p[i - 1][0]), p[i - 1][1] + a * (p[i][1] - p[i - 1][1]),
+            p[i - 1][2] + a * (p[i][2] - p[i - 1][2])};
+}
+
+std::vector<Track> tracks(const Flight& f) {
+    std::vector<Track> out(f.bodies.size());
+    for (const auto& s : f.poses) {
+        auto& tr = out[s.body];
+        tr.t.push_back(s.t);
+        tr.p.push_back(s.p);
+        tr.q.push_back(s.q);
+    }
+    return out;
+}
+
+}  // namespace dw::flight

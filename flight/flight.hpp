@@ -1,0 +1,82 @@
+#pragma once
+// Flight folders (downwash-flight/1, ../shared/FLIGHT_FORMAT.md): the plain-file contract every
+// tool reads and writes next to MCAP. Reading is all-or-nothing: a file that breaks a rule is
+// rejected with dw::InputError naming the file, the line and the problem.
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dw::flight {
+
+inline constexpr const char* kFormat = "downwash-flight/1";
+inline constexpr std::array<const char*, 6> kAxes = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
+inline constexpr std::array<const char*, 6> kFormations = {"single", "side_by_side", "leader_follower",
+                                                           "stack", "hybrid", "free"};
+
+// The wrench the air exerts on the sufferer, tared, on the stand clock. N, N·m, NED axes.
+struct WrenchSample {
+    double t = 0;
+    std::array<double, 6> w{};  // f_n f_e f_d m_roll m_pitch m_yaw
+};
+
+// One body's pose on the mocap clock. World NED metres; unit quaternion body->world, w first.
+struct PoseSample {
+    double t = 0;
+    std::uint16_t body = 0;  // index into Flight::bodies
+    std::array<double, 3> p{};
+    std::array<double, 4> q{1, 0, 0, 0};
+};
+
+struct Leg {
+    int leg = 0;
+    double t_start = 0;
+    double t_end = 0;
+};
+
+struct VehicleInfo {
+    double mass_kg = 0.7;
+    int rotors = 4;
+    double prop_radius_m = 0.0635;
+    double motor_distance_m = 0.25;
+};
+
+struct Meta {
+    std::string sufferer = "sufferer";
+    std::vector<std::string> neighbours;
+    std::string formation = "free";
+    std::map<std::string, VehicleInfo> vehicles;
+    double stand_height_m = 1.4;
+    std::string extra_json = "{}";  // unknown keys, kept as they were (a JSON object)
+};
+
+struct Flight {
+    Meta meta;
+    std::vector<std::string> bodies;  // names of the bodies in poses.csv, in first-seen order
+    std::vector<WrenchSample> wrench;
+    std::vector<PoseSample> poses;
+    std::optional<std::vector<Leg>> legs;
+
+    // Index of a body name, adding it if new.
+    std::uint16_t body_index(const std::string& name);
+    // Index of a body name, or -1.
+    int find_body(const std::string& name) const;
+};
+
+Flight read_flight(const std::string& dir);
+// Writes meta.json, wrench.csv, poses.csv and legs.csv (if any); creates dir. Deterministic bytes.
+void write_flight(const Flight& flight, const std::string& dir);
+
+// Per-body pose tracks, for lookup by time.
+struct Track {
+    std::vector<double> t;
+    std::vector<std::array<double, 3>> p;
+    std::vector<std::array<double, 4>> q;
+    // Linear interpolation (clamped at the ends) of the position at time t.
+    std::array<double, 3> position_at(double time) const;
+};
+std::vector<Track> tracks(const Flight& flight);  // indexed like Flight::bodies
+
+}  // namespace dw::flight

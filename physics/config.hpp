@@ -1,0 +1,106 @@
+#pragma once
+// The physics configuration (downwash-physics/1): which jet model and aggregation law, the
+// vehicles, the stand, noise and turbulence, and the switchable effects named as in
+// ../shared/FLIGHT_FORMAT.md. Loaded strictly from YAML: an unknown key or a bad value is an
+// error naming file, line and key. config/physics.example.yaml documents every key.
+#include <array>
+#include <string>
+
+namespace dw::physics {
+
+enum class JetModelKind { bauersfeld, jain };
+enum class Aggregation { force_sum, velocity_superposition };
+
+struct VehicleParams {
+    double mass_kg = 0.7;
+    int rotors = 4;
+    double prop_radius_m = 0.0635;   // 5" propellers
+    double motor_distance_m = 0.25;  // diagonal motor-to-motor distance l
+};
+
+struct JainParams {  // Jain et al., ICUAS 2019; published constants disagree: fit them
+    double c_ax = 5.0;
+    double c_rad = 10.0;
+    double z0_m = 0.25;
+    double diameter_m = 0.25;
+};
+
+struct SuffererParams {
+    VehicleParams vehicle;
+    double drag_coefficient = 1.18;          // flat plate, vertical flow
+    double lateral_drag_coefficient = 0.3;   // edge-on, horizontal flow
+    double arm_width_m = 0.02;
+    double body_size_m = 0.08;
+    int disc_rings = 2;                      // planform resolution per rotor disc
+    int disc_sectors = 6;
+    bool thrust_loss = true;                 // rotors lose thrust in oncoming flow
+    double kv_omega_n_per_mps = 0.1;         // per rotor
+};
+
+struct StandParams {
+    double height_m = 1.4;                   // sufferer above the floor
+    double lateral_radius_m = 0.1;           // lateral cells' distance from the centre
+    double counts_per_newton = 21400.0;      // 10 kg cell, 1 mV/V, HX711 gain 128
+    double offset_sigma_counts = 50000.0;    // per-chip zero offsets (removed by the tare)
+    double rate_hz = 80.0;
+    double rate_skew = 0.01;                 // each chip's rate within ±1 %
+    double noise_n = 0.025;                  // per cell, 1 sigma
+    double tare_s = 1.0;                     // averaging time of the tare at the start
+};
+
+struct TurbulenceParams {
+    bool enabled = true;
+    double intensity = 0.1;                  // u'/U of the jet speed (Ornstein-Uhlenbeck)
+    double time_scale_s = 0.025;             // ≈ r_half / U_c
+};
+
+struct DynamicsParams {  // simulated vehicles
+    double natural_frequency_rad_s = 3.0;
+    double damping = 0.6;
+    double hover_noise_m = 0.02;
+    double hover_noise_time_s = 1.0;
+    double rate_hz = 360.0;                  // integration rate (also the wrench model's rate)
+};
+
+struct MocapParams {
+    double rate_hz = 180.0;
+    double noise_m = 0.0005;
+};
+
+struct Effects {
+    struct { bool enabled = false; double offset_s = 0.0; } clock_offset;
+    struct { bool enabled = false; double tau_s = 0.0; } sensor_lag;
+    struct { bool enabled = false; double delay_scale = 1.0; } wake_transport;
+    struct { bool enabled = false; std::array<double, 3> offset_m{0, 0, 0}; } position_offset;
+    struct { bool enabled = false; double scale = 1.0; } force_scale;
+    struct { bool enabled = false; int from = 2; int to = 0; double coefficient = 0.0; } cell_crosstalk;  // axes 0-5
+    struct { bool enabled = false; double contraction = 0.8; double onset = 0.6; double full = 1.0; } jet_merging;
+    struct { bool enabled = false; double coefficient = 0.02; double length_m = 1.0; } floor_recirculation;
+};
+
+struct PhysicsConfig {
+    double air_density_kg_m3 = 1.225;
+    double gravity_m_s2 = 9.81;
+    JetModelKind jet_model = JetModelKind::bauersfeld;
+    bool radial_inflow = true;               // entrainment flow from continuity
+    JainParams jain;
+    Aggregation aggregation = Aggregation::force_sum;
+    SuffererParams sufferer;
+    VehicleParams neighbour;                 // neighbours' parameters
+    StandParams stand;
+    TurbulenceParams turbulence;
+    DynamicsParams dynamics;
+    MocapParams mocap;
+    Effects effects;
+};
+
+// Throws dw::InputError "file:line:col: key: problem".
+PhysicsConfig load_physics(const std::string& path);
+PhysicsConfig parse_physics(const std::string& yaml, const std::string& name);
+// A complete YAML document that parse_physics reads back to the same configuration.
+std::string to_yaml(const PhysicsConfig& c);
+
+int axis_index(const std::string& name);  // "f_n" -> 0 ... "m_yaw" -> 5, -1 if unknown
+const char* axis_name(int index);
+
+}  // namespace dw::physics

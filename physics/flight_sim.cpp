@@ -1,0 +1,175 @@
+#include "physics/flight_sim.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+#include "physics/stand.hpp"
+#include "physics/vehicle.hpp"
+
+namespace dw::physics {
+namespace {
+
+// The wrench series at the base rate, read between samples by linear interpolation.
+Wrench interpolate(const std::vector<Wrench>& w, double t, double dt) {
+    const double x = t / dt;
+    if (x <= 0) return w.front();
+    const auto i = static_cast<std::size_t>(x);
+    if (i + 1 >= w.size()) return w.back();
+    const double a = x - static_cast<double>(i);
+    return (1 - a) * w[i] + a * w[i + 1];
+}
+
+}  // namespace
+
+SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
+    const Formation formation = make_formation(o.formation);
+    GridOptions grid = o.grid;
+    grid.stand_height_m = c.stand.height_m;
+    const ReferenceTrajectory reference(grid);
+    const WrenchModel model(c);
+    const StandModel stand(c.stand);
+    const auto& fx = c.effects;
+
+    Rng master(o.seed);
+    const std::size_t k = formation.offsets.size();
+    std::vector<SimVehicle> vehicles;
+    std::vector<OrnsteinUhlenbeck> gusts;
+    std::vector<Rng> gust_rng;
+    for (std::size_t j = 0; j < k; ++j) {
+        vehicles.emplace_back(c.dynamics, c.gravity_m_s2, reference.at(0).position + formation.offsets[j], master.split());
+        gusts.emplace_back(c.turbulence.intensity, c.turbulence.time_scale_s);
+        gust_rng.push_back(master.split());
+    }
+    Rng mocap_rng = master.split();
+    Rng stand_rng = master.split();
+
+    SimResult out;
+    flight::Flight& f = out.flight;
+    f.meta.sufferer = "sufferer";
+    f.meta.formation = formation.meta_name;
+    f.meta.stand_height_m = c.stand.height_m;
+    f.meta.extra_json = R"({"generator":"dw-sim fly"})";
+    const std::uint16_t sufferer_body = f.body_index("sufferer");
+    std::vector<std::uint16_t> bodies;
+    for (std::size_t j = 0; j < k; ++j) {
+        const std::string name = "v" + std::to_string(j + 1);
+        f.meta.neighbours.push_back(name);
+        f.meta.vehicles[name] = {c.neighbour.mass_kg, c.neighbour.rotors, c.neighbour.prop_radius_m, c.neighbour.motor_distance_m};
+        bodies.push_back(f.body_index(name));
+    }
+    const Vec3 sufferer(0, 0, -c.stand.height_m);
+
+    // 1. Fly, and evaluate the true wrench at every integration step.
+    const double dt = 1.0 / c.dynamics.rate_hz;
+    const auto steps = static_cast<std::size_t>(std::ceil(reference.duration() / dt)) + 1;
+    const double mocap_dt = 1.0 / c.mocap.rate_hz;
+    double next_mocap = 0;
+    std::vector<Producer> producers(k);
+    out.truth_t.reserve(steps);
+    out.truth.reserve(steps);
+    auto add_pose = [&](double t, std::uint16_t body, const Vec3& p, const Eigen::Quaterniond& q, const Vec3& offset) {
+        flight::PoseSample s;
+        s.t = t;
+        s.body = body;
+        for (int i = 0; i < 3; ++i) s.p[static_cast<std::size_t>(i)] = p[i] + offset[i] + c.mocap.noise_m * mocap_rng.normal();
+        s.q = {q.w(), q.x(), q.y(), q.z()};
+        f.poses.push_back(s);
+    };
+    const Vec3 pos_offset = fx.position_offset.enabled
+                                ? Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1], fx.position_offset.offset_m[2])
+                                : Vec3::Zero();
+    for (std::size_t n = 0; n < steps; ++n) {
+        const double t = static_cast<double>(n) * dt;
+        const Setpoint ref = reference.at(t);
+        for (std::size_t j = 0; j < k; ++j) {
+            Setpoint sp = ref;
+            sp.position += formation.offsets[j];
+            if (n > 0) vehicles[j].step(sp, dt);
+            const VehicleState& s = vehicles[j].state();
+            producers[j] = model.producer(s.position, s.velocity);
+            producers[j].axis = vehicles[j].jet_axis();
+            if (c.turbulence.enabled) producers[j].gust = std::max(0.0, 1.0 + gusts[j].step(dt, gust_rng[j]));
+        }
+        out.truth_t.push_back(t);
+        out.truth.push_back(model.evaluate(sufferer, producers));
+        if (t + 1e-9 >= next_mocap) {
+            add_pose(t, sufferer_body, sufferer, Eigen::Quaterniond::Identity(), Vec3::Zero());
+            for (std::size_t j = 0; j < k; ++j) {
+                add_pose(t, bodies[j], vehicles[j].state().position, vehicles[j].state().orientation, pos_offset);
+            }
+            next_mocap += mocap_dt;
+        }
+        if (o.progress && n % 4096 == 0) o.progress(0.9 * static_cast<double>(n) / static_cast<double>(steps));
+    }
+
+    // 2. The stand's response: a first-order lag of the true wrench (sensor_lag).
+    std::vector<Wrench> felt = out.truth;
+    if (fx.sensor_lag.enabled && fx.sensor_lag.tau_s > 0) {
+        const double a = std::exp(-dt / fx.sensor_lag.tau_s);
+        for (std::size_t n = 1; n < felt.size(); ++n) felt[n] = a * felt[n - 1] + (1 - a) * out.truth[n];
+    }
+
+    // 3. Eight HX711s on their own oscillators, each converting its cell's force.
+    struct Chip {
+        double period, phase, offset;
+        std::vector<double> t;
+        std::vector<std::int32_t> counts;
+    };
+    std::array<Chip, kCells> chips;
+    const double end = out.truth_t.back();
+    for (int ci = 0; ci < kCells; ++ci) {
+        Chip& chip = chips[static_cast<std::size_t>(ci)];
+        chip.period = 1.0 / (c.stand.rate_hz * (1.0 + c.stand.rate_skew * (2 * stand_rng.uniform() - 1)));
+        chip.phase = chip.period * stand_rng.uniform();
+        chip.offset = c.stand.offset_sigma_counts * stand_rng.normal();
+        for (double t = chip.phase; t <= end; t += chip.period) {
+            const auto cells = stand.wrench_to_cells(interpolate(felt, t, dt));
+            const double force = cells[ci] + c.stand.noise_n * stand_rng.normal();
+            chip.t.push_back(t);
+            chip.counts.push_back(StandModel::to_counts(force, chip.offset, c.stand.counts_per_newton));
+        }
+    }
+    // The agent publishes a frame whenever chip 0 converts, with every chip's latest conversion.
+    std::array<std::size_t, kCells> latest{};
+    std::vector<double> frame_t;
+    std::vector<Eigen::Matrix<double, kCells, 1>> frame_counts;
+    for (std::size_t i = 0; i < chips[0].t.size(); ++i) {
+        const double t = chips[0].t[i];
+        Eigen::Matrix<double, kCells, 1> counts;
+        bool complete = true;
+        for (std::size_t ci = 0; ci < kCells; ++ci) {
+            while (latest[ci] + 1 < chips[ci].t.size() && chips[ci].t[latest[ci] + 1] <= t) ++latest[ci];
+            if (chips[ci].t.empty() || chips[ci].t[latest[ci]] > t) complete = false;
+            else counts[static_cast<Eigen::Index>(ci)] = chips[ci].counts[latest[ci]];
+        }
+        if (!complete) continue;
+        frame_t.push_back(t);
+        frame_counts.push_back(counts);
+    }
+    // Tare: the mean of the first tare_s (neighbours far away, sufferer at hover thrust).
+    Eigen::Matrix<double, kCells, 1> zero = Eigen::Matrix<double, kCells, 1>::Zero();
+    int tare_n = 0;
+    for (std::size_t i = 0; i < frame_t.size() && frame_t[i] < frame_t.front() + c.stand.tare_s; ++i, ++tare_n) zero += frame_counts[i];
+    zero /= std::max(tare_n, 1);
+
+    // 4. Calibrated wrench, then the recording's own errors, stamped on the stand clock.
+    const double clock = fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0;
+    for (std::size_t i = 0; i < frame_t.size(); ++i) {
+        Wrench w = stand.cells_to_wrench() * ((frame_counts[i] - zero) / c.stand.counts_per_newton);
+        if (fx.force_scale.enabled) w *= fx.force_scale.scale;
+        if (fx.cell_crosstalk.enabled) w[fx.cell_crosstalk.to] += fx.cell_crosstalk.coefficient * w[fx.cell_crosstalk.from];
+        flight::WrenchSample s;
+        s.t = frame_t[i] + clock;
+        for (int a = 0; a < 6; ++a) s.w[static_cast<std::size_t>(a)] = w[a];
+        f.wrench.push_back(s);
+    }
+
+    std::vector<flight::Leg> legs;
+    for (const auto& l : reference.legs()) legs.push_back({l.index, l.t_start, l.t_end});
+    f.legs = std::move(legs);
+    if (o.progress) o.progress(1.0);
+    return out;
+}
+
+}  // namespace dw::physics

@@ -1,0 +1,33 @@
+#pragma once
+// A simulated flight: vehicles fly the grid legs in formation above the stand; the physics gives
+// the true wrench; the stand samples it through 8 skewed HX711 clocks, tares and calibrates; the
+// mocap samples the poses; the effects act where they would in a real lab. The result is a
+// flight folder (downwash-flight/1) plus, for tests, the true wrench behind it.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "flight/flight.hpp"
+#include "physics/config.hpp"
+#include "physics/trajectory.hpp"
+#include "physics/wrench_model.hpp"
+
+namespace dw::physics {
+
+struct FlyOptions {
+    std::string formation = "single";
+    GridOptions grid;
+    std::uint64_t seed = 1;
+    std::function<void(double)> progress;  // fraction done, 0..1 (may be empty)
+};
+
+struct SimResult {
+    flight::Flight flight;
+    std::vector<double> truth_t;   // simulation time (= mocap clock) [s]
+    std::vector<Wrench> truth;     // the true wrench on the sufferer, before the stand
+};
+
+SimResult simulate_flight(const PhysicsConfig& physics, const FlyOptions& options);
+
+}  // namespace dw::physics

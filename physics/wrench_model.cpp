@@ -1,0 +1,308 @@
+#include "physics/wrench_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace dw::physics {
+
+struct WrenchModel::Scratch {
+    std::vector<double> ux, uy, uz;
+    void reset(std::size_t n) {
+        ux.assign(n, 0.0);
+        uy.assign(n, 0.0);
+        uz.assign(n, 0.0);
+    }
+};
+
+Planform Planform::make(const SuffererParams& s) {
+    Planform p;
+    const double R = s.vehicle.prop_radius_m;
+    const double arm = 0.5 * s.vehicle.motor_distance_m;  // centre to motor
+    const int rotors = s.vehicle.rotors;
+    auto add = [&](double x, double y, double a, int rotor) {
+        p.x.push_back(x);
+        p.y.push_back(y);
+        p.area.push_back(a);
+        p.rotor.push_back(rotor);
+    };
+    for (int k = 0; k < rotors; ++k) {
+        // X configuration: the first motor at 45° (front right).
+        const double phi = M_PI / 4 + 2 * M_PI * k / rotors;
+        const double cx = arm * std::cos(phi), cy = arm * std::sin(phi);
+        p.rotor_centre.push_back({cx, cy});
+        p.rotor_area.push_back(M_PI * R * R);
+        // Ring 0 is a centre disc; rings 1.. are annuli of equal width split into sectors.
+        const double dr = R / s.disc_rings;
+        add(cx, cy, M_PI * dr * dr, k);
+        for (int ring = 1; ring < s.disc_rings; ++ring) {
+            const double r0 = ring * dr, r1 = (ring + 1) * dr;
+            const double rc = 2.0 / 3.0 * (r1 * r1 * r1 - r0 * r0 * r0) / (r1 * r1 - r0 * r0);  // centroid radius
+            const double a = M_PI * (r1 * r1 - r0 * r0) / s.disc_sectors;
+            for (int sec = 0; sec < s.disc_sectors; ++sec) {
+                const double th = 2 * M_PI * (sec + 0.5) / s.disc_sectors;
+                add(cx + rc * std::cos(th), cy + rc * std::sin(th), a, k);
+            }
+        }
+        // The arm between the body and the disc.
+        const double inner = 0.5 * s.body_size_m * std::sqrt(2.0), outer = arm - R;
+        if (outer > inner && s.arm_width_m > 0) {
+            const double mid = 0.5 * (inner + outer);
+            add(mid * std::cos(phi), mid * std::sin(phi), (outer - inner) * s.arm_width_m, -1);
+        }
+    }
+    if (s.body_size_m > 0) {
+        const double h = 0.25 * s.body_size_m;  // 2x2 cells
+        const double a = 0.25 * s.body_size_m * s.body_size_m;
+        for (double bx : {-h, h}) {
+            for (double by : {-h, h}) add(bx, by, a, -1);
+        }
+    }
+    return p;
+}
+
+WrenchModel::WrenchModel(const PhysicsConfig& config)
+    : config_(config), planform_(Planform::make(config.sufferer)),
+      neighbour_jet_(Jet::make(config.neighbour, config)) {
+    half_rho_cd_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.drag_coefficient;
+    half_rho_clat_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.lateral_drag_coefficient;
+}
+
+Producer WrenchModel::producer(const Vec3& position, const Vec3& velocity) const {
+    Producer p;
+    p.position = position;
+    p.velocity = velocity;
+    p.jet = neighbour_jet_;
+    return p;
+}
+
+void WrenchModel::add_velocity(const Vec3& suf, const Producer& p, double weight, Scratch& sc) const {
+    const Jet& jet = p.jet;
+    const double ax = p.axis.x(), ay = p.axis.y(), az = p.axis.z();
+    const double ox = suf.x() - p.position.x(), oy = suf.y() - p.position.y(), oz = suf.z() - p.position.z();
+    const double gain = weight * p.gust;
+    const double delay_scale = config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
+    const bool radial = config_.radial_inflow;
+    const std::size_t n = planform_.size();
+    const double* cx = planform_.x.data();
+    const double* cy = planform_.y.data();
+    double* ux = sc.ux.data();
+    double* uy = sc.uy.data();
+    double* uz = sc.uz.data();
+    for (std::size_t i = 0; i < n; ++i) {
+        double dx = ox + cx[i], dy = oy + cy[i], dz = oz;
+        double s = dx * ax + dy * ay + dz * az;
+        if (delay_scale > 0 && s > 0) {
+            // The air at depth s left the producer τ(s) ago, when it was at p - v τ.
+            const double tau = delay_scale * jet.transport_delay(s);
+            dx += p.velocity.x() * tau;
+            dy += p.velocity.y() * tau;
+            dz += p.velocity.z() * tau;
+            s = dx * ax + dy * ay + dz * az;
+        }
+        if (s <= 0) continue;
+        const double rx = dx - s * ax, ry = dy - s * ay, rz = dz - s * az;
+        const double r2 = rx * rx + ry * ry + rz * rz;
+        double u_axial, u_radial_over_r;
+        if (jet.model == JetModelKind::bauersfeld) {
+            const double xi = s * jet.inv_l + kBauersfeldB;
+            const double uc = jet.k_centre / xi;
+            const double inv_rh = 1.0 / (jet.c_half * xi);
+            const double d = 1.0 + kProfileB * r2 * inv_rh * inv_rh;
+            const double inv_d = 1.0 / d;
+            u_axial = uc * inv_d * inv_d;
+            u_radial_over_r = radial ? uc * kBauersfeldC * inv_rh * (inv_d * inv_d - 0.5 * inv_d) : 0.0;
+        } else {
+            u_axial = jet.axial(std::sqrt(r2), s);
+            u_radial_over_r = 0.0;
+        }
+        ux[i] += gain * (u_axial * ax + u_radial_over_r * rx);
+        uy[i] += gain * (u_axial * ay + u_radial_over_r * ry);
+        uz[i] += gain * (u_axial * az + u_radial_over_r * rz);
+    }
+}
+
+Wrench WrenchModel::drag(const Scratch& sc) const {
+    const std::size_t n = planform_.size();
+    double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
+    const double* cx = planform_.x.data();
+    const double* cy = planform_.y.data();
+    const double* area = planform_.area.data();
+    for (std::size_t i = 0; i < n; ++i) {
+        const double u_x = sc.ux[i], u_y = sc.uy[i], u_z = sc.uz[i];
+        const double fzi = half_rho_cd_ * area[i] * std::abs(u_z) * u_z;
+        const double uh = std::sqrt(u_x * u_x + u_y * u_y);
+        const double k = half_rho_clat_ * area[i] * uh;
+        const double fxi = k * u_x, fyi = k * u_y;
+        fx += fxi;
+        fy += fyi;
+        fz += fzi;
+        tx += cy[i] * fzi;
+        ty -= cx[i] * fzi;
+        tz += cx[i] * fyi - cy[i] * fxi;
+    }
+    if (config_.sufferer.thrust_loss) {
+        const std::size_t rotors = planform_.rotor_centre.size();
+        std::array<double, 16> inflow{};  // area-weighted downward flow through each disc
+        for (std::size_t i = 0; i < n; ++i) {
+            const int r = planform_.rotor[i];
+            if (r >= 0) inflow[static_cast<std::size_t>(r)] += area[i] * sc.uz[i];
+        }
+        for (std::size_t r = 0; r < rotors; ++r) {
+            const double dT = config_.sufferer.kv_omega_n_per_mps * inflow[r] / planform_.rotor_area[r];
+            fz += dT;
+            tx += planform_.rotor_centre[r][1] * dT;
+            ty -= planform_.rotor_centre[r][0] * dT;
+        }
+    }
+    Wrench w;
+    w << fx, fy, fz, tx, ty, tz;
+    return w;
+}
+
+Wrench WrenchModel::floor_bias(const Vec3& suf, std::span<const Producer> producers) const {
+    Wrench w = Wrench::Zero();
+    const auto& e = config_.effects.floor_recirculation;
+    if (!e.enabled) return w;
+    // Jets that reach the floor come back up around the stand: an upward bias that grows with
+    // each impinging jet and fades with its lateral distance.
+    for (const auto& p : producers) {
+        if (p.position.z() >= suf.z()) continue;  // not above the sufferer
+        const double dx = p.position.x() - suf.x(), dy = p.position.y() - suf.y();
+        const double r2 = (dx * dx + dy * dy) / (e.length_m * e.length_m);
+        w[2] -= e.coefficient * p.jet.thrust_n * std::exp(-r2);
+    }
+    return w;
+}
+
+Producer WrenchModel::merged(std::span<const Producer> producers, const std::vector<int>& members) const {
+    // Momentum flux adds; the merged axis sits at the momentum-weighted centroid; the column
+    // contracts by κ with its centreline speed raised by 1/κ so that momentum is conserved.
+    const double kappa = config_.effects.jet_merging.contraction;
+    Producer m;
+    m.position.setZero();
+    m.axis.setZero();
+    m.velocity.setZero();
+    m.gust = 0;
+    double total = 0, uh2 = 0, c_half = 0, l = 0;
+    for (int i : members) {
+        const Producer& p = producers[static_cast<std::size_t>(i)];
+        const double w = p.jet.thrust_n;
+        total += w;
+        m.position += w * p.position;
+        m.axis += w * p.axis;
+        m.velocity += w * p.velocity;
+        m.gust += w * p.gust;
+        uh2 += p.jet.u_hover * p.jet.u_hover;
+        c_half += w * p.jet.c_half;
+        l += w * p.jet.l;
+    }
+    m.position /= total;
+    m.axis.normalize();
+    m.velocity /= total;
+    m.gust /= total;
+    m.jet = producers[static_cast<std::size_t>(members.front())].jet;
+    m.jet.model = JetModelKind::bauersfeld;
+    m.jet.thrust_n = total;
+    m.jet.u_hover = std::sqrt(uh2);
+    m.jet.l = l / total;
+    m.jet.inv_l = 1.0 / m.jet.l;
+    m.jet.k_centre = m.jet.u_hover * kBauersfeldA / kappa;
+    m.jet.c_half = kappa * c_half / total;
+    return m;
+}
+
+Wrench WrenchModel::evaluate(const Vec3& suf, std::span<const Producer> producers) const {
+    thread_local Scratch sc;
+    const std::size_t k = producers.size();
+    const bool sum = config_.aggregation == Aggregation::force_sum;
+    Wrench total = floor_bias(suf, producers);
+    if (k == 0) return total;
+    const std::size_t n = planform_.size();
+    const auto& jm = config_.effects.jet_merging;
+    if (!jm.enabled || k == 1) {  // the common case, without any allocation
+        if (!sum) sc.reset(n);
+        for (const auto& p : producers) {
+            if (sum) sc.reset(n);
+            add_velocity(suf, p, 1.0, sc);
+            if (sum) total += drag(sc);
+        }
+        if (!sum) total += drag(sc);
+        return total;
+    }
+
+    // Merging groups: pairs whose half-widths overlap at the sufferer's depth.
+    std::vector<int> group(k);
+    std::iota(group.begin(), group.end(), 0);
+    std::vector<double> weight(k, 0.0);
+    {
+        auto root = [&](int i) { while (group[static_cast<std::size_t>(i)] != i) i = group[static_cast<std::size_t>(i)]; return i; };
+        std::vector<Vec3> centre(k);
+        std::vector<double> half(k), depth(k);
+        for (std::size_t j = 0; j < k; ++j) {
+            depth[j] = (suf - producers[j].position).dot(producers[j].axis);
+            centre[j] = producers[j].position + depth[j] * producers[j].axis;
+            half[j] = producers[j].jet.half_width(depth[j]);
+        }
+        for (std::size_t a = 0; a < k; ++a) {
+            for (std::size_t b = a + 1; b < k; ++b) {
+                if (depth[a] <= 0 || depth[b] <= 0) continue;
+                const double d = std::max((centre[a] - centre[b]).norm(), 1e-6);
+                const double o = (half[a] + half[b]) / d;
+                double w = std::clamp((o - jm.onset) / (jm.full - jm.onset), 0.0, 1.0);
+                w = w * w * (3 - 2 * w);  // smoothstep: no kink where merging begins
+                if (w <= 0) continue;
+                const int ra = root(static_cast<int>(a)), rb = root(static_cast<int>(b));
+                group[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+                weight[a] = std::max(weight[a], w);
+                weight[b] = std::max(weight[b], w);
+            }
+        }
+        for (std::size_t j = 0; j < k; ++j) group[j] = root(static_cast<int>(j));
+    }
+
+    if (!sum) sc.reset(n);
+    for (std::size_t g = 0; g < k; ++g) {
+        std::vector<int> members;
+        double w_merge = 0;
+        for (std::size_t j = 0; j < k; ++j) {
+            if (static_cast<std::size_t>(group[j]) == g) {
+                members.push_back(static_cast<int>(j));
+                w_merge = std::max(w_merge, weight[j]);
+            }
+        }
+        if (members.empty()) continue;
+        const double w_single = members.size() > 1 ? 1.0 - w_merge : 1.0;
+        for (int j : members) {
+            if (sum) {
+                sc.reset(n);
+                add_velocity(suf, producers[static_cast<std::size_t>(j)], 1.0, sc);
+                total += w_single * drag(sc);
+            } else {
+                add_velocity(suf, producers[static_cast<std::size_t>(j)], w_single, sc);
+            }
+        }
+        if (members.size() > 1 && w_merge > 0) {
+            const Producer m = merged(producers, members);
+            if (sum) {
+                sc.reset(n);
+                add_velocity(suf, m, 1.0, sc);
+                total += w_merge * drag(sc);
+            } else {
+                add_velocity(suf, m, w_merge, sc);
+            }
+        }
+    }
+    if (!sum) total += drag(sc);
+    return total;
+}
+
+void WrenchModel::cell_velocities(const Vec3& suf, std::span<const Producer> producers, std::vector<Vec3>& out) const {
+    Scratch sc;
+    sc.reset(planform_.size());
+    for (const auto& p : producers) add_velocity(suf, p, 1.0, sc);
+    out.resize(planform_.size());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3(sc.ux[i], sc.uy[i], sc.uz[i]);
+}
+
+}  // namespace dw::physics

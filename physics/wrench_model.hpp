@@ -1,0 +1,71 @@
+#pragma once
+// The wrench the downwash of K producers exerts on the sufferer.
+//
+// The sufferer's planform (rotor discs, arms, body) is split into cells; each cell gets bluff-body
+// drag from the air velocity there — f_d = ½ rho C_d A |u_d| u_d vertically and ½ rho C_lat A |u_h| u_h
+// laterally — and torques r x f about the sufferer's centre. Spinning rotors also lose thrust in
+// oncoming flow, ΔT ≈ k_v Ω v_in per rotor (PHYSICS.md). Several producers aggregate by a force sum
+// or by velocity superposition; with the jet_merging effect, jets whose half-widths overlap merge
+// into one momentum-conserving, contracted jet on their momentum-weighted axis.
+#include <Eigen/Core>
+#include <array>
+#include <span>
+#include <vector>
+
+#include "physics/config.hpp"
+#include "physics/jet.hpp"
+
+namespace dw::physics {
+
+using Vec3 = Eigen::Vector3d;
+// f_n, f_e, f_d [N]; m_roll, m_pitch, m_yaw [N·m] — NED axes of the (level) sufferer.
+using Wrench = Eigen::Matrix<double, 6, 1>;
+
+struct Producer {
+    Vec3 position = Vec3::Zero();   // world NED [m]
+    Vec3 axis{0, 0, 1};             // unit vector along which its air goes (world NED; down when level)
+    Vec3 velocity = Vec3::Zero();   // world NED [m/s]
+    Jet jet;
+    double gust = 1.0;              // turbulence: multiplier on the jet speed
+};
+
+// The sufferer's planform cells, in its own level frame centred on it (x north, y east).
+struct Planform {
+    std::vector<double> x, y, area;
+    std::vector<int> rotor;             // rotor index of a disc cell, -1 for arms and body
+    std::vector<std::array<double, 2>> rotor_centre;
+    std::vector<double> rotor_area;
+    std::size_t size() const { return x.size(); }
+    static Planform make(const SuffererParams& s);
+};
+
+class WrenchModel {
+public:
+    explicit WrenchModel(const PhysicsConfig& config);
+
+    Wrench evaluate(const Vec3& sufferer, std::span<const Producer> producers) const;
+    // The air velocity at each planform cell (world NED), aggregated by velocity superposition.
+    void cell_velocities(const Vec3& sufferer, std::span<const Producer> producers,
+                         std::vector<Vec3>& out) const;
+
+    // A producer with the neighbours' parameters, level, at `position`.
+    Producer producer(const Vec3& position, const Vec3& velocity = Vec3::Zero()) const;
+    const Planform& planform() const { return planform_; }
+    const PhysicsConfig& config() const { return config_; }
+    const Jet& neighbour_jet() const { return neighbour_jet_; }
+
+private:
+    struct Scratch;
+    void add_velocity(const Vec3& sufferer, const Producer& p, double weight, Scratch& s) const;
+    Wrench drag(const Scratch& s) const;
+    Wrench floor_bias(const Vec3& sufferer, std::span<const Producer> producers) const;
+    Producer merged(std::span<const Producer> producers, const std::vector<int>& members) const;
+
+    PhysicsConfig config_;
+    Planform planform_;
+    Jet neighbour_jet_;
+    double half_rho_cd_ = 0;
+    double half_rho_clat_ = 0;
+};
+
+}  // namespace dw::physics
