@@ -108,7 +108,8 @@ private:
 
 std::string json_location(const std::string& text, std::size_t byte) {
     std::size_t line = 1, col = 1;
-    for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
+    // nlohmann's byte is the 1-based index of the character where parsing failed.
+    for (std::size_t i = 0; i + 1 < byte && i < text.size(); ++i) {
         if (text[i] == '\n') {
             ++line;
             col = 1;

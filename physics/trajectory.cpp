@@ -48,7 +48,9 @@ ReferenceTrajectory::ReferenceTrajectory(const GridOptions& o) {
     const double hw = o.half_width_m;
     const double ramp_m = 0.5 * o.speed_mps * o.ramp_s;  // distance of a cosine speed ramp
     const double far = hw + ramp_m;
-    const int per_alt = (o.legs + static_cast<int>(o.altitudes_m.size()) - 1) / static_cast<int>(o.altitudes_m.size());
+    const int per_alt = o.lines_n_m.empty()
+                            ? (o.legs + static_cast<int>(o.altitudes_m.size()) - 1) / static_cast<int>(o.altitudes_m.size())
+                            : static_cast<int>(o.lines_n_m.size());
 
     std::vector<LegInfo> plan;
     int direction = 1;
@@ -56,7 +58,8 @@ ReferenceTrajectory::ReferenceTrajectory(const GridOptions& o) {
         for (int k = 0; k < per_alt && static_cast<int>(plan.size()) < o.legs; ++k) {
             LegInfo leg;
             leg.index = static_cast<int>(plan.size());
-            leg.n_m = per_alt == 1 ? 0.0 : -hw + 2.0 * hw * k / (per_alt - 1);
+            if (!o.lines_n_m.empty()) leg.n_m = o.lines_n_m[static_cast<std::size_t>(k)];
+            else leg.n_m = per_alt == 1 ? 0.0 : -hw + 2.0 * hw * k / (per_alt - 1);
             leg.altitude_m = o.altitudes_m[a];
             leg.direction = direction;
             direction = -direction;

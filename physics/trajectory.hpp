@@ -25,6 +25,7 @@ struct GridOptions {
     std::vector<double> altitudes_m{0.3, 0.8, 1.3};  // reference point above the sufferer
     int legs = 36;
     double half_width_m = 1.0;       // the square is 2 x half_width on a side
+    std::vector<double> lines_n_m;   // explicit N of the legs at each altitude (default: spread over the square)
     double speed_mps = 0.5;
     double ramp_s = 1.2;             // smooth acceleration into and out of each leg
     double hover_s = 0.5;            // pause after each leg and each transition

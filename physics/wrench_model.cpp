@@ -77,18 +77,18 @@ Producer WrenchModel::producer(const Vec3& position, const Vec3& velocity) const
 }
 
 void WrenchModel::add_velocity(const Vec3& suf, const Producer& p, double weight, Scratch& sc) const {
+    add_velocity(suf, planform_.x.data(), planform_.y.data(), planform_.size(), p, weight, sc.ux.data(),
+                 sc.uy.data(), sc.uz.data());
+}
+
+void WrenchModel::add_velocity(const Vec3& suf, const double* cx, const double* cy, std::size_t n,
+                               const Producer& p, double weight, double* ux, double* uy, double* uz) const {
     const Jet& jet = p.jet;
     const double ax = p.axis.x(), ay = p.axis.y(), az = p.axis.z();
     const double ox = suf.x() - p.position.x(), oy = suf.y() - p.position.y(), oz = suf.z() - p.position.z();
     const double gain = weight * p.gust;
     const double delay_scale = config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
     const bool radial = config_.radial_inflow;
-    const std::size_t n = planform_.size();
-    const double* cx = planform_.x.data();
-    const double* cy = planform_.y.data();
-    double* ux = sc.ux.data();
-    double* uy = sc.uy.data();
-    double* uz = sc.uz.data();
     for (std::size_t i = 0; i < n; ++i) {
         double dx = ox + cx[i], dy = oy + cy[i], dz = oz;
         double s = dx * ax + dy * ay + dz * az;
@@ -297,12 +297,11 @@ Wrench WrenchModel::evaluate(const Vec3& suf, std::span<const Producer> producer
     return total;
 }
 
-void WrenchModel::cell_velocities(const Vec3& suf, std::span<const Producer> producers, std::vector<Vec3>& out) const {
-    Scratch sc;
-    sc.reset(planform_.size());
-    for (const auto& p : producers) add_velocity(suf, p, 1.0, sc);
-    out.resize(planform_.size());
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3(sc.ux[i], sc.uy[i], sc.uz[i]);
+Vec3 WrenchModel::air_velocity(const Vec3& point, std::span<const Producer> producers) const {
+    const double zero = 0.0;
+    double u[3] = {0, 0, 0};
+    for (const auto& p : producers) add_velocity(point, &zero, &zero, 1, p, 1.0, &u[0], &u[1], &u[2]);
+    return Vec3(u[0], u[1], u[2]);
 }
 
 }  // namespace dw::physics

@@ -44,9 +44,8 @@ public:
     explicit WrenchModel(const PhysicsConfig& config);
 
     Wrench evaluate(const Vec3& sufferer, std::span<const Producer> producers) const;
-    // The air velocity at each planform cell (world NED), aggregated by velocity superposition.
-    void cell_velocities(const Vec3& sufferer, std::span<const Producer> producers,
-                         std::vector<Vec3>& out) const;
+    // The air velocity (world NED) at a point, summed over producers (velocity superposition).
+    Vec3 air_velocity(const Vec3& point, std::span<const Producer> producers) const;
 
     // A producer with the neighbours' parameters, level, at `position`.
     Producer producer(const Vec3& position, const Vec3& velocity = Vec3::Zero()) const;
@@ -56,6 +55,9 @@ public:
 
 private:
     struct Scratch;
+    // Adds weight x the producer's air velocity at base + (x[i], y[i], 0) for i < n.
+    void add_velocity(const Vec3& base, const double* x, const double* y, std::size_t n, const Producer& p,
+                      double weight, double* ux, double* uy, double* uz) const;
     void add_velocity(const Vec3& sufferer, const Producer& p, double weight, Scratch& s) const;
     Wrench drag(const Scratch& s) const;
     Wrench floor_bias(const Vec3& sufferer, std::span<const Producer> producers) const;

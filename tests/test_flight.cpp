@@ -1,0 +1,120 @@
+// Flight folders (downwash-flight/1): round trip, and every rule enforced with file:line.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/errors.hpp"
+#include "flight/flight.hpp"
+#include "support.hpp"
+
+using namespace dw::flight;
+
+namespace {
+Flight sample_flight() {
+    Flight f;
+    f.meta.neighbours = {"v1"};
+    f.meta.formation = "single";
+    f.meta.vehicles["v1"] = VehicleInfo{};
+    const auto s = f.body_index("sufferer"), v = f.body_index("v1");
+    for (int i = 0; i < 10; ++i) {
+        f.wrench.push_back({0.0125 * i, {0.1 * i, -0.2, 1.5, 0.01, -0.02, 0.003}});
+        f.poses.push_back({i / 180.0, s, {0, 0, -1.4}, {1, 0, 0, 0}});
+        f.poses.push_back({i / 180.0, v, {0.1, 0.2 * i, -1.7}, {0.70710678, 0, 0, 0.70710678}});
+    }
+    f.legs = std::vector<Leg>{{0, 0.01, 0.04}};
+    return f;
+}
+
+// A valid wrench.csv header and n rows at t = 0.
+std::string many_rows(int n) {
+    std::string s = "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
+    for (int i = 0; i < n; ++i) s += "0,1,2,3,4,5,6\n";
+    return s;
+}
+
+void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+std::string error_reading(const std::string& dir) {
+    try {
+        read_flight(dir);
+    } catch (const dw::InputError& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+}  // namespace
+
+TEST(FlightFolder, RoundTripsAndKeepsUnknownMetaKeys) {
+    dw::test::TempDir d;
+    Flight f = sample_flight();
+    f.meta.extra_json = R"({"lab":"Cambridge","notes":{"wind":0}})";
+    write_flight(f, d.file("f"));
+    const Flight g = read_flight(d.file("f"));
+    EXPECT_EQ(g.meta.neighbours, f.meta.neighbours);
+    EXPECT_EQ(g.bodies, f.bodies);
+    ASSERT_EQ(g.wrench.size(), 10u);
+    EXPECT_NEAR(g.wrench[3].w[0], 0.3, 1e-9);
+    ASSERT_EQ(g.poses.size(), 20u);
+    EXPECT_NEAR(g.poses[5].p[1], 0.4, 1e-9);
+    ASSERT_TRUE(g.legs.has_value());
+    EXPECT_EQ(g.legs->size(), 1u);
+    EXPECT_NE(g.meta.extra_json.find("Cambridge"), std::string::npos);
+    // Writing what was read gives the same bytes.
+    write_flight(g, d.file("g"));
+    for (const char* name : {"meta.json", "wrench.csv", "poses.csv", "legs.csv"}) {
+        EXPECT_EQ(dw::read_file(d.file(std::string("f/") + name)), dw::read_file(d.file(std::string("g/") + name))) << name;
+    }
+}
+
+TEST(FlightFolder, LegsAreOptional) {
+    dw::test::TempDir d;
+    Flight f = sample_flight();
+    f.legs.reset();
+    write_flight(f, d.file("f"));
+    EXPECT_FALSE(read_flight(d.file("f")).legs.has_value());
+}
+
+TEST(FlightFolder, EveryRuleIsEnforcedWithFileAndLine) {
+    dw::test::TempDir d;
+    const std::string dir = d.file("f");
+    auto fresh = [&] { write_flight(sample_flight(), dir); };
+    struct Case {
+        const char* file;
+        std::string text;
+        std::string expect;
+    };
+    const std::vector<Case> cases = {
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch\n0,1,2,3,4,5\n", "wrench.csv:1: header is 't,f_n,f_e,f_d,m_roll,m_pitch'"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5\n", "wrench.csv:3: 6 fields, expected 7"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,abc,6\n", "wrench.csv:3: column m_pitch: 'abc' is not a number"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,nan\n", "wrench.csv:3: column m_yaw: 'nan' is not finite"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0.2,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n", "wrench.csv:3: t = 0.1 is earlier"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3;1;2;3;4;5;6\n", "wrench.csv:5: 1 fields, expected 7"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3,1,2,3,4,5,6,7\n", "wrench.csv:5: 8 fields"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3,1,2,3,4,5,6\n0.4,1,2,3,,5,6\n", "wrench.csv:6: column m_roll: '' is not a number"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n", "wrench.csv:1: no samples"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n0,v1,0,0,-1.7,0.5,0,0,0\n", "poses.csv:3: quaternion norm 0.5 is not 1"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n", "poses.csv:1: neighbour 'v1' named in meta.json has no pose"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,,0,0,-1.4,1,0,0,0\n", "poses.csv:2: column body: empty"},
+        {"legs.csv", "leg,t_start,t_end\n0,0.5,0.2\n", "legs.csv:2: t_end is not after t_start"},
+        {"legs.csv", "leg,t_start,t_end\n0.5,0.1,0.2\n", "legs.csv:2: column leg: '0.5' is not a leg number"},
+        {"meta.json", "{\"format\": \"downwash-flight/2\"}", "meta.json: field 'format': expected \"downwash-flight/1\""},
+        {"meta.json", "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": \"triangle\"}", "meta.json: field 'formation': 'triangle' is not one of"},
+        {"meta.json", "{\"format\": \"downwash-flight/1\",\n \"sufferer\": }", "meta.json:2:14: not valid JSON"},
+        {"meta.json", "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": \"single\", \"vehicles\": {\"v1\": {\"mass_kg\": -1}}}", "meta.json: field 'vehicles.v1.mass_kg': must be positive"},
+        {"wrench.csv", many_rows(120) + "1e400,1,2,3,4,5,6\n", "wrench.csv:122: column t: '1e400' is not a number"},
+        {"wrench.csv", many_rows(14) + "0.5,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n", "wrench.csv:17: t = 0.1 is earlier"},
+    };
+    for (const auto& c : cases) {
+        fresh();
+        write(dir + "/" + c.file, c.text);
+        const std::string e = error_reading(dir);
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.file << ": got '" << e << "', expected '" << c.expect << "'";
+        EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    }
+    fresh();
+    std::filesystem::remove(dir + "/poses.csv");
+    EXPECT_NE(error_reading(dir).find("poses.csv: cannot read the file"), std::string::npos);
+    EXPECT_NE(error_reading(d.file("nothing")).find("not a flight folder"), std::string::npos);
+}

@@ -1,0 +1,472 @@
+// The physics pinned to the literature (PHYSICS.md) and each effect's signature.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numeric>
+
+#include "core/errors.hpp"
+#include "physics/config.hpp"
+#include "physics/flight_sim.hpp"
+#include "physics/jet.hpp"
+#include "physics/stand.hpp"
+#include "physics/wrench_model.hpp"
+
+using namespace dw::physics;
+
+namespace {
+PhysicsConfig quiet_config() {
+    // No noise anywhere: signatures show without averaging.
+    PhysicsConfig c;
+    c.turbulence.enabled = false;
+    c.stand.noise_n = 0;
+    c.dynamics.hover_noise_m = 0;
+    c.mocap.noise_m = 0;
+    return c;
+}
+
+double within(double value, double expected) { return std::abs(value - expected) / std::abs(expected); }
+
+// Where along E the force peak of each direction appears, measured like an analyst would: the
+// neighbour's recorded E at each wrench stamp, weighted by f_d above half its maximum.
+struct Peaks {
+    double plus_e = 0, minus_e = 0;
+    double peak_fd = 0;
+};
+Peaks peak_positions(const dw::flight::Flight& f) {
+    const auto tracks = dw::flight::tracks(f);
+    const auto& track = tracks[static_cast<std::size_t>(f.find_body(f.meta.neighbours.front()))];
+    Peaks p;
+    for (const auto& leg : *f.legs) {
+        const double mid = 0.5 * (leg.t_start + leg.t_end);
+        const int dir = track.position_at(leg.t_end)[1] > track.position_at(leg.t_start)[1] ? 1 : -1;
+        double max_fd = 0;
+        for (const auto& s : f.wrench) {
+            if (std::abs(s.t - mid) < 0.5 * (leg.t_end - leg.t_start)) max_fd = std::max(max_fd, s.w[2]);
+        }
+        double sw = 0, swe = 0;
+        for (const auto& s : f.wrench) {
+            if (std::abs(s.t - mid) >= 0.5 * (leg.t_end - leg.t_start) || s.w[2] < 0.5 * max_fd) continue;
+            sw += s.w[2];
+            swe += s.w[2] * track.position_at(s.t)[1];
+        }
+        (dir > 0 ? p.plus_e : p.minus_e) = swe / sw;
+        p.peak_fd = std::max(p.peak_fd, max_fd);
+    }
+    return p;
+}
+
+FlyOptions over_the_stand(double altitude, const std::string& formation = "single") {
+    FlyOptions o;
+    o.formation = formation;
+    o.grid.altitudes_m = {altitude};
+    o.grid.lines_n_m = {0.0, 0.0};  // two legs straight over the stand: +E then -E
+    o.grid.legs = 2;
+    o.seed = 7;
+    return o;
+}
+}  // namespace
+
+// ---- the jet, pinned to PHYSICS.md (0.7 kg, 5" props, l = 0.25 m, rho 1.225) -------------------
+
+TEST(Jet, BauersfeldNumbersWithin2Percent) {
+    const PhysicsConfig c;
+    const Jet j = Jet::make(c.neighbour, c);
+    EXPECT_LT(within(j.u_hover, 7.4), 0.02) << j.u_hover;
+    EXPECT_LT(within(j.centreline(0.3), 10.7), 0.02) << j.centreline(0.3);
+    EXPECT_LT(within(j.half_width(0.3), 0.135), 0.02) << j.half_width(0.3);
+    EXPECT_LT(within(j.centreline(1.3), 6.8), 0.02) << j.centreline(1.3);
+    EXPECT_LT(within(j.half_width(1.3), 0.21), 0.02) << j.half_width(1.3);
+    EXPECT_NEAR(j.axial(j.half_width(1.3), 1.3), 0.5 * j.centreline(1.3), 1e-12);  // half-width means half speed
+    EXPECT_EQ(j.centreline(-0.1), 0.0);  // nothing above the producer
+}
+
+TEST(Jet, MomentumFluxIsConstantAndNearThrust) {
+    const PhysicsConfig c;
+    const Jet j = Jet::make(c.neighbour, c);
+    for (double s : {0.5, 1.0, 1.5}) {
+        // rho ∫ U² dA, numerically over the plane at depth s.
+        double flux = 0;
+        const double dr = 1e-4;
+        for (double r = 0.5 * dr; r < 20 * j.half_width(s); r += dr) {
+            const double u = j.axial(r, s);
+            flux += c.air_density_kg_m3 * u * u * 2 * M_PI * r * dr;
+        }
+        const double thrust = c.neighbour.mass_kg * c.gravity_m_s2;
+        EXPECT_LT(within(flux, thrust), 0.10) << "s=" << s << " flux=" << flux;
+        EXPECT_LT(within(flux, j.momentum_flux(c.air_density_kg_m3)), 0.01);
+        EXPECT_NEAR(flux / thrust, 0.94, 0.01);
+    }
+}
+
+TEST(Jet, TransportDelayFollowsTheJetLaw) {
+    const PhysicsConfig c;
+    const Jet j = Jet::make(c.neighbour, c);
+    EXPECT_LT(within(j.transport_delay(1.3), 0.146), 0.05) << j.transport_delay(1.3);
+    EXPECT_LT(within(j.transport_delay(0.5), 0.045), 0.05) << j.transport_delay(0.5);
+    // It is the integral of 1/U_c.
+    double tau = 0;
+    for (double z = 0.00005; z < 1.3; z += 0.0001) tau += 0.0001 / j.centreline(z);
+    EXPECT_NEAR(tau, j.transport_delay(1.3), 1e-4);
+}
+
+TEST(Jet, RadialInflowConservesMass) {
+    // Continuity: d/ds ∫U dA = -2π r V at the edge of a disc; check at a large radius.
+    const PhysicsConfig c;
+    const Jet j = Jet::make(c.neighbour, c);
+    const double s = 1.0, R = 0.5, ds = 1e-4, dr = 1e-4;
+    auto flow = [&](double depth) {
+        double q = 0;
+        for (double r = 0.5 * dr; r < R; r += dr) q += j.axial(r, depth) * 2 * M_PI * r * dr;
+        return q;
+    };
+    const double dq = (flow(s + ds) - flow(s - ds)) / (2 * ds);
+    EXPECT_NEAR(dq, -2 * M_PI * R * j.radial(R, s), 1e-3 * std::abs(dq) + 1e-6);
+    EXPECT_LT(j.radial(R, s), 0.0);            // entrainment: inward outside the core
+    EXPECT_GT(j.radial(0.3 * j.half_width(s), s), 0.0);  // outward near the axis
+}
+
+// ---- the field and the force ------------------------------------------------------------------
+
+TEST(Field, HoveringProducerIsAxisymmetric) {
+    const PhysicsConfig c;
+    const WrenchModel m(c);
+    const Producer p = m.producer(Vec3(0, 0, -2.7));
+    const std::array<Producer, 1> ps{p};
+    const Vec3 ref = m.air_velocity(Vec3(0.15, 0, -1.4), ps);
+    EXPECT_GT(ref.z(), 1.0);
+    for (int k = 1; k < 12; ++k) {
+        const double th = 2 * M_PI * k / 12;
+        const Vec3 u = m.air_velocity(Vec3(0.15 * std::cos(th), 0.15 * std::sin(th), -1.4), ps);
+        EXPECT_NEAR(u.norm(), ref.norm(), 1e-12);
+        EXPECT_NEAR(u.z(), ref.z(), 1e-12);
+        EXPECT_NEAR(std::hypot(u.x(), u.y()), std::abs(ref.x()), 1e-12);
+    }
+}
+
+TEST(Field, TranslatingProducerIsOnlyMirrorSymmetric) {
+    PhysicsConfig c;
+    c.effects.wake_transport.enabled = true;
+    const WrenchModel m(c);
+    const std::array<Producer, 1> ps{m.producer(Vec3(0, 0, -2.7), Vec3(0, 0.5, 0))};  // moving along +E
+    double asym = 0;
+    for (double n : {0.05, 0.1, 0.2}) {
+        for (double e : {-0.2, -0.1, 0.0, 0.1, 0.2}) {
+            const Vec3 a = m.air_velocity(Vec3(n, e, -1.4), ps);
+            const Vec3 b = m.air_velocity(Vec3(-n, e, -1.4), ps);  // mirrored in the plane of v and vertical
+            EXPECT_NEAR(a.x(), -b.x(), 1e-12);
+            EXPECT_NEAR(a.y(), b.y(), 1e-12);
+            EXPECT_NEAR(a.z(), b.z(), 1e-12);
+            const Vec3 fore = m.air_velocity(Vec3(0, e + 0.1, -1.4), ps);
+            const Vec3 aft = m.air_velocity(Vec3(0, -(e + 0.1), -1.4), ps);
+            asym = std::max(asym, std::abs(fore.z() - aft.z()));
+        }
+    }
+    EXPECT_GT(asym, 0.2);  // not axisymmetric: the wake trails behind
+}
+
+TEST(Force, SingleProducerPeakAt03mBetween1And6N) {
+    const PhysicsConfig c;
+    const WrenchModel m(c);
+    const Vec3 suf(0, 0, -1.4);
+    double peak = 0;
+    for (double n = -0.3; n <= 0.3; n += 0.02) {
+        for (double e = -0.3; e <= 0.3; e += 0.02) {
+            const std::array<Producer, 1> ps{m.producer(suf + Vec3(n, e, -0.3))};
+            peak = std::max(peak, std::abs(m.evaluate(suf, ps)[2]));
+        }
+    }
+    EXPECT_GT(peak, 1.0);
+    EXPECT_LT(peak, 6.0);
+    // Downwash pushes the sufferer down (+D); far away it is nothing.
+    const std::array<Producer, 1> above{m.producer(suf + Vec3(0, 0, -0.3))};
+    EXPECT_GT(m.evaluate(suf, above)[2], 0.0);
+    const std::array<Producer, 1> far{m.producer(suf + Vec3(0, 3.0, -0.3))};
+    EXPECT_LT(std::abs(m.evaluate(suf, far)[2]), 1e-3);
+}
+
+TEST(Force, TorqueFollowsTheOffCentreLoad) {
+    const PhysicsConfig c;
+    const WrenchModel m(c);
+    const Vec3 suf(0, 0, -1.4);
+    // A producer east of centre loads the east rotors: roll (about N) = Σ y f_d > 0.
+    const std::array<Producer, 1> east{m.producer(suf + Vec3(0, 0.1, -0.3))};
+    EXPECT_GT(m.evaluate(suf, east)[3], 0.0);
+    // North of centre: pitch = -Σ x f_d < 0.
+    const std::array<Producer, 1> north{m.producer(suf + Vec3(0.1, 0, -0.3))};
+    EXPECT_LT(m.evaluate(suf, north)[4], 0.0);
+}
+
+TEST(Force, AggregationLaws) {
+    PhysicsConfig c;
+    const Vec3 suf(0, 0, -1.4);
+    auto two = [&](const WrenchModel& m) {
+        const std::array<Producer, 2> ps{m.producer(suf + Vec3(0, -0.1, -0.8)), m.producer(suf + Vec3(0, 0.1, -0.8))};
+        return m.evaluate(suf, ps)[2];
+    };
+    auto one = [&](const WrenchModel& m, double e) {
+        const std::array<Producer, 1> ps{m.producer(suf + Vec3(0, e, -0.8))};
+        return m.evaluate(suf, ps)[2];
+    };
+    const WrenchModel sum(c);
+    EXPECT_NEAR(two(sum), one(sum, -0.1) + one(sum, 0.1), 1e-9);
+    c.aggregation = Aggregation::velocity_superposition;
+    const WrenchModel sup(c);
+    // Overlapping jets: U² has the cross term 2 u1 u2, so superposed velocities push harder.
+    EXPECT_GT(two(sup), 1.2 * (one(sup, -0.1) + one(sup, 0.1)) - 0.3);
+    EXPECT_GT(two(sup), two(sum));
+}
+
+// ---- the stand ------------------------------------------------------------------------------
+
+TEST(Stand, CellsCarryEveryWrench) {
+    const StandModel s(StandParams{});
+    Wrench w;
+    w << 0.3, -0.2, 1.5, 0.02, -0.03, 0.005;
+    const auto cells = s.wrench_to_cells(w);
+    EXPECT_LT((s.cells_to_wrench() * cells - w).norm(), 1e-12);
+    int vertical = 0, north = 0, east = 0;
+    for (const auto& cell : s.cells()) (cell.axis == 2 ? vertical : cell.axis == 0 ? north : east)++;
+    EXPECT_EQ(vertical, 4);
+    EXPECT_EQ(north, 2);
+    EXPECT_EQ(east, 2);
+}
+
+TEST(Stand, Hx711CountsSaturateAt24Bits) {
+    EXPECT_EQ(StandModel::to_counts(1.0, 100, 21400), 21500);
+    EXPECT_EQ(StandModel::to_counts(1e6, 0, 21400), kCountsMax);
+    EXPECT_EQ(StandModel::to_counts(-1e6, 0, 21400), kCountsMin);
+    EXPECT_EQ(kCountsMax, 0x7FFFFF);
+    EXPECT_EQ(kCountsMin, -0x800000);
+}
+
+// ---- configuration ----------------------------------------------------------------------------
+
+TEST(PhysicsConfig, TheExampleFileIsTheDefaults) {
+    const PhysicsConfig file = load_physics(std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml");
+    EXPECT_EQ(to_yaml(file), to_yaml(PhysicsConfig{}));
+}
+
+TEST(PhysicsConfig, RoundTripsThroughYaml) {
+    PhysicsConfig c;
+    c.effects.clock_offset = {true, 0.118};
+    c.effects.cell_crosstalk = {true, 1, 3, 0.04};
+    c.effects.position_offset = {true, {0.01, -0.02, 0.03}};
+    c.jet_model = JetModelKind::jain;
+    c.aggregation = Aggregation::velocity_superposition;
+    EXPECT_EQ(to_yaml(parse_physics(to_yaml(c), "x.yaml")), to_yaml(c));
+}
+
+TEST(PhysicsConfig, ErrorsNameFileLineAndKey) {
+    auto error = [](const std::string& yaml) {
+        try {
+            parse_physics(yaml, "p.yaml");
+        } catch (const dw::InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("(no error)");
+    };
+    EXPECT_EQ(error("stand:\n  heigth_m: 1.4\n"), "p.yaml:2:3: stand.heigth_m: unknown key 'heigth_m'");
+    EXPECT_EQ(error("jet:\n  model: magic\n"), "p.yaml:2:10: jet.model: unknown jet model 'magic' (expected bauersfeld or jain)");
+    EXPECT_EQ(error("stand:\n  rate_hz: fast\n"), "p.yaml:2:12: stand.rate_hz: expected a number");
+    EXPECT_EQ(error("air_density_kg_m3: 40\n"), "p.yaml:1:20: air_density_kg_m3: 40 is out of range [0.5, 2]");
+    EXPECT_NE(error("effects:\n  cell_crosstalk: {from: f_x}\n").find("unknown axis 'f_x'"), std::string::npos);
+    EXPECT_NE(error("a: [1,\n").find("p.yaml:"), std::string::npos);
+}
+
+// ---- effects: each one's signature ---------------------------------------------------------------
+
+TEST(Effects, ClockOffsetShiftsThePeakByVTimesOffsetFlippingWithDirection) {
+    PhysicsConfig base = quiet_config();
+    PhysicsConfig off = base;
+    off.effects.clock_offset = {true, 0.1};
+    const auto a = simulate_flight(base, over_the_stand(0.3));
+    const auto b = simulate_flight(off, over_the_stand(0.3));
+    const Peaks pa = peak_positions(a.flight), pb = peak_positions(b.flight);
+    EXPECT_NEAR(pb.plus_e - pa.plus_e, 0.5 * 0.1, 0.01);
+    EXPECT_NEAR(pb.minus_e - pa.minus_e, -0.5 * 0.1, 0.01);
+    // The values are the same samples, stamped offset_s later.
+    ASSERT_EQ(a.flight.wrench.size(), b.flight.wrench.size());
+    EXPECT_NEAR(b.flight.wrench[100].t - a.flight.wrench[100].t, 0.1, 1e-9);
+    EXPECT_EQ(b.flight.wrench[100].w, a.flight.wrench[100].w);
+}
+
+TEST(Effects, WakeTransportShiftGrowsWithVerticalSeparation) {
+    PhysicsConfig base = quiet_config();
+    PhysicsConfig wake = base;
+    wake.effects.wake_transport = {true, 1.0};
+    const Jet j = Jet::make(base.neighbour, base);
+    double shift_low = 0, shift_high = 0;
+    for (double alt : {0.3, 1.3}) {
+        const Peaks pa = peak_positions(simulate_flight(base, over_the_stand(alt)).flight);
+        const Peaks pb = peak_positions(simulate_flight(wake, over_the_stand(alt)).flight);
+        const double plus = pb.plus_e - pa.plus_e, minus = pb.minus_e - pa.minus_e;
+        EXPECT_GT(plus, 0.0);   // the force follows where the producer was: seen when it is past
+        EXPECT_LT(minus, 0.0);  // ... in either direction
+        EXPECT_NEAR(plus, 0.5 * j.transport_delay(alt), 0.4 * 0.5 * j.transport_delay(alt) + 0.003) << alt;
+        (alt < 1 ? shift_low : shift_high) = 0.5 * (plus - minus);
+    }
+    EXPECT_GT(shift_high, 2.5 * shift_low);
+}
+
+TEST(Effects, SensorLagDelaysAndSmoothsButDoesNotDependOnSeparation) {
+    PhysicsConfig base = quiet_config();
+    PhysicsConfig lag = base;
+    lag.effects.sensor_lag = {true, 0.08};
+    std::array<double, 2> shifts{};
+    for (int i = 0; i < 2; ++i) {
+        const double alt = i == 0 ? 0.3 : 1.3;
+        const Peaks pa = peak_positions(simulate_flight(base, over_the_stand(alt)).flight);
+        const Peaks pb = peak_positions(simulate_flight(lag, over_the_stand(alt)).flight);
+        EXPECT_GT(pb.plus_e - pa.plus_e, 0.02);
+        EXPECT_LT(pb.minus_e - pa.minus_e, -0.02);
+        EXPECT_LT(pb.peak_fd, pa.peak_fd);  // smoothed
+        shifts[static_cast<std::size_t>(i)] = 0.5 * ((pb.plus_e - pa.plus_e) - (pb.minus_e - pa.minus_e));
+    }
+    EXPECT_NEAR(shifts[0], shifts[1], 0.015);
+}
+
+TEST(Effects, PositionOffsetShiftsThePeakWithoutFlipping) {
+    PhysicsConfig base = quiet_config();
+    PhysicsConfig off = base;
+    off.effects.position_offset = {true, {0.0, 0.05, 0.0}};
+    const Peaks pa = peak_positions(simulate_flight(base, over_the_stand(0.3)).flight);
+    const Peaks pb = peak_positions(simulate_flight(off, over_the_stand(0.3)).flight);
+    EXPECT_NEAR(pb.plus_e - pa.plus_e, 0.05, 0.005);
+    EXPECT_NEAR(pb.minus_e - pa.minus_e, 0.05, 0.005);
+}
+
+TEST(Effects, ForceScaleAndCrosstalkChangeOnlyTheRecording) {
+    const PhysicsConfig base;  // with noise: the same seed gives the same noise
+    PhysicsConfig scaled = base, cross = base;
+    scaled.effects.force_scale = {true, 1.2};
+    cross.effects.cell_crosstalk = {true, 2, 0, 0.05};
+    const auto a = simulate_flight(base, over_the_stand(0.3));
+    const auto s = simulate_flight(scaled, over_the_stand(0.3));
+    const auto x = simulate_flight(cross, over_the_stand(0.3));
+    ASSERT_EQ(a.flight.wrench.size(), s.flight.wrench.size());
+    for (std::size_t i = 0; i < a.flight.wrench.size(); i += 97) {
+        for (std::size_t k = 0; k < 6; ++k) EXPECT_NEAR(s.flight.wrench[i].w[k], 1.2 * a.flight.wrench[i].w[k], 1e-12);
+        EXPECT_NEAR(x.flight.wrench[i].w[0], a.flight.wrench[i].w[0] + 0.05 * a.flight.wrench[i].w[2], 1e-12);
+        EXPECT_EQ(x.flight.wrench[i].w[2], a.flight.wrench[i].w[2]);
+    }
+    EXPECT_EQ(a.truth, s.truth);  // the air did not change
+}
+
+TEST(Effects, JetMergingChangesLeaderFollower3At13mButNotASingleProducer) {
+    PhysicsConfig base;
+    PhysicsConfig merge = base;
+    merge.effects.jet_merging.enabled = true;
+    const WrenchModel m_sum(base), m_merge(merge);
+    const Vec3 suf(0, 0, -1.4);
+    const auto lf3 = make_formation("leader_follower3");
+    double peak = 0, max_diff = 0, single_diff = 0;
+    for (double n = -1.0; n <= 1.0; n += 0.05) {
+        for (double e = -1.0; e <= 1.0; e += 0.05) {
+            const Vec3 ref = suf + Vec3(n, e, -1.3);
+            std::vector<Producer> ps;
+            for (const auto& off : lf3.offsets) ps.push_back(m_sum.producer(ref + off));
+            const double a = m_sum.evaluate(suf, ps)[2], b = m_merge.evaluate(suf, ps)[2];
+            peak = std::max(peak, std::abs(a));
+            max_diff = std::max(max_diff, std::abs(b - a));
+            const std::array<Producer, 1> one{m_sum.producer(ref)};
+            single_diff = std::max(single_diff, std::abs(m_merge.evaluate(suf, one)[2] - m_sum.evaluate(suf, one)[2]));
+        }
+    }
+    EXPECT_GT(max_diff, 0.2 * peak) << "peak " << peak << " diff " << max_diff;
+    EXPECT_EQ(single_diff, 0.0);
+    // At 0.3 m the jets are still apart: no merging there.
+    std::vector<Producer> low;
+    for (const auto& off : lf3.offsets) low.push_back(m_sum.producer(suf + Vec3(0, 0, -0.3) + off));
+    EXPECT_EQ(m_merge.evaluate(suf, low), m_sum.evaluate(suf, low));
+}
+
+TEST(Effects, FloorRecirculationGrowsWithImpingingJets) {
+    PhysicsConfig on;
+    on.effects.floor_recirculation.enabled = true;
+    const PhysicsConfig off;
+    const WrenchModel with(on), without(off);
+    const Vec3 suf(0, 0, -1.4);
+    // Producers 1.2 m away: their jets barely touch the sufferer, their recirculation does.
+    std::vector<Producer> ps;
+    std::vector<double> bias;
+    for (int k = 0; k < 3; ++k) {
+        ps.push_back(with.producer(suf + Vec3(0.05 * k, 1.2, -1.0)));
+        bias.push_back(with.evaluate(suf, ps)[2] - without.evaluate(suf, ps)[2]);
+    }
+    EXPECT_LT(bias[0], -0.01);  // upward
+    EXPECT_NEAR(bias[1] / bias[0], 2.0, 0.05);
+    EXPECT_NEAR(bias[2] / bias[0], 3.0, 0.1);
+}
+
+TEST(Effects, TurbulenceHasItsIntensityAndTimeScale) {
+    Rng rng(3);
+    OrnsteinUhlenbeck ou(0.25, 0.025);
+    const double dt = 1.0 / 360;
+    std::vector<double> x;
+    for (int i = 0; i < 400000; ++i) x.push_back(ou.step(dt, rng));
+    double var = 0, lag = 0;
+    const int k = 9;  // 9 steps = 0.025 s
+    for (std::size_t i = 0; i + k < x.size(); ++i) {
+        var += x[i] * x[i];
+        lag += x[i] * x[i + k];
+    }
+    EXPECT_NEAR(std::sqrt(var / static_cast<double>(x.size())), 0.25, 0.01);
+    EXPECT_NEAR(lag / var, std::exp(-1.0), 0.03);
+}
+
+TEST(Effects, LoadCellNoiseIsAboutFiveHundredthsOfANewton) {
+    PhysicsConfig c;
+    c.turbulence.enabled = false;
+    FlyOptions o = over_the_stand(1.3);
+    const auto f = simulate_flight(c, o).flight;
+    // Before the first leg no neighbour is near: what the stand reports is noise.
+    double sum2 = 0;
+    int n = 0;
+    for (const auto& s : f.wrench) {
+        if (s.t > 2.5) break;
+        sum2 += s.w[2] * s.w[2];
+        ++n;
+    }
+    const double sd = std::sqrt(sum2 / n);
+    EXPECT_GT(sd, 0.02);
+    EXPECT_LT(sd, 0.08);
+}
+
+// ---- simulated flights ---------------------------------------------------------------------
+
+TEST(Flight, VehiclesFollowTheLegsWithSmallErrorsAndRecordAtTheirRates) {
+    const PhysicsConfig c;
+    FlyOptions o;
+    o.formation = "leader_follower3";
+    o.grid.legs = 6;
+    const auto r = simulate_flight(c, o);
+    const auto& f = r.flight;
+    ASSERT_EQ(f.meta.neighbours.size(), 3u);
+    EXPECT_EQ(f.meta.formation, "leader_follower");
+    ASSERT_EQ(f.legs->size(), 6u);
+    const double duration = r.truth_t.back();
+    EXPECT_NEAR(static_cast<double>(f.wrench.size()) / duration, 80.0, 1.0);
+    EXPECT_NEAR(static_cast<double>(f.poses.size()) / 4.0 / duration, 180.0, 1.0);
+    // On a measured leg the middle vehicle moves at the leg speed, within a few cm of the line.
+    const auto tracks = dw::flight::tracks(f);
+    const auto& v2 = tracks[static_cast<std::size_t>(f.find_body("v2"))];
+    const auto& leg = f.legs->front();
+    const auto p0 = v2.position_at(leg.t_start + 1.0), p1 = v2.position_at(leg.t_end - 1.0);
+    EXPECT_NEAR(std::abs(p1[1] - p0[1]) / (leg.t_end - leg.t_start - 2.0), 0.5, 0.03);
+    EXPECT_LT(std::abs(p0[2] - (-1.4 - 0.3)), 0.1);
+}
+
+TEST(Flight, SameSeedSameBytesOtherSeedOtherNoise) {
+    const PhysicsConfig c;
+    FlyOptions o;
+    o.formation = "side_by_side";
+    o.grid.legs = 3;
+    const auto a = simulate_flight(c, o), b = simulate_flight(c, o);
+    EXPECT_EQ(a.truth, b.truth);
+    ASSERT_EQ(a.flight.wrench.size(), b.flight.wrench.size());
+    for (std::size_t i = 0; i < a.flight.wrench.size(); ++i) ASSERT_EQ(a.flight.wrench[i].w, b.flight.wrench[i].w);
+    o.seed = 2;
+    const auto d = simulate_flight(c, o);
+    EXPECT_NE(d.flight.wrench[50].w, a.flight.wrench[50].w);
+}
