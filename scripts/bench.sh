@@ -7,3 +7,4 @@ for transport in shm udp; do
   "$here/build/bin/dw-bench-pingpong" --transport "$transport" --rounds 10 --per-round 2000 2>/dev/null
   echo
 done
+"$here/build/bin/dw-bench-physics" --benchmark_counters_tabular=true --benchmark_color=false

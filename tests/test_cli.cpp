@@ -71,3 +71,34 @@ TEST(Cli, HelpExitsZeroAndListsTheCommonOptions) {
     EXPECT_EQ(sub.status, 0);
     EXPECT_NE(sub.out.find("--count"), std::string::npos) << sub.out;
 }
+
+TEST(SimCli, BadInputIsOneLineAndExit2) {
+    TempDir d;
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "triangle", "--out", d.file("f")}, d),
+                           "unknown formation 'triangle'");
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--physics",
+                                d.file("none.yaml")}, d), "none.yaml: cannot read the physics configuration");
+    write(d.file("p.yaml"), "effects:\n  clock_ofset: {enabled: true}\n");
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--physics",
+                                d.file("p.yaml")}, d), "p.yaml:2:3: effects.clock_ofset: unknown key 'clock_ofset'");
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--altitudes",
+                                "0.3,high"}, d), "--altitudes: 'high' is not a number");
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single"}, d), "--out is required");
+}
+
+TEST(SimCli, SameInputsAndSeedGiveTheSameBytes) {
+    TempDir d;
+    for (const char* out : {"a", "b"}) {
+        const auto r = run({bin("dw-sim"), "fly", "--formation", "stack", "--legs", "4", "--seed", "5", "--quiet",
+                            "--out", d.file(out)}, d);
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_NE(r.out.find("4 legs"), std::string::npos) << r.out;
+    }
+    for (const char* name : {"meta.json", "wrench.csv", "poses.csv", "legs.csv"}) {
+        EXPECT_EQ(dw::read_file(d.file(std::string("a/") + name)), dw::read_file(d.file(std::string("b/") + name))) << name;
+    }
+    const auto r = run({bin("dw-sim"), "fly", "--formation", "stack", "--legs", "4", "--seed", "6", "--quiet",
+                        "--out", d.file("c")}, d);
+    ASSERT_EQ(r.status, 0);
+    EXPECT_NE(dw::read_file(d.file("a/wrench.csv")), dw::read_file(d.file("c/wrench.csv")));
+}
