@@ -470,3 +470,18 @@ TEST(Flight, SameSeedSameBytesOtherSeedOtherNoise) {
     const auto d = simulate_flight(c, o);
     EXPECT_NE(d.flight.wrench[50].w, a.flight.wrench[50].w);
 }
+
+TEST(Jet, JainGaussianAlternative) {
+    PhysicsConfig c;
+    c.jet_model = JetModelKind::jain;
+    const Jet j = Jet::make(c.neighbour, c);
+    const double s = 1.3, z = s - c.jain.z0_m;
+    EXPECT_NEAR(j.centreline(s), j.u_hover * c.jain.c_ax * c.jain.diameter_m / z, 1e-12);
+    EXPECT_NEAR(j.axial(j.half_width(s), s), 0.5 * j.centreline(s), 1e-12);
+    EXPECT_NEAR(j.axial(0.1, s), j.centreline(s) * std::exp(-c.jain.c_rad * (0.1 / z) * (0.1 / z)), 1e-12);
+    EXPECT_EQ(j.radial(0.1, s), 0.0);
+    // The whole simulator runs on it.
+    const WrenchModel m(c);
+    const std::array<Producer, 1> ps{m.producer(Vec3(0, 0, -2.7))};
+    EXPECT_GT(m.evaluate(Vec3(0, 0, -1.4), ps)[2], 0.5);
+}
