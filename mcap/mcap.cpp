@@ -1,0 +1,668 @@
+#include "mcap/mcap.hpp"
+
+#include <fcntl.h>
+#include <lz4frame.h>
+#include <unistd.h>
+#include <zlib.h>
+#include <zstd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <tuple>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+
+namespace dw::mcap {
+
+namespace {
+
+enum Op : std::uint8_t {
+    kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
+    kMessageIndex = 0x07, kChunkIndex = 0x08, kAttachment = 0x09, kAttachmentIndex = 0x0A,
+    kStatistics = 0x0B, kMetadata = 0x0C, kMetadataIndex = 0x0D, kSummaryOffset = 0x0E, kDataEnd = 0x0F,
+};
+
+// Appends little-endian fields (MCAP is little-endian throughout).
+struct Out {
+    std::string s;
+    void u8(std::uint8_t v) { s.push_back(static_cast<char>(v)); }
+    void u16(std::uint16_t v) { put(&v, 2); }
+    void u32(std::uint32_t v) { put(&v, 4); }
+    void u64(std::uint64_t v) { put(&v, 8); }
+    void put(const void* p, std::size_t n) { s.append(static_cast<const char*>(p), n); }
+    void str(const std::string& v) {
+        u32(static_cast<std::uint32_t>(v.size()));
+        s += v;
+    }
+    void map(const std::map<std::string, std::string>& m) {
+        Out body;
+        for (const auto& [k, v] : m) {
+            body.str(k);
+            body.str(v);
+        }
+        u32(static_cast<std::uint32_t>(body.s.size()));
+        s += body.s;
+    }
+};
+
+// Reads fields with bounds checks; every problem names the file offset.
+class In {
+public:
+    In(const std::uint8_t* p, std::size_t n, std::uint64_t base) : p_(p), n_(n), base_(base) {}
+    std::uint8_t u8() { return get<std::uint8_t>(); }
+    std::uint16_t u16() { return get<std::uint16_t>(); }
+    std::uint32_t u32() { return get<std::uint32_t>(); }
+    std::uint64_t u64() { return get<std::uint64_t>(); }
+    std::string str() {
+        const std::uint32_t len = u32();
+        need(len, "string");
+        std::string v(reinterpret_cast<const char*>(p_ + pos_), len);
+        pos_ += len;
+        return v;
+    }
+    std::span<const std::uint8_t> bytes(std::uint64_t len, const char* what) {
+        need(len, what);
+        std::span<const std::uint8_t> v(p_ + pos_, static_cast<std::size_t>(len));
+        pos_ += static_cast<std::size_t>(len);
+        return v;
+    }
+    std::span<const std::uint8_t> rest() { return bytes(n_ - pos_, "data"); }
+    std::map<std::string, std::string> map() {
+        const std::uint32_t len = u32();
+        need(len, "map");
+        In body(p_ + pos_, len, base_ + pos_);
+        pos_ += len;
+        std::map<std::string, std::string> m;
+        while (body.pos_ < body.n_) {
+            std::string k = body.str();
+            m[std::move(k)] = body.str();
+        }
+        return m;
+    }
+    std::uint64_t offset() const { return base_ + pos_; }
+    [[noreturn]] void fail(const std::string& what) const { throw InputError(log::cat("offset ", offset(), ": ", what)); }
+
+private:
+    template <class T>
+    T get() {
+        need(sizeof(T), "field");
+        T v;
+        std::memcpy(&v, p_ + pos_, sizeof(T));
+        pos_ += sizeof(T);
+        return v;
+    }
+    void need(std::uint64_t len, const char* what) const {
+        if (len > n_ - pos_) fail(log::cat(what, " of ", len, " bytes runs past the end of its record"));
+    }
+    const std::uint8_t* p_;
+    std::size_t n_;
+    std::size_t pos_ = 0;
+    std::uint64_t base_;
+};
+
+constexpr std::uint64_t kMaxChunk = 1ull << 30;  // a sanity bound on a chunk's uncompressed size
+
+std::string compress(Compression c, const std::string& in) {
+    if (c == Compression::zstd) {
+        std::string out(ZSTD_compressBound(in.size()), '\0');
+        const std::size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), 1);
+        if (ZSTD_isError(n)) throw RuntimeError(log::cat("zstd: ", ZSTD_getErrorName(n)));
+        out.resize(n);
+        return out;
+    }
+    if (c == Compression::lz4) {
+        LZ4F_preferences_t prefs{};
+        prefs.frameInfo.contentSize = in.size();
+        std::string out(LZ4F_compressFrameBound(in.size(), &prefs), '\0');
+        const std::size_t n = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &prefs);
+        if (LZ4F_isError(n)) throw RuntimeError(log::cat("lz4: ", LZ4F_getErrorName(n)));
+        out.resize(n);
+        return out;
+    }
+    return in;
+}
+
+std::vector<std::uint8_t> decompress(const std::string& compression, std::span<const std::uint8_t> in,
+                                     std::uint64_t size, const In& where) {
+    if (size > kMaxChunk) where.fail(log::cat("chunk claims ", size, " uncompressed bytes (more than the 1 GiB bound)"));
+    std::vector<std::uint8_t> out(static_cast<std::size_t>(size));
+    if (compression.empty()) {
+        if (in.size() != size) where.fail("uncompressed chunk size does not match its records");
+        std::copy(in.begin(), in.end(), out.begin());
+    } else if (compression == "zstd") {
+        const std::size_t n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
+        if (ZSTD_isError(n)) where.fail(log::cat("zstd chunk: ", ZSTD_getErrorName(n)));
+        if (n != size) where.fail("zstd chunk decompressed to the wrong size");
+    } else if (compression == "lz4") {
+        LZ4F_dctx* ctx = nullptr;
+        LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION);
+        std::size_t out_pos = 0, in_pos = 0;
+        std::size_t hint = 1;
+        while (hint != 0 && in_pos < in.size()) {
+            std::size_t out_n = out.size() - out_pos, in_n = in.size() - in_pos;
+            hint = LZ4F_decompress(ctx, out.data() + out_pos, &out_n, in.data() + in_pos, &in_n, nullptr);
+            if (LZ4F_isError(hint)) {
+                LZ4F_freeDecompressionContext(ctx);
+                where.fail(log::cat("lz4 chunk: ", LZ4F_getErrorName(hint)));
+            }
+            out_pos += out_n;
+            in_pos += in_n;
+            if (out_n == 0 && in_n == 0) break;
+        }
+        LZ4F_freeDecompressionContext(ctx);
+        if (out_pos != size || hint != 0) where.fail("lz4 chunk is truncated or of the wrong size");
+    } else {
+        where.fail(log::cat("unknown chunk compression '", compression, "'"));
+    }
+    return out;
+}
+
+}  // namespace
+
+std::uint32_t crc32(std::span<const std::uint8_t> data, std::uint32_t crc) {
+    // zlib's crc32 is the IEEE CRC-32 MCAP uses (reflected 0xEDB88320, init and final xor ~0).
+    std::size_t done = 0;
+    while (done < data.size()) {
+        const auto n = static_cast<uInt>(std::min<std::size_t>(data.size() - done, 1u << 30));
+        crc = static_cast<std::uint32_t>(::crc32(crc, data.data() + done, n));
+        done += n;
+    }
+    return crc;
+}
+
+Compression parse_compression(const std::string& text) {
+    if (text == "zstd") return Compression::zstd;
+    if (text == "lz4") return Compression::lz4;
+    if (text == "none" || text.empty()) return Compression::none;
+    throw InputError(log::cat("unknown compression '", text, "' (expected zstd, lz4 or none)"));
+}
+
+std::string to_string(Compression c) {
+    return c == Compression::zstd ? "zstd" : c == Compression::lz4 ? "lz4" : "";
+}
+
+// ---------------------------------------------------------------------------------------------
+struct Writer::ChunkIndexEntry {
+    std::uint64_t start_time, end_time, chunk_offset, chunk_length;
+    std::map<std::uint16_t, std::uint64_t> index_offsets;
+    std::uint64_t index_length;
+    std::string compression;
+    std::uint64_t compressed_size, uncompressed_size;
+};
+
+Writer::Writer(const std::string& path, const WriterOptions& options) : path_(path), options_(options) {
+    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw RuntimeError(log::cat("cannot create ", path, ": ", std::strerror(errno)));
+    raw(kMagic, sizeof(kMagic));
+    Out h;
+    h.str(options_.profile);
+    h.str(options_.library);
+    record(kHeader, h.s);
+}
+
+Writer::~Writer() {
+    try {
+        close();
+    } catch (const std::exception& e) {
+        log::error("closing ", path_, ": ", e.what());
+    }
+}
+
+void Writer::raw(const void* data, std::size_t n) {
+    buffer_.append(static_cast<const char*>(data), n);
+    data_crc_ = crc32({static_cast<const std::uint8_t*>(data), n}, data_crc_);
+    offset_ += n;
+}
+
+void Writer::record(std::uint8_t opcode, const std::string& content) {
+    raw(&opcode, 1);
+    const std::uint64_t len = content.size();
+    raw(&len, 8);
+    raw(content.data(), content.size());
+}
+
+std::uint16_t Writer::add_schema(const std::string& name, const std::string& encoding, const std::string& data) {
+    Schema s{static_cast<std::uint16_t>(schemas_.size() + 1), name, encoding, data};
+    Out o;
+    o.u16(s.id);
+    o.str(s.name);
+    o.str(s.encoding);
+    o.str(s.data);
+    record(kSchema, o.s);
+    schemas_.push_back(std::move(s));
+    return schemas_.back().id;
+}
+
+std::uint16_t Writer::add_channel(const std::string& topic, std::uint16_t schema_id, const std::string& encoding,
+                                  const std::map<std::string, std::string>& metadata) {
+    Channel c{static_cast<std::uint16_t>(channels_.size() + 1), schema_id, topic, encoding, metadata};
+    Out o;
+    o.u16(c.id);
+    o.u16(c.schema_id);
+    o.str(c.topic);
+    o.str(c.message_encoding);
+    o.map(c.metadata);
+    record(kChannel, o.s);
+    channels_.push_back(std::move(c));
+    return channels_.back().id;
+}
+
+void Writer::write(const Message& m, std::int64_t now_ns) {
+    if (chunk_.empty()) {
+        chunk_opened_ns_ = now_ns;
+        chunk_start_ = m.log_time;
+        chunk_end_ = m.log_time;
+    }
+    chunk_index_[m.channel_id].emplace_back(m.log_time, chunk_.size());
+    const std::uint64_t len = 2 + 4 + 8 + 8 + m.data.size();
+    char head[1 + 8 + 2 + 4 + 8 + 8];
+    head[0] = static_cast<char>(kMessage);
+    std::memcpy(head + 1, &len, 8);
+    std::memcpy(head + 9, &m.channel_id, 2);
+    std::memcpy(head + 11, &m.sequence, 4);
+    std::memcpy(head + 15, &m.log_time, 8);
+    std::memcpy(head + 23, &m.publish_time, 8);
+    chunk_.append(head, sizeof(head));
+    chunk_.append(reinterpret_cast<const char*>(m.data.data()), m.data.size());
+    chunk_start_ = std::min(chunk_start_, m.log_time);
+    chunk_end_ = std::max(chunk_end_, m.log_time);
+    ++message_count_;
+    first_time_ = std::min(first_time_, m.log_time);
+    last_time_ = std::max(last_time_, m.log_time);
+    ++channel_counts_[m.channel_id];
+    if (chunk_.size() >= options_.chunk_size) close_chunk();
+    else flush_if_due(now_ns);
+}
+
+void Writer::flush_if_due(std::int64_t now_ns) {
+    if (!chunk_.empty() && now_ns - chunk_opened_ns_ >= static_cast<std::int64_t>(options_.flush_interval_ns)) flush();
+}
+
+void Writer::close_chunk() {
+    if (chunk_.empty()) return;
+    const std::string body = compress(options_.compression, chunk_);
+    ChunkIndexEntry e;
+    e.start_time = chunk_start_;
+    e.end_time = chunk_end_;
+    e.chunk_offset = offset_;
+    e.compression = to_string(options_.compression);
+    e.compressed_size = body.size();
+    e.uncompressed_size = chunk_.size();
+    Out o;
+    o.u64(chunk_start_);
+    o.u64(chunk_end_);
+    o.u64(chunk_.size());
+    o.u32(crc32({reinterpret_cast<const std::uint8_t*>(chunk_.data()), chunk_.size()}));
+    o.str(e.compression);
+    o.u64(body.size());
+    o.s += body;
+    record(kChunk, o.s);
+    e.chunk_length = offset_ - e.chunk_offset;
+    const std::uint64_t index_start = offset_;
+    for (const auto& [channel, entries] : chunk_index_) {
+        e.index_offsets[channel] = offset_;
+        Out mi;
+        mi.u16(channel);
+        mi.u32(static_cast<std::uint32_t>(entries.size() * 16));
+        for (const auto& [t, off] : entries) {
+            mi.u64(t);
+            mi.u64(off);
+        }
+        record(kMessageIndex, mi.s);
+    }
+    e.index_length = offset_ - index_start;
+    chunk_indexes_.push_back(std::move(e));
+    chunk_.clear();
+    chunk_index_.clear();
+}
+
+void Writer::flush() {
+    close_chunk();
+    std::size_t done = 0;
+    while (done < buffer_.size()) {
+        const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            throw RuntimeError(log::cat("writing ", path_, ": ", std::strerror(errno)));
+        }
+        done += static_cast<std::size_t>(n);
+    }
+    buffer_.clear();
+    if (options_.fsync) ::fdatasync(fd_);
+}
+
+void Writer::add_metadata(const Metadata& m) {
+    const std::uint64_t start = offset_;
+    Out o;
+    o.str(m.name);
+    o.map(m.entries);
+    record(kMetadata, o.s);
+    metadata_index_.emplace_back(start, offset_ - start, m.name);
+}
+
+void Writer::add_attachment(const Attachment& a) {
+    const std::uint64_t start = offset_;
+    Out o;
+    o.u64(a.log_time);
+    o.u64(a.create_time);
+    o.str(a.name);
+    o.str(a.media_type);
+    o.u64(a.data.size());
+    o.s += a.data;
+    o.u32(crc32({reinterpret_cast<const std::uint8_t*>(o.s.data()), o.s.size()}));
+    record(kAttachment, o.s);
+    attachment_index_.emplace_back(start, offset_ - start);
+    attachment_meta_.push_back({a.log_time, a.create_time, a.name, a.media_type, std::string()});
+    attachment_sizes_.push_back(a.data.size());
+}
+
+void Writer::close() {
+    if (closed_) return;
+    closed_ = true;
+    close_chunk();
+    Out de;
+    de.u32(data_crc_);
+    record(kDataEnd, de.s);
+
+    // Summary: groups by opcode, each remembered for its SummaryOffset record.
+    const std::uint64_t summary_start = offset_;
+    data_crc_ = 0;  // from here it is the summary CRC
+    std::vector<std::tuple<std::uint8_t, std::uint64_t, std::uint64_t>> groups;
+    auto group = [&](std::uint8_t op, const std::function<void()>& body) {
+        const std::uint64_t start = offset_;
+        body();
+        if (offset_ > start) groups.emplace_back(op, start, offset_ - start);
+    };
+    group(kSchema, [&] {
+        for (const auto& s : schemas_) {
+            Out o;
+            o.u16(s.id);
+            o.str(s.name);
+            o.str(s.encoding);
+            o.str(s.data);
+            record(kSchema, o.s);
+        }
+    });
+    group(kChannel, [&] {
+        for (const auto& c : channels_) {
+            Out o;
+            o.u16(c.id);
+            o.u16(c.schema_id);
+            o.str(c.topic);
+            o.str(c.message_encoding);
+            o.map(c.metadata);
+            record(kChannel, o.s);
+        }
+    });
+    group(kStatistics, [&] {
+        Out o;
+        o.u64(message_count_);
+        o.u16(static_cast<std::uint16_t>(schemas_.size()));
+        o.u32(static_cast<std::uint32_t>(channels_.size()));
+        o.u32(static_cast<std::uint32_t>(attachment_index_.size()));
+        o.u32(static_cast<std::uint32_t>(metadata_index_.size()));
+        o.u32(static_cast<std::uint32_t>(chunk_indexes_.size()));
+        o.u64(message_count_ ? first_time_ : 0);
+        o.u64(message_count_ ? last_time_ : 0);
+        Out counts;
+        for (const auto& [ch, n] : channel_counts_) {
+            counts.u16(ch);
+            counts.u64(n);
+        }
+        o.u32(static_cast<std::uint32_t>(counts.s.size()));
+        o.s += counts.s;
+        record(kStatistics, o.s);
+    });
+    group(kChunkIndex, [&] {
+        for (const auto& e : chunk_indexes_) {
+            Out o;
+            o.u64(e.start_time);
+            o.u64(e.end_time);
+            o.u64(e.chunk_offset);
+            o.u64(e.chunk_length);
+            Out offsets;
+            for (const auto& [ch, off] : e.index_offsets) {
+                offsets.u16(ch);
+                offsets.u64(off);
+            }
+            o.u32(static_cast<std::uint32_t>(offsets.s.size()));
+            o.s += offsets.s;
+            o.u64(e.index_length);
+            o.str(e.compression);
+            o.u64(e.compressed_size);
+            o.u64(e.uncompressed_size);
+            record(kChunkIndex, o.s);
+        }
+    });
+    group(kAttachmentIndex, [&] {
+        for (std::size_t i = 0; i < attachment_index_.size(); ++i) {
+            Out o;
+            o.u64(attachment_index_[i].first);
+            o.u64(attachment_index_[i].second);
+            o.u64(attachment_meta_[i].log_time);
+            o.u64(attachment_meta_[i].create_time);
+            o.u64(attachment_sizes_[i]);
+            o.str(attachment_meta_[i].name);
+            o.str(attachment_meta_[i].media_type);
+            record(kAttachmentIndex, o.s);
+        }
+    });
+    group(kMetadataIndex, [&] {
+        for (const auto& [off, len, name] : metadata_index_) {
+            Out o;
+            o.u64(off);
+            o.u64(len);
+            o.str(name);
+            record(kMetadataIndex, o.s);
+        }
+    });
+    const std::uint64_t summary_offset_start = offset_;
+    for (const auto& [op, start, len] : groups) {
+        Out o;
+        o.u8(op);
+        o.u64(start);
+        o.u64(len);
+        record(kSummaryOffset, o.s);
+    }
+    // Footer: the summary CRC runs from the summary start through summary_offset_start.
+    const bool has_summary = summary_offset_start > summary_start;
+    Out f;
+    f.u64(has_summary ? summary_start : 0);
+    f.u64(groups.empty() ? 0 : summary_offset_start);
+    const std::uint8_t op = kFooter;
+    const std::uint64_t len = 8 + 8 + 4;
+    raw(&op, 1);
+    raw(&len, 8);
+    raw(f.s.data(), f.s.size());
+    const std::uint32_t crc = data_crc_;
+    raw(&crc, 4);
+    raw(kMagic, sizeof(kMagic));
+    flush();
+    ::close(fd_);
+    fd_ = -1;
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+struct Reading {
+    const Handlers& h;
+    std::set<std::uint16_t> schemas, channels;
+    std::uint64_t messages = 0;
+
+    void inner_record(std::uint8_t op, In& in) {
+        switch (op) {
+            case kSchema: {
+                Schema s;
+                s.id = in.u16();
+                s.name = in.str();
+                s.encoding = in.str();
+                const std::uint32_t n = in.u32();
+                const auto d = in.bytes(n, "schema data");
+                s.data.assign(reinterpret_cast<const char*>(d.data()), d.size());
+                if (s.id == 0) return;  // readers ignore schema id 0
+                if (schemas.insert(s.id).second && h.on_schema) h.on_schema(s);
+                return;
+            }
+            case kChannel: {
+                Channel c;
+                c.id = in.u16();
+                c.schema_id = in.u16();
+                c.topic = in.str();
+                c.message_encoding = in.str();
+                c.metadata = in.map();
+                if (c.schema_id != 0 && !schemas.count(c.schema_id)) in.fail(log::cat("channel ", c.id, " names unknown schema ", c.schema_id));
+                if (channels.insert(c.id).second && h.on_channel) h.on_channel(c);
+                return;
+            }
+            case kMessage: {
+                Message m;
+                m.channel_id = in.u16();
+                m.sequence = in.u32();
+                m.log_time = in.u64();
+                m.publish_time = in.u64();
+                m.data = in.rest();
+                if (!channels.count(m.channel_id)) in.fail(log::cat("message on unknown channel ", m.channel_id));
+                ++messages;
+                if (h.on_message) h.on_message(m);
+                return;
+            }
+            default: return;  // other records inside a chunk are skipped by their length
+        }
+    }
+};
+
+}  // namespace
+
+ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers) {
+    ReadResult r;
+    Reading reading{handlers, {}, {}, 0};
+    std::uint64_t pos = 8;
+    bool in_summary = false;
+    try {
+        if (file.size() < 8 || std::memcmp(file.data(), kMagic, 8) != 0) {
+            throw InputError("offset 0: not an MCAP file (no MCAP magic)");
+        }
+        r.valid_until = 8;
+        for (;;) {
+            if (pos == file.size()) throw InputError(log::cat("offset ", pos, ": the file ends without a footer (truncated)"));
+            if (file.size() - pos < 9) throw InputError(log::cat("offset ", pos, ": truncated record header"));
+            const std::uint8_t op = file[pos];
+            std::uint64_t len = 0;
+            std::memcpy(&len, file.data() + pos + 1, 8);
+            if (op == 0) throw InputError(log::cat("offset ", pos, ": invalid opcode 0"));
+            if (len > file.size() - pos - 9) {
+                throw InputError(log::cat("offset ", pos, ": record (opcode 0x", std::hex, static_cast<int>(op), std::dec,
+                                          ") of ", len, " bytes runs past the end of the file (truncated)"));
+            }
+            In in(file.data() + pos + 9, static_cast<std::size_t>(len), pos + 9);
+            if (op == kFooter) {
+                const std::uint64_t end = pos + 9 + len;
+                if (file.size() - end < 8 || std::memcmp(file.data() + end, kMagic, 8) != 0) {
+                    throw InputError(log::cat("offset ", end, ": no closing magic after the footer"));
+                }
+                r.complete = true;
+                r.valid_until = end + 8;
+                break;
+            }
+            if (op == kDataEnd) {
+                const std::uint32_t crc = in.u32();
+                if (crc != 0 && crc != crc32(file.subspan(0, static_cast<std::size_t>(pos)))) {
+                    throw InputError(log::cat("offset ", pos, ": data section CRC mismatch"));
+                }
+                in_summary = true;
+            } else if (!in_summary) {
+                switch (op) {
+                    case kSchema: case kChannel: case kMessage: reading.inner_record(op, in); break;
+                    case kChunk: {
+                        in.u64();
+                        in.u64();
+                        const std::uint64_t size = in.u64();
+                        const std::uint32_t crc = in.u32();
+                        const std::string compression = in.str();
+                        const std::uint64_t n = in.u64();
+                        const auto body = in.bytes(n, "chunk records");
+                        const auto records = decompress(compression, body, size, in);
+                        if (crc != 0 && crc != crc32(records)) in.fail("chunk CRC mismatch");
+                        std::size_t p = 0;
+                        while (p < records.size()) {
+                            if (records.size() - p < 9) in.fail("truncated record inside a chunk");
+                            const std::uint8_t iop = records[p];
+                            std::uint64_t ilen = 0;
+                            std::memcpy(&ilen, records.data() + p + 1, 8);
+                            if (ilen > records.size() - p - 9) in.fail("record inside a chunk runs past the chunk");
+                            In inner(records.data() + p + 9, static_cast<std::size_t>(ilen), in.offset());
+                            reading.inner_record(iop, inner);
+                            p += 9 + static_cast<std::size_t>(ilen);
+                        }
+                        break;
+                    }
+                    case kMetadata: {
+                        Metadata m;
+                        m.name = in.str();
+                        m.entries = in.map();
+                        if (handlers.on_metadata) handlers.on_metadata(m);
+                        break;
+                    }
+                    case kAttachment: {
+                        Attachment a;
+                        a.log_time = in.u64();
+                        a.create_time = in.u64();
+                        a.name = in.str();
+                        a.media_type = in.str();
+                        const std::uint64_t n = in.u64();
+                        const auto d = in.bytes(n, "attachment data");
+                        const std::uint64_t covered = in.offset() - (pos + 9);
+                        const std::uint32_t crc = in.u32();
+                        if (crc != 0 && crc != crc32(file.subspan(static_cast<std::size_t>(pos + 9), static_cast<std::size_t>(covered)))) {
+                            in.fail(log::cat("attachment '", a.name, "' CRC mismatch"));
+                        }
+                        a.data.assign(reinterpret_cast<const char*>(d.data()), d.size());
+                        if (handlers.on_attachment) handlers.on_attachment(a);
+                        break;
+                    }
+                    default: break;  // indexes, statistics, unknown opcodes: skipped by length
+                }
+            }
+            pos += 9 + len;
+            r.valid_until = pos;
+        }
+    } catch (const InputError& e) {
+        r.error = e.what();
+    }
+    r.messages = reading.messages;
+    return r;
+}
+
+ReadResult read_file(const std::string& path, const Handlers& handlers) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(log::cat(path, ": cannot read the file"));
+    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return read(bytes, handlers);
+}
+
+ReadResult recover(const std::string& in_path, const std::string& out_path, const WriterOptions& options) {
+    Writer out(out_path, options);
+    std::map<std::uint16_t, std::uint16_t> schema_ids, channel_ids;
+    Handlers h;
+    h.on_schema = [&](const Schema& s) { schema_ids[s.id] = out.add_schema(s.name, s.encoding, s.data); };
+    h.on_channel = [&](const Channel& c) {
+        channel_ids[c.id] = out.add_channel(c.topic, c.schema_id ? schema_ids.at(c.schema_id) : 0, c.message_encoding, c.metadata);
+    };
+    h.on_message = [&](const Message& m) {
+        Message copy = m;
+        copy.channel_id = channel_ids.at(m.channel_id);
+        out.write(copy, 0);
+    };
+    h.on_metadata = [&](const Metadata& m) { out.add_metadata(m); };
+    h.on_attachment = [&](const Attachment& a) { out.add_attachment(a); };
+    const ReadResult r = read_file(in_path, h);
+    out.close();
+    return r;
+}
+
+}  // namespace dw::mcap

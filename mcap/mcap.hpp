@@ -1,0 +1,148 @@
+#pragma once
+// MCAP (mcap.dev/spec), written from the public specification: a writer with chunking (zstd,
+// lz4 frame or none), message indexes, a summary with statistics, metadata and attachments, and
+// CRCs; a linear reader that survives corrupt and truncated input; and recovery of a truncated
+// file. Records are plain structs; problems are dw::InputError naming the byte offset.
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dw::mcap {
+
+inline constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
+
+enum class Compression { none, zstd, lz4 };
+Compression parse_compression(const std::string& text);  // throws dw::InputError
+std::string to_string(Compression c);                       // "", "zstd", "lz4"
+
+struct Schema {
+    std::uint16_t id = 0;
+    std::string name, encoding;
+    std::string data;
+};
+
+struct Channel {
+    std::uint16_t id = 0;
+    std::uint16_t schema_id = 0;
+    std::string topic, message_encoding;
+    std::map<std::string, std::string> metadata;
+};
+
+struct Message {
+    std::uint16_t channel_id = 0;
+    std::uint32_t sequence = 0;
+    std::uint64_t log_time = 0;      // ns
+    std::uint64_t publish_time = 0;  // ns
+    std::span<const std::uint8_t> data;
+};
+
+struct Metadata {
+    std::string name;
+    std::map<std::string, std::string> entries;
+};
+
+struct Attachment {
+    std::uint64_t log_time = 0, create_time = 0;
+    std::string name, media_type;
+    std::string data;
+};
+
+struct WriterOptions {
+    Compression compression = Compression::zstd;
+    std::size_t chunk_size = 1 << 20;        // close a chunk at this many uncompressed bytes...
+    std::uint64_t flush_interval_ns = 1'000'000'000;  // ...or when its first message is this old
+    bool fsync = true;                       // fdatasync after each chunk: survive a power cut
+    std::string library = "downwash-lab";
+    std::string profile;                     // "" (custom); not ros2: schemas are omgidl
+};
+
+// Not thread-safe: callers serialise (the recorder holds one lock).
+class Writer {
+public:
+    // Throws dw::RuntimeError when the file cannot be created.
+    Writer(const std::string& path, const WriterOptions& options);
+    ~Writer();  // closes if still open (errors are then only logged)
+    Writer(const Writer&) = delete;
+    Writer& operator=(const Writer&) = delete;
+
+    std::uint16_t add_schema(const std::string& name, const std::string& encoding, const std::string& data);
+    std::uint16_t add_channel(const std::string& topic, std::uint16_t schema_id, const std::string& message_encoding,
+                              const std::map<std::string, std::string>& metadata);
+    // `now_ns` (monotonic) drives the flush interval; messages go into the current chunk.
+    void write(const Message& m, std::int64_t now_ns);
+    void add_metadata(const Metadata& m);
+    void add_attachment(const Attachment& a);
+    // Writes out the open chunk if it is older than the flush interval.
+    void flush_if_due(std::int64_t now_ns);
+    void flush();  // writes out the open chunk now
+    // Flushes, writes DataEnd, the summary and the footer. Idempotent.
+    void close();
+
+    std::uint64_t bytes_written() const { return offset_; }
+    std::uint64_t message_count() const { return message_count_; }
+    const std::string& path() const { return path_; }
+
+private:
+    struct ChunkIndexEntry;
+    void raw(const void* data, std::size_t n);
+    void record(std::uint8_t opcode, const std::string& content);
+    void close_chunk();
+
+    std::string path_;
+    WriterOptions options_;
+    int fd_ = -1;
+    bool closed_ = false;
+    std::uint64_t offset_ = 0;
+    std::uint32_t data_crc_ = 0;
+    std::string buffer_;                  // pending file bytes (written in large blocks)
+
+    std::vector<Schema> schemas_;
+    std::vector<Channel> channels_;
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> attachment_index_;  // offset, length (+ below)
+    std::vector<Attachment> attachment_meta_;  // without their data
+    std::vector<std::uint64_t> attachment_sizes_;
+    std::vector<std::tuple<std::uint64_t, std::uint64_t, std::string>> metadata_index_;
+
+    std::string chunk_;                   // uncompressed records of the open chunk
+    std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_index_;  // channel -> (log_time, offset)
+    std::uint64_t chunk_start_ = 0, chunk_end_ = 0;
+    std::int64_t chunk_opened_ns_ = 0;
+    std::vector<ChunkIndexEntry> chunk_indexes_;
+
+    std::uint64_t message_count_ = 0;
+    std::uint64_t first_time_ = UINT64_MAX, last_time_ = 0;
+    std::map<std::uint16_t, std::uint64_t> channel_counts_;
+};
+
+// What a linear read found. Handlers may be empty.
+struct Handlers {
+    std::function<void(const Schema&)> on_schema;
+    std::function<void(const Channel&)> on_channel;
+    std::function<void(const Message&)> on_message;
+    std::function<void(const Metadata&)> on_metadata;
+    std::function<void(const Attachment&)> on_attachment;
+};
+
+struct ReadResult {
+    bool complete = false;           // reached a footer and the closing magic
+    std::optional<std::string> error;  // the first problem ("offset N: ..."), if any
+    std::uint64_t messages = 0;
+    std::uint64_t valid_until = 0;   // file offset up to which every record was whole and sound
+};
+
+// Reads every record in file order, decompressing chunks and checking CRCs. Strict: stops at the
+// first problem and reports it; what was read before it has been handed to the handlers.
+ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers);
+ReadResult read_file(const std::string& path, const Handlers& handlers);
+
+// Rebuilds a readable file (indexes, summary, footer) from a truncated or damaged one: every
+// whole, sound record before the damage is kept. Returns what the read of `in` found.
+ReadResult recover(const std::string& in, const std::string& out, const WriterOptions& options);
+
+std::uint32_t crc32(std::span<const std::uint8_t> data, std::uint32_t crc = 0);
+
+}  // namespace dw::mcap
