@@ -15,11 +15,21 @@ std::condition_variable g_cv;
 bool g_requested = false;
 std::atomic<int> g_signal{0};
 std::once_flag g_once;
+std::function<void()> g_user_signal;
 
 void wait_for_signals(sigset_t set) {
     for (;;) {
         int sig = 0;
         if (sigwait(&set, &sig) != 0) continue;
+        if (sig == SIGUSR1) {
+            std::function<void()> f;
+            {
+                std::lock_guard lock(g_mutex);
+                f = g_user_signal;
+            }
+            if (f) f();
+            continue;
+        }
         Shutdown::instance().request(sig);
     }
 }
@@ -36,6 +46,7 @@ Shutdown& Shutdown::install() {
         sigemptyset(&set);
         sigaddset(&set, SIGINT);
         sigaddset(&set, SIGTERM);
+        sigaddset(&set, SIGUSR1);  // ignored unless someone asks for it (on_user_signal)
         pthread_sigmask(SIG_BLOCK, &set, nullptr);
         std::thread(wait_for_signals, set).detach();
     });
@@ -62,5 +73,10 @@ void Shutdown::request(int signal_number) {
 }
 
 int Shutdown::signal_number() const { return g_signal; }
+
+void Shutdown::on_user_signal(std::function<void()> f) {
+    std::lock_guard lock(g_mutex);
+    g_user_signal = std::move(f);
+}
 
 }  // namespace dw

@@ -63,9 +63,20 @@ public:
         return ok;
     }
 
+    // Publishes the sample exactly as given, header.seq included (replaying a recording).
+    bool write_as_is(const T& sample) {
+        const bool ok = writer_->write(const_cast<T*>(&sample));
+        (ok ? stats_->samples : stats_->lost).fetch_add(1, std::memory_order_relaxed);
+        return ok;
+    }
+
     int matched() const { return matched_.load(); }
+    // True once n readers matched. The writer sees a match before the reader has finished its
+    // side, and best-effort samples sent in between are dropped, so this waits a little more.
     bool wait_for_readers(int n, std::chrono::milliseconds timeout) const {
-        return detail::wait_until_count([this] { return matched(); }, n, timeout);
+        if (!detail::wait_until_count([this] { return matched(); }, n, timeout)) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        return true;
     }
     const std::string& name() const { return name_; }
     const Topic<T>& spec() const { return spec_; }

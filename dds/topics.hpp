@@ -38,32 +38,33 @@ struct Topic {
     QosProfile qos;
     std::string_view type_name;    // the scoped IDL name, as registered with DDS
     std::string_view description;
+    std::string_view idl;          // the IDL file defining the type (idl/<idl>.idl)
 };
 
 namespace topics {
 using namespace dw::msg;
 inline constexpr Topic<WrenchStamped> stand_wrench{"stand/wrench", QosProfile::sensor,
-    "dw::msg::WrenchStamped", "calibrated 6-DOF wrench on the sufferer (80 Hz)"};
+    "dw::msg::WrenchStamped", "calibrated 6-DOF wrench on the sufferer (80 Hz)", "Wrench"};
 inline constexpr Topic<LoadCellFrame> stand_cells{"stand/cells", QosProfile::sensor,
-    "dw::msg::LoadCellFrame", "raw counts of the 8 load cells (80 Hz)"};
+    "dw::msg::LoadCellFrame", "raw counts of the 8 load cells (80 Hz)", "Stand"};
 inline constexpr Topic<StandStatus> stand_status{"stand/status", QosProfile::state,
-    "dw::msg::StandStatus", "stand agent state, faults and tare (latched)"};
+    "dw::msg::StandStatus", "stand agent state, faults and tare (latched)", "Stand"};
 inline constexpr Topic<MocapFrame> mocap_frame{"mocap/frame", QosProfile::sensor,
-    "dw::msg::MocapFrame", "one motion-capture frame, every rigid body (180 Hz)"};
+    "dw::msg::MocapFrame", "one motion-capture frame, every rigid body (180 Hz)", "Mocap"};
 inline constexpr Topic<VehicleState> vehicle_state{"vehicles/state", QosProfile::sensor,
-    "dw::msg::VehicleState", "per-vehicle pose and velocity (keyed by vehicle_id)"};
+    "dw::msg::VehicleState", "per-vehicle pose and velocity (keyed by vehicle_id)", "Vehicle"};
 inline constexpr Topic<VehicleSetpoint> vehicle_setpoint{"vehicles/setpoint", QosProfile::sensor,
-    "dw::msg::VehicleSetpoint", "per-vehicle trajectory setpoint (keyed by vehicle_id, >= 50 Hz)"};
+    "dw::msg::VehicleSetpoint", "per-vehicle trajectory setpoint (keyed by vehicle_id, >= 50 Hz)", "Vehicle"};
 inline constexpr Topic<ExperimentPlan> experiment_plan{"experiment/plan", QosProfile::state,
-    "dw::msg::ExperimentPlan", "the experiment's formation and legs (latched)"};
+    "dw::msg::ExperimentPlan", "the experiment's formation and legs (latched)", "Experiment"};
 inline constexpr Topic<ExperimentCommand> experiment_command{"experiment/command", QosProfile::command,
-    "dw::msg::ExperimentCommand", "operator/planner commands: start, calibrate, pause, abort"};
+    "dw::msg::ExperimentCommand", "operator/planner commands: start, calibrate, pause, abort", "Experiment"};
 inline constexpr Topic<ExperimentState> experiment_state{"experiment/state", QosProfile::state,
-    "dw::msg::ExperimentState", "experiment phase, leg and progress (latched)"};
+    "dw::msg::ExperimentState", "experiment phase, leg and progress (latched)", "Experiment"};
 inline constexpr Topic<WrenchPrediction> wrench_prediction{"predictor/wrench", QosProfile::sensor,
-    "dw::msg::WrenchPrediction", "predicted wrench on the sufferer, per model"};
+    "dw::msg::WrenchPrediction", "predicted wrench on the sufferer, per model", "Prediction"};
 inline constexpr Topic<ProcessStatus> process_status{"processes/status", QosProfile::heartbeat,
-    "dw::msg::ProcessStatus", "heartbeat and status of every lab process (keyed by process)"};
+    "dw::msg::ProcessStatus", "heartbeat and status of every lab process (keyed by process)", "Status"};
 
 // Calls f(topic) for every lab topic, in a fixed order.
 template <class F>

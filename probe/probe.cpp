@@ -24,7 +24,7 @@ class PubChannel {
 public:
     virtual ~PubChannel() = default;
     virtual const std::string& name() const = 0;
-    virtual int matched() const = 0;
+    virtual bool wait_for_readers(int n, std::chrono::milliseconds timeout) const = 0;
     virtual bool publish(std::uint64_t i) = 0;
     virtual std::string last_summary() const = 0;
 };
@@ -34,7 +34,9 @@ class TypedPub final : public PubChannel {
 public:
     TypedPub(dds::Participant& p, const dds::Topic<T>& spec, const dds::QosOverrides& q) : writer_(p, spec, q) {}
     const std::string& name() const override { return writer_.name(); }
-    int matched() const override { return writer_.matched(); }
+    bool wait_for_readers(int n, std::chrono::milliseconds timeout) const override {
+        return writer_.wait_for_readers(n, timeout);
+    }
     bool publish(std::uint64_t i) override {
         sample_ = make_sample<T>(i);
         return writer_.write(sample_);
@@ -153,18 +155,12 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
     if (o.wait_readers > 0) {
         const auto deadline = std::chrono::steady_clock::now() + o.wait_timeout;
         for (const auto& c : channels) {
-            while (c->matched() < o.wait_readers) {
-                if (std::chrono::steady_clock::now() >= deadline || Shutdown::instance().requested()) {
-                    log::error("no reader on ", c->name(), " after ",
-                               std::chrono::duration<double>(o.wait_timeout).count(), " s");
-                    return false;
-                }
-                std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+            if (!c->wait_for_readers(o.wait_readers, std::max(left, std::chrono::milliseconds(0)))) {
+                log::error("no reader on ", c->name(), " after ", std::chrono::duration<double>(o.wait_timeout).count(), " s");
+                return false;
             }
         }
-        // A match is seen by the writer first; give the reader's side a moment to complete it,
-        // or the first best-effort samples can arrive before the reader accepts them.
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
     const auto period = std::chrono::duration<double>(o.rate_hz > 0 ? 1.0 / o.rate_hz : 0.0);
     auto next = std::chrono::steady_clock::now();

@@ -1,0 +1,263 @@
+#include "recorder/recorder.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "dds/endpoint.hpp"
+#include "idl/idl_texts.hpp"
+
+namespace dw::recorder {
+
+// One lab topic: a typed reader whose samples are serialised back to CDR (the bytes a DDS
+// writer sends, encapsulation header first) and handed to the recorder.
+class Recorder::Channel {
+public:
+    virtual ~Channel() = default;
+    virtual TopicStats stats() const = 0;
+    std::string topic, type, qos, qos_profile, idl;
+    std::atomic<std::uint64_t> recorded{0}, skipped{0};
+};
+
+namespace {
+
+template <class T>
+class TypedChannel final : public Recorder::Channel {
+public:
+    TypedChannel(Recorder& r, dds::Participant& p, const dds::Topic<T>& spec, std::uint16_t index,
+                 std::function<void(const T&)> observe, std::function<void(std::uint16_t, std::span<const std::uint8_t>,
+                                                                           std::uint64_t, std::uint64_t, std::uint32_t)> sink)
+        : observe_(std::move(observe)), sink_(std::move(sink)), index_(index),
+          reader_(p, spec, [this](const T& m, const dds::SampleMeta& meta) { on_sample(m, meta); }) {
+        (void)r;
+        topic = reader_.name();
+        type = std::string(spec.type_name);
+        qos = reader_.qos_text();
+        qos_profile = dds::to_string(spec.qos);
+        idl = std::string(spec.idl);
+    }
+    TopicStats stats() const override {
+        return {topic, recorded.load(), reader_.lost(), skipped.load()};
+    }
+
+private:
+    void on_sample(const T& m, const dds::SampleMeta& meta) {
+        if (observe_) observe_(m);
+        const std::uint32_t size = support_.getSerializedSizeProvider(const_cast<T*>(&m))();
+        if (payload_.max_size < size) payload_.reserve(size);
+        payload_.length = 0;
+        if (!support_.serialize(const_cast<T*>(&m), &payload_)) return;
+        sink_(index_, {payload_.data, payload_.length}, static_cast<std::uint64_t>(meta.reception_time_ns),
+              static_cast<std::uint64_t>(meta.source_time_ns), static_cast<std::uint32_t>(m.header().seq()));
+    }
+
+    std::function<void(const T&)> observe_;
+    std::function<void(std::uint16_t, std::span<const std::uint8_t>, std::uint64_t, std::uint64_t, std::uint32_t)> sink_;
+    std::uint16_t index_;
+    typename dds::PubSubOf<T>::type support_;
+    eprosima::fastrtps::rtps::SerializedPayload_t payload_{256};
+    dds::Reader<T> reader_;  // last: its callback uses the members above
+};
+
+std::string read_attachment(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(log::cat("--attach: cannot read ", path));
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+std::string hostname() {
+    char buf[256] = {};
+    ::gethostname(buf, sizeof(buf) - 1);
+    return buf;
+}
+
+}  // namespace
+
+Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
+    : participant_(participant), options_(options) {
+    for (const auto& [name, path] : options_.attachments) attachment_data_.emplace_back(name, read_attachment(path));
+    paused_ = options_.start_paused;
+    const auto& wanted = options_.topics;
+    auto sink = [this](std::uint16_t i, std::span<const std::uint8_t> d, std::uint64_t lt, std::uint64_t pt, std::uint32_t seq) {
+        on_message(i, d, lt, pt, seq);
+    };
+    std::lock_guard lock(mutex_);
+    open_file();  // before the readers: a latched sample may arrive at once
+    dds::topics::for_each([&](const auto& spec) {
+        using T = typename std::decay_t<decltype(spec)>::type;
+        const bool take = wanted.empty() || std::find(wanted.begin(), wanted.end(), std::string(spec.suffix)) != wanted.end();
+        if (!take) return;
+        std::function<void(const T&)> observe;
+        if constexpr (std::is_same_v<T, msg::ExperimentState>) {
+            observe = [this](const T& s) { note_run(s.header().run_id()); };
+        } else if constexpr (std::is_same_v<T, msg::ExperimentPlan>) {
+            observe = [this](const T& p) { note_plan(p.name(), p.formation(), p.document()); };
+        } else if constexpr (std::is_same_v<T, msg::ExperimentCommand>) {
+            if (options_.command_control) {
+                observe = [this](const T& c) {
+                    if (c.kind() == msg::CMD_PAUSE) pause("PAUSE command from " + c.issuer());
+                    if (c.kind() == msg::CMD_RESUME) resume("RESUME command from " + c.issuer());
+                };
+            }
+        }
+        const auto index = static_cast<std::uint16_t>(channels_.size());
+        channels_.push_back(std::make_unique<TypedChannel<T>>(*this, participant_, spec, index, observe, sink));
+        Channel& c = *channels_.back();
+        const auto schema = writer_->add_schema(c.type, "omgidl", idl::resolved(c.idl));
+        channel_ids_.push_back(writer_->add_channel(c.topic, schema, "cdr",
+            {{"qos", c.qos}, {"qos_profile", c.qos_profile}, {"dds_type", c.type}}));
+    });
+}
+
+Recorder::~Recorder() { close(); }
+
+void Recorder::open_file() {
+    std::string path = options_.out;
+    if (options_.split_bytes > 0 || options_.split_seconds > 0) {
+        const std::filesystem::path p(options_.out);
+        char suffix[16];
+        std::snprintf(suffix, sizeof(suffix), "_%04zu", files_.size());
+        path = (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
+    }
+    writer_ = std::make_unique<mcap::Writer>(path, options_.writer);
+    files_.push_back(path);
+    file_opened_ns_ = participant_.clock().monotonic_ns();
+    const auto& dds = participant_.config();
+    writer_->add_metadata({"recording", {{"host", hostname()},
+                                         {"started_unix_ns", std::to_string(participant_.clock().now_ns())},
+                                         {"recorder", "dw-recorder 0.1 (downwash-lab)"},
+                                         {"fast_dds", "2.9 (Debian bookworm)"},
+                                         {"dds_domain", std::to_string(dds.domain)},
+                                         {"namespace", dds.ns},
+                                         {"file_index", std::to_string(files_.size() - 1)}}});
+    for (const auto& [name, data] : attachment_data_) {
+        const auto now = static_cast<std::uint64_t>(participant_.clock().now_ns());
+        const std::string ext = std::filesystem::path(name).extension().string();
+        const std::string media = ext == ".yaml" || ext == ".yml" ? "application/yaml"
+                                  : ext == ".json"                ? "application/json"
+                                                                  : "application/octet-stream";
+        writer_->add_attachment({now, now, name, media, data});
+    }
+    // Re-announce what a split file needs (the first file gets its channels from the constructor).
+    if (!channels_.empty()) {
+        channel_ids_.clear();
+        for (const auto& c : channels_) {
+            const auto schema = writer_->add_schema(c->type, "omgidl", idl::resolved(c->idl));
+            channel_ids_.push_back(writer_->add_channel(c->topic, schema, "cdr",
+                {{"qos", c->qos}, {"qos_profile", c->qos_profile}, {"dds_type", c->type}}));
+        }
+        if (!run_id_.empty()) writer_->add_metadata({"run", {{"run_id", run_id_}}});
+    }
+}
+
+void Recorder::close_file() {
+    if (!writer_) return;
+    std::map<std::string, std::string> loss;
+    for (const auto& c : channels_) {
+        const TopicStats s = c->stats();
+        loss[s.topic] = log::cat("recorded ", s.recorded, ", lost ", s.lost, ", skipped while paused ", s.skipped);
+    }
+    writer_->add_metadata({"loss", loss});
+    writer_->close();
+    writer_.reset();
+}
+
+void Recorder::on_message(std::uint16_t index, std::span<const std::uint8_t> cdr, std::uint64_t log_time,
+                          std::uint64_t publish_time, std::uint32_t sequence) {
+    std::lock_guard lock(mutex_);  // also orders us after the constructor that fills channels_
+    Channel& c = *channels_[index];
+    if (paused_) {
+        ++c.skipped;
+        return;
+    }
+    if (!writer_) return;
+    writer_->write({channel_ids_[index], sequence, log_time, publish_time, cdr}, participant_.clock().monotonic_ns());
+    ++c.recorded;
+}
+
+void Recorder::note_run(const std::string& run_id) {
+    std::lock_guard lock(mutex_);
+    if (run_id.empty() || run_id == run_id_) return;
+    run_id_ = run_id;
+    if (writer_) writer_->add_metadata({"run", {{"run_id", run_id}, {"since_unix_ns", std::to_string(participant_.clock().now_ns())}}});
+    log::info("run id ", run_id);
+}
+
+void Recorder::note_plan(const std::string& name, const std::string& formation, const std::string& document) {
+    std::lock_guard lock(mutex_);
+    const std::string key = name + '\n' + formation + '\n' + document;
+    if (key == last_plan_) return;  // latched plans are re-sent: store each plan once
+    last_plan_ = key;
+    if (writer_) writer_->add_metadata({"experiment_plan", {{"name", name}, {"formation", formation}, {"document", document}}});
+}
+
+void Recorder::pause(const std::string& why) {
+    if (!paused_.exchange(true)) log::info("paused (", why, ")");
+}
+void Recorder::resume(const std::string& why) {
+    if (paused_.exchange(false)) log::info("resumed (", why, ")");
+}
+void Recorder::toggle(const std::string& why) { paused_ ? resume(why) : pause(why); }
+
+void Recorder::tick() {
+    std::lock_guard lock(mutex_);
+    if (!writer_) return;
+    const std::int64_t now = participant_.clock().monotonic_ns();
+    writer_->flush_if_due(now);
+    const bool by_size = options_.split_bytes > 0 && writer_->bytes_written() >= options_.split_bytes;
+    const bool by_time = options_.split_seconds > 0 && now - file_opened_ns_ >= from_seconds(options_.split_seconds);
+    if (by_size || by_time) {
+        close_file();
+        open_file();
+        log::info("split: now writing ", files_.back());
+    }
+}
+
+void Recorder::close() {
+    std::lock_guard lock(mutex_);
+    close_file();
+}
+
+std::vector<TopicStats> Recorder::stats() const {
+    std::vector<TopicStats> out;
+    for (const auto& c : channels_) out.push_back(c->stats());
+    return out;
+}
+
+std::vector<std::string> Recorder::files() const {
+    std::lock_guard lock(mutex_);
+    return files_;
+}
+
+std::string Recorder::run_id() const {
+    std::lock_guard lock(mutex_);
+    return run_id_;
+}
+
+std::string Recorder::status_line() {
+    std::uint64_t total = 0, lost = 0;
+    std::size_t active = 0;
+    for (const auto& s : stats()) {
+        total += s.recorded;
+        lost += s.lost;
+        if (s.recorded > 0) ++active;
+    }
+    const std::int64_t now = participant_.clock().monotonic_ns();
+    const double dt = last_status_ns_ ? to_seconds(now - last_status_ns_) : 0.0;
+    const double rate = dt > 0 ? static_cast<double>(total - last_total_) / dt : 0.0;
+    last_total_ = total;
+    last_status_ns_ = now;
+    std::ostringstream out;
+    out << (paused_ ? "PAUSED " : "recording ") << total << " messages on " << active << "/" << channels_.size()
+        << " topics, " << static_cast<long>(rate) << " msg/s, lost " << lost;
+    return out.str();
+}
+
+}  // namespace dw::recorder

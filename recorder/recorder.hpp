@@ -1,0 +1,84 @@
+#pragma once
+// dw-recorder's record: every lab topic (or a filter) into MCAP — `omgidl` schemas (the IDL with
+// includes resolved, named by the scoped type), `cdr` channels with their QoS in the metadata,
+// log time = receive time, publish time = the writer's source timestamp. Chunks are flushed at
+// least every flush interval (crash safety); files split by size or duration; pause/resume by
+// experiment command or SIGUSR1; the run id comes from the experiment state; per-topic losses
+// (gaps in the writers' sequence numbers) are shown live and stored in the file.
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "dds/participant.hpp"
+#include "mcap/mcap.hpp"
+
+namespace dw::recorder {
+
+struct RecordOptions {
+    std::string out = "recording.mcap";          // file; with splitting, <stem>_NNNN.mcap
+    std::vector<std::string> topics;             // suffixes; empty = all
+    mcap::WriterOptions writer;
+    std::uint64_t split_bytes = 0;               // 0 = no split by size
+    double split_seconds = 0;                    // 0 = no split by duration
+    std::vector<std::pair<std::string, std::string>> attachments;  // name, path (read at start)
+    bool start_paused = false;
+    bool command_control = true;                 // PAUSE/RESUME experiment commands pause/resume
+};
+
+struct TopicStats {
+    std::string topic;
+    std::uint64_t recorded = 0;
+    std::uint64_t lost = 0;       // gaps in the writers' header.seq
+    std::uint64_t skipped = 0;    // arrived while paused
+};
+
+class Recorder {
+public:
+    // Throws dw::InputError for a bad topic or attachment, dw::RuntimeError when the file fails.
+    Recorder(dds::Participant& participant, const RecordOptions& options);
+    ~Recorder();  // closes the file
+
+    void pause(const std::string& why);
+    void resume(const std::string& why);
+    void toggle(const std::string& why);
+    bool paused() const { return paused_; }
+    // Periodic work from the owner's loop: flushes due chunks, splits files.
+    void tick();
+    void close();
+
+    std::vector<TopicStats> stats() const;
+    std::vector<std::string> files() const;
+    std::string run_id() const;
+    // One line for the live display: messages, rate, losses.
+    std::string status_line();
+
+    class Channel;  // one per topic, typed (recorder.cpp)
+
+private:
+    friend class Channel;
+    void open_file();
+    void close_file();
+    void on_message(std::uint16_t channel_index, std::span<const std::uint8_t> cdr, std::uint64_t log_time,
+                    std::uint64_t publish_time, std::uint32_t sequence);
+    void note_run(const std::string& run_id);
+    void note_plan(const std::string& name, const std::string& formation, const std::string& document);
+
+    dds::Participant& participant_;
+    RecordOptions options_;
+    mutable std::mutex mutex_;
+    std::unique_ptr<mcap::Writer> writer_;
+    std::vector<std::string> files_;
+    std::vector<std::pair<std::string, std::string>> attachment_data_;  // name, bytes
+    std::vector<std::uint16_t> channel_ids_;  // in the current file, by channel index
+    std::int64_t file_opened_ns_ = 0;
+    std::atomic<bool> paused_{false};
+    std::string run_id_;
+    std::string last_plan_;
+    std::vector<std::unique_ptr<Channel>> channels_;
+    std::uint64_t last_total_ = 0;
+    std::int64_t last_status_ns_ = 0;
+};
+
+}  // namespace dw::recorder

@@ -1,0 +1,334 @@
+// The recorder end to end: separate processes on loopback DDS, files read back by the
+// ecosystem's own readers (npm @mcap/core and @foxglove/omgidl-serialization), kill -9 and
+// recovery, pause/resume, splitting, export and replay.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "core/clock.hpp"
+#include "dds/endpoint.hpp"
+#include "dds/msg_json.hpp"
+#include "dds/time.hpp"
+#include "flight/flight.hpp"
+#include "mcap/mcap.hpp"
+#include "physics/flight_sim.hpp"
+#include "probe/samples.hpp"
+#include "recorder/recorder.hpp"
+#include "recorder/tools.hpp"
+#include "support.hpp"
+
+using namespace std::chrono_literals;
+using dw::test::bin;
+using dw::test::TempDir;
+using nlohmann::json;
+
+namespace {
+
+struct Lab {
+    TempDir dir;
+    std::string domain = std::to_string(dw::test::test_domain());
+    std::string ns = "rec" + std::to_string(::getpid());
+    std::vector<std::string> dds() const { return {"--domain", domain, "--namespace", ns}; }
+    dw::Subprocess start(const std::string& exe, std::vector<std::string> args, const std::string& tag) const {
+        args.insert(args.begin(), bin(exe));
+        const auto d = dds();
+        args.insert(args.end(), d.begin(), d.end());
+        return dw::Subprocess({args, dir.file(tag + ".out"), dir.file(tag + ".err"), {}});
+    }
+    std::string text(const std::string& tag) const { return dw::read_file(dir.file(tag)); }
+};
+
+// Waits until a process's stderr shows `needle` (it is up), or it died.
+void wait_for_line(const Lab& lab, dw::Subprocess& p, const std::string& tag, const std::string& needle) {
+    for (int i = 0; i < 2000; ++i) {
+        if (lab.text(tag + ".err").find(needle) != std::string::npos) return;
+        ASSERT_TRUE(p.running()) << lab.text(tag + ".err");
+        std::this_thread::sleep_for(10ms);
+    }
+    FAIL() << "no '" << needle << "' from " << tag;
+}
+
+json expected_json(const std::string& type, std::uint64_t seq) {
+    json out;
+    dw::dds::topics::for_each([&](const auto& spec) {
+        using T = typename std::decay_t<decltype(spec)>::type;
+        if (spec.type_name == type) out = dw::dds::to_json(dw::probe::make_sample<T>(seq));
+    });
+    return out;
+}
+
+std::string node_modules() { return std::string(DW_SOURCE_DIR) + "/tests/js/node_modules"; }
+
+// Records `count` probe samples of every topic with the recorder as a separate process.
+void record_probe_samples(const Lab& lab, const std::string& file, const std::string& compression, int count) {
+    auto rec = lab.start("dw-recorder", {"record", "--out", file, "--compression", compression, "--quiet",
+                                         "--no-command-control", "--no-fsync", "--attach",
+                                         "physics.yaml=" + std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml"}, "rec-" + compression);
+    wait_for_line(lab, rec, "rec-" + compression, "recording to");
+    const auto pub = dw::test::run({bin("dw-probe"), "pub", "all", "--count", std::to_string(count), "--rate", "100",
+                                    "--wait-readers", "1", "--quiet", "--domain", lab.domain, "--namespace", lab.ns}, lab.dir);
+    ASSERT_EQ(pub.status, 0) << pub.err;
+    std::this_thread::sleep_for(300ms);  // the last best-effort samples are in flight
+    rec.signal(SIGINT);
+    ASSERT_EQ(rec.wait_for(60000ms), std::optional<int>(0)) << lab.text("rec-" + compression + ".err");
+}
+
+}  // namespace
+
+TEST(Recorder, IndependentReadersDecodeExactlyWhatWasPublished) {
+    ASSERT_TRUE(std::filesystem::exists(node_modules())) << "run `npm ci` in tests/js (scripts/test.sh does)";
+    for (const std::string compression : {"zstd", "lz4", "none"}) {
+        SCOPED_TRACE(compression);
+        Lab lab;
+        const std::string file = lab.dir.file("probe.mcap");
+        record_probe_samples(lab, file, compression, 20);
+        const auto js = dw::test::run({"node", std::string(DW_SOURCE_DIR) + "/tests/js/check_mcap.mjs", file}, lab.dir);
+        ASSERT_EQ(js.status, 0) << js.err;
+        const auto lines = dw::test::lines(js.out);
+        ASSERT_GT(lines.size(), 1u);
+        const json totals = json::parse(lines[0]);
+        EXPECT_EQ(totals["messages"], totals["indexed_messages"]) << lines[0];
+        EXPECT_EQ(totals["messages"], totals["statistics_messages"]) << lines[0];
+        EXPECT_EQ(totals["attachments"], 1);
+        EXPECT_GE(totals["chunk_indexes"].get<int>(), 1);
+        std::map<std::string, int> probe_messages;
+        for (std::size_t i = 1; i < lines.size(); ++i) {
+            const json m = json::parse(lines[i]);
+            EXPECT_EQ(m["encoding"], "cdr");
+            if (m["message"]["header"]["run_id"] != "probe") continue;  // heartbeats
+            const auto seq = m["message"]["header"]["seq"].get<std::uint64_t>();
+            EXPECT_EQ(m["sequence"].get<std::uint64_t>(), seq);
+            const json want = expected_json(m["schema"], seq);
+            ASSERT_FALSE(want.is_null()) << m["schema"];
+            EXPECT_EQ(m["message"], want) << m["topic"] << " #" << seq;
+            ++probe_messages[m["topic"]];
+        }
+        EXPECT_EQ(probe_messages.size(), 11u);
+        for (const auto& [topic, n] : probe_messages) EXPECT_EQ(n, 20) << topic;
+    }
+}
+
+TEST(Recorder, KillNineLosesAtMostTheFlushIntervalAndRecoverRebuildsTheFile) {
+    Lab lab;
+    const std::string file = lab.dir.file("crash.mcap");
+    auto rec = lab.start("dw-recorder", {"record", "stand/wrench", "mocap/frame", "--out", file, "--flush-interval", "1",
+                                         "--quiet"}, "rec");
+    wait_for_line(lab, rec, "rec", "recording to");
+    auto mocap = lab.start("dw-probe", {"pub", "mocap/frame", "--count", "100000", "--rate", "180", "--wait-readers", "1", "--quiet"}, "mocap");
+    auto stand = lab.start("dw-probe", {"pub", "stand/wrench", "--count", "100000", "--rate", "80", "--wait-readers", "1", "--quiet"}, "stand");
+    std::this_thread::sleep_for(10s);
+    const dw::Nanos killed_at = dw::SystemClock::instance().now_ns();
+    rec.signal(SIGKILL);
+    rec.wait_for(10000ms);
+    mocap.stop();
+    stand.stop();
+
+    // The killed file has no footer; recover rebuilds it.
+    std::uint64_t raw = 0;
+    const auto damaged = dw::mcap::read_file(file, {.on_message = [&](const dw::mcap::Message&) { ++raw; }});
+    EXPECT_FALSE(damaged.complete);
+    const auto r = dw::test::run({bin("dw-recorder"), "recover", file, lab.dir.file("fixed.mcap")}, lab.dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::map<std::uint16_t, std::vector<std::uint32_t>> seqs;
+    std::map<std::uint16_t, std::uint64_t> last_log;
+    std::map<std::uint16_t, std::string> topics;
+    const auto fixed = dw::mcap::read_file(lab.dir.file("fixed.mcap"), {
+        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+        .on_message = [&](const dw::mcap::Message& m) {
+            seqs[m.channel_id].push_back(m.sequence);
+            last_log[m.channel_id] = std::max(last_log[m.channel_id], m.log_time);
+        }});
+    ASSERT_FALSE(fixed.error) << *fixed.error;
+    EXPECT_TRUE(fixed.complete);
+    ASSERT_EQ(seqs.size(), 2u);
+    for (const auto& [ch, s] : seqs) {
+        SCOPED_TRACE(topics[ch]);
+        // Every message from the first one on, none missing ...
+        ASSERT_FALSE(s.empty());
+        EXPECT_EQ(s.front(), 0u);
+        for (std::size_t i = 1; i < s.size(); ++i) ASSERT_EQ(s[i], s[i - 1] + 1) << "gap at " << i;
+        // ... up to at most the flush interval before the kill.
+        EXPECT_GE(static_cast<dw::Nanos>(last_log[ch]), killed_at - 1'000'000'000) << (killed_at - static_cast<dw::Nanos>(last_log[ch])) * 1e-9 << " s before the kill";
+        EXPECT_GT(s.size(), topics[ch].find("mocap") != std::string::npos ? 1000u : 450u);
+    }
+    EXPECT_EQ(fixed.messages, raw);
+}
+
+TEST(Recorder, PausesAndResumesOnExperimentCommands) {
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = "pause" + std::to_string(::getpid());
+    TempDir dir;
+    dw::dds::Participant rp(cfg, "recorder");
+    dw::recorder::RecordOptions o;
+    o.out = dir.file("p.mcap");
+    o.topics = {"experiment/command", "stand/wrench"};
+    o.writer.fsync = false;
+    dw::recorder::Recorder rec(rp, o);
+    dw::dds::Participant op(cfg, "operator");
+    dw::dds::Writer<dw::msg::ExperimentCommand> cmd(op, dw::dds::topics::experiment_command);
+    ASSERT_TRUE(cmd.wait_for_readers(1, 20000ms));
+    dw::msg::ExperimentCommand c;
+    c.issuer("operator");
+    c.kind(dw::msg::CMD_PAUSE);
+    cmd.write(c);
+    for (int i = 0; i < 2000 && !rec.paused(); ++i) std::this_thread::sleep_for(5ms);
+    EXPECT_TRUE(rec.paused());
+    c.kind(dw::msg::CMD_RESUME);
+    cmd.write(c);
+    for (int i = 0; i < 2000 && rec.paused(); ++i) std::this_thread::sleep_for(5ms);
+    EXPECT_FALSE(rec.paused());
+    rec.close();
+    // The commands themselves are in the file (the PAUSE one, sent before pausing took effect).
+    std::uint64_t n = 0;
+    dw::mcap::read_file(o.out, {.on_message = [&](const dw::mcap::Message&) { ++n; }});
+    EXPECT_GE(n, 1u);
+}
+
+TEST(Recorder, Sigusr1TogglesPauseAndSplitsAreEachComplete) {
+    Lab lab;
+    auto rec = lab.start("dw-recorder", {"record", "stand/wrench", "--out", lab.dir.file("s.mcap"), "--split-duration", "1",
+                                         "--quiet", "--no-fsync"}, "rec");
+    wait_for_line(lab, rec, "rec", "recording to");
+    auto pub = lab.start("dw-probe", {"pub", "stand/wrench", "--count", "100000", "--rate", "100", "--wait-readers", "1", "--quiet"}, "pub");
+    std::this_thread::sleep_for(2500ms);
+    rec.signal(SIGUSR1);
+    wait_for_line(lab, rec, "rec", "paused (SIGUSR1)");
+    std::this_thread::sleep_for(1000ms);
+    rec.signal(SIGUSR1);
+    wait_for_line(lab, rec, "rec", "resumed (SIGUSR1)");
+    std::this_thread::sleep_for(500ms);
+    rec.signal(SIGINT);
+    ASSERT_EQ(rec.wait_for(30000ms), std::optional<int>(0)) << lab.text("rec.err");
+    pub.stop();
+    const auto files = dw::test::lines(lab.text("rec.out"));
+    ASSERT_GE(files.size(), 3u) << lab.text("rec.out");
+    std::vector<std::uint32_t> seqs;
+    for (const auto& line : files) {
+        const std::string path = line.substr(line.find(' ') + 1);
+        const auto r = dw::mcap::read_file(path, {.on_message = [&](const dw::mcap::Message& m) { seqs.push_back(m.sequence); }});
+        EXPECT_TRUE(r.complete) << path;
+        EXPECT_FALSE(r.error) << path;
+    }
+    // One gap: the paused second (~100 samples skipped), nothing else missing.
+    int gaps = 0;
+    for (std::size_t i = 1; i < seqs.size(); ++i) {
+        if (seqs[i] != seqs[i - 1] + 1) {
+            ++gaps;
+            EXPECT_GT(seqs[i] - seqs[i - 1], 50u);
+        }
+    }
+    EXPECT_EQ(gaps, 1);
+}
+
+TEST(Recorder, ReplayRepublishesRecordedSamplesIntact) {
+    Lab lab;
+    const std::string file = lab.dir.file("r.mcap");
+    record_probe_samples(lab, file, "zstd", 15);
+    auto echo = lab.start("dw-probe", {"echo", "stand/wrench", "mocap/frame", "experiment/plan", "--expect", "15", "--timeout", "120",
+                                       "--quiet", "--summary", lab.dir.file("echo.json")}, "echo");
+    const auto r = dw::test::run({bin("dw-recorder"), "replay", file, "stand/wrench", "mocap/frame", "experiment/plan",
+                                  "--speed", "4", "--wait-readers", "1", "--domain", lab.domain, "--namespace", lab.ns}, lab.dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_EQ(echo.wait_for(120000ms), std::optional<int>(0)) << lab.text("echo.out");
+    const json s = json::parse(lab.text("echo.json"));
+    for (const auto& t : s["topics"]) {
+        EXPECT_EQ(t["intact"], 15) << t.dump();
+        EXPECT_EQ(t["corrupt"], 0) << t.dump();
+    }
+}
+
+TEST(Recorder, InfoShowsTopicsAndRefusesDamagedFilesClearly) {
+    Lab lab;
+    const std::string file = lab.dir.file("i.mcap");
+    record_probe_samples(lab, file, "lz4", 10);
+    const auto ok = dw::test::run({bin("dw-recorder"), "info", file}, lab.dir);
+    ASSERT_EQ(ok.status, 0) << ok.err;
+    EXPECT_NE(ok.out.find("rt/" + lab.ns + "/mocap/frame"), std::string::npos) << ok.out;
+    EXPECT_NE(ok.out.find("dw::msg::MocapFrame"), std::string::npos);
+    EXPECT_NE(ok.out.find("lost 0"), std::string::npos);
+    EXPECT_NE(ok.out.find("attachment physics.yaml"), std::string::npos);
+    auto bytes = dw::read_file(file);
+    bytes.resize(bytes.size() / 2);
+    std::ofstream(lab.dir.file("half.mcap"), std::ios::binary) << bytes;
+    const auto bad = dw::test::run({bin("dw-recorder"), "info", lab.dir.file("half.mcap")}, lab.dir);
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.out.find("DAMAGED: offset "), std::string::npos) << bad.out;
+    const auto exp = dw::test::run({bin("dw-recorder"), "export", lab.dir.file("half.mcap"), "--csv", lab.dir.file("csv")}, lab.dir);
+    EXPECT_EQ(exp.status, 2);
+    EXPECT_EQ(dw::test::lines(exp.err).size(), 1u) << exp.err;
+    EXPECT_NE(exp.err.find("recover"), std::string::npos) << exp.err;
+}
+
+TEST(Recorder, ExportsCsvPerTopic) {
+    Lab lab;
+    const std::string file = lab.dir.file("c.mcap");
+    record_probe_samples(lab, file, "zstd", 5);
+    const auto r = dw::test::run({bin("dw-recorder"), "export", file, "--csv", lab.dir.file("csv")}, lab.dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto lines = dw::test::lines(dw::read_file(lab.dir.file("csv/stand_wrench.csv")));
+    ASSERT_EQ(lines.size(), 6u);
+    EXPECT_NE(lines[0].find("force_n.x"), std::string::npos) << lines[0];
+    EXPECT_NE(lines[0].find("header.seq"), std::string::npos);
+    const auto mocap = dw::test::lines(dw::read_file(lab.dir.file("csv/mocap_frame.csv")));
+    EXPECT_NE(mocap[0].find("bodies[0].position_m.x"), std::string::npos) << mocap[0];
+}
+
+TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
+    // A simulated flight, published as the stand agent and the mocap bridge would, recorded.
+    dw::physics::FlyOptions fo;
+    fo.grid.legs = 1;
+    const auto sim = dw::physics::simulate_flight(dw::physics::PhysicsConfig{}, fo).flight;
+    TempDir dir;
+    const std::string file = dir.file("f.mcap");
+    {
+        dw::mcap::WriterOptions wo;
+        wo.fsync = false;
+        dw::mcap::Writer w(file, wo);
+        const auto sw = w.add_schema("dw::msg::WrenchStamped", "omgidl", "");
+        const auto sm = w.add_schema("dw::msg::MocapFrame", "omgidl", "");
+        const auto cw = w.add_channel("rt/lab/stand/wrench", sw, "cdr", {});
+        const auto cm = w.add_channel("rt/lab/mocap/frame", sm, "cdr", {});
+        const dw::Nanos epoch = 1'700'000'000'000'000'000;
+        auto put = [&](std::uint16_t ch, auto& msg, auto support) {
+            eprosima::fastrtps::rtps::SerializedPayload_t p(support.getSerializedSizeProvider(&msg)());
+            support.serialize(&msg, &p);
+            const auto t = static_cast<std::uint64_t>(dw::dds::from_msg(msg.header().stamp()));
+            w.write({ch, 0, t, t, {p.data, p.length}}, 0);
+        };
+        for (const auto& s : sim.wrench) {
+            dw::msg::WrenchStamped m;
+            m.header().stamp(dw::dds::to_msg(epoch + static_cast<dw::Nanos>(std::llround(s.t * 1e9))));
+            m.force_n().x(s.w[0]); m.force_n().y(s.w[1]); m.force_n().z(s.w[2]);
+            m.torque_nm().x(s.w[3]); m.torque_nm().y(s.w[4]); m.torque_nm().z(s.w[5]);
+            put(cw, m, dw::msg::WrenchStampedPubSubType());
+        }
+        for (std::size_t i = 0; i < sim.poses.size(); i += sim.bodies.size()) {
+            dw::msg::MocapFrame f;
+            f.header().stamp(dw::dds::to_msg(epoch + static_cast<dw::Nanos>(std::llround(sim.poses[i].t * 1e9))));
+            for (std::size_t b = 0; b < sim.bodies.size(); ++b) {
+                const auto& p = sim.poses[i + b];
+                dw::msg::RigidBody body;
+                body.name(sim.bodies[p.body]);
+                body.position_m().x(p.p[0]); body.position_m().y(p.p[1]); body.position_m().z(p.p[2]);
+                body.orientation().w(p.q[0]); body.orientation().x(p.q[1]); body.orientation().y(p.q[2]); body.orientation().z(p.q[3]);
+                f.bodies().push_back(body);
+            }
+            put(cm, f, dw::msg::MocapFramePubSubType());
+        }
+        w.close();
+    }
+    dw::recorder::export_flight(file, dir.file("flight"), {});
+    const auto f = dw::flight::read_flight(dir.file("flight"));
+    ASSERT_EQ(f.wrench.size(), sim.wrench.size());
+    ASSERT_EQ(f.poses.size(), sim.poses.size());
+    EXPECT_EQ(f.meta.neighbours, std::vector<std::string>{"v1"});
+    for (std::size_t i = 0; i < f.wrench.size(); i += 101) {
+        EXPECT_NEAR(f.wrench[i].t, sim.wrench[i].t, 1e-6);
+        for (std::size_t k = 0; k < 6; ++k) EXPECT_NEAR(f.wrench[i].w[k], sim.wrench[i].w[k], 1e-6);
+    }
+    for (std::size_t i = 0; i < f.poses.size(); i += 997) EXPECT_NEAR(f.poses[i].p[1], sim.poses[i].p[1], 1e-6);
+}
