@@ -78,6 +78,13 @@ public:
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
         return true;
     }
+    // Waits until every reliable reader acknowledged every sample (call before exiting, or the
+    // last samples can die with the process). True at once for best-effort writers.
+    bool wait_for_acknowledgments(std::chrono::milliseconds timeout) {
+        const eprosima::fastrtps::Duration_t d(static_cast<std::int32_t>(timeout.count() / 1000),
+                                               static_cast<std::uint32_t>((timeout.count() % 1000) * 1'000'000));
+        return writer_->wait_for_acknowledgments(d) == ReturnCode_t::RETCODE_OK;
+    }
     const std::string& name() const { return name_; }
     const Topic<T>& spec() const { return spec_; }
     std::string qos_text() const { return describe(qos_); }

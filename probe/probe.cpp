@@ -26,6 +26,7 @@ public:
     virtual const std::string& name() const = 0;
     virtual bool wait_for_readers(int n, std::chrono::milliseconds timeout) const = 0;
     virtual bool publish(std::uint64_t i) = 0;
+    virtual bool wait_for_acknowledgments(std::chrono::milliseconds timeout) = 0;
     virtual std::string last_summary() const = 0;
 };
 
@@ -42,6 +43,9 @@ public:
         return writer_.write(sample_);
     }
     std::string last_summary() const override { return summary(sample_); }
+    bool wait_for_acknowledgments(std::chrono::milliseconds timeout) override {
+        return writer_.wait_for_acknowledgments(timeout);
+    }
 
 private:
     dds::Writer<T> writer_;
@@ -173,6 +177,9 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
         std::this_thread::sleep_until(next);
     }
     out.flush();
+    for (const auto& c : channels) {
+        if (!c->wait_for_acknowledgments(std::chrono::seconds(5))) log::warn("not every reader acknowledged ", c->name());
+    }
     if (o.linger.count() < 0) {
         while (!Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
     } else if (o.linger.count() > 0) {

@@ -258,6 +258,7 @@ public:
     virtual ~ReplayChannel() = default;
     virtual bool publish(std::span<const std::uint8_t> cdr) = 0;
     virtual bool wait_for_readers(int n, std::chrono::milliseconds timeout) const = 0;
+    virtual void wait_for_acknowledgments() = 0;
 };
 template <class T>
 class TypedReplay final : public ReplayChannel {
@@ -268,6 +269,7 @@ public:
         return writer_.write_as_is(sample_);
     }
     bool wait_for_readers(int n, std::chrono::milliseconds timeout) const override { return writer_.wait_for_readers(n, timeout); }
+    void wait_for_acknowledgments() override { writer_.wait_for_acknowledgments(std::chrono::seconds(5)); }
 
 private:
     dds::Writer<T> writer_;
@@ -318,6 +320,7 @@ std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayO
         if (w->second->publish(it.data)) ++sent;
         if (o.progress && i % 256 == 0) o.progress(static_cast<double>(i) / static_cast<double>(items.size()));
     }
+    for (const auto& [id, w] : writers) w->wait_for_acknowledgments();
     if (o.progress) o.progress(1.0);
     return sent;
 }
