@@ -214,8 +214,20 @@ Writer::~Writer() {
 
 void Writer::raw(const void* data, std::size_t n) {
     buffer_.append(static_cast<const char*>(data), n);
-    data_crc_ = crc32({static_cast<const std::uint8_t*>(data), n}, data_crc_);
+    if (options_.data_crc || closed_) data_crc_ = crc32({static_cast<const std::uint8_t*>(data), n}, data_crc_);
     offset_ += n;
+}
+
+void Writer::write_out(const char* data, std::size_t size) {
+    std::size_t done = 0;
+    while (done < size) {
+        const ssize_t n = ::write(fd_, data + done, size - done);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            throw RuntimeError(log::cat("writing ", path_, ": ", std::strerror(errno)));
+        }
+        done += static_cast<std::size_t>(n);
+    }
 }
 
 void Writer::record(std::uint8_t opcode, const std::string& content) {
@@ -284,7 +296,9 @@ void Writer::flush_if_due(std::int64_t now_ns) {
 
 void Writer::close_chunk() {
     if (chunk_.empty()) return;
-    const std::string body = compress(options_.compression, chunk_);
+    std::string compressed;
+    if (options_.compression != Compression::none) compressed = compress(options_.compression, chunk_);
+    const std::string& body = options_.compression == Compression::none ? chunk_ : compressed;
     ChunkIndexEntry e;
     e.start_time = chunk_start_;
     e.end_time = chunk_end_;
@@ -293,14 +307,27 @@ void Writer::close_chunk() {
     e.compressed_size = body.size();
     e.uncompressed_size = chunk_.size();
     Out o;
+    o.u8(kChunk);
+    o.u64(0);  // record length, set below
     o.u64(chunk_start_);
     o.u64(chunk_end_);
     o.u64(chunk_.size());
     o.u32(crc32({reinterpret_cast<const std::uint8_t*>(chunk_.data()), chunk_.size()}));
     o.str(e.compression);
     o.u64(body.size());
-    o.s += body;
-    record(kChunk, o.s);
+    const std::uint64_t len = o.s.size() - 9 + body.size();
+    std::memcpy(o.s.data() + 1, &len, 8);
+    raw(o.s.data(), o.s.size());
+    if (body.size() >= (64u << 10)) {
+        // Large bodies go straight to the file: no copy through the buffer.
+        write_out(buffer_.data(), buffer_.size());
+        buffer_.clear();
+        write_out(body.data(), body.size());
+        if (options_.data_crc) data_crc_ = crc32({reinterpret_cast<const std::uint8_t*>(body.data()), body.size()}, data_crc_);
+        offset_ += body.size();
+    } else {
+        raw(body.data(), body.size());
+    }
     e.chunk_length = offset_ - e.chunk_offset;
     const std::uint64_t index_start = offset_;
     for (const auto& [channel, entries] : chunk_index_) {
@@ -318,19 +345,15 @@ void Writer::close_chunk() {
     chunk_indexes_.push_back(std::move(e));
     chunk_.clear();
     chunk_index_.clear();
+    if (buffer_.size() >= (4u << 20)) {  // keep memory bounded between timed flushes
+        write_out(buffer_.data(), buffer_.size());
+        buffer_.clear();
+    }
 }
 
 void Writer::flush() {
     close_chunk();
-    std::size_t done = 0;
-    while (done < buffer_.size()) {
-        const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
-        if (n < 0) {
-            if (errno == EINTR) continue;
-            throw RuntimeError(log::cat("writing ", path_, ": ", std::strerror(errno)));
-        }
-        done += static_cast<std::size_t>(n);
-    }
+    write_out(buffer_.data(), buffer_.size());
     buffer_.clear();
     if (options_.fsync) ::fdatasync(fd_);
 }
@@ -362,11 +385,11 @@ void Writer::add_attachment(const Attachment& a) {
 
 void Writer::close() {
     if (closed_) return;
-    closed_ = true;
     close_chunk();
     Out de;
-    de.u32(data_crc_);
+    de.u32(options_.data_crc ? data_crc_ : 0);
     record(kDataEnd, de.s);
+    closed_ = true;  // from here raw() always computes the (summary) CRC
 
     // Summary: groups by opcode, each remembered for its SummaryOffset record.
     const std::uint64_t summary_start = offset_;

@@ -55,7 +55,10 @@ struct WriterOptions {
     Compression compression = Compression::zstd;
     std::size_t chunk_size = 1 << 20;        // close a chunk at this many uncompressed bytes...
     std::uint64_t flush_interval_ns = 1'000'000'000;  // ...or when its first message is this old
-    bool fsync = true;                       // fdatasync after each chunk: survive a power cut
+    bool fsync = true;                       // fdatasync at each timed flush: survive a power cut
+    bool data_crc = false;                   // CRC of the whole data section (0 = not computed, as
+                                             // the reference writer does by default; chunks and
+                                             // attachments always carry theirs)
     std::string library = "downwash-lab";
     std::string profile;                     // "" (custom); not ros2: schemas are omgidl
 };
@@ -89,6 +92,7 @@ public:
 private:
     struct ChunkIndexEntry;
     void raw(const void* data, std::size_t n);
+    void write_out(const char* data, std::size_t n);
     void record(std::uint8_t opcode, const std::string& content);
     void close_chunk();
 

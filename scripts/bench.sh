@@ -8,3 +8,5 @@ for transport in shm udp; do
   echo
 done
 "$here/build/bin/dw-bench-physics" --benchmark_counters_tabular=true --benchmark_color=false
+"$here/build/bin/dw-bench-mcap" --dir "${DW_BENCH_DIR:-/tmp}" --benchmark_counters_tabular=true --benchmark_color=false
+"$here/build/bin/dw-bench-record"

@@ -25,6 +25,7 @@ void write_sample(const std::string& path, Compression c, std::uint32_t n, std::
     o.compression = c;
     o.chunk_size = chunk_size;
     o.fsync = false;
+    o.data_crc = c == Compression::lz4;  // exercised on one of the three
     Writer w(path, o);
     const auto s = w.add_schema("dw::msg::Test", "omgidl", "module dw { module msg { struct Test { long a; }; }; };");
     const auto a = w.add_channel("rt/lab/a", s, "cdr", {{"offered_qos", "RELIABLE"}});
