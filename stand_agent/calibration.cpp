@@ -1,0 +1,145 @@
+#include "stand_agent/calibration.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "physics/stand.hpp"
+
+namespace dw::stand {
+
+Calibration Calibration::nominal(const physics::StandParams& stand) {
+    Calibration c;
+    c.counts_per_newton.fill(stand.counts_per_newton);
+    c.cell_to_wrench = physics::StandModel(stand).cells_to_wrench();
+    return c;
+}
+
+physics::Wrench Calibration::wrench(const CellVector& tared) const {
+    CellVector forces;
+    for (int i = 0; i < kChips; ++i) forces[i] = tared[i] / counts_per_newton[static_cast<std::size_t>(i)];
+    return cell_to_wrench * forces;
+}
+
+Calibration Calibration::load(const std::string& path) {
+    YAML::Node root;
+    try {
+        root = YAML::LoadFile(path);
+    } catch (const YAML::BadFile&) {
+        throw InputError(log::cat(path, ": cannot read the calibration file"));
+    } catch (const YAML::ParserException& e) {
+        throw InputError(log::cat(path, ":", e.mark.line + 1, ":", e.mark.column + 1, ": not valid YAML: ", e.msg));
+    }
+    auto fail = [&](const YAML::Node& n, const std::string& key, const std::string& what) {
+        if (n && n.Mark().line >= 0) throw InputError(log::cat(path, ":", n.Mark().line + 1, ":", n.Mark().column + 1, ": ", key, ": ", what));
+        throw InputError(log::cat(path, ": ", key, ": ", what));
+    };
+    if (!root.IsMap() || !root["format"] || root["format"].Scalar() != "downwash-stand-calibration/1") {
+        fail(root["format"], "format", "expected downwash-stand-calibration/1");
+    }
+    Calibration c;
+    const YAML::Node g = root["counts_per_newton"];
+    if (!g || !g.IsSequence() || g.size() != kChips) fail(g, "counts_per_newton", "expected a list of 8 numbers");
+    for (std::size_t i = 0; i < kChips; ++i) {
+        double v = 0;
+        if (!YAML::convert<double>::decode(g[i], v) || !(std::abs(v) > 0) || !std::isfinite(v)) {
+            fail(g[i], log::cat("counts_per_newton[", i, "]"), "expected a non-zero number");
+        }
+        c.counts_per_newton[i] = v;
+    }
+    const YAML::Node m = root["cell_to_wrench"];
+    if (!m || !m.IsSequence() || m.size() != 6) fail(m, "cell_to_wrench", "expected 6 rows (f_n, f_e, f_d, m_roll, m_pitch, m_yaw) of 8 numbers");
+    for (std::size_t r = 0; r < 6; ++r) {
+        if (!m[r].IsSequence() || m[r].size() != kChips) fail(m[r], log::cat("cell_to_wrench[", r, "]"), "expected 8 numbers");
+        for (std::size_t k = 0; k < kChips; ++k) {
+            double v = 0;
+            if (!YAML::convert<double>::decode(m[r][k], v) || !std::isfinite(v)) fail(m[r][k], log::cat("cell_to_wrench[", r, "][", k, "]"), "expected a number");
+            c.cell_to_wrench(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = v;
+        }
+    }
+    return c;
+}
+
+void Calibration::save(const std::string& path) const {
+    YAML::Emitter o;
+    o.SetDoublePrecision(12);
+    o << YAML::BeginMap << YAML::Key << "format" << YAML::Value << "downwash-stand-calibration/1";
+    o << YAML::Key << "counts_per_newton" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (double v : counts_per_newton) o << v;
+    o << YAML::EndSeq;
+    o << YAML::Key << "cell_to_wrench" << YAML::Value << YAML::BeginSeq;
+    for (int r = 0; r < 6; ++r) {
+        o << YAML::Flow << YAML::BeginSeq;
+        for (int k = 0; k < kChips; ++k) o << cell_to_wrench(r, k);
+        o << YAML::EndSeq;
+    }
+    o << YAML::EndSeq << YAML::EndMap;
+    std::ofstream out(path);
+    if (!out) throw RuntimeError(log::cat("cannot write ", path));
+    out << "# Stand calibration: per-cell gain and the cell-to-wrench matrix (rows f_n, f_e, f_d,\n"
+           "# m_roll, m_pitch, m_yaw; columns cells 0-7: 4 vertical, 2 along N, 2 along E).\n"
+        << o.c_str() << "\n";
+}
+
+CalibrationFit fit_calibration(const std::vector<KnownLoad>& loads, const std::array<double, kChips>& cpn) {
+    if (loads.size() < 6) throw InputError(log::cat("calibrate: ", loads.size(), " known loads; at least 6 are needed"));
+    const auto n = static_cast<Eigen::Index>(loads.size());
+    Eigen::MatrixXd F(kChips, n), W(6, n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+        for (int i = 0; i < kChips; ++i) F(i, j) = loads[static_cast<std::size_t>(j)].tared_counts[i] / cpn[static_cast<std::size_t>(i)];
+        W.col(j) = loads[static_cast<std::size_t>(j)].wrench;
+    }
+    // The loads excite six directions of the eight cell forces (the stand is statically
+    // indeterminate); the minimum-norm least-squares solution maps exactly those.
+    // A F = W  <=>  F^T A^T = W^T: least squares over the loads.
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(F.transpose(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto& s = svd.singularValues();
+    if (s.size() < 6 || s[5] <= 1e-9 * s[0]) {
+        throw InputError("calibrate: the known loads do not excite all six axes (add loads along the missing ones)");
+    }
+    CalibrationFit out;
+    out.condition = s[0] / s[5];
+    svd.setThreshold(s[5] / s[0] * 0.5);
+    const Eigen::MatrixXd A = svd.solve(W.transpose()).transpose();
+    out.calibration.counts_per_newton = cpn;
+    out.calibration.cell_to_wrench = A;
+    out.residual_rms = std::sqrt((A * F - W).squaredNorm() / static_cast<double>(W.size()));
+    return out;
+}
+
+std::vector<KnownLoad> read_known_loads(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(log::cat(path, ": cannot read the known loads"));
+    std::string line;
+    std::getline(in, line);
+    const std::string header = "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw";
+    if (line != header) throw InputError(log::cat(path, ":1: header is '", line, "', expected '", header, "'"));
+    std::vector<KnownLoad> loads;
+    for (int lineno = 2; std::getline(in, line); ++lineno) {
+        if (line.empty()) continue;
+        std::stringstream ss(line);
+        std::string cell;
+        std::vector<double> v;
+        while (std::getline(ss, cell, ',')) {
+            char* end = nullptr;
+            const double x = std::strtod(cell.c_str(), &end);
+            if (cell.empty() || *end != '\0' || !std::isfinite(x)) {
+                throw InputError(log::cat(path, ":", lineno, ": column ", v.size() + 1, ": '", cell, "' is not a number"));
+            }
+            v.push_back(x);
+        }
+        if (v.size() != 14) throw InputError(log::cat(path, ":", lineno, ": ", v.size(), " fields, expected 14"));
+        KnownLoad k;
+        for (int i = 0; i < kChips; ++i) k.tared_counts[i] = v[static_cast<std::size_t>(i)];
+        for (int a = 0; a < 6; ++a) k.wrench[a] = v[static_cast<std::size_t>(8 + a)];
+        loads.push_back(k);
+    }
+    return loads;
+}
+
+}  // namespace dw::stand

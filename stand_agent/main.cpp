@@ -1,0 +1,113 @@
+// dw-stand-agent: eight HX711 load-cell ADCs to a calibrated 6-DOF wrench at 80 Hz.
+#include <iostream>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+#include "dds/heartbeat.hpp"
+#include "dds/process_cli.hpp"
+#include "stand_agent/emulated_bank.hpp"
+#include "stand_agent/gpiod_lines.hpp"
+#include "stand_agent/runner.hpp"
+
+namespace {
+
+std::vector<unsigned> parse_lines(const std::string& text) {
+    std::vector<unsigned> out;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        char* end = nullptr;
+        const long v = std::strtol(item.c_str(), &end, 10);
+        if (item.empty() || *end != '\0' || v < 0 || v > 1023) throw dw::InputError("--data-lines: '" + item + "' is not a line number");
+        out.push_back(static_cast<unsigned>(v));
+    }
+    if (out.size() != dw::stand::kChips) throw dw::InputError("--data-lines: expected 8 line numbers, got " + std::to_string(out.size()));
+    return out;
+}
+
+int run(int argc, char** argv) {
+    dw::Shutdown::install();
+    dw::dds::ProcessCli cli("dw-stand-agent: eight HX711 load cells to a calibrated 6-DOF wrench (80 Hz)");
+    CLI::App& app = cli.app();
+    app.require_subcommand(1);
+
+    bool sim = false, realtime = false;
+    std::string calibration_path, physics_path, gpio_chip = "gpiochip0", data_lines = "5,6,13,19,26,16,20,21", gain = "a128";
+    unsigned clock_line = 17;
+    double noise_n = 0.025;
+    auto* runc = app.add_subcommand("run", "sample the cells and publish the wrench");
+    runc->add_flag("--sim", sim, "emulated HX711 bank driven by the physics and the mocap topic (no hardware)");
+    runc->add_option("--calibration", calibration_path, "calibration YAML (default: nominal gains and the stand's geometry)");
+    runc->add_option("--physics", physics_path, "physics configuration for --sim (default: the documented defaults)");
+    runc->add_option("--noise", noise_n, "--sim: load-cell noise, 1 sigma [N]");
+    runc->add_option("--gpio-chip", gpio_chip, "GPIO chip (real hardware)");
+    runc->add_option("--clock-line", clock_line, "PD_SCK line offset, shared by the 8 chips");
+    runc->add_option("--data-lines", data_lines, "DOUT line offsets of cells 0-7, comma-separated");
+    runc->add_option("--gain", gain, "a128 (default), a64 or b32");
+    runc->add_flag("--realtime", realtime, "SCHED_FIFO and mlockall for the sampling thread");
+
+    std::string loads_path, out_path = "stand-calibration.yaml";
+    auto* calc = app.add_subcommand("calibrate", "fit the cell-to-wrench matrix by least squares from known loads");
+    calc->add_option("--loads", loads_path, "CSV: c0..c7 (tared counts), f_n, f_e, f_d, m_roll, m_pitch, m_yaw")->required();
+    calc->add_option("--out", out_path, "calibration YAML to write");
+    calc->add_option("--calibration", calibration_path, "take the per-cell gains from this file");
+
+    cli.parse(argc, argv);
+    const dw::physics::PhysicsConfig physics = physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
+    const dw::stand::Calibration cal = calibration_path.empty() ? dw::stand::Calibration::nominal(physics.stand)
+                                                                 : dw::stand::Calibration::load(calibration_path);
+    if (calc->parsed()) {
+        const auto fit = dw::stand::fit_calibration(dw::stand::read_known_loads(loads_path), cal.counts_per_newton);
+        fit.calibration.save(out_path);
+        std::cout << "wrote " << out_path << ": residual " << fit.residual_rms << " (RMS over axes), condition number "
+                  << fit.condition << "\n";
+        return 0;
+    }
+
+    dw::stand::DriverOptions dopt;
+    if (gain == "a128") dopt.gain = dw::stand::Gain::a128;
+    else if (gain == "a64") dopt.gain = dw::stand::Gain::a64;
+    else if (gain == "b32") dopt.gain = dw::stand::Gain::b32;
+    else throw dw::InputError("--gain: '" + gain + "' (expected a128, a64 or b32)");
+    dw::dds::Participant participant(cli.dds(), "stand_agent");
+    dw::dds::Heartbeat heartbeat(participant);
+    dw::stand::AgentOptions aopt;
+    aopt.calibration = cal;
+    dw::stand::StandAgent agent(aopt, dw::SystemClock::instance());
+
+    std::unique_ptr<dw::stand::Hx711Lines> lines;
+    std::unique_ptr<dw::stand::PhysicsSource> source;
+    if (sim) {
+        source = std::make_unique<dw::stand::PhysicsSource>(participant, physics);
+        dw::stand::BankOptions bopt;
+        bopt.rate_hz = physics.stand.rate_hz;
+        bopt.rate_skew = physics.stand.rate_skew;
+        bopt.counts_per_newton = physics.stand.counts_per_newton;
+        bopt.offset_sigma_counts = physics.stand.offset_sigma_counts;
+        bopt.noise_counts = noise_n * physics.stand.counts_per_newton;
+        auto* src = source.get();
+        lines = std::make_unique<dw::stand::EmulatedBank>(dw::SystemClock::instance(), bopt,
+                                                          [src](int chip, dw::Nanos t) { return src->force(chip, t); });
+        dw::log::info("simulated stand: emulated HX711 bank driven by the physics and rt/", cli.dds().ns, "/mocap/frame");
+    } else {
+        dw::stand::GpioPins pins;
+        pins.chip = gpio_chip;
+        pins.clock = clock_line;
+        const auto d = parse_lines(data_lines);
+        std::copy(d.begin(), d.end(), pins.data.begin());
+        lines = std::make_unique<dw::stand::GpiodLines>(pins);
+    }
+    dw::stand::Hx711Driver driver(*lines, dopt);
+    heartbeat.set_state(dw::msg::PROC_RUNNING);
+    const auto n = dw::stand::run_agent(participant, driver, agent, {realtime});
+    dw::log::info("published ", n, " wrench samples");
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    return dw::cli::run_main("dw-stand-agent", [&] { return run(argc, argv); });
+}

@@ -1,0 +1,87 @@
+#include "stand_agent/runner.hpp"
+
+#include <Eigen/Geometry>
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+
+namespace dw::stand {
+
+PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, std::string sufferer)
+    : model_(physics), stand_(physics.stand), sufferer_name_(std::move(sufferer)),
+      sufferer_(0, 0, -physics.stand.height_m),
+      reader_(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) {
+          std::vector<physics::Producer> ps;
+          physics::Vec3 suf = sufferer_;
+          for (const auto& b : f.bodies()) {
+              const physics::Vec3 pos(b.position_m().x(), b.position_m().y(), b.position_m().z());
+              if (b.name() == sufferer_name_) {
+                  suf = pos;
+                  continue;
+              }
+              if (!b.tracking_valid()) continue;
+              physics::Producer pr = model_.producer(pos);
+              const Eigen::Quaterniond q(b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z());
+              if (q.norm() > 0.5) pr.axis = q.normalized() * physics::Vec3::UnitZ();
+              ps.push_back(pr);
+          }
+          std::lock_guard lock(mutex_);
+          producers_ = std::move(ps);
+          sufferer_ = suf;
+      }) {}
+
+double PhysicsSource::force(int chip, Nanos) {
+    std::lock_guard lock(mutex_);
+    const physics::Wrench w = model_.evaluate(sufferer_, producers_);
+    return stand_.wrench_to_cells(w)[chip];
+}
+
+std::uint64_t run_agent(dds::Participant& p, Hx711Driver& driver, StandAgent& agent, const RunOptions& o) {
+    if (o.realtime) {
+        sched_param sp{};
+        sp.sched_priority = 50;
+        if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0) log::warn("SCHED_FIFO refused: ", std::strerror(errno));
+        if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) log::warn("mlockall refused: ", std::strerror(errno));
+    }
+    dds::Writer<msg::LoadCellFrame> frames(p, dds::topics::stand_cells);
+    dds::Writer<msg::WrenchStamped> wrench(p, dds::topics::stand_wrench);
+    dds::Writer<msg::StandStatus> status(p, dds::topics::stand_status);
+    std::atomic<bool> tare{false};
+    dds::Reader<msg::ExperimentCommand> commands(p, dds::topics::experiment_command,
+        [&](const msg::ExperimentCommand& c, const dds::SampleMeta&) {
+            if (c.kind() == msg::CMD_CALIBRATE) tare = true;
+        });
+    std::uint64_t published = 0;
+    Nanos last_status = 0;
+    while (!Shutdown::instance().requested()) {
+        if (tare.exchange(false)) {
+            agent.request_tare();
+            log::info("CALIBRATE: taring at hover thrust");
+        }
+        const Hx711Sample s = driver.read_parallel();
+        StandAgent::Output out = agent.process(s);
+        if (out.publish) {
+            frames.write(out.frame);
+            wrench.write(out.wrench);
+            ++published;
+        }
+        const Nanos now = p.clock().monotonic_ns();
+        if (out.status_changed || now - last_status > 1'000'000'000) {
+            msg::StandStatus st = agent.status();
+            status.write(st);
+            if (out.status_changed) {
+                if (st.state() == msg::STAND_FAULT) log::error("stand: ", st.message());
+                else log::info("stand: ", st.message());
+            }
+            last_status = now;
+        }
+    }
+    return published;
+}
+
+}  // namespace dw::stand
