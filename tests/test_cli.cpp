@@ -1,6 +1,7 @@
 // Bad input to the lab's executables: one clear line on stderr and exit code 2, never a crash.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include "support.hpp"
@@ -101,4 +102,38 @@ TEST(SimCli, SameInputsAndSeedGiveTheSameBytes) {
                         "--out", d.file("c")}, d);
     ASSERT_EQ(r.status, 0);
     EXPECT_NE(dw::read_file(d.file("a/wrench.csv")), dw::read_file(d.file("c/wrench.csv")));
+}
+
+TEST(StandCli, CalibrateFitsKnownLoadsAndRejectsBadFilesClearly) {
+    TempDir d;
+    // Known loads on the nominal stand: tared counts = cell forces x 21400.
+    std::string csv = "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
+    const double r = 0.1;
+    for (int i = 0; i < 12; ++i) {
+        const double fz = 1.0 + i, fn = (i % 3) - 1.0, fe = (i % 4) - 1.5, mr = 0.01 * (i % 5), mp = -0.01 * (i % 3), my = 0.005 * (i % 2);
+        // Minimum-norm cell forces of the nominal geometry (vertical cells at 45° + k 90°).
+        double v[4];
+        for (int k = 0; k < 4; ++k) {
+            const double phi = M_PI / 4 + M_PI / 2 * k, x = r * std::cos(phi), y = r * std::sin(phi);
+            v[k] = fz / 4 + mr * y / (4 * r * r * 0.5) - mp * x / (4 * r * r * 0.5);
+        }
+        const double n4 = fn / 2 + my / (4 * r) * -1, n5 = fn / 2 - my / (4 * r) * -1;
+        const double e6 = fe / 2 - my / (4 * r), e7 = fe / 2 + my / (4 * r);
+        char line[512];
+        std::snprintf(line, sizeof(line), "%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f\n", v[0] * 21400, v[1] * 21400, v[2] * 21400,
+                      v[3] * 21400, n4 * 21400, n5 * 21400, e6 * 21400, e7 * 21400, fn, fe, fz, mr, mp, my);
+        csv += line;
+    }
+    write(d.file("loads.csv"), csv);
+    const auto ok = run({bin("dw-stand-agent"), "calibrate", "--loads", d.file("loads.csv"), "--out", d.file("cal.yaml")}, d);
+    ASSERT_EQ(ok.status, 0) << ok.err;
+    EXPECT_NE(ok.out.find("residual"), std::string::npos) << ok.out;
+    EXPECT_NE(ok.out.find("condition number"), std::string::npos) << ok.out;
+    EXPECT_NE(dw::read_file(d.file("cal.yaml")).find("downwash-stand-calibration/1"), std::string::npos);
+    write(d.file("bad.csv"), "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n1,2,3,4,5,6,7,8,9,10,11,12,13,x\n");
+    expect_one_line_exit_2(run({bin("dw-stand-agent"), "calibrate", "--loads", d.file("bad.csv")}, d),
+                           "bad.csv:2: column 14: 'x' is not a number");
+    const auto nogpio = run({bin("dw-stand-agent"), "run", "--domain", "9"}, d);
+    EXPECT_EQ(nogpio.status, 1);
+    EXPECT_NE(nogpio.err.find("cannot open GPIO chip gpiochip0"), std::string::npos) << nogpio.err;
 }
