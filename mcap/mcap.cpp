@@ -49,6 +49,26 @@ struct Out {
     }
 };
 
+// Record contents that appear twice, in the data section and again in the summary.
+std::string encode(const Schema& x) {
+    Out o;
+    o.u16(x.id);
+    o.str(x.name);
+    o.str(x.encoding);
+    o.str(x.data);
+    return o.s;
+}
+
+std::string encode(const Channel& x) {
+    Out o;
+    o.u16(x.id);
+    o.u16(x.schema_id);
+    o.str(x.topic);
+    o.str(x.message_encoding);
+    o.map(x.metadata);
+    return o.s;
+}
+
 // Reads fields with bounds checks; every problem names the file offset.
 class In {
 public:
@@ -239,12 +259,7 @@ void Writer::record(std::uint8_t opcode, const std::string& content) {
 
 std::uint16_t Writer::add_schema(const std::string& name, const std::string& encoding, const std::string& data) {
     Schema s{static_cast<std::uint16_t>(schemas_.size() + 1), name, encoding, data};
-    Out o;
-    o.u16(s.id);
-    o.str(s.name);
-    o.str(s.encoding);
-    o.str(s.data);
-    record(kSchema, o.s);
+    record(kSchema, encode(s));
     schemas_.push_back(std::move(s));
     return schemas_.back().id;
 }
@@ -252,13 +267,7 @@ std::uint16_t Writer::add_schema(const std::string& name, const std::string& enc
 std::uint16_t Writer::add_channel(const std::string& topic, std::uint16_t schema_id, const std::string& encoding,
                                   const std::map<std::string, std::string>& metadata) {
     Channel c{static_cast<std::uint16_t>(channels_.size() + 1), schema_id, topic, encoding, metadata};
-    Out o;
-    o.u16(c.id);
-    o.u16(c.schema_id);
-    o.str(c.topic);
-    o.str(c.message_encoding);
-    o.map(c.metadata);
-    record(kChannel, o.s);
+    record(kChannel, encode(c));
     channels_.push_back(std::move(c));
     return channels_.back().id;
 }
@@ -401,25 +410,10 @@ void Writer::close() {
         if (offset_ > start) groups.emplace_back(op, start, offset_ - start);
     };
     group(kSchema, [&] {
-        for (const auto& s : schemas_) {
-            Out o;
-            o.u16(s.id);
-            o.str(s.name);
-            o.str(s.encoding);
-            o.str(s.data);
-            record(kSchema, o.s);
-        }
+        for (const auto& s : schemas_) record(kSchema, encode(s));
     });
     group(kChannel, [&] {
-        for (const auto& c : channels_) {
-            Out o;
-            o.u16(c.id);
-            o.u16(c.schema_id);
-            o.str(c.topic);
-            o.str(c.message_encoding);
-            o.map(c.metadata);
-            record(kChannel, o.s);
-        }
+        for (const auto& c : channels_) record(kChannel, encode(c));
     });
     group(kStatistics, [&] {
         Out o;

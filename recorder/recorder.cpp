@@ -109,10 +109,7 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
         }
         const auto index = static_cast<std::uint16_t>(channels_.size());
         channels_.push_back(std::make_unique<TypedChannel<T>>(*this, participant_, spec, index, observe, sink));
-        Channel& c = *channels_.back();
-        const auto schema = writer_->add_schema(c.type, "omgidl", idl::resolved(c.idl));
-        channel_ids_.push_back(writer_->add_channel(c.topic, schema, "cdr",
-            {{"qos", c.qos}, {"qos_profile", c.qos_profile}, {"dds_type", c.type}}));
+        channel_ids_.push_back(announce(*channels_.back()));
     });
 }
 
@@ -148,13 +145,14 @@ void Recorder::open_file() {
     // Re-announce what a split file needs (the first file gets its channels from the constructor).
     if (!channels_.empty()) {
         channel_ids_.clear();
-        for (const auto& c : channels_) {
-            const auto schema = writer_->add_schema(c->type, "omgidl", idl::resolved(c->idl));
-            channel_ids_.push_back(writer_->add_channel(c->topic, schema, "cdr",
-                {{"qos", c->qos}, {"qos_profile", c->qos_profile}, {"dds_type", c->type}}));
-        }
+        for (const auto& c : channels_) channel_ids_.push_back(announce(*c));
         if (!run_id_.empty()) writer_->add_metadata({"run", {{"run_id", run_id_}}});
     }
+}
+
+std::uint16_t Recorder::announce(const Channel& c) {
+    const auto schema = writer_->add_schema(c.type, "omgidl", idl::resolved(c.idl));
+    return writer_->add_channel(c.topic, schema, "cdr", {{"qos", c.qos}, {"qos_profile", c.qos_profile}, {"dds_type", c.type}});
 }
 
 void Recorder::close_file() {

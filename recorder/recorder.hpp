@@ -60,6 +60,8 @@ private:
     friend class Channel;
     void open_file();
     void close_file();
+    // Schema and channel records of one topic in the current file; returns the channel id.
+    std::uint16_t announce(const Channel& c);
     void on_message(std::uint16_t channel_index, std::span<const std::uint8_t> cdr, std::uint64_t log_time,
                     std::uint64_t publish_time, std::uint32_t sequence);
     void note_run(const std::string& run_id);
