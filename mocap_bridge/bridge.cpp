@@ -1,0 +1,215 @@
+#include "mocap_bridge/bridge.hpp"
+
+#include <cmath>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "dds/time.hpp"
+
+namespace dw::natnet {
+
+NatNetClient::NatNetClient(const ClientOptions& o)
+    : options_(o), socket_(o.local_ip, 0), server_endpoint_(Endpoint::make(o.server_ip, o.command_port)) {}
+
+ServerInfo NatNetClient::connect() {
+    const Nanos deadline = SystemClock::instance().monotonic_ns() + static_cast<Nanos>(options_.connect_timeout_ms) * 1'000'000;
+    while (SystemClock::instance().monotonic_ns() < deadline) {
+        socket_.send_to(server_endpoint_, build_connect());
+        for (int i = 0; i < 5; ++i) {
+            auto p = socket_.receive(100);
+            if (!p) continue;
+            try {
+                if (message_id(*p) == kServerInfo) {
+                    server_ = parse_server_info(payload(*p));
+                    last_keepalive_ = SystemClock::instance().monotonic_ns();
+                    return server_;
+                }
+            } catch (const InputError&) {
+                ++malformed_;
+            }
+        }
+    }
+    throw RuntimeError(log::cat("no NatNet server answered at ", server_endpoint_.str(), " within ",
+                                options_.connect_timeout_ms, " ms (is Motive streaming, unicast, to this host?)"));
+}
+
+ModelDef NatNetClient::request_modeldef() {
+    for (int attempt = 0; attempt < 10; ++attempt) {
+        socket_.send_to(server_endpoint_, build_simple(kRequestModelDef));
+        for (int i = 0; i < 20; ++i) {
+            auto p = socket_.receive(50);
+            if (!p) break;
+            try {
+                if (message_id(*p) == kModelDef) return parse_modeldef(payload(*p), server_.natnet);
+            } catch (const InputError& e) {
+                ++malformed_;
+                log::warn("model definitions: ", e.what());
+            }
+        }
+    }
+    throw RuntimeError("the NatNet server sent no model definitions");
+}
+
+std::optional<NatNetClient::Received> NatNetClient::next_frame(int timeout_ms) {
+    const Nanos now = SystemClock::instance().monotonic_ns();
+    if (now - last_keepalive_ > 1'000'000'000) {
+        socket_.send_to(server_endpoint_, build_simple(kKeepAlive));
+        last_keepalive_ = now;
+    }
+    auto p = socket_.receive(timeout_ms);
+    if (!p) return std::nullopt;
+    Received r;
+    r.receive_wall_ns = SystemClock::instance().now_ns();
+    try {
+        if (message_id(*p) != kFrameOfData) return std::nullopt;
+        r.frame = parse_frame(payload(*p), server_.natnet);
+    } catch (const InputError& e) {
+        if (++malformed_ <= 5) log::warn("skipped a malformed NatNet packet: ", e.what());
+        return std::nullopt;
+    }
+    return r;
+}
+
+AxisMap AxisMap::parse(const std::string& text) {
+    AxisMap m;
+    std::array<bool, 3> used{};
+    std::size_t start = 0;
+    for (int i = 0; i < 3; ++i) {
+        if (start > text.size()) throw InputError(log::cat("--axes '", text, "': expected three axes, e.g. x,z,-y (N, E, D)"));
+        const std::size_t comma = text.find(',', start);
+        std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        start = comma == std::string::npos ? text.size() + 1 : comma + 1;
+        int sign = 1;
+        if (!item.empty() && (item[0] == '-' || item[0] == '+')) {
+            sign = item[0] == '-' ? -1 : 1;
+            item = item.substr(1);
+        }
+        if (item.size() != 1 || item[0] < 'x' || item[0] > 'z' || used[static_cast<std::size_t>(item[0] - 'x')]) {
+            throw InputError(log::cat("--axes '", text, "': expected three of x, y, z with signs, e.g. x,z,-y (N, E, D)"));
+        }
+        used[static_cast<std::size_t>(item[0] - 'x')] = true;
+        m.source[static_cast<std::size_t>(i)] = item[0] - 'x';
+        m.sign[static_cast<std::size_t>(i)] = sign;
+    }
+    if (start <= text.size()) throw InputError(log::cat("--axes '", text, "': more than three axes"));
+    return m;
+}
+
+int AxisMap::det() const {
+    // The sign of the permutation times the product of the signs.
+    int inversions = 0;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = i + 1; j < 3; ++j) inversions += source[static_cast<std::size_t>(i)] > source[static_cast<std::size_t>(j)];
+    }
+    return (inversions % 2 ? -1 : 1) * sign[0] * sign[1] * sign[2];
+}
+
+FrameConverter::FrameConverter(const BridgeOptions& o, const ServerInfo& server, const ModelDef& models)
+    : options_(o), server_(server) {
+    for (const auto& d : models.rigid_bodies) names_[d.id] = d.name;
+}
+
+double FrameConverter::camera_time_s(const FrameOfData& f, Nanos receive_wall_ns) {
+    const double receive = static_cast<double>(receive_wall_ns) * 1e-9;
+    if (server_.clock_frequency == 0 || f.transmit == 0) return receive;  // no camera stamps (< 3.0)
+    const double freq = static_cast<double>(server_.clock_frequency);
+    switch (options_.mode) {
+        case msg::MOCAP_STAMP_RECEIVE: return receive;
+        case msg::MOCAP_STAMP_COMPENSATED:
+            return receive - static_cast<double>(f.transmit - f.mid_exposure) / freq;
+        case msg::MOCAP_STAMP_CLOCK_SYNC: {
+            // The smallest (receive - transmit) seen so far: the clocks' offset plus the network's
+            // least delay; mid-exposure is mapped through it.
+            const double offset = receive - static_cast<double>(f.transmit) / freq;
+            if (!have_offset_ || offset < clock_offset_s_) clock_offset_s_ = offset;
+            have_offset_ = true;
+            return static_cast<double>(f.mid_exposure) / freq + clock_offset_s_;
+        }
+    }
+    return receive;
+}
+
+FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos receive_wall_ns) {
+    Output out;
+    if (last_frame_ >= 0 && f.frame_number > last_frame_ + 1) dropped_ += static_cast<std::uint64_t>(f.frame_number - last_frame_ - 1);
+    last_frame_ = f.frame_number;
+    const double t = camera_time_s(f, receive_wall_ns);
+    const double freq = server_.clock_frequency ? static_cast<double>(server_.clock_frequency) : 1.0;
+    auto& m = out.frame;
+    m.header().stamp(dds::to_msg(static_cast<Nanos>(t * 1e9)));
+    m.frame_number(static_cast<std::uint64_t>(f.frame_number));
+    m.camera_mid_exposure(dds::to_msg(static_cast<Nanos>(static_cast<double>(f.mid_exposure) / freq * 1e9)));
+    m.transmit(dds::to_msg(static_cast<Nanos>(static_cast<double>(f.transmit) / freq * 1e9)));
+    m.receive(dds::to_msg(receive_wall_ns));
+    m.timestamp_mode(options_.mode);
+    m.dropped_frames(static_cast<std::uint32_t>(dropped_));
+    const auto& ax = options_.axes;
+    for (const auto& b : f.bodies) {
+        msg::RigidBody r;
+        auto it = names_.find(b.id);
+        const std::string motive_name = it == names_.end() ? "body" + std::to_string(b.id) : it->second;
+        auto mapped = options_.names.find(motive_name);
+        r.name(mapped == options_.names.end() ? motive_name : mapped->second);
+        r.id(b.id);
+        std::array<double, 3> p{};
+        std::array<double, 3> qv{};
+        for (std::size_t i = 0; i < 3; ++i) {
+            p[i] = ax.sign[i] * static_cast<double>(b.position[static_cast<std::size_t>(ax.source[i])]);
+            // The quaternion's vector part is an axial vector: a reflection flips it once more.
+            qv[i] = ax.det() * ax.sign[i] * static_cast<double>(b.orientation[static_cast<std::size_t>(ax.source[i])]);
+        }
+        r.position_m().x(p[0]);
+        r.position_m().y(p[1]);
+        r.position_m().z(p[2]);
+        r.orientation().w(b.orientation[3]);
+        r.orientation().x(qv[0]);
+        r.orientation().y(qv[1]);
+        r.orientation().z(qv[2]);
+        r.tracking_valid(b.tracking_valid);
+        r.residual_m(b.mean_error);
+        m.bodies().push_back(r);
+
+        Track& tr = tracks_[b.id];
+        msg::VehicleState s;
+        s.header().stamp(m.header().stamp());
+        s.vehicle_id(r.name());
+        s.tracking_valid(b.tracking_valid);
+        if (b.tracking_valid) {
+            if (tr.last_valid_s >= 0 && t - tr.last_valid_s > options_.reset_gap_s) tr.recent.clear();  // back after a loss
+            tr.recent.emplace_back(t, p);
+            while (tr.recent.size() > 2 && t - tr.recent.front().first > options_.velocity_window_s) tr.recent.erase(tr.recent.begin());
+            tr.last_valid_s = t;
+            s.position_m(r.position_m());
+            s.orientation(r.orientation());
+        } else if (!tr.recent.empty()) {
+            const auto& last = tr.recent.back().second;  // hold the last known pose
+            s.position_m().x(last[0]);
+            s.position_m().y(last[1]);
+            s.position_m().z(last[2]);
+        }
+        // Least-squares slope over the recent samples, on their own time stamps: a dropped
+        // frame only widens the spacing.
+        if (b.tracking_valid && tr.recent.size() >= 2) {
+            double mt = 0;
+            for (const auto& [ti, pi] : tr.recent) mt += ti;
+            mt /= static_cast<double>(tr.recent.size());
+            double den = 0;
+            std::array<double, 3> num{};
+            for (const auto& [ti, pi] : tr.recent) {
+                den += (ti - mt) * (ti - mt);
+                for (std::size_t k = 0; k < 3; ++k) num[k] += (ti - mt) * pi[k];
+            }
+            if (den > 0) {
+                s.velocity_mps().x(num[0] / den);
+                s.velocity_mps().y(num[1] / den);
+                s.velocity_mps().z(num[2] / den);
+            }
+        }
+        s.staleness_s(tr.last_valid_s < 0 ? -1.0 : t - tr.last_valid_s);
+        s.airborne(true);
+        out.states.push_back(s);
+    }
+    return out;
+}
+
+}  // namespace dw::natnet

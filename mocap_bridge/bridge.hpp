@@ -1,0 +1,94 @@
+#pragma once
+// The mocap bridge: a NatNet client (unicast command channel, frames received on it, keepalives),
+// and the conversion of each frame to the lab's MocapFrame and per-vehicle VehicleState: Motive's
+// Y-up axes to NED, rigid-body names to vehicle names, honest timestamps, per-body velocity robust
+// to dropped frames, tracking-lost flags, staleness and dropped-frame counts.
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/clock.hpp"
+#include "dw/msg/Mocap.h"
+#include "dw/msg/Vehicle.h"
+#include "mocap_bridge/natnet.hpp"
+#include "mocap_bridge/udp.hpp"
+
+namespace dw::natnet {
+
+struct ClientOptions {
+    std::string server_ip = "127.0.0.1";
+    std::uint16_t command_port = 1510;
+    std::string local_ip = "127.0.0.1";
+    int connect_timeout_ms = 3000;
+};
+
+class NatNetClient {
+public:
+    explicit NatNetClient(const ClientOptions& o);
+    // CONNECT -> SERVERINFO. Throws dw::RuntimeError when no server answers.
+    ServerInfo connect();
+    ModelDef request_modeldef();
+    struct Received {
+        FrameOfData frame;
+        Nanos receive_wall_ns = 0;
+    };
+    // The next frame within timeout_ms (other packets are handled or ignored); keepalives are
+    // sent about once a second. Malformed packets are counted and skipped.
+    std::optional<Received> next_frame(int timeout_ms);
+    std::uint64_t malformed() const { return malformed_; }
+    const ServerInfo& server() const { return server_; }
+
+private:
+    ClientOptions options_;
+    UdpSocket socket_;
+    Endpoint server_endpoint_;
+    ServerInfo server_;
+    Nanos last_keepalive_ = 0;
+    std::uint64_t malformed_ = 0;
+};
+
+struct AxisMap {
+    // Each NED axis as a signed Motive axis: default n = x, e = z, d = -y.
+    std::array<int, 3> source{0, 2, 1};
+    std::array<int, 3> sign{1, 1, -1};
+    static AxisMap parse(const std::string& text);  // "x,z,-y"; throws dw::InputError
+    int det() const;  // +1 for a rotation, -1 for a reflection of the axes
+};
+
+struct BridgeOptions {
+    AxisMap axes;
+    std::map<std::string, std::string> names;        // rigid-body name -> vehicle name
+    msg::MocapTimestampMode mode = msg::MOCAP_STAMP_COMPENSATED;
+    double velocity_window_s = 0.03;                 // least-squares velocity over this span
+    double reset_gap_s = 0.05;                       // a longer gap restarts a body's estimator
+};
+
+class FrameConverter {
+public:
+    FrameConverter(const BridgeOptions& o, const ServerInfo& server, const ModelDef& models);
+    struct Output {
+        msg::MocapFrame frame;
+        std::vector<msg::VehicleState> states;
+    };
+    Output convert(const FrameOfData& f, Nanos receive_wall_ns);
+    std::uint64_t dropped() const { return dropped_; }
+
+private:
+    struct Track {
+        std::vector<std::pair<double, std::array<double, 3>>> recent;  // camera time, NED position
+        double last_valid_s = -1;
+    };
+    double camera_time_s(const FrameOfData& f, Nanos receive_wall_ns);
+
+    BridgeOptions options_;
+    ServerInfo server_;
+    std::map<std::int32_t, std::string> names_;
+    std::map<std::int32_t, Track> tracks_;
+    std::int32_t last_frame_ = -1;
+    std::uint64_t dropped_ = 0;
+    double clock_offset_s_ = 0;  // clock-sync mode: host wall time - server ticks
+    bool have_offset_ = false;
+};
+
+}  // namespace dw::natnet

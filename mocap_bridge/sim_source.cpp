@@ -1,0 +1,54 @@
+#include "mocap_bridge/sim_source.hpp"
+
+#include <cmath>
+
+namespace dw::natnet {
+
+SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz)
+    : names_(names),
+      reader_(p, dds::topics::vehicle_setpoint, [this](const msg::VehicleSetpoint& s, const dds::SampleMeta&) {
+          physics::Setpoint sp;
+          sp.position = physics::Vec3(s.position_m().x(), s.position_m().y(), s.position_m().z());
+          sp.velocity = physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z());
+          sp.acceleration = physics::Vec3(s.acceleration_mps2().x(), s.acceleration_mps2().y(), s.acceleration_mps2().z());
+          sp.yaw_rad = s.yaw_rad();
+          std::lock_guard lock(mutex_);
+          setpoints_[s.vehicle_id()] = sp;
+      }) {
+    physics::Rng rng(1);
+    for (std::size_t i = 1; i < names_.size(); ++i) {
+        // Parked on the floor beside the stand until setpoints arrive.
+        const physics::Vec3 start(-2.0, -1.0 + 0.7 * static_cast<double>(i), 0.0);
+        vehicles_.emplace_back(physics_.dynamics, physics_.gravity_m_s2, start, rng.split());
+        setpoints_[names_[i]].position = start;
+    }
+    EmulatorOptions o;
+    o.port = 0;
+    o.rate_hz = rate_hz;
+    o.names = names_;
+    o.motion = [this](int body, double t) { return pose(body, t); };
+    emulator_ = std::make_unique<NatNetEmulator>(o);
+}
+
+BodyPose SimSource::pose(int body, double t) {
+    std::lock_guard lock(mutex_);
+    if (body == 0) {
+        BodyPose p;
+        p.ned = {0, 0, -physics_.stand.height_m};
+        return p;
+    }
+    if (body == 1) {  // once per frame: advance every vehicle to t at the dynamics' rate
+        const double dt = 1.0 / physics_.dynamics.rate_hz;
+        while (t_ + dt <= t) {
+            for (std::size_t i = 0; i < vehicles_.size(); ++i) vehicles_[i].step(setpoints_[names_[i + 1]], dt);
+            t_ += dt;
+        }
+    }
+    const auto& s = vehicles_[static_cast<std::size_t>(body - 1)].state();
+    BodyPose p;
+    p.ned = {s.position.x(), s.position.y(), s.position.z()};
+    p.q_ned = {s.orientation.w(), s.orientation.x(), s.orientation.y(), s.orientation.z()};
+    return p;
+}
+
+}  // namespace dw::natnet
