@@ -11,3 +11,4 @@ done
 "$here/build/bin/dw-bench-mcap" --dir "${DW_BENCH_DIR:-/tmp}" --benchmark_counters_tabular=true --benchmark_color=false
 "$here/build/bin/dw-bench-record"
 "$here/build/bin/dw-bench-stand"
+"$here/build/bin/dw-bench-mocap" --seconds 60
