@@ -18,6 +18,7 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
+#include "bench/raw_dds.hpp"
 #include "dds/endpoint.hpp"
 
 namespace fdds = eprosima::fastdds::dds;
@@ -36,23 +37,13 @@ class RawEndpoint : public fdds::DataReaderListener {
 public:
     RawEndpoint(const dw::dds::DdsConfig& cfg, const std::string& out_topic, const std::string& in_topic,
                 std::function<void(const Msg&)> on_sample)
-        : on_sample_(std::move(on_sample)) {
-        participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
-            static_cast<fdds::DomainId_t>(cfg.domain), dw::dds::participant_qos(cfg, "raw"));
-        fdds::TypeSupport type(new dw::msg::WrenchStampedPubSubType());
-        type.register_type(participant_);
-        auto* out = participant_->create_topic(out_topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
-        auto* in = participant_->create_topic(in_topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
-        writer_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT)
-                      ->create_datawriter(out, dw::dds::writer_qos(dw::dds::QosProfile::command));
-        reader_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT)
-                      ->create_datareader(in, dw::dds::reader_qos(dw::dds::QosProfile::command), this);
+        : on_sample_(std::move(on_sample)), participant_(cfg, "raw") {
+        writer_ = participant_.publisher()->create_datawriter(participant_.topic(out_topic),
+                                                              dw::dds::writer_qos(dw::dds::QosProfile::command));
+        reader_ = participant_.subscriber()->create_datareader(participant_.topic(in_topic),
+                                                               dw::dds::reader_qos(dw::dds::QosProfile::command), this);
     }
-    ~RawEndpoint() override {
-        reader_->set_listener(nullptr);
-        participant_->delete_contained_entities();
-        fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
-    }
+    ~RawEndpoint() override { reader_->set_listener(nullptr); }
     void on_data_available(fdds::DataReader* r) override {
         fdds::SampleInfo info;
         while (r->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
@@ -69,7 +60,7 @@ public:
 
 private:
     std::function<void(const Msg&)> on_sample_;
-    fdds::DomainParticipant* participant_ = nullptr;
+    dw::bench::RawParticipant participant_;
     fdds::DataWriter* writer_ = nullptr;
     fdds::DataReader* reader_ = nullptr;
     Msg sample_;

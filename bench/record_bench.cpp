@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench/raw_dds.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
 #include "dds/endpoint.hpp"
@@ -24,21 +25,12 @@ namespace {
 
 class RawCounter : public fdds::DataReaderListener {
 public:
-    explicit RawCounter(const dw::dds::DdsConfig& cfg) {
-        participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
-            static_cast<fdds::DomainId_t>(cfg.domain), dw::dds::participant_qos(cfg, "raw-counter"));
-        fdds::TypeSupport type(new dw::msg::WrenchStampedPubSubType());
-        type.register_type(participant_);
-        auto* topic = participant_->create_topic("rt/" + cfg.ns + "/stand/wrench", type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    explicit RawCounter(const dw::dds::DdsConfig& cfg) : participant_(cfg, "raw-counter") {
         auto qos = dw::dds::reader_qos(dw::dds::QosProfile::sensor);
         qos.history().depth = 1000;  // a fair reader: it keeps up, so losses are the transport's
-        reader_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT)->create_datareader(topic, qos, this);
+        reader_ = participant_.subscriber()->create_datareader(participant_.topic("rt/" + cfg.ns + "/stand/wrench"), qos, this);
     }
-    ~RawCounter() override {
-        reader_->set_listener(nullptr);
-        participant_->delete_contained_entities();
-        fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
-    }
+    ~RawCounter() override { reader_->set_listener(nullptr); }
     void on_data_available(fdds::DataReader* r) override {
         fdds::SampleInfo info;
         while (r->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
@@ -48,7 +40,7 @@ public:
     std::atomic<std::uint64_t> count{0};
 
 private:
-    fdds::DomainParticipant* participant_ = nullptr;
+    dw::bench::RawParticipant participant_;
     fdds::DataReader* reader_ = nullptr;
     dw::msg::WrenchStamped sample_;
 };

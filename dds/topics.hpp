@@ -2,7 +2,9 @@
 // Every lab topic, its type and its QoS profile, in one place. Names follow the ROS 2 convention
 // rt/<namespace>/<suffix> (namespace "lab" by default), so ROS 2 tools on the same domain list
 // them. Add a topic here and every tool that visits all topics (dw-probe, the recorder) gets it.
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "dds/qos.hpp"
 #include "dw/msg/ExperimentPubSubTypes.h"
@@ -83,5 +85,11 @@ void for_each(F&& f) {
 }
 inline constexpr int kTopicCount = 11;
 }  // namespace topics
+
+// Topic suffixes ("stand/wrench") of every lab topic, in registry order.
+std::vector<std::string> all_topics();
+// Accepts suffixes, full names (rt/<ns>/...) or "all"; none = all. Throws dw::InputError for an
+// unknown topic.
+std::vector<std::string> select_topics(const std::vector<std::string>& requested, const std::string& ns);
 
 }  // namespace dw::dds

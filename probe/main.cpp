@@ -78,7 +78,7 @@ int run(int argc, char** argv) {
         return 0;
     }
 
-    const auto selected = dw::probe::select_topics(topics, dds_config.ns);
+    const auto selected = dw::dds::select_topics(topics, dds_config.ns);
     const auto qos = qos_overrides(reliability, durability);
     dw::dds::Participant participant(dds_config, name);
     dw::dds::Heartbeat heartbeat(participant);

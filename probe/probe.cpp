@@ -128,28 +128,6 @@ void visit_selected(const std::vector<std::string>& selected, F&& f) {
 
 }  // namespace
 
-std::vector<std::string> all_topics() {
-    std::vector<std::string> out;
-    dds::topics::for_each([&](const auto& spec) { out.emplace_back(spec.suffix); });
-    return out;
-}
-
-std::vector<std::string> select_topics(const std::vector<std::string>& requested, const std::string& ns) {
-    const auto all = all_topics();
-    if (requested.empty()) return all;
-    std::vector<std::string> out;
-    const std::string prefix = "rt/" + ns + "/";
-    for (const auto& r : requested) {
-        if (r == "all") return all;
-        std::string suffix = r.rfind(prefix, 0) == 0 ? r.substr(prefix.size()) : r;
-        if (std::find(all.begin(), all.end(), suffix) == all.end()) {
-            throw InputError(log::cat("unknown topic '", r, "' (dw-probe list shows the lab's topics)"));
-        }
-        if (std::find(out.begin(), out.end(), suffix) == out.end()) out.push_back(suffix);
-    }
-    return out;
-}
-
 bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
     std::vector<std::unique_ptr<PubChannel>> channels;
     visit_selected(o.topics, [&](const auto& spec) {

@@ -12,11 +12,6 @@
 
 namespace dw::probe {
 
-// Topic suffixes ("stand/wrench") of every lab topic, in registry order.
-std::vector<std::string> all_topics();
-// Accepts suffixes, full names (rt/<ns>/...) or "all"; throws dw::InputError for unknown ones.
-std::vector<std::string> select_topics(const std::vector<std::string>& requested, const std::string& ns);
-
 struct PubOptions {
     std::vector<std::string> topics;           // suffixes
     std::uint64_t count = 10;                  // samples per topic

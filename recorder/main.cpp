@@ -7,7 +7,6 @@
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
-#include "probe/probe.hpp"
 #include "recorder/recorder.hpp"
 #include "recorder/tools.hpp"
 
@@ -105,7 +104,7 @@ int run(int argc, char** argv) {
     // Ticks every 50 ms, so a chunk is written out no later than the interval.
     rec.writer.flush_interval_ns = static_cast<std::uint64_t>(std::max(0.0, flush_s - 0.05) * 1e9);
     rec.split_bytes = static_cast<std::uint64_t>(split_mb * 1e6);
-    rec.topics = dw::probe::select_topics(rec.topics, cli.dds().ns);
+    rec.topics = dw::dds::select_topics(rec.topics, cli.dds().ns);
     for (const auto& a : attach) {
         const auto eq = a.find('=');
         if (eq == std::string::npos || eq == 0) throw dw::InputError("--attach '" + a + "': expected NAME=PATH");
