@@ -137,3 +137,17 @@ TEST(StandCli, CalibrateFitsKnownLoadsAndRejectsBadFilesClearly) {
     EXPECT_EQ(nogpio.status, 1);
     EXPECT_NE(nogpio.err.find("cannot open GPIO chip gpiochip0"), std::string::npos) << nogpio.err;
 }
+
+TEST(PlannerCli, PlanPrintsItsFiguresAndRejectsInfeasiblePlansInOneLine) {
+    TempDir d;
+    const auto ok = run({bin("dw-planner"), "plan", "--formation", "stack", "--out", d.file("p.json")}, d);
+    ASSERT_EQ(ok.status, 0) << ok.err;
+    EXPECT_NE(ok.out.find("36 legs"), std::string::npos) << ok.out;
+    EXPECT_NE(ok.out.find("coverage"), std::string::npos);
+    EXPECT_NE(dw::read_file(d.file("p.json")).find("downwash-plan/1"), std::string::npos);
+    EXPECT_GT(dw::read_file(d.file("p.png")).size(), 1000u);
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "leader_follower3", "--min-separation", "0.6",
+                                "--out", d.file("q.yaml")}, d), "infeasible plan: v1 and v2 come 0.5 m apart");
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--altitudes", "2.0"}, d),
+                           "--altitudes: 2.0 m is above");
+}

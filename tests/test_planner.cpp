@@ -1,0 +1,100 @@
+// The planner's plans: formation geometry, coverage of the square, separation and geofence over
+// a fine time grid for every formation, infeasible plans rejected with the reason, the picture.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/errors.hpp"
+#include "swarm_planner/picture.hpp"
+#include "swarm_planner/plan.hpp"
+#include <cmath>
+
+#include "support.hpp"
+
+using namespace dw::planner;
+
+TEST(Formations, HaveTheStudysGeometry) {
+    using dw::physics::make_formation;
+    EXPECT_EQ(make_formation("single").offsets.size(), 1u);
+    const auto sbs = make_formation("side_by_side").offsets;  // abreast: across the E travel
+    ASSERT_EQ(sbs.size(), 2u);
+    EXPECT_NEAR(sbs[0].y(), sbs[1].y(), 1e-12);
+    EXPECT_GT(std::abs(sbs[0].x() - sbs[1].x()), 0.3);
+    const auto lf3 = make_formation("leader_follower3").offsets;  // in line along E, 0.5 m from the centroid
+    ASSERT_EQ(lf3.size(), 3u);
+    for (const auto& o : lf3) EXPECT_NEAR(o.x(), 0.0, 1e-12);
+    EXPECT_NEAR((lf3[0] + lf3[1] + lf3[2]).norm(), 0.0, 1e-12);
+    EXPECT_NEAR(std::abs(lf3[0].y()), 0.5, 1e-12);
+    const auto stack = make_formation("stack").offsets;  // different altitudes, small lateral offset
+    ASSERT_EQ(stack.size(), 2u);
+    EXPECT_GT(std::abs(stack[0].z() - stack[1].z()), 0.3);
+    EXPECT_LT(std::hypot(stack[0].x() - stack[1].x(), stack[0].y() - stack[1].y()), 0.2);
+    const auto hyb = make_formation("hybrid").offsets;  // equilateral triangle, one plane
+    ASSERT_EQ(hyb.size(), 3u);
+    const double s01 = (hyb[0] - hyb[1]).norm(), s12 = (hyb[1] - hyb[2]).norm(), s20 = (hyb[2] - hyb[0]).norm();
+    EXPECT_NEAR(s01, s12, 1e-9);
+    EXPECT_NEAR(s12, s20, 1e-9);
+    for (const auto& o : hyb) EXPECT_EQ(o.z(), 0.0);
+    EXPECT_THROW(make_formation("diamond"), dw::InputError);
+}
+
+TEST(Plans, EveryFormationIsSafeOverAFineTimeGridAndCoversTheSquare) {
+    for (const auto& name : dw::physics::formation_names()) {
+        SCOPED_TRACE(name);
+        PlanOptions o;
+        o.formation = name;
+        o.check_dt_s = 0.005;
+        const Plan p = make_plan(o);
+        EXPECT_EQ(p.reference.legs().size(), 36u);
+        const auto v = check(p);
+        EXPECT_FALSE(v.has_value()) << v->what;
+        EXPECT_GE(coverage(p), 0.95);
+        // Legs alternate +E/-E and are at constant speed on their measured segment.
+        for (std::size_t i = 0; i < p.reference.legs().size(); ++i) {
+            const auto& leg = p.reference.legs()[i];
+            EXPECT_EQ(leg.direction, i % 2 == 0 ? 1 : -1);
+            for (double t = leg.t_start + 0.05; t < leg.t_end; t += 0.5) {
+                EXPECT_NEAR(p.reference.at(t).velocity.norm(), 0.5, 1e-9);
+            }
+        }
+    }
+}
+
+TEST(Plans, InfeasiblePlansAreRejectedWithTheReason) {
+    PlanOptions close;
+    close.formation = "leader_follower3";
+    close.min_separation_m = 0.6;  // the vehicles fly 0.5 m apart
+    const auto v = check(make_plan(close));
+    ASSERT_TRUE(v.has_value());
+    EXPECT_NE(v->what.find("v1 and v2 come 0.5 m apart"), std::string::npos) << v->what;
+    EXPECT_NE(v->what.find("minimum 0.6 m"), std::string::npos);
+
+    PlanOptions low;
+    low.formation = "single";
+    low.grid.altitudes_m = {0.1};  // 10 cm over the sufferer
+    const auto w = check(make_plan(low));
+    ASSERT_TRUE(w.has_value());
+    EXPECT_NE(w->what.find("from the sufferer"), std::string::npos) << w->what;
+
+    PlanOptions tight;
+    tight.formation = "side_by_side";
+    tight.fence.e_min = -1.2;  // the run-up leaves the room
+    const auto x = check(make_plan(tight));
+    ASSERT_TRUE(x.has_value());
+    EXPECT_NE(x->what.find("leaves the geofence"), std::string::npos) << x->what;
+}
+
+TEST(Plans, DocumentsAndPicture) {
+    PlanOptions o;
+    o.formation = "hybrid";
+    o.grid.legs = 6;
+    const Plan p = make_plan(o);
+    const std::string yaml = to_document(p, false), json = to_document(p, true);
+    EXPECT_NE(yaml.find("format: downwash-plan/1"), std::string::npos);
+    EXPECT_NE(json.find("\"legs\""), std::string::npos);
+    dw::test::TempDir d;
+    draw_plan(p, d.file("plan.png"));
+    const std::string png = dw::read_file(d.file("plan.png"));
+    ASSERT_GT(png.size(), 1000u);
+    EXPECT_EQ(png.substr(1, 3), "PNG");
+}
