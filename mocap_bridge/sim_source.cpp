@@ -17,8 +17,8 @@ SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names,
       }) {
     physics::Rng rng(1);
     for (std::size_t i = 1; i < names_.size(); ++i) {
-        // Parked on the floor beside the stand until setpoints arrive.
-        const physics::Vec3 start(-2.0, -1.0 + 0.7 * static_cast<double>(i), 0.0);
+        // Parked on the floor west of the stand until setpoints arrive.
+        const physics::Vec3 start(-1.0 + 0.7 * static_cast<double>(i - 1), -2.4, 0.0);
         vehicles_.emplace_back(physics_.dynamics, physics_.gravity_m_s2, start, rng.split());
         setpoints_[names_[i]].position = start;
     }

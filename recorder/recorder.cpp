@@ -88,8 +88,12 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
     auto sink = [this](std::uint16_t i, std::span<const std::uint8_t> d, std::uint64_t lt, std::uint64_t pt, std::uint32_t seq) {
         on_message(i, d, lt, pt, seq);
     };
-    std::lock_guard lock(mutex_);
-    open_file();  // before the readers: a latched sample may arrive at once
+    {
+        std::lock_guard lock(mutex_);
+        open_file();  // before the readers: a latched sample may arrive at once
+    }
+    channels_.reserve(dds::topics::kTopicCount);
+    channel_ids_.reserve(dds::topics::kTopicCount);
     dds::topics::for_each([&](const auto& spec) {
         using T = typename std::decay_t<decltype(spec)>::type;
         const bool take = wanted.empty() || std::find(wanted.begin(), wanted.end(), std::string(spec.suffix)) != wanted.end();
@@ -107,9 +111,19 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
                 };
             }
         }
-        const auto index = static_cast<std::uint16_t>(channels_.size());
-        channels_.push_back(std::make_unique<TypedChannel<T>>(*this, participant_, spec, index, observe, sink));
-        channel_ids_.push_back(announce(*channels_.back()));
+        const auto index = static_cast<std::uint16_t>(channel_ids_.size());
+        {
+            // Announced before the reader exists, so the first sample always has its channel.
+            std::lock_guard lock(mutex_);
+            infos_.push_back({participant_.topic_name(spec.suffix), std::string(spec.type_name),
+                              dds::describe(dds::reader_qos(spec.qos)), dds::to_string(spec.qos), std::string(spec.idl)});
+            channel_ids_.push_back(announce(infos_.back()));
+        }
+        // No lock is held while the reader is created: its listener may already be running
+        // (a latched sample) and Fast DDS must not wait on us.
+        auto channel = std::make_unique<TypedChannel<T>>(*this, participant_, spec, index, observe, sink);
+        std::lock_guard lock(mutex_);
+        channels_.push_back(std::move(channel));
     });
 }
 
@@ -143,14 +157,14 @@ void Recorder::open_file() {
         writer_->add_attachment({now, now, name, media, data});
     }
     // Re-announce what a split file needs (the first file gets its channels from the constructor).
-    if (!channels_.empty()) {
+    if (!infos_.empty()) {
         channel_ids_.clear();
-        for (const auto& c : channels_) channel_ids_.push_back(announce(*c));
+        for (const auto& info : infos_) channel_ids_.push_back(announce(info));
         if (!run_id_.empty()) writer_->add_metadata({"run", {{"run_id", run_id_}}});
     }
 }
 
-std::uint16_t Recorder::announce(const Channel& c) {
+std::uint16_t Recorder::announce(const ChannelInfo& c) {
     const auto schema = writer_->add_schema(c.type, "omgidl", idl::resolved(c.idl));
     return writer_->add_channel(c.topic, schema, "cdr", {{"qos", c.qos}, {"qos_profile", c.qos_profile}, {"dds_type", c.type}});
 }
@@ -169,15 +183,15 @@ void Recorder::close_file() {
 
 void Recorder::on_message(std::uint16_t index, std::span<const std::uint8_t> cdr, std::uint64_t log_time,
                           std::uint64_t publish_time, std::uint32_t sequence) {
-    std::lock_guard lock(mutex_);  // also orders us after the constructor that fills channels_
-    Channel& c = *channels_[index];
+    std::lock_guard lock(mutex_);
+    Channel* c = index < channels_.size() ? channels_[index].get() : nullptr;  // null while being set up
     if (paused_) {
-        ++c.skipped;
+        if (c) ++c->skipped;
         return;
     }
     if (!writer_) return;
     writer_->write({channel_ids_[index], sequence, log_time, publish_time, cdr}, participant_.clock().monotonic_ns());
-    ++c.recorded;
+    if (c) ++c->recorded;
 }
 
 void Recorder::note_run(const std::string& run_id) {

@@ -60,8 +60,11 @@ private:
     friend class Channel;
     void open_file();
     void close_file();
+    struct ChannelInfo {
+        std::string topic, type, qos, qos_profile, idl;
+    };
     // Schema and channel records of one topic in the current file; returns the channel id.
-    std::uint16_t announce(const Channel& c);
+    std::uint16_t announce(const ChannelInfo& c);
     void on_message(std::uint16_t channel_index, std::span<const std::uint8_t> cdr, std::uint64_t log_time,
                     std::uint64_t publish_time, std::uint32_t sequence);
     void note_run(const std::string& run_id);
@@ -73,6 +76,7 @@ private:
     std::unique_ptr<mcap::Writer> writer_;
     std::vector<std::string> files_;
     std::vector<std::pair<std::string, std::string>> attachment_data_;  // name, bytes
+    std::vector<ChannelInfo> infos_;          // by channel index
     std::vector<std::uint16_t> channel_ids_;  // in the current file, by channel index
     std::int64_t file_opened_ns_ = 0;
     std::atomic<bool> paused_{false};

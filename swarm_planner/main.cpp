@@ -4,7 +4,9 @@
 #include <iostream>
 #include <sstream>
 
-#include "core/cli.hpp"
+#include "core/shutdown.hpp"
+#include "dds/process_cli.hpp"
+#include "swarm_planner/experiment.hpp"
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "swarm_planner/picture.hpp"
@@ -13,22 +15,29 @@
 namespace {
 
 int run(int argc, char** argv) {
-    CLI::App app{"dw-planner: plan formation flights over the load stand"};
-    dw::cli::BaseOptions base;
-    dw::cli::configure(app, base);
+    dw::Shutdown::install();
+    dw::dds::ProcessCli cli("dw-planner: plan formation flights over the load stand, and fly them");
+    CLI::App& app = cli.app();
     app.require_subcommand(1);
     dw::planner::PlanOptions o;
     std::string altitudes = "0.3,0.8,1.3", out = "plan.yaml", picture;
     auto* plan = app.add_subcommand("plan", "write a checked plan (YAML, or JSON by extension) and a picture (PNG)");
-    plan->add_option("--formation", o.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid")->required();
-    plan->add_option("--altitudes", altitudes, "relative altitudes above the sufferer [m], comma-separated (<= 1.4)");
-    plan->add_option("--legs", o.grid.legs, "number of legs (30-40 in the study)")->check(CLI::Range(1, 1000));
-    plan->add_option("--speed", o.grid.speed_mps, "leg speed [m/s]");
-    plan->add_option("--min-separation", o.min_separation_m, "between vehicles and from the sufferer [m]");
+    auto* runc = app.add_subcommand("run", "fly the plan: the supervised experiment over DDS (vehicles: sim)");
+    dw::planner::RunOptions ro;
+    std::string wait = "stand_agent,mocap_bridge,recorder";
+    for (auto* sub : {plan, runc}) {
+        sub->add_option("--formation", o.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid")->required();
+        sub->add_option("--altitudes", altitudes, "relative altitudes above the sufferer [m], comma-separated (<= 1.4)");
+        sub->add_option("--legs", o.grid.legs, "number of legs (30-40 in the study)")->check(CLI::Range(1, 1000));
+        sub->add_option("--speed", o.grid.speed_mps, "leg speed [m/s]");
+        sub->add_option("--min-separation", o.min_separation_m, "between vehicles and from the sufferer [m]");
+    }
     plan->add_option("--out", out, "plan file (.yaml or .json)");
     plan->add_option("--picture", picture, "PNG picture (default: the plan file with .png)");
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
+    runc->add_option("--wait-for", wait, "processes to wait for (heartbeats), comma-separated; '' = none");
+    runc->add_option("--run-id", ro.run_id, "experiment run id (default: run-<unix time>)");
+    runc->add_option("--wait-timeout", ro.wait_timeout_s, "seconds to wait for the participants");
+    cli.parse(argc, argv);
     o.grid.altitudes_m.clear();
     std::stringstream in(altitudes);
     for (std::string item; std::getline(in, item, ',');) {
@@ -40,6 +49,24 @@ int run(int argc, char** argv) {
     }
     const auto p = dw::planner::make_plan(o);
     if (const auto v = dw::planner::check(p)) throw dw::InputError("infeasible plan: " + v->what);
+    if (runc->parsed()) {
+        ro.wait_for.clear();
+        std::stringstream w(wait);
+        for (std::string item; std::getline(w, item, ',');) {
+            if (!item.empty()) ro.wait_for.push_back(item);
+        }
+        dw::dds::Participant participant(cli.dds(), "planner");
+        dw::dds::Heartbeat heartbeat(participant);
+        heartbeat.set_state(dw::msg::PROC_RUNNING);
+        dw::planner::Experiment experiment(participant, p, ro);
+        const auto phase = experiment.run();
+        if (phase == dw::msg::PHASE_DONE) {
+            std::cout << "DONE: " << experiment.legs_flown() << " of " << p.reference.legs().size() << " legs flown\n";
+            return 0;
+        }
+        std::cout << "ABORTED: " << experiment.reason() << "\n";
+        return dw::kExitRuntime;
+    }
     const bool json = out.size() > 5 && out.substr(out.size() - 5) == ".json";
     std::ofstream(out) << dw::planner::to_document(p, json);
     if (picture.empty()) picture = out.substr(0, out.find_last_of('.')) + ".png";

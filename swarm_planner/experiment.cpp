@@ -1,0 +1,262 @@
+#include "swarm_planner/experiment.hpp"
+
+#include <cmath>
+#include <thread>
+
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+#include "dds/time.hpp"
+
+namespace dw::planner {
+namespace {
+const char* kPhaseNames[] = {"IDLE", "WAITING", "CALIBRATING", "TAKING_OFF", "FLYING", "LANDING", "DONE", "ABORTED"};
+
+physics::Setpoint min_jerk(const physics::Vec3& a, const physics::Vec3& b, double t, double T) {
+    const double s = std::clamp(t / T, 0.0, 1.0);
+    physics::Setpoint sp;
+    sp.position = a + (b - a) * (10 * std::pow(s, 3) - 15 * std::pow(s, 4) + 6 * std::pow(s, 5));
+    sp.velocity = (b - a) / T * (30 * s * s - 60 * std::pow(s, 3) + 30 * std::pow(s, 4));
+    return sp;
+}
+}  // namespace
+
+Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& o)
+    : p_(p), plan_(plan), o_(o), state_(p, dds::topics::experiment_state), plan_writer_(p, dds::topics::experiment_plan),
+      commands_(p, dds::topics::experiment_command), setpoints_(p, dds::topics::vehicle_setpoint),
+      states_(p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) {
+          std::lock_guard lock(mutex_);
+          auto& v = seen_[s.vehicle_id()];
+          v.tracking = s.tracking_valid();
+          if (s.tracking_valid()) {
+              v.position = physics::Vec3(s.position_m().x(), s.position_m().y(), s.position_m().z());
+              v.seen_ns = p_.clock().monotonic_ns();
+          }
+      }),
+      operator_(p, dds::topics::experiment_command, [this](const msg::ExperimentCommand& c, const dds::SampleMeta&) {
+          if (c.kind() == msg::CMD_ABORT || c.kind() == msg::CMD_STOP) {
+              std::lock_guard lock(mutex_);
+              abort_reason_ = log::cat("operator ", c.kind() == msg::CMD_ABORT ? "ABORT" : "STOP", " from ", c.issuer(),
+                                       c.reason().empty() ? "" : ": " + c.reason());
+              abort_requested_ = true;
+          }
+      }),
+      peers_(p, [this](const dds::PeerEvent& e) {
+          if (e.kind != dds::PeerEvent::Kind::lost) return;
+          if (std::find(o_.wait_for.begin(), o_.wait_for.end(), e.process) == o_.wait_for.end()) return;
+          std::lock_guard lock(mutex_);
+          if (lost_peer_.empty()) lost_peer_ = log::cat("lost participant ", e.process, " (", e.reason, ")");
+      }) {
+    if (o_.run_id.empty()) o_.run_id = log::cat("run-", p.clock().now_ns() / 1'000'000'000);
+}
+
+void Experiment::publish_state(msg::ExperimentPhase phase, int leg, double progress, const std::string& message) {
+    msg::ExperimentState s;
+    s.header().stamp(dds::to_msg(p_.clock().now_ns()));
+    s.header().run_id(o_.run_id);
+    s.phase(phase);
+    s.leg_index(leg);
+    s.leg_count(static_cast<std::uint32_t>(plan_.reference.legs().size()));
+    s.progress(progress);
+    s.eta_s(-1);
+    s.message(message);
+    state_.write(s);
+}
+
+void Experiment::send(const std::vector<physics::Setpoint>& sps) {
+    last_ = sps;
+    for (std::size_t i = 0; i < sps.size(); ++i) {
+        msg::VehicleSetpoint m;
+        m.header().stamp(dds::to_msg(p_.clock().now_ns()));
+        m.header().run_id(o_.run_id);
+        m.vehicle_id(plan_.vehicles[i]);
+        m.position_m().x(sps[i].position.x());
+        m.position_m().y(sps[i].position.y());
+        m.position_m().z(sps[i].position.z());
+        m.velocity_mps().x(sps[i].velocity.x());
+        m.velocity_mps().y(sps[i].velocity.y());
+        m.velocity_mps().z(sps[i].velocity.z());
+        m.acceleration_mps2().x(sps[i].acceleration.x());
+        m.acceleration_mps2().y(sps[i].acceleration.y());
+        m.acceleration_mps2().z(sps[i].acceleration.z());
+        m.yaw_rad(sps[i].yaw_rad);
+        setpoints_.write(m);
+    }
+}
+
+std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint>& sps) {
+    std::lock_guard lock(mutex_);
+    if (abort_requested_) return abort_reason_;
+    if (!lost_peer_.empty()) return lost_peer_;
+    const Nanos now = p_.clock().monotonic_ns();
+    const auto& f = plan_.options.fence;
+    for (std::size_t i = 0; i < sps.size(); ++i) {
+        const auto it = seen_.find(plan_.vehicles[i]);
+        const double age = it == seen_.end() ? 1e9 : to_seconds(now - it->second.seen_ns);
+        if (age > o_.mocap_timeout_s) return log::cat("mocap lost: no pose of ", plan_.vehicles[i], " for ", age > 1e8 ? 0.0 : age, " s");
+        const auto& x = it->second.position;
+        const double tol = 0.1;  // hover noise on the floor or at a wall is not a breach
+        if (x.x() < f.n_min - tol || x.x() > f.n_max + tol || x.y() < f.e_min - tol || x.y() > f.e_max + tol ||
+            x.z() < f.d_min - tol || x.z() > f.d_max + tol) {
+            return log::cat("geofence breach by ", plan_.vehicles[i], " at (", x.x(), ", ", x.y(), ", ", x.z(), ")");
+        }
+        const double err = (x - sps[i].position).norm();
+        if (err > o_.tracking_error_m) return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
+    }
+    return std::nullopt;
+}
+
+std::optional<std::string> Experiment::fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,
+                                           msg::ExperimentPhase phase, bool supervise) {
+    const auto period = std::chrono::duration<double>(1.0 / o_.setpoint_hz);
+    const auto start = std::chrono::steady_clock::now();
+    auto next = start;
+    int last_report = -1;
+    for (;;) {
+        const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (t > duration) break;
+        if (Shutdown::instance().requested() && supervise) return std::string("interrupted (SIGINT/SIGTERM)");
+        const auto sps = target(t);
+        send(sps);
+        if (supervise && t > 0.3) {  // the vehicles need a moment to start following
+            if (auto f = fault(sps)) return f;
+        }
+        if (phase == msg::PHASE_FLYING) {
+            int leg = -1;
+            for (const auto& l : plan_.reference.legs()) {
+                if (t >= l.t_start) leg = l.index;
+                if (t >= l.t_end) legs_flown_ = std::max(legs_flown_, l.index + 1);
+            }
+            leg_ = leg;
+        }
+        const int report = static_cast<int>(t * 2);  // the latched state twice a second
+        if (report != last_report) {
+            publish_state(phase, leg_, phase == msg::PHASE_FLYING ? t / plan_.duration_s() : 0.0, kPhaseNames[phase]);
+            last_report = report;
+        }
+        next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
+        std::this_thread::sleep_until(next);
+    }
+    send(target(duration));  // end exactly where the segment ends
+    return std::nullopt;
+}
+
+void Experiment::land_safely(const std::string& why) {
+    log::error("ABORT: ", why);
+    reason_ = why;
+    publish_state(msg::PHASE_LANDING, leg_, 0, "aborting: " + why + " — holding, then landing");
+    const auto hold = last_;
+    fly(o_.hold_s, [&](double) { return hold; }, msg::PHASE_LANDING, false);
+    std::vector<physics::Vec3> from, to;
+    for (const auto& s : hold) {
+        from.push_back(s.position);
+        to.push_back(physics::Vec3(s.position.x(), s.position.y(), 0.0));  // straight down to the floor
+    }
+    fly(o_.land_s, [&](double t) {
+        std::vector<physics::Setpoint> sps;
+        for (std::size_t i = 0; i < from.size(); ++i) sps.push_back(min_jerk(from[i], to[i], t, o_.land_s));
+        return sps;
+    }, msg::PHASE_LANDING, false);
+    publish_state(msg::PHASE_ABORTED, leg_, 0, "ABORTED: " + why + "; every vehicle landed");
+}
+
+msg::ExperimentPhase Experiment::run() {
+    const std::size_t k = plan_.vehicles.size();
+    // The plan, latched, for the recorder and everyone else.
+    msg::ExperimentPlan pm;
+    pm.header().run_id(o_.run_id);
+    pm.name(o_.run_id);
+    pm.formation(plan_.formation.meta_name);
+    pm.vehicles(plan_.vehicles);
+    for (const auto& off : plan_.formation.offsets) {
+        msg::Vector3 v;
+        v.x(off.x()); v.y(off.y()); v.z(off.z());
+        pm.offsets_m().push_back(v);
+    }
+    for (const auto& l : plan_.reference.legs()) {
+        msg::Leg leg;
+        leg.index(static_cast<std::uint32_t>(l.index));
+        const auto a = plan_.reference.at(l.t_start).position, b = plan_.reference.at(l.t_end).position;
+        leg.start_m().x(a.x()); leg.start_m().y(a.y()); leg.start_m().z(a.z());
+        leg.end_m().x(b.x()); leg.end_m().y(b.y()); leg.end_m().z(b.z());
+        leg.speed_mps(plan_.options.grid.speed_mps);
+        leg.relative_altitude_m(l.altitude_m);
+        pm.legs().push_back(leg);
+    }
+    pm.document(to_document(plan_, false));
+    plan_writer_.write(pm);
+
+    publish_state(msg::PHASE_WAITING, -1, 0, "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");
+    log::info("waiting for ", o_.wait_for.size(), " processes and ", k, " vehicles");
+    if (!peers_.wait_for(o_.wait_for, std::chrono::milliseconds(static_cast<long>(o_.wait_timeout_s * 1000)))) {
+        reason_ = "not every participant came up within the wait timeout";
+        publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
+        return msg::PHASE_ABORTED;
+    }
+    std::vector<physics::Vec3> parked(k);
+    for (int i = 0; i < 3000; ++i) {  // the vehicles' parked poses, from the motion capture
+        std::size_t n = 0;
+        {
+            std::lock_guard lock(mutex_);
+            for (std::size_t v = 0; v < k; ++v) {
+                auto it = seen_.find(plan_.vehicles[v]);
+                if (it != seen_.end() && it->second.tracking) {
+                    parked[v] = it->second.position;
+                    ++n;
+                }
+            }
+        }
+        if (n == k) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    {
+        std::lock_guard lock(mutex_);
+        for (std::size_t v = 0; v < k; ++v) {
+            if (!seen_.count(plan_.vehicles[v])) {
+                reason_ = "vehicle " + plan_.vehicles[v] + " is not seen by the motion capture";
+                publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
+                return msg::PHASE_ABORTED;
+            }
+        }
+    }
+    std::vector<physics::Setpoint> hold(k);
+    for (std::size_t v = 0; v < k; ++v) hold[v].position = parked[v];
+    publish_state(msg::PHASE_CALIBRATING, -1, 0, "CALIBRATE: stand tare at hover thrust");
+    msg::ExperimentCommand c;
+    c.kind(msg::CMD_CALIBRATE);
+    c.issuer("planner");
+    c.header().run_id(o_.run_id);
+    commands_.write(c);
+    fly(o_.calibrate_s, [&](double) { return hold; }, msg::PHASE_CALIBRATING, false);
+
+    auto takeoff = [&](double t) {
+        std::vector<physics::Setpoint> sps;
+        for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(parked[v], plan_.setpoint(v, 0).position, t, o_.takeoff_s));
+        return sps;
+    };
+    if (auto f = fly(o_.takeoff_s, takeoff, msg::PHASE_TAKING_OFF, true)) {
+        land_safely(*f);
+        return msg::PHASE_ABORTED;
+    }
+    log::info("flying ", plan_.reference.legs().size(), " legs (", plan_.duration_s(), " s)");
+    auto legs = [&](double t) {
+        std::vector<physics::Setpoint> sps;
+        for (std::size_t v = 0; v < k; ++v) sps.push_back(plan_.setpoint(v, t));
+        return sps;
+    };
+    if (auto f = fly(plan_.duration_s(), legs, msg::PHASE_FLYING, true)) {
+        land_safely(*f);
+        return msg::PHASE_ABORTED;
+    }
+    legs_flown_ = static_cast<int>(plan_.reference.legs().size());
+    std::vector<physics::Vec3> from(k);
+    for (std::size_t v = 0; v < k; ++v) from[v] = plan_.setpoint(v, plan_.duration_s()).position;
+    fly(o_.land_s, [&](double t) {
+        std::vector<physics::Setpoint> sps;
+        for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(from[v], parked[v], t, o_.land_s));
+        return sps;
+    }, msg::PHASE_LANDING, false);
+    publish_state(msg::PHASE_DONE, leg_, 1.0, log::cat("DONE: ", legs_flown_, " legs flown"));
+    return msg::PHASE_DONE;
+}
+
+}  // namespace dw::planner

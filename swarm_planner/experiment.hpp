@@ -1,0 +1,74 @@
+#pragma once
+// The supervised experiment over DDS: wait for the stand agent, the mocap bridge, the recorder
+// (heartbeats) and the vehicles (mocap) -> CALIBRATE the stand -> take off -> fly the legs
+// (setpoints at >= 50 Hz) -> land -> DONE. Experiment state (phase, leg, progress) is latched.
+// Aborts safely — hold, then land — on mocap loss, a tracking error, a geofence breach, a lost
+// participant or an operator's ABORT; the reason is published and logged.
+#include <atomic>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "dds/heartbeat.hpp"
+#include "swarm_planner/plan.hpp"
+
+namespace dw::planner {
+
+struct RunOptions {
+    std::vector<std::string> wait_for{"stand_agent", "mocap_bridge", "recorder"};
+    double wait_timeout_s = 30;
+    double setpoint_hz = 50;
+    double calibrate_s = 1.5;
+    double takeoff_s = 4;
+    double land_s = 4;
+    double hold_s = 1;
+    double mocap_timeout_s = 0.2;
+    double tracking_error_m = 0.3;
+    std::string run_id;
+};
+
+class Experiment {
+public:
+    Experiment(dds::Participant& p, const Plan& plan, const RunOptions& o);
+    // Runs to DONE or ABORTED; returns the final phase. `reason()` says why it aborted.
+    msg::ExperimentPhase run();
+    const std::string& reason() const { return reason_; }
+    int legs_flown() const { return legs_flown_; }
+
+private:
+    struct VehicleSeen {
+        physics::Vec3 position = physics::Vec3::Zero();
+        Nanos seen_ns = 0;
+        bool tracking = false;
+    };
+    void publish_state(msg::ExperimentPhase phase, int leg, double progress, const std::string& message);
+    void send(const std::vector<physics::Setpoint>& sps);
+    std::optional<std::string> fault(const std::vector<physics::Setpoint>& sps);
+    // Flies `target(t)` for `duration` at the setpoint rate; stops early on a fault (returned).
+    std::optional<std::string> fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,
+                                   msg::ExperimentPhase phase, bool supervise);
+    void land_safely(const std::string& why);
+
+    dds::Participant& p_;
+    Plan plan_;
+    RunOptions o_;
+    dds::Writer<msg::ExperimentState> state_;
+    dds::Writer<msg::ExperimentPlan> plan_writer_;
+    dds::Writer<msg::ExperimentCommand> commands_;
+    dds::Writer<msg::VehicleSetpoint> setpoints_;
+    std::mutex mutex_;
+    std::map<std::string, VehicleSeen> seen_;
+    std::string lost_peer_;
+    std::atomic<bool> abort_requested_{false};
+    std::string abort_reason_;
+    dds::Reader<msg::VehicleState> states_;
+    dds::Reader<msg::ExperimentCommand> operator_;
+    dds::PeerMonitor peers_;
+    std::string reason_;
+    int legs_flown_ = 0;
+    int leg_ = -1;
+    std::vector<physics::Setpoint> last_;
+};
+
+}  // namespace dw::planner
