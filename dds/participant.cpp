@@ -35,6 +35,7 @@ Participant::~Participant() {
 }
 
 std::string Participant::topic_name(std::string_view suffix) const {
+    if (suffix.rfind("rt/", 0) == 0) return std::string(suffix);  // an absolute name (PX4's topics)
     return log::cat("rt/", config_.ns, "/", suffix);
 }
 

@@ -43,7 +43,7 @@ public:
     const std::string& process() const { return process_; }
     Clock& clock() const { return clock_; }
 
-    // rt/<namespace>/<suffix>
+    // rt/<namespace>/<suffix>; a suffix that starts with rt/ is already a full name.
     std::string topic_name(std::string_view suffix) const;
 
     template <class T>

@@ -22,7 +22,7 @@ physics::Setpoint min_jerk(const physics::Vec3& a, const physics::Vec3& b, doubl
 
 Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& o)
     : p_(p), plan_(plan), o_(o), state_(p, dds::topics::experiment_state), plan_writer_(p, dds::topics::experiment_plan),
-      commands_(p, dds::topics::experiment_command), setpoints_(p, dds::topics::vehicle_setpoint),
+      commands_(p, dds::topics::experiment_command),
       states_(p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) {
           std::lock_guard lock(mutex_);
           auto& v = seen_[s.vehicle_id()];
@@ -47,6 +47,8 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
           if (lost_peer_.empty()) lost_peer_ = log::cat("lost participant ", e.process, " (", e.reason, ")");
       }) {
     if (o_.run_id.empty()) o_.run_id = log::cat("run-", p.clock().now_ns() / 1'000'000'000);
+    if (o_.link == "px4") link_ = std::make_unique<Px4Link>(p, plan_.vehicles, std::vector<physics::Vec3>{});
+    else link_ = std::make_unique<SimLink>(p, plan_.vehicles, o_.run_id);
 }
 
 void Experiment::publish_state(msg::ExperimentPhase phase, int leg, double progress, const std::string& message) {
@@ -64,23 +66,7 @@ void Experiment::publish_state(msg::ExperimentPhase phase, int leg, double progr
 
 void Experiment::send(const std::vector<physics::Setpoint>& sps) {
     last_ = sps;
-    for (std::size_t i = 0; i < sps.size(); ++i) {
-        msg::VehicleSetpoint m;
-        m.header().stamp(dds::to_msg(p_.clock().now_ns()));
-        m.header().run_id(o_.run_id);
-        m.vehicle_id(plan_.vehicles[i]);
-        m.position_m().x(sps[i].position.x());
-        m.position_m().y(sps[i].position.y());
-        m.position_m().z(sps[i].position.z());
-        m.velocity_mps().x(sps[i].velocity.x());
-        m.velocity_mps().y(sps[i].velocity.y());
-        m.velocity_mps().z(sps[i].velocity.z());
-        m.acceleration_mps2().x(sps[i].acceleration.x());
-        m.acceleration_mps2().y(sps[i].acceleration.y());
-        m.acceleration_mps2().z(sps[i].acceleration.z());
-        m.yaw_rad(sps[i].yaw_rad);
-        setpoints_.write(m);
-    }
+    link_->send(sps, p_.clock().now_ns());
 }
 
 std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint>& sps) {
@@ -156,6 +142,7 @@ void Experiment::land_safely(const std::string& why) {
         for (std::size_t i = 0; i < from.size(); ++i) sps.push_back(min_jerk(from[i], to[i], t, o_.land_s));
         return sps;
     }, msg::PHASE_LANDING, false);
+    link_->land();
     publish_state(msg::PHASE_ABORTED, leg_, 0, "ABORTED: " + why + "; every vehicle landed");
 }
 
@@ -233,6 +220,7 @@ msg::ExperimentPhase Experiment::run() {
         for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(parked[v], plan_.setpoint(v, 0).position, t, o_.takeoff_s));
         return sps;
     };
+    link_->start();
     if (auto f = fly(o_.takeoff_s, takeoff, msg::PHASE_TAKING_OFF, true)) {
         land_safely(*f);
         return msg::PHASE_ABORTED;
@@ -255,6 +243,7 @@ msg::ExperimentPhase Experiment::run() {
         for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(from[v], parked[v], t, o_.land_s));
         return sps;
     }, msg::PHASE_LANDING, false);
+    link_->land();
     publish_state(msg::PHASE_DONE, leg_, 1.0, log::cat("DONE: ", legs_flown_, " legs flown"));
     return msg::PHASE_DONE;
 }

@@ -12,6 +12,7 @@
 
 #include "dds/heartbeat.hpp"
 #include "swarm_planner/plan.hpp"
+#include "swarm_planner/vehicle_link.hpp"
 
 namespace dw::planner {
 
@@ -26,6 +27,7 @@ struct RunOptions {
     double mocap_timeout_s = 0.2;
     double tracking_error_m = 0.3;
     std::string run_id;
+    std::string link = "sim";                 // sim or px4
 };
 
 class Experiment {
@@ -56,7 +58,7 @@ private:
     dds::Writer<msg::ExperimentState> state_;
     dds::Writer<msg::ExperimentPlan> plan_writer_;
     dds::Writer<msg::ExperimentCommand> commands_;
-    dds::Writer<msg::VehicleSetpoint> setpoints_;
+    std::unique_ptr<VehicleLink> link_;
     std::mutex mutex_;
     std::map<std::string, VehicleSeen> seen_;
     std::string lost_peer_;

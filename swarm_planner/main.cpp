@@ -37,6 +37,7 @@ int run(int argc, char** argv) {
     runc->add_option("--wait-for", wait, "processes to wait for (heartbeats), comma-separated; '' = none");
     runc->add_option("--run-id", ro.run_id, "experiment run id (default: run-<unix time>)");
     runc->add_option("--wait-timeout", ro.wait_timeout_s, "seconds to wait for the participants");
+    runc->add_option("--vehicles", ro.link, "sim (vehicles/setpoint) or px4 (uXRCE-DDS: rt/<vehicle>/fmu/in/...)");
     cli.parse(argc, argv);
     o.grid.altitudes_m.clear();
     std::stringstream in(altitudes);
@@ -50,6 +51,7 @@ int run(int argc, char** argv) {
     const auto p = dw::planner::make_plan(o);
     if (const auto v = dw::planner::check(p)) throw dw::InputError("infeasible plan: " + v->what);
     if (runc->parsed()) {
+        if (ro.link != "sim" && ro.link != "px4") throw dw::InputError("--vehicles: '" + ro.link + "' (expected sim or px4)");
         ro.wait_for.clear();
         std::stringstream w(wait);
         for (std::string item; std::getline(w, item, ',');) {
