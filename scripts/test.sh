@@ -9,6 +9,7 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 # @foxglove/omgidl-serialization (versions pinned in tests/js/package-lock.json).
 if ! command -v npm >/dev/null; then
   sudo_cmd=(); [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
   "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends nodejs npm
 fi
 (cd "$here/tests/js" && npm ci --no-audit --no-fund --loglevel=error)
