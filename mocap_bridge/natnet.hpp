@@ -76,9 +76,6 @@ ServerInfo parse_server_info(std::span<const std::uint8_t> payload);
 // Writers (the emulator and the tests): complete packets, header included. A frame also carries
 // the sections a bridge must skip (a marker set, labeled markers, a skeleton, an asset in 4.1, a
 // force plate and a device) when `with_other_sections` is set.
-struct OtherSections {
-    bool present = true;
-};
 std::vector<std::uint8_t> build_frame(const FrameOfData& f, Version v, bool with_other_sections = true);
 std::vector<std::uint8_t> build_modeldef(const ModelDef& m, Version v);
 std::vector<std::uint8_t> build_server_info(const ServerInfo& s);

@@ -15,12 +15,12 @@
 namespace dw::recorder {
 
 // One lab topic: a typed reader whose samples are serialised back to CDR (the bytes a DDS
-// writer sends, encapsulation header first) and handed to the recorder.
+// writer sends, encapsulation header first) and handed to the recorder. What the file says
+// about the topic (name, type, QoS, IDL) is the recorder's ChannelInfo.
 class Recorder::Channel {
 public:
     virtual ~Channel() = default;
     virtual TopicStats stats() const = 0;
-    std::string topic, type, qos, qos_profile, idl;
     std::atomic<std::uint64_t> recorded{0}, skipped{0};
 };
 
@@ -29,20 +29,13 @@ namespace {
 template <class T>
 class TypedChannel final : public Recorder::Channel {
 public:
-    TypedChannel(Recorder& r, dds::Participant& p, const dds::Topic<T>& spec, std::uint16_t index,
+    TypedChannel(dds::Participant& p, const dds::Topic<T>& spec, std::uint16_t index,
                  std::function<void(const T&)> observe, std::function<void(std::uint16_t, std::span<const std::uint8_t>,
                                                                            std::uint64_t, std::uint64_t, std::uint32_t)> sink)
         : observe_(std::move(observe)), sink_(std::move(sink)), index_(index),
-          reader_(p, spec, [this](const T& m, const dds::SampleMeta& meta) { on_sample(m, meta); }) {
-        (void)r;
-        topic = reader_.name();
-        type = std::string(spec.type_name);
-        qos = reader_.qos_text();
-        qos_profile = dds::to_string(spec.qos);
-        idl = std::string(spec.idl);
-    }
+          reader_(p, spec, [this](const T& m, const dds::SampleMeta& meta) { on_sample(m, meta); }) {}
     TopicStats stats() const override {
-        return {topic, recorded.load(), reader_.lost(), skipped.load()};
+        return {reader_.name(), recorded.load(), reader_.lost(), skipped.load()};
     }
 
 private:
@@ -121,7 +114,7 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
         }
         // No lock is held while the reader is created: its listener may already be running
         // (a latched sample) and Fast DDS must not wait on us.
-        auto channel = std::make_unique<TypedChannel<T>>(*this, participant_, spec, index, observe, sink);
+        auto channel = std::make_unique<TypedChannel<T>>(participant_, spec, index, observe, sink);
         std::lock_guard lock(mutex_);
         channels_.push_back(std::move(channel));
     });
