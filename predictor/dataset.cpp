@@ -1,0 +1,182 @@
+#include "predictor/dataset.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "recorder/tools.hpp"
+
+namespace dw::predictor {
+
+std::array<double, 3> Sample::reference() const {
+    std::array<double, 3> c{0, 0, 0};
+    if (k == 0) return c;
+    c[2] = -1e9;
+    for (std::size_t j = 0; j < static_cast<std::size_t>(k); ++j) {
+        c[0] += x[j][0] / k;
+        c[1] += x[j][1] / k;
+        c[2] = std::max(c[2], x[j][2]);  // the lowest neighbour: largest D
+    }
+    c[2] = -c[2];  // height above the sufferer
+    return c;
+}
+
+void Dataset::append(const Dataset& other) {
+    const int base = static_cast<int>(sources.size());
+    sources.insert(sources.end(), other.sources.begin(), other.sources.end());
+    for (auto s : other.samples) {
+        s.source += base;
+        samples.push_back(s);
+    }
+}
+
+Dataset Dataset::with_formation(const std::string& formation) const {
+    Dataset d;
+    d.sources = sources;
+    for (const auto& s : samples)
+        if (sources[static_cast<std::size_t>(s.source)].formation == formation) d.samples.push_back(s);
+    return d;
+}
+
+Dataset Dataset::with_k(int k_min, int k_max) const {
+    Dataset d;
+    d.sources = sources;
+    for (const auto& s : samples)
+        if (s.k >= k_min && s.k <= k_max) d.samples.push_back(s);
+    return d;
+}
+
+Split split_by_leg(const Dataset& d, int period, int test_phase, int val_phase) {
+    Split s;
+    s.train = d.legs_where([&](int leg) { return leg % period != test_phase && leg % period != val_phase; });
+    s.validation = d.legs_where([&](int leg) { return leg % period == val_phase; });
+    s.test = d.legs_where([&](int leg) { return leg % period == test_phase; });
+    return s;
+}
+
+namespace {
+
+std::array<double, 3> velocity_at(const flight::Track& tr, double t) {
+    constexpr double h = 0.02;  // ±20 ms central difference over the 180 Hz poses
+    const auto a = tr.position_at(t - h), b = tr.position_at(t + h);
+    return {(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
+}
+
+std::array<double, 3> centroid_at(const std::vector<const flight::Track*>& ts, double t) {
+    std::array<double, 3> c{0, 0, 0};
+    for (const auto* tr : ts) {
+        const auto p = tr->position_at(t);
+        for (std::size_t a = 0; a < 3; ++a) c[a] += p[a] / static_cast<double>(ts.size());
+    }
+    return c;
+}
+
+}  // namespace
+
+std::vector<flight::Leg> find_legs(const flight::Flight& f) {
+    const auto trs = flight::tracks(f);
+    std::vector<const flight::Track*> ns;
+    for (const auto& name : f.meta.neighbours) {
+        const int b = f.find_body(name);
+        if (b >= 0 && !trs[static_cast<std::size_t>(b)].t.empty()) ns.push_back(&trs[static_cast<std::size_t>(b)]);
+    }
+    std::vector<flight::Leg> legs;
+    if (ns.empty()) return legs;
+    const double t0 = ns.front()->t.front(), t1 = ns.front()->t.back();
+    constexpr double dt = 0.05, h = 0.1;
+    double start = -1;
+    std::array<double, 3> dir{0, 0, 0};
+    auto close = [&](double t) {
+        if (start >= 0 && t - start >= 2.0) legs.push_back({static_cast<int>(legs.size()), start, t});
+        start = -1;
+    };
+    for (double t = t0 + h; t < t1 - h; t += dt) {
+        const auto a = centroid_at(ns, t - h), b = centroid_at(ns, t + h);
+        const std::array<double, 3> v{(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
+        const double speed = std::hypot(v[0], v[1]);
+        const bool moving = speed > 0.25 && std::abs(v[2]) < 0.1;
+        if (moving && start >= 0) {  // the same leg only while heading and speed hold
+            const double cosang = (v[0] * dir[0] + v[1] * dir[1]) / speed;
+            if (cosang < 0.98 || std::abs(speed - dir[2]) > 0.15 * dir[2]) close(t);
+        }
+        if (moving && start < 0) {
+            start = t;
+            dir = {v[0] / speed, v[1] / speed, speed};
+        }
+        if (!moving) close(t);
+    }
+    close(t1);
+    return legs;
+}
+
+Dataset from_flight(const flight::Flight& f, const std::string& name, const DatasetOptions& o) {
+    const int sufferer = f.find_body(f.meta.sufferer);
+    if (sufferer < 0) throw InputError(log::cat(name, "/poses.csv: the sufferer '", f.meta.sufferer, "' has no poses"));
+    const auto trs = flight::tracks(f);
+    std::vector<const flight::Track*> ns;
+    for (const auto& n : f.meta.neighbours) {
+        const int b = f.find_body(n);
+        if (b < 0) throw InputError(log::cat(name, "/poses.csv: neighbour '", n, "' (meta.json) has no poses"));
+        ns.push_back(&trs[static_cast<std::size_t>(b)]);
+    }
+    if (ns.size() > static_cast<std::size_t>(kMaxNeighbours))
+        throw InputError(log::cat(name, "/meta.json: neighbours: ", ns.size(), " (the models take at most ", kMaxNeighbours, ")"));
+    const auto& st = trs[static_cast<std::size_t>(sufferer)];
+    const auto legs = f.legs ? *f.legs : find_legs(f);
+
+    Dataset d;
+    std::string formation = f.meta.formation;
+    if (ns.size() > 1 || formation == "single") formation += log::cat(" K=", ns.size());
+    d.sources.push_back({name, formation});
+    std::size_t li = 0;
+    for (const auto& w : f.wrench) {
+        if (w.t < st.t.front() || w.t > st.t.back()) continue;
+        Sample s;
+        s.t = w.t;
+        s.y = w.w;
+        const auto ps = st.position_at(w.t);
+        const auto vs = velocity_at(st, w.t);
+        for (const auto* tr : ns) {
+            if (tr->t.empty() || w.t < tr->t.front() || w.t > tr->t.back()) continue;
+            const auto p = tr->position_at(w.t);
+            const auto v = velocity_at(*tr, w.t);
+            RelState r{p[0] - ps[0], p[1] - ps[1], p[2] - ps[2], v[0] - vs[0], v[1] - vs[1], v[2] - vs[2]};
+            if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > o.max_distance_m) continue;
+            s.x[static_cast<std::size_t>(s.k++)] = r;
+        }
+        while (li < legs.size() && legs[li].t_end < w.t) ++li;
+        if (li < legs.size() && w.t >= legs[li].t_start && w.t <= legs[li].t_end) {
+            s.leg = legs[li].leg;
+            double ve = 0;
+            for (int j = 0; j < s.k; ++j) ve += s.x[static_cast<std::size_t>(j)][4];
+            s.leg_direction = ve > 0 ? 1 : (ve < 0 ? -1 : 0);
+        }
+        d.samples.push_back(s);
+    }
+    return d;
+}
+
+Dataset load_dataset(const std::string& path, const DatasetOptions& o) {
+    namespace fs = std::filesystem;
+    if (fs::is_directory(path)) return from_flight(flight::read_flight(path), path, o);
+    if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
+    if (fs::path(path).extension() != ".mcap")
+        throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
+    const fs::path tmp = fs::temp_directory_path() / log::cat("dw-predictor-", ::getpid(), "-", fs::path(path).stem().string());
+    recorder::export_flight(path, tmp.string(), {});
+    Dataset d;
+    try {
+        d = from_flight(flight::read_flight(tmp.string()), path, o);
+    } catch (...) {
+        fs::remove_all(tmp);
+        throw;
+    }
+    fs::remove_all(tmp);
+    return d;
+}
+
+}  // namespace dw::predictor

@@ -1,0 +1,47 @@
+#pragma once
+// How well a force model predicts: RMSE per axis, and the study's Table 1 metric — the integral
+// of |prediction - truth| over the lateral arena at a relative altitude, per axis. Here the arena
+// integral is taken over maps: the held-out samples whose neighbours' centroid is within a band
+// of the altitude are binned over N-E cells of the 2 m x 2 m arena, prediction and truth are
+// averaged per cell (the contour maps people read), and |mean prediction - mean truth| is
+// integrated over the occupied cells and divided by their area — an arena-mean error in N or N·m.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "predictor/dataset.hpp"
+#include "predictor/model.hpp"
+
+namespace dw::predictor {
+
+struct ArenaOptions {
+    double altitude_m = 1.3;     // neighbours' centroid above the sufferer
+    double band_m = 0.15;        // ± around it
+    double half_width_m = 1.0;   // the arena: |N|, |E| <= this
+    double cell_m = 0.1;
+};
+
+using AxisValues = std::array<double, 6>;
+
+AxisValues rmse(const ForceModel& model, const Dataset& data);
+// NaN on every axis when no sample falls in the band.
+AxisValues arena_error(const ForceModel& model, const Dataset& data, const ArenaOptions& o = {});
+
+struct ComparisonRow {
+    std::string formation;
+    std::string model;
+    std::size_t samples = 0;
+    AxisValues arena{};   // Table 1 metric
+    AxisValues rmse{};
+};
+
+// Every model on every formation of `test` (held-out legs).
+std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models, const Dataset& test,
+                                   const ArenaOptions& o = {});
+
+// The table as Markdown (arena metric "model a / model b / ..." per formation and axis, then RMSE)
+// and as CSV (one row per formation, model, metric).
+std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptions& o);
+std::string to_csv(const std::vector<ComparisonRow>& rows);
+
+}  // namespace dw::predictor

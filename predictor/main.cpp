@@ -1,0 +1,166 @@
+// dw-predictor: learnt downwash models — train, compare, draw maps, run the whole study, and
+// predict online from the motion capture.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+#include "dds/heartbeat.hpp"
+#include "dds/process_cli.hpp"
+#include "predictor/evaluate.hpp"
+#include "predictor/maps.hpp"
+#include "predictor/node.hpp"
+#include "predictor/study.hpp"
+#include "predictor/train.hpp"
+#include "physics/trajectory.hpp"
+
+namespace {
+
+using namespace dw::predictor;
+
+dw::physics::PhysicsConfig physics_from(const std::string& path) {
+    return path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
+}
+
+Dataset load_all(const std::vector<std::string>& paths) {
+    Dataset d;
+    for (const auto& p : paths) {
+        dw::log::info("reading ", p);
+        d.append(load_dataset(p));
+    }
+    return d;
+}
+
+std::vector<std::unique_ptr<ForceModel>> load_models(const std::vector<std::string>& paths) {
+    std::vector<std::unique_ptr<ForceModel>> out;
+    for (const auto& p : paths) out.push_back(load_model(p));
+    return out;
+}
+
+std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>>& models) {
+    std::vector<const ForceModel*> out;
+    for (const auto& m : models) out.push_back(m.get());
+    return out;
+}
+
+int run(int argc, char** argv) {
+    dw::Shutdown::install();
+    dw::dds::ProcessCli cli("dw-predictor: learnt downwash force models (naive linear, learnt linear, Deep Sets)");
+    CLI::App& app = cli.app();
+    app.require_subcommand(1);
+
+    StudyOptions so;
+    std::string physics_path;
+    bool jet_merging = false, no_generalisation = false, no_maps = false;
+    auto* study = app.add_subcommand("study", "simulate flights, train every model, compare on held-out legs, draw maps (one command for the table)");
+    study->add_option("--out", so.out_dir, "output folder (flights, models, table.md, table.csv, maps)")->required();
+    study->add_option("--physics", physics_path, "physics configuration (default: config/physics.example.yaml's defaults)");
+    study->add_flag("--jet-merging", jet_merging, "switch the jet_merging effect on (the aggregate is not a sum)");
+    study->add_option("--legs", so.legs, "legs per flight")->check(CLI::Range(5, 1000));
+    study->add_option("--seed", so.seed, "seed of the flights and the training");
+    study->add_option("--epochs", so.max_epochs, "at most this many epochs per model")->check(CLI::Range(1, 100000));
+    study->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]");
+    study->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
+    study->add_flag("--no-maps", no_maps, "skip the maps");
+
+    TrainOptions to;
+    std::vector<std::string> data;
+    std::string model_out;
+    auto* train = app.add_subcommand("train", "train one model on flight folders / recordings (split by leg)");
+    train->add_option("--kind", to.kind, "naive_linear, learnt_linear or deep_sets")->required();
+    train->add_option("--data", data, "flight folders or .mcap recordings")->required();
+    train->add_option("--out", model_out, "model file to write (JSON)")->required();
+    train->add_option("--epochs", to.max_epochs, "at most this many epochs")->check(CLI::Range(1, 100000));
+    train->add_option("--seed", to.seed, "seed");
+    train->add_option("--hidden", to.hidden, "hidden layer width")->check(CLI::Range(4, 4096));
+
+    std::vector<std::string> models;
+    std::string out_dir;
+    ArenaOptions arena;
+    auto* cmp = app.add_subcommand("compare", "compare models on the held-out legs (leg % 5 == 0) of flights: Table 1 metric and RMSE");
+    cmp->add_option("--models", models, "model files (.json), or a physics configuration (.yaml) for the simulator")->required();
+    cmp->add_option("--data", data, "flight folders or .mcap recordings")->required();
+    cmp->add_option("--out", out_dir, "folder for table.md and table.csv")->required();
+    cmp->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]");
+
+    MapRequest mr;
+    std::string axis = "f_d", png = "map.png", line;
+    auto* map = app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
+    map->add_option("--models", models, "model files (.json) or physics configurations (.yaml)")->required();
+    map->add_option("--formation", mr.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid");
+    map->add_option("--altitude", mr.altitude_m, "the formation's height above the sufferer [m]");
+    map->add_option("--axis", axis, "f_n, f_e, f_d, m_roll, m_pitch or m_yaw");
+    map->add_option("--data", data, "recorded flight of this formation: drawn as 'observed'");
+    map->add_option("--out", png, "the map (PNG)");
+    map->add_option("--line", line, "the line plot along E through the stand (PNG; default: <out>_line.png)");
+
+    NodeOptions no;
+    auto* runc = app.add_subcommand("run", "online: mocap/frame in, predictor/wrench out at the mocap rate");
+    runc->add_option("--model", no.model_path, "model file (.json) or physics configuration (.yaml); swapped in when it changes")->required();
+    runc->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
+    cli.parse(argc, argv);
+
+    if (study->parsed()) {
+        so.physics = physics_from(physics_path);
+        if (jet_merging) so.physics.effects.jet_merging.enabled = true;
+        so.generalisation = !no_generalisation;
+        so.maps = !no_maps;
+        so.progress = [](const std::string& l) { std::cerr << "dw-predictor: " << l << "\n"; };
+        const auto r = run_study(so);
+        std::cout << "wrote " << r.markdown_path << " and " << r.csv_path << "\n";
+        return 0;
+    }
+    if (train->parsed()) {
+        Dataset d = load_all(data);
+        const Split s = split_by_leg(d);
+        to.split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out, else training";
+        to.progress = [](int epoch, double tl, double vl) {
+            std::fprintf(stderr, "\rdw-predictor: epoch %4d  training %.4f  validation %.4f", epoch, tl, vl);
+        };
+        const auto r = train_model(s.train, s.validation, to);
+        std::fprintf(stderr, "\n");
+        r.model.save(model_out);
+        std::cout << to.kind << ": " << r.epochs << " epochs (best " << r.best_epoch << ", validation "
+                  << r.best_validation_loss << "), " << r.seconds << " s; wrote " << model_out << "\n";
+        return 0;
+    }
+    if (cmp->parsed()) {
+        const auto ms = load_models(models);
+        const Dataset test = split_by_leg(load_all(data)).test;
+        const auto rows = compare(raw(ms), test, arena);
+        std::filesystem::create_directories(out_dir);
+        std::ofstream(out_dir + "/table.md") << "# Force models compared\n\n" << to_markdown(rows, arena);
+        std::ofstream(out_dir + "/table.csv") << to_csv(rows);
+        std::cout << to_markdown(rows, arena);
+        return 0;
+    }
+    if (map->parsed()) {
+        mr.axis = dw::physics::axis_index(axis);
+        if (mr.axis < 0) throw dw::InputError("--axis: '" + axis + "' (expected f_n, f_e, f_d, m_roll, m_pitch or m_yaw)");
+        (void)dw::physics::make_formation(mr.formation);  // validates the name
+        const auto ms = load_models(models);
+        if (!data.empty()) mr.observed = load_all(data);
+        if (line.empty()) line = png.substr(0, png.find_last_of('.')) + "_line.png";
+        draw_force_map(raw(ms), mr, png);
+        draw_force_line(raw(ms), mr, line);
+        std::cout << "wrote " << png << " and " << line << "\n";
+        return 0;
+    }
+    dw::dds::Participant participant(cli.dds(), "predictor");
+    dw::dds::Heartbeat heartbeat(participant);
+    dw::SystemClock clock;
+    PredictorNode node(participant, no, clock);
+    heartbeat.set_state(dw::msg::PROC_RUNNING);
+    while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
+    std::cout << "published " << node.published() << " predictions, " << node.reloads() << " model swaps\n";
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    return dw::cli::run_main("dw-predictor", [&] { return run(argc, argv); });
+}

@@ -1,0 +1,79 @@
+#pragma once
+// Force models: given every neighbour's state relative to the sufferer, the wrench on it.
+//   physics        the simulator's wrench model (the jets, the planform, the aggregation law)
+//   naive_linear   Σ_j psi(x_j - x_i), psi trained on single-neighbour flights only
+//   learnt_linear  the same sum structure, trained on multi-vehicle data
+//   deep_sets      Phi(Σ_j phi(x_j - x_i))
+// Learnt models are trained with libtorch (train.hpp) but evaluated here with Eigen, so serving
+// a model needs no libtorch. A saved model (JSON, downwash-model/1) carries its input
+// normalisation and its metadata.
+#include <Eigen/Core>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "physics/config.hpp"
+#include "predictor/dataset.hpp"
+
+namespace dw::physics { class WrenchModel; }
+
+namespace dw::predictor {
+
+class ForceModel {
+public:
+    virtual ~ForceModel() = default;
+    virtual const std::string& name() const = 0;
+    virtual Wrench6 predict(std::span<const RelState> neighbours) const = 0;
+};
+
+// A dense layer: out = act(W in + b). Activation "silu" or "linear".
+struct Layer {
+    Eigen::MatrixXf w;
+    Eigen::VectorXf b;
+    bool silu = true;
+};
+struct Mlp {
+    std::vector<Layer> layers;
+    Eigen::VectorXf forward(const Eigen::VectorXf& in) const;
+    int inputs() const { return layers.empty() ? 0 : static_cast<int>(layers.front().w.cols()); }
+    int outputs() const { return layers.empty() ? 0 : static_cast<int>(layers.back().w.rows()); }
+};
+
+enum class Structure { sum, deep_sets };
+
+class LearntModel final : public ForceModel {
+public:
+    std::string kind;                  // naive_linear, learnt_linear, deep_sets (the model's name)
+    Structure structure = Structure::sum;
+    std::array<float, kStateSize> input_mean{}, input_std{};
+    std::array<float, 6> output_scale{};
+    Mlp phi;                           // per neighbour (psi for the sum structure)
+    Mlp rho;                           // deep sets: on the pooled sum
+    std::string metadata_json = "{}";  // what it was trained on, how, and how well
+
+    const std::string& name() const override { return kind; }
+    Wrench6 predict(std::span<const RelState> neighbours) const override;
+
+    void save(const std::string& path) const;
+    // Throws dw::InputError naming the file and the field for a malformed model.
+    static LearntModel load(const std::string& path);
+};
+
+class PhysicsModel final : public ForceModel {
+public:
+    explicit PhysicsModel(const physics::PhysicsConfig& config, std::string name = "physics");
+    ~PhysicsModel() override;
+    const std::string& name() const override { return name_; }
+    Wrench6 predict(std::span<const RelState> neighbours) const override;
+
+private:
+    std::string name_;
+    std::unique_ptr<physics::WrenchModel> model_;
+    double stand_height_ = 1.4;
+};
+
+// Loads "physics" (needs the physics config) or a saved learnt model.
+std::unique_ptr<ForceModel> load_model(const std::string& path);
+
+}  // namespace dw::predictor

@@ -1,0 +1,115 @@
+#include "predictor/node.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "dds/time.hpp"
+
+namespace dw::predictor {
+
+std::array<double, 3> FrameFeatures::velocity(History& h, double t, const std::array<double, 3>& p) {
+    while (!h.p.empty() && (h.p.back().first >= t || t - h.p.back().first > 0.1)) h.p.clear();  // gap or reorder: restart
+    h.p.emplace_back(t, p);
+    while (h.p.size() > 2 && t - h.p[1].first >= 0.02) h.p.pop_front();  // keep ~20 ms of history
+    if (h.p.size() < 2) return {0, 0, 0};
+    const auto& [t0, p0] = h.p.front();
+    const double dt = t - t0;
+    return {(p[0] - p0[0]) / dt, (p[1] - p0[1]) / dt, (p[2] - p0[2]) / dt};
+}
+
+std::optional<std::vector<RelState>> FrameFeatures::update(const msg::MocapFrame& frame) {
+    const double t = static_cast<double>(dds::from_msg(frame.header().stamp())) * 1e-9;
+    std::array<double, 3> ps{}, vs{};
+    bool have_sufferer = false;
+    std::vector<std::pair<std::array<double, 3>, std::array<double, 3>>> others;
+    for (const auto& b : frame.bodies()) {
+        if (!b.tracking_valid()) continue;
+        const std::array<double, 3> p{b.position_m().x(), b.position_m().y(), b.position_m().z()};
+        const auto v = velocity(history_[b.name()], t, p);
+        if (b.name() == sufferer_) {
+            ps = p;
+            vs = v;
+            have_sufferer = true;
+        } else {
+            others.emplace_back(p, v);
+        }
+    }
+    if (!have_sufferer) return std::nullopt;
+    std::vector<RelState> x;
+    for (const auto& [p, v] : others) {
+        const RelState r{p[0] - ps[0], p[1] - ps[1], p[2] - ps[2], v[0] - vs[0], v[1] - vs[1], v[2] - vs[2]};
+        if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > max_distance_m_) continue;
+        x.push_back(r);
+        if (x.size() == static_cast<std::size_t>(kMaxNeighbours)) break;
+    }
+    return x;
+}
+
+PredictorNode::PredictorNode(dds::Participant& p, const NodeOptions& o, const Clock& clock)
+    : options_(o), clock_(clock), model_(load_model(o.model_path)), features_(o.sufferer),
+      writer_(p, dds::topics::wrench_prediction),
+      reader_(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) { on_frame(f); }) {
+    log::info("predicting with ", model_->name(), " (", o.model_path, ") for '", o.sufferer, "'");
+    watcher_ = std::thread([this] { watch(); });
+}
+
+PredictorNode::~PredictorNode() {
+    stop_ = true;
+    if (watcher_.joinable()) watcher_.join();
+}
+
+std::string PredictorNode::model_name() const {
+    std::lock_guard lock(mutex_);
+    return model_->name();
+}
+
+void PredictorNode::on_frame(const msg::MocapFrame& frame) {
+    const auto x = features_.update(frame);
+    if (!x) return;
+    std::shared_ptr<const ForceModel> model;
+    {
+        std::lock_guard lock(mutex_);
+        model = model_;
+    }
+    const Wrench6 w = model->predict(*x);
+    msg::WrenchPrediction out;
+    out.header().stamp(frame.header().stamp());
+    out.header().run_id(frame.header().run_id());
+    out.model_name(model->name());
+    out.force_n().x(w[0]);
+    out.force_n().y(w[1]);
+    out.force_n().z(w[2]);
+    out.torque_nm().x(w[3]);
+    out.torque_nm().y(w[4]);
+    out.torque_nm().z(w[5]);
+    out.input_age_s(static_cast<double>(clock_.now_ns() - dds::from_msg(frame.header().stamp())) * 1e-9);
+    if (writer_.write(out)) ++published_;
+}
+
+void PredictorNode::watch() {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    auto last = fs::last_write_time(options_.model_path, ec);
+    while (!stop_) {
+        std::this_thread::sleep_for(std::chrono::duration<double>(options_.reload_check_s));
+        const auto now = fs::last_write_time(options_.model_path, ec);
+        if (ec || now == last) continue;
+        last = now;
+        try {
+            std::shared_ptr<const ForceModel> m = load_model(options_.model_path);
+            {
+                std::lock_guard lock(mutex_);
+                model_ = m;
+            }
+            ++reloads_;
+            log::info("model swapped: now ", m->name(), " (", options_.model_path, ")");
+        } catch (const std::exception& e) {
+            log::error("model not swapped, keeping the old one: ", e.what());
+        }
+    }
+}
+
+}  // namespace dw::predictor

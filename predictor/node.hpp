@@ -1,0 +1,77 @@
+#pragma once
+// The online predictor: subscribes to the motion capture, forms every neighbour's state relative
+// to the sufferer (velocity from the frames' camera stamps), and publishes the model's predicted
+// wrench on predictor/wrench at the mocap rate, stamped with the input's time and carrying its
+// age. The model file is watched: a new model is swapped in without a restart; a bad one is
+// refused with one line and the old one kept.
+#include <atomic>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "core/clock.hpp"
+#include "dds/endpoint.hpp"
+#include "dds/participant.hpp"
+#include "dw/msg/Mocap.h"
+#include "dw/msg/Prediction.h"
+#include "predictor/model.hpp"
+
+namespace dw::predictor {
+
+// Relative states from a stream of frames (no DDS: tests and benchmarks call it directly).
+class FrameFeatures {
+public:
+    explicit FrameFeatures(std::string sufferer = "sufferer", double max_distance_m = 3.0)
+        : sufferer_(std::move(sufferer)), max_distance_m_(max_distance_m) {}
+    // The neighbours' relative states at this frame; empty if the sufferer is not tracked.
+    std::optional<std::vector<RelState>> update(const msg::MocapFrame& frame);
+
+private:
+    struct History {
+        std::deque<std::pair<double, std::array<double, 3>>> p;  // (t, position), last ~30 ms
+    };
+    std::array<double, 3> velocity(History& h, double t, const std::array<double, 3>& p);
+    std::string sufferer_;
+    double max_distance_m_;
+    std::map<std::string, History> history_;
+};
+
+struct NodeOptions {
+    std::string model_path;
+    std::string sufferer = "sufferer";
+    double reload_check_s = 0.5;
+};
+
+class PredictorNode {
+public:
+    // Throws dw::InputError if the first model cannot be loaded.
+    PredictorNode(dds::Participant& p, const NodeOptions& o, const Clock& clock);
+    ~PredictorNode();
+    PredictorNode(const PredictorNode&) = delete;
+    PredictorNode& operator=(const PredictorNode&) = delete;
+
+    std::uint64_t published() const { return published_.load(); }
+    std::uint64_t reloads() const { return reloads_.load(); }
+    std::string model_name() const;
+
+private:
+    void on_frame(const msg::MocapFrame& frame);
+    void watch();
+
+    NodeOptions options_;
+    const Clock& clock_;
+    mutable std::mutex mutex_;
+    std::shared_ptr<const ForceModel> model_;
+    FrameFeatures features_;
+    dds::Writer<msg::WrenchPrediction> writer_;
+    dds::Reader<msg::MocapFrame> reader_;
+    std::atomic<std::uint64_t> published_{0}, reloads_{0};
+    std::atomic<bool> stop_{false};
+    std::thread watcher_;
+};
+
+}  // namespace dw::predictor

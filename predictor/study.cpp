@@ -1,0 +1,164 @@
+#include "predictor/study.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "flight/flight.hpp"
+#include "physics/flight_sim.hpp"
+#include "predictor/maps.hpp"
+#include "predictor/train.hpp"
+
+namespace dw::predictor {
+
+namespace fs = std::filesystem;
+
+double table_value(const std::vector<ComparisonRow>& rows, const std::string& formation, const std::string& model,
+                   int axis, bool arena) {
+    for (const auto& r : rows)
+        if (r.formation == formation && r.model == model)
+            return arena ? r.arena[static_cast<std::size_t>(axis)] : r.rmse[static_cast<std::size_t>(axis)];
+    return NAN;
+}
+
+namespace {
+
+void write_text(const fs::path& p, const std::string& text) {
+    std::ofstream out(p);
+    out << text;
+    if (!out) throw RuntimeError(log::cat(p.string(), ": cannot write"));
+}
+
+}  // namespace
+
+StudyResult run_study(const StudyOptions& o) {
+    auto say = [&](const std::string& line) {
+        if (o.progress) o.progress(line);
+    };
+    const fs::path out(o.out_dir);
+    fs::create_directories(out / "flights");
+    fs::create_directories(out / "models");
+
+    // 1. Fly: one flight folder per formation.
+    Dataset all;
+    std::map<std::string, std::string> label;  // physics formation name -> the dataset's formation label
+    std::uint64_t seed = o.seed;
+    for (const auto& f : o.formations) {
+        physics::FlyOptions fly;
+        fly.formation = f;
+        fly.grid.legs = o.legs;
+        // Single-neighbour flights cover where the formations' vehicles go (up to 0.5 m beyond the
+        // formations' centre), so the sum of single-neighbour models is not extrapolating.
+        // As many more legs as keep the lines as close together (narrow jets at 0.3 m).
+        if (f == "single") {
+            fly.grid.half_width_m = o.single_half_width_m;
+            fly.grid.legs = static_cast<int>(std::lround(o.legs * o.single_half_width_m / 1.0));
+        }
+        fly.seed = seed++;
+        const fs::path dir = out / "flights" / f;
+        say(log::cat("flying ", f, " (", fly.grid.legs, " legs, simulated)"));
+        flight::write_flight(physics::simulate_flight(o.physics, fly).flight, dir.string());
+        const Dataset d = load_dataset(dir.string());  // back through the contract
+        label[f] = d.sources.front().formation;
+        all.append(d);
+    }
+    const Split split = split_by_leg(all);
+    say(log::cat(all.samples.size(), " samples; on legs: ", split.train.samples.size(), " training, ",
+                 split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
+
+    // 2. Train.
+    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file) {
+        TrainOptions t;
+        t.kind = kind;
+        t.seed = o.seed;
+        t.max_epochs = o.max_epochs;
+        t.split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training";
+        t.progress = [&](int epoch, double tl, double vl) {
+            if (epoch % 10 == 0) say(log::cat("  ", kind, " epoch ", epoch, ": training ", tl, ", validation ", vl));
+        };
+        say(log::cat("training ", kind, " on ", tr.samples.size(), " samples"));
+        auto r = train_model(tr, va, t);
+        say(log::cat("  ", kind, ": ", r.epochs, " epochs (best ", r.best_epoch, "), ", r.seconds, " s"));
+        r.model.save((out / "models" / file).string());
+        return std::make_unique<LearntModel>(std::move(r.model));
+    };
+    auto singles = [](const Dataset& d) { return d.with_k(1, 1).with_formation("single K=1"); };
+    auto naive = train("naive_linear", singles(split.train), singles(split.validation), "naive_linear.json");
+    auto linear = train("learnt_linear", split.train, split.validation, "learnt_linear.json");
+    auto deep = train("deep_sets", split.train, split.validation, "deep_sets.json");
+    PhysicsModel physics(o.physics);
+    write_text(out / "models" / "physics.yaml", physics::to_yaml(o.physics));
+
+    // 3. Compare on held-out legs.
+    StudyResult r;
+    const std::vector<const ForceModel*> models{&physics, naive.get(), linear.get(), deep.get()};
+    r.table = compare(models, split.test, o.arena);
+
+    // 4. Generalisation: K <= 2 -> K = 3, and a formation left out.
+    if (o.generalisation) {
+        auto without = [](const Dataset& d, const std::string& f1, const std::string& f2) {
+            Dataset x;
+            x.sources = d.sources;
+            for (const auto& s : d.samples) {
+                const auto& f = d.sources[static_cast<std::size_t>(s.source)].formation;
+                if (f != f1 && f != f2) x.samples.push_back(s);
+            }
+            return x;
+        };
+        auto k2_tr = split.train.with_k(0, 2), k2_va = split.validation.with_k(0, 2);
+        k2_tr = without(k2_tr, "leader_follower K=3", "hybrid K=3");
+        k2_va = without(k2_va, "leader_follower K=3", "hybrid K=3");
+        auto lin2 = train("learnt_linear", k2_tr, k2_va, "learnt_linear.k_le_2.json");
+        auto deep2 = train("deep_sets", k2_tr, k2_va, "deep_sets.k_le_2.json");
+        for (auto row : compare({naive.get(), lin2.get(), deep2.get()}, split.test.with_k(3, 3), o.arena)) {
+            row.formation += " (trained on K ≤ 2)";
+            r.generalisation.push_back(row);
+        }
+        auto ns_tr = without(split.train, "stack K=2", ""), ns_va = without(split.validation, "stack K=2", "");
+        auto lin_s = train("learnt_linear", ns_tr, ns_va, "learnt_linear.no_stack.json");
+        auto deep_s = train("deep_sets", ns_tr, ns_va, "deep_sets.no_stack.json");
+        for (auto row : compare({naive.get(), lin_s.get(), deep_s.get()}, split.test.with_formation("stack K=2"), o.arena)) {
+            row.formation += " (stack left out)";
+            r.generalisation.push_back(row);
+        }
+    }
+
+    // 5. Tables and maps.
+    std::string md = "# Force models compared\n\n";
+    md += log::cat("Simulated flights (", o.legs, " legs each, seed ", o.seed, "; aggregation ",
+                   o.physics.aggregation == physics::Aggregation::force_sum ? "force sum" : "velocity superposition",
+                   ", jet merging ", o.physics.effects.jet_merging.enabled ? "on" : "off", ").\n\n");
+    md += to_markdown(r.table, o.arena);
+    if (!r.generalisation.empty()) {
+        md += "\n## Generalisation (held-out legs of formations the models were not trained on)\n\n";
+        md += to_markdown(r.generalisation, o.arena);
+    }
+    if (o.maps) {
+        say("drawing maps");
+        fs::create_directories(out / "maps");
+        md += "\n## Maps\n\n";
+        for (const auto& f : o.formations) {
+            if (f == "single") continue;
+            MapRequest req;
+            req.formation = f;
+            req.altitude_m = o.arena.altitude_m;
+            req.observed = all.with_formation(label[f]);
+            const auto png = (out / "maps" / (f + ".png")).string();
+            const auto line = (out / "maps" / (f + "_line.png")).string();
+            draw_force_map(models, req, png);
+            draw_force_line(models, req, line);
+            md += log::cat("![", f, "](maps/", f, ".png)\n![", f, " along E](maps/", f, "_line.png)\n\n");
+        }
+    }
+    r.markdown_path = (out / "table.md").string();
+    r.csv_path = (out / "table.csv").string();
+    write_text(r.markdown_path, md);
+    write_text(r.csv_path, to_csv(r.table) + to_csv(r.generalisation).substr(to_csv({}).size()));
+    return r;
+}
+
+}  // namespace dw::predictor

@@ -1,0 +1,42 @@
+#pragma once
+// The study in one call: simulate the flights (single-neighbour legs and every formation), write
+// them as flight folders, read them back through the contract (no side channel), split by leg,
+// train the naive linear, learnt linear and Deep Sets models, compare them with the physics on
+// held-out legs (the Table 1 metric and RMSE), run the generalisation tests and draw the maps.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "physics/config.hpp"
+#include "predictor/evaluate.hpp"
+
+namespace dw::predictor {
+
+struct StudyOptions {
+    physics::PhysicsConfig physics;
+    std::string out_dir;
+    std::vector<std::string> formations{"single", "side_by_side", "leader_follower", "leader_follower3", "stack", "hybrid"};
+    int legs = 60;                       // per flight
+    double single_half_width_m = 1.6;    // the single-neighbour flights' square (others: 1 m)
+    std::uint64_t seed = 1;
+    int max_epochs = 150;
+    bool generalisation = true;          // train on K <= 2, test on K = 3; leave stack out
+    bool maps = true;
+    ArenaOptions arena;
+    std::function<void(const std::string&)> progress;  // one line per step
+};
+
+struct StudyResult {
+    std::vector<ComparisonRow> table;           // held-out legs, every formation, every model
+    std::vector<ComparisonRow> generalisation;  // models trained without the formation they are tested on
+    std::string markdown_path, csv_path;
+};
+
+StudyResult run_study(const StudyOptions& o);
+
+// The arena-metric value of `model` on `formation` and `axis` in a table (NaN if absent).
+double table_value(const std::vector<ComparisonRow>& rows, const std::string& formation, const std::string& model,
+                   int axis, bool arena = true);
+
+}  // namespace dw::predictor

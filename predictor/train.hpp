@@ -1,0 +1,43 @@
+#pragma once
+// Training the learnt models with libtorch: Adam on the mean squared error of the normalised
+// wrench, mini-batches, early stopping on held-out validation legs, fixed seeds. The result is a
+// LearntModel evaluated with Eigen (model.hpp). This header keeps libtorch out of its users.
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "predictor/dataset.hpp"
+#include "predictor/model.hpp"
+
+namespace dw::predictor {
+
+struct TrainOptions {
+    std::string kind = "deep_sets";     // naive_linear, learnt_linear or deep_sets
+    int hidden = 64;                    // width of the hidden layers
+    int latent = 32;                    // deep sets: width of phi's output
+    int max_epochs = 150;
+    int patience = 15;                  // epochs without a better validation loss before stopping
+                                        // (the step is halved after every patience/3 of them)
+    double learning_rate = 2e-3;
+    int batch = 256;
+    std::uint64_t seed = 1;
+    int threads = 2;
+    std::string split = "by leg";        // how the training and validation legs were chosen (metadata)
+    // Called after every epoch: epoch, training loss, validation loss (normalised MSE).
+    std::function<void(int, double, double)> progress;
+};
+
+Structure structure_of(const std::string& kind);  // throws dw::InputError for an unknown kind
+
+struct TrainResult {
+    LearntModel model;
+    int epochs = 0;
+    int best_epoch = 0;
+    double best_validation_loss = 0;
+    double seconds = 0;
+};
+
+// Throws dw::InputError when there is nothing to train on.
+TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o);
+
+}  // namespace dw::predictor

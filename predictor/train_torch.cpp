@@ -1,0 +1,191 @@
+// The only translation unit that includes libtorch (it compiles slowly).
+#include <torch/torch.h>
+
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "predictor/train.hpp"
+
+namespace dw::predictor {
+
+Structure structure_of(const std::string& kind) {
+    if (kind == "naive_linear" || kind == "learnt_linear") return Structure::sum;
+    if (kind == "deep_sets") return Structure::deep_sets;
+    throw InputError(log::cat("model kind '", kind, "' (expected naive_linear, learnt_linear or deep_sets)"));
+}
+
+namespace {
+
+torch::nn::Sequential mlp(int in, int hidden, int out) {
+    return torch::nn::Sequential(torch::nn::Linear(in, hidden), torch::nn::SiLU(), torch::nn::Linear(hidden, hidden),
+                                 torch::nn::SiLU(), torch::nn::Linear(hidden, out));
+}
+
+Mlp export_mlp(torch::nn::Sequential& seq) {
+    Mlp m;
+    const auto n = seq->size();
+    for (std::size_t i = 0; i < n; ++i) {
+        auto lin = seq[i]->as<torch::nn::Linear>();
+        if (!lin) continue;
+        const auto w = lin->weight.detach().contiguous().to(torch::kFloat32);
+        const auto b = lin->bias.detach().contiguous().to(torch::kFloat32);
+        Layer l;
+        l.w.resize(w.size(0), w.size(1));
+        for (int64_t r = 0; r < w.size(0); ++r)
+            for (int64_t c = 0; c < w.size(1); ++c) l.w(r, c) = w[r][c].item<float>();
+        l.b.resize(b.size(0));
+        for (int64_t r = 0; r < b.size(0); ++r) l.b[r] = b[r].item<float>();
+        l.silu = i + 1 < n;  // every Linear but the last is followed by SiLU
+        m.layers.push_back(std::move(l));
+    }
+    return m;
+}
+
+struct Tensors {
+    torch::Tensor x, mask, y;
+};
+
+Tensors tensors(const Dataset& d, const LearntModel& norm) {
+    const auto n = static_cast<int64_t>(d.samples.size());
+    auto x = torch::zeros({n, kMaxNeighbours, kStateSize});
+    auto mask = torch::zeros({n, kMaxNeighbours, 1});
+    auto y = torch::zeros({n, 6});
+    auto xa = x.accessor<float, 3>();
+    auto ma = mask.accessor<float, 3>();
+    auto ya = y.accessor<float, 2>();
+    for (int64_t i = 0; i < n; ++i) {
+        const auto& s = d.samples[static_cast<std::size_t>(i)];
+        for (int j = 0; j < s.k; ++j) {
+            ma[i][j][0] = 1;
+            for (int a = 0; a < kStateSize; ++a) {
+                const auto ai = static_cast<std::size_t>(a);
+                xa[i][j][a] = (static_cast<float>(s.x[static_cast<std::size_t>(j)][ai]) - norm.input_mean[ai]) / norm.input_std[ai];
+            }
+        }
+        for (std::size_t a = 0; a < 6; ++a) ya[i][static_cast<int64_t>(a)] = static_cast<float>(s.y[a]) / norm.output_scale[a];
+    }
+    return {x, mask, y};
+}
+
+}  // namespace
+
+TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o) {
+    const auto started = std::chrono::steady_clock::now();
+    if (train.samples.empty()) throw InputError("training: no samples on the training legs");
+    if (validation.samples.empty()) throw InputError("training: no samples on the validation legs");
+    torch::manual_seed(o.seed);
+    torch::set_num_threads(o.threads);
+
+    TrainResult r;
+    LearntModel& m = r.model;
+    m.kind = o.kind;
+    m.structure = structure_of(o.kind);
+    // Normalisation from the training data: per-feature mean and spread over every neighbour;
+    // per-axis RMS of the wrench (no offset: the sum structure must give 0 with nobody near).
+    std::array<double, kStateSize> sum{}, sq{};
+    std::array<double, 6> ysq{};
+    double count = 0;
+    for (const auto& s : train.samples) {
+        for (int j = 0; j < s.k; ++j)
+            for (std::size_t a = 0; a < kStateSize; ++a) {
+                sum[a] += s.x[static_cast<std::size_t>(j)][a];
+                sq[a] += s.x[static_cast<std::size_t>(j)][a] * s.x[static_cast<std::size_t>(j)][a];
+            }
+        count += s.k;
+        for (std::size_t a = 0; a < 6; ++a) ysq[a] += s.y[a] * s.y[a];
+    }
+    if (count == 0) throw InputError("training: no sample has a neighbour");
+    for (std::size_t a = 0; a < kStateSize; ++a) {
+        const double mean = sum[a] / count;
+        m.input_mean[a] = static_cast<float>(mean);
+        m.input_std[a] = static_cast<float>(std::max(1e-3, std::sqrt(std::max(0.0, sq[a] / count - mean * mean))));
+    }
+    for (std::size_t a = 0; a < 6; ++a)
+        m.output_scale[a] = static_cast<float>(std::max(1e-3, std::sqrt(ysq[a] / static_cast<double>(train.samples.size()))));
+
+    const Tensors tr = tensors(train, m), va = tensors(validation, m);
+    const int width = m.structure == Structure::deep_sets ? o.latent : 6;
+    auto phi = mlp(kStateSize, o.hidden, width);
+    auto rho = mlp(o.latent, o.hidden, 6);
+    std::vector<torch::Tensor> params = phi->parameters();
+    if (m.structure == Structure::deep_sets)
+        for (auto& p : rho->parameters()) params.push_back(p);
+    torch::optim::Adam adam(params, torch::optim::AdamOptions(o.learning_rate));
+
+    auto forward = [&](const torch::Tensor& x, const torch::Tensor& mask) {
+        auto pooled = (phi->forward(x) * mask).sum(1);
+        return m.structure == Structure::deep_sets ? rho->forward(pooled) : pooled;
+    };
+    auto snapshot = [&] {
+        std::vector<torch::Tensor> s;
+        for (auto& p : params) s.push_back(p.detach().clone());
+        return s;
+    };
+    auto best = snapshot();
+    r.best_validation_loss = INFINITY;
+    const int64_t n = tr.x.size(0);
+    auto gen = torch::make_generator<torch::CPUGeneratorImpl>(o.seed);
+    int since_best = 0;
+    for (int epoch = 1; epoch <= o.max_epochs; ++epoch) {
+        const auto perm = torch::randperm(n, gen, torch::kLong);
+        double total = 0;
+        int64_t batches = 0;
+        for (int64_t b = 0; b < n; b += o.batch) {
+            const auto idx = perm.slice(0, b, std::min(n, b + o.batch));
+            adam.zero_grad();
+            auto loss = torch::mse_loss(forward(tr.x.index_select(0, idx), tr.mask.index_select(0, idx)), tr.y.index_select(0, idx));
+            loss.backward();
+            adam.step();
+            total += loss.item<double>();
+            ++batches;
+        }
+        double val = 0;
+        {
+            torch::NoGradGuard no_grad;
+            val = torch::mse_loss(forward(va.x, va.mask), va.y).item<double>();
+        }
+        r.epochs = epoch;
+        if (o.progress) o.progress(epoch, total / static_cast<double>(batches), val);
+        if (val < r.best_validation_loss - 1e-5) {
+            r.best_validation_loss = val;
+            r.best_epoch = epoch;
+            best = snapshot();
+            since_best = 0;
+        } else if (++since_best >= o.patience) {
+            break;
+        } else if (since_best % std::max(1, o.patience / 3) == 0) {  // plateau: halve the step
+            for (auto& g : adam.param_groups())
+                static_cast<torch::optim::AdamOptions&>(g.options()).lr(static_cast<torch::optim::AdamOptions&>(g.options()).lr() * 0.5);
+        }
+    }
+    {
+        torch::NoGradGuard no_grad;
+        for (std::size_t i = 0; i < params.size(); ++i) params[i].copy_(best[i]);
+    }
+    m.phi = export_mlp(phi);
+    if (m.structure == Structure::deep_sets) m.rho = export_mlp(rho);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+    nlohmann::json sources = nlohmann::json::array();
+    for (const auto& s : train.sources) sources.push_back({{"name", s.name}, {"formation", s.formation}});
+    m.metadata_json = nlohmann::json{{"trained_on", sources},
+                                     {"train_samples", train.samples.size()},
+                                     {"validation_samples", validation.samples.size()},
+                                     {"split", o.split},
+                                     {"epochs", r.epochs},
+                                     {"best_epoch", r.best_epoch},
+                                     {"best_validation_mse_normalised", r.best_validation_loss},
+                                     {"seed", o.seed},
+                                     {"hidden", o.hidden},
+                                     {"latent", o.latent},
+                                     {"learning_rate", o.learning_rate},
+                                     {"batch", o.batch},
+                                     {"training_seconds", r.seconds}}
+                          .dump();
+    return r;
+}
+
+}  // namespace dw::predictor
