@@ -171,7 +171,7 @@ Field observed_field(const Dataset& d, const MapRequest& r, double cell_m) {
     const auto cells = static_cast<std::size_t>(f.cells * f.cells);
     std::vector<double> sum(cells, 0.0), count(cells, 0.0);
     for (const auto& s : d.samples) {
-        if (s.k == 0 || s.leg < 0 || s.leg_direction != 1) continue;
+        if (s.k == 0 || s.leg < 0) continue;
         const auto c = s.reference();
         if (std::abs(c[2] - r.altitude_m) > r.band_m) continue;
         const int in = static_cast<int>(std::lround((c[0] + r.half_width_m) / f.step()));
@@ -210,11 +210,11 @@ void draw_force_line(const std::vector<const ForceModel*>& models, const MapRequ
         }
         curves.push_back(std::move(c));
     }
-    std::vector<std::array<double, 2>> points;  // observed: samples of +E legs within 0.1 m of N = 0, binned by 5 cm
+    std::vector<std::array<double, 2>> points;  // observed: samples on legs within 0.1 m of N = 0, binned by 5 cm
     if (r.observed) {
         std::vector<double> sum(49, 0), cnt(49, 0);
         for (const auto& s : r.observed->samples) {
-            if (s.k == 0 || s.leg < 0 || s.leg_direction != 1) continue;
+            if (s.k == 0 || s.leg < 0) continue;
             const auto c = s.reference();
             if (std::abs(c[2] - r.altitude_m) > r.band_m || std::abs(c[0]) > 0.1 || std::abs(c[1]) > r.half_width_m) continue;
             const auto b = static_cast<std::size_t>(std::lround((c[1] + r.half_width_m) / (2 * r.half_width_m) * 48));
@@ -259,7 +259,7 @@ void draw_force_line(const std::vector<const ForceModel*>& models, const MapRequ
         for (const auto& p : points) cv::circle(img, {X(p[0]), Y(p[1])}, 3, cv::Scalar(80, 80, 80), cv::FILLED, cv::LINE_AA);
         const int ky = top + 25 + 22 * static_cast<int>(curves.size());
         cv::circle(img, {left + pw + 27, ky - 5}, 3, cv::Scalar(80, 80, 80), cv::FILLED);
-        text(img, "observed (+E legs)", {left + pw + 46, ky}, 0.45);
+        text(img, "observed (legs both ways)", {left + pw + 46, ky}, 0.45);
     }
     if (!cv::imwrite(png, img)) throw RuntimeError(log::cat(png, ": cannot write the PNG"));
 }

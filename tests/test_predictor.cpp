@@ -1,0 +1,297 @@
+// The predictor: datasets from flight folders (alignment, split by leg), models (save/load,
+// permutation invariance, bad files), the arena metric, the pixel test of the maps, and the
+// study's claims on simulated flights (Deep Sets vs the linear models).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <set>
+
+#include "core/errors.hpp"
+#include "flight/flight.hpp"
+#include "physics/flight_sim.hpp"
+#include "predictor/dataset.hpp"
+#include "predictor/evaluate.hpp"
+#include "predictor/maps.hpp"
+#include "predictor/model.hpp"
+#include "predictor/study.hpp"
+#include "support.hpp"
+
+using namespace dw::predictor;
+
+namespace {
+
+// A small simulated flight folder (2 neighbours, few legs).
+std::string small_flight(const dw::test::TempDir& dir, const std::string& formation = "leader_follower", int legs = 10) {
+    dw::physics::FlyOptions fly;
+    fly.formation = formation;
+    fly.grid.legs = legs;
+    fly.grid.altitudes_m = {0.8};
+    const auto path = dir.file(formation);
+    dw::flight::write_flight(dw::physics::simulate_flight(dw::physics::PhysicsConfig{}, fly).flight, path);
+    return path;
+}
+
+Mlp random_mlp(std::mt19937& rng, std::vector<int> sizes) {
+    std::normal_distribution<float> g(0, 0.5f);
+    Mlp m;
+    for (std::size_t i = 0; i + 1 < sizes.size(); ++i) {
+        Layer l;
+        l.w = Eigen::MatrixXf(sizes[i + 1], sizes[i]).unaryExpr([&](float) { return g(rng); });
+        l.b = Eigen::VectorXf(sizes[i + 1]).unaryExpr([&](float) { return g(rng); });
+        l.silu = i + 2 < sizes.size();
+        m.layers.push_back(l);
+    }
+    return m;
+}
+
+LearntModel random_model(Structure s, unsigned seed) {
+    std::mt19937 rng(seed);
+    LearntModel m;
+    m.kind = s == Structure::sum ? "learnt_linear" : "deep_sets";
+    m.structure = s;
+    m.input_mean = {0.1f, -0.2f, -1.0f, 0, 0.3f, 0};
+    m.input_std = {0.6f, 0.7f, 0.4f, 0.1f, 0.5f, 0.1f};
+    m.output_scale = {0.1f, 0.1f, 1.5f, 0.01f, 0.01f, 0.005f};
+    m.phi = random_mlp(rng, {6, 16, 16, s == Structure::sum ? 6 : 8});
+    if (s == Structure::deep_sets) m.rho = random_mlp(rng, {8, 16, 6});
+    return m;
+}
+
+}  // namespace
+
+TEST(PredictorDataset, AlignsPosesWithTheWrenchAndSplitsByLeg) {
+    dw::test::TempDir dir;
+    const auto path = small_flight(dir);
+    const auto f = dw::flight::read_flight(path);
+    const Dataset d = load_dataset(path);
+    ASSERT_EQ(d.sources.size(), 1u);
+    EXPECT_EQ(d.sources[0].formation, "leader_follower K=2");
+    ASSERT_GT(d.samples.size(), 1000u);
+    // Every sample's relative position is the interpolated poses' difference at the wrench time.
+    const auto tr = dw::flight::tracks(f);
+    const auto& s = d.samples[d.samples.size() / 2];
+    ASSERT_EQ(s.k, 2);
+    const auto ps = tr[static_cast<std::size_t>(f.find_body("sufferer"))].position_at(s.t);
+    const auto p1 = tr[static_cast<std::size_t>(f.find_body(f.meta.neighbours[0]))].position_at(s.t);
+    for (std::size_t a = 0; a < 3; ++a) EXPECT_NEAR(s.x[0][a], p1[a] - ps[a], 1e-9);
+    // Velocities of vehicles flying a leg at 0.5 m/s along E (they lag the reference a little
+    // at the legs' ends).
+    int on_leg = 0, at_speed = 0;
+    for (const auto& x : d.samples)
+        if (x.leg >= 0) {
+            ++on_leg;
+            at_speed += std::abs(std::abs(x.x[0][4]) - 0.5) < 0.05;
+            EXPECT_EQ(x.leg_direction, x.x[0][4] > 0 ? 1 : -1);
+        }
+    EXPECT_GT(on_leg, 500);
+    EXPECT_GT(at_speed, 0.8 * on_leg);
+    const Split sp = split_by_leg(d);
+    std::set<int> tr_legs, te_legs;
+    for (const auto& x : sp.train.samples) tr_legs.insert(x.leg);
+    for (const auto& x : sp.test.samples) te_legs.insert(x.leg);
+    EXPECT_EQ(te_legs, (std::set<int>{0, 5}));
+    for (int l : te_legs) EXPECT_EQ(tr_legs.count(l), 0u);
+    EXPECT_EQ(sp.train.samples.size() + sp.validation.samples.size() + sp.test.samples.size(), static_cast<std::size_t>(on_leg));
+}
+
+TEST(PredictorDataset, FindsLegsWithoutLegsCsv) {
+    dw::test::TempDir dir;
+    auto f = dw::flight::read_flight(small_flight(dir));
+    const auto truth = *f.legs;
+    const auto found = find_legs(f);
+    ASSERT_EQ(found.size(), truth.size());
+    for (std::size_t i = 0; i < found.size(); ++i) {
+        // The vehicles lag the reference a little; the found leg covers most of the true one
+        // and little else.
+        const double overlap = std::min(found[i].t_end, truth[i].t_end) - std::max(found[i].t_start, truth[i].t_start);
+        const double length = truth[i].t_end - truth[i].t_start;
+        EXPECT_GT(overlap, 0.7 * length) << "leg " << i;
+        EXPECT_LT(found[i].t_end - found[i].t_start, length + 2.5) << "leg " << i;
+    }
+}
+
+TEST(PredictorDataset, RejectsWhatIsNotAFlight) {
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("x.txt")) << "hello";
+    EXPECT_THROW(load_dataset(dir.file("x.txt")), dw::InputError);
+    EXPECT_THROW(load_dataset(dir.file("missing")), dw::InputError);
+    std::filesystem::create_directories(dir.file("bad"));
+    std::ofstream(dir.file("bad/meta.json")) << "{";
+    try {
+        load_dataset(dir.file("bad"));
+        FAIL();
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("meta.json"), std::string::npos) << e.what();
+    }
+}
+
+TEST(PredictorModel, SavesAndLoadsExactlyAndIsPermutationInvariant) {
+    dw::test::TempDir dir;
+    for (auto s : {Structure::sum, Structure::deep_sets}) {
+        const LearntModel m = random_model(s, 7);
+        m.save(dir.file("m.json"));
+        const LearntModel back = LearntModel::load(dir.file("m.json"));
+        const std::vector<RelState> x{{0.1, 0.5, -1.2, 0, 0.5, 0}, {0.0, -0.5, -1.3, 0, 0.5, 0}, {0.3, 0, -1.25, 0.1, 0.4, 0}};
+        const std::vector<RelState> y{x[2], x[0], x[1]};
+        const auto a = m.predict(x), b = back.predict(x), c = m.predict(y);
+        for (std::size_t i = 0; i < 6; ++i) {
+            EXPECT_FLOAT_EQ(static_cast<float>(a[i]), static_cast<float>(b[i]));
+            EXPECT_NEAR(a[i], c[i], 1e-5 * (1 + std::abs(a[i])));
+        }
+        // The sum structure gives nothing with nobody near; Deep Sets gives rho(0).
+        if (s == Structure::sum)
+            for (double v : m.predict({})) EXPECT_EQ(v, 0.0);
+        // A sum of single-neighbour predictions is exactly the sum structure.
+        if (s == Structure::sum) {
+            const auto s0 = m.predict({&x[0], 1}), s1 = m.predict({&x[1], 1}), s2 = m.predict({&x[2], 1});
+            for (std::size_t i = 0; i < 6; ++i) EXPECT_NEAR(a[i], s0[i] + s1[i] + s2[i], 1e-4 * (1 + std::abs(a[i])));
+        }
+    }
+}
+
+TEST(PredictorModel, BadModelFilesNameTheField) {
+    dw::test::TempDir dir;
+    random_model(Structure::deep_sets, 3).save(dir.file("ok.json"));
+    std::string text = dw::read_file(dir.file("ok.json"));
+    auto expect_error = [&](const std::string& body, const std::string& needle) {
+        std::ofstream(dir.file("bad.json")) << body;
+        try {
+            LearntModel::load(dir.file("bad.json"));
+            FAIL() << "accepted: " << needle;
+        } catch (const dw::InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+    };
+    expect_error("{", "not JSON");
+    expect_error(R"({"format": "something/1"})", "format");
+    auto broken = nlohmann::json::parse(text);
+    broken["structure"] = "ring";
+    expect_error(broken.dump(), "structure");
+    auto no_rho = nlohmann::json::parse(text);
+    no_rho.erase("rho");
+    expect_error(no_rho.dump(), "rho");
+    auto wrong = nlohmann::json::parse(text);
+    wrong["input"]["std"][2] = 0;
+    expect_error(wrong.dump(), "input.std[2]");
+    wrong = nlohmann::json::parse(text);
+    wrong["phi"][1]["weight"][0].erase(0);
+    expect_error(wrong.dump(), "phi[1].weight[1]: rows differ in length");
+    wrong = nlohmann::json::parse(text);
+    wrong["rho"][0]["weight"][3][2] = "x";
+    expect_error(wrong.dump(), "rho[0].weight[3][2]: not a number");
+}
+
+// A model that returns a known field: f_d = A exp(-|x - c|^2 / 2 s^2) of the first neighbour.
+class GaussianModel final : public ForceModel {
+public:
+    GaussianModel(double n, double e, double amplitude) : n_(n), e_(e), a_(amplitude) {}
+    const std::string& name() const override { return name_; }
+    Wrench6 predict(std::span<const RelState> x) const override {
+        if (x.empty()) return {};
+        const double r2 = (x[0][0] - n_) * (x[0][0] - n_) + (x[0][1] - e_) * (x[0][1] - e_);
+        return {0, 0, a_ * std::exp(-r2 / (2 * 0.15 * 0.15)), 0, 0, 0};
+    }
+
+private:
+    std::string name_ = "gaussian";
+    double n_, e_, a_;
+};
+
+TEST(PredictorMaps, ASyntheticFieldDrawsItsPeakWhereItIsOnTheRightScale) {
+    dw::test::TempDir dir;
+    // Peaks on grid nodes (-1.2 + 0.04 i), so the fields' extremes are exactly ±2 and -1.
+    const GaussianModel g(0.48, -0.32, 2.0), h(-0.6, 0.68, -1.0);
+    MapRequest r;
+    r.formation = "single";
+    r.speed_mps = 0;
+    const auto png = dir.file("map.png");
+    const MapLayout L = draw_force_map({&g, &h}, r, png);
+    EXPECT_DOUBLE_EQ(L.vmax, 2.0);  // one symmetric scale over both panels: the larger |peak|
+    EXPECT_DOUBLE_EQ(L.vmin, -2.0);
+    const cv::Mat img = cv::imread(png);
+    ASSERT_FALSE(img.empty());
+    EXPECT_EQ(img.cols, L.width);
+    // Panel 0: the reddest pixel is the peak; panel 1: the bluest is the trough.
+    auto extreme = [&](int panel, bool red) {
+        const auto& p = L.panels[static_cast<std::size_t>(panel)];
+        auto score = [&](int x, int y) {
+            const auto c = img.at<cv::Vec3b>(y, x);
+            return red ? c[2] - c[1] : c[0] - c[2];
+        };
+        int best = -1000;
+        for (int y = p.y; y < p.y + p.size; ++y)
+            for (int x = p.x; x < p.x + p.size; ++x) best = std::max(best, score(x, y));
+        double sx = 0, sy = 0, n = 0;  // the centre of the pixels of the extreme colour
+        for (int y = p.y; y < p.y + p.size; ++y)
+            for (int x = p.x; x < p.x + p.size; ++x)
+                if (score(x, y) == best) sx += x, sy += y, n += 1;
+        return std::array<int, 2>{static_cast<int>(std::lround(sx / n)), static_cast<int>(std::lround(sy / n))};
+    };
+    const auto peak = extreme(0, true), want = L.pixel(0, 0.48, -0.32);
+    EXPECT_LE(std::abs(peak[0] - want[0]), 4);
+    EXPECT_LE(std::abs(peak[1] - want[1]), 4);
+    const auto trough = extreme(1, false), want1 = L.pixel(1, -0.6, 0.68);
+    EXPECT_LE(std::abs(trough[0] - want1[0]), 4);
+    EXPECT_LE(std::abs(trough[1] - want1[1]), 4);
+    // The peak's colour is the scale's top colour; the trough (-1 of ±2) is half-way to blue.
+    const auto top = colour_of(2.0, L.vmin, L.vmax), mid = colour_of(-1.0, L.vmin, L.vmax);
+    const auto cp = img.at<cv::Vec3b>(peak[1], peak[0]), ct = img.at<cv::Vec3b>(trough[1], trough[0]);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(cp[c], top[static_cast<std::size_t>(c)], 12);
+        EXPECT_NEAR(ct[c], mid[static_cast<std::size_t>(c)], 12);
+    }
+}
+
+TEST(PredictorMetric, ArenaErrorIsTheMeanCellDifference) {
+    // Samples on two cells at 1.3 m; truth 1 N; a model predicting 1.5 N errs 0.5 everywhere.
+    Dataset d;
+    d.sources.push_back({"x", "single K=1"});
+    for (int i = 0; i < 100; ++i) {
+        Sample s;
+        s.k = 1;
+        s.x[0] = {0.05, i < 50 ? 0.05 : 0.55, -1.3, 0, 0.5, 0};
+        s.y = {0, 0, 1.0 + (i % 2 ? 0.1 : -0.1), 0, 0, 0};  // noise averages out per cell
+        s.leg = 0;
+        d.samples.push_back(s);
+    }
+    class Const final : public ForceModel {
+    public:
+        const std::string& name() const override { return n; }
+        Wrench6 predict(std::span<const RelState>) const override { return {0, 0, 1.5, 0, 0, 0}; }
+        std::string n = "const";
+    } m;
+    const auto e = arena_error(m, d);
+    EXPECT_NEAR(e[2], 0.5, 1e-12);
+    EXPECT_NEAR(e[0], 0.0, 1e-12);
+    ArenaOptions far;
+    far.altitude_m = 0.3;
+    EXPECT_TRUE(std::isnan(arena_error(m, d, far)[2]));
+}
+
+// The issue's claims, on simulated flights with fixed seeds (the table: dw-predictor study).
+TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
+    dw::test::TempDir dir;
+    StudyOptions o;
+    o.generalisation = false;
+    o.maps = false;
+    o.out_dir = dir.file("merging");
+    o.physics.effects.jet_merging.enabled = true;
+    const auto merging = run_study(o);
+    const double lin = table_value(merging.table, "leader_follower K=3", "learnt_linear", 2);
+    const double deep = table_value(merging.table, "leader_follower K=3", "deep_sets", 2);
+    EXPECT_LE(deep, 0.7 * lin) << "jet merging: Deep Sets " << deep << " vs learnt linear " << lin;
+
+    o.out_dir = dir.file("sum");
+    o.physics.effects.jet_merging.enabled = false;
+    const auto sum = run_study(o);
+    const double deep_s = table_value(sum.table, "leader_follower K=3", "deep_sets", 2);
+    for (const char* m : {"naive_linear", "learnt_linear"}) {
+        const double v = table_value(sum.table, "leader_follower K=3", m, 2);
+        EXPECT_LE(v, 1.1 * deep_s) << "force sum: " << m << " " << v << " vs Deep Sets " << deep_s;
+    }
+    EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));
+}

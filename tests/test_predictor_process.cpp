@@ -1,0 +1,139 @@
+// dw-predictor run as a process: mocap frames in, predictions out at the same rate, the model's
+// value for the frame's geometry, the input's age, and a model swapped without a restart.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "dds/endpoint.hpp"
+#include "dds/time.hpp"
+#include "predictor/model.hpp"
+#include "support.hpp"
+
+using namespace std::chrono_literals;
+using namespace dw::predictor;
+
+namespace {
+
+LearntModel linear_model(const std::string& kind, float gain) {
+    // psi(x) = gain * (dn, de, dd, 0, 0, 0): the sum is gain x the neighbours' summed offsets.
+    LearntModel m;
+    m.kind = kind;
+    m.structure = Structure::sum;
+    m.input_mean = {0, 0, 0, 0, 0, 0};
+    m.input_std = {1, 1, 1, 1, 1, 1};
+    m.output_scale = {1, 1, 1, 1, 1, 1};
+    Layer l;
+    l.silu = false;
+    l.w = Eigen::MatrixXf::Zero(6, 6);
+    for (int i = 0; i < 3; ++i) l.w(i, i) = gain;
+    l.b = Eigen::VectorXf::Zero(6);
+    m.phi.layers.push_back(l);
+    return m;
+}
+
+dw::msg::MocapFrame frame(std::uint64_t n, double t_s, double e_offset) {
+    dw::msg::MocapFrame f;
+    f.header().stamp(dw::dds::to_msg(static_cast<dw::Nanos>(t_s * 1e9)));
+    f.frame_number(n);
+    auto body = [&](const std::string& name, double x, double y, double z) {
+        dw::msg::RigidBody b;
+        b.name(name);
+        b.position_m().x(x);
+        b.position_m().y(y);
+        b.position_m().z(z);
+        b.tracking_valid(true);
+        f.bodies().push_back(b);
+    };
+    body("sufferer", 0, 0, -1.4);
+    body("v1", 0.2, e_offset, -2.7);
+    body("v2", -0.1, e_offset + 0.5, -2.7);
+    return f;
+}
+
+}  // namespace
+
+TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
+    dw::test::TempDir dir;
+    const auto model = dir.file("model.json");
+    linear_model("model_a", 1.0f).save(model);
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = "pred" + std::to_string(::getpid());
+    dw::Subprocess node({{dw::test::bin("dw-predictor"), "run", "--model", model, "--domain", std::to_string(cfg.domain),
+                          "--namespace", cfg.ns},
+                         dir.file("node.out"), dir.file("node.err"), {}});
+    dw::dds::Participant p(cfg, "test");
+    std::mutex m;
+    std::vector<dw::msg::WrenchPrediction> got;
+    dw::dds::Reader<dw::msg::WrenchPrediction> reader(p, dw::dds::topics::wrench_prediction, [&](const auto& s, const auto&) {
+        std::lock_guard lock(m);
+        got.push_back(s);
+    });
+    dw::dds::Writer<dw::msg::MocapFrame> writer(p, dw::dds::topics::mocap_frame);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms)) << dw::read_file(dir.file("node.err"));
+    ASSERT_TRUE(reader.wait_for_writers(1, 20000ms));
+    auto send = [&](int from, int count) {
+        for (int i = from; i < from + count; ++i) {
+            auto f = frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0, -1.0 + 0.5 * i / 180.0);
+            writer.write(f);
+            std::this_thread::sleep_for(std::chrono::microseconds(5556));
+        }
+    };
+    send(0, 180);
+    std::this_thread::sleep_for(300ms);
+    {
+        std::lock_guard lock(m);
+        EXPECT_GE(got.size(), 175u);  // best effort on loopback: one per frame
+        ASSERT_FALSE(got.empty());
+        const auto& last = got.back();
+        EXPECT_EQ(last.model_name(), "model_a");
+        const double t = dw::dds::from_msg(last.header().stamp()) * 1e-9;
+        const int i = static_cast<int>(std::lround((t - 1000.0) * 180.0));
+        const double e = -1.0 + 0.5 * i / 180.0;
+        EXPECT_NEAR(last.force_n().x(), 0.2 - 0.1, 1e-5);          // Σ dn
+        EXPECT_NEAR(last.force_n().y(), e + e + 0.5, 1e-4);        // Σ de
+        EXPECT_NEAR(last.force_n().z(), 2 * (-2.7 + 1.4), 1e-5);   // Σ dd
+        // The age is publish time - frame stamp; the frames were stamped in 1970 + 1000 s.
+        EXPECT_GT(last.input_age_s(), 1e9);
+    }
+    // Swap: a new file (written beside and renamed in, as an operator should) is picked up.
+    linear_model("model_b", 2.0f).save(dir.file("model.new"));
+    std::filesystem::rename(dir.file("model.new"), model);
+    std::this_thread::sleep_for(1500ms);
+    // A broken file is refused; the node keeps predicting with model_b.
+    std::ofstream(dir.file("broken")) << "{ not json";
+    std::filesystem::rename(dir.file("broken"), model);
+    std::this_thread::sleep_for(1500ms);
+    {
+        std::lock_guard lock(m);
+        got.clear();
+    }
+    send(180, 90);
+    std::this_thread::sleep_for(300ms);
+    node.signal(SIGINT);
+    EXPECT_EQ(node.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("node.err"));
+    std::lock_guard lock(m);
+    ASSERT_FALSE(got.empty());
+    EXPECT_EQ(got.back().model_name(), "model_b");
+    EXPECT_NEAR(got.back().force_n().z(), 2 * 2 * (-2.7 + 1.4), 1e-5);
+    const auto err = dw::read_file(dir.file("node.err"));
+    EXPECT_NE(err.find("model swapped: now model_b"), std::string::npos) << err;
+    EXPECT_NE(err.find("not swapped"), std::string::npos) << err;
+    EXPECT_NE(dw::read_file(dir.file("node.out")).find("1 model swaps"), std::string::npos);
+}
+
+TEST(PredictorProcess, BadModelIsOneLineAndExit2) {
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("m.json")) << "{\"format\": \"downwash-model/1\"}";
+    const auto r = dw::test::run({dw::test::bin("dw-predictor"), "run", "--model", dir.file("m.json")}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("kind"), std::string::npos) << r.err;
+    const auto r2 = dw::test::run({dw::test::bin("dw-predictor"), "map", "--models", dir.file("none.json")}, dir);
+    EXPECT_EQ(r2.status, 2);
+    EXPECT_EQ(dw::test::lines(r2.err).size(), 1u) << r2.err;
+}
