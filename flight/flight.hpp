@@ -79,4 +79,8 @@ struct Track {
 };
 std::vector<Track> tracks(const Flight& flight);  // indexed like Flight::bodies
 
+// Finds measurement legs in a flight without legs.csv: stretches where the neighbours' centroid
+// moves horizontally at a steady speed (> 0.25 m/s) for at least 2 s.
+std::vector<Leg> find_legs(const Flight& f);
+
 }  // namespace dw::flight

@@ -66,52 +66,7 @@ std::array<double, 3> velocity_at(const flight::Track& tr, double t) {
     return {(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
 }
 
-std::array<double, 3> centroid_at(const std::vector<const flight::Track*>& ts, double t) {
-    std::array<double, 3> c{0, 0, 0};
-    for (const auto* tr : ts) {
-        const auto p = tr->position_at(t);
-        for (std::size_t a = 0; a < 3; ++a) c[a] += p[a] / static_cast<double>(ts.size());
-    }
-    return c;
-}
-
 }  // namespace
-
-std::vector<flight::Leg> find_legs(const flight::Flight& f) {
-    const auto trs = flight::tracks(f);
-    std::vector<const flight::Track*> ns;
-    for (const auto& name : f.meta.neighbours) {
-        const int b = f.find_body(name);
-        if (b >= 0 && !trs[static_cast<std::size_t>(b)].t.empty()) ns.push_back(&trs[static_cast<std::size_t>(b)]);
-    }
-    std::vector<flight::Leg> legs;
-    if (ns.empty()) return legs;
-    const double t0 = ns.front()->t.front(), t1 = ns.front()->t.back();
-    constexpr double dt = 0.05, h = 0.1;
-    double start = -1;
-    std::array<double, 3> dir{0, 0, 0};
-    auto close = [&](double t) {
-        if (start >= 0 && t - start >= 2.0) legs.push_back({static_cast<int>(legs.size()), start, t});
-        start = -1;
-    };
-    for (double t = t0 + h; t < t1 - h; t += dt) {
-        const auto a = centroid_at(ns, t - h), b = centroid_at(ns, t + h);
-        const std::array<double, 3> v{(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
-        const double speed = std::hypot(v[0], v[1]);
-        const bool moving = speed > 0.25 && std::abs(v[2]) < 0.1;
-        if (moving && start >= 0) {  // the same leg only while heading and speed hold
-            const double cosang = (v[0] * dir[0] + v[1] * dir[1]) / speed;
-            if (cosang < 0.98 || std::abs(speed - dir[2]) > 0.15 * dir[2]) close(t);
-        }
-        if (moving && start < 0) {
-            start = t;
-            dir = {v[0] / speed, v[1] / speed, speed};
-        }
-        if (!moving) close(t);
-    }
-    close(t1);
-    return legs;
-}
 
 Dataset from_flight(const flight::Flight& f, const std::string& name, const DatasetOptions& o) {
     const int sufferer = f.find_body(f.meta.sufferer);
@@ -126,7 +81,7 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
     if (ns.size() > static_cast<std::size_t>(kMaxNeighbours))
         throw InputError(log::cat(name, "/meta.json: neighbours: ", ns.size(), " (the models take at most ", kMaxNeighbours, ")"));
     const auto& st = trs[static_cast<std::size_t>(sufferer)];
-    const auto legs = f.legs ? *f.legs : find_legs(f);
+    const auto legs = f.legs ? *f.legs : flight::find_legs(f);
 
     Dataset d;
     std::string formation = f.meta.formation;

@@ -70,8 +70,4 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
 // A flight folder directory, or an .mcap recording (converted through the recorder's export).
 Dataset load_dataset(const std::string& path, const DatasetOptions& o = {});
 
-// Finds measurement legs in a flight without legs.csv: stretches where the neighbours' centroid
-// moves horizontally at a steady speed (> 0.25 m/s) for at least 2 s.
-std::vector<flight::Leg> find_legs(const flight::Flight& f);
-
 }  // namespace dw::predictor

@@ -12,3 +12,4 @@ done
 "$here/build/bin/dw-bench-record"
 "$here/build/bin/dw-bench-stand"
 "$here/build/bin/dw-bench-mocap" --seconds 60
+"$here/build/bin/dw-bench-predictor"

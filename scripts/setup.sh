@@ -11,6 +11,7 @@ packages=(
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libeigen3-dev
   libzstd-dev liblz4-dev zlib1g-dev libgpiod-dev libopencv-dev
+  libtorch-dev libceres-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   iproute2 procps
 )

@@ -102,7 +102,7 @@ TEST(PredictorDataset, FindsLegsWithoutLegsCsv) {
     dw::test::TempDir dir;
     auto f = dw::flight::read_flight(small_flight(dir));
     const auto truth = *f.legs;
-    const auto found = find_legs(f);
+    const auto found = dw::flight::find_legs(f);
     ASSERT_EQ(found.size(), truth.size());
     for (std::size_t i = 0; i < found.size(); ++i) {
         // The vehicles lag the reference a little; the found leg covers most of the true one

@@ -1,0 +1,149 @@
+#include "analysis/replay.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "physics/wrench_model.hpp"
+
+namespace dw::analysis {
+
+Replay::Replay(const flight::Flight& f, double grid_hz) : tracks_(flight::tracks(f)), dt_(1.0 / grid_hz) {
+    sufferer_ = f.find_body(f.meta.sufferer);
+    if (sufferer_ < 0 || tracks_[static_cast<std::size_t>(sufferer_)].t.empty())
+        throw InputError(log::cat("poses.csv: the sufferer '", f.meta.sufferer, "' (meta.json) has no poses"));
+    for (const auto& n : f.meta.neighbours) {
+        const int b = f.find_body(n);
+        if (b < 0 || tracks_[static_cast<std::size_t>(b)].t.size() < 2)
+            throw InputError(log::cat("poses.csv: the neighbour '", n, "' (meta.json) has no poses"));
+        neighbours_.push_back(b);
+    }
+    for (const auto& w : f.wrench) {
+        stamps_.push_back(w.t);
+        measured_.push_back(w.w);
+    }
+    if (stamps_.empty()) throw InputError("wrench.csv: no samples");
+    const auto& st = tracks_[static_cast<std::size_t>(sufferer_)].t;
+    // The grid covers the poses and the wrench stamps, with a margin for time shifts.
+    t0_ = std::min(st.front(), stamps_.front()) - 1.0;
+    const double t1 = std::max(st.back(), stamps_.back()) + 1.0;
+    n_ = static_cast<std::size_t>(std::ceil((t1 - t0_) / dt_)) + 1;
+}
+
+std::array<double, 3> Replay::position(int j, double t) const {
+    return tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])].position_at(t);
+}
+
+std::array<double, 3> Replay::velocity(int j, double t) const {
+    constexpr double h = 0.02;
+    const auto& tr = tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])];
+    const auto a = tr.position_at(t - h), b = tr.position_at(t + h);
+    return {(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
+}
+
+std::array<double, 3> Replay::sufferer(double t) const { return tracks_[static_cast<std::size_t>(sufferer_)].position_at(t); }
+
+namespace {
+
+// The part of a configuration that changes the air's wrench (not the recording's view of it).
+physics::PhysicsConfig flow_part(const physics::PhysicsConfig& c) {
+    physics::PhysicsConfig f = c;
+    f.effects.clock_offset = {};
+    f.effects.sensor_lag = {};
+    f.effects.force_scale = {};
+    f.effects.cell_crosstalk = {};
+    f.turbulence.enabled = false;  // the mean flow
+    return f;
+}
+
+std::array<double, 4> orientation_at(const flight::Track& tr, double t) {
+    if (tr.t.empty()) return {1, 0, 0, 0};
+    auto it = std::lower_bound(tr.t.begin(), tr.t.end(), t);
+    const auto i = static_cast<std::size_t>(std::min<std::ptrdiff_t>(it - tr.t.begin(), static_cast<std::ptrdiff_t>(tr.t.size()) - 1));
+    return tr.q[i];
+}
+
+}  // namespace
+
+const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
+    const physics::PhysicsConfig flow = flow_part(c);
+    const std::string key = physics::to_yaml(flow);
+    if (auto it = cache_.find(key); it != cache_.end()) return it->second;
+    const physics::WrenchModel model(flow);
+    const auto& fx = flow.effects;
+    const physics::Vec3 offset = fx.position_offset.enabled
+                                     ? physics::Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1], fx.position_offset.offset_m[2])
+                                     : physics::Vec3::Zero();
+    const bool far_is_zero = !fx.floor_recirculation.enabled;
+    std::vector<Wrench6> out(n_, Wrench6{});
+    std::vector<physics::Producer> ps(neighbours_.size());
+    for (std::size_t i = 0; i < n_; ++i) {
+        const double t = t0_ + static_cast<double>(i) * dt_;
+        const auto s = sufferer(t);
+        const physics::Vec3 suf(s[0], s[1], s[2]);
+        bool near = false;
+        for (std::size_t j = 0; j < neighbours_.size(); ++j) {
+            const auto p = position(static_cast<int>(j), t);
+            const auto v = velocity(static_cast<int>(j), t);
+            const physics::Vec3 pos = physics::Vec3(p[0], p[1], p[2]) - offset;  // recorded = true + offset
+            ps[j] = model.producer(pos, physics::Vec3(v[0], v[1], v[2]));
+            const auto q = orientation_at(tracks_[static_cast<std::size_t>(neighbours_[j])], t);
+            ps[j].axis = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized() * physics::Vec3::UnitZ();
+            near = near || std::hypot(pos.x() - suf.x(), pos.y() - suf.y()) < 1.5;
+        }
+        if (far_is_zero && !near) continue;
+        const physics::Wrench w = model.evaluate(suf, ps);
+        for (std::size_t a = 0; a < 6; ++a) out[i][a] = w[static_cast<Eigen::Index>(a)];
+    }
+    if (cache_order_.size() >= 12) {  // a few flows: the fits revisit the last ones
+        cache_.erase(cache_order_.front());
+        cache_order_.erase(cache_order_.begin());
+    }
+    cache_order_.push_back(key);
+    return cache_.emplace(key, std::move(out)).first->second;
+}
+
+std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
+    const auto& fx = c.effects;
+    const std::vector<Wrench6>* series = &air(c);
+    std::vector<Wrench6> lagged;
+    if (fx.sensor_lag.enabled && fx.sensor_lag.tau_s > 0) {
+        // dy/dt = (x - y)/tau with x linear between grid points (exact first-order hold).
+        const double tau = fx.sensor_lag.tau_s, a = std::exp(-dt_ / tau), b = tau / dt_ * (1 - a);
+        lagged = *series;
+        for (std::size_t i = 1; i < lagged.size(); ++i)
+            for (std::size_t k = 0; k < 6; ++k) {
+                const double x0 = (*series)[i - 1][k], x1 = (*series)[i][k];
+                lagged[i][k] = a * lagged[i - 1][k] + x1 - a * x0 - b * (x1 - x0);
+            }
+        series = &lagged;
+    }
+    const double clock = fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0;
+    std::vector<Wrench6> out(stamps_.size());
+    for (std::size_t i = 0; i < stamps_.size(); ++i) {
+        const double g = std::clamp((stamps_[i] - clock - t0_) / dt_, 0.0, static_cast<double>(n_ - 1) - 1e-9);
+        const auto k = static_cast<std::size_t>(g);
+        const double f = g - static_cast<double>(k);
+        Wrench6 w;
+        for (std::size_t a = 0; a < 6; ++a) w[a] = (1 - f) * (*series)[k][a] + f * (*series)[std::min(k + 1, n_ - 1)][a];
+        if (fx.force_scale.enabled)
+            for (auto& v : w) v *= fx.force_scale.scale;
+        if (fx.cell_crosstalk.enabled)
+            w[static_cast<std::size_t>(fx.cell_crosstalk.to)] += fx.cell_crosstalk.coefficient * w[static_cast<std::size_t>(fx.cell_crosstalk.from)];
+        out[i] = w;
+    }
+    // The tare: the recording is zeroed over its first tare_s.
+    Wrench6 zero{};
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < out.size() && stamps_[i] < stamps_.front() + c.stand.tare_s; ++i, ++n)
+        for (std::size_t a = 0; a < 6; ++a) zero[a] += out[i][a];
+    if (n > 0)
+        for (auto& w : out)
+            for (std::size_t a = 0; a < 6; ++a) w[a] -= zero[a] / static_cast<double>(n);
+    return out;
+}
+
+}  // namespace dw::analysis

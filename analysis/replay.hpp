@@ -1,0 +1,55 @@
+#pragma once
+// Simulating a recorded flight: the physics evaluated along the recorded poses (the neighbours'
+// positions, velocities and attitudes from poses.csv, the sufferer's pose), then seen the way the
+// recording sees it — sensor lag, clock offset, force scale, cell crosstalk, the tare — at the
+// recorded wrench stamps. Reads only the flight folder's contract files.
+//
+// The air's wrench is evaluated once per configuration of the flow's effects on a uniform grid
+// of mocap time (cached), so fitting the recording-side effects (time shifts, lag, scale,
+// crosstalk) costs no new physics.
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "flight/flight.hpp"
+#include "physics/config.hpp"
+
+namespace dw::analysis {
+
+using Wrench6 = std::array<double, 6>;
+
+class Replay {
+public:
+    // Throws dw::InputError if the sufferer or a neighbour of meta.json has no poses.
+    explicit Replay(const flight::Flight& f, double grid_hz = 100.0);
+
+    // The wrench the recording would hold under physics c, at every wrench stamp.
+    std::vector<Wrench6> recorded(const physics::PhysicsConfig& c) const;
+    // The air's wrench on the sufferer on the grid (mocap time), for the flow part of c.
+    const std::vector<Wrench6>& air(const physics::PhysicsConfig& c) const;
+
+    const std::vector<double>& stamps() const { return stamps_; }       // wrench.csv t
+    const std::vector<Wrench6>& measured() const { return measured_; }  // wrench.csv values
+    double grid_t0() const { return t0_; }
+    double grid_dt() const { return dt_; }
+    std::size_t grid_size() const { return n_; }
+    int neighbours() const { return static_cast<int>(neighbours_.size()); }
+    // Neighbour j's recorded position and velocity at mocap time t.
+    std::array<double, 3> position(int j, double t) const;
+    std::array<double, 3> velocity(int j, double t) const;
+    std::array<double, 3> sufferer(double t) const;
+
+private:
+    std::vector<flight::Track> tracks_;
+    int sufferer_ = -1;
+    std::vector<int> neighbours_;
+    std::vector<double> stamps_;
+    std::vector<Wrench6> measured_;
+    double t0_ = 0, dt_ = 0.01;
+    std::size_t n_ = 0;
+    mutable std::map<std::string, std::vector<Wrench6>> cache_;
+    mutable std::vector<std::string> cache_order_;
+};
+
+}  // namespace dw::analysis
