@@ -31,6 +31,22 @@ Replay::Replay(const flight::Flight& f, double grid_hz) : tracks_(flight::tracks
     t0_ = std::min(st.front(), stamps_.front()) - 1.0;
     const double t1 = std::max(st.back(), stamps_.back()) + 1.0;
     n_ = static_cast<std::size_t>(std::ceil((t1 - t0_) / dt_)) + 1;
+    grid_.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+        const double t = t0_ + static_cast<double>(i) * dt_;
+        auto& g = grid_[i];
+        g.sufferer = sufferer(t);
+        for (std::size_t j = 0; j < neighbours_.size(); ++j) {
+            const auto p = position(static_cast<int>(j), t);
+            const auto v = velocity(static_cast<int>(j), t);
+            const auto& tr = tracks_[static_cast<std::size_t>(neighbours_[j])];
+            auto it = std::lower_bound(tr.t.begin(), tr.t.end(), t);
+            const auto k = static_cast<std::size_t>(std::min<std::ptrdiff_t>(it - tr.t.begin(), static_cast<std::ptrdiff_t>(tr.t.size()) - 1));
+            const auto& q = tr.q[k];
+            const physics::Vec3 axis = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized() * physics::Vec3::UnitZ();
+            g.neighbours.push_back({p[0], p[1], p[2], v[0], v[1], v[2], axis.x(), axis.y(), axis.z()});
+        }
+    }
 }
 
 std::array<double, 3> Replay::position(int j, double t) const {
@@ -59,13 +75,6 @@ physics::PhysicsConfig flow_part(const physics::PhysicsConfig& c) {
     return f;
 }
 
-std::array<double, 4> orientation_at(const flight::Track& tr, double t) {
-    if (tr.t.empty()) return {1, 0, 0, 0};
-    auto it = std::lower_bound(tr.t.begin(), tr.t.end(), t);
-    const auto i = static_cast<std::size_t>(std::min<std::ptrdiff_t>(it - tr.t.begin(), static_cast<std::ptrdiff_t>(tr.t.size()) - 1));
-    return tr.q[i];
-}
-
 }  // namespace
 
 const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
@@ -81,17 +90,14 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
     std::vector<Wrench6> out(n_, Wrench6{});
     std::vector<physics::Producer> ps(neighbours_.size());
     for (std::size_t i = 0; i < n_; ++i) {
-        const double t = t0_ + static_cast<double>(i) * dt_;
-        const auto s = sufferer(t);
-        const physics::Vec3 suf(s[0], s[1], s[2]);
+        const auto& g = grid_[i];
+        const physics::Vec3 suf(g.sufferer[0], g.sufferer[1], g.sufferer[2]);
         bool near = false;
         for (std::size_t j = 0; j < neighbours_.size(); ++j) {
-            const auto p = position(static_cast<int>(j), t);
-            const auto v = velocity(static_cast<int>(j), t);
-            const physics::Vec3 pos = physics::Vec3(p[0], p[1], p[2]) - offset;  // recorded = true + offset
-            ps[j] = model.producer(pos, physics::Vec3(v[0], v[1], v[2]));
-            const auto q = orientation_at(tracks_[static_cast<std::size_t>(neighbours_[j])], t);
-            ps[j].axis = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized() * physics::Vec3::UnitZ();
+            const auto& x = g.neighbours[j];
+            const physics::Vec3 pos = physics::Vec3(x[0], x[1], x[2]) - offset;  // recorded = true + offset
+            ps[j] = model.producer(pos, physics::Vec3(x[3], x[4], x[5]));
+            ps[j].axis = physics::Vec3(x[6], x[7], x[8]);
             near = near || std::hypot(pos.x() - suf.x(), pos.y() - suf.y()) < 1.5;
         }
         if (far_is_zero && !near) continue;
@@ -121,7 +127,7 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
             }
         series = &lagged;
     }
-    const double clock = fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0;
+    const double clock = (fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0) + 7.0 / 16.0 / c.stand.rate_hz;
     std::vector<Wrench6> out(stamps_.size());
     for (std::size_t i = 0; i < stamps_.size(); ++i) {
         const double g = std::clamp((stamps_[i] - clock - t0_) / dt_, 0.0, static_cast<double>(n_ - 1) - 1e-9);
@@ -131,8 +137,6 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
         for (std::size_t a = 0; a < 6; ++a) w[a] = (1 - f) * (*series)[k][a] + f * (*series)[std::min(k + 1, n_ - 1)][a];
         if (fx.force_scale.enabled)
             for (auto& v : w) v *= fx.force_scale.scale;
-        if (fx.cell_crosstalk.enabled)
-            w[static_cast<std::size_t>(fx.cell_crosstalk.to)] += fx.cell_crosstalk.coefficient * w[static_cast<std::size_t>(fx.cell_crosstalk.from)];
         out[i] = w;
     }
     // The tare: the recording is zeroed over its first tare_s.
@@ -143,6 +147,12 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
     if (n > 0)
         for (auto& w : out)
             for (std::size_t a = 0; a < 6; ++a) w[a] -= zero[a] / static_cast<double>(n);
+    // Crosstalk leaks the true `from` axis into `to`; the recording's own `from` axis is that
+    // true value (crosstalk leaves it alone), so the leak is modelled from the measured axis.
+    if (fx.cell_crosstalk.enabled)
+        for (std::size_t i = 0; i < out.size(); ++i)
+            out[i][static_cast<std::size_t>(fx.cell_crosstalk.to)] +=
+                fx.cell_crosstalk.coefficient * measured_[i][static_cast<std::size_t>(fx.cell_crosstalk.from)];
     return out;
 }
 

@@ -24,7 +24,9 @@ public:
     // Throws dw::InputError if the sufferer or a neighbour of meta.json has no poses.
     explicit Replay(const flight::Flight& f, double grid_hz = 100.0);
 
-    // The wrench the recording would hold under physics c, at every wrench stamp.
+    // The wrench the recording would hold under physics c, at every wrench stamp. The stand's
+    // own sample-and-hold is included: a wrench frame combines chip 0's fresh conversion with the
+    // other seven chips' latest ones, on average half a conversion period old (7/16 of a period).
     std::vector<Wrench6> recorded(const physics::PhysicsConfig& c) const;
     // The air's wrench on the sufferer on the grid (mocap time), for the flow part of c.
     const std::vector<Wrench6>& air(const physics::PhysicsConfig& c) const;
@@ -41,7 +43,12 @@ public:
     std::array<double, 3> sufferer(double t) const;
 
 private:
+    struct GridState {                       // the recorded states at one grid time
+        std::array<double, 3> sufferer;
+        std::vector<std::array<double, 9>> neighbours;  // position, velocity, jet axis
+    };
     std::vector<flight::Track> tracks_;
+    std::vector<GridState> grid_;
     int sufferer_ = -1;
     std::vector<int> neighbours_;
     std::vector<double> stamps_;

@@ -1,0 +1,563 @@
+#include "analysis/explain.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <numeric>
+#include <set>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "recorder/tools.hpp"
+
+namespace dw::analysis {
+
+flight::Flight load_recording(const std::string& path) {
+    namespace fs = std::filesystem;
+    if (fs::is_directory(path)) return flight::read_flight(path);
+    if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
+    if (fs::path(path).extension() != ".mcap") throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
+    const fs::path tmp = fs::temp_directory_path() / log::cat("dw-explain-", ::getpid(), "-", fs::path(path).stem().string());
+    recorder::export_flight(path, tmp.string(), {});
+    flight::Flight f;
+    try {
+        f = flight::read_flight(tmp.string());
+    } catch (...) {
+        fs::remove_all(tmp);
+        throw;
+    }
+    fs::remove_all(tmp);
+    return f;
+}
+
+namespace {
+
+const char* const kAxes[6] = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
+
+// Where each wrench sample is, relative to the formation.
+struct SampleInfo {
+    int leg = -1;
+    int direction = 0;            // of travel along E
+    double n = 0, e = 0, h = 0;   // the neighbours' centroid N, E; the lowest one's height above the sufferer
+    double speed = 0;
+    double leg_fraction = 0;      // 0..1 through the leg
+    bool near = false;            // a neighbour within 1.5 m horizontally
+};
+
+std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>& legs) {
+    std::vector<SampleInfo> out(r.stamps().size());
+    std::size_t li = 0;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const double t = r.stamps()[i];
+        auto& s = out[i];
+        const auto suf = r.sufferer(t);
+        double vn = 0, ve = 0, low = -1e9;
+        for (int j = 0; j < r.neighbours(); ++j) {
+            const auto p = r.position(j, t);
+            const auto v = r.velocity(j, t);
+            s.n += (p[0] - suf[0]) / r.neighbours();
+            s.e += (p[1] - suf[1]) / r.neighbours();
+            low = std::max(low, p[2] - suf[2]);
+            vn += v[0] / r.neighbours();
+            ve += v[1] / r.neighbours();
+            s.near = s.near || std::hypot(p[0] - suf[0], p[1] - suf[1]) < 1.5;
+        }
+        s.h = -low;
+        s.speed = std::hypot(vn, ve);
+        s.direction = ve > 0.1 ? 1 : (ve < -0.1 ? -1 : 0);
+        while (li < legs.size() && legs[li].t_end < t) ++li;
+        if (li < legs.size() && t >= legs[li].t_start && t <= legs[li].t_end) {
+            s.leg = legs[li].leg;
+            s.leg_fraction = (t - legs[li].t_start) / std::max(1e-9, legs[li].t_end - legs[li].t_start);
+        }
+    }
+    return out;
+}
+
+std::string band_name(double h) {
+    if (h < 0.55) return "0.0-0.55 m";
+    if (h < 1.05) return "0.55-1.05 m";
+    return "1.05-1.5 m";
+}
+int band_index(double h) { return h < 0.55 ? 0 : (h < 1.05 ? 1 : 2); }
+const double kBandLo[3] = {0.0, 0.55, 1.05}, kBandHi[3] = {0.55, 1.05, 1.5};
+
+// Everything a fit needs: the data, the current model, which samples, the axes' scales.
+struct Data {
+    const Replay& replay;
+    const std::vector<SampleInfo>& info;
+    AxisValues sigma;
+    std::vector<std::size_t> on_legs;  // sample indices on measurement legs
+};
+
+double norm_sq(const Data& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a) {
+    const double r = (d.replay.measured()[i][a] - pred[i][a]) / d.sigma[a];
+    return r * r;
+}
+
+// A fit of one effect's parameters with the rest of the model fixed.
+class Fit {
+public:
+    Fit(const Data& d, const physics::PhysicsConfig& base, const Effect& e) : d_(d), base_(base), e_(e) {}
+
+    const std::vector<Wrench6>& predict(const std::vector<double>& v) {
+        for (auto& [key, val] : cache_)
+            if (key == v) return val;
+        physics::PhysicsConfig c = base_;
+        e_.apply(c, v);
+        if (cache_.size() >= 16) cache_.erase(cache_.begin());
+        cache_.emplace_back(v, d_.replay.recorded(c));
+        return cache_.back().second;
+    }
+    double robust_cost(const std::vector<double>& v, const std::vector<std::size_t>& rows) {
+        const auto& p = predict(v);
+        double c = 0;
+        for (auto i : rows)
+            for (std::size_t a = 0; a < 6; ++a) {
+                const double s = norm_sq(d_, p, i, a);
+                c += s <= 9 ? s : 2 * 3 * std::sqrt(s) - 9;  // Huber, delta 3
+            }
+        return c;
+    }
+
+    struct RowCost {
+        Fit* fit;
+        std::size_t row;
+        std::size_t params;
+        bool operator()(double const* const* x, double* residual) const {
+            const std::vector<double> v(x[0], x[0] + params);
+            const auto& p = fit->predict(v);
+            for (std::size_t a = 0; a < 6; ++a)
+                residual[a] = (fit->d_.replay.measured()[row][a] - p[row][a]) / fit->d_.sigma[a];
+            return true;
+        }
+    };
+
+    // Fits on rows from `start` (a grid search first when asked); returns the values and the
+    // covariance-based standard errors (inflated for autocorrelation by 1/sqrt(neff_factor)).
+    std::pair<std::vector<double>, std::vector<double>> solve(std::vector<double> start, const std::vector<std::size_t>& rows,
+                                                              bool grid, double neff_factor) {
+        const std::size_t P = e_.params.size();
+        if (grid && P == 1 && !e_.params[0].grid.empty()) {
+            double best = INFINITY;
+            for (double g : e_.params[0].grid) {
+                const double c = robust_cost({g}, rows);
+                if (c < best) best = c, start = {g};
+            }
+        }
+        std::vector<double> x = start;
+        ceres::Problem::Options po;
+        po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+        ceres::Problem problem(po);
+        ceres::HuberLoss loss(3.0);
+        problem.AddParameterBlock(x.data(), static_cast<int>(P));
+        for (auto i : rows) {
+            auto* cost = new ceres::DynamicNumericDiffCostFunction<RowCost, ceres::CENTRAL>(new RowCost{this, i, P});
+            cost->AddParameterBlock(static_cast<int>(P));
+            cost->SetNumResiduals(6);
+            problem.AddResidualBlock(cost, &loss, x.data());
+        }
+        for (std::size_t k = 0; k < P; ++k) {
+            problem.SetParameterLowerBound(x.data(), static_cast<int>(k), e_.params[k].lower);
+            problem.SetParameterUpperBound(x.data(), static_cast<int>(k), e_.params[k].upper);
+        }
+        ceres::Solver::Options so;
+        so.linear_solver_type = ceres::DENSE_QR;
+        so.max_num_iterations = 25;
+        so.function_tolerance = 1e-7;
+        so.parameter_tolerance = 1e-7;
+        so.num_threads = 1;  // the prediction cache is not shared between threads
+        ceres::Solver::Summary summary;
+        ceres::Solve(so, &problem, &summary);
+        std::vector<double> se(P, INFINITY);
+        ceres::Covariance::Options co;
+        ceres::Covariance cov(co);
+        std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
+        if (cov.Compute(blocks, &problem)) {
+            std::vector<double> C(P * P);
+            cov.GetCovarianceBlock(x.data(), x.data(), C.data());
+            const double dof = std::max(1.0, 6.0 * static_cast<double>(rows.size()) - static_cast<double>(P));
+            const double s2 = 2 * summary.final_cost / dof;  // robust reduced chi-square
+            for (std::size_t k = 0; k < P; ++k) se[k] = std::sqrt(std::max(0.0, C[k * P + k] * s2 / neff_factor));
+        }
+        return {x, se};
+    }
+
+private:
+    const Data& d_;
+    physics::PhysicsConfig base_;
+    Effect e_;
+    std::vector<std::pair<std::vector<double>, std::vector<Wrench6>>> cache_;
+};
+
+AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred, double tare_s) {
+    AxisValues sum{}, sq{};
+    double n = 0;
+    for (std::size_t i = 0; i < info.size(); ++i) {
+        if (info[i].near || r.stamps()[i] < r.stamps().front() + tare_s + 0.5) continue;
+        for (std::size_t a = 0; a < 6; ++a) {
+            const double x = r.measured()[i][a] - pred[i][a];
+            sum[a] += x;
+            sq[a] += x * x;
+        }
+        n += 1;
+    }
+    AxisValues s{};
+    for (std::size_t a = 0; a < 6; ++a) {
+        if (n >= 30) {
+            s[a] = std::sqrt(std::max(0.0, sq[a] / n - (sum[a] / n) * (sum[a] / n)));
+        } else {  // nobody is ever far: the spread of successive differences
+            std::vector<double> d;
+            for (std::size_t i = 1; i < info.size(); ++i)
+                d.push_back(std::abs((r.measured()[i][a] - pred[i][a]) - (r.measured()[i - 1][a] - pred[i - 1][a])));
+            std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+            s[a] = d.empty() ? 0 : 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
+        }
+        s[a] = std::max(s[a], 1e-4);
+    }
+    return s;
+}
+
+// Lag-1 autocorrelation of the normalised residual along legs -> the effective-sample factor.
+double neff_factor(const Data& d, const std::vector<Wrench6>& pred) {
+    double num = 0, den = 0;
+    for (std::size_t k = 1; k < d.on_legs.size(); ++k) {
+        const auto i = d.on_legs[k], j = d.on_legs[k - 1];
+        if (i != j + 1) continue;
+        for (std::size_t a = 0; a < 6; ++a) {
+            const double ri = (d.replay.measured()[i][a] - pred[i][a]) / d.sigma[a];
+            const double rj = (d.replay.measured()[j][a] - pred[j][a]) / d.sigma[a];
+            num += ri * rj;
+            den += ri * ri;
+        }
+    }
+    const double rho = den > 0 ? std::clamp(num / den, 0.0, 0.98) : 0.0;
+    return std::clamp((1 - rho) / (1 + rho), 0.01, 1.0);
+}
+
+std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, double factor, double z_min, const std::string& formation) {
+    struct Acc {
+        double sum = 0, sq = 0;
+        std::size_t n = 0;
+    };
+    std::map<std::tuple<int, int, int, int, int>, Acc> bins;  // axis, band, direction, N cell, E cell
+    const double cell = 0.2;
+    for (auto i : d.on_legs) {
+        const auto& s = d.info[i];
+        if (!s.near || s.direction == 0) continue;
+        const int nc = static_cast<int>(std::floor(s.n / cell)), ec = static_cast<int>(std::floor(s.e / cell));
+        for (int a = 0; a < 6; ++a) {
+            const double r = d.replay.measured()[i][static_cast<std::size_t>(a)] - pred[i][static_cast<std::size_t>(a)];
+            auto& b = bins[{a, band_index(s.h), s.direction, nc, ec}];
+            b.sum += r;
+            b.sq += r * r;
+            ++b.n;
+        }
+    }
+    std::vector<Region> out;
+    for (const auto& [key, b] : bins) {
+        if (b.n < 10) continue;
+        const auto [a, band, dir, nc, ec] = key;
+        const double mean = b.sum / static_cast<double>(b.n);
+        const double sd = std::max(std::sqrt(std::max(0.0, b.sq / static_cast<double>(b.n) - mean * mean)), d.sigma[static_cast<std::size_t>(a)]);
+        const double z = mean / (sd / std::sqrt(static_cast<double>(b.n) * factor));
+        if (std::abs(z) < z_min) continue;
+        Region r;
+        r.axis = kAxes[a];
+        r.mean_residual = mean;
+        r.z = z;
+        r.altitude_lo = kBandLo[band];
+        r.altitude_hi = kBandHi[band];
+        r.direction = dir;
+        r.where = log::cat("relative altitude ", band_name(kBandLo[band] + 0.01), ", N ", nc * cell, "..", (nc + 1) * cell, " m, E ",
+                           ec * cell, "..", (ec + 1) * cell, " m, ", formation, ", ", dir > 0 ? "+E" : "-E", " legs");
+        out.push_back(r);
+    }
+    std::sort(out.begin(), out.end(), [](const Region& x, const Region& y) { return std::abs(x.z) > std::abs(y.z); });
+    if (out.size() > 8) out.resize(8);
+    return out;
+}
+
+std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
+    // Per leg direction and altitude band: the clock shift that best aligns recording and model.
+    std::map<std::pair<int, int>, std::vector<double>> sse;  // (direction, band) -> SSE per shift
+    std::map<std::pair<int, int>, std::pair<std::size_t, double>> count;
+    std::vector<double> grid;
+    for (double s = -0.3; s <= 0.3 + 1e-9; s += 0.005) grid.push_back(s);
+    const double base_offset = base.effects.clock_offset.enabled ? base.effects.clock_offset.offset_s : 0.0;
+    for (std::size_t g = 0; g < grid.size(); ++g) {
+        physics::PhysicsConfig c = base;
+        c.effects.clock_offset = {true, base_offset + grid[g]};
+        const auto p = d.replay.recorded(c);
+        for (auto i : d.on_legs) {
+            const auto& s = d.info[i];
+            if (!s.near || s.direction == 0) continue;
+            auto& v = sse[{s.direction, band_index(s.h)}];
+            v.resize(grid.size());
+            for (std::size_t a = 0; a < 6; ++a) v[g] += norm_sq(d, p, i, a);
+            if (g == 0) {
+                auto& cn = count[{s.direction, band_index(s.h)}];
+                ++cn.first;
+                cn.second += s.h;
+            }
+        }
+    }
+    std::vector<Shift> out;
+    for (const auto& [key, v] : sse) {
+        const auto k = static_cast<std::size_t>(std::min_element(v.begin(), v.end()) - v.begin());
+        double best = grid[k];
+        if (k > 0 && k + 1 < v.size()) {  // parabola through the minimum and its neighbours
+            const double den = v[k - 1] - 2 * v[k] + v[k + 1];
+            if (den > 0) best += 0.5 * 0.005 * (v[k - 1] - v[k + 1]) / den;
+        }
+        const auto& cn = count[key];
+        out.push_back({key.first, band_name(kBandLo[key.second] + 0.01), cn.second / static_cast<double>(cn.first), best, cn.first});
+    }
+    return out;
+}
+
+struct Scores {
+    std::map<int, AxisValues> before, after;  // per leg: normalised MSE sums per axis
+    std::map<int, std::size_t> n;
+};
+
+// Paired comparison over held-out legs.
+void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const ExplainOptions& o, double dbic) {
+    double best_t = -INFINITY;
+    for (std::size_t a = 0; a < 6; ++a) {
+        std::vector<double> d;
+        double before = 0, after = 0;
+        for (const auto& [leg, b] : s.before) {
+            const double nl = static_cast<double>(s.n.at(leg));
+            d.push_back((b[a] - s.after.at(leg)[a]) / nl);
+            before += b[a];
+            after += s.after.at(leg)[a];
+        }
+        // Wilcoxon signed-rank over legs (the legs' gains are heavy-tailed: a leg over the stand
+        // weighs far more than one at the edge), as a normal z.
+        std::vector<std::pair<double, double>> ranked;  // |d|, sign
+        for (double x : d)
+            if (std::abs(x) > 1e-12) ranked.emplace_back(std::abs(x), x > 0 ? 1.0 : -1.0);
+        std::sort(ranked.begin(), ranked.end());
+        double w = 0;
+        for (std::size_t k = 0; k < ranked.size(); ++k)
+            if (ranked[k].second > 0) w += static_cast<double>(k + 1);
+        const double m = static_cast<double>(ranked.size());
+        const double t = m > 0 ? (w - m * (m + 1) / 4) / std::sqrt(m * (m + 1) * (2 * m + 1) / 24) : 0.0;
+        if (t > best_t) {
+            best_t = t;
+            c.best_axis = static_cast<int>(a);
+            c.gain = before > 0 ? (before - after) / before : 0;
+        }
+    }
+    double total_n = 0;
+    for (const auto& [leg, k] : s.n) total_n += static_cast<double>(k);
+    for (std::size_t a = 0; a < 6; ++a) {
+        double b = 0, f = 0;
+        for (const auto& [leg, x] : s.before) b += x[a];
+        for (const auto& [leg, x] : s.after) f += x[a];
+        c.heldout_before[a] = std::sqrt(b / total_n) * sigma[a];
+        c.heldout_after[a] = std::sqrt(f / total_n) * sigma[a];
+    }
+    double tb = 0, ta = 0;
+    for (std::size_t a = 0; a < 6; ++a) tb += c.heldout_before[a] * c.heldout_before[a] / (sigma[a] * sigma[a]), ta += c.heldout_after[a] * c.heldout_after[a] / (sigma[a] * sigma[a]);
+    c.t = best_t;
+    c.total_ratio = tb > 0 ? ta / tb : 1;
+    c.delta_bic = dbic;
+    c.accepted = c.t >= o.min_t && c.gain >= o.min_gain && ta < tb && dbic < -10;
+    c.note = log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10, " (signed ranks over 1 s blocks of held-out legs), ", std::round(c.gain * 1000) / 10,
+                      " % of its error removed; ΔBIC ", std::round(dbic),
+                      c.accepted ? " — accepted" : " — not accepted");
+}
+
+}  // namespace
+
+ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
+    const auto started = std::chrono::steady_clock::now();
+    auto say = [&](const std::string& s) {
+        if (o.progress) o.progress(s);
+    };
+    ExplainResult R;
+    R.formation = f.meta.formation;
+    const Replay replay(f);
+    const auto legs = f.legs ? *f.legs : flight::find_legs(f);
+    if (legs.size() < static_cast<std::size_t>(o.folds))
+        throw InputError(log::cat("legs: ", legs.size(), " measurement legs found; cross-validation needs at least ", o.folds));
+    const auto info = describe(replay, legs);
+    say(log::cat("simulating the recorded flight: ", replay.stamps().size(), " wrench samples, ", replay.neighbours(), " neighbours, ",
+                 legs.size(), " legs"));
+    const auto base_pred = replay.recorded(o.physics);
+    Data d{replay, info, floor_of(replay, info, base_pred, o.physics.stand.tare_s), {}};
+    for (std::size_t i = 0; i < info.size(); ++i)
+        if (info[i].leg >= 0) d.on_legs.push_back(i);
+    std::set<int> leg_ids;
+    for (auto i : d.on_legs) leg_ids.insert(info[i].leg);
+    R.noise_floor = d.sigma;
+    R.samples = d.on_legs.size();
+    R.legs = leg_ids.size();
+    const double factor = neff_factor(d, base_pred);
+    R.regions = locate(d, base_pred, factor, o.region_z, f.meta.formation);
+    R.shifts = shifts(d, o.physics);
+    say(log::cat(R.regions.size(), " significant regions; effective samples ", factor * 100, " % of the samples (autocorrelation)"));
+
+    auto rss = [&](const std::vector<Wrench6>& p) {
+        double s = 0;
+        for (auto i : d.on_legs)
+            for (std::size_t a = 0; a < 6; ++a) s += norm_sq(d, p, i, a);
+        return s;
+    };
+    const double n_eff = 6.0 * static_cast<double>(d.on_legs.size()) * factor;
+    physics::PhysicsConfig current = o.physics;
+    std::vector<Wrench6> current_pred = base_pred;
+    std::vector<Effect> remaining = o.candidates;
+    std::vector<std::vector<std::size_t>> fold_train(static_cast<std::size_t>(o.folds)), fold_test(static_cast<std::size_t>(o.folds));
+    for (auto i : d.on_legs)
+        for (int k = 0; k < o.folds; ++k)
+            (info[i].leg % o.folds == k ? fold_test : fold_train)[static_cast<std::size_t>(k)].push_back(i);
+
+    std::map<int, double> leg_start;
+    for (auto i : d.on_legs)
+        if (!leg_start.count(info[i].leg)) leg_start[info[i].leg] = replay.stamps()[i];
+    auto score = [&](Effect e, int round) {
+        CandidateResult c;
+        c.round = round;
+        if (e.name == "cell_crosstalk") {  // the axis pair whose residual the model's other axis explains best
+            double best = -1;
+            for (int from = 0; from < 6; ++from)
+                for (int to = 0; to < 6; ++to) {
+                    if (from == to) continue;
+                    double xy = 0, xx = 0;
+                    for (auto i : d.on_legs) {
+                        const double x = replay.measured()[i][static_cast<std::size_t>(from)];
+                        const double r = replay.measured()[i][static_cast<std::size_t>(to)] - current_pred[i][static_cast<std::size_t>(to)];
+                        xy += x * r;
+                        xx += x * x;
+                    }
+                    const double explained = xx > 0 ? xy * xy / xx / (d.sigma[static_cast<std::size_t>(to)] * d.sigma[static_cast<std::size_t>(to)]) : 0;
+                    if (explained > best) best = explained, e.from = from, e.to = to;
+                }
+        }
+        c.effect = e;
+        Fit fit(d, current, e);
+        auto [values, se] = fit.solve(e.neutral(), d.on_legs, true, factor);
+        c.values = values;
+        const double dbic = n_eff * std::log(rss(fit.predict(values)) / rss(current_pred)) + static_cast<double>(values.size()) * std::log(n_eff);
+        c.delta_bic = dbic;
+        if (dbic >= -10) {
+            c.note = log::cat("ΔBIC ", std::round(dbic), " on the whole flight: not worth a held-out test");
+            c.lo = c.hi = values;
+            return c;
+        }
+        // Blocked cross-validation by leg, each fold warm-started from the whole-flight fit.
+        Scores s;
+        std::vector<std::vector<double>> fold_values;
+        for (int k = 0; k < o.folds; ++k) {
+            Fit fk(d, current, e);
+            auto [vk, sek] = fk.solve(values, fold_train[static_cast<std::size_t>(k)], false, factor);
+            fold_values.push_back(vk);
+            const auto& p = fk.predict(vk);
+            for (auto i : fold_test[static_cast<std::size_t>(k)]) {
+                // Scored per 1 s block of a held-out leg (the residual decorrelates within ~0.1 s).
+                const int leg = info[i].leg * 1000 + static_cast<int>(std::floor((replay.stamps()[i] - leg_start.at(info[i].leg)) / 1.0));
+                ++s.n[leg];
+                for (std::size_t a = 0; a < 6; ++a) {
+                    s.before[leg][a] += norm_sq(d, current_pred, i, a);
+                    s.after[leg][a] += norm_sq(d, p, i, a);
+                }
+            }
+        }
+        // 95 % intervals: the wider of the leg-fold jackknife (t, 4 dof) and the covariance.
+        const double K = o.folds;
+        for (std::size_t p = 0; p < values.size(); ++p) {
+            double mean = 0, var = 0;
+            for (const auto& v : fold_values) mean += v[p] / K;
+            for (const auto& v : fold_values) var += (v[p] - mean) * (v[p] - mean);
+            var *= (K - 1) / K;
+            const double half = std::max(2.776 * std::sqrt(var), 1.96 * se[p]);
+            c.lo.push_back(values[p] - half);
+            c.hi.push_back(values[p] + half);
+        }
+        if (e.name == "cell_crosstalk") {
+            // The base model's own errors can look like a leak: the same regression on the axes of
+            // the same kind where no leak is claimed measures how much; the interval includes it.
+            double disc = 0;
+            const bool force = e.to < 3;
+            for (int other = force ? 0 : 3; other < (force ? 3 : 6); ++other) {
+                if (other == e.to || other == e.from) continue;
+                double xy = 0, xx = 0;
+                for (auto i : d.on_legs) {
+                    const double x = replay.measured()[i][static_cast<std::size_t>(e.from)];
+                    xy += x * (replay.measured()[i][static_cast<std::size_t>(other)] - current_pred[i][static_cast<std::size_t>(other)]);
+                    xx += x * x;
+                }
+                if (xx > 0) disc = std::max(disc, std::abs(xy / xx));
+            }
+            c.lo[0] -= 1.96 * disc;
+            c.hi[0] += 1.96 * disc;
+        }
+        judge(c, s, d.sigma, o, dbic);
+        return c;
+    };
+
+    for (int round = 1; round <= o.max_effects && !remaining.empty(); ++round) {
+        std::vector<CandidateResult> scored;
+        for (const auto& e : remaining) {
+            if (e.name == "jet_merging" && replay.neighbours() < 2) continue;  // needs two jets
+            say(log::cat("round ", round, ": fitting ", e.name));
+            scored.push_back(score(e, round));
+            say(log::cat("  ", scored.back().note));
+        }
+        R.candidates.insert(R.candidates.end(), scored.begin(), scored.end());
+        const CandidateResult* best = nullptr;
+        for (const auto& c : scored)
+            if (c.accepted && (!best || c.total_ratio < best->total_ratio)) best = &c;  // the lowest held-out error
+        if (!best) break;
+        R.accepted.push_back(*best);
+        best->effect.apply(current, best->values);
+        current_pred = replay.recorded(current);
+        remaining.erase(std::remove_if(remaining.begin(), remaining.end(), [&](const Effect& e) { return e.name == best->effect.name; }),
+                        remaining.end());
+        R.heldout_before = R.accepted.front().heldout_before;
+        R.heldout_after = best->heldout_after;
+    }
+    // With several effects, each one's parameters are refitted with the others in place.
+    if (R.accepted.size() > 1) {
+        for (std::size_t k = 0; k < R.accepted.size(); ++k) {
+            physics::PhysicsConfig others = o.physics;
+            for (std::size_t j = 0; j < R.accepted.size(); ++j)
+                if (j != k) R.accepted[j].effect.apply(others, R.accepted[j].values);
+            const physics::PhysicsConfig saved = current;
+            current = others;
+            current_pred = replay.recorded(current);
+            say(log::cat("refitting ", R.accepted[k].effect.name, " with the other effects in place"));
+            auto again = score(R.accepted[k].effect, R.accepted[k].round);
+            if (again.accepted) {
+                again.heldout_before = R.accepted[k].heldout_before;
+                R.accepted[k] = again;
+            }
+            current = saved;
+        }
+        current = o.physics;
+        for (const auto& c : R.accepted) c.effect.apply(current, c.values);
+        current_pred = replay.recorded(current);
+    }
+    if (R.accepted.empty()) {
+        AxisValues rm{};
+        for (auto i : d.on_legs)
+            for (std::size_t a = 0; a < 6; ++a) rm[a] += norm_sq(d, base_pred, i, a);
+        for (std::size_t a = 0; a < 6; ++a) rm[a] = std::sqrt(rm[a] / static_cast<double>(d.on_legs.size())) * d.sigma[a];
+        R.heldout_before = R.heldout_after = rm;
+    }
+    R.fitted = current;
+    const auto after_regions = locate(d, current_pred, neff_factor(d, current_pred), o.region_z, f.meta.formation);
+    R.detected = !R.regions.empty() || !R.accepted.empty();
+    R.unexplained = !after_regions.empty();
+    R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    return R;
+}
+
+}  // namespace dw::analysis

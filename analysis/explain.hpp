@@ -1,0 +1,89 @@
+#pragma once
+// The mismatch explainer: replay a recorded flight through the physics, form residuals per axis,
+// locate where they exceed the noise, fit each candidate effect with Ceres (robust loss) on
+// training legs and score it on held-out legs (blocked cross-validation by leg) and by BIC,
+// select effects forward, and report what was found (report.json per ../shared/FLIGHT_FORMAT.md,
+// Markdown, PNG maps) with the fitted physics written beside it.
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "analysis/effects.hpp"
+#include "analysis/replay.hpp"
+#include "flight/flight.hpp"
+#include "physics/config.hpp"
+
+namespace dw::analysis {
+
+using AxisValues = std::array<double, 6>;
+
+struct ExplainOptions {
+    physics::PhysicsConfig physics;              // the simulation the recording is compared with
+    std::vector<Effect> candidates = all_effects();
+    int folds = 5;                               // blocked cross-validation: leg % folds
+    double min_t = 3.0;                          // held-out improvement: Wilcoxon z over 1 s blocks of held-out legs, best axis
+    double min_gain = 0.05;                      // ... and at least this fraction of that axis's error
+    double region_z = 5.0;                       // a region is reported above this |z|
+    int max_effects = 3;
+    std::uint64_t seed = 1;                      // (the fits are deterministic; kept for the report)
+    std::function<void(const std::string&)> progress;
+};
+
+struct Region {
+    std::string axis;
+    std::string where;
+    double mean_residual = 0;
+    double z = 0;
+    // For the maps: the band and cell.
+    double altitude_lo = 0, altitude_hi = 0;
+    int direction = 0;
+};
+
+struct Shift {            // the time shift that best aligns recording and simulation in a group
+    int direction = 0;    // +1: +E legs, -1: -E legs
+    std::string band;     // vertical separation band
+    double separation_m = 0;
+    double shift_s = 0;
+    std::size_t samples = 0;
+};
+
+struct CandidateResult {
+    Effect effect;
+    std::vector<double> values, lo, hi;          // estimates and 95 % intervals
+    AxisValues heldout_before{}, heldout_after{};
+    double delta_bic = 0;
+    double t = 0;                                // Wilcoxon signed-rank z over held-out legs, best axis
+    int best_axis = 2;
+    double gain = 0;                             // fraction of that axis's held-out MSE removed
+    double total_ratio = 1;                      // held-out error after / before, all axes (normalised)
+    bool accepted = false;
+    std::string note;                            // why (not) accepted
+    int round = 0;                               // forward-selection round it was scored in
+};
+
+struct ExplainResult {
+    bool detected = false;
+    AxisValues noise_floor{};
+    std::vector<Region> regions;                 // strongest first
+    std::vector<Shift> shifts;
+    std::vector<CandidateResult> candidates;     // every score, every round
+    std::vector<CandidateResult> accepted;       // strongest first, final parameters
+    bool unexplained = false;
+    AxisValues heldout_before{}, heldout_after{};
+    physics::PhysicsConfig fitted;
+    std::string formation;
+    std::size_t samples = 0, legs = 0;
+    double seconds = 0;
+};
+
+ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);
+
+// A flight folder, or an .mcap recording (through the recorder's export).
+flight::Flight load_recording(const std::string& path);
+
+// report.json, report.md, physics.yaml and the PNG figures into dir.
+void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir);
+
+}  // namespace dw::analysis

@@ -1,0 +1,250 @@
+// report.json (downwash-explain/1), report.md, physics.yaml and the figures.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "analysis/explain.hpp"
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "plot/field_map.hpp"
+
+namespace dw::analysis {
+
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+const char* const kAxes[6] = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
+
+std::string fmt(double v, int p = 3) {
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(p) << v;
+    return s.str();
+}
+
+json axes_json(const AxisValues& v) {
+    json j = json::object();
+    for (std::size_t a = 0; a < 6; ++a) j[kAxes[a]] = v[a];
+    return j;
+}
+
+json params_json(const CandidateResult& c, bool ci) {
+    json j = json::object();
+    const auto& e = c.effect;
+    auto val = [&](std::size_t k) { return ci ? json::array({c.lo[k], c.hi[k]}) : json(c.values[k]); };
+    if (e.name == "position_offset") {
+        j["offset_m"] = json::array({val(0), val(1), val(2)});
+    } else if (e.name == "cell_crosstalk") {
+        if (!ci) {
+            j["from"] = kAxes[e.from];
+            j["to"] = kAxes[e.to];
+        }
+        j["coefficient"] = val(0);
+    } else {
+        for (std::size_t k = 0; k < e.params.size(); ++k) j[e.params[k].name] = val(k);
+    }
+    return j;
+}
+
+std::string params_text(const CandidateResult& c) {
+    std::ostringstream s;
+    for (std::size_t k = 0; k < c.values.size(); ++k) {
+        if (k) s << ", ";
+        s << c.effect.params[k].name << " = " << fmt(c.values[k], 4) << " [" << fmt(c.lo[k], 4) << ", " << fmt(c.hi[k], 4) << "]";
+    }
+    if (c.effect.name == "cell_crosstalk") s << " (" << kAxes[c.effect.from] << " → " << kAxes[c.effect.to] << ")";
+    return s.str();
+}
+
+std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
+    const auto& v = c.values;
+    const std::string err = log::cat("Held-out RMSE on ", kAxes[c.best_axis], ": ", fmt(c.heldout_before[static_cast<std::size_t>(c.best_axis)]),
+                                     " → ", fmt(c.heldout_after[static_cast<std::size_t>(c.best_axis)]), " (", fmt(c.gain * 100, 0),
+                                     " % of its squared error removed on legs the fit never saw).");
+    const auto& n = c.effect.name;
+    if (n == "clock_offset")
+        return log::cat("**clock_offset** — the stand's clock is ", fmt(std::abs(v[0]), 3), " s ", v[0] >= 0 ? "behind" : "ahead of",
+                        " the motion capture's: the force on the sufferer at mocap time t is stamped t ", v[0] >= 0 ? "+ " : "− ",
+                        fmt(std::abs(v[0]), 3), " s in wrench.csv. Nothing aerodynamic is missing; the two systems' time bases differ. At 0.5 m/s it ",
+                        "moves the force pattern ", fmt(std::abs(v[0]) * 50, 1), " cm along each leg — towards the travel on one leg, ",
+                        "against it on the next — while the time shift is the same at every separation (table of shifts). ", err);
+    if (n == "sensor_lag")
+        return log::cat("**sensor_lag** — the stand reports a first-order low-pass of the force with a time constant of ", fmt(v[0], 3),
+                        " s: peaks are late and flattened. The stand's dynamics (filtering, mounting) were left out. ", err);
+    if (n == "wake_transport")
+        return log::cat("**wake_transport** — the downwash takes time to descend: the force follows each neighbour's state ",
+                        fmt(v[0], 2), " × τ(s) ago, τ(s) the turbulent jet's descent time over the vertical separation s (146 ms at 1.3 m for ",
+                        "k = 1). The simulation had the force follow the neighbour instantly. Its signature: the time shift grows with separation. ", err);
+    if (n == "position_offset")
+        return log::cat("**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", fmt(v[0], 3), ", ",
+                        fmt(v[1], 3), ", ", fmt(v[2], 3), ") m (N, E, D): the force pattern sits off the recorded positions by a fixed "
+                        "distance, the same on +E and −E legs. ", err);
+    if (n == "force_scale")
+        return log::cat("**force_scale** — the recorded wrench is ", fmt(v[0], 3), " × the simulated one everywhere: a mass, drag "
+                        "coefficient or load-cell gain that differs from the model by ", fmt((v[0] - 1) * 100, 1), " %. ", err);
+    if (n == "cell_crosstalk")
+        return log::cat("**cell_crosstalk** — the stand's calibration leaks ", kAxes[c.effect.from], " into ", kAxes[c.effect.to], ": ",
+                        fmt(v[0] * 100, 2), " % of the true ", kAxes[c.effect.from], " appears on ", kAxes[c.effect.to],
+                        ". Recalibrate the stand (dw-stand-agent calibrate). ", err);
+    if (n == "jet_merging")
+        return log::cat("**jet_merging** — neighbouring jets merge into one contracted, momentum-conserving column where their "
+                        "half-widths overlap (contraction ", fmt(v[0], 2), "): the aggregate is not the sum of single jets. It acts only with ",
+                        "two or more neighbours close together and far enough above the sufferer for the jets to widen. ", err);
+    if (n == "floor_recirculation")
+        return log::cat("**floor_recirculation** — jets hitting the floor come back as a bias that grows with the jets impinging "
+                        "(coefficient ", fmt(v[0], 3), "). ", err);
+    (void)r;
+    return n;
+}
+
+// Mean of per-sample values binned over the formation's N-E position (0.1 m cells).
+plot::Field binned(const std::vector<double>& value, const std::vector<std::array<double, 4>>& where, double lo, double hi, int dir,
+                   const std::string& title) {
+    plot::Field f{title, 1.2, 25, {}};
+    std::vector<double> sum(625, 0), n(625, 0);
+    for (std::size_t i = 0; i < value.size(); ++i) {
+        const auto& w = where[i];  // n, e, h, direction (0: off legs)
+        if (w[3] == 0 || w[2] < lo || w[2] >= hi || (dir != 0 && static_cast<int>(w[3]) != dir)) continue;
+        const int in = static_cast<int>(std::lround((w[0] + 1.2) / 0.1)), ie = static_cast<int>(std::lround((w[1] + 1.2) / 0.1));
+        if (in < 0 || ie < 0 || in >= 25 || ie >= 25) continue;
+        sum[static_cast<std::size_t>(in * 25 + ie)] += value[i];
+        n[static_cast<std::size_t>(in * 25 + ie)] += 1;
+    }
+    f.v.resize(625);
+    for (std::size_t k = 0; k < 625; ++k) f.v[k] = n[k] > 0 ? sum[k] / n[k] : NAN;
+    return f;
+}
+
+}  // namespace
+
+void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir) {
+    fs::create_directories(dir);
+    // report.json
+    json j;
+    j["format"] = "downwash-explain/1";
+    json regions = json::array();
+    for (const auto& g : r.regions) regions.push_back({{"axis", g.axis}, {"where", g.where}, {"mean_residual", g.mean_residual}, {"z", g.z}});
+    j["mismatch"] = {{"detected", r.detected}, {"noise_floor", axes_json(r.noise_floor)}, {"regions", regions}};
+    json cands = json::array();
+    std::map<std::string, const CandidateResult*> last;  // each effect once: its accepted (final) or latest score
+    for (const auto& c : r.candidates) last[c.effect.name] = &c;
+    for (const auto& c : r.accepted) last[c.effect.name] = &c;
+    for (const auto& e : o.candidates) {
+        if (!last.count(e.name)) continue;
+        const auto& c = *last[e.name];
+        cands.push_back({{"effect", e.name}, {"params", params_json(c, false)}, {"ci95", params_json(c, true)},
+                         {"heldout_rmse_before", axes_json(c.heldout_before)}, {"heldout_rmse_after", axes_json(c.heldout_after)},
+                         {"delta_bic", c.delta_bic}, {"accepted", c.accepted}, {"heldout_z", c.t}, {"note", c.note}});
+    }
+    j["candidates"] = cands;
+    json by = json::array();
+    for (const auto& c : r.accepted) by.push_back(c.effect.name);
+    j["explained_by"] = by;
+    j["unexplained"] = r.unexplained;
+    j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)}, {"heldout_rmse_after", axes_json(r.heldout_after)}};
+    j["physics_out"] = "physics.yaml";
+    std::ofstream(fs::path(dir) / "report.json") << j.dump(2) << "\n";
+    std::ofstream(fs::path(dir) / "physics.yaml") << physics::to_yaml(r.fitted);
+
+    // Figures: residual maps before/after (the strongest region's axis), observed vs simulated.
+    const Replay replay(f);
+    const auto legs = f.legs ? *f.legs : flight::find_legs(f);
+    const auto before = replay.recorded(o.physics), after = replay.recorded(r.fitted);
+    std::size_t axis = 2;
+    if (!r.regions.empty()) axis = static_cast<std::size_t>(physics::axis_index(r.regions.front().axis));
+    std::vector<std::array<double, 4>> where(replay.stamps().size());
+    std::size_t li = 0;
+    for (std::size_t i = 0; i < where.size(); ++i) {
+        const double t = replay.stamps()[i];
+        const auto s = replay.sufferer(t);
+        double n = 0, e = 0, low = -1e9, ve = 0;
+        for (int k = 0; k < replay.neighbours(); ++k) {
+            const auto p = replay.position(k, t);
+            n += (p[0] - s[0]) / replay.neighbours();
+            e += (p[1] - s[1]) / replay.neighbours();
+            low = std::max(low, p[2] - s[2]);
+            ve += replay.velocity(k, t)[1];
+        }
+        while (li < legs.size() && legs[li].t_end < t) ++li;
+        const bool on = li < legs.size() && t >= legs[li].t_start;
+        where[i] = {n, e, -low, on ? (ve > 0 ? 1.0 : -1.0) : 0.0};
+    }
+    std::vector<double> rb(where.size()), ra(where.size()), obs(where.size()), sb(where.size()), sa(where.size());
+    for (std::size_t i = 0; i < where.size(); ++i) {
+        obs[i] = replay.measured()[i][axis];
+        sb[i] = before[i][axis];
+        sa[i] = after[i][axis];
+        rb[i] = obs[i] - sb[i];
+        ra[i] = obs[i] - sa[i];
+    }
+    const double lo[3] = {0.0, 0.55, 1.05}, hi[3] = {0.55, 1.05, 1.5};
+    const char* band[3] = {"0-0.55 m", "0.55-1.05 m", "1.05-1.5 m"};
+    const std::string unit = log::cat(kAxes[axis], axis < 3 ? " [N]" : " [N m]");
+    std::vector<plot::Outline> outline{{0, 0, 0.19, true}};
+    for (int which = 0; which < 2; ++which) {
+        std::vector<plot::Field> fields;
+        for (int way : {1, -1})
+            for (int b = 0; b < 3; ++b)
+                fields.push_back(binned(which ? ra : rb, where, lo[b], hi[b], way, log::cat(band[b], way > 0 ? ", +E legs" : ", -E legs")));
+        plot::render_fields(fields, log::cat("residual (recorded - simulated) ", which ? "AFTER" : "BEFORE", " the fit: ", unit,
+                                             " over the neighbours' centre, by altitude band and leg direction"),
+                            unit, outline, (fs::path(dir) / (which ? "residuals_after.png" : "residuals_before.png")).string());
+    }
+    int b0 = 2;  // the band of the strongest region (else the top band)
+    if (!r.regions.empty()) b0 = r.regions.front().altitude_lo < 0.5 ? 0 : (r.regions.front().altitude_lo < 1.0 ? 1 : 2);
+    for (int way : {1, -1}) {
+        std::vector<plot::Field> fields{binned(obs, where, lo[b0], hi[b0], way, "recorded"), binned(sb, where, lo[b0], hi[b0], way, "simulated before"),
+                                        binned(sa, where, lo[b0], hi[b0], way, "simulated after")};
+        plot::render_fields(fields, log::cat(unit, " at ", band[b0], ", ", way > 0 ? "+E" : "-E", " legs: recorded vs simulated, before and after the fit"),
+                            unit, outline, (fs::path(dir) / (way > 0 ? "maps_east.png" : "maps_west.png")).string());
+    }
+
+    // report.md
+    std::ostringstream md;
+    md << "# Mismatch report\n\n";
+    md << "Flight: " << f.meta.formation << ", " << f.meta.neighbours.size() << " neighbour(s), " << r.legs << " legs, " << r.samples
+       << " wrench samples on legs. Simulated with the given physics along the recorded poses; residual = recorded − simulated. "
+       << "Analysis took " << fmt(r.seconds, 1) << " s.\n\n";
+    if (!r.detected) {
+        md << "**No mismatch**: the recording matches the simulation within its noise. No effect is claimed.\n\n";
+    } else if (r.accepted.empty()) {
+        md << "**A significant mismatch that no candidate explains** (`unexplained`). Where it is is below; no effect is claimed.\n\n";
+    } else {
+        md << "**Explained by: ";
+        for (std::size_t k = 0; k < r.accepted.size(); ++k) md << (k ? ", " : "") << r.accepted[k].effect.name;
+        md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
+        for (const auto& c : r.accepted) md << paragraph(c, r) << "\n\n";
+    }
+    md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within 1.5 m): ";
+    for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
+    if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";
+    else {
+        md << "| axis | where | mean residual | z |\n|---|---|---|---|\n";
+        for (const auto& g : r.regions) md << "| " << g.axis << " | " << g.where << " | " << fmt(g.mean_residual) << " | " << fmt(g.z, 1) << " |\n";
+        md << "\nz: the bin's mean residual over its standard error, with the sample count reduced for autocorrelation.\n\n";
+    }
+    md << "### Signatures: the time shift that best aligns recording and simulation\n\n"
+          "A clock offset or sensor lag gives the same shift everywhere; a wake transport delay grows with separation; a position "
+          "offset gives shifts of opposite sign on +E and −E legs.\n\n| legs | separation band | mean separation [m] | samples | best shift [s] |\n|---|---|---|---|---|\n";
+    for (const auto& s : r.shifts)
+        md << "| " << (s.direction > 0 ? "+E" : "−E") << " | " << s.band << " | " << fmt(s.separation_m, 2) << " | " << s.samples << " | "
+           << fmt(s.shift_s, 3) << " |\n";
+    md << "\n## Candidates\n\nEach fitted with Ceres (Huber loss) on the whole flight, then — if ΔBIC < −10 — in "
+       << o.folds << "-fold blocked cross-validation by leg (folds: leg % " << o.folds
+       << "). Accepted when the held-out error falls on some axis — Wilcoxon signed-rank z over 1 s blocks of the held-out legs ≥ " << o.min_t << ", by ≥ "
+       << o.min_gain * 100 << " %, and the total held-out error falls. Intervals: the wider of the leg-fold jackknife and the "
+          "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | verdict |\n|---|---|---|---|---|\n";
+    for (const auto& c : r.candidates)
+        md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fmt(c.delta_bic, 1) << " | " << c.note << " |\n";
+    md << "\n## Held-out error per axis\n\n| axis | before | after |\n|---|---|---|\n";
+    for (std::size_t a = 0; a < 6; ++a) md << "| " << kAxes[a] << " | " << fmt(r.heldout_before[a], 4) << " | " << fmt(r.heldout_after[a], 4) << " |\n";
+    md << "\n## Figures\n\nResiduals before and after (" << unit << "):\n\n![before](residuals_before.png)\n\n![after](residuals_after.png)\n\n"
+       << "Recorded vs simulated at " << band[b0] << ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n"
+       << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects on).\n";
+    std::ofstream(fs::path(dir) / "report.md") << md.str();
+}
+
+}  // namespace dw::analysis
