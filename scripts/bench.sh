@@ -13,3 +13,4 @@ done
 "$here/build/bin/dw-bench-stand"
 "$here/build/bin/dw-bench-mocap" --seconds 60
 "$here/build/bin/dw-bench-predictor"
+"$here/build/bin/dw-bench-explain"

@@ -1,0 +1,172 @@
+// The mismatch explainer: the replay against the simulator, the effects' vocabulary, a flight
+// folder it did not write (no legs.csv, unknown keys), the report's contract, bad input, and the
+// proof (every hidden effect found, true parameter inside the interval, null flights clean).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "analysis/explain.hpp"
+#include "analysis/proof.hpp"
+#include "core/errors.hpp"
+#include "physics/flight_sim.hpp"
+#include "support.hpp"
+
+using namespace dw::analysis;
+
+namespace {
+
+dw::flight::Flight fly(const dw::physics::PhysicsConfig& c, const std::string& formation, int legs, std::uint64_t seed = 3) {
+    dw::physics::FlyOptions o;
+    o.formation = formation;
+    o.grid.legs = legs;
+    o.seed = seed;
+    return dw::physics::simulate_flight(c, o).flight;
+}
+
+double rms(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x * x;
+    return std::sqrt(s / static_cast<double>(v.size()));
+}
+
+}  // namespace
+
+TEST(ExplainReplay, ReproducesTheSimulatorWithinItsNoise) {
+    dw::physics::PhysicsConfig c;
+    c.turbulence.enabled = false;  // the replay is the mean flow: compare like with like
+    const auto f = fly(c, "single", 12);
+    const Replay r(f);
+    const auto p = r.recorded(c);
+    std::vector<double> res, sig;
+    for (std::size_t i = 0; i < p.size(); ++i)
+        if (std::abs(r.measured()[i][2]) > 0.3) {
+            res.push_back(r.measured()[i][2] - p[i][2]);
+            sig.push_back(r.measured()[i][2]);
+        }
+    ASSERT_GT(res.size(), 100u);
+    // The stand's noise is 0.025 N per cell; f_d sums four cells.
+    EXPECT_LT(rms(res), 0.1) << "signal rms " << rms(sig);
+    EXPECT_GT(rms(sig), 10 * rms(res));
+}
+
+TEST(ExplainReplay, ClockOffsetAndScaleActOnTheRecordingOnly) {
+    const dw::physics::PhysicsConfig plain;
+    const auto f = fly(plain, "single", 12);
+    const Replay r(f);
+    auto shifted = plain;
+    shifted.effects.clock_offset = {true, 0.1};
+    shifted.effects.force_scale = {true, 2.0};
+    const auto a = r.recorded(plain), b = r.recorded(shifted);
+    // b at stamp t is twice a at stamp t - 0.1 (stamps are ~80 Hz: interpolate a).
+    int checked = 0;
+    for (std::size_t i = 20; i + 20 < a.size(); ++i) {
+        const double t = r.stamps()[i] - 0.1;
+        const auto j = static_cast<std::size_t>(std::lower_bound(r.stamps().begin(), r.stamps().end(), t) - r.stamps().begin());
+        if (j == 0 || j >= a.size()) continue;
+        const double w = (t - r.stamps()[j - 1]) / (r.stamps()[j] - r.stamps()[j - 1]);
+        const double aj = (1 - w) * a[j - 1][2] + w * a[j][2];
+        if (std::abs(aj) < 0.1) continue;
+        EXPECT_NEAR(b[i][2], 2 * aj, 0.05 * std::abs(aj) + 0.02);
+        ++checked;
+    }
+    EXPECT_GT(checked, 50);
+}
+
+TEST(ExplainEffects, NamesAreTheContractsAndUnknownOnesAreRefused) {
+    std::vector<std::string> names;
+    for (const auto& e : all_effects()) names.push_back(e.name);
+    EXPECT_EQ(names, (std::vector<std::string>{"clock_offset", "sensor_lag", "wake_transport", "position_offset", "force_scale",
+                                               "cell_crosstalk", "jet_merging", "floor_recirculation"}));
+    EXPECT_THROW(effects_named({"clock_offset", "gremlins"}), dw::InputError);
+}
+
+TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
+    dw::test::TempDir dir;
+    dw::physics::PhysicsConfig hidden;
+    hidden.effects.clock_offset = {true, 0.12};
+    dw::flight::write_flight(fly(hidden, "single", 20, 21), dir.file("sim"));
+    // Someone else's folder: only the contract's files, no legs.csv (legs are found), an unknown
+    // meta key, and the simulator's own files nowhere near.
+    std::filesystem::create_directories(dir.file("theirs"));
+    for (const char* name : {"wrench.csv", "poses.csv"})
+        std::filesystem::copy_file(dir.file(std::string("sim/") + name), dir.file(std::string("theirs/") + name));
+    auto meta = nlohmann::json::parse(dw::read_file(dir.file("sim/meta.json")));
+    meta["lab"] = "elsewhere";
+    std::ofstream(dir.file("theirs/meta.json")) << meta.dump(1);
+    ExplainOptions o;
+    const auto f = load_recording(dir.file("theirs"));
+    ASSERT_FALSE(f.legs.has_value());
+    const auto r = explain(f, o);
+    write_report(f, r, o, dir.file("out"));
+    ASSERT_FALSE(r.accepted.empty());
+    EXPECT_EQ(r.accepted.front().effect.name, "clock_offset");
+    EXPECT_LE(r.accepted.front().lo[0], 0.12);
+    EXPECT_GE(r.accepted.front().hi[0], 0.12);
+    // report.json per ../shared/FLIGHT_FORMAT.md
+    const auto j = nlohmann::json::parse(dw::read_file(dir.file("out/report.json")));
+    EXPECT_EQ(j["format"], "downwash-explain/1");
+    EXPECT_TRUE(j["mismatch"]["detected"].get<bool>());
+    for (const char* a : {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"}) {
+        EXPECT_TRUE(j["mismatch"]["noise_floor"][a].is_number()) << a;
+        EXPECT_TRUE(j["fit"]["heldout_rmse_before"][a].is_number()) << a;
+        EXPECT_TRUE(j["fit"]["heldout_rmse_after"][a].is_number()) << a;
+    }
+    EXPECT_LT(j["fit"]["heldout_rmse_after"]["f_d"].get<double>(), j["fit"]["heldout_rmse_before"]["f_d"].get<double>());
+    EXPECT_FALSE(j["mismatch"]["regions"].empty());
+    for (const auto& g : j["mismatch"]["regions"]) {
+        EXPECT_TRUE(g["axis"].is_string());
+        EXPECT_TRUE(g["where"].is_string());
+        EXPECT_TRUE(g["mean_residual"].is_number());
+        EXPECT_TRUE(g["z"].is_number());
+    }
+    EXPECT_EQ(j["explained_by"][0], "clock_offset");
+    bool saw = false;
+    for (const auto& c : j["candidates"]) {
+        EXPECT_TRUE(c["effect"].is_string());
+        EXPECT_TRUE(c["accepted"].is_boolean());
+        EXPECT_TRUE(c["delta_bic"].is_number());
+        if (c["effect"] == "clock_offset") {
+            saw = true;
+            EXPECT_NEAR(c["params"]["offset_s"].get<double>(), 0.12, 0.02);
+            EXPECT_EQ(c["ci95"]["offset_s"].size(), 2u);
+        }
+    }
+    EXPECT_TRUE(saw);
+    EXPECT_EQ(j["physics_out"], "physics.yaml");
+    const auto fitted = dw::physics::load_physics(dir.file("out/physics.yaml"));
+    EXPECT_TRUE(fitted.effects.clock_offset.enabled);
+    EXPECT_NEAR(fitted.effects.clock_offset.offset_s, 0.12, 0.02);
+    for (const char* png : {"residuals_before.png", "residuals_after.png", "maps_east.png", "maps_west.png", "report.md"})
+        EXPECT_TRUE(std::filesystem::exists(dir.file(std::string("out/") + png))) << png;
+}
+
+TEST(ExplainCli, BadInputIsOneLineAndExit2) {
+    dw::test::TempDir dir;
+    auto r = dw::test::run({dw::test::bin("dw-explain"), "--real", dir.file("nowhere"), "--out", dir.file("o")}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("nowhere"), std::string::npos);
+    std::filesystem::create_directories(dir.file("f"));
+    std::ofstream(dir.file("f/meta.json")) << "{\"format\": \"downwash-flight/1\"}";
+    r = dw::test::run({dw::test::bin("dw-explain"), "--real", dir.file("f"), "--out", dir.file("o")}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    r = dw::test::run({dw::test::bin("dw-explain"), "--real", dir.file("f"), "--out", dir.file("o"), "--effects", "gremlins"}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("gremlins"), std::string::npos) << r.err;
+}
+
+// The proof, as CI runs it (dw-explain proof does the same from the command line).
+TEST(ExplainProof, FindsEveryHiddenEffectAndNothingInNoise) {
+    dw::test::TempDir dir;
+    ProofOptions o;
+    o.out_dir = dir.file("proof");
+    o.null_seeds = 10;
+    const auto r = run_proof(o);
+    for (const auto& row : r.rows) EXPECT_TRUE(row.pass) << row.name << ": " << row.why << " (found " << row.found << ")";
+    EXPECT_GE(r.null_clean, 9) << r.null_clean << " of " << r.null_total;
+    EXPECT_TRUE(r.pass) << dw::read_file(r.table_path);
+}
