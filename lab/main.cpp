@@ -1,12 +1,17 @@
-// dw-lab: starts the lab's processes. For now: `dw-lab loopback`, a loopback DDS session in which
-// every lab topic type is published, received, checked and shown.
+// dw-lab: starts the lab's processes. `dw-lab demo` flies a whole simulated experiment and makes
+// everything a researcher wants of it; `dw-lab run` starts a lab file's processes (here or on
+// other hosts) and watches them; `dw-lab loopback` checks every topic type over loopback DDS.
+#include <ctime>
 #include <iostream>
 
 #include "core/cli.hpp"
+#include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
 #include "dds/process_cli.hpp"
+#include "lab/demo.hpp"
+#include "lab/launcher.hpp"
 #include "lab/loopback.hpp"
 
 namespace {
@@ -25,7 +30,48 @@ int run(int argc, char** argv) {
     loopback->add_option("--summary", lo.summary_path, "write the JSON summary here");
     loopback->add_flag("--quiet", lo.quiet, "show only the summary table");
 
+    dw::lab::DemoOptions demo_o;
+    auto* demo = app.add_subcommand("demo", "fly a simulated experiment end to end: recording, models, table, maps, explained mismatch");
+    demo->add_option("--out", demo_o.out_dir, "run folder (default: runs/demo-<time>)");
+    demo->add_flag("--quick", demo_o.quick, "fewer legs and epochs (a smoke test, ~3 min)");
+    std::string lab_path, run_dir;
+    std::vector<std::string> var_args;
+    auto* runc = app.add_subcommand("run", "start a lab file's processes, watch them, stop them when the experiment ends");
+    runc->add_option("--lab", lab_path, "lab file (downwash-lab/1), e.g. config/lab.sim.yaml")->required();
+    runc->add_option("--run-dir", run_dir, "folder for logs and {run_dir} (default: runs/<time>)");
+    runc->add_option("--var", var_args, "NAME=VALUE: set a lab-file variable (repeatable)");
+
     cli.parse(argc, argv);  // validates the DDS settings once, before any child starts
+    auto stamp = [] {
+        char buf[32];
+        const std::time_t t = std::time(nullptr);
+        std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
+        return std::string(buf);
+    };
+    if (demo->parsed()) {
+        if (demo_o.out_dir.empty()) demo_o.out_dir = "runs/demo-" + stamp();
+        demo_o.dds_args = cli.dds_args();
+        demo_o.dds = cli.dds();
+        return dw::lab::run_demo(demo_o);
+    }
+    if (runc->parsed()) {
+        const auto lab = dw::lab::load_lab(lab_path);
+        dw::lab::LaunchOptions o;
+        o.run_dir = run_dir.empty() ? "runs/" + stamp() : run_dir;
+        for (const auto& v : var_args) {
+            const auto eq = v.find('=');
+            if (eq == std::string::npos || eq == 0) throw dw::InputError("--var '" + v + "': expected NAME=VALUE");
+            o.vars[v.substr(0, eq)] = v.substr(eq + 1);
+        }
+        o.dds_args = cli.dds_args();
+        o.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
+        const auto r = dw::lab::launch(lab, o, cli.dds());
+        for (const auto& p : r.printed) std::cout << "started elsewhere: " << p << "\n";
+        std::cout << (r.phase.empty() ? "no experiment state seen" : r.phase) << ": " << r.legs_flown << " of " << r.legs_total
+                  << " legs; logs in " << o.run_dir << "/logs\n";
+        if (dw::Shutdown::instance().requested()) return 0;
+        return r.experiment_status == 0 && r.phase == "DONE" ? 0 : dw::kExitRuntime;
+    }
     lo.probe_path = dw::executable_dir() + "/dw-probe";
     lo.dds_args = cli.dds_args();
     return dw::lab::run_loopback(lo);

@@ -1,0 +1,24 @@
+#pragma once
+// `dw-lab demo`: the whole lab in one command, simulated. Flies single-neighbour legs and a
+// Leader Follower K=3 experiment with every process separate on loopback DDS (the lab file
+// config/lab.sim.yaml), records MCAP, exports flight folders, trains and compares the models
+// (naive linear, learnt linear, Deep Sets), draws maps, then explains a "real" flight made with
+// a hidden effect — all into one run folder with an index.md.
+#include <string>
+#include <vector>
+
+#include "dds/config.hpp"
+
+namespace dw::lab {
+
+struct DemoOptions {
+    std::string out_dir;
+    bool quick = false;                 // fewer legs and epochs (the CI test)
+    std::vector<std::string> dds_args;  // for every process
+    dds::DdsConfig dds;                 // the launcher's own participant
+};
+
+// Returns the exit code (0 when every step succeeded).
+int run_demo(const DemoOptions& o);
+
+}  // namespace dw::lab

@@ -1,0 +1,236 @@
+#include "lab/launcher.hpp"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+#include "core/subprocess.hpp"
+#include "dds/endpoint.hpp"
+#include "dds/heartbeat.hpp"
+#include "dds/participant.hpp"
+#include "dds/time.hpp"
+
+namespace dw::lab {
+
+std::string progress_bar(unsigned flown, unsigned total, double progress, double eta_s, int width) {
+    const double f = std::clamp(progress, 0.0, 1.0);
+    const int fill = static_cast<int>(std::lround(f * width));
+    std::ostringstream s;
+    s << "[" << std::string(static_cast<std::size_t>(fill), '#') << std::string(static_cast<std::size_t>(width - fill), '.') << "] " << flown
+      << "/" << total << " legs  " << static_cast<int>(std::lround(f * 100)) << " %";
+    if (eta_s >= 0) {
+        const int e = static_cast<int>(std::lround(eta_s));
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "  ETA %d:%02d", e / 60, e % 60);
+        s << buf;
+    }
+    return s.str();
+}
+
+namespace {
+
+const char* phase_name(msg::ExperimentPhase p) {
+    switch (p) {
+        case msg::PHASE_IDLE: return "IDLE";
+        case msg::PHASE_WAITING: return "WAITING";
+        case msg::PHASE_CALIBRATING: return "CALIBRATING";
+        case msg::PHASE_TAKING_OFF: return "TAKING_OFF";
+        case msg::PHASE_FLYING: return "FLYING";
+        case msg::PHASE_LANDING: return "LANDING";
+        case msg::PHASE_DONE: return "DONE";
+        case msg::PHASE_ABORTED: return "ABORTED";
+    }
+    return "?";
+}
+
+const char* state_name(msg::ProcessState s) {
+    switch (s) {
+        case msg::PROC_STARTING: return "STARTING";
+        case msg::PROC_RUNNING: return "RUNNING";
+        case msg::PROC_DEGRADED: return "DEGRADED";
+        case msg::PROC_FAULT: return "FAULT";
+        case msg::PROC_STOPPING: return "STOPPING";
+    }
+    return "?";
+}
+
+std::string quoted(const std::vector<std::string>& argv) {
+    std::string s;
+    for (const auto& a : argv) {
+        const bool plain = !a.empty() && a.find_first_of(" \t'\"$\\{}") == std::string::npos;
+        s += (s.empty() ? "" : " ") + (plain ? a : "'" + a + "'");
+    }
+    return s;
+}
+
+struct Running {
+    ProcessSpec spec;
+    std::vector<std::string> argv;
+    std::string log;
+    std::unique_ptr<Subprocess> proc;  // null: started elsewhere (printed)
+    std::optional<int> ended;
+    int restarts = 0;
+};
+
+}  // namespace
+
+LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsConfig& monitor) {
+    namespace fs = std::filesystem;
+    auto say = [&](const std::string& s) {
+        if (o.say) o.say(s);
+    };
+    fs::create_directories(fs::path(o.run_dir) / "logs");
+    std::map<std::string, std::string> vars = lab.vars;
+    for (const auto& [k, v] : o.vars) vars[k] = v;
+    vars["run_dir"] = o.run_dir;
+
+    // Build every command first: a bad variable stops the run before anything starts.
+    std::deque<Running> procs;
+    for (const auto& p : lab.processes) {
+        const HostSpec& host = lab.hosts.at(p.host);
+        auto args = expand(p, vars);
+        const std::string bin = host.bin.empty() ? executable_dir() : host.bin;
+        std::vector<std::string> argv = host.launch;
+        argv.push_back(bin + "/" + args[0]);
+        argv.insert(argv.end(), args.begin() + 1, args.end());
+        argv.insert(argv.end(), o.dds_args.begin(), o.dds_args.end());
+        procs.push_back({p, argv, (fs::path(o.run_dir) / "logs" / (p.name + ".log")).string(), nullptr, std::nullopt, 0});
+    }
+
+    LaunchResult R;
+    dds::Participant participant(monitor, "lab");
+    dds::PeerMonitor peers(participant, [&](const dds::PeerEvent& e) {
+        say(log::cat(e.process, e.kind == dds::PeerEvent::Kind::appeared ? " is up" : " is gone: " + e.reason));
+    });
+    std::mutex m;
+    std::optional<msg::ExperimentState> state;
+    dds::Reader<msg::ExperimentState> states(participant, dds::topics::experiment_state, [&](const msg::ExperimentState& s, const dds::SampleMeta&) {
+        std::lock_guard lock(m);
+        state = s;
+    });
+
+    auto start = [&](Running& r) {
+        r.proc = std::make_unique<Subprocess>(SpawnOptions{r.argv, r.log, r.log, {}});
+        r.ended.reset();
+    };
+    for (auto& r : procs) {
+        const HostSpec& host = lab.hosts.at(r.spec.host);
+        if (r.spec.host != "local" && host.launch.empty()) {
+            R.printed.push_back(log::cat(r.spec.host, ": ", quoted(r.argv)));
+            say(log::cat("start on ", r.spec.host, ":  ", quoted(r.argv)));
+            continue;
+        }
+        start(r);
+        say(log::cat("started ", r.spec.name, " on ", r.spec.host, " (pid ", r.proc->pid(), "): ", quoted(r.argv), "  → ", r.log));
+    }
+
+    const bool tty = o.live && ::isatty(STDERR_FILENO);
+    int drawn = 0;
+    auto draw = [&] {
+        std::ostringstream s;
+        const Nanos now = SystemClock().now_ns();
+        for (const auto& r : procs) {
+            char line[256];
+            const auto st = peers.last(r.spec.name);
+            std::string where = r.proc ? log::cat("pid ", r.proc->pid()) : "elsewhere";
+            if (r.ended) where = log::cat("exited ", *r.ended);
+            if (st) {
+                double out_hz = 0, in_hz = 0;
+                unsigned long long lost = 0;
+                for (const auto& t : st->rates()) {
+                    (t.outgoing() ? out_hz : in_hz) += t.rate_hz();
+                    lost += t.lost();
+                }
+                const double age_ms = static_cast<double>(now - dds::from_msg(st->header().stamp())) * 1e-6;
+                std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s out %7.1f Hz  in %7.1f Hz  lost %-6llu hb %5.0f ms ago%s%s",
+                              r.spec.name.c_str(), state_name(st->state()), where.c_str(), r.spec.host.c_str(), out_hz, in_hz, lost, age_ms,
+                              st->message().empty() ? "" : "  ", st->message().c_str());
+            } else {
+                std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-", where.c_str(),
+                              r.spec.host.c_str());
+            }
+            s << line << "\n";
+        }
+        {
+            std::lock_guard lock(m);
+            if (state)
+                s << "  experiment     " << phase_name(state->phase()) << "  "
+                  << progress_bar(state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index())),
+                                  state->leg_count(), state->progress(), state->phase() == msg::PHASE_DONE ? -1.0 : state->eta_s())
+                  << "\n";
+        }
+        const std::string text = s.str();
+        if (tty) {
+            for (int i = 0; i < drawn; ++i) std::fputs("\033[F\033[K", stderr);
+            drawn = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+        }
+        std::fputs(text.c_str(), stderr);
+        std::fflush(stderr);
+    };
+
+    Running* experiment = nullptr;
+    for (auto& r : procs)
+        if (r.spec.experiment) experiment = &r;
+    auto last_draw = std::chrono::steady_clock::now() - std::chrono::hours(1);
+    while (!Shutdown::instance().requested()) {
+        for (auto& r : procs) {
+            if (!r.proc || r.ended) continue;
+            if (auto st = r.proc->poll()) {
+                r.ended = st;
+                if (&r == experiment) break;
+                say(log::cat(r.spec.name, " exited with status ", *st, " (log: ", r.log, ")"));
+                if (r.spec.restart == Restart::on_failure && *st != 0 && r.restarts < 3) {
+                    ++r.restarts;
+                    ++R.restarts[r.spec.name];
+                    say(log::cat("restarting ", r.spec.name, " (", r.restarts, " of 3)"));
+                    start(r);
+                }
+            }
+        }
+        if (experiment && experiment->ended) break;
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_draw >= (tty ? std::chrono::seconds(1) : std::chrono::seconds(10))) {
+            draw();
+            last_draw = now;
+        }
+        Shutdown::instance().wait_for(std::chrono::milliseconds(100));
+    }
+    draw();
+    if (experiment && experiment->ended) {
+        R.experiment_status = *experiment->ended;
+        say(log::cat(experiment->spec.name, " ended with status ", R.experiment_status));
+    } else {
+        say("stopping the lab (interrupted)");
+    }
+    {
+        std::lock_guard lock(m);
+        if (state) {
+            R.phase = phase_name(state->phase());
+            R.legs_total = state->leg_count();
+            R.legs_flown = state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index()));
+        }
+    }
+    // Stop in reverse order, so the recorder (started early) sees the others' last words.
+    for (auto it = procs.rbegin(); it != procs.rend(); ++it)
+        if (it->proc && !it->ended) it->proc->signal(SIGINT);
+    for (auto it = procs.rbegin(); it != procs.rend(); ++it) {
+        if (!it->proc || it->ended) continue;
+        const int st = it->proc->stop(std::chrono::milliseconds(static_cast<long>(o.stop_grace_s * 1000)));
+        say(log::cat("stopped ", it->spec.name, " (status ", st, ")"));
+    }
+    return R;
+}
+
+}  // namespace dw::lab

@@ -1,0 +1,166 @@
+// dw-lab: lab files (located errors), the progress bar, `dw-lab run` on loopback (a process
+// printed for another host, a failing process restarted), across two network namespaces (one
+// per host), and `dw-lab demo --quick` end to end.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/errors.hpp"
+#include "lab/labfile.hpp"
+#include "lab/launcher.hpp"
+#include "support.hpp"
+
+using namespace std::chrono_literals;
+using dw::test::bin;
+
+namespace {
+
+std::string error_of(const std::string& yaml) {
+    try {
+        dw::lab::parse_lab(yaml, "lab.yaml");
+    } catch (const dw::InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+const char* kShort = R"(format: downwash-lab/1
+vars: {legs: "2"}
+hosts:
+  local: {}
+  elsewhere: {}
+  %B%
+processes:
+  - name: stand_agent
+    run: [dw-stand-agent, run, --sim]
+  - name: mocap_bridge
+    run: [dw-mocap-bridge, --sim, --sim-vehicles, v1]
+  - name: recorder
+    run: [dw-recorder, record, --out, "{run_dir}/exp.mcap", --quiet, --no-fsync]
+  - name: predictor
+    host: elsewhere
+    run: [dw-predictor, run, --model, physics.yaml]
+  - name: flaky
+    run: [dw-predictor, run, --model, "{run_dir}/no-such-model.json"]
+    restart: on-failure
+  - name: planner
+    host: %PLANNER_HOST%
+    run: [dw-planner, run, --formation, single, --legs, "{legs}", --altitudes, "0.5", --speed, "1.0"]
+    experiment: true
+)";
+
+std::string lab_text(const std::string& b_host, const std::string& planner_host) {
+    std::string s = kShort;
+    s.replace(s.find("%B%"), 3, b_host);
+    s.replace(s.find("%PLANNER_HOST%"), 14, planner_host);
+    return s;
+}
+
+}  // namespace
+
+TEST(LabFile, ReadsTheSimulatedLabAndNamesWhereItIsWrong) {
+    const auto lab = dw::lab::load_lab(std::string(DW_SOURCE_DIR) + "/config/lab.sim.yaml");
+    ASSERT_EQ(lab.processes.size(), 5u);
+    EXPECT_TRUE(lab.processes.back().experiment);
+    EXPECT_EQ(dw::lab::expand(lab.processes.back(), lab.vars)[3], "leader_follower3");
+    EXPECT_NE(error_of("format: downwash-lab/2\nprocesses: []\n").find("lab.yaml:1:9: format"), std::string::npos);
+    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    run: [dw-probe]\n    restart: sometimes\n").find("lab.yaml:5:14: processes[0].restart"),
+              std::string::npos);
+    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    run: [rm, -rf]\n").find("not a lab executable"), std::string::npos);
+    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    host: mars\n    run: [dw-probe]\n").find("'mars' is not under hosts"),
+              std::string::npos);
+    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe]}\n  - {name: a, run: [dw-probe]}\n").find("used twice"),
+              std::string::npos);
+    EXPECT_NE(error_of("format: downwash-lab/1\ncolour: red\nprocesses: []\n").find("lab.yaml:2:1: colour: unknown key"), std::string::npos);
+    const auto lab2 = dw::lab::parse_lab("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe, \"{what}\"]}\n", "x");
+    EXPECT_THROW(dw::lab::expand(lab2.processes[0], {}), dw::InputError);
+}
+
+TEST(LabFile, ProgressBar) {
+    EXPECT_EQ(dw::lab::progress_bar(7, 20, 0.35, 65, 20), "[#######.............] 7/20 legs  35 %  ETA 1:05");
+    EXPECT_EQ(dw::lab::progress_bar(0, 4, 0, -1, 4), "[....] 0/4 legs  0 %");
+}
+
+TEST(LabRun, FliesALabFileRestartsAFailingProcessAndPrintsOtherHostsCommands) {
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("lab.yaml")) << lab_text("", "local");
+    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--domain",
+                                  std::to_string(dw::test::test_domain()), "--namespace", "labrun" + std::to_string(::getpid())},
+                                 dir, 300000ms);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("started elsewhere: elsewhere: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("dw-predictor run --model physics.yaml --domain"), std::string::npos) << r.out;
+    EXPECT_NE(r.err.find("restarting flaky (3 of 3)"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("experiment     DONE"), std::string::npos) << r.err;  // the status block
+    EXPECT_NE(r.err.find("stand_agent    RUNNING"), std::string::npos) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(dir.file("run/exp.mcap")));
+    EXPECT_NE(dw::read_file(dir.file("run/logs/planner.log")).find("DONE"), std::string::npos);
+}
+
+TEST(LabRun, BadLabFileIsOneLineAndExit2) {
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("lab.yaml")) << "format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe], restart: sometimes}\n";
+    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml")}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("lab.yaml:3"), std::string::npos) << r.err;
+}
+
+// The lab across two hosts: network namespaces joined by a veth pair. The launcher, stand agent,
+// mocap bridge and recorder run in host A; the planner is started in host B through its launch
+// prefix (as ssh would on a real lab). Needs root; skipped otherwise.
+TEST(LabRun, AcrossTwoHostsInNetworkNamespaces) {
+    if (::geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
+    auto sh = [](const std::string& c) { return std::system((c + " >/dev/null 2>&1").c_str()); };
+    const std::string id = std::to_string(::getpid() % 100000), a = "dwla" + id, b = "dwlb" + id;
+    const std::string net = "10.232." + std::to_string(::getpid() % 250);
+    struct Cleanup {
+        std::function<void()> f;
+        ~Cleanup() { f(); }
+    } cleanup{[&] {
+        sh("ip netns del " + a);
+        sh("ip netns del " + b);
+    }};
+    for (const auto& s : std::vector<std::string>{
+             "ip netns add " + a, "ip netns add " + b, "ip link add " + a + " type veth peer name " + b, "ip link set " + a + " netns " + a,
+             "ip link set " + b + " netns " + b, "ip -n " + a + " addr add " + net + ".1/24 dev " + a,
+             "ip -n " + b + " addr add " + net + ".2/24 dev " + b, "ip -n " + a + " link set " + a + " up", "ip -n " + b + " link set " + b + " up",
+             "ip -n " + a + " link set lo up", "ip -n " + b + " link set lo up", "ip -n " + a + " route add 224.0.0.0/4 dev " + a,
+             "ip -n " + b + " route add 224.0.0.0/4 dev " + b})
+        ASSERT_EQ(sh(s), 0) << s;
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("lab.yaml")) << lab_text("hostb: {launch: [ip, netns, exec, " + b + "]}", "hostb");
+    const auto r = dw::test::run({"ip", "netns", "exec", a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
+                                  "--profile", "lab", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
+                                 dir, 300000ms);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
+    EXPECT_NE(r.err.find("started planner on hostb"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("ip netns exec " + b), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("@hostb"), std::string::npos) << r.err;  // its status line, heard across the veth
+    EXPECT_TRUE(std::filesystem::exists(dir.file("run/exp.mcap")));
+}
+
+TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
+    dw::test::TempDir dir;
+    const auto r = dw::test::run({bin("dw-lab"), "demo", "--quick", "--out", dir.file("demo"), "--domain",
+                                  std::to_string(dw::test::test_domain()), "--namespace", "demo" + std::to_string(::getpid())},
+                                 dir, 900000ms);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string index = dw::read_file(dir.file("demo/index.md"));
+    for (const char* f : {"recordings/single.mcap", "recordings/lf3.mcap", "flights/lf3", "study/table.md", "study/models", "recorded/table.md",
+                          "study/maps/leader_follower3.png", "recorded/lf3_map.png", "explain/report.md", "explain/report.json",
+                          "explain/residuals_before.png"}) {
+        EXPECT_NE(index.find(f), std::string::npos) << f;
+        EXPECT_TRUE(std::filesystem::exists(dir.file(std::string("demo/") + f))) << f;
+    }
+    for (const char* m : {"naive_linear.json", "learnt_linear.json", "deep_sets.json"})
+        EXPECT_TRUE(std::filesystem::exists(dir.file(std::string("demo/study/models/") + m))) << m;
+    const auto report = nlohmann::json::parse(dw::read_file(dir.file("demo/explain/report.json")));
+    EXPECT_EQ(report["explained_by"][0], "clock_offset") << report.dump(1);
+    EXPECT_NE(r.out.find("experiments: DONE, DONE"), std::string::npos) << r.out;
+}
