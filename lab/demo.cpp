@@ -1,6 +1,7 @@
 #include "lab/demo.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -148,8 +149,16 @@ int run_demo(const DemoOptions& o) {
     std::string found;
     for (const auto& e : report["explained_by"]) found += (found.empty() ? "" : ", ") + e.get<std::string>();
     std::string fitted;
-    for (const auto& c : report["candidates"])
-        if (c["accepted"].get<bool>()) fitted += log::cat(c["effect"].get<std::string>(), " ", c["params"].dump(), " (95 %: ", c["ci95"].dump(), ")\n");
+    for (const auto& c : report["candidates"]) {
+        if (!c["accepted"].get<bool>()) continue;
+        fitted += c["effect"].get<std::string>() + ":";
+        for (const auto& [k, v] : c["params"].items()) {
+            fitted += " " + k + " = " + (v.is_number() ? log::cat(std::round(v.get<double>() * 1e4) / 1e4) : v.dump());
+            if (c["ci95"].contains(k) && c["ci95"][k].size() == 2 && c["ci95"][k][0].is_number())
+                fitted += log::cat(" [", std::round(c["ci95"][k][0].get<double>() * 1e4) / 1e4, ", ", std::round(c["ci95"][k][1].get<double>() * 1e4) / 1e4, "]");
+        }
+        fitted += "\n";
+    }
     const double before = report["fit"]["heldout_rmse_before"]["f_d"].get<double>(), after = report["fit"]["heldout_rmse_after"]["f_d"].get<double>();
     const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
     std::ostringstream md;
@@ -170,7 +179,7 @@ int run_demo(const DemoOptions& o) {
        << "The recorded Leader Follower K=3 experiment against the models:\n\n![recorded](recorded/lf3_map.png)\n\n";
     md << "## 3. The explained mismatch\n\nA Leader Follower flight was made with a 0.1 s clock offset the lab's physics does not "
           "know ([hidden-physics.yaml](hidden-physics.yaml)) and given to `dw-explain` with the lab's physics. Found: **"
-       << (found.empty() ? "nothing" : found) << "**.\n\n```\n" << fitted << "```\n\nHeld-out f_d RMSE " << before << " N → " << after
+       << (found.empty() ? "nothing" : found) << "**.\n\n```\n" << fitted << "```\n\nHeld-out f_d RMSE " << std::round(before * 1000) / 1000 << " N → " << std::round(after * 1000) / 1000
        << " N. Report: [explain/report.md](explain/report.md) ([report.json](explain/report.json), fitted physics "
           "[explain/physics.yaml](explain/physics.yaml)).\n\n![residuals before](explain/residuals_before.png)\n\n"
           "![residuals after](explain/residuals_after.png)\n";
