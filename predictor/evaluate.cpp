@@ -128,7 +128,10 @@ std::string to_csv(const std::vector<ComparisonRow>& rows) {
     for (const auto& r : rows)
         for (int arena = 1; arena >= 0; --arena) {
             out << r.formation << "," << r.model << "," << (arena ? "arena_mean_abs" : "rmse") << "," << r.samples;
-            for (std::size_t a = 0; a < 6; ++a) out << "," << fmt(arena ? r.arena[a] : r.rmse[a], 5);
+            for (std::size_t a = 0; a < 6; ++a) {
+                const double v = arena ? r.arena[a] : r.rmse[a];
+                out << "," << (std::isnan(v) ? "" : fmt(v, 5));  // empty: no sample in the band
+            }
             out << "\n";
         }
     return out.str();

@@ -82,7 +82,7 @@ MapLayout draw_force_map(const std::vector<const ForceModel*>& models, const Map
 }
 
 void draw_force_line(const std::vector<const ForceModel*>& models, const MapRequest& r, const std::string& png) {
-    const int W = 820, H = 440, left = 70, right = 180, top = 50, bottom = 60;
+    const int W = 880, H = 440, left = 70, right = 240, top = 50, bottom = 60;
     const int pw = W - left - right, ph = H - top - bottom;
     const int n = 241;
     std::vector<std::vector<double>> curves;
