@@ -7,6 +7,8 @@
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <chrono>
+#include <mutex>
+#include <set>
 #include <condition_variable>
 #include <functional>
 #include <map>
@@ -29,6 +31,19 @@ bool wait_until_count(F&& count, int n, std::chrono::milliseconds timeout) {
     }
     return true;
 }
+
+// The QoS policies already reported by one endpoint (its listener runs on Fast DDS threads).
+class ReportedPolicies {
+public:
+    bool first(std::uint32_t policy) {
+        std::lock_guard lock(mutex_);
+        return seen_.insert(policy).second;
+    }
+
+private:
+    std::mutex mutex_;
+    std::set<std::uint32_t> seen_;
+};
 }  // namespace detail
 
 template <class T>
@@ -97,10 +112,13 @@ private:
     }
     void on_offered_incompatible_qos(eprosima::fastdds::dds::DataWriter*,
                                      const eprosima::fastdds::dds::OfferedIncompatibleQosStatus& s) override {
+        // One line per policy: Fast DDS may announce the same peer more than once.
+        if (!reported_.first(s.last_policy_id)) return;
         participant_.report_problem(qos_mismatch_line(name_, spec_.type_name, false, describe(qos_),
                                                       s.last_policy_id, s.total_count));
     }
 
+    detail::ReportedPolicies reported_;
     Participant& participant_;
     Topic<T> spec_;
     std::string name_;
@@ -185,6 +203,8 @@ private:
     }
     void on_requested_incompatible_qos(eprosima::fastdds::dds::DataReader*,
                                        const eprosima::fastdds::dds::RequestedIncompatibleQosStatus& s) override {
+        // One line per policy: Fast DDS may announce the same peer more than once.
+        if (!reported_.first(s.last_policy_id)) return;
         participant_.report_problem(qos_mismatch_line(name_, spec_.type_name, true, describe(qos_),
                                                       s.last_policy_id, s.total_count));
     }
@@ -209,6 +229,7 @@ private:
         if (f) f(handle);
     }
 
+    detail::ReportedPolicies reported_;
     Participant& participant_;
     Topic<T> spec_;
     std::string name_;
