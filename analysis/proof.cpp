@@ -61,12 +61,8 @@ void fly(const physics::PhysicsConfig& hidden, const std::string& formation, std
     fs::create_directories(fs::path(dir).parent_path());
     const std::string yaml = dir + ".physics.yaml";
     std::ofstream(yaml) << physics::to_yaml(hidden);
-    const std::string log_file = dir + ".log";
-    Subprocess p({{executable_dir() + "/dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed),
-                   "--out", dir, "--quiet"},
-                  log_file, log_file, {}});
-    const auto status = p.wait_for(std::chrono::minutes(10));
-    if (!status || *status != 0) throw RuntimeError(log::cat("dw-sim fly failed for ", dir, ": ", read_file(log_file)));
+    run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--out", dir, "--quiet"},
+                dir + ".log");
 }
 
 }  // namespace

@@ -13,6 +13,8 @@
 #include <thread>
 
 #include "core/errors.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
 
 extern char** environ;
 
@@ -125,6 +127,24 @@ std::string read_file(const std::string& path) {
     std::ostringstream out;
     out << in.rdbuf();
     return out.str();
+}
+
+void run_sibling(const std::vector<std::string>& args, const std::string& log_file) {
+    std::vector<std::string> argv{executable_dir() + "/" + args.at(0)};
+    argv.insert(argv.end(), args.begin() + 1, args.end());
+    Subprocess p({argv, log_file, log_file, {}});
+    std::optional<int> st;
+    while (!(st = p.wait_for(std::chrono::milliseconds(200)))) {
+        if (Shutdown::instance().requested()) {
+            p.stop();
+            throw RuntimeError(log::cat(args[0], ": interrupted"));
+        }
+    }
+    if (*st != 0) {
+        std::string out = read_file(log_file);
+        if (out.size() > 2000) out = "..." + out.substr(out.size() - 2000);
+        throw RuntimeError(log::cat(args[0], " failed (status ", *st, "; log ", log_file, "):\n", out));
+    }
 }
 
 }  // namespace dw

@@ -44,4 +44,9 @@ private:
 std::string executable_dir();
 std::string read_file(const std::string& path);
 
+// Runs a sibling lab executable (args[0], a name in executable_dir()) to completion with its
+// output in log_file; stops it when shutdown is requested. Throws dw::RuntimeError naming it,
+// its status and the end of its log when it fails or is interrupted.
+void run_sibling(const std::vector<std::string>& args, const std::string& log_file);
+
 }  // namespace dw

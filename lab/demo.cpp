@@ -33,25 +33,6 @@ struct Step {
     }
 };
 
-// Runs a lab tool to completion; its output goes to the step's log (and is echoed on failure).
-void tool(const std::vector<std::string>& args, const std::string& log_file) {
-    std::vector<std::string> argv{executable_dir() + "/" + args[0]};
-    argv.insert(argv.end(), args.begin() + 1, args.end());
-    Subprocess p({argv, log_file, log_file, {}});
-    std::optional<int> st;
-    while (!(st = p.wait_for(std::chrono::milliseconds(200)))) {
-        if (Shutdown::instance().requested()) {
-            p.stop();
-            throw RuntimeError("interrupted");
-        }
-    }
-    if (*st != 0) {
-        std::string out = read_file(log_file);
-        if (out.size() > 2000) out = "..." + out.substr(out.size() - 2000);
-        throw RuntimeError(log::cat(args[0], " failed (status ", *st, "; log ", log_file, "):\n", out));
-    }
-}
-
 std::string first_line_with(const std::string& text, const std::string& needle) {
     const auto p = text.find(needle);
     if (p == std::string::npos) return "";
@@ -104,7 +85,7 @@ int run_demo(const DemoOptions& o) {
             throw RuntimeError(log::cat("the ", f.formation, " experiment ended ", r.phase.empty() ? "without a state" : r.phase,
                                         " (status ", r.experiment_status, "; logs in ", lo.run_dir, "/logs)"));
         results.push_back(r);
-        tool({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight", (run / "flights" / f.name).string()},
+        run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight", (run / "flights" / f.name).string()},
              (run / "logs" / ("export-" + f.name + ".log")).string());
     }
 
@@ -112,7 +93,7 @@ int run_demo(const DemoOptions& o) {
     step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
     std::vector<std::string> study{"dw-predictor", "study", "--out", (run / "study").string(), "--physics", physics_path};
     if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
-    tool(study, (run / "logs" / "study.log").string());
+    run_sibling(study, (run / "logs" / "study.log").string());
 
     // 4. The models on the recorded (DDS) flights, and the recorded maps.
     step(4).begin("the models on the recorded flights: table and maps");
@@ -121,12 +102,12 @@ int run_demo(const DemoOptions& o) {
     std::vector<std::string> cmp{"dw-predictor", "compare", "--models"};
     cmp.insert(cmp.end(), model_files.begin(), model_files.end());
     cmp.insert(cmp.end(), {"--data", (run / "flights" / "single").string(), (run / "flights" / "lf3").string(), "--out", (run / "recorded").string()});
-    tool(cmp, (run / "logs" / "compare.log").string());
+    run_sibling(cmp, (run / "logs" / "compare.log").string());
     std::vector<std::string> map{"dw-predictor", "map", "--models"};
     map.insert(map.end(), model_files.begin(), model_files.end());
     map.insert(map.end(), {"--formation", "leader_follower3", "--altitude", "1.3", "--data", (run / "flights" / "lf3").string(), "--out",
                            (run / "recorded" / "lf3_map.png").string()});
-    tool(map, (run / "logs" / "map.log").string());
+    run_sibling(map, (run / "logs" / "map.log").string());
 
     // 5. A "real" flight with something the simulation leaves out.
     step(5).begin("a 'real' flight with a hidden effect (a 0.1 s clock offset between stand and mocap)");
@@ -134,13 +115,13 @@ int run_demo(const DemoOptions& o) {
     hidden.effects.clock_offset = {true, 0.1};
     const std::string hidden_path = (run / "hidden-physics.yaml").string();
     std::ofstream(hidden_path) << physics::to_yaml(hidden);
-    tool({"dw-sim", "fly", "--formation", "leader_follower", "--legs", o.quick ? "20" : "36", "--physics", hidden_path, "--seed", "42",
+    run_sibling({"dw-sim", "fly", "--formation", "leader_follower", "--legs", o.quick ? "20" : "36", "--physics", hidden_path, "--seed", "42",
           "--out", (run / "flights" / "real").string(), "--quiet"},
          (run / "logs" / "real-flight.log").string());
 
     // 6. Explain it.
     step(6).begin("explaining the 'real' flight against the lab's physics");
-    tool({"dw-explain", "--physics", physics_path, "--real", (run / "flights" / "real").string(), "--out", (run / "explain").string()},
+    run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "flights" / "real").string(), "--out", (run / "explain").string()},
          (run / "logs" / "explain.log").string());
 
     // 7. The index.
