@@ -64,7 +64,6 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
 
 namespace {
 const char* const kAxisTitles[6] = {"N", "E", "D", "roll", "pitch", "yaw"};
-const char* const kAxisNames[6] = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
 
 std::string fmt(double v, int precision = 3) {
     if (std::isnan(v)) return "–";
@@ -120,11 +119,13 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
     return out.str();
 }
 
-std::string to_csv(const std::vector<ComparisonRow>& rows) {
+std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
     std::ostringstream out;
-    out << "formation,model,metric,samples";
-    for (const auto* a : kAxisNames) out << "," << a;
-    out << "\n";
+    if (header) {
+        out << "formation,model,metric,samples";
+        for (const auto* a : flight::kAxes) out << "," << a;
+        out << "\n";
+    }
     for (const auto& r : rows)
         for (int arena = 1; arena >= 0; --arena) {
             out << r.formation << "," << r.model << "," << (arena ? "arena_mean_abs" : "rmse") << "," << r.samples;

@@ -42,6 +42,6 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
 // The table as Markdown (arena metric "model a / model b / ..." per formation and axis, then RMSE)
 // and as CSV (one row per formation, model, metric).
 std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptions& o);
-std::string to_csv(const std::vector<ComparisonRow>& rows);
+std::string to_csv(const std::vector<ComparisonRow>& rows, bool header = true);
 
 }  // namespace dw::predictor

@@ -157,7 +157,7 @@ StudyResult run_study(const StudyOptions& o) {
     r.markdown_path = (out / "table.md").string();
     r.csv_path = (out / "table.csv").string();
     write_text(r.markdown_path, md);
-    write_text(r.csv_path, to_csv(r.table) + to_csv(r.generalisation).substr(to_csv({}).size()));
+    write_text(r.csv_path, to_csv(r.table) + to_csv(r.generalisation, false));
     return r;
 }
 
