@@ -12,79 +12,12 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
-#include "recorder/tools.hpp"
 
 namespace dw::analysis {
 
-flight::Flight load_recording(const std::string& path) {
-    namespace fs = std::filesystem;
-    if (fs::is_directory(path)) return flight::read_flight(path);
-    if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
-    if (fs::path(path).extension() != ".mcap") throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
-    const fs::path tmp = fs::temp_directory_path() / log::cat("dw-explain-", ::getpid(), "-", fs::path(path).stem().string());
-    recorder::export_flight(path, tmp.string(), {});
-    flight::Flight f;
-    try {
-        f = flight::read_flight(tmp.string());
-    } catch (...) {
-        fs::remove_all(tmp);
-        throw;
-    }
-    fs::remove_all(tmp);
-    return f;
-}
-
 namespace {
 
-const char* const kAxes[6] = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
-
-// Where each wrench sample is, relative to the formation.
-struct SampleInfo {
-    int leg = -1;
-    int direction = 0;            // of travel along E
-    double n = 0, e = 0, h = 0;   // the neighbours' centroid N, E; the lowest one's height above the sufferer
-    double speed = 0;
-    double leg_fraction = 0;      // 0..1 through the leg
-    bool near = false;            // a neighbour within 1.5 m horizontally
-};
-
-std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>& legs) {
-    std::vector<SampleInfo> out(r.stamps().size());
-    std::size_t li = 0;
-    for (std::size_t i = 0; i < out.size(); ++i) {
-        const double t = r.stamps()[i];
-        auto& s = out[i];
-        const auto suf = r.sufferer(t);
-        double vn = 0, ve = 0, low = -1e9;
-        for (int j = 0; j < r.neighbours(); ++j) {
-            const auto p = r.position(j, t);
-            const auto v = r.velocity(j, t);
-            s.n += (p[0] - suf[0]) / r.neighbours();
-            s.e += (p[1] - suf[1]) / r.neighbours();
-            low = std::max(low, p[2] - suf[2]);
-            vn += v[0] / r.neighbours();
-            ve += v[1] / r.neighbours();
-            s.near = s.near || std::hypot(p[0] - suf[0], p[1] - suf[1]) < 1.5;
-        }
-        s.h = -low;
-        s.speed = std::hypot(vn, ve);
-        s.direction = ve > 0.1 ? 1 : (ve < -0.1 ? -1 : 0);
-        while (li < legs.size() && legs[li].t_end < t) ++li;
-        if (li < legs.size() && t >= legs[li].t_start && t <= legs[li].t_end) {
-            s.leg = legs[li].leg;
-            s.leg_fraction = (t - legs[li].t_start) / std::max(1e-9, legs[li].t_end - legs[li].t_start);
-        }
-    }
-    return out;
-}
-
-std::string band_name(double h) {
-    if (h < 0.55) return "0.0-0.55 m";
-    if (h < 1.05) return "0.55-1.05 m";
-    return "1.05-1.5 m";
-}
-int band_index(double h) { return h < 0.55 ? 0 : (h < 1.05 ? 1 : 2); }
-const double kBandLo[3] = {0.0, 0.55, 1.05}, kBandHi[3] = {0.55, 1.05, 1.5};
+using flight::kAxes;  // the axes as in wrench.csv
 
 // Everything a fit needs: the data, the current model, which samples, the axes' scales.
 struct Data {
@@ -270,10 +203,10 @@ std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, doub
         r.axis = kAxes[a];
         r.mean_residual = mean;
         r.z = z;
-        r.altitude_lo = kBandLo[band];
-        r.altitude_hi = kBandHi[band];
+        r.altitude_lo = kBands[static_cast<std::size_t>(band)].lo;
+        r.altitude_hi = kBands[static_cast<std::size_t>(band)].hi;
         r.direction = dir;
-        r.where = log::cat("relative altitude ", band_name(kBandLo[band] + 0.01), ", N ", nc * cell, "..", (nc + 1) * cell, " m, E ",
+        r.where = log::cat("relative altitude ", kBands[static_cast<std::size_t>(band)].name, ", N ", nc * cell, "..", (nc + 1) * cell, " m, E ",
                            ec * cell, "..", (ec + 1) * cell, " m, ", formation, ", ", dir > 0 ? "+E" : "-E", " legs");
         out.push_back(r);
     }
@@ -315,7 +248,7 @@ std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
             if (den > 0) best += 0.5 * 0.005 * (v[k - 1] - v[k + 1]) / den;
         }
         const auto& cn = count[key];
-        out.push_back({key.first, band_name(kBandLo[key.second] + 0.01), cn.second / static_cast<double>(cn.first), best, cn.first});
+        out.push_back({key.first, kBands[static_cast<std::size_t>(key.second)].name, cn.second / static_cast<double>(cn.first), best, cn.first});
     }
     return out;
 }

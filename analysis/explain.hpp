@@ -80,9 +80,6 @@ struct ExplainResult {
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);
 
-// A flight folder, or an .mcap recording (through the recorder's export).
-flight::Flight load_recording(const std::string& path);
-
 // report.json, report.md, physics.yaml and the PNG figures into dir.
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir);
 

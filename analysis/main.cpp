@@ -10,6 +10,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/subprocess.hpp"
+#include "recorder/tools.hpp"
 
 namespace {
 
@@ -59,7 +60,7 @@ int run(int argc, char** argv) {
     }
     o.seed = seed;
     o.progress = progress;
-    const auto f = dw::analysis::load_recording(real);
+    const auto f = dw::recorder::read_flight_or_recording(real);
     const auto r = dw::analysis::explain(f, o);
     dw::analysis::write_report(f, r, o, out);
     std::string by;

@@ -54,10 +54,7 @@ std::array<double, 3> Replay::position(int j, double t) const {
 }
 
 std::array<double, 3> Replay::velocity(int j, double t) const {
-    constexpr double h = 0.02;
-    const auto& tr = tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])];
-    const auto a = tr.position_at(t - h), b = tr.position_at(t + h);
-    return {(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
+    return tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])].velocity_at(t);
 }
 
 std::array<double, 3> Replay::sufferer(double t) const { return tracks_[static_cast<std::size_t>(sufferer_)].position_at(t); }
@@ -153,6 +150,36 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
         for (std::size_t i = 0; i < out.size(); ++i)
             out[i][static_cast<std::size_t>(fx.cell_crosstalk.to)] +=
                 fx.cell_crosstalk.coefficient * measured_[i][static_cast<std::size_t>(fx.cell_crosstalk.from)];
+    return out;
+}
+
+std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>& legs) {
+    std::vector<SampleInfo> out(r.stamps().size());
+    std::size_t li = 0;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const double t = r.stamps()[i];
+        auto& s = out[i];
+        const auto suf = r.sufferer(t);
+        double vn = 0, ve = 0, low = -1e9;
+        for (int j = 0; j < r.neighbours(); ++j) {
+            const auto p = r.position(j, t);
+            const auto v = r.velocity(j, t);
+            s.n += (p[0] - suf[0]) / r.neighbours();
+            s.e += (p[1] - suf[1]) / r.neighbours();
+            low = std::max(low, p[2] - suf[2]);
+            vn += v[0] / r.neighbours();
+            ve += v[1] / r.neighbours();
+            s.near = s.near || std::hypot(p[0] - suf[0], p[1] - suf[1]) < 1.5;
+        }
+        s.h = -low;
+        s.speed = std::hypot(vn, ve);
+        s.direction = ve > 0.1 ? 1 : (ve < -0.1 ? -1 : 0);
+        while (li < legs.size() && legs[li].t_end < t) ++li;
+        if (li < legs.size() && t >= legs[li].t_start && t <= legs[li].t_end) {
+            s.leg = legs[li].leg;
+            s.leg_fraction = (t - legs[li].t_start) / std::max(1e-9, legs[li].t_end - legs[li].t_start);
+        }
+    }
     return out;
 }
 

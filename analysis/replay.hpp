@@ -59,4 +59,23 @@ private:
     mutable std::vector<std::string> cache_order_;
 };
 
+// Where each wrench sample is, relative to the formation.
+struct SampleInfo {
+    int leg = -1;                 // -1: not on a measurement leg
+    int direction = 0;            // of travel along E: +1, -1, 0 (below 0.1 m/s)
+    double n = 0, e = 0, h = 0;   // the neighbours' centroid N, E; the lowest one's height above the sufferer
+    double speed = 0;
+    double leg_fraction = 0;      // 0..1 through the leg
+    bool near = false;            // a neighbour within 1.5 m horizontally
+};
+std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>& legs);
+
+// The vertical-separation bands residuals are located and drawn in.
+struct Band {
+    double lo, hi;
+    const char* name;
+};
+inline constexpr std::array<Band, 3> kBands{{{0.0, 0.55, "0.0-0.55 m"}, {0.55, 1.05, "0.55-1.05 m"}, {1.05, 1.5, "1.05-1.5 m"}}};
+inline int band_index(double h) { return h < kBands[1].lo ? 0 : (h < kBands[2].lo ? 1 : 2); }
+
 }  // namespace dw::analysis

@@ -17,7 +17,7 @@ namespace {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
-const char* const kAxes[6] = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
+using flight::kAxes;  // the axes as in wrench.csv
 
 std::string fmt(double v, int p = 3) {
     std::ostringstream s;
@@ -100,15 +100,16 @@ std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
     return n;
 }
 
-// Mean of per-sample values binned over the formation's N-E position (0.1 m cells).
-plot::Field binned(const std::vector<double>& value, const std::vector<std::array<double, 4>>& where, double lo, double hi, int dir,
+// Mean of per-sample values binned over the formation's N-E position (0.1 m cells), for samples
+// on legs in one band and leg direction (0: both).
+plot::Field binned(const std::vector<double>& value, const std::vector<SampleInfo>& info, const Band& band, int dir,
                    const std::string& title) {
     plot::Field f{title, 1.2, 25, {}};
     std::vector<double> sum(625, 0), n(625, 0);
     for (std::size_t i = 0; i < value.size(); ++i) {
-        const auto& w = where[i];  // n, e, h, direction (0: off legs)
-        if (w[3] == 0 || w[2] < lo || w[2] >= hi || (dir != 0 && static_cast<int>(w[3]) != dir)) continue;
-        const int in = static_cast<int>(std::lround((w[0] + 1.2) / 0.1)), ie = static_cast<int>(std::lround((w[1] + 1.2) / 0.1));
+        const auto& w = info[i];
+        if (w.leg < 0 || w.direction == 0 || w.h < band.lo || w.h >= band.hi || (dir != 0 && w.direction != dir)) continue;
+        const int in = static_cast<int>(std::lround((w.n + 1.2) / 0.1)), ie = static_cast<int>(std::lround((w.e + 1.2) / 0.1));
         if (in < 0 || ie < 0 || in >= 25 || ie >= 25) continue;
         sum[static_cast<std::size_t>(in * 25 + ie)] += value[i];
         n[static_cast<std::size_t>(in * 25 + ie)] += 1;
@@ -155,50 +156,33 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     const auto before = replay.recorded(o.physics), after = replay.recorded(r.fitted);
     std::size_t axis = 2;
     if (!r.regions.empty()) axis = static_cast<std::size_t>(physics::axis_index(r.regions.front().axis));
-    std::vector<std::array<double, 4>> where(replay.stamps().size());
-    std::size_t li = 0;
-    for (std::size_t i = 0; i < where.size(); ++i) {
-        const double t = replay.stamps()[i];
-        const auto s = replay.sufferer(t);
-        double n = 0, e = 0, low = -1e9, ve = 0;
-        for (int k = 0; k < replay.neighbours(); ++k) {
-            const auto p = replay.position(k, t);
-            n += (p[0] - s[0]) / replay.neighbours();
-            e += (p[1] - s[1]) / replay.neighbours();
-            low = std::max(low, p[2] - s[2]);
-            ve += replay.velocity(k, t)[1];
-        }
-        while (li < legs.size() && legs[li].t_end < t) ++li;
-        const bool on = li < legs.size() && t >= legs[li].t_start;
-        where[i] = {n, e, -low, on ? (ve > 0 ? 1.0 : -1.0) : 0.0};
-    }
-    std::vector<double> rb(where.size()), ra(where.size()), obs(where.size()), sb(where.size()), sa(where.size());
-    for (std::size_t i = 0; i < where.size(); ++i) {
+    const auto info = describe(replay, legs);
+    const std::size_t n = info.size();
+    std::vector<double> rb(n), ra(n), obs(n), sb(n), sa(n);
+    for (std::size_t i = 0; i < n; ++i) {
         obs[i] = replay.measured()[i][axis];
         sb[i] = before[i][axis];
         sa[i] = after[i][axis];
         rb[i] = obs[i] - sb[i];
         ra[i] = obs[i] - sa[i];
     }
-    const double lo[3] = {0.0, 0.55, 1.05}, hi[3] = {0.55, 1.05, 1.5};
-    const char* band[3] = {"0-0.55 m", "0.55-1.05 m", "1.05-1.5 m"};
     const std::string unit = log::cat(kAxes[axis], axis < 3 ? " [N]" : " [N m]");
     std::vector<plot::Outline> outline{{0, 0, 0.19, true}};
     for (int which = 0; which < 2; ++which) {
         std::vector<plot::Field> fields;
         for (int way : {1, -1})
-            for (int b = 0; b < 3; ++b)
-                fields.push_back(binned(which ? ra : rb, where, lo[b], hi[b], way, log::cat(band[b], way > 0 ? ", +E legs" : ", -E legs")));
+            for (const auto& band : kBands)
+                fields.push_back(binned(which ? ra : rb, info, band, way, log::cat(band.name, way > 0 ? ", +E legs" : ", -E legs")));
         plot::render_fields(fields, log::cat("residual (recorded - simulated) ", which ? "AFTER" : "BEFORE", " the fit: ", unit,
                                              " over the neighbours' centre, by altitude band and leg direction"),
                             unit, outline, (fs::path(dir) / (which ? "residuals_after.png" : "residuals_before.png")).string());
     }
-    int b0 = 2;  // the band of the strongest region (else the top band)
-    if (!r.regions.empty()) b0 = r.regions.front().altitude_lo < 0.5 ? 0 : (r.regions.front().altitude_lo < 1.0 ? 1 : 2);
+    // The band of the strongest region (else the top band).
+    const Band& b0 = kBands[static_cast<std::size_t>(r.regions.empty() ? 2 : band_index(r.regions.front().altitude_lo))];
     for (int way : {1, -1}) {
-        std::vector<plot::Field> fields{binned(obs, where, lo[b0], hi[b0], way, "recorded"), binned(sb, where, lo[b0], hi[b0], way, "simulated before"),
-                                        binned(sa, where, lo[b0], hi[b0], way, "simulated after")};
-        plot::render_fields(fields, log::cat(unit, " at ", band[b0], ", ", way > 0 ? "+E" : "-E", " legs: recorded vs simulated, before and after the fit"),
+        std::vector<plot::Field> fields{binned(obs, info, b0, way, "recorded"), binned(sb, info, b0, way, "simulated before"),
+                                        binned(sa, info, b0, way, "simulated after")};
+        plot::render_fields(fields, log::cat(unit, " at ", b0.name, ", ", way > 0 ? "+E" : "-E", " legs: recorded vs simulated, before and after the fit"),
                             unit, outline, (fs::path(dir) / (way > 0 ? "maps_east.png" : "maps_west.png")).string());
     }
 
@@ -242,7 +226,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     md << "\n## Held-out error per axis\n\n| axis | before | after |\n|---|---|---|\n";
     for (std::size_t a = 0; a < 6; ++a) md << "| " << kAxes[a] << " | " << fmt(r.heldout_before[a], 4) << " | " << fmt(r.heldout_after[a], 4) << " |\n";
     md << "\n## Figures\n\nResiduals before and after (" << unit << "):\n\n![before](residuals_before.png)\n\n![after](residuals_after.png)\n\n"
-       << "Recorded vs simulated at " << band[b0] << ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n"
+       << "Recorded vs simulated at " << b0.name << ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n"
        << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects on).\n";
     std::ofstream(fs::path(dir) / "report.md") << md.str();
 }

@@ -348,6 +348,11 @@ std::array<double, 3> Track::position_at(double time) const {
             p[i - 1][2] + a * (p[i][2] - p[i - 1][2])};
 }
 
+std::array<double, 3> Track::velocity_at(double time, double h) const {
+    const auto a = position_at(time - h), b = position_at(time + h);
+    return {(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
+}
+
 std::vector<Track> tracks(const Flight& f) {
     std::vector<Track> out(f.bodies.size());
     for (const auto& s : f.poses) {

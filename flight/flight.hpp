@@ -76,6 +76,9 @@ struct Track {
     std::vector<std::array<double, 4>> q;
     // Linear interpolation (clamped at the ends) of the position at time t.
     std::array<double, 3> position_at(double time) const;
+    // Central difference of the interpolated position over ±half_window_s (±20 ms spans several
+    // 180 Hz poses, so mocap noise is not differentiated sample by sample).
+    std::array<double, 3> velocity_at(double time, double half_window_s = 0.02) const;
 };
 std::vector<Track> tracks(const Flight& flight);  // indexed like Flight::bodies
 

@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <unistd.h>
-
 #include <filesystem>
 
 #include "core/errors.hpp"
@@ -58,15 +56,6 @@ Split split_by_leg(const Dataset& d, int period, int test_phase, int val_phase) 
     return s;
 }
 
-namespace {
-
-std::array<double, 3> velocity_at(const flight::Track& tr, double t) {
-    constexpr double h = 0.02;  // ±20 ms central difference over the 180 Hz poses
-    const auto a = tr.position_at(t - h), b = tr.position_at(t + h);
-    return {(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
-}
-
-}  // namespace
 
 Dataset from_flight(const flight::Flight& f, const std::string& name, const DatasetOptions& o) {
     const int sufferer = f.find_body(f.meta.sufferer);
@@ -94,11 +83,11 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
         s.t = w.t;
         s.y = w.w;
         const auto ps = st.position_at(w.t);
-        const auto vs = velocity_at(st, w.t);
+        const auto vs = st.velocity_at(w.t);
         for (const auto* tr : ns) {
             if (tr->t.empty() || w.t < tr->t.front() || w.t > tr->t.back()) continue;
             const auto p = tr->position_at(w.t);
-            const auto v = velocity_at(*tr, w.t);
+            const auto v = tr->velocity_at(w.t);
             RelState r{p[0] - ps[0], p[1] - ps[1], p[2] - ps[2], v[0] - vs[0], v[1] - vs[1], v[2] - vs[2]};
             if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > o.max_distance_m) continue;
             s.x[static_cast<std::size_t>(s.k++)] = r;
@@ -116,22 +105,7 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
 }
 
 Dataset load_dataset(const std::string& path, const DatasetOptions& o) {
-    namespace fs = std::filesystem;
-    if (fs::is_directory(path)) return from_flight(flight::read_flight(path), path, o);
-    if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
-    if (fs::path(path).extension() != ".mcap")
-        throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
-    const fs::path tmp = fs::temp_directory_path() / log::cat("dw-predictor-", ::getpid(), "-", fs::path(path).stem().string());
-    recorder::export_flight(path, tmp.string(), {});
-    Dataset d;
-    try {
-        d = from_flight(flight::read_flight(tmp.string()), path, o);
-    } catch (...) {
-        fs::remove_all(tmp);
-        throw;
-    }
-    fs::remove_all(tmp);
-    return d;
+    return from_flight(recorder::read_flight_or_recording(path), path, o);
 }
 
 }  // namespace dw::predictor

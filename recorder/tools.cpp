@@ -1,5 +1,7 @@
 #include "recorder/tools.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -195,6 +197,24 @@ void export_flight(const std::string& path, const std::string& dir, const Export
     f.meta.formation = known ? formation : "free";
     f.meta.extra_json = nlohmann::json{{"source", path}, {"epoch_unix_s", epoch}}.dump();
     flight::write_flight(f, dir);
+}
+
+flight::Flight read_flight_or_recording(const std::string& path) {
+    namespace fs = std::filesystem;
+    if (fs::is_directory(path)) return flight::read_flight(path);
+    if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
+    if (fs::path(path).extension() != ".mcap") throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
+    const fs::path tmp = fs::temp_directory_path() / log::cat("dw-flight-", ::getpid(), "-", fs::path(path).stem().string());
+    export_flight(path, tmp.string(), {});
+    flight::Flight f;
+    try {
+        f = flight::read_flight(tmp.string());
+    } catch (...) {
+        fs::remove_all(tmp);
+        throw;
+    }
+    fs::remove_all(tmp);
+    return f;
 }
 
 void export_csv(const std::string& path, const std::string& dir) {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dds/participant.hpp"
+#include "flight/flight.hpp"
 
 namespace dw::recorder {
 
@@ -25,6 +26,9 @@ struct ExportOptions {
 };
 // A flight folder (downwash-flight/1) from stand/wrench and mocap/frame (+ the plan's formation).
 void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o);
+// A flight folder as it is, or an .mcap recording exported to one (through a temporary folder)
+// and read back: what the analysis tools take. Throws dw::InputError naming the path.
+flight::Flight read_flight_or_recording(const std::string& path);
 // One CSV per topic: log_time, publish_time and every field (flattened JSON paths).
 void export_csv(const std::string& path, const std::string& dir);
 
