@@ -25,13 +25,13 @@ int run(int argc, char** argv) {
     app.add_option("--real", real, "the recording: a flight folder (downwash-flight/1) or an .mcap file");
     app.add_option("--out", out, "output folder: report.json, report.md, physics.yaml, figures");
     app.add_option("--effects", effects, "candidates, comma-separated (default: every effect of the vocabulary)");
-    app.add_option("--seed", seed, "seed (the analysis is deterministic; recorded in the report)");
+    app.add_option("--seed", seed, "seed (the analysis is deterministic; recorded in the report)")->check(dw::cli::in(dw::kSeedRange));
     app.add_flag("--quiet", quiet, "no progress");
     auto* proof = app.add_subcommand("proof", "fly flights with hidden effects (dw-sim fly), explain them, check what was found");
     dw::analysis::ProofOptions po;
     std::string cases;
     proof->add_option("--out", po.out_dir, "output folder (flights, reports, proof.md)")->required();
-    proof->add_option("--null-seeds", po.null_seeds, "null flights (noise only)")->check(CLI::Range(0, 100));
+    proof->add_option("--null-seeds", po.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
     proof->add_option("--cases", cases, "clock_offset, wake_transport, sensor_lag, jet_merging, cell_crosstalk, two_effects, null (default: all)");
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));

@@ -1,29 +1,54 @@
 #include "core/config.hpp"
 
-#include <fstream>
+#include <set>
 #include <sstream>
 
+#include "core/files.hpp"
 #include "core/log.hpp"
 
 namespace dw {
+namespace {
+void require_unique_keys(const YAML::Node& node, const std::string& name) {
+    if (node.IsSequence()) {
+        for (const auto& item : node) require_unique_keys(item, name);
+        return;
+    }
+    if (!node.IsMap()) return;
+    std::set<std::string> seen;
+    for (const auto& kv : node) {
+        const std::string key = kv.first.Scalar();
+        if (!seen.insert(key).second) {
+            throw InputError(log::cat(name, ":", kv.first.Mark().line + 1, ":", kv.first.Mark().column + 1,
+                                      ": key '", key, "' appears twice in the same mapping"));
+        }
+        require_unique_keys(kv.second, name);
+    }
+}
+}  // namespace
+
+YAML::Node load_yaml(const std::string& text, const std::string& name) {
+    YAML::Node root;
+    try {
+        root = YAML::Load(text);
+    } catch (const YAML::ParserException& e) {
+        throw InputError(log::cat(name, ":", e.mark.line + 1, ":", e.mark.column + 1, ": not valid YAML: ", e.msg));
+    }
+    require_unique_keys(root, name);
+    return root;
+}
+
+YAML::Node load_yaml_file(const std::string& path, std::string_view what) {
+    return load_yaml(read_file(path, what), path);
+}
 
 ConfigFile ConfigFile::load(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(log::cat("config ", path, ": cannot read the file"));
-    std::stringstream text;
-    text << in.rdbuf();
-    return parse(text.str(), path);
+    return parse(read_file(path, "config"), path);
 }
 
 ConfigFile ConfigFile::parse(const std::string& text, const std::string& name) {
     ConfigFile c;
     c.path_ = name;
-    try {
-        c.root_ = YAML::Load(text);
-    } catch (const YAML::ParserException& e) {
-        throw InputError(log::cat(name, ":", e.mark.line + 1, ":", e.mark.column + 1,
-                                  ": not valid YAML: ", e.msg));
-    }
+    c.root_ = load_yaml(text, name);
     if (c.root_ && !c.root_.IsNull() && !c.root_.IsMap()) {
         throw InputError(log::cat(name, ":1:1: the top level must be a mapping of keys"));
     }
@@ -73,11 +98,15 @@ std::optional<T> read_scalar(const ConfigFile& c, const std::string& dotted, con
 }
 }  // namespace
 
-std::optional<long long> ConfigFile::get_int(const std::string& d) const {
-    return read_scalar<long long>(*this, d, "an integer");
+std::optional<long long> ConfigFile::get_int(const std::string& d, const Range& range) const {
+    const auto v = read_scalar<long long>(*this, d, "an integer");
+    if (v && !range.contains(static_cast<double>(*v))) fail(d, range_problem(static_cast<double>(*v), range));
+    return v;
 }
-std::optional<double> ConfigFile::get_double(const std::string& d) const {
-    return read_scalar<double>(*this, d, "a number");
+std::optional<double> ConfigFile::get_double(const std::string& d, const Range& range) const {
+    const auto v = read_scalar<double>(*this, d, "a number");
+    if (v && !range.contains(*v)) fail(d, range_problem(*v, range));
+    return v;
 }
 std::optional<bool> ConfigFile::get_bool(const std::string& d) const {
     return read_scalar<bool>(*this, d, "true or false");

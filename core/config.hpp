@@ -8,13 +8,20 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/numbers.hpp"
 
 namespace dw {
+
+// The one way a YAML document is read: parse errors and duplicate keys (which yaml-cpp would
+// otherwise resolve silently to the first) are dw::InputError "name:line:col: ...".
+YAML::Node load_yaml(const std::string& text, const std::string& name);
+// load_yaml() of a file's bytes (missing, directory, unreadable: one clear InputError).
+YAML::Node load_yaml_file(const std::string& path, std::string_view what);
 
 class ConfigFile {
 public:
     ConfigFile() = default;  // empty: every key absent
-    // Throws dw::InputError when the file is unreadable or not valid YAML.
+    // Throws dw::InputError when the file is missing, a directory, unreadable or not valid YAML.
     static ConfigFile load(const std::string& path);
     static ConfigFile parse(const std::string& text, const std::string& name);
 
@@ -24,8 +31,9 @@ public:
     YAML::Node at(const std::string& dotted) const;
 
     // Typed reads of an optional key: nullopt when absent, InputError when of the wrong type.
-    std::optional<long long> get_int(const std::string& dotted) const;
-    std::optional<double> get_double(const std::string& dotted) const;
+    // Numbers must lie in `range` (dw::Range: finite, the range named in the error).
+    std::optional<long long> get_int(const std::string& dotted, const Range& range) const;
+    std::optional<double> get_double(const std::string& dotted, const Range& range) const;
     std::optional<bool> get_bool(const std::string& dotted) const;
     std::optional<std::string> get_string(const std::string& dotted) const;
     std::optional<std::vector<std::string>> get_strings(const std::string& dotted) const;

@@ -8,6 +8,9 @@
 #include <mutex>
 #include <thread>
 
+#include "core/errors.hpp"
+#include "core/log.hpp"
+
 namespace dw {
 namespace {
 std::mutex g_mutex;
@@ -16,6 +19,7 @@ bool g_requested = false;
 std::atomic<int> g_signal{0};
 std::once_flag g_once;
 std::function<void()> g_user_signal;
+std::stop_source g_stop;
 
 void wait_for_signals(sigset_t set) {
     for (;;) {
@@ -70,6 +74,13 @@ void Shutdown::request(int signal_number) {
         g_requested = true;
     }
     g_cv.notify_all();
+    g_stop.request_stop();
+}
+
+std::stop_token Shutdown::token() const { return g_stop.get_token(); }
+
+void throw_if_stopped(const std::stop_token& stop, std::string_view what) {
+    if (stop.stop_requested()) throw Stopped(log::cat("stopped during ", what));
 }
 
 int Shutdown::signal_number() const { return g_signal; }

@@ -4,8 +4,14 @@
 // dedicated one, so a signal never interrupts DDS code and main loops can wait on it.
 #include <chrono>
 #include <functional>
+#include <stop_token>
+#include <string_view>
 
 namespace dw {
+
+// Throws dw::Stopped ("stopped during <what>") when `stop` has been requested. Long loops call it
+// once per step, so a stop takes effect within one step.
+void throw_if_stopped(const std::stop_token& stop, std::string_view what);
 
 class Shutdown {
 public:
@@ -18,6 +24,8 @@ public:
     void request(int signal_number = 0);
     // The signal that requested shutdown, 0 if requested by code or not at all.
     int signal_number() const;
+    // Set when shutdown is requested: what long work takes (injected) to notice a stop.
+    std::stop_token token() const;
     // Runs `f` (on the signal thread) at each SIGUSR1 — e.g. the recorder's pause/resume.
     void on_user_signal(std::function<void()> f);
 

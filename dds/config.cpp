@@ -7,6 +7,7 @@
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 
+#include "core/cli.hpp"
 #include "core/log.hpp"
 
 namespace dw::dds {
@@ -100,7 +101,7 @@ void validate(const DdsConfig& c, std::string_view where) {
 }
 
 void add_cli_options(CLI::App& app, DdsCliOptions& o) {
-    app.add_option("--domain", o.domain, "DDS domain id (0-232)")->type_name("ID");
+    app.add_option("--domain", o.domain, "DDS domain id (0-232)")->type_name("ID")->check(cli::in(kDomainRange));
     app.add_option("--profile", o.profile, "local (loopback only, default) or lab (real network)")
         ->type_name("NAME");
     app.add_option("--transport", o.transport, "default (UDP+SHM), shm or udp")->type_name("NAME");
@@ -125,12 +126,7 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
     };
     if (!file.empty()) {
         in_file("domain", [&] {
-            if (auto v = file.get_int("dds.domain")) {
-                if (*v < 0 || *v > kMaxDomainId) {
-                    throw InputError(log::cat("domain id ", *v, " is out of range (0-", kMaxDomainId, ")"));
-                }
-                c.domain = static_cast<int>(*v);
-            }
+            if (auto v = file.get_int("dds.domain", kDomainRange)) c.domain = static_cast<int>(*v);
         });
         in_file("profile", [&] { if (auto v = file.get_string("dds.profile")) c.profile = parse_profile(*v); });
         in_file("transport", [&] { if (auto v = file.get_string("dds.transport")) c.transport = parse_transport(*v); });

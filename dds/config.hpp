@@ -19,6 +19,8 @@ enum class Profile { local, lab };
 enum class Transport { default_, shm, udp };
 
 inline constexpr int kMaxDomainId = 232;  // RTPS port mapping: 7400 + 250 * domain must fit
+inline constexpr Range kDomainRange{0, kMaxDomainId};
+inline constexpr Range kReadersRange{0, 1000};  // "wait for this many readers per topic"
 inline constexpr std::string_view kDefaultNamespace = "lab";
 
 struct DdsConfig {

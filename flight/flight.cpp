@@ -11,7 +11,9 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 
 namespace dw::flight {
 namespace fs = std::filesystem;
@@ -31,13 +33,7 @@ int Flight::find_body(const std::string& name) const {
 
 namespace {
 
-std::string slurp(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(log::cat(path.string(), ": cannot read the file"));
-    std::ostringstream out;
-    out << in.rdbuf();
-    return out.str();
-}
+std::string slurp(const fs::path& path) { return read_file(path.string(), "flight file"); }
 
 // Splits CSV text into lines of fields; the first line is the header.
 class CsvReader {
@@ -150,7 +146,12 @@ Meta read_meta(const fs::path& path) {
     if (!j.contains("neighbours") || !j["neighbours"].is_array()) fail("neighbours", "missing or not a list");
     for (const auto& n : j["neighbours"]) {
         if (!n.is_string()) fail("neighbours", "every entry must be a string");
-        m.neighbours.push_back(n.get<std::string>());
+        const std::string name = n.get<std::string>();
+        if (name == m.sufferer) fail("neighbours", log::cat("'", name, "' is the sufferer"));
+        if (std::find(m.neighbours.begin(), m.neighbours.end(), name) != m.neighbours.end()) {
+            fail("neighbours", log::cat("'", name, "' is listed twice (its force would count twice)"));
+        }
+        m.neighbours.push_back(name);
     }
     if (j.contains("vehicles")) {
         if (!j["vehicles"].is_object()) fail("vehicles", "not an object");
@@ -162,7 +163,7 @@ Meta read_meta(const fs::path& path) {
                 if (!v.contains(field)) return;
                 if (!v[field].is_number()) fail(key + "." + field, "not a number");
                 out = v[field].get<double>();
-                if (!(out > 0)) fail(key + "." + field, "must be positive");
+                if (!(std::isfinite(out) && out > 0)) fail(key + "." + field, "must be a positive finite number");
             };
             num("mass_kg", info.mass_kg);
             num("prop_radius_m", info.prop_radius_m);
@@ -180,6 +181,7 @@ Meta read_meta(const fs::path& path) {
         if (s.contains("height_m")) {
             if (!s["height_m"].is_number()) fail("stand.height_m", "not a number");
             m.stand_height_m = s["height_m"].get<double>();
+            if (!kStandHeightRange.contains(m.stand_height_m)) fail("stand.height_m", range_problem(m.stand_height_m, kStandHeightRange));
         }
     }
     json extra = json::object();
@@ -263,78 +265,96 @@ Flight read_flight(const std::string& dir) {
 }
 
 namespace {
-void write_text(const fs::path& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    if (!out) throw RuntimeError(log::cat("cannot write ", path.string()));
-    out << text;
-    if (!out) throw RuntimeError(log::cat("writing ", path.string(), " failed"));
-}
+// Formats every file before anything is written: a value that cannot be written (NaN, inf) is an
+// error naming the file, row and column, and leaves no folder behind.
+struct FlightText {
+    std::string meta, wrench, poses, legs;
+};
 
-void append(std::string& s, const char* fmt, double v) {
-    char buf[48];
-    const int n = std::snprintf(buf, sizeof(buf), fmt, v);
-    s.append(buf, static_cast<std::size_t>(n));
-}
-}  // namespace
+class Row {
+public:
+    Row(std::string& out, const char* file, std::size_t row) : out_(out), file_(file), row_(row) {}
+    void number(double v, int decimals, const char* column) {
+        if (!first_) out_ += ',';
+        first_ = false;
+        append_fixed(out_, v, decimals, log::cat("flight to write: ", file_, " row ", row_, " column ", column));
+    }
+    void text(const std::string& v) {
+        if (!first_) out_ += ',';
+        first_ = false;
+        out_ += v;
+    }
+    ~Row() { out_ += '\n'; }
 
-void write_flight(const Flight& f, const std::string& dir) {
-    const fs::path root(dir);
-    fs::create_directories(root);
-    json meta = json::parse(f.meta.extra_json);
+private:
+    std::string& out_;
+    const char* file_;
+    std::size_t row_;
+    bool first_ = true;
+};
+
+std::string meta_text(const Meta& m) {
+    json meta = json::parse(m.extra_json);
     meta["format"] = kFormat;
-    meta["sufferer"] = f.meta.sufferer;
-    meta["neighbours"] = f.meta.neighbours;
-    meta["formation"] = f.meta.formation;
+    meta["sufferer"] = m.sufferer;
+    meta["neighbours"] = m.neighbours;
+    meta["formation"] = m.formation;
     json vehicles = json::object();
-    for (const auto& [name, v] : f.meta.vehicles) {
+    for (const auto& [name, v] : m.vehicles) {
         vehicles[name] = {{"mass_kg", v.mass_kg}, {"rotors", v.rotors}, {"prop_radius_m", v.prop_radius_m},
                           {"motor_distance_m", v.motor_distance_m}};
     }
     meta["vehicles"] = vehicles;
-    meta["stand"] = {{"height_m", f.meta.stand_height_m}};
-    write_text(root / "meta.json", meta.dump(2) + "\n");
+    meta["stand"] = {{"height_m", m.stand_height_m}};
+    return meta.dump(2) + "\n";
+}
 
-    std::string w = "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
-    w.reserve(f.wrench.size() * 80);
-    for (const auto& s : f.wrench) {
-        append(w, "%.6f", s.t);
-        for (double v : s.w) {
-            w += ',';
-            append(w, "%.6f", v);
-        }
-        w += '\n';
+FlightText format_flight(const Flight& f) {
+    static constexpr const char* kQuaternion[] = {"qw", "qx", "qy", "qz"};
+    static constexpr const char* kPosition[] = {"n", "e", "d"};
+    FlightText t;
+    t.meta = meta_text(f.meta);
+    t.wrench = "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
+    t.wrench.reserve(f.wrench.size() * 80);
+    for (std::size_t i = 0; i < f.wrench.size(); ++i) {
+        Row row(t.wrench, "wrench.csv", i + 2);
+        row.number(f.wrench[i].t, 6, "t");
+        for (std::size_t a = 0; a < kAxes.size(); ++a) row.number(f.wrench[i].w[a], 6, kAxes[a]);
     }
-    write_text(root / "wrench.csv", w);
-
-    std::string p = "t,body,n,e,d,qw,qx,qy,qz\n";
-    p.reserve(f.poses.size() * 90);
-    for (const auto& s : f.poses) {
-        append(p, "%.6f", s.t);
-        p += ',';
-        p += f.bodies.at(s.body);
-        for (double v : s.p) {
-            p += ',';
-            append(p, "%.6f", v);
-        }
-        for (double v : s.q) {
-            p += ',';
-            append(p, "%.8f", v);
-        }
-        p += '\n';
+    t.poses = "t,body,n,e,d,qw,qx,qy,qz\n";
+    t.poses.reserve(f.poses.size() * 90);
+    for (std::size_t i = 0; i < f.poses.size(); ++i) {
+        const PoseSample& s = f.poses[i];
+        Row row(t.poses, "poses.csv", i + 2);
+        row.number(s.t, 6, "t");
+        row.text(f.bodies.at(s.body));
+        for (std::size_t k = 0; k < 3; ++k) row.number(s.p[k], 6, kPosition[k]);
+        for (std::size_t k = 0; k < 4; ++k) row.number(s.q[k], 8, kQuaternion[k]);
     }
-    write_text(root / "poses.csv", p);
-
     if (f.legs) {
-        std::string l = "leg,t_start,t_end\n";
-        for (const auto& leg : *f.legs) {
-            l += std::to_string(leg.leg) + ",";
-            append(l, "%.6f", leg.t_start);
-            l += ',';
-            append(l, "%.6f", leg.t_end);
-            l += '\n';
+        t.legs = "leg,t_start,t_end\n";
+        for (std::size_t i = 0; i < f.legs->size(); ++i) {
+            const Leg& leg = (*f.legs)[i];
+            Row row(t.legs, "legs.csv", i + 2);
+            row.text(std::to_string(leg.leg));
+            row.number(leg.t_start, 6, "t_start");
+            row.number(leg.t_end, 6, "t_end");
         }
-        write_text(root / "legs.csv", l);
     }
+    return t;
+}
+}  // namespace
+
+void write_flight(const Flight& f, const std::string& dir) {
+    const FlightText text = format_flight(f);
+    const fs::path root(dir);
+    std::error_code ec;
+    fs::create_directories(root, ec);
+    if (ec) throw RuntimeError(log::cat("cannot create the flight folder ", dir, ": ", ec.message()));
+    write_file((root / "meta.json").string(), text.meta);
+    write_file((root / "wrench.csv").string(), text.wrench);
+    write_file((root / "poses.csv").string(), text.poses);
+    if (f.legs) write_file((root / "legs.csv").string(), text.legs);
 }
 
 std::array<double, 3> Track::position_at(double time) const {

@@ -9,9 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "core/numbers.hpp"
+
 namespace dw::flight {
 
 inline constexpr const char* kFormat = "downwash-flight/1";
+inline constexpr Range kStandHeightRange{0.1, 10, "m"};
 inline constexpr std::array<const char*, 6> kAxes = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
 inline constexpr std::array<const char*, 6> kFormations = {"single", "side_by_side", "leader_follower",
                                                            "stack", "hybrid", "free"};

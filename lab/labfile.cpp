@@ -6,7 +6,9 @@
 #include <set>
 #include <sstream>
 
+#include "core/config.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 
 namespace dw::lab {
@@ -43,12 +45,7 @@ struct Ctx {
 
 LabFile parse_lab(const std::string& yaml, const std::string& name) {
     Ctx c{name};
-    YAML::Node root;
-    try {
-        root = YAML::Load(yaml);
-    } catch (const YAML::Exception& e) {
-        throw InputError(log::cat(name, ":", e.mark.line + 1, ":", e.mark.column + 1, ": not valid YAML: ", e.msg));
-    }
+    const YAML::Node root = load_yaml(yaml, name);
     LabFile lab;
     lab.path = name;
     if (!root.IsMap()) c.fail(root, "(document)", "expected a mapping with format, hosts and processes");
@@ -112,11 +109,7 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
 }
 
 LabFile load_lab(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(log::cat(path, ": cannot open the lab file"));
-    std::stringstream s;
-    s << in.rdbuf();
-    return parse_lab(s.str(), path);
+    return parse_lab(read_file(path, "lab file"), path);
 }
 
 std::vector<std::string> expand(const ProcessSpec& p, const std::map<std::string, std::string>& vars) {

@@ -17,16 +17,15 @@
 namespace {
 
 int run(int argc, char** argv) {
-    dw::Shutdown::install();
     dw::dds::ProcessCli cli("dw-lab: run the Downwash Lab's processes");
     CLI::App& app = cli.app();
     app.require_subcommand(1);
 
     dw::lab::LoopbackOptions lo;
     auto* loopback = app.add_subcommand("loopback", "publish, receive and show every lab topic type over loopback DDS");
-    loopback->add_option("--count", lo.count, "samples per topic")->check(CLI::Range(1, 1000000));
-    loopback->add_option("--rate", lo.rate_hz, "samples per second per topic")->check(CLI::Range(0.1, 10000.0));
-    loopback->add_option("--timeout", lo.timeout_s, "seconds before giving up")->check(CLI::Range(1.0, 3600.0));
+    loopback->add_option("--count", lo.count, "samples per topic")->check(dw::cli::in({1, 1e6}));
+    loopback->add_option("--rate", lo.rate_hz, "samples per second per topic")->check(dw::cli::in({0.1, 1e4, "Hz"}));
+    loopback->add_option("--timeout", lo.timeout_s, "seconds before giving up")->check(dw::cli::in({1, 3600, "s"}));
     loopback->add_option("--summary", lo.summary_path, "write the JSON summary here");
     loopback->add_flag("--quiet", lo.quiet, "show only the summary table");
 

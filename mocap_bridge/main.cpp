@@ -13,7 +13,6 @@
 namespace {
 
 int run(int argc, char** argv) {
-    dw::Shutdown::install();
     dw::dds::ProcessCli cli("dw-mocap-bridge: OptiTrack NatNet motion capture onto DDS (180 Hz), or its simulation");
     CLI::App& app = cli.app();
     std::string source = "natnet", axes = "x,z,-y", mode = "compensated", sim_vehicles = "v1,v2,v3";
@@ -24,13 +23,13 @@ int run(int argc, char** argv) {
     app.add_option("--source", source, "natnet (Motive), or sim (simulated vehicles through an emulated NatNet server)");
     app.add_flag("--sim", sim, "same as --source sim");
     app.add_option("--server", client.server_ip, "Motive host (natnet)");
-    app.add_option("--command-port", client.command_port, "NatNet command port (default 1510)");
+    app.add_option("--command-port", client.command_port, "NatNet command port (default 1510)")->check(dw::cli::in(dw::natnet::kPortRange));
     app.add_option("--local-ip", client.local_ip, "this host's address towards Motive");
     app.add_option("--axes", axes, "NED axes as Motive axes: default x,z,-y (Y up)");
     app.add_option("--name", name_map, "RIGIDBODY=VEHICLE (repeatable)");
     app.add_option("--timestamps", mode, "receive, compensated (default) or clock_sync");
     app.add_option("--sim-vehicles", sim_vehicles, "sim: the neighbours' names (they follow vehicles/setpoint)");
-    app.add_option("--sim-rate", sim_rate, "sim: camera rate [Hz]");
+    app.add_option("--sim-rate", sim_rate, "sim: camera rate [Hz]")->check(dw::cli::in({1, 1000, "Hz"}));
     cli.parse(argc, argv);
     if (sim) source = "sim";
     if (source != "natnet" && source != "sim") throw dw::InputError("--source: '" + source + "' (expected natnet or sim; replay: dw-recorder replay)");

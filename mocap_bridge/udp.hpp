@@ -8,7 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "core/numbers.hpp"
+
 namespace dw::natnet {
+
+inline constexpr Range kPortRange{0, 65535};  // a UDP port (0 = any free one where allowed)
 
 struct Endpoint {
     sockaddr_in addr{};

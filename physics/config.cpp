@@ -8,8 +8,11 @@
 #include <set>
 #include <sstream>
 
+#include "core/config.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "flight/flight.hpp"
 
 namespace dw::physics {
@@ -39,10 +42,9 @@ public:
         const YAML::Node n = get(key);
         if (!n) return;
         double v = 0;
-        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v)) {
-            fail(n, "expected a number", key);
-        }
-        if (v < min || v > max) fail(n, log::cat(v, " is out of range [", min, ", ", max, "]"), key);
+        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v)) fail(n, "expected a number", key);
+        const Range range{min, max};
+        if (!range.contains(v)) fail(n, range_problem(v, range), key);
         out = v;
     }
     void integer(const std::string& key, int& out, int min, int max) {
@@ -98,12 +100,7 @@ int axis_index(const std::string& name) {
 const char* axis_name(int i) { return flight::kAxes.at(static_cast<std::size_t>(i)); }
 
 PhysicsConfig parse_physics(const std::string& yaml, const std::string& file) {
-    YAML::Node root;
-    try {
-        root = YAML::Load(yaml);
-    } catch (const YAML::ParserException& e) {
-        throw InputError(log::cat(file, ":", e.mark.line + 1, ":", e.mark.column + 1, ": not valid YAML: ", e.msg));
-    }
+    const YAML::Node root = load_yaml(yaml, file);
     PhysicsConfig c;
     Section top(root, "", file);
     const std::string format = top.text("format", "downwash-physics/1");
@@ -151,7 +148,7 @@ PhysicsConfig parse_physics(const std::string& yaml, const std::string& file) {
         s.number("offset_sigma_counts", c.stand.offset_sigma_counts, 0, 4e6);
         s.number("rate_hz", c.stand.rate_hz, 1, 1000);
         s.number("rate_skew", c.stand.rate_skew, 0, 0.2);
-        s.number("noise_n", c.stand.noise_n, 0, 10);
+        s.number("noise_n", c.stand.noise_n, kCellNoiseRange.lo, kCellNoiseRange.hi);
         s.number("tare_s", c.stand.tare_s, 0.05, 60);
     }
     {
@@ -186,9 +183,11 @@ PhysicsConfig parse_physics(const std::string& yaml, const std::string& file) {
             const YAML::Node n = s.get("offset_m");
             if (n) {
                 if (!n.IsSequence() || n.size() != 3) s.fail(n, "expected [n, e, d] in metres", "offset_m");
+                const Range range{-10, 10, "m"};
                 for (std::size_t i = 0; i < 3; ++i) {
                     double v = 0;
-                    if (!YAML::convert<double>::decode(n[i], v) || std::abs(v) > 10) s.fail(n, "expected [n, e, d] in metres", "offset_m");
+                    if (!YAML::convert<double>::decode(n[i], v)) s.fail(n, "expected [n, e, d] in metres", "offset_m");
+                    if (!range.contains(v)) s.fail(n, range_problem(v, range), "offset_m");
                     x.position_offset.offset_m[i] = v;
                 }
             }
@@ -224,11 +223,7 @@ PhysicsConfig parse_physics(const std::string& yaml, const std::string& file) {
 }
 
 PhysicsConfig load_physics(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(log::cat(path, ": cannot read the physics configuration"));
-    std::stringstream text;
-    text << in.rdbuf();
-    return parse_physics(text.str(), path);
+    return parse_physics(read_file(path, "physics configuration"), path);
 }
 
 std::string to_yaml(const PhysicsConfig& c) {

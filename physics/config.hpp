@@ -6,7 +6,11 @@
 #include <array>
 #include <string>
 
+#include "core/numbers.hpp"
+
 namespace dw::physics {
+
+inline constexpr Range kCellNoiseRange{0, 10, "N"};  // load-cell noise, 1 sigma
 
 enum class JetModelKind { bauersfeld, jain };
 enum class Aggregation { force_sum, velocity_superposition };

@@ -7,23 +7,11 @@
 #include "core/cli.hpp"
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "flight/flight.hpp"
 #include "physics/flight_sim.hpp"
 
 namespace {
-
-std::vector<double> parse_list(const std::string& text, const std::string& option) {
-    std::vector<double> out;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        char* end = nullptr;
-        const double v = std::strtod(item.c_str(), &end);
-        if (item.empty() || *end != '\0') throw dw::InputError(option + ": '" + item + "' is not a number");
-        out.push_back(v);
-    }
-    return out;
-}
 
 int run(int argc, char** argv) {
     CLI::App app{"dw-sim: the downwash physics simulator (no hardware involved: everything is simulated)"};
@@ -38,16 +26,16 @@ int run(int argc, char** argv) {
     cmd->add_option("--formation", fly.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid")
         ->required();
     cmd->add_option("--physics", physics_path, "physics configuration (default: the documented defaults, config/physics.example.yaml)");
-    cmd->add_option("--seed", fly.seed, "random seed: the same inputs and seed give the same bytes");
+    cmd->add_option("--seed", fly.seed, "random seed: the same inputs and seed give the same bytes")->check(dw::cli::in(dw::kSeedRange));
     cmd->add_option("--out", out_dir, "flight folder to write")->required();
     cmd->add_option("--altitudes", altitudes, "relative altitudes above the sufferer [m], comma-separated");
-    cmd->add_option("--legs", fly.grid.legs, "number of legs")->check(CLI::Range(1, 1000));
-    cmd->add_option("--speed", fly.grid.speed_mps, "leg speed [m/s]");
+    cmd->add_option("--legs", fly.grid.legs, "number of legs")->check(dw::cli::in(dw::physics::kLegsRange));
+    cmd->add_option("--speed", fly.grid.speed_mps, "leg speed [m/s]")->check(dw::cli::in(dw::physics::kSpeedRange));
     cmd->add_flag("--quiet", quiet, "no progress");
 
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
-    fly.grid.altitudes_m = parse_list(altitudes, "--altitudes");
+    fly.grid.altitudes_m = dw::parse_number_list(altitudes, dw::physics::kAltitudeRange, "--altitudes");
     const dw::physics::PhysicsConfig physics =
         physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
     if (!quiet) {

@@ -39,12 +39,10 @@ void ReferenceTrajectory::add(Kind kind, double length_s, const Vec3& p0, const 
 }
 
 ReferenceTrajectory::ReferenceTrajectory(const GridOptions& o) {
-    if (o.legs < 1) throw InputError("--legs must be at least 1");
+    require_in(o.legs, kLegsRange, "legs");
     if (o.altitudes_m.empty()) throw InputError("--altitudes needs at least one altitude");
-    for (double a : o.altitudes_m) {
-        if (a <= 0 || a > 3.0) throw InputError(log::cat("altitude ", a, " m is outside (0, 3] m above the stand"));
-    }
-    if (o.speed_mps <= 0 || o.speed_mps > 3) throw InputError(log::cat("speed ", o.speed_mps, " m/s is outside (0, 3]"));
+    for (double a : o.altitudes_m) require_in(a, kAltitudeRange, "altitude above the sufferer");
+    require_in(o.speed_mps, kSpeedRange, "leg speed");
     const double hw = o.half_width_m;
     const double ramp_m = 0.5 * o.speed_mps * o.ramp_s;  // distance of a cosine speed ramp
     const double far = hw + ramp_m;

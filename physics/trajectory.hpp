@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/numbers.hpp"
 #include "physics/vehicle.hpp"
 
 namespace dw::physics {
@@ -20,6 +21,11 @@ struct Formation {
 // Throws dw::InputError for an unknown name.
 Formation make_formation(const std::string& name);
 const std::vector<std::string>& formation_names();
+
+// What the grid generator accepts (the planner narrows the altitude to its geofence).
+inline constexpr Range kAltitudeRange{0.05, 3.0, "m"};
+inline constexpr Range kSpeedRange{0.05, 3.0, "m/s"};
+inline constexpr Range kLegsRange{1, 1000};
 
 struct GridOptions {
     std::vector<double> altitudes_m{0.3, 0.8, 1.3};  // reference point above the sufferer

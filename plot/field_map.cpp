@@ -10,6 +10,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "plot/draw.hpp"
+#include "plot/png.hpp"
 
 namespace dw::plot {
 
@@ -105,7 +106,7 @@ MapLayout render_fields(const std::vector<Field>& fields, const std::string& tit
         text(img, num(std::abs(v) < 1e-12 ? 0.0 : v, prec), {bx + bw + 6, py + 4}, 0.38);
     }
     text(img, unit, {bx + bw / 2, top - 10}, 0.42, 1);
-    if (!cv::imwrite(png, img)) throw RuntimeError(log::cat(png, ": cannot write the PNG"));
+    write_png(img, png);
     return L;
 }
 

@@ -47,7 +47,6 @@ std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>
 }
 
 int run(int argc, char** argv) {
-    dw::Shutdown::install();
     dw::dds::ProcessCli cli("dw-predictor: learnt downwash force models (naive linear, learnt linear, Deep Sets)");
     CLI::App& app = cli.app();
     app.require_subcommand(1);
@@ -59,10 +58,10 @@ int run(int argc, char** argv) {
     study->add_option("--out", so.out_dir, "output folder (flights, models, table.md, table.csv, maps)")->required();
     study->add_option("--physics", physics_path, "physics configuration (default: config/physics.example.yaml's defaults)");
     study->add_flag("--jet-merging", jet_merging, "switch the jet_merging effect on (the aggregate is not a sum)");
-    study->add_option("--legs", so.legs, "legs per flight")->check(CLI::Range(5, 1000));
-    study->add_option("--seed", so.seed, "seed of the flights and the training");
-    study->add_option("--epochs", so.max_epochs, "at most this many epochs per model")->check(CLI::Range(1, 100000));
-    study->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]");
+    study->add_option("--legs", so.legs, "legs per flight")->check(dw::cli::in(dw::Range{5, dw::physics::kLegsRange.hi}));
+    study->add_option("--seed", so.seed, "seed of the flights and the training")->check(dw::cli::in(dw::kSeedRange));
+    study->add_option("--epochs", so.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+    study->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
     study->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
     study->add_flag("--no-maps", no_maps, "skip the maps");
 
@@ -73,9 +72,9 @@ int run(int argc, char** argv) {
     train->add_option("--kind", to.kind, "naive_linear, learnt_linear or deep_sets")->required();
     train->add_option("--data", data, "flight folders or .mcap recordings")->required();
     train->add_option("--out", model_out, "model file to write (JSON)")->required();
-    train->add_option("--epochs", to.max_epochs, "at most this many epochs")->check(CLI::Range(1, 100000));
-    train->add_option("--seed", to.seed, "seed");
-    train->add_option("--hidden", to.hidden, "hidden layer width")->check(CLI::Range(4, 4096));
+    train->add_option("--epochs", to.max_epochs, "at most this many epochs")->check(dw::cli::in(kEpochsRange));
+    train->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
+    train->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
 
     std::vector<std::string> models;
     std::string out_dir;
@@ -84,14 +83,14 @@ int run(int argc, char** argv) {
     cmp->add_option("--models", models, "model files (.json), or a physics configuration (.yaml) for the simulator")->required();
     cmp->add_option("--data", data, "flight folders or .mcap recordings")->required();
     cmp->add_option("--out", out_dir, "folder for table.md and table.csv")->required();
-    cmp->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]");
+    cmp->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
 
     MapRequest mr;
     std::string axis = "f_d", png = "map.png", line;
     auto* map = app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
     map->add_option("--models", models, "model files (.json) or physics configurations (.yaml)")->required();
     map->add_option("--formation", mr.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid");
-    map->add_option("--altitude", mr.altitude_m, "the formation's height above the sufferer [m]");
+    map->add_option("--altitude", mr.altitude_m, "the formation's height above the sufferer [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
     map->add_option("--axis", axis, "f_n, f_e, f_d, m_roll, m_pitch or m_yaw");
     map->add_option("--data", data, "recorded flight of this formation: drawn as 'observed'");
     map->add_option("--out", png, "the map (PNG)");

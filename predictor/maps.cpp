@@ -9,6 +9,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "plot/png.hpp"
 #include "physics/trajectory.hpp"
 #include "plot/draw.hpp"
 
@@ -148,7 +149,7 @@ void draw_force_line(const std::vector<const ForceModel*>& models, const MapRequ
         cv::circle(img, {left + pw + 27, ky - 5}, 3, cv::Scalar(80, 80, 80), cv::FILLED);
         text(img, "observed (legs both ways)", {left + pw + 46, ky}, 0.45);
     }
-    if (!cv::imwrite(png, img)) throw RuntimeError(log::cat(png, ": cannot write the PNG"));
+    plot::write_png(img, png);
 }
 
 }  // namespace dw::predictor

@@ -6,10 +6,14 @@
 #include <functional>
 #include <string>
 
+#include "core/numbers.hpp"
 #include "predictor/dataset.hpp"
 #include "predictor/model.hpp"
 
 namespace dw::predictor {
+
+inline constexpr Range kEpochsRange{1, 100000};
+inline constexpr Range kHiddenRange{4, 4096};
 
 struct TrainOptions {
     std::string kind = "deep_sets";     // naive_linear, learnt_linear or deep_sets

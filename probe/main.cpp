@@ -26,7 +26,6 @@ dw::dds::QosOverrides qos_overrides(const std::string& reliability, const std::s
 }
 
 int run(int argc, char** argv) {
-    dw::Shutdown::install();
     dw::dds::ProcessCli cli("dw-probe: list the lab's DDS topics, publish test samples, echo and check them");
     CLI::App& app = cli.app();
     std::string name = "probe-" + std::to_string(::getpid());
@@ -48,12 +47,12 @@ int run(int argc, char** argv) {
     double wait_timeout_s = 10.0;
     auto* pub_cmd = app.add_subcommand("pub", "publish deterministic samples on lab topics");
     add_topic_options(pub_cmd);
-    pub_cmd->add_option("--count", pub.count, "samples per topic")->check(CLI::Range(1, 100000000));
+    pub_cmd->add_option("--count", pub.count, "samples per topic")->check(dw::cli::in({1, 1e8}));
     pub_cmd->add_option("--rate", pub.rate_hz, "rounds per second (one sample per topic each)")
-        ->check(CLI::Range(0.0, 100000.0));
-    pub_cmd->add_option("--wait-readers", pub.wait_readers, "wait for this many readers per topic first");
-    pub_cmd->add_option("--wait-timeout", wait_timeout_s, "seconds to wait for readers");
-    pub_cmd->add_option("--linger", linger_s, "seconds to stay after publishing (latched topics), -1 = until stopped");
+        ->check(dw::cli::in({0, 1e5, "Hz"}));
+    pub_cmd->add_option("--wait-readers", pub.wait_readers, "wait for this many readers per topic first")->check(dw::cli::in(dw::dds::kReadersRange));
+    pub_cmd->add_option("--wait-timeout", wait_timeout_s, "seconds to wait for readers")->check(dw::cli::in(dw::kTimeoutRange));
+    pub_cmd->add_option("--linger", linger_s, "seconds to stay after publishing (latched topics), -1 = until stopped")->check(dw::cli::in({-1, dw::kTimeoutRange.hi, "s"}));
     pub_cmd->add_flag("--quiet", pub.quiet, "do not print each sample");
 
     dw::probe::EchoOptions echo;
@@ -61,9 +60,9 @@ int run(int argc, char** argv) {
     std::string summary_path;
     auto* echo_cmd = app.add_subcommand("echo", "print samples of lab topics and check their content");
     add_topic_options(echo_cmd);
-    echo_cmd->add_option("--expect", echo.expect, "end after this many intact samples per topic");
-    echo_cmd->add_option("--expect-latched", echo.expect_latched, "the same for latched topics (default: --expect)");
-    echo_cmd->add_option("--timeout", timeout_s, "give up after this many seconds (exit 1)");
+    echo_cmd->add_option("--expect", echo.expect, "end after this many intact samples per topic (0 = until stopped)")->check(dw::cli::in({0, 1e8}));
+    echo_cmd->add_option("--expect-latched", echo.expect_latched, "the same for latched topics (default, -1: --expect)")->check(dw::cli::in({-1, 1e8}));
+    echo_cmd->add_option("--timeout", timeout_s, "give up after this many seconds (exit 1; 0 = never)")->check(dw::cli::in(dw::kTimeoutRange));
     echo_cmd->add_option("--summary", summary_path, "write a JSON summary here");
     echo_cmd->add_flag("--quiet", echo.quiet, "print only the summary table");
 

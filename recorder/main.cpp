@@ -13,7 +13,6 @@
 namespace {
 
 int run(int argc, char** argv) {
-    dw::Shutdown::install();
     dw::dds::ProcessCli cli("dw-recorder: record every lab topic to MCAP; inspect, recover, export and replay recordings");
     CLI::App& app = cli.app();
     app.require_subcommand(1);
@@ -27,15 +26,15 @@ int run(int argc, char** argv) {
     record->add_option("topics", rec.topics, "topic suffixes (stand/wrench) or full names; default all");
     record->add_option("-o,--out", rec.out, "output file (with splitting: <stem>_NNNN.mcap)");
     record->add_option("--compression", compression, "zstd (default), lz4 or none");
-    record->add_option("--flush-interval", flush_s, "seconds: at most this much is lost on a crash")->check(CLI::Range(0.05, 60.0));
-    record->add_option("--chunk-size", rec.writer.chunk_size, "bytes of messages per chunk at most");
-    record->add_option("--split-size", split_mb, "start a new file after this many MB");
-    record->add_option("--split-duration", rec.split_seconds, "start a new file after this many seconds");
+    record->add_option("--flush-interval", flush_s, "seconds: at most this much is lost on a crash")->check(dw::cli::in({0.05, 60, "s"}));
+    record->add_option("--chunk-size", rec.writer.chunk_size, "bytes of messages per chunk at most")->check(dw::cli::in({1024, 1 << 30, "bytes"}));
+    record->add_option("--split-size", split_mb, "start a new file after this many MB (0 = never)")->check(dw::cli::in({0, 1e6, "MB"}));
+    record->add_option("--split-duration", rec.split_seconds, "start a new file after this many seconds (0 = never)")->check(dw::cli::in(dw::kTimeoutRange));
     record->add_option("--attach", attach, "NAME=PATH: store a file (stand calibration, physics config)");
     record->add_flag("--paused", rec.start_paused, "start paused (resume: RESUME command or SIGUSR1)");
     bool no_commands = false;
     record->add_flag("--no-command-control", no_commands, "record PAUSE/RESUME commands but do not obey them");
-    record->add_option("--duration", duration_s, "stop after this many seconds (default: until Ctrl-C)");
+    record->add_option("--duration", duration_s, "stop after this many seconds (0, the default: until Ctrl-C)")->check(dw::cli::in(dw::kTimeoutRange));
     record->add_flag("--no-fsync", no_fsync, "do not fdatasync each chunk (faster, loses more on a power cut)");
     record->add_flag("--quiet", quiet, "no live status line");
 
@@ -60,8 +59,8 @@ int run(int argc, char** argv) {
     auto* replay = app.add_subcommand("replay", "publish a recording back on DDS with its original timing");
     replay->add_option("file", file, "MCAP file")->required();
     replay->add_option("topics", rp.topics, "topic suffixes to replay; default all");
-    replay->add_option("--speed", rp.speed, "x N of the original rate")->check(CLI::Range(0.01, 1000.0));
-    replay->add_option("--wait-readers", rp.wait_readers, "wait for this many readers per topic first");
+    replay->add_option("--speed", rp.speed, "x N of the original rate")->check(dw::cli::in({0.01, 1000}));
+    replay->add_option("--wait-readers", rp.wait_readers, "wait for this many readers per topic first")->check(dw::cli::in(dw::dds::kReadersRange));
 
     cli.parse(argc, argv);
 

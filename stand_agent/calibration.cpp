@@ -7,7 +7,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/config.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "physics/stand.hpp"
 
@@ -27,14 +29,7 @@ physics::Wrench Calibration::wrench(const CellVector& tared) const {
 }
 
 Calibration Calibration::load(const std::string& path) {
-    YAML::Node root;
-    try {
-        root = YAML::LoadFile(path);
-    } catch (const YAML::BadFile&) {
-        throw InputError(log::cat(path, ": cannot read the calibration file"));
-    } catch (const YAML::ParserException& e) {
-        throw InputError(log::cat(path, ":", e.mark.line + 1, ":", e.mark.column + 1, ": not valid YAML: ", e.msg));
-    }
+    const YAML::Node root = load_yaml_file(path, "calibration file");
     auto fail = [&](const YAML::Node& n, const std::string& key, const std::string& what) {
         if (n && n.Mark().line >= 0) throw InputError(log::cat(path, ":", n.Mark().line + 1, ":", n.Mark().column + 1, ": ", key, ": ", what));
         throw InputError(log::cat(path, ": ", key, ": ", what));

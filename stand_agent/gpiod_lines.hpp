@@ -4,12 +4,15 @@
 #include <array>
 #include <string>
 
+#include "core/numbers.hpp"
 #include "stand_agent/lines.hpp"
 
 struct gpiod_chip;
 struct gpiod_line;
 
 namespace dw::stand {
+
+inline constexpr Range kLineOffsetRange{0, 1023};  // a GPIO line offset on the chip
 
 struct GpioPins {
     std::string chip = "gpiochip0";

@@ -7,6 +7,7 @@
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
+#include "physics/config.hpp"
 #include "stand_agent/emulated_bank.hpp"
 #include "stand_agent/gpiod_lines.hpp"
 #include "stand_agent/runner.hpp"
@@ -20,7 +21,9 @@ std::vector<unsigned> parse_lines(const std::string& text) {
     while (std::getline(in, item, ',')) {
         char* end = nullptr;
         const long v = std::strtol(item.c_str(), &end, 10);
-        if (item.empty() || *end != '\0' || v < 0 || v > 1023) throw dw::InputError("--data-lines: '" + item + "' is not a line number");
+        if (item.empty() || *end != '\0' || !dw::stand::kLineOffsetRange.contains(static_cast<double>(v))) {
+            throw dw::InputError("--data-lines: '" + item + "' is not a line number " + dw::stand::kLineOffsetRange.describe());
+        }
         out.push_back(static_cast<unsigned>(v));
     }
     if (out.size() != dw::stand::kChips) throw dw::InputError("--data-lines: expected 8 line numbers, got " + std::to_string(out.size()));
@@ -28,7 +31,6 @@ std::vector<unsigned> parse_lines(const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-    dw::Shutdown::install();
     dw::dds::ProcessCli cli("dw-stand-agent: eight HX711 load cells to a calibrated 6-DOF wrench (80 Hz)");
     CLI::App& app = cli.app();
     app.require_subcommand(1);
@@ -41,9 +43,9 @@ int run(int argc, char** argv) {
     runc->add_flag("--sim", sim, "emulated HX711 bank driven by the physics and the mocap topic (no hardware)");
     runc->add_option("--calibration", calibration_path, "calibration YAML (default: nominal gains and the stand's geometry)");
     runc->add_option("--physics", physics_path, "physics configuration for --sim (default: the documented defaults)");
-    runc->add_option("--noise", noise_n, "--sim: load-cell noise, 1 sigma [N]");
+    runc->add_option("--noise", noise_n, "--sim: load-cell noise, 1 sigma [N]")->check(dw::cli::in(dw::physics::kCellNoiseRange));
     runc->add_option("--gpio-chip", gpio_chip, "GPIO chip (real hardware)");
-    runc->add_option("--clock-line", clock_line, "PD_SCK line offset, shared by the 8 chips");
+    runc->add_option("--clock-line", clock_line, "PD_SCK line offset, shared by the 8 chips")->check(dw::cli::in(dw::stand::kLineOffsetRange));
     runc->add_option("--data-lines", data_lines, "DOUT line offsets of cells 0-7, comma-separated");
     runc->add_option("--gain", gain, "a128 (default), a64 or b32");
     runc->add_flag("--realtime", realtime, "SCHED_FIFO and mlockall for the sampling thread");

@@ -9,6 +9,7 @@
 
 namespace dw::planner {
 namespace {
+constexpr double kFenceTolerance_m = 0.1;  // hover noise on the floor or at a wall is not a breach
 const char* kPhaseNames[] = {"IDLE", "WAITING", "CALIBRATING", "TAKING_OFF", "FLYING", "LANDING", "DONE", "ABORTED"};
 
 physics::Setpoint min_jerk(const physics::Vec3& a, const physics::Vec3& b, double t, double T) {
@@ -26,9 +27,10 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
       states_(p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) {
           std::lock_guard lock(mutex_);
           auto& v = seen_[s.vehicle_id()];
-          v.tracking = s.tracking_valid();
-          if (s.tracking_valid()) {
-              v.position = physics::Vec3(s.position_m().x(), s.position_m().y(), s.position_m().z());
+          const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
+          v.tracking = s.tracking_valid() && x.allFinite();  // a NaN pose is no pose
+          if (v.tracking) {
+              v.position = x;
               v.seen_ns = p_.clock().monotonic_ns();
           }
       }),
@@ -64,9 +66,14 @@ void Experiment::publish_state(msg::ExperimentPhase phase, int leg, double progr
     state_.write(s);
 }
 
-void Experiment::send(const std::vector<physics::Setpoint>& sps) {
+std::optional<std::string> Experiment::send(const std::vector<physics::Setpoint>& sps) {
+    for (std::size_t i = 0; i < sps.size(); ++i) {
+        // Never reaches a vehicle: the last finite setpoints are held instead.
+        if (!is_finite(sps[i])) return log::cat("non-finite setpoint for ", plan_.vehicles[i], " refused");
+    }
     last_ = sps;
     link_->send(sps, p_.clock().now_ns());
+    return std::nullopt;
 }
 
 std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint>& sps) {
@@ -74,19 +81,17 @@ std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint
     if (abort_requested_) return abort_reason_;
     if (!lost_peer_.empty()) return lost_peer_;
     const Nanos now = p_.clock().monotonic_ns();
-    const auto& f = plan_.options.fence;
+    // Each check passes only when positively satisfied: a NaN anywhere is a fault.
     for (std::size_t i = 0; i < sps.size(); ++i) {
         const auto it = seen_.find(plan_.vehicles[i]);
         const double age = it == seen_.end() ? 1e9 : to_seconds(now - it->second.seen_ns);
-        if (age > o_.mocap_timeout_s) return log::cat("mocap lost: no pose of ", plan_.vehicles[i], " for ", age > 1e8 ? 0.0 : age, " s");
+        if (!(age <= o_.mocap_timeout_s)) return log::cat("mocap lost: no pose of ", plan_.vehicles[i], " for ", age > 1e8 ? 0.0 : age, " s");
         const auto& x = it->second.position;
-        const double tol = 0.1;  // hover noise on the floor or at a wall is not a breach
-        if (x.x() < f.n_min - tol || x.x() > f.n_max + tol || x.y() < f.e_min - tol || x.y() > f.e_max + tol ||
-            x.z() < f.d_min - tol || x.z() > f.d_max + tol) {
+        if (!plan_.options.fence.contains(x, kFenceTolerance_m)) {
             return log::cat("geofence breach by ", plan_.vehicles[i], " at (", x.x(), ", ", x.y(), ", ", x.z(), ")");
         }
         const double err = (x - sps[i].position).norm();
-        if (err > o_.tracking_error_m) return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
+        if (!(err <= o_.tracking_error_m)) return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
     }
     return std::nullopt;
 }
@@ -99,10 +104,13 @@ std::optional<std::string> Experiment::fly(double duration, const std::function<
     int last_report = -1;
     for (;;) {
         const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (t > duration) break;
+        if (!(t <= duration)) break;
         if (Shutdown::instance().requested() && supervise) return std::string("interrupted (SIGINT/SIGTERM)");
         const auto sps = target(t);
-        send(sps);
+        if (auto refused = send(sps)) {
+            if (supervise) return refused;
+            link_->send(last_, p_.clock().now_ns());  // landing: hold the last finite setpoints
+        }
         if (supervise && t > 0.3) {  // the vehicles need a moment to start following
             if (auto f = fault(sps)) return f;
         }
@@ -122,8 +130,7 @@ std::optional<std::string> Experiment::fly(double duration, const std::function<
         next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
         std::this_thread::sleep_until(next);
     }
-    send(target(duration));  // end exactly where the segment ends
-    return std::nullopt;
+    return send(target(duration));  // end exactly where the segment ends
 }
 
 void Experiment::land_safely(const std::string& why) {

@@ -45,7 +45,8 @@ private:
         bool tracking = false;
     };
     void publish_state(msg::ExperimentPhase phase, int leg, double progress, const std::string& message);
-    void send(const std::vector<physics::Setpoint>& sps);
+    // Sends the setpoints unless one is not finite: then nothing is sent and the reason returned.
+    std::optional<std::string> send(const std::vector<physics::Setpoint>& sps);
     std::optional<std::string> fault(const std::vector<physics::Setpoint>& sps);
     // Flies `target(t)` for `duration` at the setpoint rate; stops early on a fault (returned).
     std::optional<std::string> fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,

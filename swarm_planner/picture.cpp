@@ -5,6 +5,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "plot/png.hpp"
 
 namespace dw::planner {
 namespace {
@@ -91,7 +92,7 @@ void draw_plan(const Plan& p, const std::string& png_path) {
         cv::putText(img, log::cat(a, " m above"), {kMargin + static_cast<int>(i) * 150 + 36, y}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
     }
     cv::putText(img, "green: measured square/volume, grey: reference path", {kMargin + 460, y}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
-    if (!cv::imwrite(png_path, img)) throw RuntimeError(log::cat("cannot write the picture ", png_path));
+    plot::write_png(img, png_path);
 }
 
 }  // namespace dw::planner

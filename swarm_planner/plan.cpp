@@ -7,6 +7,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/shutdown.hpp"
 
 namespace dw::planner {
 
@@ -16,8 +17,17 @@ physics::Setpoint Plan::setpoint(std::size_t vehicle, double t) const {
     return sp;
 }
 
+bool is_finite(const physics::Setpoint& sp) {
+    return sp.position.allFinite() && sp.velocity.allFinite() && sp.acceleration.allFinite() && std::isfinite(sp.yaw_rad);
+}
+
+bool Geofence::contains(const physics::Vec3& x, double grow_m) const {
+    return x.x() >= n_min - grow_m && x.x() <= n_max + grow_m && x.y() >= e_min - grow_m && x.y() <= e_max + grow_m &&
+           x.z() >= d_min - grow_m && x.z() <= d_max + grow_m;
+}
+
 Plan make_plan(const PlanOptions& o) {
-    if (o.min_separation_m <= 0) throw InputError("minimum separation must be positive");
+    require_in(o.min_separation_m, kSeparationRange, "minimum separation");
     Plan p{o, physics::make_formation(o.formation), physics::ReferenceTrajectory(o.grid), {}};
     for (std::size_t i = 0; i < p.formation.offsets.size(); ++i) p.vehicles.push_back("v" + std::to_string(i + 1));
     return p;
@@ -38,23 +48,29 @@ std::string fmt(const physics::Vec3& v) {
 }
 }  // namespace
 
-std::optional<Violation> check(const Plan& p) {
+std::optional<Violation> check(const Plan& p, const std::stop_token& stop) {
     const auto& f = p.options.fence;
     const physics::Vec3 sufferer(0, 0, -p.options.grid.stand_height_m);
     const std::size_t k = p.vehicles.size();
-    for (double t = 0; t <= p.duration_s(); t += p.options.check_dt_s) {
-        std::vector<physics::Vec3> pos(k);
+    const double duration = p.duration_s();
+    if (!(std::isfinite(duration) && duration > 0)) return Violation{0, log::cat("the plan's duration is ", duration, " s")};
+    const auto steps = static_cast<long long>(std::ceil(duration / p.options.check_dt_s));
+    std::vector<physics::Vec3> pos(k);
+    for (long long step = 0; step <= steps; ++step) {
+        if (step % 1000 == 0) throw_if_stopped(stop, "the plan's checks");
+        const double t = std::min(duration, static_cast<double>(step) * p.options.check_dt_s);
         for (std::size_t i = 0; i < k; ++i) {
-            pos[i] = p.setpoint(i, t).position;
+            const physics::Setpoint sp = p.setpoint(i, t);
+            if (!is_finite(sp)) return Violation{t, log::cat(p.vehicles[i], "'s setpoint is not finite at t = ", t, " s")};
+            pos[i] = sp.position;
             const auto& x = pos[i];
-            if (x.x() < f.n_min + f.margin_m || x.x() > f.n_max - f.margin_m || x.y() < f.e_min + f.margin_m ||
-                x.y() > f.e_max - f.margin_m || x.z() < f.d_min + f.margin_m || x.z() > f.d_max - f.margin_m) {
+            if (!f.contains(x, -f.margin_m)) {
                 return Violation{t, log::cat(p.vehicles[i], " leaves the geofence at ", fmt(x), " m at t = ", t, " s (",
                                              where(p, t), "; fence N ", f.n_min, "..", f.n_max, ", E ", f.e_min, "..", f.e_max,
                                              ", D ", f.d_min, "..", f.d_max, " minus ", f.margin_m, " m)")};
             }
             const double to_stand = (x - sufferer).norm();
-            if (to_stand < p.options.min_separation_m) {
+            if (!(to_stand >= p.options.min_separation_m)) {
                 return Violation{t, log::cat(p.vehicles[i], " comes ", to_stand, " m from the sufferer at t = ", t, " s (",
                                              where(p, t), "); minimum ", p.options.min_separation_m, " m")};
             }
@@ -62,7 +78,7 @@ std::optional<Violation> check(const Plan& p) {
         for (std::size_t a = 0; a < k; ++a) {
             for (std::size_t b = a + 1; b < k; ++b) {
                 const double d = (pos[a] - pos[b]).norm();
-                if (d < p.options.min_separation_m) {
+                if (!(d >= p.options.min_separation_m)) {
                     return Violation{t, log::cat(p.vehicles[a], " and ", p.vehicles[b], " come ", d, " m apart at t = ", t,
                                                  " s (", where(p, t), "); minimum ", p.options.min_separation_m, " m")};
                 }
@@ -72,11 +88,12 @@ std::optional<Violation> check(const Plan& p) {
     return std::nullopt;
 }
 
-double coverage(const Plan& p) {
+double coverage(const Plan& p, const std::stop_token& stop) {
     const double hw = p.options.grid.half_width_m, cell = 0.1;
     const int n = static_cast<int>(std::round(2 * hw / cell));
     std::vector<bool> covered(static_cast<std::size_t>(n * n), false);
     for (const auto& leg : p.reference.legs()) {
+        throw_if_stopped(stop, "the plan's coverage");
         for (double t = leg.t_start; t <= leg.t_end; t += 0.02) {
             for (std::size_t v = 0; v < p.vehicles.size(); ++v) {
                 const auto x = p.setpoint(v, t).position;

@@ -4,6 +4,7 @@
 // pair of vehicles (and the sufferer on its stand) at least the minimum separation apart, and
 // everything inside the room's geofence, over a fine time grid.
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -11,12 +12,21 @@
 
 namespace dw::planner {
 
+// The vehicles stay below the stand's volume ceiling; the separation is what the checks keep.
+inline constexpr Range kPlanAltitudeRange{physics::kAltitudeRange.lo, 1.4, "m"};
+inline constexpr Range kSeparationRange{0.05, 5, "m"};
+
+// Every finite component, else false: what the planner sends to a vehicle must pass this.
+bool is_finite(const physics::Setpoint& sp);
+
 struct Geofence {
     double n_min = -2.0, n_max = 2.0;   // a 4 m x 6 m x 4 m room (96 m³) around the stand
     double e_min = -3.0, e_max = 3.0;
     double d_min = -4.0, d_max = 0.0;   // ceiling 4 m above the floor (D = 0): a Stack at 1.3 m
                                         // puts its upper vehicle 3.2 m up
     double margin_m = 0.2;
+    // True only when x is finite and inside the fence grown by `grow_m` (negative: shrunk).
+    bool contains(const physics::Vec3& x, double grow_m) const;
 };
 
 struct PlanOptions {
@@ -42,13 +52,15 @@ struct Plan {
     physics::Setpoint setpoint(std::size_t vehicle, double t) const;
 };
 
-// Throws dw::InputError for bad options (unknown formation, impossible altitudes).
+// Throws dw::InputError for bad options (unknown formation, impossible altitudes, a separation
+// outside kSeparationRange).
 Plan make_plan(const PlanOptions& o);
-// The first separation or geofence violation over the whole plan, if any.
-std::optional<Violation> check(const Plan& p);
+// The first separation, geofence or non-finite-setpoint violation over the whole plan, if any.
+// Every check must be positively satisfied (NaN fails them all). Throws dw::Stopped on `stop`.
+std::optional<Violation> check(const Plan& p, const std::stop_token& stop = {});
 // Fraction of the square's 10 cm cells that a vehicle's measured (constant-speed) path passes
 // within 10 cm of.
-double coverage(const Plan& p);
+double coverage(const Plan& p, const std::stop_token& stop = {});
 // The plan as YAML (or JSON when `json`), for the record and for `dw-sim fly --plan`.
 std::string to_document(const Plan& p, bool json);
 

@@ -24,20 +24,21 @@ std::string error_of(const std::function<void()>& f) {
     }
     return "(no error)";
 }
+constexpr dw::Range kAnyInt{-1000, 1000};
 }  // namespace
 
 TEST(ConfigFile, ReadsTypedValuesAtDottedPaths) {
     const auto c = ConfigFile::parse("dds:\n  domain: 7\n  transport: udp\n  initial_peers: [127.0.0.1, 10.0.0.2]\n", "t.yaml");
-    EXPECT_EQ(c.get_int("dds.domain"), 7);
+    EXPECT_EQ(c.get_int("dds.domain", kAnyInt), 7);
     EXPECT_EQ(c.get_string("dds.transport"), "udp");
     EXPECT_EQ(c.get_strings("dds.initial_peers")->size(), 2u);
-    EXPECT_FALSE(c.get_int("dds.missing").has_value());
-    EXPECT_FALSE(c.get_int("nothing.here").has_value());
+    EXPECT_FALSE(c.get_int("dds.missing", kAnyInt).has_value());
+    EXPECT_FALSE(c.get_int("nothing.here", kAnyInt).has_value());
 }
 
 TEST(ConfigFile, LookupsDoNotInsertKeys) {
     const auto c = ConfigFile::parse("dds:\n  domain: 7\n", "t.yaml");
-    EXPECT_FALSE(c.get_int("dds.nope").has_value());
+    EXPECT_FALSE(c.get_int("dds.nope", kAnyInt).has_value());
     EXPECT_FALSE(c.at("dds.nope"));
     EXPECT_EQ(c.at("dds").size(), 1u);
 }
@@ -50,13 +51,13 @@ TEST(ConfigFile, MalformedYamlNamesFileLineAndColumn) {
 
 TEST(ConfigFile, WrongTypeNamesKeyAndLine) {
     const auto c = ConfigFile::parse("dds:\n  domain: seven\n", "t.yaml");
-    const std::string e = error_of([&] { (void)c.get_int("dds.domain"); });
+    const std::string e = error_of([&] { (void)c.get_int("dds.domain", kAnyInt); });
     EXPECT_EQ(e, "t.yaml:2:11: dds.domain: expected an integer, got 'seven'");
 }
 
 TEST(ConfigFile, UnreadableFileIsAnInputError) {
     const std::string e = error_of([] { ConfigFile::load("/nonexistent/lab.yaml"); });
-    EXPECT_EQ(e, "config /nonexistent/lab.yaml: cannot read the file");
+    EXPECT_EQ(e, "config /nonexistent/lab.yaml: no such file");
 }
 
 TEST(ConfigFile, TopLevelMustBeAMapping) {
@@ -102,7 +103,7 @@ TEST(DdsConfig, DomainOutOfRange) {
                   std::string::npos);
     }
     const auto file = ConfigFile::parse("dds:\n  domain: 500\n", "lab.yaml");
-    EXPECT_EQ(error_of([&] { dw::dds::resolve({}, file); }), "lab.yaml:2:11: dds.domain: domain id 500 is out of range (0-232)");
+    EXPECT_EQ(error_of([&] { dw::dds::resolve({}, file); }), "lab.yaml:2:11: dds.domain: 500 is not in [0, 232]");
     DdsCliOptions ok;
     ok.domain = 232;
     EXPECT_EQ(dw::dds::resolve(ok, ConfigFile()).domain, 232);

@@ -1,0 +1,80 @@
+#include "core/files.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+
+namespace dw {
+namespace fs = std::filesystem;
+
+void require_readable_file(const std::string& path, std::string_view what) {
+    std::error_code ec;
+    const auto status = fs::status(path, ec);
+    if (path.empty()) throw InputError(log::cat(what, ": no file given"));
+    if (!fs::exists(status)) throw InputError(log::cat(what, " ", path, ": no such file"));
+    if (fs::is_directory(status)) throw InputError(log::cat(what, " ", path, ": is a directory, expected a file"));
+    if (!fs::is_regular_file(status)) throw InputError(log::cat(what, " ", path, ": not a regular file"));
+    if (::access(path.c_str(), R_OK) != 0) {
+        throw InputError(log::cat(what, " ", path, ": cannot read: ", std::strerror(errno)));
+    }
+}
+
+std::string read_file(const std::string& path, std::string_view what) {
+    require_readable_file(path, what);
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream out;
+    if (in) out << in.rdbuf();
+    if (!in || in.bad()) throw InputError(log::cat(what, " ", path, ": cannot read the file"));
+    return out.str();
+}
+
+void require_writable_path(const std::string& path, std::string_view what) {
+    if (path.empty()) throw InputError(log::cat(what, ": no path given"));
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw InputError(log::cat(what, " ", path, ": is a directory, expected a file name"));
+    // The nearest folder that exists must be a writable directory; missing ones are made on write.
+    fs::path dir = fs::absolute(fs::path(path), ec).parent_path();
+    while (!fs::exists(dir, ec) && dir.has_parent_path() && dir != dir.parent_path()) dir = dir.parent_path();
+    if (!fs::is_directory(dir, ec)) throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
+    if (::access(dir.c_str(), W_OK) != 0) {
+        throw InputError(log::cat(what, " ", path, ": cannot write in ", dir.string(), ": ", std::strerror(errno)));
+    }
+}
+
+void write_file(const std::string& path, std::string_view content) {
+    const fs::path parent = fs::path(path).parent_path();
+    std::error_code ec;
+    if (!parent.empty() && !fs::exists(parent, ec) && !fs::create_directories(parent, ec)) {
+        throw RuntimeError(log::cat("cannot write ", path, ": cannot create ", parent.string(), ": ", ec.message()));
+    }
+    const std::string tmp = log::cat(path, ".tmp-", ::getpid());
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw RuntimeError(log::cat("cannot write ", path, ": ", std::strerror(errno)));
+    std::size_t done = 0;
+    int err = 0;
+    while (done < content.size()) {
+        const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            err = n < 0 ? errno : ENOSPC;
+            break;
+        }
+        done += static_cast<std::size_t>(n);
+    }
+    if (::close(fd) != 0 && err == 0) err = errno;
+    if (err == 0 && ::rename(tmp.c_str(), path.c_str()) != 0) err = errno;
+    if (err != 0) {
+        ::unlink(tmp.c_str());
+        throw RuntimeError(log::cat("cannot write ", path, ": ", std::strerror(err)));
+    }
+}
+
+}  // namespace dw

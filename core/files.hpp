@@ -1,0 +1,25 @@
+#pragma once
+// Reading and writing whole files the one house way: an input that is missing, a directory or
+// unreadable is one clear dw::InputError; an output is written to a temporary file beside it,
+// checked, and renamed into place, so a failure (full disk, unwritable folder, a stop request)
+// leaves no half-written file behind.
+#include <string>
+#include <string_view>
+
+namespace dw {
+
+// The bytes of a regular file. `what` names the input in the error ("--config", "meta.json").
+std::string read_file(const std::string& path, std::string_view what);
+// Throws dw::InputError unless `path` is an existing regular file that can be opened for reading.
+void require_readable_file(const std::string& path, std::string_view what);
+
+// Writes `content` to `path` atomically (temporary + rename), making missing folders. Throws
+// dw::RuntimeError naming the path and the system's reason; no file is left at `path` or beside
+// it on failure.
+void write_file(const std::string& path, std::string_view content);
+// Throws dw::InputError when `path` cannot become a file: it is a directory, or its nearest
+// existing folder is not a writable directory. Creates nothing: for checking an output option
+// before long work starts.
+void require_writable_path(const std::string& path, std::string_view what);
+
+}  // namespace dw

@@ -1,0 +1,65 @@
+#include "core/numbers.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <system_error>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+
+namespace dw {
+
+bool Range::contains(double v) const { return std::isfinite(v) && v >= lo && v <= hi; }
+
+std::string Range::describe() const {
+    std::string s = log::cat("[", lo, ", ", hi, "]");
+    if (!unit.empty()) s += log::cat(" ", unit);
+    return s;
+}
+
+std::string range_problem(double v, const Range& r) {
+    if (!std::isfinite(v)) return log::cat(v, " is not a finite number (expected ", r.describe(), ")");
+    if (!r.contains(v)) return log::cat(v, " is not in ", r.describe());
+    return "";
+}
+
+double require_in(double v, const Range& r, std::string_view what) {
+    const std::string problem = range_problem(v, r);
+    if (!problem.empty()) throw InputError(log::cat(what, ": ", problem));
+    return v;
+}
+
+double parse_number(std::string_view text, std::string_view what) {
+    double v = 0;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+    // from_chars leaves out-of-range magnitudes as an error: they are not usable numbers either.
+    if (text.empty() || ec != std::errc() || ptr != end) {
+        throw InputError(log::cat(what, ": '", text, "' is not a number"));
+    }
+    return v;
+}
+
+std::vector<double> parse_number_list(std::string_view text, const Range& r, std::string_view what) {
+    std::vector<double> out;
+    std::size_t start = 0;
+    for (;;) {
+        const std::size_t comma = text.find(',', start);
+        const std::string_view item = text.substr(start, comma == std::string_view::npos ? comma : comma - start);
+        out.push_back(require_in(parse_number(item, what), r, what));
+        if (comma == std::string_view::npos) break;
+        start = comma + 1;
+    }
+    return out;
+}
+
+void append_fixed(std::string& out, double v, int decimals, std::string_view what) {
+    if (!std::isfinite(v)) throw InputError(log::cat(what, ": ", v, " is not a finite number"));
+    // A double in fixed notation has at most 309 integer digits; decimals are bounded by the caller.
+    char buf[400];
+    const auto [ptr, ec] = std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::fixed, decimals);
+    if (ec != std::errc()) throw InputError(log::cat(what, ": ", v, " does not fit a number field"));
+    out.append(buf, static_cast<std::size_t>(ptr - buf));
+}
+
+}  // namespace dw

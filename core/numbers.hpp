@@ -1,0 +1,41 @@
+#pragma once
+// Numbers at the edges: the one validation rule for every numeric option and configuration value
+// (finite and inside a stated range, the range named in the error), and number formatting that
+// cannot write past what it formatted.
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace dw {
+
+// A closed interval an input must lie in. contains() is a positive check: NaN and ±inf are never
+// inside, whatever the bounds.
+struct Range {
+    double lo = 0;
+    double hi = 0;
+    std::string_view unit = "";
+
+    bool contains(double v) const;
+    std::string describe() const;  // "[0.05, 5] m/s"
+};
+
+// Ranges several tools share.
+inline constexpr Range kSeedRange{0, 9007199254740992.0};  // 2^53: every seed a double can say exactly
+inline constexpr Range kTimeoutRange{0, 86400, "s"};        // 0 = no limit where a tool says so
+
+// Why `v` is not acceptable for `r` ("nan is not a finite number", "7 is not in [0, 1.4] m"),
+// or "" when it is.
+std::string range_problem(double v, const Range& r);
+// Returns v, or throws dw::InputError "<what>: <problem>".
+double require_in(double v, const Range& r, std::string_view what);
+
+// A whole decimal number ("1.5", "-2e-3"); throws dw::InputError "<what>: '<text>' is not a number".
+double parse_number(std::string_view text, std::string_view what);
+// Comma-separated numbers, each inside r; at least one.
+std::vector<double> parse_number_list(std::string_view text, const Range& r, std::string_view what);
+
+// Appends v with `decimals` digits after the point. Throws dw::InputError naming `what` when v is
+// not finite: no NaN or inf reaches a file.
+void append_fixed(std::string& out, double v, int decimals, std::string_view what);
+
+}  // namespace dw
