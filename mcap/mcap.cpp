@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 
 namespace dw::mcap {
@@ -510,6 +511,8 @@ struct Reading {
     const Handlers& h;
     std::set<std::uint16_t> schemas, channels;
     std::uint64_t messages = 0;
+    bool salvage = false;        // a message of an unknown channel (its record lost) is counted, not fatal
+    std::uint64_t orphaned = 0;
 
     void inner_record(std::uint8_t op, In& in) {
         switch (op) {
@@ -543,7 +546,11 @@ struct Reading {
                 m.log_time = in.u64();
                 m.publish_time = in.u64();
                 m.data = in.rest();
-                if (!channels.count(m.channel_id)) in.fail(log::cat("message on unknown channel ", m.channel_id));
+                if (!channels.count(m.channel_id)) {
+                    if (!salvage) in.fail(log::cat("message on unknown channel ", m.channel_id));
+                    ++orphaned;
+                    return;
+                }
                 ++messages;
                 if (h.on_message) h.on_message(m);
                 return;
@@ -555,131 +562,220 @@ struct Reading {
 
 }  // namespace
 
-ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers) {
-    ReadResult r;
-    Reading reading{handlers, {}, {}, 0};
-    std::uint64_t pos = 8;
-    bool in_summary = false;
-    try {
-        if (file.size() < 8 || std::memcmp(file.data(), kMagic, 8) != 0) {
-            throw InputError("offset 0: not an MCAP file (no MCAP magic)");
+namespace {
+
+// A chunk's records, decompressed and CRC-checked. Throws InputError (located) when unsound.
+std::vector<std::uint8_t> chunk_records(In& in) {
+    in.u64();
+    in.u64();
+    const std::uint64_t size = in.u64();
+    const std::uint32_t crc = in.u32();
+    const std::string compression = in.str();
+    const std::uint64_t n = in.u64();
+    const auto body = in.bytes(n, "chunk records");
+    auto records = decompress(compression, body, size, in);
+    if (crc != 0 && crc != crc32(records)) in.fail("chunk CRC mismatch");
+    return records;
+}
+
+// The next offset after `from` where a whole chunk with a matching (non-zero) CRC starts, or the
+// file's size: where a salvaging read resumes after a record whose header is damaged.
+std::uint64_t next_sound_chunk(std::span<const std::uint8_t> file, std::uint64_t from) {
+    for (std::uint64_t q = from; q + 9 < file.size(); ++q) {
+        if (file[q] != kChunk) continue;
+        std::uint64_t len = 0;
+        std::memcpy(&len, file.data() + q + 1, 8);
+        if (len > file.size() - q - 9 || len < 8 * 3 + 4 + 4 + 8) continue;
+        std::uint32_t crc = 0;
+        std::memcpy(&crc, file.data() + q + 9 + 24, 4);
+        if (crc == 0) continue;  // nothing to confirm it by
+        try {
+            In in(file.data() + q + 9, static_cast<std::size_t>(len), q + 9);
+            chunk_records(in);
+            return q;
+        } catch (const InputError&) {
         }
-        r.valid_until = 8;
-        for (;;) {
-            if (pos == file.size()) throw InputError(log::cat("offset ", pos, ": the file ends without a footer (truncated)"));
-            if (file.size() - pos < 9) throw InputError(log::cat("offset ", pos, ": truncated record header"));
-            const std::uint8_t op = file[pos];
-            std::uint64_t len = 0;
-            std::memcpy(&len, file.data() + pos + 1, 8);
-            if (op == 0) throw InputError(log::cat("offset ", pos, ": invalid opcode 0"));
-            if (len > file.size() - pos - 9) {
-                throw InputError(log::cat("offset ", pos, ": record (opcode 0x", std::hex, static_cast<int>(op), std::dec,
-                                          ") of ", len, " bytes runs past the end of the file (truncated)"));
+    }
+    return file.size();
+}
+
+class LinearRead {
+public:
+    LinearRead(std::span<const std::uint8_t> file, const Handlers& h, ReadMode mode)
+        : file_(file), h_(h), mode_(mode), reading_{h, {}, {}, 0, mode == ReadMode::salvage, 0} {}
+
+    ReadResult run() {
+        try {
+            if (file_.size() < 8 || std::memcmp(file_.data(), kMagic, 8) != 0) {
+                throw InputError("offset 0: not an MCAP file (no MCAP magic)");
             }
-            In in(file.data() + pos + 9, static_cast<std::size_t>(len), pos + 9);
-            if (op == kFooter) {
-                const std::uint64_t end = pos + 9 + len;
-                if (file.size() - end < 8 || std::memcmp(file.data() + end, kMagic, 8) != 0) {
-                    throw InputError(log::cat("offset ", end, ": no closing magic after the footer"));
-                }
-                r.complete = true;
-                r.valid_until = end + 8;
+            r_.valid_until = 8;
+            std::uint64_t pos = 8;
+            while (pos != kDone) pos = step(pos);
+        } catch (const InputError& e) {
+            note(e.what());
+        }
+        r_.messages = reading_.messages;
+        r_.orphaned_messages = reading_.orphaned;
+        return r_;
+    }
+
+private:
+    static constexpr std::uint64_t kDone = ~0ULL;
+
+    void note(const std::string& problem) {
+        if (!r_.error) r_.error = problem;
+        r_.damage.push_back(problem);
+    }
+
+    // One record at pos; returns the next record's offset, or kDone.
+    std::uint64_t step(std::uint64_t pos) {
+        if (pos == file_.size()) throw InputError(log::cat("offset ", pos, ": the file ends without a footer (truncated)"));
+        if (file_.size() - pos < 9) throw InputError(log::cat("offset ", pos, ": truncated record header"));
+        const std::uint8_t op = file_[pos];
+        std::uint64_t len = 0;
+        std::memcpy(&len, file_.data() + pos + 1, 8);
+        if (op == 0 || len > file_.size() - pos - 9) {
+            const std::string problem = op == 0 ? log::cat("offset ", pos, ": invalid opcode 0")
+                                                : log::cat("offset ", pos, ": record (opcode 0x", std::hex, static_cast<int>(op), std::dec,
+                                                           ") of ", len, " bytes runs past the end of the file (truncated)");
+            if (mode_ == ReadMode::strict) throw InputError(problem);
+            note(problem);
+            const std::uint64_t next = next_sound_chunk(file_, pos + 1);
+            if (next == file_.size()) return kDone;
+            ++r_.skipped_regions;
+            return next;
+        }
+        In in(file_.data() + pos + 9, static_cast<std::size_t>(len), pos + 9);
+        if (op == kFooter) {
+            const std::uint64_t end = pos + 9 + len;
+            if (file_.size() - end < 8 || std::memcmp(file_.data() + end, kMagic, 8) != 0) {
+                throw InputError(log::cat("offset ", end, ": no closing magic after the footer"));
+            }
+            r_.complete = true;
+            r_.valid_until = end + 8;
+            return kDone;
+        }
+        try {
+            record(op, in, pos, len);
+        } catch (const InputError& e) {
+            if (mode_ == ReadMode::strict) throw;
+            note(e.what());  // the record's length is sound: skip just this record
+            ++r_.skipped_regions;
+        }
+        if (r_.damage.empty()) r_.valid_until = pos + 9 + len;
+        return pos + 9 + len;
+    }
+
+    void record(std::uint8_t op, In& in, std::uint64_t pos, std::uint64_t len) {
+        (void)len;
+        if (op == kDataEnd) {
+            const std::uint32_t crc = in.u32();
+            if (crc != 0 && mode_ == ReadMode::strict && crc != crc32(file_.subspan(0, static_cast<std::size_t>(pos)))) {
+                throw InputError(log::cat("offset ", pos, ": data section CRC mismatch"));
+            }
+            in_summary_ = true;
+            return;
+        }
+        if (in_summary_) return;
+        switch (op) {
+            case kSchema: case kChannel: case kMessage: reading_.inner_record(op, in); break;
+            case kChunk: chunk(in); break;
+            case kMetadata: {
+                Metadata m;
+                m.name = in.str();
+                m.entries = in.map();
+                if (h_.on_metadata) h_.on_metadata(m);
                 break;
             }
-            if (op == kDataEnd) {
-                const std::uint32_t crc = in.u32();
-                if (crc != 0 && crc != crc32(file.subspan(0, static_cast<std::size_t>(pos)))) {
-                    throw InputError(log::cat("offset ", pos, ": data section CRC mismatch"));
-                }
-                in_summary = true;
-            } else if (!in_summary) {
-                switch (op) {
-                    case kSchema: case kChannel: case kMessage: reading.inner_record(op, in); break;
-                    case kChunk: {
-                        in.u64();
-                        in.u64();
-                        const std::uint64_t size = in.u64();
-                        const std::uint32_t crc = in.u32();
-                        const std::string compression = in.str();
-                        const std::uint64_t n = in.u64();
-                        const auto body = in.bytes(n, "chunk records");
-                        const auto records = decompress(compression, body, size, in);
-                        if (crc != 0 && crc != crc32(records)) in.fail("chunk CRC mismatch");
-                        std::size_t p = 0;
-                        while (p < records.size()) {
-                            if (records.size() - p < 9) in.fail("truncated record inside a chunk");
-                            const std::uint8_t iop = records[p];
-                            std::uint64_t ilen = 0;
-                            std::memcpy(&ilen, records.data() + p + 1, 8);
-                            if (ilen > records.size() - p - 9) in.fail("record inside a chunk runs past the chunk");
-                            In inner(records.data() + p + 9, static_cast<std::size_t>(ilen), in.offset());
-                            reading.inner_record(iop, inner);
-                            p += 9 + static_cast<std::size_t>(ilen);
-                        }
-                        break;
-                    }
-                    case kMetadata: {
-                        Metadata m;
-                        m.name = in.str();
-                        m.entries = in.map();
-                        if (handlers.on_metadata) handlers.on_metadata(m);
-                        break;
-                    }
-                    case kAttachment: {
-                        Attachment a;
-                        a.log_time = in.u64();
-                        a.create_time = in.u64();
-                        a.name = in.str();
-                        a.media_type = in.str();
-                        const std::uint64_t n = in.u64();
-                        const auto d = in.bytes(n, "attachment data");
-                        const std::uint64_t covered = in.offset() - (pos + 9);
-                        const std::uint32_t crc = in.u32();
-                        if (crc != 0 && crc != crc32(file.subspan(static_cast<std::size_t>(pos + 9), static_cast<std::size_t>(covered)))) {
-                            in.fail(log::cat("attachment '", a.name, "' CRC mismatch"));
-                        }
-                        a.data.assign(reinterpret_cast<const char*>(d.data()), d.size());
-                        if (handlers.on_attachment) handlers.on_attachment(a);
-                        break;
-                    }
-                    default: break;  // indexes, statistics, unknown opcodes: skipped by length
-                }
-            }
-            pos += 9 + len;
-            r.valid_until = pos;
+            case kAttachment: attachment(in, pos); break;
+            default: break;  // indexes, statistics, unknown opcodes: skipped by length
         }
-    } catch (const InputError& e) {
-        r.error = e.what();
     }
-    r.messages = reading.messages;
-    return r;
+
+    void chunk(In& in) {
+        const auto records = chunk_records(in);
+        std::size_t p = 0;
+        while (p < records.size()) {
+            if (records.size() - p < 9) in.fail("truncated record inside a chunk");
+            const std::uint8_t iop = records[p];
+            std::uint64_t ilen = 0;
+            std::memcpy(&ilen, records.data() + p + 1, 8);
+            if (ilen > records.size() - p - 9) in.fail("record inside a chunk runs past the chunk");
+            In inner(records.data() + p + 9, static_cast<std::size_t>(ilen), in.offset());
+            reading_.inner_record(iop, inner);
+            p += 9 + static_cast<std::size_t>(ilen);
+        }
+    }
+
+    void attachment(In& in, std::uint64_t pos) {
+        Attachment a;
+        a.log_time = in.u64();
+        a.create_time = in.u64();
+        a.name = in.str();
+        a.media_type = in.str();
+        const std::uint64_t n = in.u64();
+        const auto d = in.bytes(n, "attachment data");
+        const std::uint64_t covered = in.offset() - (pos + 9);
+        const std::uint32_t crc = in.u32();
+        if (crc != 0 && crc != crc32(file_.subspan(static_cast<std::size_t>(pos + 9), static_cast<std::size_t>(covered)))) {
+            in.fail(log::cat("attachment '", a.name, "' CRC mismatch"));
+        }
+        a.data.assign(reinterpret_cast<const char*>(d.data()), d.size());
+        if (h_.on_attachment) h_.on_attachment(a);
+    }
+
+    std::span<const std::uint8_t> file_;
+    const Handlers& h_;
+    ReadMode mode_;
+    Reading reading_;
+    ReadResult r_;
+    bool in_summary_ = false;
+};
+
+std::vector<std::uint8_t> file_bytes(const std::string& path) {
+    const std::string text = dw::read_file(path, "MCAP file");
+    return std::vector<std::uint8_t>(text.begin(), text.end());
 }
 
-ReadResult read_file(const std::string& path, const Handlers& handlers) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(log::cat(path, ": cannot read the file"));
-    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return read(bytes, handlers);
+}  // namespace
+
+ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers, ReadMode mode) {
+    return LinearRead(file, handlers, mode).run();
 }
+
+ReadResult read_file(const std::string& path, const Handlers& handlers) { return read(file_bytes(path), handlers); }
 
 ReadResult recover(const std::string& in_path, const std::string& out_path, const WriterOptions& options) {
-    Writer out(out_path, options);
-    std::map<std::uint16_t, std::uint16_t> schema_ids, channel_ids;
-    Handlers h;
-    h.on_schema = [&](const Schema& s) { schema_ids[s.id] = out.add_schema(s.name, s.encoding, s.data); };
-    h.on_channel = [&](const Channel& c) {
-        channel_ids[c.id] = out.add_channel(c.topic, c.schema_id ? schema_ids.at(c.schema_id) : 0, c.message_encoding, c.metadata);
-    };
-    h.on_message = [&](const Message& m) {
-        Message copy = m;
-        copy.channel_id = channel_ids.at(m.channel_id);
-        out.write(copy, 0);
-    };
-    h.on_metadata = [&](const Metadata& m) { out.add_metadata(m); };
-    h.on_attachment = [&](const Attachment& a) { out.add_attachment(a); };
-    const ReadResult r = read_file(in_path, h);
-    out.close();
-    return r;
+    const auto bytes = file_bytes(in_path);  // the input is checked before any output exists
+    if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) {
+        throw InputError(log::cat(in_path, ": not an MCAP file (no MCAP magic at offset 0); nothing to recover"));
+    }
+    const std::string tmp = log::cat(out_path, ".tmp-", ::getpid());
+    try {
+        Writer out(tmp, options);
+        std::map<std::uint16_t, std::uint16_t> schema_ids, channel_ids;
+        Handlers h;
+        h.on_schema = [&](const Schema& s) { schema_ids[s.id] = out.add_schema(s.name, s.encoding, s.data); };
+        h.on_channel = [&](const Channel& c) {
+            const auto schema = schema_ids.find(c.schema_id);
+            channel_ids[c.id] = out.add_channel(c.topic, schema == schema_ids.end() ? 0 : schema->second, c.message_encoding, c.metadata);
+        };
+        h.on_message = [&](const Message& m) {
+            Message copy = m;
+            copy.channel_id = channel_ids.at(m.channel_id);  // the reader hands on only messages of known channels
+            out.write(copy, 0);
+        };
+        h.on_metadata = [&](const Metadata& m) { out.add_metadata(m); };
+        h.on_attachment = [&](const Attachment& a) { out.add_attachment(a); };
+        const ReadResult r = read(bytes, h, ReadMode::salvage);
+        out.close();
+        if (::rename(tmp.c_str(), out_path.c_str()) != 0) throw RuntimeError(log::cat("cannot write ", out_path, ": ", std::strerror(errno)));
+        return r;
+    } catch (...) {
+        ::unlink(tmp.c_str());
+        throw;
+    }
 }
 
 }  // namespace dw::mcap

@@ -134,17 +134,27 @@ struct Handlers {
 struct ReadResult {
     bool complete = false;           // reached a footer and the closing magic
     std::optional<std::string> error;  // the first problem ("offset N: ..."), if any
+    std::vector<std::string> damage;   // every problem met (salvage: each one skipped)
     std::uint64_t messages = 0;
+    std::uint64_t skipped_regions = 0;    // salvage: damaged records (chunks) skipped
+    std::uint64_t orphaned_messages = 0;  // salvage: messages whose channel record was lost
     std::uint64_t valid_until = 0;   // file offset up to which every record was whole and sound
 };
 
-// Reads every record in file order, decompressing chunks and checking CRCs. Strict: stops at the
-// first problem and reports it; what was read before it has been handed to the handlers.
-ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers);
+// strict: stop at the first problem. salvage (recovery): skip a damaged record whose length is
+// sound, resynchronise on the next chunk whose CRC checks out after a damaged record header, and
+// keep every intact record after the damage.
+enum class ReadMode { strict, salvage };
+
+// Reads every record in file order, decompressing chunks and checking CRCs, and reports the first
+// problem; what was read before it (strict) or around it (salvage) has been handed to the handlers.
+ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers, ReadMode mode = ReadMode::strict);
 ReadResult read_file(const std::string& path, const Handlers& handlers);
 
 // Rebuilds a readable file (indexes, summary, footer) from a truncated or damaged one: every
-// whole, sound record before the damage is kept. Returns what the read of `in` found.
+// whole, sound record is kept, before and after damaged chunks (a salvage read). The input is
+// checked first (missing, a directory, not MCAP: dw::InputError, and no output is made); the output
+// appears only when complete. Returns what the read of `in` found.
 ReadResult recover(const std::string& in, const std::string& out, const WriterOptions& options);
 
 std::uint32_t crc32(std::span<const std::uint8_t> data, std::uint32_t crc = 0);

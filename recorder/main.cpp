@@ -68,9 +68,12 @@ int run(int argc, char** argv) {
     if (recover->parsed()) {
         dw::mcap::WriterOptions o;
         const auto r = dw::mcap::recover(file, out, o);
-        std::cout << "recovered " << r.messages << " messages into " << out;
-        if (r.error) std::cout << " (input damaged: " << *r.error << ")";
-        std::cout << "\n";
+        std::cout << "recovered " << r.messages << " messages into " << out << "\n";
+        for (const auto& problem : r.damage) std::cout << "  lost: " << problem << "\n";
+        if (r.skipped_regions > 0 || r.orphaned_messages > 0) {
+            std::cout << "  skipped " << r.skipped_regions << " damaged record(s); " << r.orphaned_messages
+                      << " message(s) dropped because their channel record was lost\n";
+        }
         return 0;
     }
     if (exp->parsed()) {
