@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
 #include "physics/stand.hpp"
 #include "physics/vehicle.hpp"
 
@@ -87,12 +90,20 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
             sp.position += formation.offsets[j];
             if (n > 0) vehicles[j].step(sp, dt);
             const VehicleState& s = vehicles[j].state();
+            if (!((s.position - sp.position).norm() <= kDivergence_m)) {
+                throw InputError(log::cat("physics: simulated vehicle v", j + 1, " diverged at t = ", t,
+                                          " s (dynamics too stiff for dynamics.rate_hz ", c.dynamics.rate_hz, " Hz?)"));
+            }
             producers[j] = model.producer(s.position, s.velocity);
             producers[j].axis = vehicles[j].jet_axis();
             if (c.turbulence.enabled) producers[j].gust = std::max(0.0, 1.0 + gusts[j].step(dt, gust_rng[j]));
         }
         out.truth_t.push_back(t);
         out.truth.push_back(model.evaluate(sufferer, producers));
+        if (!out.truth.back().allFinite()) {
+            throw InputError(log::cat("physics: the configuration gives a non-finite wrench at t = ", t,
+                                      " s (jet model, aggregation and effects together are not usable)"));
+        }
         if (t + 1e-9 >= next_mocap) {
             add_pose(t, sufferer_body, sufferer, Eigen::Quaterniond::Identity(), Vec3::Zero());
             for (std::size_t j = 0; j < k; ++j) {
@@ -100,7 +111,10 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
             }
             next_mocap += mocap_dt;
         }
-        if (o.progress && n % 4096 == 0) o.progress(0.9 * static_cast<double>(n) / static_cast<double>(steps));
+        if (n % 4096 == 0) {
+            throw_if_stopped(o.stop, "the simulation");
+            if (o.progress) o.progress(0.9 * static_cast<double>(n) / static_cast<double>(steps));
+        }
     }
 
     // 2. The stand's response: a first-order lag of the true wrench (sensor_lag).

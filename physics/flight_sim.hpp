@@ -5,6 +5,7 @@
 // flight folder (downwash-flight/1) plus, for tests, the true wrench behind it.
 #include <cstdint>
 #include <functional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,11 @@ struct FlyOptions {
     GridOptions grid;
     std::uint64_t seed = 1;
     std::function<void(double)> progress;  // fraction done, 0..1 (may be empty)
+    std::stop_token stop;                   // a stop request ends the simulation with dw::Stopped
 };
+
+// A simulated vehicle this far from its setpoint has diverged (dynamics too stiff for rate_hz).
+inline constexpr double kDivergence_m = 100.0;
 
 struct SimResult {
     flight::Flight flight;
@@ -28,6 +33,8 @@ struct SimResult {
     std::vector<Wrench> truth;     // the true wrench on the sufferer, before the stand
 };
 
+// Throws dw::InputError when the configuration makes the physics produce a non-finite wrench or
+// a vehicle diverge (no NaN, zeros or runaway values are written), dw::Stopped on options.stop.
 SimResult simulate_flight(const PhysicsConfig& physics, const FlyOptions& options);
 
 }  // namespace dw::physics

@@ -12,9 +12,11 @@ Jet Jet::make(const VehicleParams& v, const PhysicsConfig& c) {
     j.u_hover = std::sqrt(j.thrust_n / (2.0 * c.air_density_kg_m3 * disc));
     j.l = v.motor_distance_m;
     j.inv_l = 1.0 / v.motor_distance_m;
+    // Every jet carries its Bauersfeld width: merged columns (jet_merging) are Bauersfeld jets
+    // whatever their members' model, and a zero width made them NaN.
+    j.c_half = kBauersfeldC * v.motor_distance_m;
     if (j.model == JetModelKind::bauersfeld) {
         j.k_centre = j.u_hover * kBauersfeldA;
-        j.c_half = kBauersfeldC * v.motor_distance_m;
     } else {
         j.k_centre = j.u_hover * c.jain.c_ax * c.jain.diameter_m;
         j.jain_z0 = c.jain.z0_m;

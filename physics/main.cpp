@@ -8,6 +8,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "core/shutdown.hpp"
 #include "flight/flight.hpp"
 #include "physics/flight_sim.hpp"
 
@@ -45,6 +46,7 @@ int run(int argc, char** argv) {
         };
     }
     const auto t0 = std::chrono::steady_clock::now();
+    fly.stop = dw::Shutdown::instance().token();
     const auto result = dw::physics::simulate_flight(physics, fly);
     dw::flight::write_flight(result.flight, out_dir);
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

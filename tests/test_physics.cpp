@@ -485,3 +485,55 @@ TEST(Jet, JainGaussianAlternative) {
     const std::array<Producer, 1> ps{m.producer(Vec3(0, 0, -2.7))};
     EXPECT_GT(m.evaluate(Vec3(0, 0, -1.4), ps)[2], 0.5);
 }
+
+// ---- issue 14: physics that lies -----------------------------------------------------------------
+
+namespace {
+double peak_fd(const dw::flight::Flight& f) {
+    double peak = 0;
+    for (const auto& s : f.wrench) peak = std::max(peak, std::abs(s.w[2]));
+    return peak;
+}
+}  // namespace
+
+// Jain jets merged by jet_merging were NaN: zeros for stack, a saturated ±401 397 N for the rest.
+TEST(PhysicsHardening, JainJetsMergeIntoFiniteForcesOfTheRightSize) {
+    PhysicsConfig jain = quiet_config();
+    jain.jet_model = dw::physics::JetModelKind::jain;
+    PhysicsConfig merged = jain;
+    merged.effects.jet_merging.enabled = true;
+    for (const char* formation : {"stack", "side_by_side", "leader_follower3", "hybrid"}) {
+        const double plain = peak_fd(simulate_flight(jain, over_the_stand(0.8, formation)).flight);
+        const double with = peak_fd(simulate_flight(merged, over_the_stand(0.8, formation)).flight);
+        EXPECT_GT(with, 0.25 * plain) << formation;  // merging redistributes momentum, it does not erase it
+        EXPECT_LT(with, 4.0 * plain) << formation;
+        EXPECT_LT(with, 100.0) << formation;        // nowhere near the HX711's saturation
+    }
+}
+
+TEST(PhysicsHardening, DivergingDynamicsAreAnErrorNotHugeNumbers) {
+    PhysicsConfig stiff = quiet_config();
+    stiff.dynamics.natural_frequency_rad_s = 50;
+    stiff.dynamics.damping = 5;
+    stiff.dynamics.rate_hz = 200;  // explicit integration of a 500 1/s damping term at 200 Hz: unstable
+    try {
+        simulate_flight(stiff, over_the_stand(0.8));
+        FAIL() << "a diverging simulation was accepted";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("diverged"), std::string::npos) << e.what();
+    }
+}
+
+TEST(PhysicsHardening, DuplicateKeysAndNonFiniteOffsetsAreRefused) {
+    auto error = [](const std::string& yaml) {
+        try {
+            parse_physics(yaml, "p.yaml");
+        } catch (const dw::InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("(no error)");
+    };
+    EXPECT_EQ(error("air_density_kg_m3: 1.2\nair_density_kg_m3: 1.1\n"), "p.yaml:2:1: key 'air_density_kg_m3' appears twice in the same mapping");
+    EXPECT_NE(error("effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n").find("not a finite number"), std::string::npos);
+    EXPECT_NE(error("stand: {noise_n: .inf}\n").find("not a finite number"), std::string::npos);
+}
