@@ -12,6 +12,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/shutdown.hpp"
 
 namespace dw::analysis {
 
@@ -329,6 +330,11 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         if (info[i].leg >= 0) d.on_legs.push_back(i);
     std::set<int> leg_ids;
     for (auto i : d.on_legs) leg_ids.insert(info[i].leg);
+    if (leg_ids.size() < static_cast<std::size_t>(o.folds)) {
+        throw InputError(log::cat("legs: ", leg_ids.size(), " of ", legs.size(), " measurement legs hold wrench samples (",
+                                  d.on_legs.size(), " samples on legs); cross-validation needs at least ", o.folds,
+                                  " — do the wrench and pose clocks overlap?"));
+    }
     R.noise_floor = d.sigma;
     R.samples = d.on_legs.size();
     R.legs = leg_ids.size();
@@ -375,6 +381,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
                 }
         }
         c.effect = e;
+        throw_if_stopped(o.stop, "the fits");
         Fit fit(d, current, e);
         auto [values, se] = fit.solve(e.neutral(), d.on_legs, true, factor);
         c.values = values;
@@ -389,6 +396,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         Scores s;
         std::vector<std::vector<double>> fold_values;
         for (int k = 0; k < o.folds; ++k) {
+            throw_if_stopped(o.stop, "the fits");
             Fit fk(d, current, e);
             auto [vk, sek] = fk.solve(values, fold_train[static_cast<std::size_t>(k)], false, factor);
             fold_values.push_back(vk);

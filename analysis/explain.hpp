@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,7 @@ struct ExplainOptions {
     int max_effects = 3;
     std::uint64_t seed = 1;                      // (the fits are deterministic; kept for the report)
     std::function<void(const std::string&)> progress;
+    std::stop_token stop;                        // checked between fits: dw::Stopped
 };
 
 struct Region {

@@ -9,6 +9,7 @@
 #include "core/cli.hpp"
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
 #include "recorder/tools.hpp"
 
@@ -43,6 +44,7 @@ int run(int argc, char** argv) {
         for (std::string c; std::getline(in, c, ',');)
             if (!c.empty()) po.cases.push_back(c);
         po.progress = progress;
+        po.stop = dw::Shutdown::instance().token();
         const auto r = dw::analysis::run_proof(po);
         std::cout << dw::read_file(r.table_path);
         std::cout << (r.pass ? "PROOF PASSED" : "PROOF FAILED") << " (" << r.table_path << ")\n";
@@ -60,6 +62,7 @@ int run(int argc, char** argv) {
     }
     o.seed = seed;
     o.progress = progress;
+    o.stop = dw::Shutdown::instance().token();
     const auto f = dw::recorder::read_flight_or_recording(real);
     const auto r = dw::analysis::explain(f, o);
     dw::analysis::write_report(f, r, o, out);

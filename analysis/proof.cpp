@@ -8,6 +8,7 @@
 
 #include "analysis/explain.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/subprocess.hpp"
 
@@ -60,7 +61,7 @@ std::vector<Case> cases() {
 void fly(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir) {
     fs::create_directories(fs::path(dir).parent_path());
     const std::string yaml = dir + ".physics.yaml";
-    std::ofstream(yaml) << physics::to_yaml(hidden);
+    write_file(yaml, physics::to_yaml(hidden));
     run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--out", dir, "--quiet"},
                 dir + ".log");
 }
@@ -71,6 +72,15 @@ ProofResult run_proof(const ProofOptions& o) {
     auto say = [&](const std::string& s) {
         if (o.progress) o.progress(s);
     };
+    std::vector<std::string> known{"null"};
+    for (const auto& c : cases()) known.push_back(c.name);
+    for (const auto& n : o.cases) {
+        if (std::find(known.begin(), known.end(), n) == known.end()) {
+            std::string list;
+            for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+            throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", list, ")"));
+        }
+    }
     fs::create_directories(o.out_dir);
     ProofResult R;
     const physics::PhysicsConfig plain;  // what the explainer is given: every effect off
@@ -84,6 +94,7 @@ ProofResult run_proof(const ProofOptions& o) {
         fly(hidden, c.formation, c.seed, dir + "/flight");
         ExplainOptions eo;
         eo.physics = plain;
+        eo.stop = o.stop;
         const auto f = flight::read_flight(dir + "/flight");
         const auto r = explain(f, eo);
         write_report(f, r, eo, dir + "/explain");
@@ -125,6 +136,7 @@ ProofResult run_proof(const ProofOptions& o) {
             fly(plain, "single", 100 + static_cast<std::uint64_t>(k), dir + "/flight");
             ExplainOptions eo;
             eo.physics = plain;
+            eo.stop = o.stop;
             const auto f = flight::read_flight(dir + "/flight");
             const auto r = explain(f, eo);
             write_report(f, r, eo, dir + "/explain");
@@ -139,7 +151,9 @@ ProofResult run_proof(const ProofOptions& o) {
         if (!row.pass) row.why = "effects claimed on noise";
         R.rows.push_back(row);
     }
-    R.pass = std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass; });
+    // A proof of nothing proves nothing: no rows, or a null case without flights, fails.
+    R.pass = !R.rows.empty() && (!wanted("null") || R.null_total > 0) &&
+             std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass; });
     std::ostringstream md;
     md << "| case | flight | hidden effect | effect found | true parameter | fitted [95 %] | held-out RMSE before → after | verdict |\n"
           "|---|---|---|---|---|---|---|---|\n";
@@ -147,7 +161,7 @@ ProofResult run_proof(const ProofOptions& o) {
         md << "| " << r.name << " | " << r.formation << " | " << r.hidden << " | " << r.found << " | " << r.truth << " | " << r.fitted << " | "
            << r.rmse << " | " << (r.pass ? "pass" : "FAIL: " + r.why) << " |\n";
     R.table_path = (fs::path(o.out_dir) / "proof.md").string();
-    std::ofstream(R.table_path) << md.str();
+    write_file(R.table_path, md.str());
     return R;
 }
 

@@ -4,6 +4,7 @@
 // parameter inside the reported interval, the held-out error reduced; null flights (noise only)
 // must name nothing in at least 9 of 10 seeds.
 #include <functional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -12,7 +13,8 @@ namespace dw::analysis {
 struct ProofOptions {
     std::string out_dir;
     int null_seeds = 10;
-    std::vector<std::string> cases;   // empty: all
+    std::vector<std::string> cases;   // empty: all; an unknown name is a dw::InputError
+    std::stop_token stop;             // between flights and fits: dw::Stopped
     std::function<void(const std::string&)> progress;
 };
 

@@ -8,6 +8,7 @@
 
 #include "analysis/explain.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "plot/field_map.hpp"
 
@@ -147,8 +148,8 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     j["unexplained"] = r.unexplained;
     j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)}, {"heldout_rmse_after", axes_json(r.heldout_after)}};
     j["physics_out"] = "physics.yaml";
-    std::ofstream(fs::path(dir) / "report.json") << j.dump(2) << "\n";
-    std::ofstream(fs::path(dir) / "physics.yaml") << physics::to_yaml(r.fitted);
+    write_file((fs::path(dir) / "report.json").string(), j.dump(2) + "\n");
+    write_file((fs::path(dir) / "physics.yaml").string(), physics::to_yaml(r.fitted));
 
     // Figures: residual maps before/after (the strongest region's axis), observed vs simulated.
     const Replay replay(f);
@@ -228,7 +229,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     md << "\n## Figures\n\nResiduals before and after (" << unit << "):\n\n![before](residuals_before.png)\n\n![after](residuals_after.png)\n\n"
        << "Recorded vs simulated at " << b0.name << ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n"
        << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects on).\n";
-    std::ofstream(fs::path(dir) / "report.md") << md.str();
+    write_file((fs::path(dir) / "report.md").string(), md.str());
 }
 
 }  // namespace dw::analysis

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
@@ -53,9 +54,9 @@ int run_demo(const DemoOptions& o) {
     physics::PhysicsConfig physics;
     physics.effects.jet_merging.enabled = true;
     const std::string physics_path = (run / "physics.yaml").string();
-    std::ofstream(physics_path) << physics::to_yaml(physics);
+    write_file(physics_path, physics::to_yaml(physics));
     const std::string lab_path = (run / "lab.yaml").string();
-    std::ofstream(lab_path) << kLabSimYaml;
+    write_file(lab_path, kLabSimYaml);
     const LabFile lab = load_lab(lab_path);
 
     // 1-2. Two experiments, every process separate, over loopback DDS.
@@ -114,7 +115,7 @@ int run_demo(const DemoOptions& o) {
     physics::PhysicsConfig hidden = physics;
     hidden.effects.clock_offset = {true, 0.1};
     const std::string hidden_path = (run / "hidden-physics.yaml").string();
-    std::ofstream(hidden_path) << physics::to_yaml(hidden);
+    write_file(hidden_path, physics::to_yaml(hidden));
     run_sibling({"dw-sim", "fly", "--formation", "leader_follower", "--legs", o.quick ? "20" : "36", "--physics", hidden_path, "--seed", "42",
           "--out", (run / "flights" / "real").string(), "--quiet"},
          (run / "logs" / "real-flight.log").string());
@@ -164,7 +165,7 @@ int run_demo(const DemoOptions& o) {
        << " N. Report: [explain/report.md](explain/report.md) ([report.json](explain/report.json), fitted physics "
           "[explain/physics.yaml](explain/physics.yaml)).\n\n![residuals before](explain/residuals_before.png)\n\n"
           "![residuals after](explain/residuals_after.png)\n";
-    std::ofstream(run / "index.md") << md.str();
+    write_file((run / "index.md").string(), md.str());
     std::cout << "demo done in " << static_cast<int>(seconds) << " s: " << (run / "index.md").string() << "\n"
               << "  experiments: " << results[0].phase << ", " << results[1].phase << "; explained by: " << (found.empty() ? "nothing" : found)
               << "\n  " << first_line_with(read_file((run / "study" / "table.md").string()), "| leader_follower K=3") << "\n";

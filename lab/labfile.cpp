@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -43,6 +45,12 @@ struct Ctx {
 
 }  // namespace
 
+bool is_process_name(const std::string& name) {
+    // The name becomes a log file under the run folder and a heartbeat name: no paths.
+    if (name.empty() || name.front() == '.') return false;
+    return std::all_of(name.begin(), name.end(), [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.'; });
+}
+
 LabFile parse_lab(const std::string& yaml, const std::string& name) {
     Ctx c{name};
     const YAML::Node root = load_yaml(yaml, name);
@@ -82,6 +90,9 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
         ProcessSpec p;
         if (!n["name"]) c.fail(n, where + ".name", "missing");
         p.name = c.str(n["name"], where + ".name");
+        if (!is_process_name(p.name)) {
+            c.fail(n["name"], where + ".name", "'" + p.name + "' is not a process name (letters, digits, _ - and ., not starting with .)");
+        }
         if (!names.insert(p.name).second) c.fail(n["name"], where + ".name", "'" + p.name + "' is used twice");
         if (n["host"]) p.host = c.str(n["host"], where + ".host");
         if (!lab.hosts.count(p.host)) c.fail(n["host"], where + ".host", "'" + p.host + "' is not under hosts");
@@ -90,6 +101,7 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
         if (p.run.empty()) c.fail(n["run"], where + ".run", "empty");
         if (p.run[0].find('/') != std::string::npos || p.run[0].rfind("dw-", 0) != 0)
             c.fail(n["run"], where + ".run[0]", "'" + p.run[0] + "' is not a lab executable (dw-...)");
+        if (p.run[0] == kLauncher) c.fail(n["run"], where + ".run[0]", "a lab file cannot start the launcher (it would start itself without end)");
         if (n["restart"]) {
             const auto r = c.str(n["restart"], where + ".restart");
             if (r == "never") p.restart = Restart::never;

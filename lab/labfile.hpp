@@ -22,6 +22,12 @@
 
 namespace dw::lab {
 
+inline constexpr const char* kLauncher = "dw-lab";  // never a process of a lab file: it would start itself
+
+// Letters, digits, '_', '-' and '.', not starting with '.': a process name is a file name and a
+// heartbeat name, never a path.
+bool is_process_name(const std::string& name);
+
 struct HostSpec {
     std::string name;
     std::vector<std::string> launch;  // command prefix that starts a process there (ssh, ip netns exec, ...)

@@ -6,6 +6,8 @@
 #include <iostream>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
+#include "plot/png.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
@@ -108,11 +110,14 @@ int run(int argc, char** argv) {
         so.generalisation = !no_generalisation;
         so.maps = !no_maps;
         so.progress = [](const std::string& l) { std::cerr << "dw-predictor: " << l << "\n"; };
+        so.stop = dw::Shutdown::instance().token();
         const auto r = run_study(so);
         std::cout << "wrote " << r.markdown_path << " and " << r.csv_path << "\n";
         return 0;
     }
     if (train->parsed()) {
+        dw::require_writable_path(model_out, "--out");
+        to.stop = dw::Shutdown::instance().token();
         Dataset d = load_all(data);
         const Split s = split_by_leg(d);
         to.split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out, else training";
@@ -130,9 +135,8 @@ int run(int argc, char** argv) {
         const auto ms = load_models(models);
         const Dataset test = split_by_leg(load_all(data)).test;
         const auto rows = compare(raw(ms), test, arena);
-        std::filesystem::create_directories(out_dir);
-        std::ofstream(out_dir + "/table.md") << "# Force models compared\n\n" << to_markdown(rows, arena);
-        std::ofstream(out_dir + "/table.csv") << to_csv(rows);
+        dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + to_markdown(rows, arena));
+        dw::write_file(out_dir + "/table.csv", to_csv(rows));
         std::cout << to_markdown(rows, arena);
         return 0;
     }
@@ -140,9 +144,11 @@ int run(int argc, char** argv) {
         mr.axis = dw::physics::axis_index(axis);
         if (mr.axis < 0) throw dw::InputError("--axis: '" + axis + "' (expected f_n, f_e, f_d, m_roll, m_pitch or m_yaw)");
         (void)dw::physics::make_formation(mr.formation);  // validates the name
+        if (line.empty()) line = std::filesystem::path(png).replace_extension().string() + "_line.png";
+        dw::plot::require_png_path(png, "--out");
+        dw::plot::require_png_path(line, "--line");
         const auto ms = load_models(models);
         if (!data.empty()) mr.observed = load_all(data);
-        if (line.empty()) line = png.substr(0, png.find_last_of('.')) + "_line.png";
         draw_force_map(raw(ms), mr, png);
         draw_force_line(raw(ms), mr, line);
         std::cout << "wrote " << png << " and " << line << "\n";

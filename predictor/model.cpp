@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "physics/wrench_model.hpp"
 
@@ -120,17 +121,14 @@ void LearntModel::save(const std::string& path) const {
     j["phi"] = to_json(phi);
     if (structure == Structure::deep_sets) j["rho"] = to_json(rho);
     j["metadata"] = json::parse(metadata_json);
-    std::ofstream out(path);
-    out << j.dump(1) << "\n";
-    if (!out) throw RuntimeError(log::cat(path, ": cannot write the model"));
+    write_file(path, j.dump(1) + "\n");
 }
 
 LearntModel LearntModel::load(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(log::cat(path, ": cannot open the model"));
+    const std::string text = read_file(path, "model file");
     json j;
     try {
-        j = json::parse(in);
+        j = json::parse(text);
     } catch (const json::parse_error& e) {
         throw InputError(log::cat(path, ": not JSON (byte ", e.byte, ")"));
     }

@@ -2,12 +2,13 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/shutdown.hpp"
 #include "flight/flight.hpp"
 #include "physics/flight_sim.hpp"
 #include "predictor/maps.hpp"
@@ -27,11 +28,7 @@ double table_value(const std::vector<ComparisonRow>& rows, const std::string& fo
 
 namespace {
 
-void write_text(const fs::path& p, const std::string& text) {
-    std::ofstream out(p);
-    out << text;
-    if (!out) throw RuntimeError(log::cat(p.string(), ": cannot write"));
-}
+void write_text(const fs::path& p, const std::string& text) { write_file(p.string(), text); }
 
 }  // namespace
 
@@ -59,6 +56,7 @@ StudyResult run_study(const StudyOptions& o) {
             fly.grid.legs = static_cast<int>(std::lround(o.legs * o.single_half_width_m / 1.0));
         }
         fly.seed = seed++;
+        fly.stop = o.stop;
         const fs::path dir = out / "flights" / f;
         say(log::cat("flying ", f, " (", fly.grid.legs, " legs, simulated)"));
         flight::write_flight(physics::simulate_flight(o.physics, fly).flight, dir.string());
@@ -76,6 +74,7 @@ StudyResult run_study(const StudyOptions& o) {
         t.kind = kind;
         t.seed = o.seed;
         t.max_epochs = o.max_epochs;
+        t.stop = o.stop;
         t.split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training";
         t.progress = [&](int epoch, double tl, double vl) {
             if (epoch % 10 == 0) say(log::cat("  ", kind, " epoch ", epoch, ": training ", tl, ", validation ", vl));
@@ -143,6 +142,7 @@ StudyResult run_study(const StudyOptions& o) {
         md += "\n## Maps\n\n";
         for (const auto& f : o.formations) {
             if (f == "single") continue;
+            throw_if_stopped(o.stop, "the maps");
             MapRequest req;
             req.formation = f;
             req.altitude_m = o.arena.altitude_m;

@@ -5,6 +5,7 @@
 // held-out legs (the Table 1 metric and RMSE), run the generalisation tests and draw the maps.
 #include <cstdint>
 #include <functional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,7 @@ struct StudyOptions {
     bool maps = true;
     ArenaOptions arena;
     std::function<void(const std::string&)> progress;  // one line per step
+    std::stop_token stop;  // flying, training and drawing stop with dw::Stopped
 };
 
 struct StudyResult {

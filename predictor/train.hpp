@@ -4,6 +4,7 @@
 // LearntModel evaluated with Eigen (model.hpp). This header keeps libtorch out of its users.
 #include <cstdint>
 #include <functional>
+#include <stop_token>
 #include <string>
 
 #include "core/numbers.hpp"
@@ -29,6 +30,7 @@ struct TrainOptions {
     std::string split = "by leg";        // how the training and validation legs were chosen (metadata)
     // Called after every epoch: epoch, training loss, validation loss (normalised MSE).
     std::function<void(int, double, double)> progress;
+    std::stop_token stop;  // checked every mini-batch: dw::Stopped, and nothing is returned
 };
 
 Structure structure_of(const std::string& kind);  // throws dw::InputError for an unknown kind

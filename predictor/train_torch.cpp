@@ -7,6 +7,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/shutdown.hpp"
 #include "predictor/train.hpp"
 
 namespace dw::predictor {
@@ -134,6 +135,7 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
         double total = 0;
         int64_t batches = 0;
         for (int64_t b = 0; b < n; b += o.batch) {
+            throw_if_stopped(o.stop, "training");
             const auto idx = perm.slice(0, b, std::min(n, b + o.batch));
             adam.zero_grad();
             auto loss = torch::mse_loss(forward(tr.x.index_select(0, idx), tr.mask.index_select(0, idx)), tr.y.index_select(0, idx));

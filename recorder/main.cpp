@@ -79,11 +79,12 @@ int run(int argc, char** argv) {
     if (exp->parsed()) {
         if (flight_dir.empty() && csv_dir.empty()) throw dw::InputError("export: give --flight DIR and/or --csv DIR");
         if (!flight_dir.empty()) {
+            ex.stop = dw::Shutdown::instance().token();
             dw::recorder::export_flight(file, flight_dir, ex);
             std::cout << "flight folder: " << flight_dir << "\n";
         }
         if (!csv_dir.empty()) {
-            dw::recorder::export_csv(file, csv_dir);
+            dw::recorder::export_csv(file, csv_dir, dw::Shutdown::instance().token());
             std::cout << "CSV per topic: " << csv_dir << "\n";
         }
         return 0;

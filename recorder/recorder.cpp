@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "dds/endpoint.hpp"
 #include "idl/idl_texts.hpp"
@@ -57,13 +58,7 @@ private:
     dds::Reader<T> reader_;  // last: its callback uses the members above
 };
 
-std::string read_attachment(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(log::cat("--attach: cannot read ", path));
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+std::string read_attachment(const std::string& path) { return dw::read_file(path, "--attach"); }
 
 std::string hostname() {
     char buf[256] = {};

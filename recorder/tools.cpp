@@ -12,7 +12,9 @@
 #include <thread>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/shutdown.hpp"
 #include "core/shutdown.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/msg_json.hpp"
@@ -21,6 +23,10 @@
 #include "mcap/mcap.hpp"
 
 namespace dw::recorder {
+namespace {
+constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks while exporting
+}  // namespace
+
 namespace {
 
 template <class T>
@@ -151,7 +157,9 @@ void export_flight(const std::string& path, const std::string& dir, const Export
     mcap::Handlers h;
     h.on_schema = [&](const mcap::Schema& s) { l.schemas[s.id] = s; };
     h.on_channel = [&](const mcap::Channel& c) { l.channels[c.id] = c; };
+    std::uint64_t read = 0;
     h.on_message = [&](const mcap::Message& m) {
+        if (++read % kStopCheckEvery == 0) throw_if_stopped(o.stop, "the export");
         const auto& c = l.channels.at(m.channel_id);
         const std::string suffix = suffix_of(c.topic);
         if (suffix == "stand/wrench") {
@@ -217,7 +225,7 @@ flight::Flight read_flight_or_recording(const std::string& path) {
     return f;
 }
 
-void export_csv(const std::string& path, const std::string& dir) {
+void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop) {
     Loaded l;
     struct Table {
         std::vector<std::string> columns;
@@ -228,7 +236,9 @@ void export_csv(const std::string& path, const std::string& dir) {
     mcap::Handlers h;
     h.on_schema = [&](const mcap::Schema& s) { l.schemas[s.id] = s; };
     h.on_channel = [&](const mcap::Channel& c) { l.channels[c.id] = c; };
+    std::uint64_t read = 0;
     h.on_message = [&](const mcap::Message& m) {
+        if (++read % kStopCheckEvery == 0) throw_if_stopped(stop, "the export");
         const auto& c = l.channels.at(m.channel_id);
         const std::string type = c.schema_id ? l.schemas.at(c.schema_id).name : "";
         const auto j = decode(type, m.data);
@@ -257,18 +267,17 @@ void export_csv(const std::string& path, const std::string& dir) {
         t.rows.push_back(std::move(row));
     };
     require_sound(mcap::read_file(path, h), path);
-    std::filesystem::create_directories(dir);
     for (const auto& [id, t] : tables) {
         std::string name = suffix_of(l.channels.at(id).topic);
         std::replace(name.begin(), name.end(), '/', '_');
-        std::ofstream out(std::filesystem::path(dir) / (name + ".csv"));
-        if (!out) throw RuntimeError(log::cat("cannot write ", dir, "/", name, ".csv"));
-        for (std::size_t i = 0; i < t.columns.size(); ++i) out << (i ? "," : "") << t.columns[i];
-        out << "\n";
+        std::string text;
+        for (std::size_t i = 0; i < t.columns.size(); ++i) text += (i ? "," : "") + t.columns[i];
+        text += "\n";
         for (const auto& row : t.rows) {
-            for (std::size_t i = 0; i < t.columns.size(); ++i) out << (i ? "," : "") << (i < row.size() ? row[i] : "");
-            out << "\n";
+            for (std::size_t i = 0; i < t.columns.size(); ++i) text += (i ? "," : "") + (i < row.size() ? row[i] : std::string());
+            text += "\n";
         }
+        write_file((std::filesystem::path(dir) / (name + ".csv")).string(), text);
     }
 }
 

@@ -4,6 +4,7 @@
 #include <iosfwd>
 #include <optional>
 #include <span>
+#include <stop_token>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -23,6 +24,7 @@ bool print_info(const std::string& path, std::ostream& out);
 
 struct ExportOptions {
     std::string sufferer = "sufferer";  // the rigid body on the stand
+    std::stop_token stop;               // checked while reading: dw::Stopped, nothing written
 };
 // A flight folder (downwash-flight/1) from stand/wrench and mocap/frame (+ the plan's formation).
 void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o);
@@ -30,7 +32,7 @@ void export_flight(const std::string& path, const std::string& dir, const Export
 // and read back: what the analysis tools take. Throws dw::InputError naming the path.
 flight::Flight read_flight_or_recording(const std::string& path);
 // One CSV per topic: log_time, publish_time and every field (flattened JSON paths).
-void export_csv(const std::string& path, const std::string& dir);
+void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop = {});
 
 struct ReplayOptions {
     double speed = 1.0;                  // x N

@@ -70,10 +70,11 @@ int run(int argc, char** argv) {
         std::cout << "ABORTED: " << experiment.reason() << "\n";
         return dw::kExitRuntime;
     }
+    const double covered = dw::planner::coverage(p, stop);  // before any file: a stop leaves none
     dw::write_file(out, dw::planner::to_document(p, json));
     dw::planner::draw_plan(p, picture);
     std::cout << p.reference.legs().size() << " legs, " << p.duration_s() << " s, coverage "
-              << static_cast<int>(dw::planner::coverage(p, stop) * 100 + 0.5) << " % of the square; every pair >= "
+              << static_cast<int>(covered * 100 + 0.5) << " % of the square; every pair >= "
               << o.min_separation_m << " m apart and inside the geofence; wrote " << out << " and " << picture << "\n";
     return 0;
 }

@@ -164,3 +164,16 @@ TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
     EXPECT_EQ(report["explained_by"][0], "clock_offset") << report.dump(1);
     EXPECT_NE(r.out.find("experiments: DONE, DONE"), std::string::npos) << r.out;
 }
+
+// Issue 14: a process name that is a path wrote its log outside the run folder; a lab file that
+// starts dw-lab started itself without end.
+TEST(LabFile, ProcessNamesAreNotPathsAndTheLauncherIsNotAProcess) {
+    for (const char* name : {"../../escape", "a/b", ".hidden", ""}) {
+        const std::string e = error_of(std::string("format: downwash-lab/1\nprocesses:\n  - {name: \"") + name +
+                                       "\", run: [dw-probe, list], experiment: true}\n");
+        EXPECT_NE(e.find("is not a process name"), std::string::npos) << name << ": " << e;
+    }
+    const std::string e = error_of("format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, lab.yaml]}\n");
+    EXPECT_NE(e.find("cannot start the launcher"), std::string::npos) << e;
+    EXPECT_EQ(error_of("format: downwash-lab/1\nprocesses:\n  - {name: probe-1.a_b, run: [dw-probe, list]}\n"), "");
+}

@@ -98,3 +98,39 @@ TEST(Plans, DocumentsAndPicture) {
     ASSERT_GT(png.size(), 1000u);
     EXPECT_EQ(png.substr(1, 3), "PNG");
 }
+
+// ---- issue 14: NaN never flies -------------------------------------------------------------------
+
+TEST(PlannerHardening, ChecksArePositivelySatisfiedSoNaNFailsThem) {
+    const Geofence fence;
+    const double nan = std::nan("");
+    EXPECT_TRUE(fence.contains({0, 0, -1.5}, 0));
+    EXPECT_FALSE(fence.contains({nan, 0, -1.5}, 0));
+    EXPECT_FALSE(fence.contains({0, 0, -1.5}, nan));
+    dw::physics::Setpoint sp;
+    EXPECT_TRUE(is_finite(sp));
+    sp.velocity.y() = INFINITY;
+    EXPECT_FALSE(is_finite(sp));
+}
+
+TEST(PlannerHardening, NaNOptionsNeverMakeAPlan) {
+    for (int which = 0; which < 3; ++which) {
+        PlanOptions o;
+        o.grid.legs = 2;
+        if (which == 0) o.grid.altitudes_m = {std::nan("")};
+        if (which == 1) o.grid.speed_mps = std::nan("");
+        if (which == 2) o.min_separation_m = std::nan("");
+        EXPECT_THROW(make_plan(o), dw::InputError) << which;
+    }
+}
+
+TEST(PlannerHardening, ChecksStopWhenAsked) {
+    PlanOptions o;
+    o.grid.legs = 4;
+    const Plan p = make_plan(o);
+    std::stop_source stop;
+    stop.request_stop();
+    EXPECT_THROW(check(p, stop.get_token()), dw::Stopped);
+    EXPECT_THROW(coverage(p, stop.get_token()), dw::Stopped);
+    EXPECT_FALSE(check(p));
+}

@@ -1,0 +1,654 @@
+// CLI fuzz harness (issue 14): every tool and subcommand, started with a table of hostile values
+// in its numeric and path options. For each run it asserts the house rules:
+//   - the exit status is 0, 1, 2 or 130; a run still going after the row's bound is sent SIGINT
+//     and must end within 10 s (130; 0 too for rows whose normal end is a stop, see Row::until_stopped);
+//   - on 1 and 2, stderr is exactly one non-empty line, "<tool>: error: ...";
+//   - a value that can never be a number (nan, inf, -inf, "", x) is refused with 2;
+//   - no text file the run leaves contains a NaN or inf token;
+//   - on any status but 0: the row's declared outputs do not exist, an attacked output path is as
+//     it was before, and no "*.tmp-*" file is left anywhere.
+// docs/HOSTILE_INPUT.md lists the hostile values and what each tool does with them.
+//
+// Registration (tests/CMakeLists.txt, next to the other dw_test calls; it needs every tool):
+//
+// if(DW_BUILD_TOOLS AND DW_BUILD_PHYSICS AND DW_BUILD_PLANNER AND DW_BUILD_RECORDER AND DW_BUILD_PREDICTOR AND DW_BUILD_EXPLAINER
+//    AND DW_BUILD_STAND_AGENT AND DW_BUILD_MOCAP_BRIDGE)
+//   dw_test(dw_fuzz_cli_tests SOURCES test_fuzz_cli.cpp LIBS dw_core LABELS "fuzz;integration"
+//           DEPENDS dw-probe dw-lab dw-sim dw-recorder dw-stand-agent dw-mocap-bridge dw-natnet-emulator
+//                   dw-planner dw-predictor dw-explain
+//           LOCK heavy)
+// endif()
+//
+// One CTest test per table row (gtest_discover_tests: FuzzCli/Tool.HostileValues/<row>), so CTest
+// runs rows in parallel; each test process makes the fixtures its row needs, once. LOCK heavy:
+// the dw-lab demo, predictor study and explain proof rows run real work (and a whole simulated lab
+// for a few seconds each), which would starve the real-time experiments sharing that lock.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "support.hpp"
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using dw::test::bin;
+using dw::test::lines;
+using dw::test::TempDir;
+
+namespace {
+
+// ----------------------------------------------------------------------------------------------
+// The table
+// ----------------------------------------------------------------------------------------------
+
+// What a path option is to its tool.
+enum class Role {
+    in,      // a file or folder it reads
+    out,     // a file it writes
+    outdir,  // a folder it writes
+    png,     // a PNG picture it writes
+};
+
+struct PathOption {
+    // "--opt" (replaced, or appended when the base argv lacks it), or a positional placeholder
+    // exactly as it appears in the base argv ("{mcap}", "{out}/recovered.mcap").
+    std::string target;
+    Role role;
+    std::string ext;          // the extension hostile names get (".yaml"), so extension checks pass
+    std::string prefix = "";  // put before the path ("note=" for --attach NAME=PATH)
+};
+
+struct Row {
+    std::string name;  // test name
+    std::string tool;
+    std::string sub;   // subcommand whose --help lists the numeric options ("" = the tool's own help)
+    // A minimal valid command line. Placeholders: {out} (the run's work folder, also its working
+    // directory), {domain} (this process's private DDS domain), {flight} {mcap} {model} {loads}
+    // {labfile} (fixtures, made once per test process).
+    std::vector<std::string> argv;
+    std::chrono::milliseconds bound;  // then SIGINT; batch rows finish well inside it
+    // The row runs until stopped (a daemon, or a documented "until Ctrl-C" mode): its normal end
+    // is a stop, so 0 after SIGINT is accepted besides 130. Batch work must say 130.
+    bool until_stopped = false;
+    // Also attack the tool's root options (--domain, --config). Only on rows that make no DDS
+    // participant, so "--domain 0" puts no traffic on the default domain; the options are shared
+    // (dw::dds::ProcessCli, dw::cli::configure), so one row per tool covers them.
+    bool root_options = false;
+    std::vector<std::string> skip;             // numeric options not to attack
+    std::vector<PathOption> paths;             // path options to attack (listed by hand)
+    std::vector<std::string> outputs;          // what a failed run must not leave (placeholders)
+};
+
+const PathOption kConfig{"--config", Role::in, ".yaml"};
+
+std::vector<Row> table() {
+    constexpr auto quick = std::chrono::milliseconds(20000);
+    constexpr auto daemon = std::chrono::milliseconds(2500);
+    return {
+        // ---- dw-probe
+        {"probe_list", "dw-probe", "list", {"list", "--domain", "{domain}"}, quick, false, true, {}, {kConfig}, {}},
+        {"probe_pub", "dw-probe", "pub", {"pub", "--domain", "{domain}", "--count", "5", "--rate", "100", "--quiet"},
+         quick, /*--linger -1: until stopped*/ true, false, {}, {}, {}},
+        {"probe_echo", "dw-probe", "echo", {"echo", "--domain", "{domain}", "--quiet"}, daemon, true, false, {},
+         {{"--summary", Role::out, ".json"}}, {}},
+        // ---- dw-lab
+        {"lab_loopback", "dw-lab", "loopback",
+         {"loopback", "--domain", "{domain}", "--count", "3", "--quiet", "--summary", "{out}/summary.json"}, quick, false,
+         false, {}, {{"--summary", Role::out, ".json"}}, {"{out}/summary.json"}},
+        {"lab_run", "dw-lab", "run", {"run", "--lab", "{labfile}", "--run-dir", "{out}/run", "--domain", "{domain}"},
+         std::chrono::milliseconds(3000), true, false, {},
+         {{"--lab", Role::in, ".yaml"}, {"--run-dir", Role::outdir, ""}}, {"{out}/run"}},
+        // A whole simulated lab: stopped after 4 s, which also checks that a stop reaches every child.
+        {"lab_demo", "dw-lab", "demo", {"demo", "--quick", "--out", "{out}/demo", "--domain", "{domain}"},
+         std::chrono::milliseconds(4000), false, false, {}, {{"--out", Role::outdir, ""}}, {"{out}/demo"}},
+        // ---- dw-sim
+        {"sim_fly", "dw-sim", "fly", {"fly", "--formation", "single", "--legs", "1", "--quiet", "--out", "{out}/flight"},
+         quick, false, true, {}, {{"--physics", Role::in, ".yaml"}, {"--out", Role::outdir, ""}, kConfig},
+         {"{out}/flight"}},
+        // ---- dw-recorder
+        {"recorder_record", "dw-recorder", "record",
+         {"record", "--domain", "{domain}", "--quiet", "--duration", "1", "-o", "{out}/rec.mcap"}, quick,
+         /*--duration 0: until Ctrl-C*/ true, false, {},
+         {{"-o", Role::out, ".mcap"}, {"--attach", Role::in, ".yaml", "note="}}, {"{out}/rec.mcap"}},
+        {"recorder_info", "dw-recorder", "info", {"info", "{mcap}"}, quick, false, true, {},
+         {{"{mcap}", Role::in, ".mcap"}, kConfig}, {}},
+        {"recorder_recover", "dw-recorder", "recover", {"recover", "{mcap}", "{out}/recovered.mcap"}, quick, false, false,
+         {}, {{"{mcap}", Role::in, ".mcap"}, {"{out}/recovered.mcap", Role::out, ".mcap"}}, {"{out}/recovered.mcap"}},
+        {"recorder_export", "dw-recorder", "export", {"export", "{mcap}", "--flight", "{out}/flight", "--csv", "{out}/csv"},
+         quick, false, false, {},
+         {{"{mcap}", Role::in, ".mcap"}, {"--flight", Role::outdir, ""}, {"--csv", Role::outdir, ""}},
+         {"{out}/flight", "{out}/csv"}},
+        {"recorder_replay", "dw-recorder", "replay", {"replay", "{mcap}", "--domain", "{domain}", "--speed", "10"}, quick,
+         false, false, {}, {{"{mcap}", Role::in, ".mcap"}}, {}},
+        // ---- dw-stand-agent
+        {"stand_run", "dw-stand-agent", "run", {"run", "--sim", "--domain", "{domain}"}, daemon, true, false, {},
+         {{"--calibration", Role::in, ".yaml"}, {"--physics", Role::in, ".yaml"}}, {}},
+        {"stand_calibrate", "dw-stand-agent", "calibrate", {"calibrate", "--loads", "{loads}", "--out", "{out}/cal.yaml"},
+         quick, false, true, {},
+         {{"--loads", Role::in, ".csv"}, {"--out", Role::out, ".yaml"}, {"--calibration", Role::in, ".yaml"}, kConfig},
+         {"{out}/cal.yaml"}},
+        // ---- dw-mocap-bridge, dw-natnet-emulator (no subcommands: their options are the root's)
+        {"mocap_bridge", "dw-mocap-bridge", "", {"--sim", "--domain", "{domain}"}, daemon, true, false, {"--domain"},
+         {kConfig}, {}},
+        {"natnet_emulator", "dw-natnet-emulator", "", {"--port", "0"}, daemon, true, false, {}, {kConfig}, {}},
+        // ---- dw-planner
+        {"planner_plan", "dw-planner", "plan", {"plan", "--formation", "single", "--legs", "2", "--out", "{out}/plan.yaml"},
+         quick, false, true, {},
+         {{"--out", Role::out, ".yaml"}, {"--picture", Role::png, ".png"}, kConfig}, {"{out}/plan.yaml", "{out}/plan.png"}},
+        // Waits for its vehicle until the wait timeout (30 s): stopped after 3 s.
+        {"planner_run", "dw-planner", "run", {"run", "--formation", "single", "--legs", "2", "--domain", "{domain}", "--wait-for", ""},
+         std::chrono::milliseconds(3000), false, false, {}, {}, {}},
+        // ---- dw-predictor
+        {"predictor_study", "dw-predictor", "study",
+         {"study", "--out", "{out}/study", "--legs", "5", "--epochs", "1", "--no-generalisation", "--no-maps"},
+         std::chrono::milliseconds(40000), false, false, {}, {{"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml"}},
+         {"{out}/study"}},
+        {"predictor_train", "dw-predictor", "train",
+         {"train", "--kind", "learnt_linear", "--epochs", "1", "--data", "{flight}", "--out", "{out}/model.json"}, quick,
+         false, true, {}, {{"--data", Role::in, ".mcap"}, {"--out", Role::out, ".json"}, kConfig}, {"{out}/model.json"}},
+        {"predictor_compare", "dw-predictor", "compare",
+         {"compare", "--models", "{model}", "--data", "{flight}", "--out", "{out}/cmp"}, quick, false, false, {},
+         {{"--models", Role::in, ".json"}, {"--data", Role::in, ".mcap"}, {"--out", Role::outdir, ""}}, {"{out}/cmp"}},
+        {"predictor_map", "dw-predictor", "map",
+         {"map", "--models", "{model}", "--formation", "single", "--out", "{out}/map.png"}, quick, false, false, {},
+         {{"--models", Role::in, ".json"}, {"--data", Role::in, ".mcap"}, {"--out", Role::png, ".png"},
+          {"--line", Role::png, ".png"}},
+         {"{out}/map.png", "{out}/map_line.png"}},
+        {"predictor_run", "dw-predictor", "run", {"run", "--model", "{model}", "--domain", "{domain}"}, daemon, true, false,
+         {}, {{"--model", Role::in, ".json"}}, {}},
+        // ---- dw-explain
+        {"explain", "dw-explain", "", {"--real", "{flight}", "--out", "{out}/explain", "--quiet"}, quick, false, true, {},
+         {{"--real", Role::in, ".mcap"}, {"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml"}, kConfig},
+         {"{out}/explain"}},
+        {"explain_proof", "dw-explain", "proof",
+         {"proof", "--out", "{out}/proof", "--null-seeds", "1", "--cases", "null", "--quiet"},
+         std::chrono::milliseconds(40000), false, false, {}, {{"--out", Role::outdir, ""}}, {"{out}/proof"}},
+    };
+}
+
+// The hostile values. Numbers: every numeric option. Paths: every listed path option.
+const std::vector<std::string> kNumbers{"nan", "inf", "-inf", "-1", "0", "1e308", "1e-300", "", "x"};
+// Never a number: whatever the option, the answer is 2.
+const std::set<std::string> kNeverNumbers{"nan", "inf", "-inf", "", "x"};
+enum class HostilePath { directory, missing, empty_file, unreadable, empty_string, not_png };
+const char* name_of(HostilePath h) {
+    switch (h) {
+        case HostilePath::directory: return "directory";
+        case HostilePath::missing: return "missing";
+        case HostilePath::empty_file: return "empty_file";
+        case HostilePath::unreadable: return "unreadable";
+        case HostilePath::empty_string: return "empty_string";
+        case HostilePath::not_png: return "not_png";
+    }
+    return "?";
+}
+
+// ----------------------------------------------------------------------------------------------
+// Fixtures: made once per test process (each row is its own process under CTest), and only
+// those the row's base command line names.
+// ----------------------------------------------------------------------------------------------
+
+std::string slurp(const std::string& path) {
+    try {
+        return dw::read_file(path);
+    } catch (...) {
+        return "";
+    }
+}
+
+// Runs a helper command to completion; returns its status, stderr in `err`.
+int run_helper(const std::vector<std::string>& argv, const std::string& dir, std::string* err = nullptr,
+               std::chrono::milliseconds limit = 120s) {
+    static int n = 0;
+    const std::string tag = dir + "/helper" + std::to_string(n++);
+    dw::Subprocess p({argv, tag + ".out", tag + ".err", {}});
+    const auto st = p.wait_for(limit);
+    const int status = st ? *st : p.stop();
+    if (err != nullptr) *err = slurp(tag + ".out") + slurp(tag + ".err");
+    return status;
+}
+
+std::string known_loads_csv() {  // the nominal stand under 12 known loads (as test_cli.cpp)
+    std::string csv = "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
+    const double r = 0.1;
+    for (int i = 0; i < 12; ++i) {
+        const double fz = 1.0 + i, fn = (i % 3) - 1.0, fe = (i % 4) - 1.5, mr = 0.01 * (i % 5), mp = -0.01 * (i % 3),
+                     my = 0.005 * (i % 2);
+        double v[4];
+        for (int k = 0; k < 4; ++k) {
+            const double phi = M_PI / 4 + M_PI / 2 * k, x = r * std::cos(phi), y = r * std::sin(phi);
+            v[k] = fz / 4 + mr * y / (4 * r * r * 0.5) - mp * x / (4 * r * r * 0.5);
+        }
+        const double n4 = fn / 2 - my / (4 * r), n5 = fn / 2 + my / (4 * r);
+        const double e6 = fe / 2 - my / (4 * r), e7 = fe / 2 + my / (4 * r);
+        char line[512];
+        std::snprintf(line, sizeof(line), "%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f\n", v[0] * 21400, v[1] * 21400,
+                      v[2] * 21400, v[3] * 21400, n4 * 21400, n5 * 21400, e6 * 21400, e7 * 21400, fn, fe, fz, mr, mp, my);
+        csv += line;
+    }
+    return csv;
+}
+
+class Fixtures {
+public:
+    explicit Fixtures(std::string dir) : dir_(std::move(dir)) {}
+
+    // The fixture's path; empty and *problem set when it could not be made.
+    std::string get(const std::string& name, std::string* problem) {
+        if (auto it = made_.find(name); it != made_.end()) return it->second;
+        std::string path, err;
+        const std::string domain = std::to_string(dw::test::test_domain());
+        if (name == "flight") {
+            path = dir_ + "/flight";
+            if (run_helper({bin("dw-sim"), "fly", "--formation", "single", "--legs", "5", "--quiet", "--out", path}, dir_,
+                           &err) != 0) {
+                *problem = "dw-sim fly: " + err;
+                return "";
+            }
+        } else if (name == "model") {
+            const std::string flight = get("flight", problem);
+            if (flight.empty()) return "";
+            path = dir_ + "/model.json";
+            if (run_helper({bin("dw-predictor"), "train", "--kind", "learnt_linear", "--epochs", "1", "--data", flight,
+                            "--out", path}, dir_, &err) != 0) {
+                *problem = "dw-predictor train: " + err;
+                return "";
+            }
+        } else if (name == "mcap") {
+            // A short recording of dw-probe's deterministic samples on this process's own domain. If
+            // the publisher finds no reader in time the recording still holds the heartbeats: a
+            // valid, smaller file, good enough for info/recover/export/replay.
+            path = dir_ + "/recording.mcap";
+            dw::Subprocess rec({{bin("dw-recorder"), "record", "--domain", domain, "--duration", "3", "--quiet",
+                                 "--no-command-control", "-o", path},
+                                dir_ + "/rec.out", dir_ + "/rec.err", {}});
+            std::this_thread::sleep_for(300ms);
+            run_helper({bin("dw-probe"), "pub", "--domain", domain, "--count", "50", "--rate", "100", "--wait-readers",
+                        "1", "--wait-timeout", "5", "--quiet"}, dir_);
+            const auto st = rec.wait_for(30s);
+            if (!st || *st != 0 || !fs::exists(path)) {
+                *problem = "dw-recorder record: " + slurp(dir_ + "/rec.err");
+                return "";
+            }
+        } else if (name == "loads") {
+            path = dir_ + "/loads.csv";
+            std::ofstream(path) << known_loads_csv();
+        } else if (name == "labfile") {
+            // One process that runs until stopped: dw-lab run then runs until stopped too.
+            path = dir_ + "/lab.yaml";
+            std::ofstream(path) << "format: downwash-lab/1\nprocesses:\n  - name: echo\n    run: [dw-probe, echo, --quiet]\n";
+        } else {
+            *problem = "unknown fixture {" + name + "}";
+            return "";
+        }
+        made_[name] = path;
+        return path;
+    }
+
+private:
+    std::string dir_;
+    std::map<std::string, std::string> made_;
+};
+
+// ----------------------------------------------------------------------------------------------
+// One run
+// ----------------------------------------------------------------------------------------------
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to) {
+    for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+    return s;
+}
+
+// Replaces the value of `target` in argv (an option: the word after it, appended when absent; a
+// positional placeholder: that word).
+std::vector<std::string> with_value(std::vector<std::string> argv, const std::string& target, const std::string& value) {
+    const auto it = std::find(argv.begin(), argv.end(), target);
+    if (target.rfind('-', 0) != 0) {
+        if (it != argv.end()) *it = value;
+        return argv;
+    }
+    if (it != argv.end() && it + 1 != argv.end()) {
+        *(it + 1) = value;
+    } else {
+        argv.push_back(target);
+        argv.push_back(value);
+    }
+    return argv;
+}
+
+// The numeric options a --help text lists: those carrying a range ("--speed FLOAT:[0.05, 3] m/s",
+// "--domain ID:[0, 232]") and any FLOAT/INT/UINT one (dw::cli::parse refuses those without a range,
+// but the harness should not rely on it).
+std::vector<std::string> numeric_options(const std::string& help) {
+    static const std::regex re(R"(^\s+(?:-\w,)?(--[a-z][a-z0-9-]*)\s+(?:(?:FLOAT|INT|UINT)\b|[A-Z]+:\[))");
+    std::vector<std::string> out;
+    for (const auto& line : lines(help)) {
+        std::smatch m;
+        if (std::regex_search(line, m, re) && std::find(out.begin(), out.end(), m[1].str()) == out.end()) {
+            out.push_back(m[1].str());
+        }
+    }
+    return out;
+}
+
+// A NaN or inf token in text ("nan", "-inf", ".inf", "NaN", "inf," ...): never in an output file.
+std::optional<std::string> nan_line(const std::string& text) {
+    static const std::regex re(R"((^|[,:\s\[="'(])(-?\.?nan|-?\.?inf)([,\s\]"')]|$))", std::regex::icase);
+    std::string lower(text.size(), ' ');
+    std::transform(text.begin(), text.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    for (const char* word : {"nan", "inf"}) {
+        for (std::size_t at = lower.find(word); at != std::string::npos; at = lower.find(word, at + 1)) {
+            const std::size_t b = lower.rfind('\n', at), e = lower.find('\n', at);
+            const std::size_t start = b == std::string::npos ? 0 : b + 1;
+            const std::string line = text.substr(start, e == std::string::npos ? std::string::npos : e - start);
+            if (std::regex_search(line, re)) return line.substr(0, 160);
+            if (e == std::string::npos) break;
+            at = e;
+        }
+    }
+    return std::nullopt;
+}
+
+// What a path is, to compare before and after a failed run.
+std::string state_of(const std::string& path) {
+    std::error_code ec;
+    if (path.empty() || !fs::exists(fs::symlink_status(path, ec))) return "absent";
+    if (fs::is_directory(path, ec)) {
+        std::vector<std::string> names;
+        for (const auto& e : fs::directory_iterator(path, ec)) names.push_back(e.path().filename().string());
+        std::sort(names.begin(), names.end());
+        std::string s = "folder {";
+        for (const auto& n : names) s += " " + n;
+        return s + " }";
+    }
+    return "file of " + std::to_string(fs::file_size(path, ec)) + " bytes";
+}
+
+struct Case {
+    std::string label;                       // "--speed nan", "--out=directory"
+    std::vector<std::string> argv;           // with placeholders
+    bool never_a_number = false;
+    const PathOption* path = nullptr;        // the attacked path option, if any
+    HostilePath hostile{};
+};
+
+class Run {
+public:
+    explicit Run(const std::string& tool) : tool_(tool) {
+        std::error_code ec;
+        fs::create_directories(work(), ec);
+        fs::create_directories(hostile_dir(), ec);
+    }
+    std::string root() const { return root_.file(""); }
+    std::string work() const { return root_.file("work"); }
+    std::string hostile_dir() const { return root_.file("hostile"); }
+    std::string out_file() const { return root_.file("stdout"); }
+    std::string err_file() const { return root_.file("stderr"); }
+
+    // Makes the hostile path for `o` inside this run's folder; returns it and, in *watch, the path
+    // whose state must not change when the run fails ("" = nothing to watch).
+    std::string make(HostilePath h, const PathOption& o, std::string* watch) {
+        const std::string d = hostile_dir();
+        std::string p;
+        switch (h) {
+            case HostilePath::directory:
+                p = d + "/dir" + o.ext;
+                fs::create_directories(p);
+                break;
+            case HostilePath::missing:
+                // An input that is not there; an output in folders that are not there yet.
+                p = o.role == Role::in ? d + "/missing" + o.ext : d + "/no/such/folder/out" + o.ext;
+                break;
+            case HostilePath::empty_file:
+                p = d + "/empty" + o.ext;
+                std::ofstream{p};
+                break;
+            case HostilePath::unreadable:
+                p = d + "/unreadable" + o.ext;
+                std::ofstream{p} << "format: unreadable\n";
+                ::chmod(p.c_str(), 0);
+                break;
+            case HostilePath::empty_string: break;
+            case HostilePath::not_png: p = d + "/picture.txt"; break;
+        }
+        *watch = o.role == Role::in || p.empty() ? "" : (h == HostilePath::missing ? d + "/no" : p);
+        return p;
+    }
+
+    struct Result {
+        int status = -1;
+        bool stopped = false;  // SIGINT was sent
+        bool hung = false;     // ... and it did not end within 10 s
+        std::string err;
+    };
+
+    Result start(const std::vector<std::string>& argv, std::chrono::milliseconds bound) {
+        // Tools write default outputs (plan.yaml, recording.mcap, runs/...) in the working
+        // directory: run each in its own folder. One run at a time per process, so chdir is safe.
+        const fs::path here = fs::current_path();
+        fs::current_path(work());
+        Result r;
+        {
+            dw::Subprocess p({argv, out_file(), err_file(), {}});
+            fs::current_path(here);
+            auto st = p.wait_for(bound);
+            if (!st) {
+                r.stopped = true;
+                p.signal(SIGINT);
+                st = p.wait_for(10s);
+                if (!st) {
+                    r.hung = true;
+                    st = p.stop(3000ms);  // SIGTERM, then SIGKILL
+                }
+            }
+            r.status = st.value_or(-1);
+        }
+        r.err = slurp(err_file());
+        return r;
+    }
+
+    // Problems with the files the run left: NaN/inf tokens, temporaries.
+    void scan(std::vector<std::string>& problems) const {
+        std::error_code ec;
+        for (auto it = fs::recursive_directory_iterator(root(), fs::directory_options::skip_permission_denied, ec);
+             it != fs::recursive_directory_iterator(); it.increment(ec)) {
+            if (ec) break;
+            const fs::path p = it->path();
+            const std::string name = p.filename().string();
+            if (name.find(".tmp-") != std::string::npos) problems.push_back("temporary file left: " + shorten(p.string()));
+            if (!it->is_regular_file(ec) || p == fs::path(out_file()) || p == fs::path(err_file())) continue;
+            const std::string ext = p.extension().string();
+            if (ext == ".png" || ext == ".mcap") continue;  // binary
+            const std::string text = slurp(p.string());
+            if (text.find('\0') != std::string::npos) continue;  // binary
+            if (const auto line = nan_line(text)) problems.push_back("NaN/inf in " + shorten(p.string()) + ": " + *line);
+        }
+    }
+
+    std::string shorten(const std::string& s) const { return replace_all(s, root(), "$T/"); }
+
+private:
+    std::string tool_;
+    TempDir root_;
+};
+
+std::string quoted(const std::vector<std::string>& argv) {
+    std::string s;
+    for (const auto& a : argv) {
+        if (!s.empty()) s += ' ';
+        s += a.empty() || a.find_first_of(" \t'\"") != std::string::npos ? "'" + a + "'" : a;
+    }
+    return s;
+}
+
+// ----------------------------------------------------------------------------------------------
+// The test: one per row
+// ----------------------------------------------------------------------------------------------
+
+class Tool : public ::testing::TestWithParam<Row> {
+protected:
+    static void SetUpTestSuite() {
+        fixture_dir_ = std::make_unique<TempDir>();
+        fixtures_ = std::make_unique<Fixtures>(fixture_dir_->file("fixtures"));
+        fs::create_directories(fixture_dir_->file("fixtures"));
+    }
+    static void TearDownTestSuite() {
+        fixtures_.reset();
+        fixture_dir_.reset();
+    }
+    static std::unique_ptr<TempDir> fixture_dir_;
+    static std::unique_ptr<Fixtures> fixtures_;
+};
+std::unique_ptr<TempDir> Tool::fixture_dir_;
+std::unique_ptr<Fixtures> Tool::fixtures_;
+
+std::string help_of(const std::string& tool, const std::string& sub) {
+    TempDir d;
+    std::vector<std::string> argv{bin(tool)};
+    if (!sub.empty()) argv.push_back(sub);
+    argv.push_back("--help");
+    dw::Subprocess p({argv, d.file("help"), d.file("help.err"), {}});
+    const auto st = p.wait_for(10s);
+    if (!st) p.stop();
+    return slurp(d.file("help"));
+}
+
+std::vector<Case> cases_of(const Row& row) {
+    std::vector<std::string> numeric = numeric_options(help_of(row.tool, row.sub));
+    if (row.root_options && !row.sub.empty()) {
+        for (const auto& o : numeric_options(help_of(row.tool, ""))) {
+            if (std::find(numeric.begin(), numeric.end(), o) == numeric.end()) numeric.push_back(o);
+        }
+    }
+    std::vector<Case> cases;
+    for (const auto& o : numeric) {
+        if (std::find(row.skip.begin(), row.skip.end(), o) != row.skip.end()) continue;
+        for (const auto& v : kNumbers) {
+            cases.push_back({o + " " + (v.empty() ? "''" : v), with_value(row.argv, o, v), kNeverNumbers.count(v) > 0});
+        }
+    }
+    for (const auto& p : row.paths) {
+        for (HostilePath h : {HostilePath::directory, HostilePath::missing, HostilePath::empty_file, HostilePath::unreadable,
+                              HostilePath::empty_string, HostilePath::not_png}) {
+            if (h == HostilePath::not_png && p.role != Role::png) continue;
+            // As root every file is readable: the unreadable value would test nothing (CI runs as root).
+            if (h == HostilePath::unreadable && ::geteuid() == 0) continue;
+            Case c;
+            c.label = p.target + "=" + name_of(h);
+            c.argv = row.argv;
+            c.path = &p;
+            c.hostile = h;
+            cases.push_back(c);
+        }
+    }
+    return cases;
+}
+
+TEST_P(Tool, HostileValues) {
+    const Row& row = GetParam();
+
+    // The fixtures this row's base command names.
+    std::map<std::string, std::string> fixture;
+    for (const auto& a : row.argv) {
+        for (const char* name : {"flight", "mcap", "model", "loads", "labfile"}) {
+            if (a.find(std::string("{") + name + "}") == std::string::npos || fixture.count(name)) continue;
+            std::string problem;
+            const std::string path = fixtures_->get(name, &problem);
+            ASSERT_FALSE(path.empty()) << "fixture {" << name << "}: " << problem;
+            fixture[name] = path;
+        }
+    }
+
+    const auto cases = cases_of(row);
+    ASSERT_FALSE(cases.empty()) << row.tool << " " << row.sub << ": no numeric option found in --help and no path option listed";
+
+    for (const auto& c : cases) {
+        Run run(row.tool);
+        std::vector<std::string> argv = c.argv;
+        std::string watch, watch_before;
+        if (c.path != nullptr) {
+            const std::string value = run.make(c.hostile, *c.path, &watch);
+            argv = with_value(argv, c.path->target, c.path->prefix + value);
+            watch_before = state_of(watch);
+        }
+        auto expand = [&](std::string a) {
+            a = replace_all(a, "{out}", run.work());
+            a = replace_all(a, "{domain}", std::to_string(dw::test::test_domain()));
+            for (const auto& [name, path] : fixture) a = replace_all(a, "{" + name + "}", path);
+            return a;
+        };
+        std::vector<std::string> full{bin(row.tool)};
+        for (const auto& a : argv) full.push_back(expand(a));
+
+        const auto r = run.start(full, row.bound);
+        std::vector<std::string> problems;
+        const auto err_lines = [&] {
+            std::vector<std::string> l;
+            for (const auto& s : lines(r.err)) {
+                if (s.find_first_not_of(" \t\r") != std::string::npos) l.push_back(s);
+            }
+            return l;
+        }();
+
+        if (r.hung) {
+            problems.push_back("still running 10 s after SIGINT (killed)");
+        } else if (r.status != 0 && r.status != 1 && r.status != 2 && r.status != 130) {
+            problems.push_back("exit status " + std::to_string(r.status) + " (expected 0, 1, 2 or 130)");
+        } else if (r.stopped && r.status != 130 && !(row.until_stopped && r.status == 0)) {
+            problems.push_back("status " + std::to_string(r.status) + " after SIGINT (expected 130" +
+                               (row.until_stopped ? " or 0)" : ")"));
+        }
+        if (c.never_a_number && r.status != 2) problems.push_back("a value that is no number was not refused with 2");
+        if (r.status == 1 || r.status == 2) {
+            if (err_lines.size() != 1) {
+                problems.push_back(std::to_string(err_lines.size()) + " lines on stderr (expected one)");
+            } else if (err_lines[0].rfind(row.tool + ": error: ", 0) != 0) {
+                problems.push_back("the stderr line is not '" + row.tool + ": error: ...'");
+            }
+        }
+        run.scan(problems);
+        if (r.status != 0) {
+            for (const auto& o : row.outputs) {
+                // Only outputs the command line still names (an attacked one is watched instead).
+                if (std::find(argv.begin(), argv.end(), o) == argv.end()) continue;
+                const std::string path = expand(o);
+                if (fs::exists(path)) problems.push_back("output left after failure: " + run.shorten(path));
+            }
+            if (!watch.empty() && state_of(watch) != watch_before) {
+                problems.push_back("attacked output " + run.shorten(watch) + " changed by a failed run: " + watch_before +
+                                   " -> " + state_of(watch));
+            }
+        }
+        if (!problems.empty()) {
+            std::string msg = "[" + c.label + "] " + run.shorten(quoted(full)) + "\n  status " + std::to_string(r.status) +
+                              (r.stopped ? " (after SIGINT)" : "");
+            for (const auto& p : problems) msg += "\n  - " + p;
+            std::string err = run.shorten(r.err);
+            if (err.size() > 600) err = "..." + err.substr(err.size() - 600);
+            msg += "\n  stderr: " + replace_all(err, "\n", "\n          ");
+            ADD_FAILURE() << msg;
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(FuzzCli, Tool, ::testing::ValuesIn(table()),
+                         [](const ::testing::TestParamInfo<Row>& info) { return info.param.name; });
+
+}  // namespace

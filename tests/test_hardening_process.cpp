@@ -1,0 +1,148 @@
+// Issue 14's findings, each replayed against the real executables: what used to succeed quietly,
+// write memory or NaN, or run until killed now ends with one clear line and the convention's
+// exit code (2 bad input, 1 runtime, 130 stopped), leaving no output behind.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "support.hpp"
+
+using dw::test::bin;
+using dw::test::lines;
+using dw::test::run;
+using dw::test::TempDir;
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+namespace {
+// One line on stderr naming `needle`, exit 2.
+void expect_refused(const dw::test::RunResult& r, const std::string& needle) {
+    EXPECT_EQ(r.status, 2) << r.err;
+    const auto l = lines(r.err);
+    ASSERT_EQ(l.size(), 1u) << r.err;
+    EXPECT_NE(l[0].find(needle), std::string::npos) << l[0];
+}
+
+std::string domain() { return std::to_string(dw::test::test_domain()); }
+
+// Starts argv, waits `settle`, sends SIGINT; returns the exit status within `limit` (-1 if none).
+int interrupted(const std::vector<std::string>& argv, const TempDir& d, std::chrono::milliseconds settle,
+                std::chrono::milliseconds limit = 10000ms) {
+    dw::Subprocess p({argv, d.file("int.out"), d.file("int.err"), {}});
+    std::this_thread::sleep_for(settle);
+    if (auto done = p.poll()) return 1000 + *done;  // ended before the signal: not what is tested
+    p.signal(SIGINT);
+    return p.wait_for(limit).value_or(-1);
+}
+
+std::string temporaries(const std::string& dir) {
+    std::string found;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+        if (e.path().filename().string().find(".tmp-") != std::string::npos) found += e.path().string() + " ";
+    }
+    return found;
+}
+}  // namespace
+
+// 2. NaN flies.
+TEST(Finding2, NaNOptionsAreRefusedByEveryTool) {
+    TempDir d;
+    for (const char* option : {"--altitudes", "--speed", "--min-separation"}) {
+        expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", option, "nan", "--out", d.file("p.yaml")}, d), option);
+        expect_refused(run({bin("dw-planner"), "run", "--formation", "single", option, "nan", "--domain", domain()}, d), option);
+    }
+    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--altitudes", "nan", "--out", d.file("f")}, d), "--altitudes");
+    expect_refused(run({bin("dw-stand-agent"), "run", "--sim", "--noise", "nan", "--domain", domain()}, d), "--noise");
+    std::ofstream(d.file("offset.yaml")) << "effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n";
+    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", d.file("offset.yaml"), "--out", d.file("f")}, d),
+                   "offset_m");
+    EXPECT_FALSE(fs::exists(d.file("f")));
+    EXPECT_FALSE(fs::exists(d.file("p.yaml")));
+}
+
+// 3. Tools that do not stop.
+TEST(Finding3, LongWorkStopsOnSigintWith130) {
+    TempDir d;
+    EXPECT_EQ(interrupted({bin("dw-planner"), "plan", "--formation", "leader_follower3", "--legs", "1000", "--speed", "0.05",
+                           "--out", d.file("plan.yaml")}, d, 1500ms), 130);
+    EXPECT_FALSE(fs::exists(d.file("plan.yaml")));
+    EXPECT_EQ(interrupted({bin("dw-sim"), "fly", "--formation", "hybrid", "--legs", "1000", "--speed", "0.05", "--quiet",
+                           "--out", d.file("flight")}, d, 1500ms), 130);
+    EXPECT_FALSE(fs::exists(d.file("flight")));
+    EXPECT_EQ(temporaries(d.file("")), "");
+}
+
+TEST(Finding3, TrainingStopsOnSigintWith130) {
+    TempDir d;
+    ASSERT_EQ(run({bin("dw-sim"), "fly", "--formation", "hybrid", "--legs", "36", "--quiet", "--out", d.file("f")}, d).status, 0);
+    // Whether the signal lands while the data loads or mid-epoch, the next mini-batch stops.
+    EXPECT_EQ(interrupted({bin("dw-predictor"), "train", "--kind", "deep_sets", "--epochs", "100000", "--data", d.file("f"),
+                           "--out", d.file("m.json")}, d, 1500ms), 130);
+    EXPECT_FALSE(fs::exists(d.file("m.json")));
+}
+
+TEST(Finding3, NumbersThatMeantForeverAreRefused) {
+    TempDir d;
+    expect_refused(run({bin("dw-probe"), "echo", "--timeout", "-1", "--domain", domain()}, d), "--timeout");
+    expect_refused(run({bin("dw-recorder"), "record", "--duration", "nan", "--out", d.file("r.mcap"), "--domain", domain()}, d), "--duration");
+    expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", "--speed", "1e-9", "--out", d.file("p.yaml")}, d), "--speed");
+    std::ofstream(d.file("self.yaml")) << "format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, "
+                                       << d.file("self.yaml") << "], experiment: true}\n";
+    expect_refused(run({bin("dw-lab"), "run", "--lab", d.file("self.yaml"), "--run-dir", d.file("run"), "--domain", domain()}, d),
+                   "cannot start the launcher");
+}
+
+// 4. Data given up too early (the salvage itself: tests/test_mcap.cpp).
+TEST(Finding4, RecoverChecksItsInputFirst) {
+    TempDir d;
+    std::ofstream(d.file("notes.txt")) << "not an MCAP file\n";
+    expect_refused(run({bin("dw-recorder"), "recover", d.file("notes.txt"), d.file("out.mcap")}, d), "not an MCAP file");
+    expect_refused(run({bin("dw-recorder"), "recover", d.file("nope.mcap"), d.file("out.mcap")}, d), "no such file");
+    expect_refused(run({bin("dw-recorder"), "recover", d.file(""), d.file("out.mcap")}, d), "is a directory");
+    EXPECT_FALSE(fs::exists(d.file("out.mcap")));
+}
+
+// 6. Quiet failures.
+TEST(Finding6, DirectoriesAndMissingFilesAreOneLine) {
+    TempDir d;
+    const std::string dir = d.file("");
+    expect_refused(run({bin("dw-probe"), "list", "--config", dir}, d), "is a directory");
+    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--config", d.file("missing.yaml"), "--out", d.file("f")}, d),
+                   "no such file");
+    expect_refused(run({bin("dw-explain"), "--config", d.file("missing.yaml"), "--real", dir, "--out", d.file("e")}, d), "no such file");
+    expect_refused(run({bin("dw-natnet-emulator"), "--config", d.file("missing.yaml")}, d), "no such file");
+    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", dir, "--out", d.file("f")}, d), "is a directory");
+    expect_refused(run({bin("dw-recorder"), "info", dir}, d), "is a directory");
+    expect_refused(run({bin("dw-predictor"), "compare", "--models", dir, "--data", dir, "--out", d.file("c")}, d), "is a directory");
+    EXPECT_FALSE(fs::exists(d.file("f")));
+}
+
+TEST(Finding6, OutputsAreCheckedBeforeWork) {
+    TempDir d;
+    std::ofstream(d.file("plain")) << "a file, not a folder";
+    expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("plain/plan.yaml")}, d), "not a directory");
+    expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("p.yaml"), "--picture", d.file("p.txt")}, d),
+                   "must end in .png");
+    EXPECT_FALSE(fs::exists(d.file("p.yaml")));
+}
+
+TEST(Finding6, ProofOfUnknownCasesAndExplainWithoutWrenchOnLegs) {
+    TempDir d;
+    expect_refused(run({bin("dw-explain"), "proof", "--cases", "nope", "--out", d.file("proof")}, d), "unknown case 'nope'");
+    ASSERT_EQ(run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status, 0);
+    // Every leg moved 1000 s past the recording: no wrench sample lies on a leg.
+    std::ifstream in(d.file("f/legs.csv"));
+    std::string header, line, moved;
+    std::getline(in, header);
+    while (std::getline(in, line)) {
+        const auto a = line.find(','), b = line.find(',', a + 1);
+        moved += line.substr(0, a) + "," + std::to_string(std::stod(line.substr(a + 1, b - a - 1)) + 1000) + "," +
+                 std::to_string(std::stod(line.substr(b + 1)) + 1000) + "\n";
+    }
+    std::ofstream(d.file("f/legs.csv")) << header << "\n" << moved;
+    expect_refused(run({bin("dw-explain"), "--real", d.file("f"), "--out", d.file("e"), "--quiet"}, d), "hold wrench samples");
+}
