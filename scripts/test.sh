@@ -15,6 +15,8 @@ fi
 (cd "$here/tests/js" && npm ci --no-audit --no-fund --loglevel=error)
 status=0
 ctest --test-dir "$here/build" --output-on-failure -j "$(nproc)" --timeout 600 || status=$?
+# The parser and unit tests again under AddressSanitizer + UBSan (build-asan/, issue 14).
+"$here/scripts/sanitize.sh" || status=1
 # Processes killed by a failing test can leave Fast DDS shared-memory segments behind.
 command -v fastdds >/dev/null && fastdds shm clean >/dev/null 2>&1 || true
 exit $status

@@ -105,7 +105,7 @@ std::vector<Row> table() {
         // ---- dw-probe
         {"probe_list", "dw-probe", "list", {"list", "--domain", "{domain}"}, quick, false, true, {}, {kConfig}, {}},
         {"probe_pub", "dw-probe", "pub", {"pub", "--domain", "{domain}", "--count", "5", "--rate", "100", "--quiet"},
-         quick, /*--linger -1: until stopped*/ true, false, {}, {}, {}},
+         std::chrono::milliseconds(5000), /*--linger -1: until stopped*/ true, false, {}, {}, {}},
         {"probe_echo", "dw-probe", "echo", {"echo", "--domain", "{domain}", "--quiet"}, daemon, true, false, {},
          {{"--summary", Role::out, ".json"}}, {}},
         // ---- dw-lab
@@ -124,7 +124,8 @@ std::vector<Row> table() {
          {"{out}/flight"}},
         // ---- dw-recorder
         {"recorder_record", "dw-recorder", "record",
-         {"record", "--domain", "{domain}", "--quiet", "--duration", "1", "-o", "{out}/rec.mcap"}, quick,
+         {"record", "--domain", "{domain}", "--quiet", "--duration", "1", "-o", "{out}/rec.mcap"},
+         std::chrono::milliseconds(5000),
          /*--duration 0: until Ctrl-C*/ true, false, {},
          {{"-o", Role::out, ".mcap"}, {"--attach", Role::in, ".yaml", "note="}}, {"{out}/rec.mcap"}},
         {"recorder_info", "dw-recorder", "info", {"info", "{mcap}"}, quick, false, true, {},
@@ -389,9 +390,9 @@ struct Case {
     HostilePath hostile{};
 };
 
-class Run {
+class Attempt {
 public:
-    explicit Run(const std::string& tool) : tool_(tool) {
+    Attempt() {
         std::error_code ec;
         fs::create_directories(work(), ec);
         fs::create_directories(hostile_dir(), ec);
@@ -442,12 +443,19 @@ public:
     Result start(const std::vector<std::string>& argv, std::chrono::milliseconds bound) {
         // Tools write default outputs (plan.yaml, recording.mcap, runs/...) in the working
         // directory: run each in its own folder. One run at a time per process, so chdir is safe.
-        const fs::path here = fs::current_path();
-        fs::current_path(work());
+        struct Cwd {
+            fs::path saved = fs::current_path();
+            explicit Cwd(const std::string& to) { fs::current_path(to); }
+            ~Cwd() { fs::current_path(saved); }
+        };
         Result r;
         {
-            dw::Subprocess p({argv, out_file(), err_file(), {}});
-            fs::current_path(here);
+            std::optional<dw::Subprocess> started;
+            {
+                Cwd cwd(work());
+                started.emplace(dw::SpawnOptions{argv, out_file(), err_file(), {}});
+            }
+            dw::Subprocess& p = *started;
             auto st = p.wait_for(bound);
             if (!st) {
                 r.stopped = true;
@@ -485,7 +493,6 @@ public:
     std::string shorten(const std::string& s) const { return replace_all(s, root(), "$T/"); }
 
 private:
-    std::string tool_;
     TempDir root_;
 };
 
@@ -515,9 +522,16 @@ protected:
     }
     static std::unique_ptr<TempDir> fixture_dir_;
     static std::unique_ptr<Fixtures> fixtures_;
+
+public:
+    static std::string fixture_dir() { return fixture_dir_ ? fixture_dir_->file("") : std::string("\x01"); }
 };
 std::unique_ptr<TempDir> Tool::fixture_dir_;
 std::unique_ptr<Fixtures> Tool::fixtures_;
+
+std::string shorten_fixtures(const std::string& s) {
+    return replace_all(s, Tool::fixture_dir(), "$F/");
+}
 
 std::string help_of(const std::string& tool, const std::string& sub) {
     TempDir d;
@@ -580,7 +594,7 @@ TEST_P(Tool, HostileValues) {
     ASSERT_FALSE(cases.empty()) << row.tool << " " << row.sub << ": no numeric option found in --help and no path option listed";
 
     for (const auto& c : cases) {
-        Run run(row.tool);
+        Attempt run;
         std::vector<std::string> argv = c.argv;
         std::string watch, watch_before;
         if (c.path != nullptr) {
@@ -625,9 +639,12 @@ TEST_P(Tool, HostileValues) {
         }
         run.scan(problems);
         if (r.status != 0) {
+            const bool output_attacked = c.path != nullptr && c.path->role != Role::in;
             for (const auto& o : row.outputs) {
-                // Only outputs the command line still names (an attacked one is watched instead).
-                if (std::find(argv.begin(), argv.end(), o) == argv.end()) continue;
+                // When an output option is attacked, derived names (plan.png beside --out) move with
+                // it: then only outputs the command line still names are checked (the attacked one
+                // is watched instead).
+                if (output_attacked && std::find(argv.begin(), argv.end(), o) == argv.end()) continue;
                 const std::string path = expand(o);
                 if (fs::exists(path)) problems.push_back("output left after failure: " + run.shorten(path));
             }
@@ -637,7 +654,10 @@ TEST_P(Tool, HostileValues) {
             }
         }
         if (!problems.empty()) {
-            std::string msg = "[" + c.label + "] " + run.shorten(quoted(full)) + "\n  status " + std::to_string(r.status) +
+            std::vector<std::string> shown = full;
+            shown[0] = row.tool;
+            std::string msg = "[" + c.label + "] " + shorten_fixtures(run.shorten(quoted(shown))) + "\n  status " +
+                              std::to_string(r.status) +
                               (r.stopped ? " (after SIGINT)" : "");
             for (const auto& p : problems) msg += "\n  - " + p;
             std::string err = run.shorten(r.err);
