@@ -12,6 +12,8 @@ SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names,
           sp.velocity = physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z());
           sp.acceleration = physics::Vec3(s.acceleration_mps2().x(), s.acceleration_mps2().y(), s.acceleration_mps2().z());
           sp.yaw_rad = s.yaw_rad();
+          // A simulated vehicle, like a real one, must never be driven by a non-finite setpoint.
+          if (!physics::is_finite(sp)) return;
           std::lock_guard lock(mutex_);
           setpoints_[s.vehicle_id()] = sp;
       }) {

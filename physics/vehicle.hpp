@@ -1,6 +1,7 @@
 #pragma once
 // Simulated vehicles that follow position/velocity setpoints with realistic lag, overshoot and
 // hover noise, plus the random processes the simulator uses.
+#include <cmath>
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <random>
@@ -43,6 +44,11 @@ struct Setpoint {
     Vec3 acceleration = Vec3::Zero();
     double yaw_rad = 0;
 };
+
+// Every component finite: what may drive a vehicle, simulated or real.
+inline bool is_finite(const Setpoint& sp) {
+    return sp.position.allFinite() && sp.velocity.allFinite() && sp.acceleration.allFinite() && std::isfinite(sp.yaw_rad);
+}
 
 struct VehicleState {
     Vec3 position = Vec3::Zero();

@@ -17,10 +17,6 @@ physics::Setpoint Plan::setpoint(std::size_t vehicle, double t) const {
     return sp;
 }
 
-bool is_finite(const physics::Setpoint& sp) {
-    return sp.position.allFinite() && sp.velocity.allFinite() && sp.acceleration.allFinite() && std::isfinite(sp.yaw_rad);
-}
-
 bool Geofence::contains(const physics::Vec3& x, double grow_m) const {
     return x.x() >= n_min - grow_m && x.x() <= n_max + grow_m && x.y() >= e_min - grow_m && x.y() <= e_max + grow_m &&
            x.z() >= d_min - grow_m && x.z() <= d_max + grow_m;

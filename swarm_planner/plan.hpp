@@ -16,8 +16,7 @@ namespace dw::planner {
 inline constexpr Range kPlanAltitudeRange{physics::kAltitudeRange.lo, 1.4, "m"};
 inline constexpr Range kSeparationRange{0.05, 5, "m"};
 
-// Every finite component, else false: what the planner sends to a vehicle must pass this.
-bool is_finite(const physics::Setpoint& sp);
+using physics::is_finite;  // what the planner sends to a vehicle must pass it
 
 struct Geofence {
     double n_min = -2.0, n_max = 2.0;   // a 4 m x 6 m x 4 m room (96 m³) around the stand
