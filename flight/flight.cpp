@@ -19,6 +19,14 @@ namespace dw::flight {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+namespace {
+// The meta.json keys this library reads; every other key is kept as it was (extra_json).
+constexpr std::array<const char*, 8> kMetaKeys = {"format", "sufferer", "neighbours", "formation", "vehicles",
+                                                   "stand", "wrench_source", "moments_measured"};
+}  // namespace
+
+const char* to_string(WrenchSource s) { return s == WrenchSource::stand ? "stand" : "residual"; }
+
 std::uint16_t Flight::body_index(const std::string& name) {
     const int i = find_body(name);
     if (i >= 0) return static_cast<std::uint16_t>(i);
@@ -180,13 +188,26 @@ Meta read_meta(const fs::path& path) {
         if (!s.is_object()) fail("stand", "not an object");
         if (s.contains("height_m")) {
             if (!s["height_m"].is_number()) fail("stand.height_m", "not a number");
-            m.stand_height_m = s["height_m"].get<double>();
-            if (!kStandHeightRange.contains(m.stand_height_m)) fail("stand.height_m", range_problem(m.stand_height_m, kStandHeightRange));
+            const double h = s["height_m"].get<double>();
+            if (!kStandHeightRange.contains(h)) fail("stand.height_m", range_problem(h, kStandHeightRange));
+            m.stand_height_m = h;
         }
+    } else {
+        m.stand_height_m.reset();
+    }
+    if (j.contains("wrench_source")) {
+        const auto& w = j["wrench_source"];
+        if (w == to_string(WrenchSource::stand)) m.wrench_source = WrenchSource::stand;
+        else if (w == to_string(WrenchSource::residual)) m.wrench_source = WrenchSource::residual;
+        else fail("wrench_source", log::cat(w.dump(), " is not \"stand\" or \"residual\""));
+    }
+    if (j.contains("moments_measured")) {
+        if (!j["moments_measured"].is_boolean()) fail("moments_measured", "not true or false");
+        m.moments_measured = j["moments_measured"].get<bool>();
     }
     json extra = json::object();
     for (const auto& [k, v] : j.items()) {
-        if (k != "format" && k != "sufferer" && k != "neighbours" && k != "formation" && k != "vehicles" && k != "stand") {
+        if (std::find(kMetaKeys.begin(), kMetaKeys.end(), k) == kMetaKeys.end()) {
             extra[k] = v;
         }
     }
@@ -305,7 +326,9 @@ std::string meta_text(const Meta& m) {
                           {"motor_distance_m", v.motor_distance_m}};
     }
     meta["vehicles"] = vehicles;
-    meta["stand"] = {{"height_m", m.stand_height_m}};
+    if (m.stand_height_m) meta["stand"] = {{"height_m", *m.stand_height_m}};
+    if (m.wrench_source != WrenchSource::stand) meta["wrench_source"] = to_string(m.wrench_source);
+    if (!m.moments_measured) meta["moments_measured"] = false;
     return meta.dump(2) + "\n";
 }
 

@@ -46,12 +46,19 @@ struct VehicleInfo {
     double motor_distance_m = 0.25;
 };
 
+// Where wrench.csv comes from: a load stand's calibrated wrench, or the force a flying sufferer's
+// own model does not explain (mass × IMU acceleration − thrust, as in other labs' logs).
+enum class WrenchSource { stand, residual };
+const char* to_string(WrenchSource s);
+
 struct Meta {
     std::string sufferer = "sufferer";
     std::vector<std::string> neighbours;
     std::string formation = "free";
     std::map<std::string, VehicleInfo> vehicles;
-    double stand_height_m = 1.4;
+    std::optional<double> stand_height_m = 1.4;  // absent: the sufferer flies (no load stand)
+    WrenchSource wrench_source = WrenchSource::stand;
+    bool moments_measured = true;                 // false: the moment columns carry no measurement
     std::string extra_json = "{}";  // unknown keys, kept as they were (a JSON object)
 };
 

@@ -1,28 +1,31 @@
-// CLI fuzz harness (issue 14): every tool and subcommand, started with a table of hostile values
-// in its numeric and path options. For each run it asserts the house rules:
-//   - the exit status is 0, 1, 2 or 130; a run still going after the row's bound is sent SIGINT
-//     and must end within 10 s (130; 0 too for rows whose normal end is a stop, see Row::until_stopped);
-//   - on 1 and 2, stderr is exactly one non-empty line, "<tool>: error: ...";
-//   - a value that can never be a number (nan, inf, -inf, "", x) is refused with 2;
+// CLI fuzz harness (issue 14): every tool and subcommand started with a table of hostile values in
+// its numeric and path options (docs/HOSTILE_INPUT.md lists them and what each tool does). Every
+// run must keep the house rules:
+//   - exit status 0, 1, 2 or 130; a run still going after its row's bound gets SIGINT and must end
+//     within 10 s with 130 (or 0, for rows whose normal end is a stop: Row::until_stopped);
+//   - on 1 and 2, exactly one non-empty line on stderr: "<tool>: error: ...";
+//   - a value that is no number (nan, inf, -inf, "", x) is refused with 2;
+//   - an empty path for an option without a default is refused with 2;
 //   - no text file the run leaves contains a NaN or inf token;
-//   - on any status but 0: the row's declared outputs do not exist, an attacked output path is as
-//     it was before, and no "*.tmp-*" file is left anywhere.
-// docs/HOSTILE_INPUT.md lists the hostile values and what each tool does with them.
+//   - on any status but 0: the row's outputs do not exist, an attacked output path is as it was,
+//     and no "*.tmp-*" file is left.
+// Tool.StopsWhenAsked interrupts each row's valid base command early with the same checks.
 //
-// Registration (tests/CMakeLists.txt, next to the other dw_test calls; it needs every tool):
+// Register it in tests/CMakeLists.txt (after the dw_lab_tests block; it starts every tool):
 //
 // if(DW_BUILD_TOOLS AND DW_BUILD_PHYSICS AND DW_BUILD_PLANNER AND DW_BUILD_RECORDER AND DW_BUILD_PREDICTOR AND DW_BUILD_EXPLAINER
 //    AND DW_BUILD_STAND_AGENT AND DW_BUILD_MOCAP_BRIDGE)
-//   dw_test(dw_fuzz_cli_tests SOURCES test_fuzz_cli.cpp LIBS dw_core LABELS "fuzz;integration"
-//           DEPENDS dw-probe dw-lab dw-sim dw-recorder dw-stand-agent dw-mocap-bridge dw-natnet-emulator
-//                   dw-planner dw-predictor dw-explain
+//   dw_test(dw_fuzz_cli_tests SOURCES test_fuzz_cli.cpp LIBS dw_core LABELS fuzz integration
+//           DEPENDS dw-probe dw-lab dw-sim dw-recorder dw-stand-agent dw-mocap-bridge dw-natnet-emulator dw-planner dw-predictor dw-explain
 //           LOCK heavy)
 // endif()
 //
-// One CTest test per table row (gtest_discover_tests: FuzzCli/Tool.HostileValues/<row>), so CTest
-// runs rows in parallel; each test process makes the fixtures its row needs, once. LOCK heavy:
-// the dw-lab demo, predictor study and explain proof rows run real work (and a whole simulated lab
-// for a few seconds each), which would starve the real-time experiments sharing that lock.
+// gtest_discover_tests makes one CTest test per row and test (FuzzCli/Tool.HostileValues/sim_fly,
+// FuzzCli/Tool.StopsWhenAsked/sim_fly, ...); each test process makes the fixtures its row needs,
+// once. LOCK heavy because rows run real work (dw-lab demo starts a whole simulated lab, the
+// predictor study and the explain proof train and fit) that would starve the real-time experiment
+// tests on 2 cores; it also serialises these tests among themselves (about 10 min in all, no row
+// over 2 min). Without LOCK they run in parallel, at that risk.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -39,7 +42,7 @@
 #include <optional>
 #include <regex>
 #include <set>
-#include <sstream>
+#include <ostream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -72,6 +75,9 @@ struct PathOption {
     std::string target;
     Role role;
     std::string ext;          // the extension hostile names get (".yaml"), so extension checks pass
+    // "" means "not given" (the option is optional or has a default). Otherwise an empty path is
+    // bad input and must be refused with 2.
+    bool empty_means_default = false;
     std::string prefix = "";  // put before the path ("note=" for --attach NAME=PATH)
 };
 
@@ -96,6 +102,9 @@ struct Row {
     std::vector<std::string> outputs;          // what a failed run must not leave (placeholders)
 };
 
+// gtest prints parameters in test listings and failures: the row's name, not its bytes.
+void PrintTo(const Row& row, std::ostream* os) { *os << row.name; }
+
 const PathOption kConfig{"--config", Role::in, ".yaml"};
 
 std::vector<Row> table() {
@@ -107,43 +116,43 @@ std::vector<Row> table() {
         {"probe_pub", "dw-probe", "pub", {"pub", "--domain", "{domain}", "--count", "5", "--rate", "100", "--quiet"},
          std::chrono::milliseconds(5000), /*--linger -1: until stopped*/ true, false, {}, {}, {}},
         {"probe_echo", "dw-probe", "echo", {"echo", "--domain", "{domain}", "--quiet"}, daemon, true, false, {},
-         {{"--summary", Role::out, ".json"}}, {}},
+         {{"--summary", Role::out, ".json", true}}, {}},
         // ---- dw-lab
         {"lab_loopback", "dw-lab", "loopback",
          {"loopback", "--domain", "{domain}", "--count", "3", "--quiet", "--summary", "{out}/summary.json"}, quick, false,
-         false, {}, {{"--summary", Role::out, ".json"}}, {"{out}/summary.json"}},
+         false, {}, {{"--summary", Role::out, ".json", true}}, {"{out}/summary.json"}},
         {"lab_run", "dw-lab", "run", {"run", "--lab", "{labfile}", "--run-dir", "{out}/run", "--domain", "{domain}"},
          std::chrono::milliseconds(3000), true, false, {},
-         {{"--lab", Role::in, ".yaml"}, {"--run-dir", Role::outdir, ""}}, {"{out}/run"}},
+         {{"--lab", Role::in, ".yaml"}, {"--run-dir", Role::outdir, "", true}}, {"{out}/run"}},
         // A whole simulated lab: stopped after 4 s, which also checks that a stop reaches every child.
         {"lab_demo", "dw-lab", "demo", {"demo", "--quick", "--out", "{out}/demo", "--domain", "{domain}"},
-         std::chrono::milliseconds(4000), false, false, {}, {{"--out", Role::outdir, ""}}, {"{out}/demo"}},
+         std::chrono::milliseconds(4000), false, false, {}, {{"--out", Role::outdir, "", true}}, {"{out}/demo"}},
         // ---- dw-sim
         {"sim_fly", "dw-sim", "fly", {"fly", "--formation", "single", "--legs", "1", "--quiet", "--out", "{out}/flight"},
-         quick, false, true, {}, {{"--physics", Role::in, ".yaml"}, {"--out", Role::outdir, ""}, kConfig},
+         quick, false, true, {}, {{"--physics", Role::in, ".yaml", true}, {"--out", Role::outdir, ""}, kConfig},
          {"{out}/flight"}},
         // ---- dw-recorder
         {"recorder_record", "dw-recorder", "record",
          {"record", "--domain", "{domain}", "--quiet", "--duration", "1", "-o", "{out}/rec.mcap"},
          std::chrono::milliseconds(5000),
          /*--duration 0: until Ctrl-C*/ true, false, {},
-         {{"-o", Role::out, ".mcap"}, {"--attach", Role::in, ".yaml", "note="}}, {"{out}/rec.mcap"}},
+         {{"-o", Role::out, ".mcap"}, {"--attach", Role::in, ".yaml", false, "note="}}, {"{out}/rec.mcap"}},
         {"recorder_info", "dw-recorder", "info", {"info", "{mcap}"}, quick, false, true, {},
          {{"{mcap}", Role::in, ".mcap"}, kConfig}, {}},
         {"recorder_recover", "dw-recorder", "recover", {"recover", "{mcap}", "{out}/recovered.mcap"}, quick, false, false,
          {}, {{"{mcap}", Role::in, ".mcap"}, {"{out}/recovered.mcap", Role::out, ".mcap"}}, {"{out}/recovered.mcap"}},
         {"recorder_export", "dw-recorder", "export", {"export", "{mcap}", "--flight", "{out}/flight", "--csv", "{out}/csv"},
          quick, false, false, {},
-         {{"{mcap}", Role::in, ".mcap"}, {"--flight", Role::outdir, ""}, {"--csv", Role::outdir, ""}},
+         {{"{mcap}", Role::in, ".mcap"}, {"--flight", Role::outdir, "", true}, {"--csv", Role::outdir, "", true}},
          {"{out}/flight", "{out}/csv"}},
         {"recorder_replay", "dw-recorder", "replay", {"replay", "{mcap}", "--domain", "{domain}", "--speed", "10"}, quick,
          false, false, {}, {{"{mcap}", Role::in, ".mcap"}}, {}},
         // ---- dw-stand-agent
         {"stand_run", "dw-stand-agent", "run", {"run", "--sim", "--domain", "{domain}"}, daemon, true, false, {},
-         {{"--calibration", Role::in, ".yaml"}, {"--physics", Role::in, ".yaml"}}, {}},
+         {{"--calibration", Role::in, ".yaml", true}, {"--physics", Role::in, ".yaml", true}}, {}},
         {"stand_calibrate", "dw-stand-agent", "calibrate", {"calibrate", "--loads", "{loads}", "--out", "{out}/cal.yaml"},
          quick, false, true, {},
-         {{"--loads", Role::in, ".csv"}, {"--out", Role::out, ".yaml"}, {"--calibration", Role::in, ".yaml"}, kConfig},
+         {{"--loads", Role::in, ".csv"}, {"--out", Role::out, ".yaml"}, {"--calibration", Role::in, ".yaml", true}, kConfig},
          {"{out}/cal.yaml"}},
         // ---- dw-mocap-bridge, dw-natnet-emulator (no subcommands: their options are the root's)
         {"mocap_bridge", "dw-mocap-bridge", "", {"--sim", "--domain", "{domain}"}, daemon, true, false, {"--domain"},
@@ -152,14 +161,15 @@ std::vector<Row> table() {
         // ---- dw-planner
         {"planner_plan", "dw-planner", "plan", {"plan", "--formation", "single", "--legs", "2", "--out", "{out}/plan.yaml"},
          quick, false, true, {},
-         {{"--out", Role::out, ".yaml"}, {"--picture", Role::png, ".png"}, kConfig}, {"{out}/plan.yaml", "{out}/plan.png"}},
-        // Waits for its vehicle until the wait timeout (30 s): stopped after 3 s.
+         {{"--out", Role::out, ".yaml"}, {"--picture", Role::png, ".png", true}, kConfig}, {"{out}/plan.yaml", "{out}/plan.png"}},
+        // --wait-for '': no process to wait for; it then waits up to 30 s for the vehicle's pose (no
+        // vehicle here): stopped after 3 s.
         {"planner_run", "dw-planner", "run", {"run", "--formation", "single", "--legs", "2", "--domain", "{domain}", "--wait-for", ""},
          std::chrono::milliseconds(3000), false, false, {}, {}, {}},
         // ---- dw-predictor
         {"predictor_study", "dw-predictor", "study",
          {"study", "--out", "{out}/study", "--legs", "5", "--epochs", "1", "--no-generalisation", "--no-maps"},
-         std::chrono::milliseconds(40000), false, false, {}, {{"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml"}},
+         std::chrono::milliseconds(40000), false, false, {}, {{"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}},
          {"{out}/study"}},
         {"predictor_train", "dw-predictor", "train",
          {"train", "--kind", "learnt_linear", "--epochs", "1", "--data", "{flight}", "--out", "{out}/model.json"}, quick,
@@ -170,13 +180,13 @@ std::vector<Row> table() {
         {"predictor_map", "dw-predictor", "map",
          {"map", "--models", "{model}", "--formation", "single", "--out", "{out}/map.png"}, quick, false, false, {},
          {{"--models", Role::in, ".json"}, {"--data", Role::in, ".mcap"}, {"--out", Role::png, ".png"},
-          {"--line", Role::png, ".png"}},
+          {"--line", Role::png, ".png", true}},
          {"{out}/map.png", "{out}/map_line.png"}},
         {"predictor_run", "dw-predictor", "run", {"run", "--model", "{model}", "--domain", "{domain}"}, daemon, true, false,
          {}, {{"--model", Role::in, ".json"}}, {}},
         // ---- dw-explain
         {"explain", "dw-explain", "", {"--real", "{flight}", "--out", "{out}/explain", "--quiet"}, quick, false, true, {},
-         {{"--real", Role::in, ".mcap"}, {"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml"}, kConfig},
+         {{"--real", Role::in, ".mcap"}, {"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}, kConfig},
          {"{out}/explain"}},
         {"explain_proof", "dw-explain", "proof",
          {"proof", "--out", "{out}/proof", "--null-seeds", "1", "--cases", "null", "--quiet"},
@@ -386,6 +396,7 @@ struct Case {
     std::string label;                       // "--speed nan", "--out=directory"
     std::vector<std::string> argv;           // with placeholders
     bool never_a_number = false;
+    bool base = false;                       // the unchanged base command: it must succeed
     const PathOption* path = nullptr;        // the attacked path option, if any
     HostilePath hostile{};
 };
@@ -575,97 +586,119 @@ std::vector<Case> cases_of(const Row& row) {
     return cases;
 }
 
-TEST_P(Tool, HostileValues) {
-    const Row& row = GetParam();
-
-    // The fixtures this row's base command names.
-    std::map<std::string, std::string> fixture;
+// The fixtures a row's base command names, made on first use.
+std::map<std::string, std::string> fixtures_for(const Row& row, Fixtures& fixtures, std::string* problem) {
+    std::map<std::string, std::string> out;
     for (const auto& a : row.argv) {
         for (const char* name : {"flight", "mcap", "model", "loads", "labfile"}) {
-            if (a.find(std::string("{") + name + "}") == std::string::npos || fixture.count(name)) continue;
-            std::string problem;
-            const std::string path = fixtures_->get(name, &problem);
-            ASSERT_FALSE(path.empty()) << "fixture {" << name << "}: " << problem;
-            fixture[name] = path;
+            if (a.find(std::string("{") + name + "}") == std::string::npos || out.count(name)) continue;
+            const std::string path = fixtures.get(name, problem);
+            if (path.empty()) return {};
+            out[name] = path;
         }
     }
+    return out;
+}
 
+// Runs one case of a row (bound: when to send SIGINT) and reports every broken rule as one failure.
+void attempt(const Row& row, const Case& c, const std::map<std::string, std::string>& fixture,
+             std::chrono::milliseconds bound) {
+    Attempt run;
+    std::vector<std::string> argv = c.argv;
+    std::string watch, watch_before;
+    if (c.path != nullptr) {
+        const std::string value = run.make(c.hostile, *c.path, &watch);
+        argv = with_value(argv, c.path->target, c.path->prefix + value);
+        watch_before = state_of(watch);
+    }
+    auto expand = [&](std::string a) {
+        a = replace_all(a, "{out}", run.work());
+        a = replace_all(a, "{domain}", std::to_string(dw::test::test_domain()));
+        for (const auto& [name, path] : fixture) a = replace_all(a, "{" + name + "}", path);
+        return a;
+    };
+    std::vector<std::string> full{bin(row.tool)};
+    for (const auto& a : argv) full.push_back(expand(a));
+
+    const auto r = run.start(full, bound);
+    std::vector<std::string> problems;
+    std::vector<std::string> err_lines;
+    for (const auto& s : lines(r.err)) {
+        if (s.find_first_not_of(" \t\r") != std::string::npos) err_lines.push_back(s);
+    }
+
+    if (r.hung) {
+        problems.push_back("still running 10 s after SIGINT (killed)");
+    } else if (r.status != 0 && r.status != 1 && r.status != 2 && r.status != 130) {
+        problems.push_back("exit status " + std::to_string(r.status) + " (expected 0, 1, 2 or 130)");
+    } else if (r.stopped && r.status != 130 && !(row.until_stopped && r.status == 0)) {
+        problems.push_back("status " + std::to_string(r.status) + " after SIGINT (expected 130" +
+                           (row.until_stopped ? " or 0)" : ")"));
+    }
+    if (c.never_a_number && r.status != 2) problems.push_back("a value that is no number was not refused with 2");
+    if (c.path != nullptr && c.hostile == HostilePath::empty_string && !c.path->empty_means_default && r.status != 2) {
+        problems.push_back("an empty path for an option without a default was not refused with 2");
+    }
+    if (c.base && !r.stopped && r.status != 0) problems.push_back("the valid base command failed");
+    if (r.status == 1 || r.status == 2) {
+        if (err_lines.size() != 1) {
+            problems.push_back(std::to_string(err_lines.size()) + " lines on stderr (expected one)");
+        } else if (err_lines[0].rfind(row.tool + ": error: ", 0) != 0) {
+            problems.push_back("the stderr line is not '" + row.tool + ": error: ...'");
+        }
+    }
+    run.scan(problems);
+    if (r.status != 0) {
+        const bool output_attacked = c.path != nullptr && c.path->role != Role::in;
+        for (const auto& o : row.outputs) {
+            // When an output option is attacked, derived names (plan.png beside --out) move with it:
+            // then only outputs the command line still names are checked (the attacked one is
+            // watched instead).
+            if (output_attacked && std::find(argv.begin(), argv.end(), o) == argv.end()) continue;
+            const std::string path = expand(o);
+            if (fs::exists(path)) problems.push_back("output left after failure: " + run.shorten(path));
+        }
+        if (!watch.empty() && state_of(watch) != watch_before) {
+            problems.push_back("attacked output " + run.shorten(watch) + " changed by a failed run: " + watch_before +
+                               " -> " + state_of(watch));
+        }
+    }
+    if (!problems.empty()) {
+        std::vector<std::string> shown = full;
+        shown[0] = row.tool;
+        std::string msg = "[" + c.label + "] " + shorten_fixtures(run.shorten(quoted(shown))) + "\n  status " +
+                          std::to_string(r.status) + (r.stopped ? " (after SIGINT)" : "");
+        for (const auto& p : problems) msg += "\n  - " + p;
+        std::string err = run.shorten(r.err);
+        if (err.size() > 600) err = "..." + err.substr(err.size() - 600);
+        msg += "\n  stderr: " + replace_all(err, "\n", "\n          ");
+        ADD_FAILURE() << msg;
+    }
+}
+
+TEST_P(Tool, HostileValues) {
+    const Row& row = GetParam();
+    std::string problem;
+    const auto fixture = fixtures_for(row, *fixtures_, &problem);
+    ASSERT_TRUE(problem.empty()) << "fixture: " << problem;
     const auto cases = cases_of(row);
     ASSERT_FALSE(cases.empty()) << row.tool << " " << row.sub << ": no numeric option found in --help and no path option listed";
+    for (const auto& c : cases) attempt(row, c, fixture, row.bound);
+}
 
-    for (const auto& c : cases) {
-        Attempt run;
-        std::vector<std::string> argv = c.argv;
-        std::string watch, watch_before;
-        if (c.path != nullptr) {
-            const std::string value = run.make(c.hostile, *c.path, &watch);
-            argv = with_value(argv, c.path->target, c.path->prefix + value);
-            watch_before = state_of(watch);
-        }
-        auto expand = [&](std::string a) {
-            a = replace_all(a, "{out}", run.work());
-            a = replace_all(a, "{domain}", std::to_string(dw::test::test_domain()));
-            for (const auto& [name, path] : fixture) a = replace_all(a, "{" + name + "}", path);
-            return a;
-        };
-        std::vector<std::string> full{bin(row.tool)};
-        for (const auto& a : argv) full.push_back(expand(a));
-
-        const auto r = run.start(full, row.bound);
-        std::vector<std::string> problems;
-        const auto err_lines = [&] {
-            std::vector<std::string> l;
-            for (const auto& s : lines(r.err)) {
-                if (s.find_first_not_of(" \t\r") != std::string::npos) l.push_back(s);
-            }
-            return l;
-        }();
-
-        if (r.hung) {
-            problems.push_back("still running 10 s after SIGINT (killed)");
-        } else if (r.status != 0 && r.status != 1 && r.status != 2 && r.status != 130) {
-            problems.push_back("exit status " + std::to_string(r.status) + " (expected 0, 1, 2 or 130)");
-        } else if (r.stopped && r.status != 130 && !(row.until_stopped && r.status == 0)) {
-            problems.push_back("status " + std::to_string(r.status) + " after SIGINT (expected 130" +
-                               (row.until_stopped ? " or 0)" : ")"));
-        }
-        if (c.never_a_number && r.status != 2) problems.push_back("a value that is no number was not refused with 2");
-        if (r.status == 1 || r.status == 2) {
-            if (err_lines.size() != 1) {
-                problems.push_back(std::to_string(err_lines.size()) + " lines on stderr (expected one)");
-            } else if (err_lines[0].rfind(row.tool + ": error: ", 0) != 0) {
-                problems.push_back("the stderr line is not '" + row.tool + ": error: ...'");
-            }
-        }
-        run.scan(problems);
-        if (r.status != 0) {
-            const bool output_attacked = c.path != nullptr && c.path->role != Role::in;
-            for (const auto& o : row.outputs) {
-                // When an output option is attacked, derived names (plan.png beside --out) move with
-                // it: then only outputs the command line still names are checked (the attacked one
-                // is watched instead).
-                if (output_attacked && std::find(argv.begin(), argv.end(), o) == argv.end()) continue;
-                const std::string path = expand(o);
-                if (fs::exists(path)) problems.push_back("output left after failure: " + run.shorten(path));
-            }
-            if (!watch.empty() && state_of(watch) != watch_before) {
-                problems.push_back("attacked output " + run.shorten(watch) + " changed by a failed run: " + watch_before +
-                                   " -> " + state_of(watch));
-            }
-        }
-        if (!problems.empty()) {
-            std::vector<std::string> shown = full;
-            shown[0] = row.tool;
-            std::string msg = "[" + c.label + "] " + shorten_fixtures(run.shorten(quoted(shown))) + "\n  status " +
-                              std::to_string(r.status) +
-                              (r.stopped ? " (after SIGINT)" : "");
-            for (const auto& p : problems) msg += "\n  - " + p;
-            std::string err = run.shorten(r.err);
-            if (err.size() > 600) err = "..." + err.substr(err.size() - 600);
-            msg += "\n  stderr: " + replace_all(err, "\n", "\n          ");
-            ADD_FAILURE() << msg;
-        }
-    }
+// The valid base command, interrupted early (batch rows after 1 s, rows that run until stopped
+// after their bound): it must end within 10 s with 130 (0 when it had already finished, or for a
+// row that runs until stopped) and, on 130, leave none of its outputs and no temporary file.
+TEST_P(Tool, StopsWhenAsked) {
+    const Row& row = GetParam();
+    std::string problem;
+    const auto fixture = fixtures_for(row, *fixtures_, &problem);
+    ASSERT_TRUE(problem.empty()) << "fixture: " << problem;
+    Case c;
+    c.label = "base, SIGINT";
+    c.argv = row.argv;
+    c.base = true;
+    attempt(row, c, fixture, row.until_stopped ? row.bound : std::chrono::milliseconds(1000));
 }
 
 INSTANTIATE_TEST_SUITE_P(FuzzCli, Tool, ::testing::ValuesIn(table()),

@@ -1,0 +1,32 @@
+#pragma once
+// Importers turn another lab's recordings into a flight folder (downwash-flight/1). One importer
+// per source format, all behind this interface, so the next lab's format is one more file.
+#include <functional>
+#include <stop_token>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "flight/flight.hpp"
+
+namespace dw::importer {
+
+struct ImportOptions {
+    std::string sufferer;                              // "" = the importer's default choice
+    std::function<void(const std::string&)> warn;      // gaps, ground touches, steep tilts, damage
+    std::stop_token stop;
+};
+
+class Importer {
+public:
+    virtual ~Importer() = default;
+    virtual std::string_view name() const = 0;         // the command word: dw-import <name> ...
+    virtual std::string_view description() const = 0;
+    // Throws dw::InputError naming the file and what is wrong.
+    virtual flight::Flight import(const std::vector<std::string>& logs, const ImportOptions& o) const = 0;
+};
+
+// Every importer, in one list.
+const std::vector<const Importer*>& importers();
+
+}  // namespace dw::importer

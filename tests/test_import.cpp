@@ -1,0 +1,124 @@
+// dw-import on the shared Neural-Swarm logs (read from ../shared, never copied; skipped with the
+// reason when absent): CSV and binary of one flight agree, damaged blocks are skipped and counted,
+// bad columns are one located error, every shared trial becomes a valid flight folder.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/errors.hpp"
+#include "flight/flight.hpp"
+#include "importer/neural_swarm.hpp"
+#include "support.hpp"
+
+using namespace dw::importer;
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kData = std::string(DW_SOURCE_DIR) + "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020/";
+
+#define REQUIRE_SHARED_DATA() \
+    if (!fs::exists(kData)) GTEST_SKIP() << "the shared Neural-Swarm logs are not at " << kData
+
+std::vector<std::string> trial(const std::vector<std::string>& files) {
+    std::vector<std::string> out;
+    for (const auto& f : files) out.push_back(kData + f);
+    return out;
+}
+
+std::string bytes_of(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string error_of(const std::vector<std::string>& logs) {
+    try {
+        neural_swarm_importer().import(logs, {});
+    } catch (const dw::InputError& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+}  // namespace
+
+TEST(Import, CsvAndBinaryOfOneFlightAgree) {
+    REQUIRE_SHARED_DATA();
+    const auto a = neural_swarm_importer().import(trial({"swap_ss/cf50_01.csv", "swap_ss/cf51_01.csv"}), {});
+    const auto b = neural_swarm_importer().import(trial({"swap_ss/cf50_01", "swap_ss/cf51_01"}), {});
+    ASSERT_EQ(a.wrench.size(), b.wrench.size());
+    ASSERT_EQ(a.poses.size(), b.poses.size());
+    for (std::size_t i = 0; i < a.wrench.size(); ++i) {
+        ASSERT_NEAR(a.wrench[i].t, b.wrench[i].t, 1e-9);
+        for (std::size_t k = 0; k < 3; ++k) ASSERT_NEAR(a.wrench[i].w[k], b.wrench[i].w[k], 1e-6) << i;
+    }
+    for (std::size_t i = 0; i < a.poses.size(); ++i) {
+        for (std::size_t k = 0; k < 3; ++k) ASSERT_NEAR(a.poses[i].p[k], b.poses[i].p[k], 1e-6) << i;
+        for (std::size_t k = 0; k < 4; ++k) ASSERT_NEAR(a.poses[i].q[k], b.poses[i].q[k], 2e-3) << i;  // the CSV's quaternion is the decompressed one
+    }
+}
+
+TEST(Import, EverySharedTrialIsAValidFlightWithDownwashOnTheLowerVehicle) {
+    REQUIRE_SHARED_DATA();
+    dw::test::TempDir d;
+    const std::vector<std::vector<std::string>> trials = {
+        {"swap_ss/cf50_01.csv", "swap_ss/cf51_01.csv"},
+        {"swap_sl/cf51_01.csv", "swap_sl/cf101_01.csv"},
+        {"swap_sl/cf101_02.csv", "swap_sl/cf51_02.csv"},
+        {"swap_ssl/cf51_05.csv", "swap_ssl/cf101_05.csv", "swap_ssl/cf50_05.csv"},
+        {"randomwalk_ss/cf50_02", "randomwalk_ss/cf51_02"},
+    };
+    for (std::size_t k = 0; k < trials.size(); ++k) {
+        const auto f = neural_swarm_importer().import(trial(trials[k]), {});
+        const std::string dir = d.file("t" + std::to_string(k));
+        dw::flight::write_flight(f, dir);
+        const auto back = dw::flight::read_flight(dir);  // through the contract
+        EXPECT_FALSE(back.meta.stand_height_m);
+        EXPECT_EQ(back.meta.wrench_source, dw::flight::WrenchSource::residual);
+        EXPECT_FALSE(back.meta.moments_measured);
+        EXPECT_EQ(back.meta.neighbours.size(), trials[k].size() - 1);
+        EXPECT_GT(back.wrench.size(), 1500u);
+        // Downwash pushes the lower vehicle down (+d) harder than anything while alone: the
+        // largest downward residual well above the tared level.
+        double max_d = 0, min_d = 0;
+        for (const auto& s : back.wrench) max_d = std::max(max_d, s.w[2]), min_d = std::min(min_d, s.w[2]);
+        if (k < 4) EXPECT_GT(max_d, 2 * std::abs(min_d)) << trials[k][0];
+    }
+}
+
+TEST(Import, DamagedBlocksAreSkippedAndCounted) {
+    REQUIRE_SHARED_DATA();
+    dw::test::TempDir d;
+    const std::string original = bytes_of(kData + "swap_ss/cf50_01");
+    std::string bytes = original;
+    const std::size_t full = read_neural_swarm_log(kData + "swap_ss/cf50_01").t_s.size();
+    bytes[bytes.size() / 2] ^= 0x5a;  // inside one block: its checksum fails
+    std::ofstream(d.file("cf50_01"), std::ios::binary) << bytes;
+    const auto damaged = read_neural_swarm_log(d.file("cf50_01"));
+    EXPECT_EQ(damaged.damaged_blocks, 1u);
+    EXPECT_LT(damaged.t_s.size(), full);
+    EXPECT_GT(damaged.t_s.size(), full - 10);  // one block of a few records lost, the rest kept
+    std::ofstream(d.file("cf51_01"), std::ios::binary) << original.substr(0, original.size() - 50);  // truncated
+    EXPECT_EQ(read_neural_swarm_log(d.file("cf51_01")).damaged_blocks, 1u);
+    std::string header = bytes;
+    header[10] ^= 0x01;
+    std::ofstream(d.file("cf52_01"), std::ios::binary) << header;
+    EXPECT_NE(error_of({d.file("cf52_01"), d.file("cf50_01")}).find("header checksum mismatch"), std::string::npos);
+}
+
+TEST(Import, BadColumnsAndValuesAreOneLocatedLine) {
+    REQUIRE_SHARED_DATA();
+    dw::test::TempDir d;
+    std::string csv = bytes_of(kData + "swap_ss/cf50_01.csv");
+    std::string renamed = csv;
+    renamed.replace(renamed.find("qw"), 2, "qq");
+    std::ofstream(d.file("cf50_01.csv")) << renamed;
+    EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("column 'qw' is missing"), std::string::npos);
+    std::string bad = csv;
+    const auto line3 = bad.find('\n', bad.find('\n') + 1) + 1;
+    bad.replace(line3, bad.find(',', line3) - line3, "oops");
+    std::ofstream(d.file("cf50_01.csv")) << bad;
+    EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("cf50_01.csv:3: column time[ms]: 'oops' is not a finite number"), std::string::npos)
+        << error_of({d.file("cf50_01.csv")});
+    EXPECT_NE(error_of({kData + "swap_ss/cf50_01.csv"}).find("at least two vehicles"), std::string::npos);
+    EXPECT_NE(error_of({d.file("cf99_01.csv")}).find("not one the Neural-Swarm collection describes"), std::string::npos);
+}
