@@ -8,6 +8,7 @@
 #include "analysis/proof.hpp"
 #include "core/cli.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
@@ -39,6 +40,7 @@ int run(int argc, char** argv) {
     auto progress = [quiet](const std::string& s) {
         if (!quiet) std::cerr << "dw-explain: " << s << "\n";
     };
+    if (proof->parsed()) dw::require_output_dir(po.out_dir, "--out");
     if (proof->parsed()) {
         std::stringstream in(cases);
         for (std::string c; std::getline(in, c, ',');)
@@ -48,10 +50,12 @@ int run(int argc, char** argv) {
         const auto r = dw::analysis::run_proof(po);
         std::cout << dw::read_file(r.table_path);
         std::cout << (r.pass ? "PROOF PASSED" : "PROOF FAILED") << " (" << r.table_path << ")\n";
-        return r.pass ? 0 : dw::kExitRuntime;
+        if (!r.pass) throw dw::RuntimeError("PROOF FAILED: see " + r.table_path);
+        return 0;
     }
     if (real.empty()) throw dw::InputError("--real: required (a flight folder or an .mcap recording)");
     if (out.empty()) throw dw::InputError("--out: required (the report's folder)");
+    dw::require_output_dir(out, "--out");
     dw::analysis::ExplainOptions o;
     o.physics = physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
     if (!effects.empty()) {

@@ -68,6 +68,10 @@ void fly(const physics::PhysicsConfig& hidden, const std::string& formation, std
 
 }  // namespace
 
+namespace {
+bool wanted_null(const ProofOptions& o) { return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), "null") != o.cases.end(); }
+}  // namespace
+
 ProofResult run_proof(const ProofOptions& o) {
     auto say = [&](const std::string& s) {
         if (o.progress) o.progress(s);
@@ -81,6 +85,7 @@ ProofResult run_proof(const ProofOptions& o) {
             throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", list, ")"));
         }
     }
+    if (wanted_null(o) && o.null_seeds < 1) throw InputError("--null-seeds: the null case needs at least 1 flight (or leave it out with --cases)");
     fs::create_directories(o.out_dir);
     ProofResult R;
     const physics::PhysicsConfig plain;  // what the explainer is given: every effect off

@@ -40,8 +40,19 @@ void require_writable_path(const std::string& path, std::string_view what) {
     if (path.empty()) throw InputError(log::cat(what, ": no path given"));
     std::error_code ec;
     if (fs::is_directory(path, ec)) throw InputError(log::cat(what, " ", path, ": is a directory, expected a file name"));
-    // The nearest folder that exists must be a writable directory; missing ones are made on write.
-    fs::path dir = fs::absolute(fs::path(path), ec).parent_path();
+    const fs::path dir = fs::absolute(fs::path(path), ec).parent_path();
+    if (!fs::exists(dir, ec)) throw InputError(log::cat(what, " ", path, ": the folder ", dir.string(), " does not exist"));
+    if (!fs::is_directory(dir, ec)) throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
+    if (::access(dir.c_str(), W_OK) != 0) {
+        throw InputError(log::cat(what, " ", path, ": cannot write in ", dir.string(), ": ", std::strerror(errno)));
+    }
+}
+
+void require_output_dir(const std::string& path, std::string_view what) {
+    if (path.empty()) throw InputError(log::cat(what, ": no folder given"));
+    std::error_code ec;
+    if (fs::exists(path, ec) && !fs::is_directory(path, ec)) throw InputError(log::cat(what, " ", path, ": is a file, expected a folder"));
+    fs::path dir = fs::absolute(fs::path(path), ec);
     while (!fs::exists(dir, ec) && dir.has_parent_path() && dir != dir.parent_path()) dir = dir.parent_path();
     if (!fs::is_directory(dir, ec)) throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
     if (::access(dir.c_str(), W_OK) != 0) {

@@ -17,9 +17,11 @@ void require_readable_file(const std::string& path, std::string_view what);
 // dw::RuntimeError naming the path and the system's reason; no file is left at `path` or beside
 // it on failure.
 void write_file(const std::string& path, std::string_view content);
-// Throws dw::InputError when `path` cannot become a file: it is a directory, or its nearest
-// existing folder is not a writable directory. Creates nothing: for checking an output option
+// Throws dw::InputError when `path` cannot become a file: it is empty or a directory, or its
+// folder does not exist or cannot be written. Creates nothing: for checking an output option
 // before long work starts.
 void require_writable_path(const std::string& path, std::string_view what);
+// The same for an output folder: `path` may exist as a directory or be made; creates nothing.
+void require_output_dir(const std::string& path, std::string_view what);
 
 }  // namespace dw

@@ -53,6 +53,10 @@ std::vector<double> parse_number_list(std::string_view text, const Range& r, std
     return out;
 }
 
+std::chrono::milliseconds to_millis(double seconds) {
+    return std::chrono::milliseconds(static_cast<long long>(std::ceil(seconds * 1000.0)));
+}
+
 void append_fixed(std::string& out, double v, int decimals, std::string_view what) {
     if (!std::isfinite(v)) throw InputError(log::cat(what, ": ", v, " is not a finite number"));
     // A double in fixed notation has at most 309 integer digits; decimals are bounded by the caller.

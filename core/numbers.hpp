@@ -2,6 +2,7 @@
 // Numbers at the edges: the one validation rule for every numeric option and configuration value
 // (finite and inside a stated range, the range named in the error), and number formatting that
 // cannot write past what it formatted.
+#include <chrono>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,6 +34,10 @@ double require_in(double v, const Range& r, std::string_view what);
 double parse_number(std::string_view text, std::string_view what);
 // Comma-separated numbers, each inside r; at least one.
 std::vector<double> parse_number_list(std::string_view text, const Range& r, std::string_view what);
+
+// A checked duration in whole milliseconds, rounded up: a positive time never becomes 0 (which
+// several options read as "no limit").
+std::chrono::milliseconds to_millis(double seconds);
 
 // Appends v with `decimals` digits after the point. Throws dw::InputError naming `what` when v is
 // not finite: no NaN or inf reaches a file.

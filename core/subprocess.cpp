@@ -137,7 +137,7 @@ void run_sibling(const std::vector<std::string>& args, const std::string& log_fi
     while (!(st = p.wait_for(std::chrono::milliseconds(200)))) {
         if (Shutdown::instance().requested()) {
             p.stop();
-            throw RuntimeError(log::cat(args[0], ": interrupted"));
+            throw Stopped(log::cat("stopped during ", args[0]));
         }
     }
     if (*st != 0) {

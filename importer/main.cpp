@@ -28,6 +28,7 @@ int run(int argc, char** argv) {
     }
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
+    dw::require_output_dir(out, "--out");
     if (std::filesystem::exists(out)) throw dw::InputError("--out " + out + ": exists already (a flight folder is written whole, once)");
     o.warn = [](const std::string& w) { dw::log::warn(w); };
     o.stop = dw::Shutdown::instance().token();

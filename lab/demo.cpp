@@ -81,7 +81,7 @@ int run_demo(const DemoOptions& o) {
         lo.dds_args = o.dds_args;
         lo.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
         auto r = launch(lab, lo, o.dds);
-        if (Shutdown::instance().requested()) throw RuntimeError("interrupted");
+        if (Shutdown::instance().requested()) throw Stopped("stopped during the demo");
         if (r.experiment_status != 0 || r.phase != "DONE")
             throw RuntimeError(log::cat("the ", f.formation, " experiment ended ", r.phase.empty() ? "without a state" : r.phase,
                                         " (status ", r.experiment_status, "; logs in ", lo.run_dir, "/logs)"));

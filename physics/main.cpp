@@ -6,6 +6,7 @@
 
 #include "core/cli.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
 #include "core/shutdown.hpp"
@@ -36,6 +37,7 @@ int run(int argc, char** argv) {
 
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
+    dw::require_output_dir(out_dir, "--out");
     fly.grid.altitudes_m = dw::parse_number_list(altitudes, dw::physics::kAltitudeRange, "--altitudes");
     const dw::physics::PhysicsConfig physics =
         physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);

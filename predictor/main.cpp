@@ -30,7 +30,7 @@ dw::physics::PhysicsConfig physics_from(const std::string& path) {
 Dataset load_all(const std::vector<std::string>& paths) {
     Dataset d;
     for (const auto& p : paths) {
-        dw::log::info("reading ", p);
+        dw::log::debug("reading ", p);
         d.append(load_dataset(p));
     }
     return d;
@@ -104,6 +104,8 @@ int run(int argc, char** argv) {
     runc->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
     cli.parse(argc, argv);
 
+    if (study->parsed()) dw::require_output_dir(so.out_dir, "--out");
+    if (cmp->parsed()) dw::require_output_dir(out_dir, "--out");
     if (study->parsed()) {
         so.physics = physics_from(physics_path);
         if (jet_merging) so.physics.effects.jet_merging.enabled = true;

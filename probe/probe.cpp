@@ -152,7 +152,7 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
             if (!o.quiet) out << c->name() << "  #" << i << "  " << c->last_summary() << "\n";
         }
         next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
-        std::this_thread::sleep_until(next);
+        if (Shutdown::instance().wait_for(next - std::chrono::steady_clock::now())) break;  // a slow rate still stops at once
     }
     out.flush();
     for (const auto& c : channels) {

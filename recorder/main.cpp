@@ -1,8 +1,10 @@
 // dw-recorder: every lab topic to MCAP, and what to do with a recording afterwards.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
@@ -64,8 +66,14 @@ int run(int argc, char** argv) {
 
     cli.parse(argc, argv);
 
-    if (info->parsed()) return dw::recorder::print_info(file, std::cout) ? 0 : dw::kExitBadInput;
+    if (info->parsed()) {
+        if (!dw::recorder::print_info(file, std::cout)) {
+            throw dw::InputError(file + ": damaged (see above); dw-recorder recover rebuilds what is readable");
+        }
+        return 0;
+    }
     if (recover->parsed()) {
+        dw::require_writable_path(out, "recover output");
         dw::mcap::WriterOptions o;
         const auto r = dw::mcap::recover(file, out, o);
         std::cout << "recovered " << r.messages << " messages into " << out << "\n";
@@ -77,6 +85,9 @@ int run(int argc, char** argv) {
         return 0;
     }
     if (exp->parsed()) {
+        // Both outputs are checked before either is written.
+        if (exp->count("--flight")) dw::require_output_dir(flight_dir, "--flight");
+        if (exp->count("--csv")) dw::require_output_dir(csv_dir, "--csv");
         if (flight_dir.empty() && csv_dir.empty()) throw dw::InputError("export: give --flight DIR and/or --csv DIR");
         if (!flight_dir.empty()) {
             ex.stop = dw::Shutdown::instance().token();
@@ -90,6 +101,7 @@ int run(int argc, char** argv) {
         return 0;
     }
 
+    if (record->parsed()) dw::require_writable_path(rec.out, "--out");
     dw::dds::Participant participant(cli.dds(), record->parsed() ? "recorder" : "replay");
     dw::dds::Heartbeat heartbeat(participant);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
@@ -106,7 +118,7 @@ int run(int argc, char** argv) {
     rec.command_control = !no_commands;
     // Ticks every 50 ms, so a chunk is written out no later than the interval.
     rec.writer.flush_interval_ns = static_cast<std::uint64_t>(std::max(0.0, flush_s - 0.05) * 1e9);
-    rec.split_bytes = static_cast<std::uint64_t>(split_mb * 1e6);
+    rec.split_bytes = static_cast<std::uint64_t>(std::ceil(split_mb * 1e6));  // a positive size is never 0 ("never")
     rec.topics = dw::dds::select_topics(rec.topics, cli.dds().ns);
     for (const auto& a : attach) {
         const auto eq = a.find('=');

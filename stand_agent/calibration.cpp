@@ -108,8 +108,7 @@ CalibrationFit fit_calibration(const std::vector<KnownLoad>& loads, const std::a
 }
 
 std::vector<KnownLoad> read_known_loads(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(log::cat(path, ": cannot read the known loads"));
+    std::istringstream in(read_file(path, "--loads"));
     std::string line;
     std::getline(in, line);
     const std::string header = "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw";

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
@@ -61,6 +62,7 @@ int run(int argc, char** argv) {
     const dw::stand::Calibration cal = calibration_path.empty() ? dw::stand::Calibration::nominal(physics.stand)
                                                                  : dw::stand::Calibration::load(calibration_path);
     if (calc->parsed()) {
+        dw::require_writable_path(out_path, "--out");
         const auto fit = dw::stand::fit_calibration(dw::stand::read_known_loads(loads_path), cal.counts_per_newton);
         fit.calibration.save(out_path);
         std::cout << "wrote " << out_path << ": residual " << fit.residual_rms << " (RMS over axes), condition number "

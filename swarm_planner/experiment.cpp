@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "core/shutdown.hpp"
 #include "dds/time.hpp"
 
@@ -181,13 +182,15 @@ msg::ExperimentPhase Experiment::run() {
 
     publish_state(msg::PHASE_WAITING, -1, 0, "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");
     log::info("waiting for ", o_.wait_for.size(), " processes and ", k, " vehicles");
-    if (!peers_.wait_for(o_.wait_for, std::chrono::milliseconds(static_cast<long>(o_.wait_timeout_s * 1000)))) {
+    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s))) {
         reason_ = "not every participant came up within the wait timeout";
         publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
         return msg::PHASE_ABORTED;
     }
     std::vector<physics::Vec3> parked(k);
-    for (int i = 0; i < 3000; ++i) {  // the vehicles' parked poses, from the motion capture
+    // The vehicles' parked poses, from the motion capture, within the same wait timeout.
+    const auto deadline = std::chrono::steady_clock::now() + to_millis(o_.wait_timeout_s);
+    while (!Shutdown::instance().requested()) {
         std::size_t n = 0;
         {
             std::lock_guard lock(mutex_);
@@ -199,7 +202,7 @@ msg::ExperimentPhase Experiment::run() {
                 }
             }
         }
-        if (n == k) break;
+        if (n == k || std::chrono::steady_clock::now() >= deadline) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     {

@@ -68,7 +68,8 @@ int run(int argc, char** argv) {
             return 0;
         }
         std::cout << "ABORTED: " << experiment.reason() << "\n";
-        return dw::kExitRuntime;
+        if (dw::Shutdown::instance().requested()) throw dw::Stopped("stopped: the experiment was aborted and the vehicles landed");
+        throw dw::RuntimeError("ABORTED: " + experiment.reason());
     }
     const double covered = dw::planner::coverage(p, stop);  // before any file: a stop leaves none
     dw::write_file(out, dw::planner::to_document(p, json));

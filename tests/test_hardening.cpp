@@ -135,7 +135,12 @@ TEST(Files, WritablePathCheckRefusesDirectoriesAndFilesAsFolders) {
     dw::write_file(dir.file("plain"), "x");
     EXPECT_THROW(dw::require_writable_path(dir.file(""), "--out"), InputError);
     EXPECT_THROW(dw::require_writable_path(dir.file("plain/x.yaml"), "--out"), InputError);
-    EXPECT_NO_THROW(dw::require_writable_path(dir.file("new/deeper/x.yaml"), "--out"));
+    EXPECT_NO_THROW(dw::require_writable_path(dir.file("x.yaml"), "--out"));
+    EXPECT_THROW(dw::require_writable_path(dir.file("new/x.yaml"), "--out"), InputError);  // a missing folder
+    EXPECT_THROW(dw::require_writable_path("", "--out"), InputError);
+    EXPECT_NO_THROW(dw::require_output_dir(dir.file("new/deeper"), "--out"));
+    EXPECT_THROW(dw::require_output_dir(dir.file("plain"), "--out"), InputError);
+    EXPECT_THROW(dw::require_output_dir("", "--out"), InputError);
     EXPECT_FALSE(fs::exists(dir.file("new")));  // checking creates nothing
 }
 
