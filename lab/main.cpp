@@ -6,6 +6,7 @@
 
 #include "core/cli.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
@@ -41,6 +42,9 @@ int run(int argc, char** argv) {
     runc->add_option("--var", var_args, "NAME=VALUE: set a lab-file variable (repeatable)");
 
     cli.parse(argc, argv);  // validates the DDS settings once, before any child starts
+    if (loopback->count("--summary")) dw::require_writable_path(lo.summary_path, "--summary");
+    if (demo->count("--out")) dw::require_output_dir(demo_o.out_dir, "--out");
+    if (runc->count("--run-dir")) dw::require_output_dir(run_dir, "--run-dir");
     auto stamp = [] {
         char buf[32];
         const std::time_t t = std::time(nullptr);

@@ -69,6 +69,7 @@ int run(int argc, char** argv) {
     echo_cmd->add_flag("--quiet", echo.quiet, "print only the summary table");
 
     cli.parse(argc, argv);
+    if (echo_cmd->count("--summary")) dw::require_writable_path(summary_path, "--summary");
     const dw::dds::DdsConfig& dds_config = cli.dds();
 
     if (list->parsed()) {
@@ -99,9 +100,7 @@ int run(int argc, char** argv) {
     const auto report = dw::probe::run_echo(participant, echo, std::cout);
     dw::probe::print_table(report, std::cout);
     if (!summary_path.empty()) {
-        std::ofstream out(summary_path);
-        if (!out) throw dw::RuntimeError("cannot write the summary " + summary_path);
-        out << report.to_json() << "\n";
+        dw::write_file(summary_path, report.to_json() + "\n");
     }
     if (!report.ok()) throw dw::RuntimeError("echo: not every topic received its samples intact (the table above says which)");
     return 0;
