@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
     return dw::cli::run_main("dw-bench-mocap", [&] {
         dw::dds::ProcessCli cli("dw-bench-mocap: bridge loss, added latency and CPU at 180 Hz");
         double seconds = 60;
-        cli.app().add_option("--seconds", seconds, "how long to stream");
+        cli.app().add_option("--seconds", seconds, "how long to stream")->check(dw::cli::in({1, 3600, "s"}));
         cli.parse(argc, argv);
         dw::dds::DdsConfig cfg = cli.dds();
         if (cfg.ns == dw::dds::kDefaultNamespace) cfg.ns = "benchmocap" + std::to_string(::getpid());

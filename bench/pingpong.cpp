@@ -144,8 +144,8 @@ int run(int argc, char** argv) {
     int rounds = 10;
     std::size_t per_round = 2000;
     app.add_flag("--pong", pong, "(internal) run the echo side");
-    app.add_option("--rounds", rounds, "alternating raw/layer rounds")->check(CLI::Range(1, 1000));
-    app.add_option("--per-round", per_round, "round trips per round")->check(CLI::Range(10, 1000000));
+    app.add_option("--rounds", rounds, "alternating raw/layer rounds")->check(dw::cli::in({1, 1000}));
+    app.add_option("--per-round", per_round, "round trips per round")->check(dw::cli::in({10, 1e6}));
     cli.parse(argc, argv);
     dw::dds::DdsConfig cfg = cli.dds();
     if (pong) return run_pong(cfg);

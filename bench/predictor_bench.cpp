@@ -186,7 +186,7 @@ int main(int argc, char** argv) {
         std::string parts = "inference,map,train,e2e";
         int frames = 3600;
         cli.app().add_option("--parts", parts, "which parts, comma-separated");
-        cli.app().add_option("--frames", frames, "end to end: frames at 180 Hz");
+        cli.app().add_option("--frames", frames, "end to end: frames at 180 Hz")->check(dw::cli::in({1, 1e7}));
         cli.parse(argc, argv);
         dw::dds::DdsConfig cfg = cli.dds();
         if (cfg.ns == dw::dds::kDefaultNamespace) cfg.ns = "benchpred" + std::to_string(::getpid());

@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
         std::string rates = "2000,10000,40000,0";
         double seconds = 2.0;
         cli.app().add_option("--rates", rates, "publish rates to sweep [msg/s]; 0 = as fast as the publisher can");
-        cli.app().add_option("--seconds", seconds, "publishing time per rate");
+        cli.app().add_option("--seconds", seconds, "publishing time per rate")->check(dw::cli::in({1, 3600, "s"}));
         cli.parse(argc, argv);
         dw::dds::DdsConfig cfg = cli.dds();
         if (cfg.ns == dw::dds::kDefaultNamespace) cfg.ns = "benchrec" + std::to_string(::getpid());

@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     return dw::cli::run_main("dw-bench-stand", [&] {
         dw::dds::ProcessCli cli("dw-bench-stand: HX711 line operations and sample-to-publish latency");
         int samples = 5000;
-        cli.app().add_option("--samples", samples, "latency samples");
+        cli.app().add_option("--samples", samples, "latency samples")->check(dw::cli::in({1, 1e7}));
         cli.parse(argc, argv);
         dw::dds::DdsConfig cfg = cli.dds();
         if (cfg.ns == dw::dds::kDefaultNamespace) cfg.ns = "benchstand" + std::to_string(::getpid());

@@ -17,7 +17,7 @@ void require_unique_keys(const YAML::Node& node, const std::string& name) {
     std::set<std::string> seen;
     for (const auto& kv : node) {
         const std::string key = kv.first.Scalar();
-        if (!seen.insert(key).second) {
+        if (kv.first.IsScalar() && !seen.insert(key).second) {
             throw InputError(log::cat(name, ":", kv.first.Mark().line + 1, ":", kv.first.Mark().column + 1,
                                       ": key '", key, "' appears twice in the same mapping"));
         }

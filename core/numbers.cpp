@@ -1,5 +1,6 @@
 #include "core/numbers.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <system_error>
@@ -11,15 +12,24 @@ namespace dw {
 
 bool Range::contains(double v) const { return std::isfinite(v) && v >= lo && v <= hi; }
 
+namespace {
+// The shortest text that reads back as exactly v (no 6-digit rounding in messages).
+std::string exact(double v) {
+    char buf[32];
+    const auto [ptr, ec] = std::to_chars(buf, buf + sizeof(buf), v);
+    return ec == std::errc() ? std::string(buf, ptr) : log::cat(v);
+}
+}  // namespace
+
 std::string Range::describe() const {
-    std::string s = log::cat("[", lo, ", ", hi, "]");
+    std::string s = "[" + exact(lo) + ", " + exact(hi) + "]";
     if (!unit.empty()) s += log::cat(" ", unit);
     return s;
 }
 
 std::string range_problem(double v, const Range& r) {
-    if (!std::isfinite(v)) return log::cat(v, " is not a finite number (expected ", r.describe(), ")");
-    if (!r.contains(v)) return log::cat(v, " is not in ", r.describe());
+    if (!std::isfinite(v)) return exact(v) + " is not a finite number (expected " + r.describe() + ")";
+    if (!r.contains(v)) return exact(v) + " is not in " + r.describe();
     return "";
 }
 
@@ -30,12 +40,16 @@ double require_in(double v, const Range& r, std::string_view what) {
 }
 
 double parse_number(std::string_view text, std::string_view what) {
+    const std::string_view original = text;
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+    if (text.size() > 1 && text.front() == '+') text.remove_prefix(1);
     double v = 0;
     const char* end = text.data() + text.size();
     const auto [ptr, ec] = std::from_chars(text.data(), end, v);
     // from_chars leaves out-of-range magnitudes as an error: they are not usable numbers either.
     if (text.empty() || ec != std::errc() || ptr != end) {
-        throw InputError(log::cat(what, ": '", text, "' is not a number"));
+        throw InputError(log::cat(what, ": '", original, "' is not a number"));
     }
     return v;
 }

@@ -1,7 +1,8 @@
 #pragma once
 // Clean shutdown on SIGINT/SIGTERM. install() must run first in main(), before any thread
 // (Fast DDS starts several) exists: it blocks the signals in every thread and waits for them in a
-// dedicated one, so a signal never interrupts DDS code and main loops can wait on it.
+// dedicated one, so a signal never interrupts DDS code and main loops can wait on it. A second
+// SIGINT (Ctrl-C pressed again) ends the process at once with exit code 130.
 #include <chrono>
 #include <functional>
 #include <stop_token>

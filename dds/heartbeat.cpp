@@ -218,7 +218,8 @@ std::optional<msg::ProcessStatus> PeerMonitor::last(const std::string& process) 
     return table_.last(process);
 }
 
-bool PeerMonitor::wait_for(const std::vector<std::string>& processes, std::chrono::milliseconds timeout) const {
+bool PeerMonitor::wait_for(const std::vector<std::string>& processes, std::chrono::milliseconds timeout,
+                           const std::stop_token& stop) const {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     for (;;) {
         const auto up = alive();
@@ -227,7 +228,7 @@ bool PeerMonitor::wait_for(const std::vector<std::string>& processes, std::chron
             if (std::find(up.begin(), up.end(), p) == up.end()) all = false;
         }
         if (all) return true;
-        if (std::chrono::steady_clock::now() >= deadline) return false;
+        if (std::chrono::steady_clock::now() >= deadline || stop.stop_requested()) return false;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
 }

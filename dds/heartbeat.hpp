@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <thread>
 #include <vector>
@@ -90,7 +91,8 @@ public:
     std::vector<std::string> alive() const;
     std::optional<msg::ProcessStatus> last(const std::string& process) const;
     // True once every named process has been heard from (and is still alive).
-    bool wait_for(const std::vector<std::string>& processes, std::chrono::milliseconds timeout) const;
+    bool wait_for(const std::vector<std::string>& processes, std::chrono::milliseconds timeout,
+                  const std::stop_token& stop = {}) const;  // false also when stop is requested
 
 private:
     void emit(const std::optional<PeerEvent>& e);

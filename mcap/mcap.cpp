@@ -535,7 +535,10 @@ struct Reading {
                 c.topic = in.str();
                 c.message_encoding = in.str();
                 c.metadata = in.map();
-                if (c.schema_id != 0 && !schemas.count(c.schema_id)) in.fail(log::cat("channel ", c.id, " names unknown schema ", c.schema_id));
+                if (c.schema_id != 0 && !schemas.count(c.schema_id)) {
+                    if (!salvage) in.fail(log::cat("channel ", c.id, " names unknown schema ", c.schema_id));
+                    c.schema_id = 0;  // salvage: its schema record was lost; keep the channel and its messages
+                }
                 if (channels.insert(c.id).second && h.on_channel) h.on_channel(c);
                 return;
             }
@@ -594,6 +597,7 @@ std::uint64_t next_sound_chunk(std::span<const std::uint8_t> file, std::uint64_t
             chunk_records(in);
             return q;
         } catch (const InputError&) {
+        } catch (const std::bad_alloc&) {  // a false candidate claiming a huge size
         }
     }
     return file.size();

@@ -51,7 +51,7 @@ int run(int argc, char** argv) {
     add_topic_options(pub_cmd);
     pub_cmd->add_option("--count", pub.count, "samples per topic")->check(dw::cli::in({1, 1e8}));
     pub_cmd->add_option("--rate", pub.rate_hz, "rounds per second (one sample per topic each)")
-        ->check(dw::cli::in({0.01, 1e5, "Hz"}));
+        ->check(dw::cli::in({0, 1e5, "Hz"}));  // 0: as fast as the publisher can
     pub_cmd->add_option("--wait-readers", pub.wait_readers, "wait for this many readers per topic first")->check(dw::cli::in(dw::dds::kReadersRange));
     pub_cmd->add_option("--wait-timeout", wait_timeout_s, "seconds to wait for readers")->check(dw::cli::in(dw::kTimeoutRange));
     pub_cmd->add_option("--linger", linger_s, "seconds to stay after publishing (latched topics), -1 = until stopped")->check(dw::cli::in({-1, dw::kTimeoutRange.hi, "s"}));

@@ -17,6 +17,10 @@
 
 namespace dw::probe {
 namespace {
+constexpr double kMinRate_hz = 0.01;  // slower rounds are a stuck publisher, not a rate
+}  // namespace
+
+namespace {
 
 std::mutex g_out_mutex;
 
@@ -143,6 +147,9 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
                 return false;
             }
         }
+    }
+    if (o.rate_hz > 0 && o.rate_hz < kMinRate_hz) {
+        throw InputError(log::cat("--rate: ", o.rate_hz, " Hz is below ", kMinRate_hz, " Hz (0 means as fast as possible)"));
     }
     const auto period = std::chrono::duration<double>(o.rate_hz > 0 ? 1.0 / o.rate_hz : 0.0);
     auto next = std::chrono::steady_clock::now();

@@ -74,11 +74,9 @@ void Calibration::save(const std::string& path) const {
         o << YAML::EndSeq;
     }
     o << YAML::EndSeq << YAML::EndMap;
-    std::ofstream out(path);
-    if (!out) throw RuntimeError(log::cat("cannot write ", path));
-    out << "# Stand calibration: per-cell gain and the cell-to-wrench matrix (rows f_n, f_e, f_d,\n"
-           "# m_roll, m_pitch, m_yaw; columns cells 0-7: 4 vertical, 2 along N, 2 along E).\n"
-        << o.c_str() << "\n";
+    write_file(path, std::string("# Stand calibration: per-cell gain and the cell-to-wrench matrix (rows f_n, f_e, f_d,\n"
+                                 "# m_roll, m_pitch, m_yaw; columns cells 0-7: 4 vertical, 2 along N, 2 along E).\n") +
+                         o.c_str() + "\n");
 }
 
 CalibrationFit fit_calibration(const std::vector<KnownLoad>& loads, const std::array<double, kChips>& cpn) {

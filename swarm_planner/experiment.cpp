@@ -182,8 +182,9 @@ msg::ExperimentPhase Experiment::run() {
 
     publish_state(msg::PHASE_WAITING, -1, 0, "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");
     log::info("waiting for ", o_.wait_for.size(), " processes and ", k, " vehicles");
-    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s))) {
-        reason_ = "not every participant came up within the wait timeout";
+    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s), Shutdown::instance().token())) {
+        if (Shutdown::instance().requested()) reason_ = "interrupted (SIGINT/SIGTERM) while waiting";
+        else reason_ = "not every participant came up within the wait timeout";
         publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
         return msg::PHASE_ABORTED;
     }
@@ -205,10 +206,16 @@ msg::ExperimentPhase Experiment::run() {
         if (n == k || std::chrono::steady_clock::now() >= deadline) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
+    if (Shutdown::instance().requested()) {  // before anything is armed
+        reason_ = "interrupted (SIGINT/SIGTERM) while waiting";
+        publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
+        return msg::PHASE_ABORTED;
+    }
     {
         std::lock_guard lock(mutex_);
         for (std::size_t v = 0; v < k; ++v) {
-            if (!seen_.count(plan_.vehicles[v])) {
+            const auto it = seen_.find(plan_.vehicles[v]);
+            if (it == seen_.end() || !it->second.tracking) {  // never take off from an unknown pose
                 reason_ = "vehicle " + plan_.vehicles[v] + " is not seen by the motion capture";
                 publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
                 return msg::PHASE_ABORTED;
