@@ -1,5 +1,6 @@
 #pragma once
 // Helpers for tests that start the lab's executables as separate processes.
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -64,6 +65,14 @@ inline std::vector<std::string> lines(const std::string& text) {
         start = end + 1;
     }
     return out;
+}
+
+// Bad input: exit 2 and exactly one line on stderr containing `needle`.
+inline void expect_one_line_exit_2(const RunResult& r, const std::string& needle) {
+    EXPECT_EQ(r.status, 2) << r.err;
+    const auto l = lines(r.err);
+    ASSERT_EQ(l.size(), 1u) << r.err;
+    EXPECT_NE(l[0].find(needle), std::string::npos) << l[0];
 }
 
 }  // namespace dw::test

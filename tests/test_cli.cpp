@@ -7,17 +7,12 @@
 #include "support.hpp"
 
 using dw::test::bin;
+using dw::test::expect_one_line_exit_2;
 using dw::test::lines;
 using dw::test::run;
 using dw::test::TempDir;
 
 namespace {
-void expect_one_line_exit_2(const dw::test::RunResult& r, const std::string& needle) {
-    EXPECT_EQ(r.status, 2) << r.err;
-    const auto l = lines(r.err);
-    ASSERT_EQ(l.size(), 1u) << r.err;
-    EXPECT_NE(l[0].find(needle), std::string::npos) << l[0];
-}
 void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 }  // namespace
 

@@ -12,6 +12,7 @@
 #include "support.hpp"
 
 using dw::test::bin;
+using dw::test::expect_one_line_exit_2;
 using dw::test::lines;
 using dw::test::run;
 using dw::test::TempDir;
@@ -19,13 +20,6 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
 namespace {
-// One line on stderr naming `needle`, exit 2.
-void expect_refused(const dw::test::RunResult& r, const std::string& needle) {
-    EXPECT_EQ(r.status, 2) << r.err;
-    const auto l = lines(r.err);
-    ASSERT_EQ(l.size(), 1u) << r.err;
-    EXPECT_NE(l[0].find(needle), std::string::npos) << l[0];
-}
 
 std::string domain() { return std::to_string(dw::test::test_domain()); }
 
@@ -52,13 +46,13 @@ std::string temporaries(const std::string& dir) {
 TEST(Finding2, NaNOptionsAreRefusedByEveryTool) {
     TempDir d;
     for (const char* option : {"--altitudes", "--speed", "--min-separation"}) {
-        expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", option, "nan", "--out", d.file("p.yaml")}, d), option);
-        expect_refused(run({bin("dw-planner"), "run", "--formation", "single", option, "nan", "--domain", domain()}, d), option);
+        expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", option, "nan", "--out", d.file("p.yaml")}, d), option);
+        expect_one_line_exit_2(run({bin("dw-planner"), "run", "--formation", "single", option, "nan", "--domain", domain()}, d), option);
     }
-    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--altitudes", "nan", "--out", d.file("f")}, d), "--altitudes");
-    expect_refused(run({bin("dw-stand-agent"), "run", "--sim", "--noise", "nan", "--domain", domain()}, d), "--noise");
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--altitudes", "nan", "--out", d.file("f")}, d), "--altitudes");
+    expect_one_line_exit_2(run({bin("dw-stand-agent"), "run", "--sim", "--noise", "nan", "--domain", domain()}, d), "--noise");
     std::ofstream(d.file("offset.yaml")) << "effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n";
-    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", d.file("offset.yaml"), "--out", d.file("f")}, d),
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", d.file("offset.yaml"), "--out", d.file("f")}, d),
                    "offset_m");
     EXPECT_FALSE(fs::exists(d.file("f")));
     EXPECT_FALSE(fs::exists(d.file("p.yaml")));
@@ -87,12 +81,12 @@ TEST(Finding3, TrainingStopsOnSigintWith130) {
 
 TEST(Finding3, NumbersThatMeantForeverAreRefused) {
     TempDir d;
-    expect_refused(run({bin("dw-probe"), "echo", "--timeout", "-1", "--domain", domain()}, d), "--timeout");
-    expect_refused(run({bin("dw-recorder"), "record", "--duration", "nan", "--out", d.file("r.mcap"), "--domain", domain()}, d), "--duration");
-    expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", "--speed", "1e-9", "--out", d.file("p.yaml")}, d), "--speed");
+    expect_one_line_exit_2(run({bin("dw-probe"), "echo", "--timeout", "-1", "--domain", domain()}, d), "--timeout");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "record", "--duration", "nan", "--out", d.file("r.mcap"), "--domain", domain()}, d), "--duration");
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--speed", "1e-9", "--out", d.file("p.yaml")}, d), "--speed");
     std::ofstream(d.file("self.yaml")) << "format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, "
                                        << d.file("self.yaml") << "], experiment: true}\n";
-    expect_refused(run({bin("dw-lab"), "run", "--lab", d.file("self.yaml"), "--run-dir", d.file("run"), "--domain", domain()}, d),
+    expect_one_line_exit_2(run({bin("dw-lab"), "run", "--lab", d.file("self.yaml"), "--run-dir", d.file("run"), "--domain", domain()}, d),
                    "cannot start the launcher");
 }
 
@@ -100,9 +94,9 @@ TEST(Finding3, NumbersThatMeantForeverAreRefused) {
 TEST(Finding4, RecoverChecksItsInputFirst) {
     TempDir d;
     std::ofstream(d.file("notes.txt")) << "not an MCAP file\n";
-    expect_refused(run({bin("dw-recorder"), "recover", d.file("notes.txt"), d.file("out.mcap")}, d), "not an MCAP file");
-    expect_refused(run({bin("dw-recorder"), "recover", d.file("nope.mcap"), d.file("out.mcap")}, d), "no such file");
-    expect_refused(run({bin("dw-recorder"), "recover", d.file(""), d.file("out.mcap")}, d), "is a directory");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file("notes.txt"), d.file("out.mcap")}, d), "not an MCAP file");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file("nope.mcap"), d.file("out.mcap")}, d), "no such file");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file(""), d.file("out.mcap")}, d), "is a directory");
     EXPECT_FALSE(fs::exists(d.file("out.mcap")));
 }
 
@@ -110,29 +104,29 @@ TEST(Finding4, RecoverChecksItsInputFirst) {
 TEST(Finding6, DirectoriesAndMissingFilesAreOneLine) {
     TempDir d;
     const std::string dir = d.file("");
-    expect_refused(run({bin("dw-probe"), "list", "--config", dir}, d), "is a directory");
-    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--config", d.file("missing.yaml"), "--out", d.file("f")}, d),
+    expect_one_line_exit_2(run({bin("dw-probe"), "list", "--config", dir}, d), "is a directory");
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--config", d.file("missing.yaml"), "--out", d.file("f")}, d),
                    "no such file");
-    expect_refused(run({bin("dw-explain"), "--config", d.file("missing.yaml"), "--real", dir, "--out", d.file("e")}, d), "no such file");
-    expect_refused(run({bin("dw-natnet-emulator"), "--config", d.file("missing.yaml")}, d), "no such file");
-    expect_refused(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", dir, "--out", d.file("f")}, d), "is a directory");
-    expect_refused(run({bin("dw-recorder"), "info", dir}, d), "is a directory");
-    expect_refused(run({bin("dw-predictor"), "compare", "--models", dir, "--data", dir, "--out", d.file("c")}, d), "is a directory");
+    expect_one_line_exit_2(run({bin("dw-explain"), "--config", d.file("missing.yaml"), "--real", dir, "--out", d.file("e")}, d), "no such file");
+    expect_one_line_exit_2(run({bin("dw-natnet-emulator"), "--config", d.file("missing.yaml")}, d), "no such file");
+    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", dir, "--out", d.file("f")}, d), "is a directory");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "info", dir}, d), "is a directory");
+    expect_one_line_exit_2(run({bin("dw-predictor"), "compare", "--models", dir, "--data", dir, "--out", d.file("c")}, d), "is a directory");
     EXPECT_FALSE(fs::exists(d.file("f")));
 }
 
 TEST(Finding6, OutputsAreCheckedBeforeWork) {
     TempDir d;
     std::ofstream(d.file("plain")) << "a file, not a folder";
-    expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("plain/plan.yaml")}, d), "not a directory");
-    expect_refused(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("p.yaml"), "--picture", d.file("p.txt")}, d),
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("plain/plan.yaml")}, d), "not a directory");
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("p.yaml"), "--picture", d.file("p.txt")}, d),
                    "must end in .png");
     EXPECT_FALSE(fs::exists(d.file("p.yaml")));
 }
 
 TEST(Finding6, ProofOfUnknownCasesAndExplainWithoutWrenchOnLegs) {
     TempDir d;
-    expect_refused(run({bin("dw-explain"), "proof", "--cases", "nope", "--out", d.file("proof")}, d), "unknown case 'nope'");
+    expect_one_line_exit_2(run({bin("dw-explain"), "proof", "--cases", "nope", "--out", d.file("proof")}, d), "unknown case 'nope'");
     ASSERT_EQ(run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status, 0);
     // Every leg moved 1000 s past the recording: no wrench sample lies on a leg.
     std::ifstream in(d.file("f/legs.csv"));
@@ -144,5 +138,5 @@ TEST(Finding6, ProofOfUnknownCasesAndExplainWithoutWrenchOnLegs) {
                  std::to_string(std::stod(line.substr(b + 1)) + 1000) + "\n";
     }
     std::ofstream(d.file("f/legs.csv")) << header << "\n" << moved;
-    expect_refused(run({bin("dw-explain"), "--real", d.file("f"), "--out", d.file("e"), "--quiet"}, d), "hold wrench samples");
+    expect_one_line_exit_2(run({bin("dw-explain"), "--real", d.file("f"), "--out", d.file("e"), "--quiet"}, d), "hold wrench samples");
 }

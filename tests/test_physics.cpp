@@ -56,6 +56,16 @@ Peaks peak_positions(const dw::flight::Flight& f) {
     return p;
 }
 
+// The error parse_physics gives for a YAML text named p.yaml, or "(no error)".
+std::string error(const std::string& yaml) {
+    try {
+        parse_physics(yaml, "p.yaml");
+    } catch (const dw::InputError& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
 FlyOptions over_the_stand(double altitude, const std::string& formation = "single") {
     FlyOptions o;
     o.formation = formation;
@@ -258,14 +268,6 @@ TEST(PhysicsConfig, RoundTripsThroughYaml) {
 }
 
 TEST(PhysicsConfig, ErrorsNameFileLineAndKey) {
-    auto error = [](const std::string& yaml) {
-        try {
-            parse_physics(yaml, "p.yaml");
-        } catch (const dw::InputError& e) {
-            return std::string(e.what());
-        }
-        return std::string("(no error)");
-    };
     EXPECT_EQ(error("stand:\n  heigth_m: 1.4\n"), "p.yaml:2:3: stand.heigth_m: unknown key 'heigth_m'");
     EXPECT_EQ(error("jet:\n  model: magic\n"), "p.yaml:2:10: jet.model: unknown jet model 'magic' (expected bauersfeld or jain)");
     EXPECT_EQ(error("stand:\n  rate_hz: fast\n"), "p.yaml:2:12: stand.rate_hz: expected a number");
@@ -525,14 +527,6 @@ TEST(PhysicsHardening, DivergingDynamicsAreAnErrorNotHugeNumbers) {
 }
 
 TEST(PhysicsHardening, DuplicateKeysAndNonFiniteOffsetsAreRefused) {
-    auto error = [](const std::string& yaml) {
-        try {
-            parse_physics(yaml, "p.yaml");
-        } catch (const dw::InputError& e) {
-            return std::string(e.what());
-        }
-        return std::string("(no error)");
-    };
     EXPECT_EQ(error("air_density_kg_m3: 1.2\nair_density_kg_m3: 1.1\n"), "p.yaml:2:1: key 'air_density_kg_m3' appears twice in the same mapping");
     EXPECT_NE(error("effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n").find("not a finite number"), std::string::npos);
     EXPECT_NE(error("stand: {noise_n: .inf}\n").find("not a finite number"), std::string::npos);
