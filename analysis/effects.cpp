@@ -25,6 +25,8 @@ std::vector<Effect> all_effects() {
         {"cell_crosstalk", {{"coefficient", -0.5, 0.5, {}, 0.0}}},
         {"jet_merging", {{"contraction", 0.05, 1.0, range(0.2, 1.0, 5), 0.8}}},
         {"floor_recirculation", {{"coefficient", 0.0, 0.3, range(0.0, 0.1, 5), 0.02}}},
+        {"body_drag", {{"cda_h_m2", 0.0, 0.1, {}, 0.0}, {"cda_v_m2", 0.0, 0.1, {}, 0.0}}},
+        {"ground_effect", {{"coefficient", 0.0, 50.0, range(0.0, 20.0, 5), 0.0}}},
     };
 }
 
@@ -33,9 +35,11 @@ std::vector<Effect> effects_named(const std::vector<std::string>& names) {
     const auto all = all_effects();
     for (const auto& n : names) {
         auto it = std::find_if(all.begin(), all.end(), [&](const Effect& e) { return e.name == n; });
-        if (it == all.end())
-            throw InputError(log::cat("--effects: unknown effect '", n, "' (expected clock_offset, sensor_lag, wake_transport, "
-                                      "position_offset, force_scale, cell_crosstalk, jet_merging or floor_recirculation)"));
+        if (it == all.end()) {
+            std::string known;
+            for (const auto& e : all) known += (known.empty() ? "" : ", ") + e.name;
+            throw InputError(log::cat("--effects: unknown effect '", n, "' (expected one of ", known, ")"));
+        }
         out.push_back(*it);
     }
     return out;
@@ -65,6 +69,10 @@ void Effect::apply(physics::PhysicsConfig& c, const std::vector<double>& v) cons
     } else if (name == "floor_recirculation") {
         fx.floor_recirculation.enabled = true;
         fx.floor_recirculation.coefficient = v[0];
+    } else if (name == "body_drag") {
+        fx.body_drag = {true, v[0], v[1]};
+    } else if (name == "ground_effect") {
+        fx.ground_effect = {true, v[0]};
     }
 }
 

@@ -8,11 +8,13 @@
 #include <filesystem>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
+#include "physics/bodies.hpp"
 
 namespace dw::analysis {
 
@@ -29,6 +31,7 @@ struct Data {
 };
 
 double norm_sq(const Data& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a) {
+    if (!d.replay.measured_axes()[a]) return 0;  // a column that carries no measurement
     const double r = (d.replay.measured()[i][a] - pred[i][a]) / d.sigma[a];
     return r * r;
 }
@@ -66,7 +69,7 @@ public:
             const std::vector<double> v(x[0], x[0] + params);
             const auto& p = fit->predict(v);
             for (std::size_t a = 0; a < 6; ++a)
-                residual[a] = (fit->d_.replay.measured()[row][a] - p[row][a]) / fit->d_.sigma[a];
+                residual[a] = fit->d_.replay.measured_axes()[a] ? (fit->d_.replay.measured()[row][a] - p[row][a]) / fit->d_.sigma[a] : 0.0;
             return true;
         }
     };
@@ -173,20 +176,46 @@ double neff_factor(const Data& d, const std::vector<Wrench6>& pred) {
     return std::clamp((1 - rho) / (1 + rho), 0.01, 1.0);
 }
 
+// Where a sample is, for locating residuals: over a stand, the arena cell of the neighbours'
+// centre by altitude band and leg direction; for a flying sufferer, the nearest neighbour's
+// position relative to it (horizontal offset x height above).
+struct Cell {
+    int band = 0, direction = 0, u = 0, v = 0;
+    auto operator<=>(const Cell&) const = default;
+};
+constexpr double kArenaCell_m = 0.2;
+constexpr double kRelativeCell_m = 0.1;
+
+std::optional<Cell> cell_of(const SampleInfo& s, bool flying) {
+    if (!s.near) return std::nullopt;
+    if (flying) return Cell{0, 0, static_cast<int>(std::floor(s.offset / kRelativeCell_m)), static_cast<int>(std::floor(s.above / kRelativeCell_m))};
+    if (s.direction == 0) return std::nullopt;
+    return Cell{band_index(s.h), s.direction, static_cast<int>(std::floor(s.n / kArenaCell_m)), static_cast<int>(std::floor(s.e / kArenaCell_m))};
+}
+
+std::string where(const Cell& c, bool flying, const std::string& formation) {
+    if (flying)
+        return log::cat("nearest neighbour ", c.u * kRelativeCell_m, "-", (c.u + 1) * kRelativeCell_m, " m off horizontally, ", c.v * kRelativeCell_m, "-",
+                        (c.v + 1) * kRelativeCell_m, " m above the sufferer, ", formation);
+    const double cell = kArenaCell_m;
+    return log::cat("relative altitude ", kBands[static_cast<std::size_t>(c.band)].name, ", N ", c.u * cell, "..", (c.u + 1) * cell, " m, E ",
+                    c.v * cell, "..", (c.v + 1) * cell, " m, ", formation, ", ", c.direction > 0 ? "+E" : "-E", " legs");
+}
+
 std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, double factor, double z_min, const std::string& formation) {
     struct Acc {
         double sum = 0, sq = 0;
         std::size_t n = 0;
     };
-    std::map<std::tuple<int, int, int, int, int>, Acc> bins;  // axis, band, direction, N cell, E cell
-    const double cell = 0.2;
+    std::map<std::pair<int, Cell>, Acc> bins;  // axis, cell
+    const bool flying = d.replay.flying();
     for (auto i : d.on_legs) {
-        const auto& s = d.info[i];
-        if (!s.near || s.direction == 0) continue;
-        const int nc = static_cast<int>(std::floor(s.n / cell)), ec = static_cast<int>(std::floor(s.e / cell));
+        const auto cell = cell_of(d.info[i], flying);
+        if (!cell) continue;
         for (int a = 0; a < 6; ++a) {
+            if (!d.replay.measured_axes()[static_cast<std::size_t>(a)]) continue;
             const double r = d.replay.measured()[i][static_cast<std::size_t>(a)] - pred[i][static_cast<std::size_t>(a)];
-            auto& b = bins[{a, band_index(s.h), s.direction, nc, ec}];
+            auto& b = bins[{a, *cell}];
             b.sum += r;
             b.sq += r * r;
             ++b.n;
@@ -195,7 +224,7 @@ std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, doub
     std::vector<Region> out;
     for (const auto& [key, b] : bins) {
         if (b.n < 10) continue;
-        const auto [a, band, dir, nc, ec] = key;
+        const auto& [a, c] = key;
         const double mean = b.sum / static_cast<double>(b.n);
         const double sd = std::max(std::sqrt(std::max(0.0, b.sq / static_cast<double>(b.n) - mean * mean)), d.sigma[static_cast<std::size_t>(a)]);
         const double z = mean / (sd / std::sqrt(static_cast<double>(b.n) * factor));
@@ -204,11 +233,10 @@ std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, doub
         r.axis = kAxes[a];
         r.mean_residual = mean;
         r.z = z;
-        r.altitude_lo = kBands[static_cast<std::size_t>(band)].lo;
-        r.altitude_hi = kBands[static_cast<std::size_t>(band)].hi;
-        r.direction = dir;
-        r.where = log::cat("relative altitude ", kBands[static_cast<std::size_t>(band)].name, ", N ", nc * cell, "..", (nc + 1) * cell, " m, E ",
-                           ec * cell, "..", (ec + 1) * cell, " m, ", formation, ", ", dir > 0 ? "+E" : "-E", " legs");
+        r.altitude_lo = flying ? c.v * kRelativeCell_m : kBands[static_cast<std::size_t>(c.band)].lo;
+        r.altitude_hi = flying ? (c.v + 1) * kRelativeCell_m : kBands[static_cast<std::size_t>(c.band)].hi;
+        r.direction = c.direction;
+        r.where = where(c, flying, formation);
         out.push_back(r);
     }
     std::sort(out.begin(), out.end(), [](const Region& x, const Region& y) { return std::abs(x.z) > std::abs(y.z); });
@@ -229,7 +257,7 @@ std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
         const auto p = d.replay.recorded(c);
         for (auto i : d.on_legs) {
             const auto& s = d.info[i];
-            if (!s.near || s.direction == 0) continue;
+            if (!s.near || (!d.replay.flying() && s.direction == 0)) continue;
             auto& v = sse[{s.direction, band_index(s.h)}];
             v.resize(grid.size());
             for (std::size_t a = 0; a < 6; ++a) v[g] += norm_sq(d, p, i, a);
@@ -252,6 +280,14 @@ std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
         out.push_back({key.first, kBands[static_cast<std::size_t>(key.second)].name, cn.second / static_cast<double>(cn.first), best, cn.first});
     }
     return out;
+}
+
+// Whether an effect can act in this flight: merging needs two jets; a sufferer's own drag and the
+// ground effect need a sufferer that flies.
+bool applies(const Effect& e, const Replay& r) {
+    if (e.name == "jet_merging") return r.neighbours() >= 2;
+    if (e.name == "body_drag" || e.name == "ground_effect") return r.flying();
+    return true;
 }
 
 struct Scores {
@@ -317,13 +353,16 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     };
     ExplainResult R;
     R.formation = f.meta.formation;
-    const Replay replay(f);
-    const auto legs = f.legs ? *f.legs : flight::find_legs(f);
+    const Replay replay(f, o.physics);
+    const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
+    const auto& legs = blocks.blocks;
+    R.blocks = blocks.kind;
     if (legs.size() < static_cast<std::size_t>(o.folds))
-        throw InputError(log::cat("legs: ", legs.size(), " measurement legs found; cross-validation needs at least ", o.folds));
-    const auto info = describe(replay, legs);
+        throw InputError(log::cat("poses.csv: ", legs.size(), " cross-validation blocks (", flight::to_string(blocks.kind),
+                                  ") in the flight; cross-validation needs at least ", o.folds));
+    const auto info = describe(replay, blocks);
     say(log::cat("simulating the recorded flight: ", replay.stamps().size(), " wrench samples, ", replay.neighbours(), " neighbours, ",
-                 legs.size(), " legs"));
+                 legs.size(), " blocks by ", flight::to_string(blocks.kind)));
     const auto base_pred = replay.recorded(o.physics);
     Data d{replay, info, floor_of(replay, info, base_pred, o.physics.stand.tare_s), {}};
     for (std::size_t i = 0; i < info.size(); ++i)
@@ -331,8 +370,8 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     std::set<int> leg_ids;
     for (auto i : d.on_legs) leg_ids.insert(info[i].leg);
     if (leg_ids.size() < static_cast<std::size_t>(o.folds)) {
-        throw InputError(log::cat("legs: ", leg_ids.size(), " of ", legs.size(), " measurement legs hold wrench samples (",
-                                  d.on_legs.size(), " samples on legs); cross-validation needs at least ", o.folds,
+        throw InputError(log::cat("wrench.csv: ", leg_ids.size(), " of ", legs.size(), " cross-validation blocks (", flight::to_string(blocks.kind),
+                                  ") hold wrench samples (", d.on_legs.size(), " samples in blocks); cross-validation needs at least ", o.folds,
                                   " — do the wrench and pose clocks overlap?"));
     }
     R.noise_floor = d.sigma;
@@ -368,7 +407,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
             double best = -1;
             for (int from = 0; from < 6; ++from)
                 for (int to = 0; to < 6; ++to) {
-                    if (from == to) continue;
+                    if (from == to || !replay.measured_axes()[static_cast<std::size_t>(from)] || !replay.measured_axes()[static_cast<std::size_t>(to)]) continue;
                     double xy = 0, xx = 0;
                     for (auto i : d.on_legs) {
                         const double x = replay.measured()[i][static_cast<std::size_t>(from)];
@@ -447,7 +486,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     for (int round = 1; round <= o.max_effects && !remaining.empty(); ++round) {
         std::vector<CandidateResult> scored;
         for (const auto& e : remaining) {
-            if (e.name == "jet_merging" && replay.neighbours() < 2) continue;  // needs two jets
+            if (!applies(e, replay)) continue;
             say(log::cat("round ", round, ": fitting ", e.name));
             scored.push_back(score(e, round));
             say(log::cat("  ", scored.back().note));

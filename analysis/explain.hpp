@@ -76,7 +76,8 @@ struct ExplainResult {
     AxisValues heldout_before{}, heldout_after{};
     physics::PhysicsConfig fitted;
     std::string formation;
-    std::size_t samples = 0, legs = 0;
+    std::size_t samples = 0, legs = 0;          // samples in blocks, blocks holding samples
+    flight::BlockKind blocks = flight::BlockKind::legs;  // what the cross-validation blocks are
     double seconds = 0;
 };
 

@@ -11,7 +11,14 @@
 
 namespace dw::analysis {
 
-Replay::Replay(const flight::Flight& f, double grid_hz) : tracks_(flight::tracks(f)), dt_(1.0 / grid_hz) {
+Replay::Replay(const flight::Flight& f, const physics::PhysicsConfig& physics, double grid_hz)
+    : tracks_(flight::tracks(f)), dt_(1.0 / grid_hz) {
+    sufferer_params_ = physics::vehicle_of(f.meta, f.meta.sufferer, physics.sufferer.vehicle);
+    neighbour_params_ = physics::neighbours_of(f.meta, physics);
+    for (const auto& v : neighbour_params_) near_radius_.push_back(physics::near_radius(v));
+    flying_ = !f.meta.stand_height_m.has_value();
+    residual_ = f.meta.wrench_source == flight::WrenchSource::residual;
+    if (!f.meta.moments_measured) measured_axes_ = {true, true, true, false, false, false};
     sufferer_ = f.find_body(f.meta.sufferer);
     if (sufferer_ < 0 || tracks_[static_cast<std::size_t>(sufferer_)].t.empty())
         throw InputError(log::cat("poses.csv: the sufferer '", f.meta.sufferer, "' (meta.json) has no poses"));
@@ -36,6 +43,7 @@ Replay::Replay(const flight::Flight& f, double grid_hz) : tracks_(flight::tracks
         const double t = t0_ + static_cast<double>(i) * dt_;
         auto& g = grid_[i];
         g.sufferer = sufferer(t);
+        g.sufferer_velocity = tracks_[static_cast<std::size_t>(sufferer_)].velocity_at(t);
         for (std::size_t j = 0; j < neighbours_.size(); ++j) {
             const auto p = position(static_cast<int>(j), t);
             const auto v = velocity(static_cast<int>(j), t);
@@ -68,6 +76,8 @@ physics::PhysicsConfig flow_part(const physics::PhysicsConfig& c) {
     f.effects.sensor_lag = {};
     f.effects.force_scale = {};
     f.effects.cell_crosstalk = {};
+    f.effects.body_drag = {};      // the sufferer's own forces, added to the air's
+    f.effects.ground_effect = {};
     f.turbulence.enabled = false;  // the mean flow
     return f;
 }
@@ -75,10 +85,13 @@ physics::PhysicsConfig flow_part(const physics::PhysicsConfig& c) {
 }  // namespace
 
 const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
-    const physics::PhysicsConfig flow = flow_part(c);
+    physics::PhysicsConfig flow = flow_part(c);
+    flow.sufferer.vehicle = sufferer_params_;
     const std::string key = physics::to_yaml(flow);
     if (auto it = cache_.find(key); it != cache_.end()) return it->second;
     const physics::WrenchModel model(flow);
+    std::vector<physics::Jet> jets;
+    for (const auto& v : neighbour_params_) jets.push_back(physics::Jet::make(v, flow));
     const auto& fx = flow.effects;
     const physics::Vec3 offset = fx.position_offset.enabled
                                      ? physics::Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1], fx.position_offset.offset_m[2])
@@ -95,10 +108,14 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
             const physics::Vec3 pos = physics::Vec3(x[0], x[1], x[2]) - offset;  // recorded = true + offset
             ps[j] = model.producer(pos, physics::Vec3(x[3], x[4], x[5]));
             ps[j].axis = physics::Vec3(x[6], x[7], x[8]);
-            near = near || std::hypot(pos.x() - suf.x(), pos.y() - suf.y()) < 1.5;
+            ps[j].jet = jets[j];
+            near = near || std::hypot(pos.x() - suf.x(), pos.y() - suf.y()) < near_radius_[j];
         }
         if (far_is_zero && !near) continue;
         const physics::Wrench w = model.evaluate(suf, ps);
+        if (!w.allFinite())
+            throw InputError(log::cat("the physics gave a non-finite wrench at t = ", t0_ + static_cast<double>(i) * dt_,
+                                      " s of the recorded flight: check meta.json's vehicles and the physics configuration"));
         for (std::size_t a = 0; a < 6; ++a) out[i][a] = w[static_cast<Eigen::Index>(a)];
     }
     if (cache_order_.size() >= 12) {  // a few flows: the fits revisit the last ones
@@ -109,9 +126,38 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
     return cache_.emplace(key, std::move(out)).first->second;
 }
 
+std::vector<Wrench6> Replay::own_forces(const physics::PhysicsConfig& c) const {
+    const auto& fx = c.effects;
+    std::vector<Wrench6> out(n_, Wrench6{});
+    const double half_rho = 0.5 * c.air_density_kg_m3;
+    const double hover = sufferer_params_.mass_kg * c.gravity_m_s2, radius = sufferer_params_.prop_radius_m;
+    for (std::size_t i = 0; i < n_; ++i) {
+        const auto& v = grid_[i].sufferer_velocity;
+        if (fx.body_drag.enabled) {
+            const double vh = std::hypot(v[0], v[1]);
+            out[i][0] = -half_rho * fx.body_drag.cda_h_m2 * vh * v[0];
+            out[i][1] = -half_rho * fx.body_drag.cda_h_m2 * vh * v[1];
+            out[i][2] = -half_rho * fx.body_drag.cda_v_m2 * std::abs(v[2]) * v[2];
+        }
+        if (fx.ground_effect.enabled) {
+            // Above its own propeller radius: the image-rotor law's pole is not reached by a flying vehicle.
+            const double h = std::max(-grid_[i].sufferer[2], radius);
+            out[i][2] -= fx.ground_effect.coefficient * hover * std::pow(radius / (4 * h), 2);
+        }
+    }
+    return out;
+}
+
 std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
     const auto& fx = c.effects;
     const std::vector<Wrench6>* series = &air(c);
+    std::vector<Wrench6> with_own;
+    if (fx.body_drag.enabled || fx.ground_effect.enabled) {
+        with_own = own_forces(c);
+        for (std::size_t i = 0; i < n_; ++i)
+            for (std::size_t a = 0; a < 6; ++a) with_own[i][a] += (*series)[i][a];
+        series = &with_own;
+    }
     std::vector<Wrench6> lagged;
     if (fx.sensor_lag.enabled && fx.sensor_lag.tau_s > 0) {
         // dy/dt = (x - y)/tau with x linear between grid points (exact first-order hold).
@@ -124,7 +170,10 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
             }
         series = &lagged;
     }
-    const double clock = (fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0) + 7.0 / 16.0 / c.stand.rate_hz;
+    // A load stand's sample-and-hold ages its wrench by 7/16 of a conversion period; another
+    // lab's residual is computed from one sample's own readings.
+    const double hold = residual_ ? 0.0 : 7.0 / 16.0 / c.stand.rate_hz;
+    const double clock = (fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0) + hold;
     std::vector<Wrench6> out(stamps_.size());
     for (std::size_t i = 0; i < stamps_.size(); ++i) {
         const double g = std::clamp((stamps_[i] - clock - t0_) / dt_, 0.0, static_cast<double>(n_ - 1) - 1e-9);
@@ -136,10 +185,11 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
             for (auto& v : w) v *= fx.force_scale.scale;
         out[i] = w;
     }
-    // The tare: the recording is zeroed over its first tare_s.
+    // The tare: a stand's recording is zeroed over its first tare_s (a residual source is tared
+    // by its importer where no neighbour is near, where the physics gives no force either).
     Wrench6 zero{};
     std::size_t n = 0;
-    for (std::size_t i = 0; i < out.size() && stamps_[i] < stamps_.front() + c.stand.tare_s; ++i, ++n)
+    for (std::size_t i = 0; !residual_ && i < out.size() && stamps_[i] < stamps_.front() + c.stand.tare_s; ++i, ++n)
         for (std::size_t a = 0; a < 6; ++a) zero[a] += out[i][a];
     if (n > 0)
         for (auto& w : out)
@@ -153,7 +203,8 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
     return out;
 }
 
-std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>& legs) {
+std::vector<SampleInfo> describe(const Replay& r, const flight::Blocks& blocks) {
+    const auto& legs = blocks.blocks;
     std::vector<SampleInfo> out(r.stamps().size());
     std::size_t li = 0;
     for (std::size_t i = 0; i < out.size(); ++i) {
@@ -161,6 +212,7 @@ std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>
         auto& s = out[i];
         const auto suf = r.sufferer(t);
         double vn = 0, ve = 0, low = -1e9;
+        s.offset = INFINITY;
         for (int j = 0; j < r.neighbours(); ++j) {
             const auto p = r.position(j, t);
             const auto v = r.velocity(j, t);
@@ -169,11 +221,13 @@ std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>
             low = std::max(low, p[2] - suf[2]);
             vn += v[0] / r.neighbours();
             ve += v[1] / r.neighbours();
-            s.near = s.near || std::hypot(p[0] - suf[0], p[1] - suf[1]) < 1.5;
+            const double horizontal = std::hypot(p[0] - suf[0], p[1] - suf[1]);
+            s.near = s.near || horizontal < r.near_radius(j);
+            if (horizontal < s.offset) s.offset = horizontal, s.above = suf[2] - p[2];
         }
         s.h = -low;
         s.speed = std::hypot(vn, ve);
-        s.direction = ve > 0.1 ? 1 : (ve < -0.1 ? -1 : 0);
+        if (blocks.kind == flight::BlockKind::legs) s.direction = ve > 0.1 ? 1 : (ve < -0.1 ? -1 : 0);
         while (li < legs.size() && legs[li].t_end < t) ++li;
         if (li < legs.size() && t >= legs[li].t_start && t <= legs[li].t_end) {
             s.leg = legs[li].leg;

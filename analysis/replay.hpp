@@ -1,8 +1,10 @@
 #pragma once
 // Simulating a recorded flight: the physics evaluated along the recorded poses (the neighbours'
-// positions, velocities and attitudes from poses.csv, the sufferer's pose), then seen the way the
-// recording sees it — sensor lag, clock offset, force scale, cell crosstalk, the tare — at the
-// recorded wrench stamps. Reads only the flight folder's contract files.
+// positions, velocities and attitudes from poses.csv, the sufferer's pose at every sample — it may
+// fly), with each body's parameters from meta.json, then seen the way the recording sees it —
+// sensor lag, clock offset, force scale, cell crosstalk, the tare — at the recorded wrench stamps.
+// A flying sufferer (wrench_source residual) also feels its own drag and the ground effect when
+// those effects are on. Reads only the flight folder's contract files.
 //
 // The air's wrench is evaluated once per configuration of the flow's effects on a uniform grid
 // of mocap time (cached), so fitting the recording-side effects (time shifts, lag, scale,
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "flight/flight.hpp"
+#include "physics/bodies.hpp"
 #include "physics/config.hpp"
 
 namespace dw::analysis {
@@ -21,8 +24,9 @@ using Wrench6 = std::array<double, 6>;
 
 class Replay {
 public:
-    // Throws dw::InputError if the sufferer or a neighbour of meta.json has no poses.
-    explicit Replay(const flight::Flight& f, double grid_hz = 100.0);
+    // Throws dw::InputError if the sufferer or a neighbour of meta.json has no poses, or a body's
+    // parameters (meta.json, else `physics`) are unusable.
+    explicit Replay(const flight::Flight& f, const physics::PhysicsConfig& physics = {}, double grid_hz = 100.0);
 
     // The wrench the recording would hold under physics c, at every wrench stamp. The stand's
     // own sample-and-hold is included: a wrench frame combines chip 0's fresh conversion with the
@@ -41,16 +45,29 @@ public:
     std::array<double, 3> position(int j, double t) const;
     std::array<double, 3> velocity(int j, double t) const;
     std::array<double, 3> sufferer(double t) const;
+    double near_radius(int j) const { return near_radius_[static_cast<std::size_t>(j)]; }
+    // Which wrench columns carry a measurement (a residual source may not measure moments).
+    const std::array<bool, 6>& measured_axes() const { return measured_axes_; }
+    bool flying() const { return flying_; }  // no load stand: the sufferer flies
 
 private:
+    // The flying sufferer's own forces on the grid: body_drag and ground_effect.
+    std::vector<Wrench6> own_forces(const physics::PhysicsConfig& c) const;
     struct GridState {                       // the recorded states at one grid time
         std::array<double, 3> sufferer;
+        std::array<double, 3> sufferer_velocity;
         std::vector<std::array<double, 9>> neighbours;  // position, velocity, jet axis
     };
     std::vector<flight::Track> tracks_;
     std::vector<GridState> grid_;
     int sufferer_ = -1;
     std::vector<int> neighbours_;
+    physics::VehicleParams sufferer_params_;
+    std::vector<physics::VehicleParams> neighbour_params_;
+    std::vector<double> near_radius_;
+    std::array<bool, 6> measured_axes_{true, true, true, true, true, true};
+    bool flying_ = false;
+    bool residual_ = false;
     std::vector<double> stamps_;
     std::vector<Wrench6> measured_;
     double t0_ = 0, dt_ = 0.01;
@@ -61,14 +78,15 @@ private:
 
 // Where each wrench sample is, relative to the formation.
 struct SampleInfo {
-    int leg = -1;                 // -1: not on a measurement leg
-    int direction = 0;            // of travel along E: +1, -1, 0 (below 0.1 m/s)
+    int leg = -1;                 // -1: not in a block (a measurement leg, an encounter, a stretch of time)
+    int direction = 0;            // of travel along E on legs: +1, -1, 0 (below 0.1 m/s; always 0 off legs)
     double n = 0, e = 0, h = 0;   // the neighbours' centroid N, E; the lowest one's height above the sufferer
+    double offset = 0, above = 0; // the horizontally nearest neighbour: horizontal offset, height above the sufferer
     double speed = 0;
     double leg_fraction = 0;      // 0..1 through the leg
-    bool near = false;            // a neighbour within 1.5 m horizontally
+    bool near = false;            // a neighbour within its near radius horizontally (physics/bodies.hpp)
 };
-std::vector<SampleInfo> describe(const Replay& r, const std::vector<flight::Leg>& legs);
+std::vector<SampleInfo> describe(const Replay& r, const flight::Blocks& blocks);
 
 // The vertical-separation bands residuals are located and drawn in.
 struct Band {

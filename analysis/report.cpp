@@ -152,12 +152,12 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     write_file((fs::path(dir) / "physics.yaml").string(), physics::to_yaml(r.fitted));
 
     // Figures: residual maps before/after (the strongest region's axis), observed vs simulated.
-    const Replay replay(f);
-    const auto legs = f.legs ? *f.legs : flight::find_legs(f);
+    const Replay replay(f, o.physics);
+    const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
     const auto before = replay.recorded(o.physics), after = replay.recorded(r.fitted);
     std::size_t axis = 2;
     if (!r.regions.empty()) axis = static_cast<std::size_t>(physics::axis_index(r.regions.front().axis));
-    const auto info = describe(replay, legs);
+    const auto info = describe(replay, blocks);
     const std::size_t n = info.size();
     std::vector<double> rb(n), ra(n), obs(n), sb(n), sa(n);
     for (std::size_t i = 0; i < n; ++i) {

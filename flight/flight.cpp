@@ -454,5 +454,75 @@ std::vector<Leg> find_legs(const Flight& f) {
     return legs;
 }
 
+const char* to_string(BlockKind k) {
+    switch (k) {
+        case BlockKind::legs: return "legs";
+        case BlockKind::encounters: return "encounters";
+        case BlockKind::time: return "time";
+    }
+    return "?";
+}
+
+namespace {
+
+// The times of closest approach: per stretch where some neighbour is within its radius of the
+// sufferer horizontally, the moment the (radius-normalised) distance is smallest.
+std::vector<double> closest_approaches(const Flight& f, const std::vector<double>& radius, double t0, double t1) {
+    const auto trs = tracks(f);
+    const Track& suf = trs[static_cast<std::size_t>(f.find_body(f.meta.sufferer))];
+    std::vector<std::pair<const Track*, double>> ns;
+    for (std::size_t j = 0; j < f.meta.neighbours.size() && j < radius.size(); ++j) {
+        const int b = f.find_body(f.meta.neighbours[j]);
+        if (b >= 0 && !trs[static_cast<std::size_t>(b)].t.empty()) ns.emplace_back(&trs[static_cast<std::size_t>(b)], radius[j]);
+    }
+    std::vector<double> out;
+    constexpr double dt = 0.02;
+    double best = INFINITY, best_t = 0;
+    for (double t = t0; t <= t1; t += dt) {
+        const auto s = suf.position_at(t);
+        double d = INFINITY;
+        for (const auto& [tr, r] : ns) {
+            const auto p = tr->position_at(t);
+            d = std::min(d, std::hypot(p[0] - s[0], p[1] - s[1]) / r);
+        }
+        if (d < 1 && d < best) best = d, best_t = t;
+        if (d >= 1 && std::isfinite(best)) {
+            out.push_back(best_t);
+            best = INFINITY;
+        }
+    }
+    if (std::isfinite(best)) out.push_back(best_t);
+    return out;
+}
+
+}  // namespace
+
+Blocks find_blocks(const Flight& f, int min_blocks, const std::vector<double>& encounter_radius_m) {
+    Blocks b;
+    b.blocks = f.legs ? *f.legs : find_legs(f);
+    if (b.blocks.size() >= static_cast<std::size_t>(min_blocks)) return b;
+    b.blocks.clear();
+    const int suf = f.find_body(f.meta.sufferer);
+    if (suf < 0 || f.poses.empty()) return b;
+    double t0 = INFINITY, t1 = -INFINITY;
+    for (const auto& p : f.poses)
+        if (p.body == suf) t0 = std::min(t0, p.t), t1 = std::max(t1, p.t);
+    if (!(t1 > t0)) return b;
+    const auto peaks = closest_approaches(f, encounter_radius_m, t0, t1);
+    if (peaks.size() >= static_cast<std::size_t>(min_blocks)) {
+        b.kind = BlockKind::encounters;
+        for (std::size_t k = 0; k < peaks.size(); ++k) {
+            const double a = k == 0 ? t0 : 0.5 * (peaks[k - 1] + peaks[k]);
+            const double e = k + 1 == peaks.size() ? t1 : 0.5 * (peaks[k] + peaks[k + 1]);
+            b.blocks.push_back({static_cast<int>(k), a, e});
+        }
+        return b;
+    }
+    b.kind = BlockKind::time;
+    const int n = std::max(2 * min_blocks, static_cast<int>(std::ceil((t1 - t0) / kTimeBlock_s)));
+    for (int k = 0; k < n; ++k) b.blocks.push_back({k, t0 + (t1 - t0) * k / n, t0 + (t1 - t0) * (k + 1) / n});
+    return b;
+}
+
 
 }  // namespace dw::flight

@@ -96,4 +96,18 @@ std::vector<Track> tracks(const Flight& flight);  // indexed like Flight::bodies
 // moves horizontally at a steady speed (> 0.25 m/s) for at least 2 s.
 std::vector<Leg> find_legs(const Flight& f);
 
+// Cross-validation blocks. A flight flown on straight legs uses its legs. A flight without them
+// (a swap, a random walk, another lab's log) is split by encounter: each pass of a neighbour
+// within its encounter radius of the sufferer horizontally is one block, the flight cut halfway
+// between successive closest approaches. Too few encounters: equal stretches of time.
+enum class BlockKind { legs, encounters, time };
+const char* to_string(BlockKind k);
+struct Blocks {
+    BlockKind kind = BlockKind::legs;
+    std::vector<Leg> blocks;  // numbered from 0, in time order
+};
+inline constexpr double kTimeBlock_s = 4.0;  // the longest time block when splitting by time
+// encounter_radius_m: per neighbour of meta.json, in its order.
+Blocks find_blocks(const Flight& f, int min_blocks, const std::vector<double>& encounter_radius_m);
+
 }  // namespace dw::flight

@@ -358,7 +358,7 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
         const auto& type = crazyflie_type(l.name);
         const std::uint16_t body = f.body_index(l.name);
         if (l.name != sufferer) f.meta.neighbours.push_back(l.name);
-        f.meta.vehicles[l.name] = {type.mass_kg, 4, type.prop_radius_m, type.arm_m};
+        f.meta.vehicles[l.name] = {type.mass_kg, 4, type.prop_radius_m, 2 * type.arm_m};  // motor_distance_m: diagonal, motor to motor
         for (std::size_t i = 0; i < l.t_s.size(); ++i) {
             throw_if_stopped(o.stop, "the import");
             const auto& q = l.quat_xyzw[i];

@@ -218,6 +218,13 @@ PhysicsConfig parse_physics(const std::string& yaml, const std::string& file) {
             s.number("coefficient", x.floor_recirculation.coefficient, 0, 1);
             s.number("length_m", x.floor_recirculation.length_m, 0.01, 100);
         }
+        {
+            Section s = e.sub("body_drag");
+            s.flag("enabled", x.body_drag.enabled);
+            s.number("cda_h_m2", x.body_drag.cda_h_m2, 0, 10);
+            s.number("cda_v_m2", x.body_drag.cda_v_m2, 0, 10);
+        }
+        { Section s = e.sub("ground_effect"); s.flag("enabled", x.ground_effect.enabled); s.number("coefficient", x.ground_effect.coefficient, 0, 10); }
     }
     return c;
 }
@@ -306,6 +313,11 @@ std::string to_yaml(const PhysicsConfig& c) {
       << YAML::Value << x.floor_recirculation.enabled << YAML::Key << "coefficient" << YAML::Value
       << x.floor_recirculation.coefficient << YAML::Key << "length_m" << YAML::Value
       << x.floor_recirculation.length_m << YAML::EndMap;
+    o << YAML::Key << "body_drag" << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value
+      << x.body_drag.enabled << YAML::Key << "cda_h_m2" << YAML::Value << x.body_drag.cda_h_m2 << YAML::Key
+      << "cda_v_m2" << YAML::Value << x.body_drag.cda_v_m2 << YAML::EndMap;
+    o << YAML::Key << "ground_effect" << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value
+      << x.ground_effect.enabled << YAML::Key << "coefficient" << YAML::Value << x.ground_effect.coefficient << YAML::EndMap;
     o << YAML::EndMap << YAML::EndMap;
     return std::string(o.c_str()) + "\n";
 }

@@ -80,6 +80,8 @@ struct Effects {
     struct { bool enabled = false; int from = 2; int to = 0; double coefficient = 0.0; } cell_crosstalk;  // axes 0-5
     struct { bool enabled = false; double contraction = 0.8; double onset = 0.6; double full = 1.0; } jet_merging;
     struct { bool enabled = false; double coefficient = 0.02; double length_m = 1.0; } floor_recirculation;
+    struct { bool enabled = false; double cda_h_m2 = 0.0; double cda_v_m2 = 0.0; } body_drag;  // a flying sufferer's own drag
+    struct { bool enabled = false; double coefficient = 0.0; } ground_effect;  // extra lift near the floor
 };
 
 struct PhysicsConfig {

@@ -7,6 +7,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
+#include "physics/bodies.hpp"
 #include "physics/stand.hpp"
 #include "physics/vehicle.hpp"
 
@@ -54,11 +55,12 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     f.meta.stand_height_m = c.stand.height_m;
     f.meta.extra_json = R"({"generator":"dw-sim fly"})";
     const std::uint16_t sufferer_body = f.body_index("sufferer");
+    f.meta.vehicles["sufferer"] = to_info(c.sufferer.vehicle);
     std::vector<std::uint16_t> bodies;
     for (std::size_t j = 0; j < k; ++j) {
         const std::string name = "v" + std::to_string(j + 1);
         f.meta.neighbours.push_back(name);
-        f.meta.vehicles[name] = {c.neighbour.mass_kg, c.neighbour.rotors, c.neighbour.prop_radius_m, c.neighbour.motor_distance_m};
+        f.meta.vehicles[name] = to_info(c.neighbour);
         bodies.push_back(f.body_index(name));
     }
     const Vec3 sufferer(0, 0, -c.stand.height_m);

@@ -80,8 +80,14 @@ TEST(ExplainEffects, NamesAreTheContractsAndUnknownOnesAreRefused) {
     std::vector<std::string> names;
     for (const auto& e : all_effects()) names.push_back(e.name);
     EXPECT_EQ(names, (std::vector<std::string>{"clock_offset", "sensor_lag", "wake_transport", "position_offset", "force_scale",
-                                               "cell_crosstalk", "jet_merging", "floor_recirculation"}));
+                                               "cell_crosstalk", "jet_merging", "floor_recirculation", "body_drag", "ground_effect"}));
     EXPECT_THROW(effects_named({"clock_offset", "gremlins"}), dw::InputError);
+    // The refusal lists every known name (from the one list, not a copy of it).
+    try {
+        effects_named({"gremlins"});
+    } catch (const dw::InputError& e) {
+        for (const auto& n : names) EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << n;
+    }
 }
 
 TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
