@@ -339,7 +339,7 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
     c.total_ratio = tb > 0 ? ta / tb : 1;
     c.delta_bic = dbic;
     c.accepted = c.t >= o.min_t && c.gain >= o.min_gain && ta < tb && dbic < -10;
-    c.note = log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10, " (signed ranks over 1 s blocks of held-out legs), ", std::round(c.gain * 1000) / 10,
+    c.note = log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10, " (signed ranks over 1 s pieces of the held-out blocks), ", std::round(c.gain * 1000) / 10,
                       " % of its error removed; ΔBIC ", std::round(dbic),
                       c.accepted ? " — accepted" : " — not accepted");
 }

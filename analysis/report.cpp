@@ -10,6 +10,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "plot/chart.hpp"
 #include "plot/field_map.hpp"
 
 namespace dw::analysis {
@@ -64,7 +65,7 @@ std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
     const auto& v = c.values;
     const std::string err = log::cat("Held-out RMSE on ", kAxes[c.best_axis], ": ", fmt(c.heldout_before[static_cast<std::size_t>(c.best_axis)]),
                                      " → ", fmt(c.heldout_after[static_cast<std::size_t>(c.best_axis)]), " (", fmt(c.gain * 100, 0),
-                                     " % of its squared error removed on legs the fit never saw).");
+                                     " % of its squared error removed on blocks the fit never saw).");
     const auto& n = c.effect.name;
     if (n == "clock_offset")
         return log::cat("**clock_offset** — the stand's clock is ", fmt(std::abs(v[0]), 3), " s ", v[0] >= 0 ? "behind" : "ahead of",
@@ -97,6 +98,11 @@ std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
     if (n == "floor_recirculation")
         return log::cat("**floor_recirculation** — jets hitting the floor come back as a bias that grows with the jets impinging "
                         "(coefficient ", fmt(v[0], 3), "). ", err);
+    if (n == "body_drag")
+        return log::cat("**body_drag** — the flying sufferer's own drag against its motion through still air: C_d A = ", fmt(v[0], 4),
+                        " m² horizontally, ", fmt(v[1], 4), " m² vertically (f = −½ ρ C_d A |v| v). The simulation had only the neighbours' air. ", err);
+    if (n == "ground_effect")
+        return log::cat("**ground_effect** — extra lift near the floor: ", fmt(v[0], 2), " × the hover thrust × (R / 4h)². ", err);
     (void)r;
     return n;
 }
@@ -118,6 +124,92 @@ plot::Field binned(const std::vector<double>& value, const std::vector<SampleInf
     f.v.resize(625);
     for (std::size_t k = 0; k < 625; ++k) f.v[k] = n[k] > 0 ? sum[k] / n[k] : NAN;
     return f;
+}
+
+// What the figures are drawn from: the replay, where each sample is, the simulation before and
+// after the fit, the axis shown, and the output folder.
+struct Figures {
+    const Replay& replay;
+    std::vector<SampleInfo> info;
+    std::vector<Wrench6> before, after;
+    std::size_t axis;
+    std::string dir;
+    std::string unit() const { return log::cat(kAxes[axis], axis < 3 ? " [N]" : " [N m]"); }
+    std::string path(const char* name) const { return (fs::path(dir) / name).string(); }
+};
+
+// Over a stand: residual maps over the neighbours' centre by band and leg direction, and recorded
+// vs simulated maps at the strongest region's band. Returns the Markdown that shows them.
+std::string stand_figures(const Figures& g, const ExplainResult& r) {
+    const std::size_t n = g.info.size(), axis = g.axis;
+    std::vector<double> rb(n), ra(n), obs(n), sb(n), sa(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        obs[i] = g.replay.measured()[i][axis];
+        sb[i] = g.before[i][axis];
+        sa[i] = g.after[i][axis];
+        rb[i] = obs[i] - sb[i];
+        ra[i] = obs[i] - sa[i];
+    }
+    const std::string unit = g.unit();
+    std::vector<plot::Outline> outline{{0, 0, 0.19, true}};
+    for (int which = 0; which < 2; ++which) {
+        std::vector<plot::Field> fields;
+        for (int way : {1, -1})
+            for (const auto& band : kBands)
+                fields.push_back(binned(which ? ra : rb, g.info, band, way, log::cat(band.name, way > 0 ? ", +E legs" : ", -E legs")));
+        plot::render_fields(fields, log::cat("residual (recorded - simulated) ", which ? "AFTER" : "BEFORE", " the fit: ", unit,
+                                             " over the neighbours' centre, by altitude band and leg direction"),
+                            unit, outline, g.path(which ? "residuals_after.png" : "residuals_before.png"));
+    }
+    // The band of the strongest region (else the top band).
+    const Band& b0 = kBands[static_cast<std::size_t>(r.regions.empty() ? 2 : band_index(r.regions.front().altitude_lo))];
+    for (int way : {1, -1}) {
+        std::vector<plot::Field> fields{binned(obs, g.info, b0, way, "recorded"), binned(sb, g.info, b0, way, "simulated before"),
+                                        binned(sa, g.info, b0, way, "simulated after")};
+        plot::render_fields(fields, log::cat(unit, " at ", b0.name, ", ", way > 0 ? "+E" : "-E", " legs: recorded vs simulated, before and after the fit"),
+                            unit, outline, g.path(way > 0 ? "maps_east.png" : "maps_west.png"));
+    }
+    return log::cat("Residuals before and after (", unit, "):\n\n![before](residuals_before.png)\n\n![after](residuals_after.png)\n\n",
+                    "Recorded vs simulated at ", b0.name, ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n");
+}
+
+// A flying sufferer: the residual against the nearest neighbour's position relative to it
+// (horizontal offset x height above), before and after; and recorded vs simulated along the
+// flight with the cross-validation blocks marked.
+std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
+    constexpr double kCell = 0.05;
+    const std::size_t axis = g.axis;
+    std::vector<std::array<double, 3>> before, after;
+    double off = kCell, lo = 0, hi = kCell;
+    for (std::size_t i = 0; i < g.info.size(); ++i) {
+        const auto& s = g.info[i];
+        if (!std::isfinite(s.offset)) continue;
+        const double m = g.replay.measured()[i][axis];
+        before.push_back({s.offset, s.above, m - g.before[i][axis]});
+        after.push_back({s.offset, s.above, m - g.after[i][axis]});
+        off = std::max(off, s.offset), lo = std::min(lo, s.above), hi = std::max(hi, s.above);
+    }
+    off = std::ceil(off / kCell) * kCell, lo = std::floor(lo / kCell) * kCell, hi = std::ceil(hi / kCell) * kCell;
+    const int nx = std::max(1, static_cast<int>(std::lround(off / kCell))), ny = std::max(1, static_cast<int>(std::lround((hi - lo) / kCell)));
+    const std::string unit = g.unit();
+    plot::render_heats({plot::bin_heat("before the fit", before, 0, off, lo, hi, nx, ny), plot::bin_heat("after the fit", after, 0, off, lo, hi, nx, ny)},
+                       log::cat("residual (recorded - simulated) ", unit, " by where the nearest neighbour is"), "horizontal offset [m]",
+                       "height above the sufferer [m]", unit, g.path("residual_vs_position.png"));
+    plot::Chart c{log::cat(unit, " of the sufferer: recorded vs simulated; grey lines: cross-validation blocks (", flight::to_string(blocks.kind), ")"),
+                  "time [s]", unit, {}, {}};
+    plot::Series rec{"recorded", g.replay.stamps(), {}, {40, 40, 40}}, sb{"simulated before the fit", g.replay.stamps(), {}, {200, 120, 30}},
+        sa{"simulated after the fit", g.replay.stamps(), {}, {30, 30, 210}};
+    for (std::size_t i = 0; i < g.info.size(); ++i) {
+        rec.y.push_back(g.replay.measured()[i][axis]);
+        sb.y.push_back(g.before[i][axis]);
+        sa.y.push_back(g.after[i][axis]);
+    }
+    c.series = {rec, sb, sa};
+    for (const auto& b : blocks.blocks) c.marks.push_back(b.t_start);
+    plot::render_chart(c, g.path("encounters.png"));
+    return log::cat("Residual (", unit, ") against where the nearest neighbour is, before and after the fit:\n\n",
+                    "![residual vs relative position](residual_vs_position.png)\n\n",
+                    "Recorded vs simulated through the flight, each encounter in its block:\n\n![encounters](encounters.png)\n\n");
 }
 
 }  // namespace
@@ -148,51 +240,26 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     j["unexplained"] = r.unexplained;
     j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)}, {"heldout_rmse_after", axes_json(r.heldout_after)}};
     j["physics_out"] = "physics.yaml";
+    j["cross_validation"] = {{"blocks", flight::to_string(r.blocks)}, {"count", r.legs}, {"folds", o.folds}, {"samples", r.samples}};
     write_file((fs::path(dir) / "report.json").string(), j.dump(2) + "\n");
     write_file((fs::path(dir) / "physics.yaml").string(), physics::to_yaml(r.fitted));
 
-    // Figures: residual maps before/after (the strongest region's axis), observed vs simulated.
     const Replay replay(f, o.physics);
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
-    const auto before = replay.recorded(o.physics), after = replay.recorded(r.fitted);
-    std::size_t axis = 2;
-    if (!r.regions.empty()) axis = static_cast<std::size_t>(physics::axis_index(r.regions.front().axis));
-    const auto info = describe(replay, blocks);
-    const std::size_t n = info.size();
-    std::vector<double> rb(n), ra(n), obs(n), sb(n), sa(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        obs[i] = replay.measured()[i][axis];
-        sb[i] = before[i][axis];
-        sa[i] = after[i][axis];
-        rb[i] = obs[i] - sb[i];
-        ra[i] = obs[i] - sa[i];
-    }
-    const std::string unit = log::cat(kAxes[axis], axis < 3 ? " [N]" : " [N m]");
-    std::vector<plot::Outline> outline{{0, 0, 0.19, true}};
-    for (int which = 0; which < 2; ++which) {
-        std::vector<plot::Field> fields;
-        for (int way : {1, -1})
-            for (const auto& band : kBands)
-                fields.push_back(binned(which ? ra : rb, info, band, way, log::cat(band.name, way > 0 ? ", +E legs" : ", -E legs")));
-        plot::render_fields(fields, log::cat("residual (recorded - simulated) ", which ? "AFTER" : "BEFORE", " the fit: ", unit,
-                                             " over the neighbours' centre, by altitude band and leg direction"),
-                            unit, outline, (fs::path(dir) / (which ? "residuals_after.png" : "residuals_before.png")).string());
-    }
-    // The band of the strongest region (else the top band).
-    const Band& b0 = kBands[static_cast<std::size_t>(r.regions.empty() ? 2 : band_index(r.regions.front().altitude_lo))];
-    for (int way : {1, -1}) {
-        std::vector<plot::Field> fields{binned(obs, info, b0, way, "recorded"), binned(sb, info, b0, way, "simulated before"),
-                                        binned(sa, info, b0, way, "simulated after")};
-        plot::render_fields(fields, log::cat(unit, " at ", b0.name, ", ", way > 0 ? "+E" : "-E", " legs: recorded vs simulated, before and after the fit"),
-                            unit, outline, (fs::path(dir) / (way > 0 ? "maps_east.png" : "maps_west.png")).string());
-    }
+    const Figures figs{replay, describe(replay, blocks), replay.recorded(o.physics), replay.recorded(r.fitted),
+                       r.regions.empty() ? std::size_t{2} : static_cast<std::size_t>(physics::axis_index(r.regions.front().axis)), dir};
+    const std::string figures_md = replay.flying() ? flying_figures(figs, blocks) : stand_figures(figs, r);
 
     // report.md
     std::ostringstream md;
     md << "# Mismatch report\n\n";
-    md << "Flight: " << f.meta.formation << ", " << f.meta.neighbours.size() << " neighbour(s), " << r.legs << " legs, " << r.samples
-       << " wrench samples on legs. Simulated with the given physics along the recorded poses; residual = recorded − simulated. "
-       << "Analysis took " << fmt(r.seconds, 1) << " s.\n\n";
+    const char* kind = flight::to_string(r.blocks);
+    md << "Flight: " << f.meta.formation << ", " << f.meta.neighbours.size() << " neighbour(s), "
+       << (replay.flying() ? log::cat("a flying sufferer (wrench: ", flight::to_string(f.meta.wrench_source), ")") : std::string("on a load stand"))
+       << ", " << r.legs << " cross-validation blocks by " << kind << ", " << r.samples
+       << " wrench samples in them. Simulated with the given physics along the recorded poses, each vehicle with its own parameters "
+          "(meta.json); residual = recorded − simulated"
+       << (f.meta.moments_measured ? "" : "; the moments are not measured and take no part") << ". Analysis took " << fmt(r.seconds, 1) << " s.\n\n";
     if (!r.detected) {
         md << "**No mismatch**: the recording matches the simulation within its noise. No effect is claimed.\n\n";
     } else if (r.accepted.empty()) {
@@ -203,7 +270,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
         for (const auto& c : r.accepted) md << paragraph(c, r) << "\n\n";
     }
-    md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within 1.5 m): ";
+    md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes << " of its own motor distances horizontally): ";
     for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
     if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";
     else {
@@ -218,16 +285,15 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         md << "| " << (s.direction > 0 ? "+E" : "−E") << " | " << s.band << " | " << fmt(s.separation_m, 2) << " | " << s.samples << " | "
            << fmt(s.shift_s, 3) << " |\n";
     md << "\n## Candidates\n\nEach fitted with Ceres (Huber loss) on the whole flight, then — if ΔBIC < −10 — in "
-       << o.folds << "-fold blocked cross-validation by leg (folds: leg % " << o.folds
-       << "). Accepted when the held-out error falls on some axis — Wilcoxon signed-rank z over 1 s blocks of the held-out legs ≥ " << o.min_t << ", by ≥ "
+       << o.folds << "-fold blocked cross-validation by " << kind << " (folds: block % " << o.folds
+       << "). Accepted when the held-out error falls on some axis — Wilcoxon signed-rank z over 1 s pieces of the held-out blocks ≥ " << o.min_t << ", by ≥ "
        << o.min_gain * 100 << " %, and the total held-out error falls. Intervals: the wider of the leg-fold jackknife and the "
           "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | verdict |\n|---|---|---|---|---|\n";
     for (const auto& c : r.candidates)
         md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fmt(c.delta_bic, 1) << " | " << c.note << " |\n";
     md << "\n## Held-out error per axis\n\n| axis | before | after |\n|---|---|---|\n";
     for (std::size_t a = 0; a < 6; ++a) md << "| " << kAxes[a] << " | " << fmt(r.heldout_before[a], 4) << " | " << fmt(r.heldout_after[a], 4) << " |\n";
-    md << "\n## Figures\n\nResiduals before and after (" << unit << "):\n\n![before](residuals_before.png)\n\n![after](residuals_after.png)\n\n"
-       << "Recorded vs simulated at " << b0.name << ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n"
+    md << "\n## Figures\n\n" << figures_md
        << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects on).\n";
     write_file((fs::path(dir) / "report.md").string(), md.str());
 }
