@@ -6,6 +6,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "physics/bodies.hpp"
 #include "recorder/tools.hpp"
 
 namespace dw::predictor {
@@ -48,6 +49,14 @@ Dataset Dataset::with_k(int k_min, int k_max) const {
     return d;
 }
 
+Dataset Dataset::from_two_vehicle_flights() const {
+    Dataset d;
+    d.sources = sources;
+    for (const auto& s : samples)
+        if (sources[static_cast<std::size_t>(s.source)].neighbours.size() == 1) d.samples.push_back(s);
+    return d;
+}
+
 Split split_by_leg(const Dataset& d, int period, int test_phase, int val_phase) {
     Split s;
     s.train = d.legs_where([&](int leg) { return leg % period != test_phase && leg % period != val_phase; });
@@ -70,12 +79,16 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
     if (ns.size() > static_cast<std::size_t>(kMaxNeighbours))
         throw InputError(log::cat(name, "/meta.json: neighbours: ", ns.size(), " (the models take at most ", kMaxNeighbours, ")"));
     const auto& st = trs[static_cast<std::size_t>(sufferer)];
-    const auto legs = f.legs ? *f.legs : flight::find_legs(f);
+    const auto blocks = flight::find_blocks(f, kSplitPeriod, physics::encounter_radii(f.meta, o.physics));
+    const auto& legs = blocks.blocks;
 
     Dataset d;
     std::string formation = f.meta.formation;
     if (ns.size() > 1 || formation == "single") formation += log::cat(" K=", ns.size());
-    d.sources.push_back({name, formation});
+    Source src{name, formation, physics::vehicle_of(f.meta, f.meta.sufferer, o.physics.sufferer.vehicle),
+               physics::neighbours_of(f.meta, o.physics), !f.meta.stand_height_m.has_value(), {}, blocks.kind};
+    if (!f.meta.moments_measured) src.measured = {true, true, true, false, false, false};
+    d.sources.push_back(src);
     std::size_t li = 0;
     for (const auto& w : f.wrench) {
         if (w.t < st.t.front() || w.t > st.t.back()) continue;
@@ -84,17 +97,24 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
         s.y = w.w;
         const auto ps = st.position_at(w.t);
         const auto vs = st.velocity_at(w.t);
-        for (const auto* tr : ns) {
+        s.height = -ps[2];
+        for (std::size_t j = 0; j < ns.size(); ++j) {
+            const auto* tr = ns[j];
             if (tr->t.empty() || w.t < tr->t.front() || w.t > tr->t.back()) continue;
             const auto p = tr->position_at(w.t);
             const auto v = tr->velocity_at(w.t);
             RelState r{p[0] - ps[0], p[1] - ps[1], p[2] - ps[2], v[0] - vs[0], v[1] - vs[1], v[2] - vs[2]};
             if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > o.max_distance_m) continue;
+            s.who[static_cast<std::size_t>(s.k)] = static_cast<std::uint8_t>(j);
             s.x[static_cast<std::size_t>(s.k++)] = r;
         }
         while (li < legs.size() && legs[li].t_end < w.t) ++li;
         if (li < legs.size() && w.t >= legs[li].t_start && w.t <= legs[li].t_end) {
             s.leg = legs[li].leg;
+            if (blocks.kind != flight::BlockKind::legs) {
+                d.samples.push_back(s);
+                continue;
+            }
             double ve = 0;
             for (int j = 0; j < s.k; ++j) ve += s.x[static_cast<std::size_t>(j)][4];
             s.leg_direction = ve > 0 ? 1 : (ve < 0 ? -1 : 0);

@@ -2,14 +2,18 @@
 // Datasets for the force models, from flight folders (downwash-flight/1) or MCAP recordings.
 // Each sample is one wrench row: the sufferer's wrench (the label) and every neighbour's state
 // relative to the sufferer at the wrench's time — x_j - x_i, position and velocity, NED — taken
-// from the 180 Hz poses by interpolation. Samples carry their leg so splits are by leg (80 Hz
-// samples are autocorrelated; random splits leak), never by random sample.
+// from the 180 Hz poses by interpolation. Samples carry their block — a measurement leg, or in a
+// flight without legs an encounter (each pass of a neighbour near the sufferer) or a stretch of
+// time (flight::find_blocks) — so splits are by block (samples are autocorrelated; random splits
+// leak), never by random sample.
 #include <array>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "flight/flight.hpp"
+#include "physics/config.hpp"
 
 namespace dw::predictor {
 
@@ -24,9 +28,11 @@ struct Sample {
     int k = 0;                                        // neighbours present
     std::array<RelState, kMaxNeighbours> x{};         // the first k are valid
     Wrench6 y{};                                      // recorded wrench
-    int leg = -1;                                     // -1: not on a measurement leg
-    int leg_direction = 0;                            // +1 towards +E, -1 towards -E, 0 unknown
+    int leg = -1;                                     // the block (leg, encounter, time); -1: none
+    int leg_direction = 0;                            // +1 towards +E, -1 towards -E, 0 unknown (or not on legs)
     int source = 0;                                   // index into Dataset::sources
+    std::array<std::uint8_t, kMaxNeighbours> who{};   // which of the source's neighbours x[j] is
+    double height = 0;                                // the sufferer above the floor [m]
     std::span<const RelState> neighbours() const { return {x.data(), static_cast<std::size_t>(k)}; }
     // Where the formation is relative to the sufferer: N and E of the neighbours' centroid, and
     // the height of the lowest neighbour above the sufferer (the formation's reference altitude:
@@ -37,6 +43,12 @@ struct Sample {
 struct Source {
     std::string name;        // the flight folder or recording
     std::string formation;   // meta.json formation (leader_follower3 when leader_follower has K = 3)
+    // Each body's parameters as the flight gives them (meta.json), for the physics per body.
+    physics::VehicleParams sufferer;
+    std::vector<physics::VehicleParams> neighbours;  // meta.json's neighbours, in order
+    bool flying = false;                             // no load stand: the sufferer's height varies
+    std::array<bool, 6> measured{true, true, true, true, true, true};  // columns carrying a measurement
+    flight::BlockKind blocks = flight::BlockKind::legs;
 };
 
 struct Dataset {
@@ -53,16 +65,20 @@ struct Dataset {
     }
     Dataset with_formation(const std::string& formation) const;
     Dataset with_k(int k_min, int k_max) const;
+    // Samples of flights with exactly one neighbour (the naive linear model's training data).
+    Dataset from_two_vehicle_flights() const;
 };
 
 // Blocked split by leg: leg % period == test_phase → test, == val_phase → validation, else train.
 struct Split {
     Dataset train, validation, test;
 };
-Split split_by_leg(const Dataset& d, int period = 5, int test_phase = 0, int val_phase = 1);
+inline constexpr int kSplitPeriod = 5;  // block % 5 == 0: held out for testing, == 1: validation
+Split split_by_leg(const Dataset& d, int period = kSplitPeriod, int test_phase = 0, int val_phase = 1);
 
 struct DatasetOptions {
     double max_distance_m = 3.0;  // neighbours farther than this from the sufferer are left out
+    physics::PhysicsConfig physics;  // a body meta.json does not describe takes these parameters
 };
 
 // Throws dw::InputError naming the file for a malformed flight folder.

@@ -6,6 +6,7 @@
 // averaged per cell (the contour maps people read), and |mean prediction - mean truth| is
 // integrated over the occupied cells and divided by their area — an arena-mean error in N or N·m.
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,15 @@ struct ArenaOptions {
 
 using AxisValues = std::array<double, 6>;
 
+// Over the samples whose source measures the axis (NaN where none does).
 AxisValues rmse(const ForceModel& model, const Dataset& data);
+// Peak-force error per block (encounter or leg): |max predicted - max recorded| of one axis
+// (default f_d, the downwash's push) in each block with a neighbour present, averaged.
+struct PeakError {
+    double mean_abs = NAN;
+    std::size_t blocks = 0;
+};
+PeakError peak_error(const ForceModel& model, const Dataset& data, int axis = 2);
 // NaN on every axis when no sample falls in the band.
 AxisValues arena_error(const ForceModel& model, const Dataset& data, const ArenaOptions& o = {});
 
@@ -33,6 +42,8 @@ struct ComparisonRow {
     std::size_t samples = 0;
     AxisValues arena{};   // Table 1 metric
     AxisValues rmse{};
+    double peak_error = NAN;  // f_d, mean over blocks
+    std::size_t blocks = 0;
 };
 
 // Every model on every formation of `test` (held-out legs).
@@ -43,5 +54,8 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
 // and as CSV (one row per formation, model, metric).
 std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptions& o);
 std::string to_csv(const std::vector<ComparisonRow>& rows, bool header = true);
+
+// Throws dw::InputError saying why when `part` (of `all`) holds no sample: never an empty table.
+void require_samples(const Dataset& all, const Dataset& part, const std::string& what);
 
 }  // namespace dw::predictor

@@ -15,6 +15,7 @@
 #include "predictor/evaluate.hpp"
 #include "predictor/maps.hpp"
 #include "predictor/node.hpp"
+#include "predictor/real.hpp"
 #include "predictor/study.hpp"
 #include "predictor/train.hpp"
 #include "physics/trajectory.hpp"
@@ -87,6 +88,16 @@ int run(int argc, char** argv) {
     cmp->add_option("--out", out_dir, "folder for table.md and table.csv")->required();
     cmp->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
 
+    RealOptions ro;
+    std::string real_physics;
+    auto* real = app.add_subcommand("real", "recorded flights without legs (e.g. dw-import's): train every model, compare with the physics "
+                                            "on held-out encounters, draw f_d by relative position");
+    real->add_option("--data", ro.data, "flight folders or .mcap recordings")->required();
+    real->add_option("--physics", real_physics, "physics configuration (e.g. config/physics.crazyflie.yaml); vehicles come from each flight");
+    real->add_option("--out", ro.out_dir, "output folder (models, table.md, table.csv, map_f_d.png)")->required();
+    real->add_option("--epochs", ro.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+    real->add_option("--seed", ro.seed, "seed of the training")->check(dw::cli::in(dw::kSeedRange));
+
     MapRequest mr;
     std::string axis = "f_d", png = "map.png", line;
     auto* map = app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
@@ -106,6 +117,15 @@ int run(int argc, char** argv) {
 
     if (study->parsed()) dw::require_output_dir(so.out_dir, "--out");
     if (cmp->parsed()) dw::require_output_dir(out_dir, "--out");
+    if (real->parsed()) dw::require_output_dir(ro.out_dir, "--out");
+    if (real->parsed()) {
+        ro.physics = physics_from(real_physics);
+        ro.progress = [](const std::string& l) { std::cerr << "dw-predictor: " << l << "\n"; };
+        ro.stop = dw::Shutdown::instance().token();
+        const auto r = run_real(ro);
+        std::cout << dw::read_file(r.markdown_path, "table") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.map_path << "\n";
+        return 0;
+    }
     if (study->parsed()) {
         so.physics = physics_from(physics_path);
         if (jet_merging) so.physics.effects.jet_merging.enabled = true;
@@ -121,8 +141,11 @@ int run(int argc, char** argv) {
         dw::require_writable_path(model_out, "--out");
         to.stop = dw::Shutdown::instance().token();
         Dataset d = load_all(data);
+        if (to.kind == "naive_linear") d = d.from_two_vehicle_flights();  // single-neighbour data only
         const Split s = split_by_leg(d);
-        to.split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out, else training";
+        require_samples(d, s.train, "training");
+        require_samples(d, s.validation, "validation");
+        to.split = "by block (leg or encounter): block % 5 == 1 validation, block % 5 == 0 held out, else training";
         to.progress = [](int epoch, double tl, double vl) {
             std::fprintf(stderr, "\rdw-predictor: epoch %4d  training %.4f  validation %.4f", epoch, tl, vl);
         };
@@ -135,7 +158,9 @@ int run(int argc, char** argv) {
     }
     if (cmp->parsed()) {
         const auto ms = load_models(models);
-        const Dataset test = split_by_leg(load_all(data)).test;
+        const Dataset all = load_all(data);
+        const Dataset test = split_by_leg(all).test;
+        require_samples(all, test, "held-out");
         const auto rows = compare(raw(ms), test, arena);
         dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + to_markdown(rows, arena));
         dw::write_file(out_dir + "/table.csv", to_csv(rows));

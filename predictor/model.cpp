@@ -162,7 +162,7 @@ LearntModel LearntModel::load(const std::string& path) {
 }
 
 PhysicsModel::PhysicsModel(const physics::PhysicsConfig& config, std::string name)
-    : name_(std::move(name)), model_(std::make_unique<physics::WrenchModel>(config)), stand_height_(config.stand.height_m) {}
+    : name_(std::move(name)), config_(config), model_(std::make_unique<physics::WrenchModel>(config)), stand_height_(config.stand.height_m) {}
 PhysicsModel::~PhysicsModel() = default;
 
 Wrench6 PhysicsModel::predict(std::span<const RelState> neighbours) const {
@@ -172,6 +172,33 @@ Wrench6 PhysicsModel::predict(std::span<const RelState> neighbours) const {
     for (const auto& x : neighbours)
         ps.push_back(model_->producer(sufferer + physics::Vec3(x[0], x[1], x[2]), physics::Vec3(x[3], x[4], x[5])));
     const physics::Wrench w = model_->evaluate(sufferer, ps);
+    return {w[0], w[1], w[2], w[3], w[4], w[5]};
+}
+
+const physics::WrenchModel& PhysicsModel::model_for(const physics::VehicleParams& v) const {
+    const std::lock_guard lock(mutex_);
+    auto same = [&](const physics::VehicleParams& a) {
+        return a.mass_kg == v.mass_kg && a.rotors == v.rotors && a.prop_radius_m == v.prop_radius_m && a.motor_distance_m == v.motor_distance_m;
+    };
+    for (const auto& [params, model] : by_sufferer_)
+        if (same(params)) return *model;
+    physics::PhysicsConfig c = config_;
+    c.sufferer.vehicle = v;
+    by_sufferer_.emplace_back(v, std::make_unique<physics::WrenchModel>(c));
+    return *by_sufferer_.back().second;
+}
+
+Wrench6 PhysicsModel::predict(const Sample& s, const Source& source) const {
+    const physics::WrenchModel& model = model_for(source.sufferer);
+    const physics::Vec3 sufferer(0, 0, -(source.flying ? s.height : stand_height_));
+    std::vector<physics::Producer> ps;
+    for (std::size_t j = 0; j < static_cast<std::size_t>(s.k); ++j) {
+        const auto& x = s.x[j];
+        ps.push_back(model.producer(sufferer + physics::Vec3(x[0], x[1], x[2]), physics::Vec3(x[3], x[4], x[5])));
+        if (s.who[j] < source.neighbours.size()) ps.back().jet = physics::Jet::make(source.neighbours[s.who[j]], config_);
+    }
+    const physics::Wrench w = model.evaluate(sufferer, ps);
+    if (!w.allFinite()) throw InputError(log::cat(source.name, ": the physics gave a non-finite wrench at t = ", s.t, " s"));
     return {w[0], w[1], w[2], w[3], w[4], w[5]};
 }
 

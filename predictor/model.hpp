@@ -9,6 +9,7 @@
 // normalisation and its metadata.
 #include <Eigen/Core>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <string>
 #include <vector>
@@ -25,6 +26,12 @@ public:
     virtual ~ForceModel() = default;
     virtual const std::string& name() const = 0;
     virtual Wrench6 predict(std::span<const RelState> neighbours) const = 0;
+    // A recorded sample of `source`: models that know the bodies (the physics) use each vehicle's
+    // parameters and the sufferer's height; the learnt ones see only the relative states.
+    virtual Wrench6 predict(const Sample& s, const Source& source) const {
+        (void)source;
+        return predict(s.neighbours());
+    }
 };
 
 // A dense layer: out = act(W in + b). Activation "silu" or "linear".
@@ -66,11 +73,16 @@ public:
     ~PhysicsModel() override;
     const std::string& name() const override { return name_; }
     Wrench6 predict(std::span<const RelState> neighbours) const override;
+    Wrench6 predict(const Sample& s, const Source& source) const override;
 
 private:
+    const physics::WrenchModel& model_for(const physics::VehicleParams& sufferer) const;
     std::string name_;
+    physics::PhysicsConfig config_;
     std::unique_ptr<physics::WrenchModel> model_;
     double stand_height_ = 1.4;
+    mutable std::mutex mutex_;  // guards the per-sufferer models
+    mutable std::vector<std::pair<physics::VehicleParams, std::unique_ptr<physics::WrenchModel>>> by_sufferer_;
 };
 
 // Loads "physics" (needs the physics config) or a saved learnt model.

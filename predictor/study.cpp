@@ -26,6 +26,27 @@ double table_value(const std::vector<ComparisonRow>& rows, const std::string& fo
     return NAN;
 }
 
+std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Dataset& tr, const Dataset& va, const TrainPlan& plan,
+                                            const std::string& path) {
+    auto say = [&](const std::string& line) {
+        if (plan.progress) plan.progress(line);
+    };
+    TrainOptions t;
+    t.kind = kind;
+    t.seed = plan.seed;
+    t.max_epochs = plan.max_epochs;
+    t.stop = plan.stop;
+    t.split = plan.split;
+    t.progress = [&](int epoch, double tl, double vl) {
+        if (epoch % 10 == 0) say(log::cat("  ", kind, " epoch ", epoch, ": training ", tl, ", validation ", vl));
+    };
+    say(log::cat("training ", kind, " on ", tr.samples.size(), " samples"));
+    auto r = train_model(tr, va, t);
+    say(log::cat("  ", kind, ": ", r.epochs, " epochs (best ", r.best_epoch, "), ", r.seconds, " s"));
+    r.model.save(path);
+    return std::make_unique<LearntModel>(std::move(r.model));
+}
+
 namespace {
 
 void write_text(const fs::path& p, const std::string& text) { write_file(p.string(), text); }
@@ -69,23 +90,12 @@ StudyResult run_study(const StudyOptions& o) {
                  split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
 
     // 2. Train.
+    const TrainPlan plan{o.seed, o.max_epochs, "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
+                         o.progress, o.stop};
     auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file) {
-        TrainOptions t;
-        t.kind = kind;
-        t.seed = o.seed;
-        t.max_epochs = o.max_epochs;
-        t.stop = o.stop;
-        t.split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training";
-        t.progress = [&](int epoch, double tl, double vl) {
-            if (epoch % 10 == 0) say(log::cat("  ", kind, " epoch ", epoch, ": training ", tl, ", validation ", vl));
-        };
-        say(log::cat("training ", kind, " on ", tr.samples.size(), " samples"));
-        auto r = train_model(tr, va, t);
-        say(log::cat("  ", kind, ": ", r.epochs, " epochs (best ", r.best_epoch, "), ", r.seconds, " s"));
-        r.model.save((out / "models" / file).string());
-        return std::make_unique<LearntModel>(std::move(r.model));
+        return train_and_save(kind, tr, va, plan, (out / "models" / file).string());
     };
-    auto singles = [](const Dataset& d) { return d.with_k(1, 1).with_formation("single K=1"); };
+    auto singles = [](const Dataset& d) { return d.from_two_vehicle_flights().with_k(1, 1); };
     auto naive = train("naive_linear", singles(split.train), singles(split.validation), "naive_linear.json");
     auto linear = train("learnt_linear", split.train, split.validation, "learnt_linear.json");
     auto deep = train("deep_sets", split.train, split.validation, "deep_sets.json");

@@ -5,6 +5,7 @@
 // held-out legs (the Table 1 metric and RMSE), run the generalisation tests and draw the maps.
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <stop_token>
 #include <string>
 #include <vector>
@@ -36,6 +37,17 @@ struct StudyResult {
 };
 
 StudyResult run_study(const StudyOptions& o);
+
+// Training one learnt model the way the study and the real-flight comparison do, saved to path.
+struct TrainPlan {
+    std::uint64_t seed = 1;
+    int max_epochs = 150;
+    std::string split;                                 // how the blocks were split (the model's metadata)
+    std::function<void(const std::string&)> progress;  // one line per step
+    std::stop_token stop;
+};
+std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Dataset& train, const Dataset& validation,
+                                            const TrainPlan& plan, const std::string& path);
 
 // The arena-metric value of `model` on `formation` and `axis` in a table (NaN if absent).
 double table_value(const std::vector<ComparisonRow>& rows, const std::string& formation, const std::string& model,

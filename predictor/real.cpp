@@ -1,0 +1,129 @@
+#include "predictor/real.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+
+#include "core/errors.hpp"
+#include "core/files.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+#include "physics/config.hpp"
+#include "plot/chart.hpp"
+#include "predictor/study.hpp"
+
+namespace dw::predictor {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kMapCell_m = 0.05;
+
+// Where the horizontally nearest neighbour is: horizontal offset and height above the sufferer.
+std::array<double, 2> nearest(const Sample& s) {
+    double best = INFINITY, above = 0;
+    for (const auto& x : s.neighbours()) {
+        const double h = std::hypot(x[0], x[1]);
+        if (h < best) best = h, above = -x[2];
+    }
+    return {best, above};
+}
+
+// f_d on the held-out samples against the nearest neighbour's relative position: recorded, then
+// each model, on one colour scale.
+void draw_maps(const std::vector<const ForceModel*>& models, const Dataset& test, const std::string& png) {
+    double off = kMapCell_m, lo = 0, hi = kMapCell_m;
+    for (const auto& s : test.samples) {
+        if (s.k == 0) continue;
+        const auto [h, a] = nearest(s);
+        off = std::max(off, h), lo = std::min(lo, a), hi = std::max(hi, a);
+    }
+    off = std::ceil(off / kMapCell_m) * kMapCell_m, lo = std::floor(lo / kMapCell_m) * kMapCell_m, hi = std::ceil(hi / kMapCell_m) * kMapCell_m;
+    const int nx = static_cast<int>(std::lround(off / kMapCell_m)), ny = static_cast<int>(std::lround((hi - lo) / kMapCell_m));
+    auto field = [&](const std::string& title, const ForceModel* m) {
+        std::vector<std::array<double, 3>> xs;
+        for (const auto& s : test.samples) {
+            if (s.k == 0) continue;
+            const auto [h, a] = nearest(s);
+            xs.push_back({h, a, m ? m->predict(s, test.sources[static_cast<std::size_t>(s.source)])[2] : s.y[2]});
+        }
+        return plot::bin_heat(title, xs, 0, off, lo, hi, nx, ny);
+    };
+    std::vector<plot::Heat> heats{field("recorded", nullptr)};
+    for (const auto* m : models) heats.push_back(field(m->name(), m));
+    plot::render_heats(heats, "f_d [N] on held-out blocks by where the nearest neighbour is (mean per 5 cm cell)", "horizontal offset [m]",
+                       "height above the sufferer [m]", "f_d [N]", png);
+}
+
+std::string describe_split(const Dataset& all) {
+    std::size_t by[3] = {0, 0, 0};
+    for (const auto& s : all.sources) ++by[static_cast<int>(s.blocks)];
+    return log::cat("blocks by block % ", kSplitPeriod, " (== 0 held out, == 1 validation, else training); flights split by legs: ", by[0],
+                    ", by encounters: ", by[1], ", by time: ", by[2]);
+}
+
+}  // namespace
+
+RealResult run_real(const RealOptions& o) {
+    auto say = [&](const std::string& line) {
+        if (o.progress) o.progress(line);
+    };
+    const fs::path out(o.out_dir);
+    Dataset all;
+    DatasetOptions dopt;
+    dopt.physics = o.physics;
+    for (const auto& p : o.data) {
+        throw_if_stopped(o.stop, "reading the flights");
+        all.append(load_dataset(p, dopt));
+    }
+    const Split split = split_by_leg(all);
+    require_samples(all, split.test, "held-out");
+    require_samples(all, split.train, "training");
+    require_samples(all, split.validation, "validation");
+    RealResult r;
+    r.train = split.train.samples.size(), r.validation = split.validation.samples.size(), r.test = split.test.samples.size();
+    say(log::cat(all.samples.size(), " samples from ", all.sources.size(), " flight(s): ", r.train, " training, ", r.validation,
+                 " validation, ", r.test, " held out"));
+    fs::create_directories(out / "models");
+    const TrainPlan plan{o.seed, o.max_epochs, describe_split(all), o.progress, o.stop};
+    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va) {
+        return train_and_save(kind, tr, va, plan, (out / "models" / (kind + ".json")).string());
+    };
+    const PhysicsModel physics(o.physics);
+    std::vector<const ForceModel*> models{&physics};
+    std::unique_ptr<LearntModel> naive;
+    const Dataset two_tr = split.train.from_two_vehicle_flights(), two_va = split.validation.from_two_vehicle_flights();
+    r.naive = !two_tr.samples.empty() && !two_va.samples.empty();
+    if (r.naive) {
+        naive = train("naive_linear", two_tr, two_va);
+        models.push_back(naive.get());
+    } else {
+        say("no two-vehicle flight among the data: the naive linear model is not trained");
+    }
+    const auto linear = train("learnt_linear", split.train, split.validation);
+    const auto deep = train("deep_sets", split.train, split.validation);
+    models.push_back(linear.get());
+    models.push_back(deep.get());
+    write_file((out / "models" / "physics.yaml").string(), physics::to_yaml(o.physics));
+
+    say("comparing on the held-out blocks");
+    r.table = compare(models, split.test);
+    r.map_path = (out / "map_f_d.png").string();
+    draw_maps(models, split.test, r.map_path);
+    std::string md = "# Force models on recorded flights\n\n";
+    for (const auto& s : all.sources) md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
+                                                     flight::to_string(s.blocks), ")\n");
+    md += log::cat("\nSplit: ", describe_split(all), ". Training ", r.train, ", validation ", r.validation, ", held out ", r.test,
+                   " samples. The naive linear model is trained on two-vehicle flights only",
+                   r.naive ? "" : " (none here: not trained)", "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters.\n\n");
+    md += to_markdown(r.table, {});
+    md += "\n![f_d by relative position](map_f_d.png)\n";
+    r.markdown_path = (out / "table.md").string();
+    r.csv_path = (out / "table.csv").string();
+    write_file(r.markdown_path, md);
+    write_file(r.csv_path, to_csv(r.table));
+    return r;
+}
+
+}  // namespace dw::predictor
