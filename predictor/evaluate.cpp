@@ -199,11 +199,13 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
 }
 
 void require_samples(const Dataset& all, const Dataset& part, const std::string& what) {
-    if (!part.samples.empty()) return;
-    std::size_t in_blocks = 0;
-    for (const auto& s : all.samples) in_blocks += s.leg >= 0 ? 1 : 0;
-    throw InputError(log::cat("--data: no ", what, " samples: ", all.sources.size(), " flight(s) gave ", all.samples.size(), " samples, ",
-                              in_blocks, " of them in cross-validation blocks; the split holds out blocks with block % ", kSplitPeriod,
+    auto with_neighbour = [](const Sample& s) { return s.k > 0; };
+    if (std::any_of(part.samples.begin(), part.samples.end(), with_neighbour)) return;
+    std::size_t in_blocks = 0, near = 0;
+    for (const auto& s : all.samples) in_blocks += s.leg >= 0 ? 1 : 0, near += s.k > 0 ? 1 : 0;
+    throw InputError(log::cat("--data: no ", what, " samples with a neighbour: ", all.sources.size(), " flight(s) gave ", all.samples.size(),
+                              " samples, ", in_blocks, " of them in cross-validation blocks, ", near,
+                              " with a neighbour; the split holds out blocks with block % ", kSplitPeriod,
                               " == 0, so a flight needs a neighbour within 3 m of the sufferer and at least ", kSplitPeriod,
                               " blocks (legs, encounters or stretches of time)"));
 }

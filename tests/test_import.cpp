@@ -9,16 +9,14 @@
 #include "core/errors.hpp"
 #include "flight/flight.hpp"
 #include "importer/neural_swarm.hpp"
+#include "real_data.hpp"
 #include "support.hpp"
 
 using namespace dw::importer;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kData = std::string(DW_SOURCE_DIR) + "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020/";
-
-#define REQUIRE_SHARED_DATA() \
-    if (!fs::exists(kData)) GTEST_SKIP() << "the shared Neural-Swarm logs are not at " << kData
+const std::string& kData = dw::test::kNeuralSwarm;
 
 std::vector<std::string> trial(const std::vector<std::string>& files) {
     std::vector<std::string> out;
@@ -60,28 +58,22 @@ TEST(Import, CsvAndBinaryOfOneFlightAgree) {
 TEST(Import, EverySharedTrialIsAValidFlightWithDownwashOnTheLowerVehicle) {
     REQUIRE_SHARED_DATA();
     dw::test::TempDir d;
-    const std::vector<std::vector<std::string>> trials = {
-        {"swap_ss/cf50_01.csv", "swap_ss/cf51_01.csv"},
-        {"swap_sl/cf51_01.csv", "swap_sl/cf101_01.csv"},
-        {"swap_sl/cf101_02.csv", "swap_sl/cf51_02.csv"},
-        {"swap_ssl/cf51_05.csv", "swap_ssl/cf101_05.csv", "swap_ssl/cf50_05.csv"},
-        {"randomwalk_ss/cf50_02", "randomwalk_ss/cf51_02"},
-    };
+    const auto& trials = dw::test::shared_trials();
     for (std::size_t k = 0; k < trials.size(); ++k) {
-        const auto f = neural_swarm_importer().import(trial(trials[k]), {});
+        const auto f = neural_swarm_importer().import(trials[k].paths(), {trials[k].sufferer, {}, {}});
         const std::string dir = d.file("t" + std::to_string(k));
         dw::flight::write_flight(f, dir);
         const auto back = dw::flight::read_flight(dir);  // through the contract
         EXPECT_FALSE(back.meta.stand_height_m);
         EXPECT_EQ(back.meta.wrench_source, dw::flight::WrenchSource::residual);
         EXPECT_FALSE(back.meta.moments_measured);
-        EXPECT_EQ(back.meta.neighbours.size(), trials[k].size() - 1);
+        EXPECT_EQ(back.meta.neighbours.size(), trials[k].logs.size() - 1);
         EXPECT_GT(back.wrench.size(), 1500u);
         // Downwash pushes the lower vehicle down (+d) harder than anything while alone: the
         // largest downward residual well above the tared level.
         double max_d = 0, min_d = 0;
         for (const auto& s : back.wrench) max_d = std::max(max_d, s.w[2]), min_d = std::min(min_d, s.w[2]);
-        if (k < 4) EXPECT_GT(max_d, 2 * std::abs(min_d)) << trials[k][0];
+        if (k < 4) EXPECT_GT(max_d, 2 * std::abs(min_d)) << trials[k].name;
     }
 }
 
