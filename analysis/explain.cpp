@@ -291,18 +291,43 @@ bool applies(const Effect& e, const Replay& r) {
 }
 
 struct Scores {
-    std::map<int, AxisValues> before, after;  // per leg: normalised MSE sums per axis
+    std::map<int, AxisValues> before, after;  // per piece: normalised MSE sums per axis
     std::map<int, std::size_t> n;
+    std::map<int, double> change;             // per piece: how much the candidate changes the prediction (normalised, summed)
 };
+
+// A held-out piece where the candidate predicts what the current model does — its prediction
+// moves by less than this fraction of the noise (RMS) — carries no evidence either way and is
+// left out of the signed-rank test (it would only dilute it).
+constexpr double kEvidenceChange = 0.1;
+// The held-out blocks are scored in pieces of this length (the residual decorrelates within ~0.1 s).
+constexpr double kPiece_s = 0.25;
+
+// A parameter fitted to a bound that is not its neutral value has not been identified: the effect
+// is standing in for something else.
+constexpr double kPinnedFraction = 1e-4;  // of the parameter's range
+bool pinned(const Effect& e, const std::vector<double>& values) {
+    for (std::size_t k = 0; k < values.size(); ++k) {
+        const auto& p = e.params[k];
+        const double tol = kPinnedFraction * (p.upper - p.lower);
+        const bool at_lower = values[k] - p.lower < tol && std::abs(p.start - p.lower) > tol;
+        if (at_lower || p.upper - values[k] < tol) return true;
+    }
+    return false;
+}
 
 // Paired comparison over held-out legs.
 void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const ExplainOptions& o, double dbic) {
+    // The axis judged: the most significant among those whose held-out error falls by at least
+    // min_gain (else the most significant of all, for the note).
     double best_t = -INFINITY;
+    bool best_gains = false;
     for (std::size_t a = 0; a < 6; ++a) {
         std::vector<double> d;
         double before = 0, after = 0;
         for (const auto& [leg, b] : s.before) {
             const double nl = static_cast<double>(s.n.at(leg));
+            if (s.change.at(leg) / nl < kEvidenceChange * kEvidenceChange) continue;
             d.push_back((b[a] - s.after.at(leg)[a]) / nl);
             before += b[a];
             after += s.after.at(leg)[a];
@@ -318,10 +343,13 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
             if (ranked[k].second > 0) w += static_cast<double>(k + 1);
         const double m = static_cast<double>(ranked.size());
         const double t = m > 0 ? (w - m * (m + 1) / 4) / std::sqrt(m * (m + 1) * (2 * m + 1) / 24) : 0.0;
-        if (t > best_t) {
+        const double gain = before > 0 ? (before - after) / before : 0;
+        const bool gains = gain >= o.min_gain;
+        if ((gains && !best_gains) || (gains == best_gains && t > best_t)) {
             best_t = t;
+            best_gains = gains;
             c.best_axis = static_cast<int>(a);
-            c.gain = before > 0 ? (before - after) / before : 0;
+            c.gain = gain;
         }
     }
     double total_n = 0;
@@ -339,7 +367,7 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
     c.total_ratio = tb > 0 ? ta / tb : 1;
     c.delta_bic = dbic;
     c.accepted = c.t >= o.min_t && c.gain >= o.min_gain && ta < tb && dbic < -10;
-    c.note = log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10, " (signed ranks over 1 s pieces of the held-out blocks), ", std::round(c.gain * 1000) / 10,
+    c.note = log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10, " (signed ranks over pieces of the held-out blocks), ", std::round(c.gain * 1000) / 10,
                       " % of its error removed; ΔBIC ", std::round(dbic),
                       c.accepted ? " — accepted" : " — not accepted");
 }
@@ -377,7 +405,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     R.noise_floor = d.sigma;
     R.samples = d.on_legs.size();
     R.legs = leg_ids.size();
-    const double factor = neff_factor(d, base_pred);
+    double factor = neff_factor(d, base_pred);
     R.regions = locate(d, base_pred, factor, o.region_z, f.meta.formation);
     R.shifts = shifts(d, o.physics);
     say(log::cat(R.regions.size(), " significant regions; effective samples ", factor * 100, " % of the samples (autocorrelation)"));
@@ -388,9 +416,17 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
             for (std::size_t a = 0; a < 6; ++a) s += norm_sq(d, p, i, a);
         return s;
     };
-    const double n_eff = 6.0 * static_cast<double>(d.on_legs.size()) * factor;
+    double n_eff = 0;
     physics::PhysicsConfig current = o.physics;
-    std::vector<Wrench6> current_pred = base_pred;
+    std::vector<Wrench6> current_pred;
+    // The model the next candidates are scored against; the autocorrelation is that of its residual.
+    auto set_current = [&](const physics::PhysicsConfig& c) {
+        current = c;
+        current_pred = replay.recorded(current);
+        factor = neff_factor(d, current_pred);
+        n_eff = 6.0 * static_cast<double>(d.on_legs.size()) * factor;
+    };
+    set_current(o.physics);
     std::vector<Effect> remaining = o.candidates;
     std::vector<std::vector<std::size_t>> fold_train(static_cast<std::size_t>(o.folds)), fold_test(static_cast<std::size_t>(o.folds));
     for (auto i : d.on_legs)
@@ -431,6 +467,11 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
             c.lo = c.hi = values;
             return c;
         }
+        if (pinned(e, values)) {
+            c.note = log::cat("ΔBIC ", std::round(dbic), ", but a parameter is pinned at its bound: not identified (it stands in for something else)");
+            c.lo = c.hi = values;
+            return c;
+        }
         // Blocked cross-validation by leg, each fold warm-started from the whole-flight fit.
         Scores s;
         std::vector<std::vector<double>> fold_values;
@@ -441,12 +482,13 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
             fold_values.push_back(vk);
             const auto& p = fk.predict(vk);
             for (auto i : fold_test[static_cast<std::size_t>(k)]) {
-                // Scored per 1 s block of a held-out leg (the residual decorrelates within ~0.1 s).
-                const int leg = info[i].leg * 1000 + static_cast<int>(std::floor((replay.stamps()[i] - leg_start.at(info[i].leg)) / 1.0));
+                // Scored per piece of a held-out block (the residual decorrelates within ~0.1 s).
+                const int leg = info[i].leg * 1000 + static_cast<int>(std::floor((replay.stamps()[i] - leg_start.at(info[i].leg)) / kPiece_s));
                 ++s.n[leg];
                 for (std::size_t a = 0; a < 6; ++a) {
                     s.before[leg][a] += norm_sq(d, current_pred, i, a);
                     s.after[leg][a] += norm_sq(d, p, i, a);
+                    if (replay.measured_axes()[a]) s.change[leg] += std::pow((p[i][a] - current_pred[i][a]) / d.sigma[a], 2);
                 }
             }
         }
@@ -497,8 +539,9 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
             if (c.accepted && (!best || c.total_ratio < best->total_ratio)) best = &c;  // the lowest held-out error
         if (!best) break;
         R.accepted.push_back(*best);
-        best->effect.apply(current, best->values);
-        current_pred = replay.recorded(current);
+        physics::PhysicsConfig next = current;
+        best->effect.apply(next, best->values);
+        set_current(next);
         remaining.erase(std::remove_if(remaining.begin(), remaining.end(), [&](const Effect& e) { return e.name == best->effect.name; }),
                         remaining.end());
         R.heldout_before = R.accepted.front().heldout_before;
@@ -511,8 +554,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
             for (std::size_t j = 0; j < R.accepted.size(); ++j)
                 if (j != k) R.accepted[j].effect.apply(others, R.accepted[j].values);
             const physics::PhysicsConfig saved = current;
-            current = others;
-            current_pred = replay.recorded(current);
+            set_current(others);
             say(log::cat("refitting ", R.accepted[k].effect.name, " with the other effects in place"));
             auto again = score(R.accepted[k].effect, R.accepted[k].round);
             if (again.accepted) {
@@ -521,9 +563,9 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
             }
             current = saved;
         }
-        current = o.physics;
-        for (const auto& c : R.accepted) c.effect.apply(current, c.values);
-        current_pred = replay.recorded(current);
+        physics::PhysicsConfig all = o.physics;
+        for (const auto& c : R.accepted) c.effect.apply(all, c.values);
+        set_current(all);
     }
     if (R.accepted.empty()) {
         AxisValues rm{};

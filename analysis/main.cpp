@@ -16,6 +16,15 @@
 
 namespace {
 
+// "a,b,,c" -> {a, b, c}
+std::vector<std::string> split_list(const std::string& text) {
+    std::vector<std::string> out;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');)
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
 int run(int argc, char** argv) {
     CLI::App app{"dw-explain: locate where a recording departs from the simulation, name the missing physics, fit it, re-simulate"};
     dw::cli::BaseOptions base;
@@ -35,16 +44,34 @@ int run(int argc, char** argv) {
     proof->add_option("--out", po.out_dir, "output folder (flights, reports, proof.md)")->required();
     proof->add_option("--null-seeds", po.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
     proof->add_option("--cases", cases, "clock_offset, wake_transport, sensor_lag, jet_merging, cell_crosstalk, two_effects, null (default: all)");
+    auto* real_proof = app.add_subcommand("real-proof", "conceal known effects in recorded flights and check each is found on top of the flight's own fit");
+    dw::analysis::RealProofOptions rpo;
+    std::string real_cases, real_physics;
+    real_proof->add_option("--flights", rpo.flights, "flight folders (e.g. dw-import's)")->required();
+    real_proof->add_option("--physics", real_physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
+    real_proof->add_option("--out", rpo.out_dir, "output folder (reports, proof.md)")->required();
+    real_proof->add_option("--cases", real_cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     auto progress = [quiet](const std::string& s) {
         if (!quiet) std::cerr << "dw-explain: " << s << "\n";
     };
     if (proof->parsed()) dw::require_output_dir(po.out_dir, "--out");
+    if (real_proof->parsed()) {
+        dw::require_output_dir(rpo.out_dir, "--out");
+        rpo.physics = physics_path.empty() && real_physics.empty() ? dw::physics::PhysicsConfig{}
+                                                                     : dw::physics::load_physics(real_physics.empty() ? physics_path : real_physics);
+        rpo.cases = split_list(real_cases);
+        rpo.progress = progress;
+        rpo.stop = dw::Shutdown::instance().token();
+        const auto r = dw::analysis::run_real_proof(rpo);
+        std::cout << dw::read_file(r.table_path, "proof table");
+        std::cout << (r.pass ? "PROOF PASSED" : "PROOF FAILED") << " (" << r.table_path << ")\n";
+        if (!r.pass) throw dw::RuntimeError("PROOF FAILED: see " + r.table_path);
+        return 0;
+    }
     if (proof->parsed()) {
-        std::stringstream in(cases);
-        for (std::string c; std::getline(in, c, ',');)
-            if (!c.empty()) po.cases.push_back(c);
+        po.cases = split_list(cases);
         po.progress = progress;
         po.stop = dw::Shutdown::instance().token();
         const auto r = dw::analysis::run_proof(po);
@@ -59,10 +86,7 @@ int run(int argc, char** argv) {
     dw::analysis::ExplainOptions o;
     o.physics = physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
     if (!effects.empty()) {
-        std::vector<std::string> names;
-        std::stringstream in(effects);
-        for (std::string e; std::getline(in, e, ',');) names.push_back(e);
-        o.candidates = dw::analysis::effects_named(names);
+        o.candidates = dw::analysis::effects_named(split_list(effects));
     }
     o.seed = seed;
     o.progress = progress;

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "physics/config.hpp"
+
 namespace dw::analysis {
 
 struct ProofOptions {
@@ -21,6 +23,7 @@ struct ProofOptions {
 struct ProofRow {
     std::string name, formation, hidden, found, truth, fitted, rmse;
     bool pass = false;
+    bool covered = true;  // every true value inside the interval of its fit, accepted or not
     std::string why;
     double seconds = 0;
 };
@@ -33,5 +36,21 @@ struct ProofResult {
 };
 
 ProofResult run_proof(const ProofOptions& o);
+
+// The proof on recorded flights (another lab's: the physics is not the truth there). Each flight
+// is first explained as it is — its own fit, whatever the real data shows. Known effects are then
+// concealed in its recording (clock offset, force scale, sensor lag, crosstalk; values not round)
+// and explained with that own fit as the physics: each must be found on top of it, its parameter
+// (the own fit's combined with the concealed value) inside the interval, nothing else claimed; and
+// the untouched flight explained on top of its own fit must claim nothing new.
+struct RealProofOptions {
+    std::vector<std::string> flights;   // flight folders
+    physics::PhysicsConfig physics;     // what the untouched flights are first explained with
+    std::string out_dir;
+    std::vector<std::string> cases;     // clock_offset, force_scale, sensor_lag, cell_crosstalk (empty: all)
+    std::stop_token stop;
+    std::function<void(const std::string&)> progress;
+};
+ProofResult run_real_proof(const RealProofOptions& o);
 
 }  // namespace dw::analysis

@@ -286,7 +286,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
            << fmt(s.shift_s, 3) << " |\n";
     md << "\n## Candidates\n\nEach fitted with Ceres (Huber loss) on the whole flight, then — if ΔBIC < −10 — in "
        << o.folds << "-fold blocked cross-validation by " << kind << " (folds: block % " << o.folds
-       << "). Accepted when the held-out error falls on some axis — Wilcoxon signed-rank z over 1 s pieces of the held-out blocks ≥ " << o.min_t << ", by ≥ "
+       << "). Accepted when the held-out error falls on some axis — Wilcoxon signed-rank z over 0.25 s pieces of the held-out blocks (pieces where the candidate changes the prediction by under 0.1 σ left out) ≥ " << o.min_t << ", by ≥ "
        << o.min_gain * 100 << " %, and the total held-out error falls. Intervals: the wider of the leg-fold jackknife and the "
           "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | verdict |\n|---|---|---|---|---|\n";
     for (const auto& c : r.candidates)
