@@ -267,10 +267,13 @@ ProofResult run_real_proof(const RealProofOptions& o) {
         if (std::none_of(all.begin(), all.end(), [&](const Concealment& c) { return c.name == n; }))
             throw InputError(log::cat("--cases: unknown case '", n, "' (expected clock_offset, force_scale, sensor_lag or cell_crosstalk)"));
     if (o.flights.empty()) throw InputError("--flights: no flight to prove on");
+    std::vector<flight::Flight> flights;  // every input read before any output is made
+    for (const auto& path : o.flights) flights.push_back(flight::read_flight(path));
     fs::create_directories(o.out_dir);
     ProofResult R;
-    for (const auto& path : o.flights) {
-        const auto f = flight::read_flight(path);
+    for (std::size_t fi = 0; fi < flights.size(); ++fi) {
+        const auto& path = o.flights[fi];
+        const auto& f = flights[fi];
         const std::string name = fs::path(path).filename().string(), dir = (fs::path(o.out_dir) / name).string();
         ExplainOptions eo;
         eo.physics = o.physics;
