@@ -159,6 +159,24 @@ AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const 
     return s;
 }
 
+// The residual's RMS over the blocks against what noise and turbulence alone explain, per measured
+// axis (0 where not measured): each sample's residual is divided by sqrt(sigma² + (2 I F)²), the
+// noise floor and the force fluctuation of a jet whose speed fluctuates by the turbulence
+// intensity I (F ∝ U², so δF ≈ 2 I F). About 1 when the physics is right.
+AxisValues excess_of(const Data& d, const std::vector<Wrench6>& pred, double intensity) {
+    AxisValues e{};
+    for (auto i : d.on_legs)
+        for (std::size_t a = 0; a < 6; ++a) {
+            if (!d.replay.measured_axes()[a]) continue;
+            const double r = d.replay.measured()[i][a] - pred[i][a], turbulent = 2 * intensity * pred[i][a];
+            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent * turbulent);
+        }
+    for (auto& v : e) v = d.on_legs.empty() ? 0 : std::sqrt(v / static_cast<double>(d.on_legs.size()));
+    return e;
+}
+
+double largest(const AxisValues& v) { return *std::max_element(v.begin(), v.end()); }
+
 // Lag-1 autocorrelation of the normalised residual along legs -> the effective-sample factor.
 double neff_factor(const Data& d, const std::vector<Wrench6>& pred) {
     double num = 0, den = 0;
@@ -202,7 +220,16 @@ std::string where(const Cell& c, bool flying, const std::string& formation) {
                     c.v * cell, "..", (c.v + 1) * cell, " m, ", formation, ", ", c.direction > 0 ? "+E" : "-E", " legs");
 }
 
-std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, double factor, double z_min, const std::string& formation) {
+// One cell's mean residual on one axis, and its z (the standard error from the cell's own spread,
+// at least the noise floor, with the sample count reduced for autocorrelation).
+struct BinZ {
+    int axis;
+    Cell cell;
+    double mean, z;
+};
+constexpr std::size_t kMinBinSamples = 10;
+
+std::vector<BinZ> bins_of(const Data& d, const std::vector<Wrench6>& pred, double factor) {
     struct Acc {
         double sum = 0, sq = 0;
         std::size_t n = 0;
@@ -221,18 +248,28 @@ std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, doub
             ++b.n;
         }
     }
-    std::vector<Region> out;
+    std::vector<BinZ> out;
     for (const auto& [key, b] : bins) {
-        if (b.n < 10) continue;
+        if (b.n < kMinBinSamples) continue;
         const auto& [a, c] = key;
         const double mean = b.sum / static_cast<double>(b.n);
         const double sd = std::max(std::sqrt(std::max(0.0, b.sq / static_cast<double>(b.n) - mean * mean)), d.sigma[static_cast<std::size_t>(a)]);
-        const double z = mean / (sd / std::sqrt(static_cast<double>(b.n) * factor));
-        if (std::abs(z) < z_min) continue;
+        out.push_back({a, c, mean, mean / (sd / std::sqrt(static_cast<double>(b.n) * factor))});
+    }
+    return out;
+}
+
+std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, double factor, double z_min, const std::string& formation) {
+    const bool flying = d.replay.flying();
+    std::vector<Region> out;
+    for (const auto& b : bins_of(d, pred, factor)) {
+        if (std::abs(b.z) < z_min) continue;
+        const int a = b.axis;
+        const Cell& c = b.cell;
         Region r;
         r.axis = kAxes[a];
-        r.mean_residual = mean;
-        r.z = z;
+        r.mean_residual = b.mean;
+        r.z = b.z;
         r.altitude_lo = flying ? c.v * kRelativeCell_m : kBands[static_cast<std::size_t>(c.band)].lo;
         r.altitude_hi = flying ? (c.v + 1) * kRelativeCell_m : kBands[static_cast<std::size_t>(c.band)].hi;
         r.direction = c.direction;
@@ -575,9 +612,16 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         R.heldout_before = R.heldout_after = rm;
     }
     R.fitted = current;
-    const auto after_regions = locate(d, current_pred, neff_factor(d, current_pred), o.region_z, f.meta.formation);
-    R.detected = !R.regions.empty() || !R.accepted.empty();
-    R.unexplained = !after_regions.empty();
+    const double intensity = o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0;
+    R.excess_before = excess_of(d, base_pred, intensity);
+    R.excess_after = excess_of(d, current_pred, intensity);
+    // Whether: an accepted effect, or a residual beyond what noise and turbulence explain (the
+    // regions say where; on their own they are many cells tested at once, not evidence).
+    const bool excess = largest(R.excess_before) > o.detect_excess;
+    R.detected = !R.accepted.empty() || excess;
+    if (excess && R.regions.empty())  // found by its size: say where, with the weaker threshold
+        R.regions = locate(d, base_pred, neff_factor(d, base_pred), o.weak_region_z, f.meta.formation);
+    R.unexplained = largest(R.excess_after) > o.detect_excess;
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     return R;
 }

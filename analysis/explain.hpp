@@ -20,6 +20,9 @@ namespace dw::analysis {
 
 using AxisValues = std::array<double, 6>;
 
+// Null flights (noise and turbulence only, 10 seeds) give 0.99-1.04: docs/EXPLAINER.md.
+inline constexpr double kDetectExcess = 1.2;
+
 struct ExplainOptions {
     physics::PhysicsConfig physics;              // the simulation the recording is compared with
     std::vector<Effect> candidates = all_effects();
@@ -27,6 +30,11 @@ struct ExplainOptions {
     double min_t = 3.0;                          // held-out improvement: Wilcoxon z over 1 s blocks of held-out legs, best axis
     double min_gain = 0.05;                      // ... and at least this fraction of that axis's error
     double region_z = 5.0;                       // a region is reported above this |z|
+    // A mismatch is detected, whatever its shape, when on some axis the residual's RMS over the
+    // blocks exceeds this many noise floors (null flights: noise and turbulence alone, see
+    // docs/EXPLAINER.md); it is then located with the weaker weak_region_z.
+    double detect_excess = kDetectExcess;
+    double weak_region_z = 3.0;
     int max_effects = 3;
     std::uint64_t seed = 1;                      // (the fits are deterministic; kept for the report)
     std::function<void(const std::string&)> progress;
@@ -73,6 +81,7 @@ struct ExplainResult {
     std::vector<CandidateResult> candidates;     // every score, every round
     std::vector<CandidateResult> accepted;       // strongest first, final parameters
     bool unexplained = false;
+    AxisValues excess_before{}, excess_after{};  // residual RMS over the blocks / noise floor (0: axis not measured)
     AxisValues heldout_before{}, heldout_after{};
     physics::PhysicsConfig fitted;
     std::string formation;

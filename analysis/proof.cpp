@@ -175,7 +175,7 @@ ProofResult run_proof(const ProofOptions& o) {
             ++R.null_total;
             std::string found;
             for (const auto& a : r.accepted) found += (found.empty() ? "" : ", ") + a.effect.name;
-            if (r.accepted.empty()) ++R.null_clean;
+            if (!r.detected) ++R.null_clean;  // clean: nothing claimed, nothing detected
             say(log::cat("null seed ", 100 + k, ": ", found.empty() ? "nothing claimed" : "claimed " + found, " (", r.seconds, " s)"));
         }
         ProofRow row{"null", "single", "nothing (noise and turbulence only)", log::cat(R.null_clean, " of ", R.null_total, " seeds claim nothing"),

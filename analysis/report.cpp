@@ -221,7 +221,8 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     j["format"] = "downwash-explain/1";
     json regions = json::array();
     for (const auto& g : r.regions) regions.push_back({{"axis", g.axis}, {"where", g.where}, {"mean_residual", g.mean_residual}, {"z", g.z}});
-    j["mismatch"] = {{"detected", r.detected}, {"noise_floor", axes_json(r.noise_floor)}, {"regions", regions}};
+    j["mismatch"] = {{"detected", r.detected}, {"noise_floor", axes_json(r.noise_floor)}, {"regions", regions},
+                     {"excess", {{"before", axes_json(r.excess_before)}, {"after", axes_json(r.excess_after)}, {"threshold", o.detect_excess}}}};
     json cands = json::array();
     std::map<std::string, const CandidateResult*> last;  // each effect once: its accepted (final) or latest score
     for (const auto& c : r.candidates) last[c.effect.name] = &c;
