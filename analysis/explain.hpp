@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <stop_token>
 #include <string>
 #include <vector>
@@ -69,8 +70,11 @@ struct CandidateResult {
     double gain = 0;                             // fraction of that axis's held-out MSE removed
     double total_ratio = 1;                      // held-out error after / before, all axes (normalised)
     bool accepted = false;
+    bool stand_in = false;                       // it passed the held-out test, but its value changes across the flight
     std::string note;                            // why (not) accepted
     int round = 0;                               // forward-selection round it was scored in
+    std::map<int, double> heldout_pieces;        // per held-out piece: normalised squared error after, all axes
+    std::vector<std::string> indistinguishable;  // accepted alternatives the held-out data cannot tell from it
 };
 
 struct ExplainResult {

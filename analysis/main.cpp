@@ -4,6 +4,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "analysis/coverage.hpp"
 #include "analysis/explain.hpp"
 #include "analysis/proof.hpp"
 #include "core/cli.hpp"
@@ -51,6 +52,14 @@ int run(int argc, char** argv) {
     real_proof->add_option("--physics", real_physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
     real_proof->add_option("--out", rpo.out_dir, "output folder (reports, proof.md)")->required();
     real_proof->add_option("--cases", real_cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
+    auto* coverage = app.add_subcommand("coverage", "measure how often the 95 % intervals hold the hidden value, over many simulated flights per effect");
+    dw::analysis::CoverageOptions co;
+    std::string coverage_effects;
+    coverage->add_option("--out", co.out_dir, "output folder (coverage.md)")->required();
+    coverage->add_option("--seeds", co.seeds, "flights per effect")->check(dw::cli::in({1, 1000}));
+    coverage->add_option("--legs", co.legs, "legs per flight")->check(dw::cli::in({5, 1000}));
+    coverage->add_option("--jobs", co.jobs, "flights at once")->check(dw::cli::in({1, 64}));
+    coverage->add_option("--effects", coverage_effects, "effects, comma-separated (default: every one a flight over the stand can show)");
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     auto progress = [quiet](const std::string& s) {
@@ -68,6 +77,16 @@ int run(int argc, char** argv) {
         std::cout << dw::read_file(r.table_path, "proof table");
         std::cout << (r.pass ? "PROOF PASSED" : "PROOF FAILED") << " (" << r.table_path << ")\n";
         if (!r.pass) throw dw::RuntimeError("PROOF FAILED: see " + r.table_path);
+        return 0;
+    }
+    if (coverage->parsed()) {
+        dw::require_output_dir(co.out_dir, "--out");
+        co.effects = split_list(coverage_effects);
+        co.progress = progress;
+        co.stop = dw::Shutdown::instance().token();
+        const auto r = dw::analysis::run_coverage(co);
+        std::cout << dw::read_file(r.table_path, "coverage table");
+        if (!r.pass) throw dw::RuntimeError("COVERAGE BELOW TARGET: see " + r.table_path);
         return 0;
     }
     if (proof->parsed()) {

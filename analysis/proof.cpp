@@ -112,15 +112,16 @@ std::string table(const std::vector<ProofRow>& rows, const std::string& flight, 
     return md.str();
 }
 
-void fly(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir) {
+}  // namespace
+
+void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir, int legs) {
     fs::create_directories(fs::path(dir).parent_path());
     const std::string yaml = dir + ".physics.yaml";
     write_file(yaml, physics::to_yaml(hidden));
-    run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--out", dir, "--quiet"},
+    run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--legs", std::to_string(legs), "--out",
+                 dir, "--quiet"},
                 dir + ".log");
 }
-
-}  // namespace
 
 namespace {
 bool wanted_null(const ProofOptions& o) { return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), "null") != o.cases.end(); }
@@ -150,7 +151,7 @@ ProofResult run_proof(const ProofOptions& o) {
         physics::PhysicsConfig hidden;
         c.hide(hidden);
         say(log::cat("case ", c.name, ": dw-sim fly --formation ", c.formation, " with ", c.hidden));
-        fly(hidden, c.formation, c.seed, dir + "/flight");
+        fly_simulated(hidden, c.formation, c.seed, dir + "/flight");
         ExplainOptions eo;
         eo.physics = plain;
         eo.stop = o.stop;
@@ -165,7 +166,7 @@ ProofResult run_proof(const ProofOptions& o) {
     if (wanted("null")) {
         for (int k = 0; k < o.null_seeds; ++k) {
             const std::string dir = (fs::path(o.out_dir) / log::cat("null_", k)).string();
-            fly(plain, "single", 100 + static_cast<std::uint64_t>(k), dir + "/flight");
+            fly_simulated(plain, "single", 100 + static_cast<std::uint64_t>(k), dir + "/flight");
             ExplainOptions eo;
             eo.physics = plain;
             eo.stop = o.stop;

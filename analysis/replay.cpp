@@ -188,8 +188,8 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
     // The tare: a stand's recording is zeroed over its first tare_s (a residual source is tared
     // by its importer where no neighbour is near, where the physics gives no force either).
     Wrench6 zero{};
-    std::size_t n = 0;
-    for (std::size_t i = 0; !residual_ && i < out.size() && stamps_[i] < stamps_.front() + c.stand.tare_s; ++i, ++n)
+    const std::size_t n = tare_samples(c);
+    for (std::size_t i = 0; i < n; ++i)
         for (std::size_t a = 0; a < 6; ++a) zero[a] += out[i][a];
     if (n > 0)
         for (auto& w : out)
@@ -201,6 +201,13 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
             out[i][static_cast<std::size_t>(fx.cell_crosstalk.to)] +=
                 fx.cell_crosstalk.coefficient * measured_[i][static_cast<std::size_t>(fx.cell_crosstalk.from)];
     return out;
+}
+
+std::size_t Replay::tare_samples(const physics::PhysicsConfig& c) const {
+    if (residual_) return 0;
+    std::size_t n = 0;
+    while (n < stamps_.size() && stamps_[n] < stamps_.front() + c.stand.tare_s) ++n;
+    return n;
 }
 
 std::vector<SampleInfo> describe(const Replay& r, const flight::Blocks& blocks) {

@@ -49,6 +49,9 @@ public:
     // Which wrench columns carry a measurement (a residual source may not measure moments).
     const std::array<bool, 6>& measured_axes() const { return measured_axes_; }
     bool flying() const { return flying_; }  // no load stand: the sufferer flies
+    // How many of the recording's first samples a stand's tare averages (0: no tare here — a
+    // residual source is tared by its importer).
+    std::size_t tare_samples(const physics::PhysicsConfig& c) const;
 
 private:
     // The flying sufferer's own forces on the grid: body_drag and ground_effect.

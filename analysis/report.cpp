@@ -61,6 +61,16 @@ std::string params_text(const CandidateResult& c) {
     return s.str();
 }
 
+// What the held-out data cannot tell an accepted effect from, said beside it.
+std::string alternatives(const CandidateResult& c) {
+    if (c.indistinguishable.empty()) return "";
+    std::string names;
+    for (const auto& n : c.indistinguishable) names += (names.empty() ? "" : " or ") + n;
+    return log::cat(" *Not distinguishable on this flight from ", names, "*: it was accepted too, and on the held-out blocks neither fits ",
+                    "significantly better (forces that change slowly make a lag look like a delay). ", c.effect.name,
+                    " is kept for its lower held-out error; a flight with faster changes would tell them apart.");
+}
+
 std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
     const auto& v = c.values;
     const std::string err = log::cat("Held-out RMSE on ", kAxes[c.best_axis], ": ", fmt(c.heldout_before[static_cast<std::size_t>(c.best_axis)]),
@@ -233,6 +243,8 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         cands.push_back({{"effect", e.name}, {"params", params_json(c, false)}, {"ci95", params_json(c, true)},
                          {"heldout_rmse_before", axes_json(c.heldout_before)}, {"heldout_rmse_after", axes_json(c.heldout_after)},
                          {"delta_bic", c.delta_bic}, {"accepted", c.accepted}, {"heldout_z", c.t}, {"note", c.note}});
+        if (!c.indistinguishable.empty()) cands.back()["indistinguishable_from"] = c.indistinguishable;
+        if (c.stand_in) cands.back()["stands_in"] = true;
     }
     j["candidates"] = cands;
     json by = json::array();
@@ -269,7 +281,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         md << "**Explained by: ";
         for (std::size_t k = 0; k < r.accepted.size(); ++k) md << (k ? ", " : "") << r.accepted[k].effect.name;
         md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
-        for (const auto& c : r.accepted) md << paragraph(c, r) << "\n\n";
+        for (const auto& c : r.accepted) md << paragraph(c, r) << alternatives(c) << "\n\n";
     }
     md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes << " of its own motor distances horizontally): ";
     for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
