@@ -485,7 +485,16 @@ constexpr std::size_t kMinGroupSamples = 100;
 constexpr int kStandInGroups = 10;
 constexpr double kStandInSeparationRatio = 1.5;  // the highest third's separation at least this times the lowest's
 
-void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsConfig& current, double factor) {
+// Whether the effect moves the prediction, on these rows, by at least kEvidenceChange noise floors (RMS).
+bool acts_on(const Data& d, const std::vector<Wrench6>& before, const std::vector<Wrench6>& after, const std::vector<std::size_t>& rows) {
+    double s = 0, n = 0;
+    for (auto i : rows)
+        for (std::size_t a = 0; a < 6; ++a)
+            if (d.replay.measured_axes()[a]) s += std::pow((after[i][a] - before[i][a]) / d.sigma[a], 2), n += 1;
+    return n > 0 && s / n >= kEvidenceChange * kEvidenceChange;
+}
+
+void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsConfig& current, const std::vector<Wrench6>& current_pred, double factor) {
     std::vector<std::size_t> near;
     for (auto i : d.on_legs)
         if (d.info[i].near) near.push_back(i);
@@ -501,6 +510,11 @@ void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsCon
         if (d.info[i].h >= high) rows[1].push_back(i);
     }
     if (rows[0].size() < kMinGroupSamples || rows[1].size() < kMinGroupSamples) return;
+    // An effect that acts only at some separations (jet merging needs widened jets) cannot be
+    // measured where it does not act: nothing to compare.
+    Fit whole(d, current, c.effect);
+    const auto& with = whole.predict(c.values);
+    if (!acts_on(d, current_pred, with, rows[0]) || !acts_on(d, current_pred, with, rows[1])) return;
     // The low-minus-high difference on all the blocks, and its spread over the blocked folds (the
     // jackknife: the covariance alone is several times too narrow on autocorrelated, turbulent data).
     auto difference = [&](int left_out) {
@@ -731,7 +745,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         const CandidateResult* best = nullptr;
         for (auto* c : ranked) {
             say(log::cat("  is ", c->effect.name, " one value for the whole flight?"));
-            stand_in_check(*c, d, current, factor);
+            stand_in_check(*c, d, current, current_pred, factor);
             if (c->accepted) {
                 best = c;
                 break;
