@@ -140,6 +140,20 @@ double t975(int dof) {
     return dof >= 1 && dof <= 10 ? table[static_cast<std::size_t>(dof - 1)] : 1.96 + 2.5 / std::max(dof, 1);
 }
 
+// The spread of a jackknife over its replicates (each with one group of blocks left out):
+// sqrt((G - 1) / G * sum (x - mean)²), per parameter.
+std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates) {
+    const double G = static_cast<double>(replicates.size());
+    std::vector<double> out;
+    for (std::size_t p = 0; p < replicates.front().size(); ++p) {
+        double mean = 0, var = 0;
+        for (const auto& x : replicates) mean += x[p] / G;
+        for (const auto& x : replicates) var += (x[p] - mean) * (x[p] - mean);
+        out.push_back(std::sqrt(var * (G - 1) / G));
+    }
+    return out;
+}
+
 // Step of the numerical derivatives below, as a fraction of a parameter's range.
 constexpr double kSensitivityStep = 1e-3;
 
@@ -530,23 +544,19 @@ void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsCon
         for (std::size_t p = 0; p < v[0].size(); ++p) out.push_back(v[0][p] - v[1][p]);
         return out;
     };
-    const auto all = difference(-1);
-    std::vector<std::vector<double>> jack;
     std::set<int> groups;  // a short flight has fewer blocks than kStandInGroups
     for (auto i : near) groups.insert(d.info[i].leg % kStandInGroups);
     if (groups.size() < 3) return;
-    const double G = static_cast<double>(groups.size());
+    const auto all = difference(-1);
+    std::vector<std::vector<double>> jack;
     for (int k : groups) jack.push_back(difference(k));
+    const auto sd = jackknife_sd(jack);
     for (std::size_t p = 0; p < c.values.size(); ++p) {
-        double mean = 0, var = 0;
-        for (const auto& x : jack) mean += x[p] / G;
-        for (const auto& x : jack) var += (x[p] - mean) * (x[p] - mean);
-        var *= (G - 1) / G;
-        const double z = std::abs(all[p]) / std::sqrt(var);
+        const double z = std::abs(all[p]) / sd[p];
         if (!(z > kStandInZ)) continue;
         c.accepted = false;
         c.stand_in = true;
-        c.note += log::cat("; but ", c.effect.params[p].name, " differs by ", all[p], " ± ", std::sqrt(var), " between the passes where the neighbours are lowest (< ",
+        c.note += log::cat("; but ", c.effect.params[p].name, " differs by ", all[p], " ± ", sd[p], " between the passes where the neighbours are lowest (< ",
                            low, " m above) and highest (>= ", high, " m; z = ", std::round(z * 10) / 10,
                            "): one value does not fit the flight, so the effect stands in for something else — not accepted");
         return;
@@ -694,14 +704,10 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         }
         // 95 % intervals: the wider of the leg-fold jackknife (t, folds - 1 dof) and the
         // covariance, with the tare's shared error added in quadrature.
-        const double K = o.folds;
         const auto tare = tare_spread(d, fit, e, values, replay.tare_samples(current));
+        const auto jack = jackknife_sd(fold_values);
         for (std::size_t p = 0; p < values.size(); ++p) {
-            double mean = 0, var = 0;
-            for (const auto& v : fold_values) mean += v[p] / K;
-            for (const auto& v : fold_values) var += (v[p] - mean) * (v[p] - mean);
-            var *= (K - 1) / K;
-            const double half = std::hypot(std::max(t975(o.folds - 1) * std::sqrt(var), 1.96 * se[p]), 1.96 * tare[p]);
+            const double half = std::hypot(std::max(t975(o.folds - 1) * jack[p], 1.96 * se[p]), 1.96 * tare[p]);
             c.lo.push_back(values[p] - half);
             c.hi.push_back(values[p] + half);
         }

@@ -67,7 +67,7 @@ std::string alternatives(const CandidateResult& c) {
     std::string names;
     for (const auto& n : c.indistinguishable) names += (names.empty() ? "" : " or ") + n;
     return log::cat(" *Not distinguishable on this flight from ", names, "*: it was accepted too, and on the held-out blocks neither fits ",
-                    "significantly better (forces that change slowly make a lag look like a delay). ", c.effect.name,
+                    "significantly better. ", c.effect.name,
                     " is kept for its lower held-out error; a flight with faster changes would tell them apart.");
 }
 
