@@ -117,8 +117,8 @@ void train() {
     std::filesystem::remove_all(tmp);
     Split sp = split_by_leg(all);
     if (sp.train.samples.size() > 100000) sp.train.samples.resize(100000);
-    std::printf("| training (%zu samples, %zu validation, 2 threads) | epochs (best) | seconds | target |\n|---|---|---|---|\n",
-                sp.train.samples.size(), sp.validation.samples.size());
+    std::printf("| training (%zu samples, %zu validation, %d thread%s) | epochs (best) | seconds | target |\n|---|---|---|---|\n",
+                sp.train.samples.size(), sp.validation.samples.size(), kDefaultTrainThreads, kDefaultTrainThreads == 1 ? "" : "s");
     for (const char* kind : {"deep_sets", "learnt_linear"}) {
         TrainOptions o;
         o.kind = kind;

@@ -24,6 +24,8 @@ namespace {
 
 using namespace dw::predictor;
 
+constexpr const char* kThreadsHelp = "libtorch threads per training (default 1: more spin against each other and any other busy process)";
+
 dw::physics::PhysicsConfig physics_from(const std::string& path) {
     return path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
 }
@@ -64,6 +66,7 @@ int run(int argc, char** argv) {
     study->add_option("--legs", so.legs, "legs per flight")->check(dw::cli::in(dw::Range{5, dw::physics::kLegsRange.hi}));
     study->add_option("--seed", so.seed, "seed of the flights and the training")->check(dw::cli::in(dw::kSeedRange));
     study->add_option("--epochs", so.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+    study->add_option("--threads", so.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
     study->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
     study->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
     study->add_flag("--no-maps", no_maps, "skip the maps");
@@ -76,6 +79,7 @@ int run(int argc, char** argv) {
     train->add_option("--data", data, "flight folders or .mcap recordings")->required();
     train->add_option("--out", model_out, "model file to write (JSON)")->required();
     train->add_option("--epochs", to.max_epochs, "at most this many epochs")->check(dw::cli::in(kEpochsRange));
+    train->add_option("--threads", to.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
     train->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
     train->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
 
@@ -96,6 +100,7 @@ int run(int argc, char** argv) {
     real->add_option("--physics", real_physics, "physics configuration (e.g. config/physics.crazyflie.yaml); vehicles come from each flight");
     real->add_option("--out", ro.out_dir, "output folder (models, table.md, table.csv, map_f_d.png)")->required();
     real->add_option("--epochs", ro.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+    real->add_option("--threads", ro.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
     real->add_option("--seed", ro.seed, "seed of the training")->check(dw::cli::in(dw::kSeedRange));
 
     MapRequest mr;

@@ -86,7 +86,7 @@ RealResult run_real(const RealOptions& o) {
     say(log::cat(all.samples.size(), " samples from ", all.sources.size(), " flight(s): ", r.train, " training, ", r.validation,
                  " validation, ", r.test, " held out"));
     fs::create_directories(out / "models");
-    const TrainPlan plan{o.seed, o.max_epochs, describe_split(all), o.progress, o.stop};
+    const TrainPlan plan{o.seed, o.max_epochs, o.threads, describe_split(all), o.progress, o.stop};
     auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va) {
         return train_and_save(kind, tr, va, plan, (out / "models" / (kind + ".json")).string());
     };

@@ -13,6 +13,7 @@
 
 #include "physics/config.hpp"
 #include "predictor/evaluate.hpp"
+#include "predictor/train.hpp"
 
 namespace dw::predictor {
 
@@ -22,6 +23,7 @@ struct RealOptions {
     std::string out_dir;
     std::uint64_t seed = 1;
     int max_epochs = 150;
+    int threads = kDefaultTrainThreads;  // libtorch's threads per training
     std::function<void(const std::string&)> progress;
     std::stop_token stop;
 };

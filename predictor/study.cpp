@@ -35,6 +35,7 @@ std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Datas
     t.kind = kind;
     t.seed = plan.seed;
     t.max_epochs = plan.max_epochs;
+    t.threads = plan.threads;
     t.stop = plan.stop;
     t.split = plan.split;
     t.progress = [&](int epoch, double tl, double vl) {
@@ -90,7 +91,7 @@ StudyResult run_study(const StudyOptions& o) {
                  split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
 
     // 2. Train.
-    const TrainPlan plan{o.seed, o.max_epochs, "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
+    const TrainPlan plan{o.seed, o.max_epochs, o.threads, "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
                          o.progress, o.stop};
     auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file) {
         return train_and_save(kind, tr, va, plan, (out / "models" / file).string());

@@ -12,6 +12,7 @@
 
 #include "physics/config.hpp"
 #include "predictor/evaluate.hpp"
+#include "predictor/train.hpp"
 
 namespace dw::predictor {
 
@@ -23,6 +24,7 @@ struct StudyOptions {
     double single_half_width_m = 1.6;    // the single-neighbour flights' square (others: 1 m)
     std::uint64_t seed = 1;
     int max_epochs = 150;
+    int threads = kDefaultTrainThreads;  // libtorch's threads per training
     bool generalisation = true;          // train on K <= 2, test on K = 3; leave stack out
     bool maps = true;
     ArenaOptions arena;
@@ -42,6 +44,7 @@ StudyResult run_study(const StudyOptions& o);
 struct TrainPlan {
     std::uint64_t seed = 1;
     int max_epochs = 150;
+    int threads = kDefaultTrainThreads;
     std::string split;                                 // how the blocks were split (the model's metadata)
     std::function<void(const std::string&)> progress;  // one line per step
     std::stop_token stop;

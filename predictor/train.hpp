@@ -15,6 +15,10 @@ namespace dw::predictor {
 
 inline constexpr Range kEpochsRange{1, 100000};
 inline constexpr Range kHiddenRange{4, 4096};
+inline constexpr Range kThreadsRange{1, 64};
+// libtorch's threads per training. One by default: the models are small, and two OpenMP threads
+// spin against each other and against any other busy process on a 2-core machine (docs/BENCHMARKS.md).
+inline constexpr int kDefaultTrainThreads = 1;
 
 struct TrainOptions {
     std::string kind = "deep_sets";     // naive_linear, learnt_linear or deep_sets
@@ -26,7 +30,7 @@ struct TrainOptions {
     double learning_rate = 2e-3;
     int batch = 256;
     std::uint64_t seed = 1;
-    int threads = 2;
+    int threads = kDefaultTrainThreads;
     std::string split = "by leg";        // how the training and validation legs were chosen (metadata)
     // Called after every epoch: epoch, training loss, validation loss (normalised MSE).
     std::function<void(int, double, double)> progress;
