@@ -71,21 +71,34 @@ std::string alternatives(const CandidateResult& c) {
                     " is kept for its lower held-out error; a flight with faster changes would tell them apart.");
 }
 
-std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
+// Who measured the force, in the report's words: a load stand, or a flying sufferer's estimate.
+struct Voice {
+    bool flying = false;
+    std::string sensor, clock, along;  // "the stand", "the stand's clock", where the force pattern moves
+    static Voice of(const Replay& r) {
+        if (!r.flying()) return {false, "the stand", "the stand's clock", "along each leg — towards the travel on one leg, against it on the next"};
+        return {true, "the sufferer's force estimate", "the sufferer's force log", "along the neighbour's path — towards its travel"};
+    }
+};
+
+std::string paragraph(const CandidateResult& c, const Voice& who) {
     const auto& v = c.values;
     const std::string err = log::cat("Held-out RMSE on ", kAxes[c.best_axis], ": ", fmt(c.heldout_before[static_cast<std::size_t>(c.best_axis)]),
                                      " → ", fmt(c.heldout_after[static_cast<std::size_t>(c.best_axis)]), " (", fmt(c.gain * 100, 0),
                                      " % of its squared error removed on blocks the fit never saw).");
     const auto& n = c.effect.name;
     if (n == "clock_offset")
-        return log::cat("**clock_offset** — the stand's clock is ", fmt(std::abs(v[0]), 3), " s ", v[0] >= 0 ? "behind" : "ahead of",
-                        " the motion capture's: the force on the sufferer at mocap time t is stamped t ", v[0] >= 0 ? "+ " : "− ",
-                        fmt(std::abs(v[0]), 3), " s in wrench.csv. Nothing aerodynamic is missing; the two systems' time bases differ. At 0.5 m/s it ",
-                        "moves the force pattern ", fmt(std::abs(v[0]) * 50, 1), " cm along each leg — towards the travel on one leg, ",
-                        "against it on the next — while the time shift is the same at every separation (table of shifts). ", err);
+        return log::cat("**clock_offset** — ", who.clock, " is ", fmt(std::abs(v[0]), 3), " s ", v[0] >= 0 ? "behind" : "ahead of",
+                        " the poses': the force on the sufferer at pose time t is stamped t ", v[0] >= 0 ? "+ " : "− ",
+                        fmt(std::abs(v[0]), 3), " s in wrench.csv. Nothing aerodynamic is missing; the two time bases differ. At 0.5 m/s it ",
+                        "moves the force pattern ", fmt(std::abs(v[0]) * 50, 1), " cm ", who.along,
+                        " — while the time shift is the same at every separation (table of shifts). ", err);
     if (n == "sensor_lag")
-        return log::cat("**sensor_lag** — the stand reports a first-order low-pass of the force with a time constant of ", fmt(v[0], 3),
-                        " s: peaks are late and flattened. The stand's dynamics (filtering, mounting) were left out. ", err);
+        return log::cat("**sensor_lag** — ", who.sensor, " is a first-order low-pass of the force with a time constant of ", fmt(v[0], 3),
+                        " s: peaks are late and flattened. ",
+                        who.flying ? "The estimate's own dynamics (the thrust model's motor lag, the state estimator's filtering)"
+                                   : "The stand's dynamics (filtering, mounting)",
+                        " were left out. ", err);
     if (n == "wake_transport")
         return log::cat("**wake_transport** — the downwash takes time to descend: the force follows each neighbour's state ",
                         fmt(v[0], 2), " × τ(s) ago, τ(s) the turbulent jet's descent time over the vertical separation s (146 ms at 1.3 m for ",
@@ -93,14 +106,18 @@ std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
     if (n == "position_offset")
         return log::cat("**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", fmt(v[0], 3), ", ",
                         fmt(v[1], 3), ", ", fmt(v[2], 3), ") m (N, E, D): the force pattern sits off the recorded positions by a fixed "
-                        "distance, the same on +E and −E legs. ", err);
+                        "distance, the same ", who.flying ? "whichever way the neighbour passes" : "on +E and −E legs", ". ", err);
     if (n == "force_scale")
         return log::cat("**force_scale** — the recorded wrench is ", fmt(v[0], 3), " × the simulated one everywhere: a mass, drag "
-                        "coefficient or load-cell gain that differs from the model by ", fmt((v[0] - 1) * 100, 1), " %. ", err);
+                        "coefficient or ", who.flying ? "thrust-model gain" : "load-cell gain", " that differs from the model by ", fmt((v[0] - 1) * 100, 1), " %. ", err);
     if (n == "cell_crosstalk")
-        return log::cat("**cell_crosstalk** — the stand's calibration leaks ", kAxes[c.effect.from], " into ", kAxes[c.effect.to], ": ",
-                        fmt(v[0] * 100, 2), " % of the true ", kAxes[c.effect.from], " appears on ", kAxes[c.effect.to],
-                        ". Recalibrate the stand (dw-stand-agent calibrate). ", err);
+        return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration", " leaks ", kAxes[c.effect.from],
+                        " into ", kAxes[c.effect.to], ": ", fmt(v[0] * 100, 2), " % of the true ", kAxes[c.effect.from], " appears on ",
+                        kAxes[c.effect.to], ". ",
+                        who.flying ? "A flying sufferer has no load cells: this stands for a force that follows another axis "
+                                     "(the vehicle tilting as it is pushed, or the thrust direction misestimated). "
+                                   : "Recalibrate the stand (dw-stand-agent calibrate). ",
+                        err);
     if (n == "jet_merging")
         return log::cat("**jet_merging** — neighbouring jets merge into one contracted, momentum-conserving column where their "
                         "half-widths overlap (contraction ", fmt(v[0], 2), "): the aggregate is not the sum of single jets. It acts only with ",
@@ -113,7 +130,6 @@ std::string paragraph(const CandidateResult& c, const ExplainResult& r) {
                         " m² horizontally, ", fmt(v[1], 4), " m² vertically (f = −½ ρ C_d A |v| v). The simulation had only the neighbours' air. ", err);
     if (n == "ground_effect")
         return log::cat("**ground_effect** — extra lift near the floor: ", fmt(v[0], 2), " × the hover thrust × (R / 4h)². ", err);
-    (void)r;
     return n;
 }
 
@@ -281,7 +297,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         md << "**Explained by: ";
         for (std::size_t k = 0; k < r.accepted.size(); ++k) md << (k ? ", " : "") << r.accepted[k].effect.name;
         md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
-        for (const auto& c : r.accepted) md << paragraph(c, r) << alternatives(c) << "\n\n";
+        for (const auto& c : r.accepted) md << paragraph(c, Voice::of(replay)) << alternatives(c) << "\n\n";
     }
     md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes << " of its own motor distances horizontally): ";
     for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
@@ -293,14 +309,19 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     }
     md << "### Signatures: the time shift that best aligns recording and simulation\n\n"
           "A clock offset or sensor lag gives the same shift everywhere; a wake transport delay grows with separation; a position "
-          "offset gives shifts of opposite sign on +E and −E legs.\n\n| legs | separation band | mean separation [m] | samples | best shift [s] |\n|---|---|---|---|---|\n";
+       << (Voice::of(replay).flying ? "offset gives shifts of opposite sign for passes in opposite directions."
+                                    : "offset gives shifts of opposite sign on +E and −E legs.")
+       << "\n\n| legs (all: a flight without legs) | separation band | mean separation [m] | samples | best shift [s] |\n|---|---|---|---|---|\n";
     for (const auto& s : r.shifts)
-        md << "| " << (s.direction > 0 ? "+E" : "−E") << " | " << s.band << " | " << fmt(s.separation_m, 2) << " | " << s.samples << " | "
+        md << "| " << (s.direction > 0 ? "+E" : s.direction < 0 ? "−E" : "all") << " | " << s.band << " | " << fmt(s.separation_m, 2) << " | " << s.samples << " | "
            << fmt(s.shift_s, 3) << " |\n";
     md << "\n## Candidates\n\nEach fitted with Ceres (Huber loss) on the whole flight, then — if ΔBIC < −10 — in "
        << o.folds << "-fold blocked cross-validation by " << kind << " (folds: block % " << o.folds
-       << "). Accepted when the held-out error falls on some axis — Wilcoxon signed-rank z over 0.25 s pieces of the held-out blocks (pieces where the candidate changes the prediction by under 0.1 σ left out) ≥ " << o.min_t << ", by ≥ "
-       << o.min_gain * 100 << " %, and the total held-out error falls. Intervals: the wider of the leg-fold jackknife and the "
+       << "). Accepted when the held-out error falls on some axis — z over 0.25 s pieces of the held-out blocks, the larger of the "
+          "Wilcoxon signed-rank z and the self-normalised sum Σd/√Σd² (pieces where the candidate changes the prediction by under 0.1 σ left out) ≥ "
+       << o.min_t << ", by ≥ " << o.min_gain * 100
+       << " %, and the total held-out error falls — and when its value fitted on the nearest and the farthest third of separations agrees "
+          "(else it stands in for a mismatch that depends on separation). Intervals: the wider of the fold jackknife and the "
           "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | verdict |\n|---|---|---|---|---|\n";
     for (const auto& c : r.candidates)
         md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fmt(c.delta_bic, 1) << " | " << c.note << " |\n";
