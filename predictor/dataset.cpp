@@ -41,6 +41,14 @@ Dataset Dataset::with_formation(const std::string& formation) const {
     return d;
 }
 
+Dataset Dataset::in_altitude_band(double altitude_m, double band_m) const {
+    Dataset d;
+    d.sources = sources;
+    for (const auto& s : samples)
+        if (s.k > 0 && std::abs(s.reference()[2] - altitude_m) <= band_m) d.samples.push_back(s);
+    return d;
+}
+
 Dataset Dataset::with_k(int k_min, int k_max) const {
     Dataset d;
     d.sources = sources;
@@ -85,8 +93,13 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
     Dataset d;
     std::string formation = f.meta.formation;
     if (ns.size() > 1 || formation == "single") formation += log::cat(" K=", ns.size());
-    Source src{name, formation, physics::vehicle_of(f.meta, f.meta.sufferer, o.physics.sufferer.vehicle),
-               physics::neighbours_of(f.meta, o.physics), !f.meta.stand_height_m.has_value(), {}, blocks.kind};
+    Source src;  // by name: a positional {} here once left every axis unmeasured (RMSE "–" on stand flights)
+    src.name = name;
+    src.formation = formation;
+    src.sufferer = physics::vehicle_of(f.meta, f.meta.sufferer, o.physics.sufferer.vehicle);
+    src.neighbours = physics::neighbours_of(f.meta, o.physics);
+    src.flying = !f.meta.stand_height_m.has_value();
+    src.blocks = blocks.kind;
     if (!f.meta.moments_measured) src.measured = {true, true, true, false, false, false};
     d.sources.push_back(src);
     std::size_t li = 0;

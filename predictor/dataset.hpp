@@ -65,6 +65,8 @@ struct Dataset {
     }
     Dataset with_formation(const std::string& formation) const;
     Dataset with_k(int k_min, int k_max) const;
+    // Samples with a neighbour whose reference altitude is within ± band_m of altitude_m.
+    Dataset in_altitude_band(double altitude_m, double band_m) const;
     // Samples of flights with exactly one neighbour (the naive linear model's training data).
     Dataset from_two_vehicle_flights() const;
 };

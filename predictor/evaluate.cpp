@@ -51,7 +51,10 @@ PeakError peak_error(const ForceModel& model, const Dataset& data, int axis) {
     return e;
 }
 
-AxisValues arena_error(const ForceModel& model, const Dataset& data, const ArenaOptions& o) {
+namespace {
+
+// |mean prediction − mean truth| in each occupied cell of the altitude band.
+std::vector<AxisValues> cell_errors(const ForceModel& model, const Dataset& data, const ArenaOptions& o) {
     struct Cell {
         AxisValues pred{}, truth{};
         int n = 0;
@@ -70,15 +73,36 @@ AxisValues arena_error(const ForceModel& model, const Dataset& data, const Arena
         }
         ++cell.n;
     }
+    std::vector<AxisValues> out;
+    for (const auto& [key, cell] : cells) {
+        AxisValues e{};
+        for (std::size_t a = 0; a < 6; ++a) e[a] = std::abs(cell.pred[a] - cell.truth[a]) / cell.n;
+        out.push_back(e);
+    }
+    return out;
+}
+
+// Σ over the cells × `weight`; NaN on every axis when no cell is occupied.
+AxisValues cell_sum(const std::vector<AxisValues>& cells, double weight) {
     AxisValues out{};
     if (cells.empty()) {
         out.fill(NAN);
         return out;
     }
-    for (const auto& [key, cell] : cells)
-        for (std::size_t a = 0; a < 6; ++a) out[a] += std::abs(cell.pred[a] - cell.truth[a]) / cell.n;
-    for (auto& v : out) v /= static_cast<double>(cells.size());  // Σ|Δ|·A_cell / (cells·A_cell)
+    for (const auto& e : cells)
+        for (std::size_t a = 0; a < 6; ++a) out[a] += e[a] * weight;
     return out;
+}
+
+}  // namespace
+
+AxisValues arena_error(const ForceModel& model, const Dataset& data, const ArenaOptions& o) {
+    const auto cells = cell_errors(model, data, o);  // Σ|Δ|·A_cell / (cells·A_cell)
+    return cell_sum(cells, cells.empty() ? 0.0 : 1.0 / static_cast<double>(cells.size()));
+}
+
+AxisValues arena_integral(const ForceModel& model, const Dataset& data, const ArenaOptions& o) {
+    return cell_sum(cell_errors(model, data, o), o.cell_m * o.cell_m);
 }
 
 std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models, const Dataset& test,
@@ -91,7 +115,8 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
         if (d.samples.empty()) continue;
         for (const auto* m : models) {
             const auto peak = peak_error(*m, d);
-            rows.push_back({f, m->name(), d.samples.size(), arena_error(*m, d, o), rmse(*m, d), peak.mean_abs, peak.blocks});
+            rows.push_back({f, m->name(), d.samples.size(), arena_error(*m, d, o), arena_integral(*m, d, o), rmse(*m, d), peak.mean_abs,
+                            peak.blocks});
         }
     }
     return rows;
@@ -107,7 +132,7 @@ std::string fmt(double v, int precision = 3) {
     return s.str();
 }
 
-void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, bool arena) {
+void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, AxisValues ComparisonRow::*metric) {
     std::vector<std::string> order;  // formations in first-seen order, models in order
     std::vector<std::string> models;
     for (const auto& r : rows) {
@@ -128,7 +153,7 @@ void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, bool
                     samples = r.samples;
                     for (std::size_t a = 0; a < 6; ++a) {
                         if (!cellv[a].empty()) cellv[a] += " / ";
-                        cellv[a] += fmt(arena ? r.arena[a] : r.rmse[a]);
+                        cellv[a] += fmt((r.*metric)[a]);
                     }
                 }
         out << "| " << f << " | " << samples << " |";
@@ -152,11 +177,14 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
     if (any_arena) {
         out << "### Arena-mean |prediction − truth| at " << fmt(o.altitude_m, 2) << " ± " << fmt(o.band_m, 2)
             << " m relative altitude (the study's Table 1 metric; N, N·m)\n\n";
-        table(out, rows, true);
+        table(out, rows, &ComparisonRow::arena);
+        out << "\n### The same |prediction − truth| integrated over the occupied cells (N·m², N·m³)\n\n"
+               "A formation that occupies more of the arena weighs more here; the mean above does not depend on the coverage.\n\n";
+        table(out, rows, &ComparisonRow::arena_integral);
         out << "\n";
     }
     out << "### RMSE over all held-out samples (N, N·m; – where no flight measures the axis)\n\n";
-    table(out, rows, false);
+    table(out, rows, &ComparisonRow::rmse);
     out << "\n### Peak f_d error per held-out block: mean |max predicted − max recorded| (N)\n\n| formation | blocks |";
     for (const auto& m : models) out << " " << m << " |";
     out << "\n|---|---|";
@@ -184,10 +212,11 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
         out << "\n";
     }
     for (const auto& r : rows)
-        for (int arena = 1; arena >= 0; --arena) {
-            out << r.formation << "," << r.model << "," << (arena ? "arena_mean_abs" : "rmse") << "," << r.samples;
+        for (const auto& [name, metric] : {std::pair{"arena_mean_abs", &ComparisonRow::arena}, std::pair{"arena_integral", &ComparisonRow::arena_integral},
+                                           std::pair{"rmse", &ComparisonRow::rmse}}) {
+            out << r.formation << "," << r.model << "," << name << "," << r.samples;
             for (std::size_t a = 0; a < 6; ++a) {
-                const double v = arena ? r.arena[a] : r.rmse[a];
+                const double v = (r.*metric)[a];
                 out << "," << (std::isnan(v) ? "" : fmt(v, 5));  // empty: no sample in the band
             }
             out << "\n";

@@ -35,12 +35,15 @@ struct PeakError {
 PeakError peak_error(const ForceModel& model, const Dataset& data, int axis = 2);
 // NaN on every axis when no sample falls in the band.
 AxisValues arena_error(const ForceModel& model, const Dataset& data, const ArenaOptions& o = {});
+// Σ |mean prediction − mean truth| × cell area over the occupied cells (NaN when none is).
+AxisValues arena_integral(const ForceModel& model, const Dataset& data, const ArenaOptions& o = {});
 
 struct ComparisonRow {
     std::string formation;
     std::string model;
     std::size_t samples = 0;
-    AxisValues arena{};   // Table 1 metric
+    AxisValues arena{};   // Table 1 metric: mean over the occupied cells [N, N·m]
+    AxisValues arena_integral{};  // the same |Δ| integrated over the occupied cells [N·m², N·m³]
     AxisValues rmse{};
     double peak_error = NAN;  // f_d, mean over blocks
     std::size_t blocks = 0;

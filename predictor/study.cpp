@@ -107,6 +107,11 @@ StudyResult run_study(const StudyOptions& o) {
     StudyResult r;
     const std::vector<const ForceModel*> models{&physics, naive.get(), linear.get(), deep.get()};
     r.table = compare(models, split.test, o.arena);
+    for (const double altitude : physics::GridOptions{}.altitudes_m) {
+        ArenaOptions at = o.arena;
+        at.altitude_m = altitude;
+        r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, at.band_m), at));
+    }
 
     // 4. Generalisation: K <= 2 -> K = 3, and a formation left out.
     if (o.generalisation) {
@@ -143,6 +148,17 @@ StudyResult run_study(const StudyOptions& o) {
                    o.physics.aggregation == physics::Aggregation::force_sum ? "force sum" : "velocity superposition",
                    ", jet merging ", o.physics.effects.jet_merging.enabled ? "on" : "off", ").\n\n");
     md += to_markdown(r.table, o.arena);
+    md += "\n## By altitude band (the flights' three altitudes; RMSE over the held-out samples within the band)\n\n";
+    std::vector<ComparisonRow> banded;  // for the CSV: the formation labelled with its band
+    for (const auto& [altitude, rows] : r.by_altitude) {
+        ArenaOptions at = o.arena;
+        at.altitude_m = altitude;
+        md += log::cat("### ", altitude, " m\n\n", to_markdown(rows, at), "\n");
+        for (auto row : rows) {
+            row.formation += log::cat(" @ ", altitude, " m");
+            banded.push_back(row);
+        }
+    }
     if (!r.generalisation.empty()) {
         md += "\n## Generalisation (held-out legs of formations the models were not trained on)\n\n";
         md += to_markdown(r.generalisation, o.arena);
@@ -168,7 +184,7 @@ StudyResult run_study(const StudyOptions& o) {
     r.markdown_path = (out / "table.md").string();
     r.csv_path = (out / "table.csv").string();
     write_text(r.markdown_path, md);
-    write_text(r.csv_path, to_csv(r.table) + to_csv(r.generalisation, false));
+    write_text(r.csv_path, to_csv(r.table) + to_csv(r.generalisation, false) + to_csv(banded, false));
     return r;
 }
 

@@ -35,6 +35,9 @@ struct StudyOptions {
 struct StudyResult {
     std::vector<ComparisonRow> table;           // held-out legs, every formation, every model
     std::vector<ComparisonRow> generalisation;  // models trained without the formation they are tested on
+    // The same comparison at each altitude band the flights fly (0.3, 0.8, 1.3 m): the arena metric
+    // at that altitude, RMSE over the held-out samples in the band.
+    std::vector<std::pair<double, std::vector<ComparisonRow>>> by_altitude;
     std::string markdown_path, csv_path;
 };
 

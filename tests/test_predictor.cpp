@@ -11,6 +11,7 @@
 #include <set>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "flight/flight.hpp"
 #include "physics/flight_sim.hpp"
 #include "predictor/dataset.hpp"
@@ -70,6 +71,7 @@ TEST(PredictorDataset, AlignsPosesWithTheWrenchAndSplitsByLeg) {
     const Dataset d = load_dataset(path);
     ASSERT_EQ(d.sources.size(), 1u);
     EXPECT_EQ(d.sources[0].formation, "leader_follower K=2");
+    for (std::size_t a = 0; a < 6; ++a) EXPECT_TRUE(d.sources[0].measured[a]) << "a stand measures axis " << a;
     ASSERT_GT(d.samples.size(), 1000u);
     // Every sample's relative position is the interpolated poses' difference at the wrench time.
     const auto tr = dw::flight::tracks(f);
@@ -267,9 +269,14 @@ TEST(PredictorMetric, ArenaErrorIsTheMeanCellDifference) {
     const auto e = arena_error(m, d);
     EXPECT_NEAR(e[2], 0.5, 1e-12);
     EXPECT_NEAR(e[0], 0.0, 1e-12);
+    // The integral: 0.5 N over two occupied 0.1 m cells = 0.01 N·m².
+    EXPECT_NEAR(arena_integral(m, d)[2], 0.5 * 2 * 0.01, 1e-12);
     ArenaOptions far;
     far.altitude_m = 0.3;
     EXPECT_TRUE(std::isnan(arena_error(m, d, far)[2]));
+    EXPECT_TRUE(std::isnan(arena_integral(m, d, far)[2]));
+    EXPECT_TRUE(d.in_altitude_band(0.3, 0.15).samples.empty());
+    EXPECT_EQ(d.in_altitude_band(1.3, 0.15).samples.size(), d.samples.size());
 }
 
 // The claims, on simulated flights with fixed seeds (the table: dw-predictor study).
@@ -294,4 +301,15 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
         EXPECT_LE(v, 1.1 * deep_s) << "force sum: " << m << " " << v << " vs Deep Sets " << deep_s;
     }
     EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));
+    // Every altitude band the flights fly has its own table, with the arena metric at that band.
+    ASSERT_EQ(sum.by_altitude.size(), 3u);
+    for (const auto& [altitude, rows] : sum.by_altitude) {
+        SCOPED_TRACE(altitude);
+        const double v = table_value(rows, "leader_follower K=3", "deep_sets", 2);
+        EXPECT_TRUE(std::isfinite(v) && v > 0);
+        for (const auto& row : rows)  // a stand measures every axis: every RMSE is a number
+            for (std::size_t a = 0; a < 6; ++a) EXPECT_TRUE(std::isfinite(row.rmse[a])) << row.formation << " " << row.model << " axis " << a;
+    }
+    const std::string md = dw::read_file(sum.markdown_path, "table");
+    for (const char* h : {"### 0.3 m", "### 0.8 m", "### 1.3 m", "integrated over the occupied cells"}) EXPECT_NE(md.find(h), std::string::npos) << h;
 }
