@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "physics/config.hpp"
+#include "physics/trajectory.hpp"
 
 namespace dw::analysis {
 
@@ -38,7 +39,8 @@ struct ProofResult {
 ProofResult run_proof(const ProofOptions& o);
 
 // `dw-sim fly` (a sibling executable) with this physics hidden in it, into the flight folder dir.
-void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir, int legs = 36);
+void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir,
+                   int legs = physics::GridOptions{}.legs);
 
 // The proof on recorded flights (another lab's: the physics is not the truth there). Each flight
 // is first explained as it is — its own fit, whatever the real data shows. Known effects are then

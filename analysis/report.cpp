@@ -277,14 +277,15 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
     const Figures figs{replay, describe(replay, blocks), replay.recorded(o.physics), replay.recorded(r.fitted),
                        r.regions.empty() ? std::size_t{2} : static_cast<std::size_t>(physics::axis_index(r.regions.front().axis)), dir};
-    const std::string figures_md = replay.flying() ? flying_figures(figs, blocks) : stand_figures(figs, r);
+    const Voice who = Voice::of(replay);
+    const std::string figures_md = who.flying ? flying_figures(figs, blocks) : stand_figures(figs, r);
 
     // report.md
     std::ostringstream md;
     md << "# Mismatch report\n\n";
     const char* kind = flight::to_string(r.blocks);
     md << "Flight: " << f.meta.formation << ", " << f.meta.neighbours.size() << " neighbour(s), "
-       << (replay.flying() ? log::cat("a flying sufferer (wrench: ", flight::to_string(f.meta.wrench_source), ")") : std::string("on a load stand"))
+       << (who.flying ? log::cat("a flying sufferer (wrench: ", flight::to_string(f.meta.wrench_source), ")") : std::string("on a load stand"))
        << ", " << r.legs << " cross-validation blocks by " << kind << ", " << r.samples
        << " wrench samples in them. Simulated with the given physics along the recorded poses, each vehicle with its own parameters "
           "(meta.json); residual = recorded − simulated"
@@ -297,7 +298,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         md << "**Explained by: ";
         for (std::size_t k = 0; k < r.accepted.size(); ++k) md << (k ? ", " : "") << r.accepted[k].effect.name;
         md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
-        for (const auto& c : r.accepted) md << paragraph(c, Voice::of(replay)) << alternatives(c) << "\n\n";
+        for (const auto& c : r.accepted) md << paragraph(c, who) << alternatives(c) << "\n\n";
     }
     md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes << " of its own motor distances horizontally): ";
     for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
@@ -309,7 +310,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     }
     md << "### Signatures: the time shift that best aligns recording and simulation\n\n"
           "A clock offset or sensor lag gives the same shift everywhere; a wake transport delay grows with separation; a position "
-       << (Voice::of(replay).flying ? "offset gives shifts of opposite sign for passes in opposite directions."
+       << (who.flying ? "offset gives shifts of opposite sign for passes in opposite directions."
                                     : "offset gives shifts of opposite sign on +E and −E legs.")
        << "\n\n| legs (all: a flight without legs) | separation band | mean separation [m] | samples | best shift [s] |\n|---|---|---|---|---|\n";
     for (const auto& s : r.shifts)

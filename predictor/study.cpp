@@ -107,11 +107,13 @@ StudyResult run_study(const StudyOptions& o) {
     StudyResult r;
     const std::vector<const ForceModel*> models{&physics, naive.get(), linear.get(), deep.get()};
     r.table = compare(models, split.test, o.arena);
-    for (const double altitude : physics::GridOptions{}.altitudes_m) {
+    auto arena_at = [&](double altitude) {  // the study's arena, at one of the flights' altitudes
         ArenaOptions at = o.arena;
         at.altitude_m = altitude;
-        r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, at.band_m), at));
-    }
+        return at;
+    };
+    for (const double altitude : physics::GridOptions{}.altitudes_m)
+        r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, o.arena.band_m), arena_at(altitude)));
 
     // 4. Generalisation: K <= 2 -> K = 3, and a formation left out.
     if (o.generalisation) {
@@ -151,9 +153,7 @@ StudyResult run_study(const StudyOptions& o) {
     md += "\n## By altitude band (the flights' three altitudes; RMSE over the held-out samples within the band)\n\n";
     std::vector<ComparisonRow> banded;  // for the CSV: the formation labelled with its band
     for (const auto& [altitude, rows] : r.by_altitude) {
-        ArenaOptions at = o.arena;
-        at.altitude_m = altitude;
-        md += log::cat("### ", altitude, " m\n\n", to_markdown(rows, at), "\n");
+        md += log::cat("### ", altitude, " m\n\n", to_markdown(rows, arena_at(altitude)), "\n");
         for (auto row : rows) {
             row.formation += log::cat(" @ ", altitude, " m");
             banded.push_back(row);
