@@ -14,13 +14,22 @@
 
 namespace dw {
 namespace {
-std::mutex g_mutex;
-std::condition_variable g_cv;
-bool g_requested = false;
-std::atomic<int> g_signal{0};
-std::once_flag g_once;
-std::function<void()> g_user_signal;
-std::stop_source g_stop;
+// The shared state is never destroyed: the detached signal thread may wake (a SIGINT arriving as
+// main returns) after static destruction has begun, and a destroyed mutex or stop_source then
+// crashed the process (status 139 instead of 0 or 130, seen once in CI on dw-predictor compare).
+struct State {
+    std::mutex mutex;
+    std::condition_variable cv;
+    bool requested = false;
+    std::atomic<int> signal{0};
+    std::once_flag once;
+    std::function<void()> user_signal;
+    std::stop_source stop;
+};
+State& state() {
+    static State* s = new State;  // intentionally immortal (still reachable: not a leak)
+    return *s;
+}
 
 void wait_for_signals(sigset_t set) {
     int interrupts = 0;
@@ -30,8 +39,8 @@ void wait_for_signals(sigset_t set) {
         if (sig == SIGUSR1) {
             std::function<void()> f;
             {
-                std::lock_guard lock(g_mutex);
-                f = g_user_signal;
+                std::lock_guard lock(state().mutex);
+                f = state().user_signal;
             }
             if (f) f();
             continue;
@@ -49,7 +58,7 @@ Shutdown& Shutdown::instance() {
 }
 
 Shutdown& Shutdown::install() {
-    std::call_once(g_once, [] {
+    std::call_once(state().once, [] {
         sigset_t set;
         sigemptyset(&set);
         sigaddset(&set, SIGINT);
@@ -62,36 +71,36 @@ Shutdown& Shutdown::install() {
 }
 
 bool Shutdown::requested() const {
-    std::lock_guard lock(g_mutex);
-    return g_requested;
+    std::lock_guard lock(state().mutex);
+    return state().requested;
 }
 
 bool Shutdown::wait_for(std::chrono::nanoseconds d) const {
-    std::unique_lock lock(g_mutex);
-    return g_cv.wait_for(lock, d, [] { return g_requested; });
+    std::unique_lock lock(state().mutex);
+    return state().cv.wait_for(lock, d, [] { return state().requested; });
 }
 
 void Shutdown::request(int signal_number) {
     {
-        std::lock_guard lock(g_mutex);
-        if (!g_requested) g_signal = signal_number;
-        g_requested = true;
+        std::lock_guard lock(state().mutex);
+        if (!state().requested) state().signal = signal_number;
+        state().requested = true;
     }
-    g_cv.notify_all();
-    g_stop.request_stop();
+    state().cv.notify_all();
+    state().stop.request_stop();
 }
 
-std::stop_token Shutdown::token() const { return g_stop.get_token(); }
+std::stop_token Shutdown::token() const { return state().stop.get_token(); }
 
 void throw_if_stopped(const std::stop_token& stop, std::string_view what) {
     if (stop.stop_requested()) throw Stopped(log::cat("stopped during ", what));
 }
 
-int Shutdown::signal_number() const { return g_signal; }
+int Shutdown::signal_number() const { return state().signal; }
 
 void Shutdown::on_user_signal(std::function<void()> f) {
-    std::lock_guard lock(g_mutex);
-    g_user_signal = std::move(f);
+    std::lock_guard lock(state().mutex);
+    state().user_signal = std::move(f);
 }
 
 }  // namespace dw
