@@ -53,7 +53,7 @@ LearntModel sized_model(Structure s) {
     m.structure = s;
     m.input_std.fill(1);
     m.output_scale.fill(1);
-    m.phi = mlp({6, 64, 64, s == Structure::sum ? 6 : 32});
+    m.phi = mlp({kFeatureSize, 64, 64, s == Structure::sum ? 6 : 32});
     if (s == Structure::deep_sets) m.rho = mlp({32, 64, 64, 6});
     return m;
 }

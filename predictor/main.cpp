@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -82,6 +83,8 @@ int run(int argc, char** argv) {
     train->add_option("--threads", to.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
     train->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
     train->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
+    std::string baseline_path;
+    train->add_option("--baseline", baseline_path, "deep_sets only: a saved sum model (learnt_linear) to learn the residual on, as the study does");
 
     std::vector<std::string> models;
     std::string out_dir;
@@ -154,7 +157,9 @@ int run(int argc, char** argv) {
         to.progress = [](int epoch, double tl, double vl) {
             std::fprintf(stderr, "\rdw-predictor: epoch %4d  training %.4f  validation %.4f", epoch, tl, vl);
         };
-        const auto r = train_model(s.train, s.validation, to);
+        std::optional<LearntModel> baseline;
+        if (!baseline_path.empty()) baseline = LearntModel::load(baseline_path);
+        const auto r = train_model(s.train, s.validation, to, baseline ? &*baseline : nullptr);
         std::fprintf(stderr, "\n");
         r.model.save(model_out);
         std::cout << to.kind << ": " << r.epochs << " epochs (best " << r.best_epoch << ", validation "

@@ -22,18 +22,24 @@ Eigen::VectorXf Mlp::forward(const Eigen::VectorXf& in) const {
     return x;
 }
 
+Features features_of(const RelState& x) {
+    const double horizontal = std::hypot(x[0], x[1]);
+    const double separation = std::abs(x[2]) + kFeatureSeparationOffsetM;
+    return {x[0], x[1], x[2], x[3], x[4], x[5], horizontal, horizontal / separation, 1.0 / separation};
+}
+
 Wrench6 LearntModel::predict(std::span<const RelState> neighbours) const {
-    const int width = phi.outputs();
-    Eigen::VectorXf pooled = Eigen::VectorXf::Zero(width);
-    Eigen::VectorXf in(kStateSize);
+    Eigen::VectorXf pooled = Eigen::VectorXf::Zero(phi.outputs());
+    Eigen::VectorXf base = Eigen::VectorXf::Zero(6);
+    Eigen::VectorXf in(kFeatureSize);
     for (const auto& x : neighbours) {
-        for (int a = 0; a < kStateSize; ++a) {
-            const auto i = static_cast<std::size_t>(a);
-            in[a] = (static_cast<float>(x[i]) - input_mean[i]) / input_std[i];
-        }
+        const Features f = features_of(x);
+        for (std::size_t i = 0; i < f.size(); ++i)
+            in[static_cast<Eigen::Index>(i)] = (static_cast<float>(f[i]) - input_mean[i]) / input_std[i];
         pooled += phi.forward(in);
+        if (!baseline.layers.empty()) base += baseline.forward(in);
     }
-    const Eigen::VectorXf out = structure == Structure::deep_sets ? rho.forward(pooled) : pooled;
+    const Eigen::VectorXf out = (structure == Structure::deep_sets ? rho.forward(pooled) : pooled) + base;
     Wrench6 w{};
     for (std::size_t a = 0; a < 6; ++a) w[a] = static_cast<double>(out[static_cast<Eigen::Index>(a)] * output_scale[a]);
     return w;
@@ -113,13 +119,14 @@ struct Reader {
 
 void LearntModel::save(const std::string& path) const {
     json j;
-    j["format"] = "downwash-model/1";
+    j["format"] = kModelFormat;
     j["kind"] = kind;
     j["structure"] = structure == Structure::sum ? "sum" : "deep_sets";
-    j["input"] = {{"features", {"dn", "de", "dd", "dvn", "dve", "dvd"}}, {"mean", input_mean}, {"std", input_std}};
+    j["input"] = {{"features", kFeatureNames}, {"mean", input_mean}, {"std", input_std}};
     j["output"] = {{"axes", {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"}}, {"scale", output_scale}};
     j["phi"] = to_json(phi);
     if (structure == Structure::deep_sets) j["rho"] = to_json(rho);
+    if (!baseline.layers.empty()) j["baseline"] = to_json(baseline);
     j["metadata"] = json::parse(metadata_json);
     write_file(path, j.dump(1) + "\n");
 }
@@ -133,7 +140,8 @@ LearntModel LearntModel::load(const std::string& path) {
         throw InputError(log::cat(path, ": not JSON (byte ", e.byte, ")"));
     }
     Reader r{path};
-    if (r.at(j, "format", "") != "downwash-model/1") r.fail("format", "expected downwash-model/1");
+    if (r.at(j, "format", "") != kModelFormat)
+        r.fail("format", log::cat("expected ", kModelFormat, " (models saved before the jet features, downwash-model/1, must be trained again)"));
     LearntModel m;
     const auto& kind = r.at(j, "kind", "");
     if (!kind.is_string()) r.fail("kind", "not a string");
@@ -143,19 +151,25 @@ LearntModel LearntModel::load(const std::string& path) {
     else if (st == "deep_sets") m.structure = Structure::deep_sets;
     else r.fail("structure", "expected sum or deep_sets");
     const auto& input = r.at(j, "input", "");
-    m.input_mean = r.floats<kStateSize>(r.at(input, "mean", "input."), "input.mean");
-    m.input_std = r.floats<kStateSize>(r.at(input, "std", "input."), "input.std");
+    m.input_mean = r.floats<kFeatureSize>(r.at(input, "mean", "input."), "input.mean");
+    m.input_std = r.floats<kFeatureSize>(r.at(input, "std", "input."), "input.std");
     for (std::size_t i = 0; i < m.input_std.size(); ++i)
         if (!(m.input_std[i] > 0)) r.fail(log::cat("input.std[", i, "]"), "must be > 0");
     m.output_scale = r.floats<6>(r.at(r.at(j, "output", ""), "scale", "output."), "output.scale");
     m.phi = r.mlp(r.at(j, "phi", ""), "phi");
-    if (m.phi.inputs() != kStateSize) r.fail("phi[0].weight", log::cat("takes ", m.phi.inputs(), " inputs, expected ", kStateSize));
+    if (m.phi.inputs() != kFeatureSize) r.fail("phi[0].weight", log::cat("takes ", m.phi.inputs(), " inputs, expected ", kFeatureSize));
     if (m.structure == Structure::deep_sets) {
         m.rho = r.mlp(r.at(j, "rho", ""), "rho");
         if (m.rho.inputs() != m.phi.outputs()) r.fail("rho[0].weight", "does not take phi's output");
         if (m.rho.outputs() != 6) r.fail("rho", "must give 6 outputs");
     } else if (m.phi.outputs() != 6) {
         r.fail("phi", "must give 6 outputs");
+    }
+    if (j.contains("baseline")) {
+        if (m.structure != Structure::deep_sets) r.fail("baseline", "only a deep_sets model carries a baseline");
+        m.baseline = r.mlp(j["baseline"], "baseline");
+        if (m.baseline.inputs() != kFeatureSize || m.baseline.outputs() != 6)
+            r.fail("baseline", log::cat("must take ", kFeatureSize, " inputs and give 6 outputs"));
     }
     if (j.contains("metadata")) m.metadata_json = j["metadata"].dump();
     return m;

@@ -5,8 +5,15 @@
 //   learnt_linear  the same sum structure, trained on multi-vehicle data
 //   deep_sets      Phi(Σ_j phi(x_j - x_i))
 // Learnt models are trained with libtorch (train.hpp) but evaluated here with Eigen, so serving
-// a model needs no libtorch. A saved model (JSON, downwash-model/1) carries its input
+// a model needs no libtorch. A saved model (JSON, kModelFormat) carries its input
 // normalisation and its metadata.
+//
+// Every learnt model sees a neighbour through the same features (features_of): the relative state
+// and three numbers that carry the jet's own invariances (horizontal distance, the similarity
+// variable horizontal distance / vertical separation, and 1 / vertical separation, the centreline
+// decay), so a small network need not rediscover them from raw coordinates. A Deep Sets model may
+// carry a frozen sum model as its baseline and learn only what the sum misses:
+//   deep_sets with baseline   Σ_j psi(x_j - x_i) + Phi(Σ_j phi(x_j - x_i)), Phi's last layer starting at 0
 #include <Eigen/Core>
 #include <memory>
 #include <mutex>
@@ -49,14 +56,26 @@ struct Mlp {
 
 enum class Structure { sum, deep_sets };
 
+inline constexpr int kFeatureSize = 9;
+using Features = std::array<double, kFeatureSize>;
+inline constexpr std::array<const char*, kFeatureSize> kFeatureNames{
+    "dn", "de", "dd", "dvn", "dve", "dvd", "horizontal_distance", "distance_over_separation", "inverse_separation"};
+// The vertical separation's offset in the two ratios [m]: about a rotor's size, so a neighbour level
+// with the sufferer gives finite features (the jet's virtual origin lies about that far above a rotor).
+inline constexpr double kFeatureSeparationOffsetM = 0.1;
+Features features_of(const RelState& x);
+
+inline constexpr const char* kModelFormat = "downwash-model/2";
+
 class LearntModel final : public ForceModel {
 public:
     std::string kind;                  // naive_linear, learnt_linear, deep_sets (the model's name)
     Structure structure = Structure::sum;
-    std::array<float, kStateSize> input_mean{}, input_std{};
+    std::array<float, kFeatureSize> input_mean{}, input_std{};
     std::array<float, 6> output_scale{};
     Mlp phi;                           // per neighbour (psi for the sum structure)
     Mlp rho;                           // deep sets: on the pooled sum
+    Mlp baseline;                      // deep sets: a frozen sum model's psi added to the output (empty: none)
     std::string metadata_json = "{}";  // what it was trained on, how, and how well
 
     const std::string& name() const override { return kind; }

@@ -87,8 +87,8 @@ RealResult run_real(const RealOptions& o) {
                  " validation, ", r.test, " held out"));
     fs::create_directories(out / "models");
     const TrainPlan plan{o.seed, o.max_epochs, o.threads, describe_split(all), o.progress, o.stop};
-    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va) {
-        return train_and_save(kind, tr, va, plan, (out / "models" / (kind + ".json")).string());
+    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const LearntModel* baseline = nullptr) {
+        return train_and_save(kind, tr, va, plan, (out / "models" / (kind + ".json")).string(), baseline);
     };
     const PhysicsModel physics(o.physics);
     std::vector<const ForceModel*> models{&physics};
@@ -102,7 +102,7 @@ RealResult run_real(const RealOptions& o) {
         say("no two-vehicle flight among the data: the naive linear model is not trained");
     }
     const auto linear = train("learnt_linear", split.train, split.validation);
-    const auto deep = train("deep_sets", split.train, split.validation);
+    const auto deep = train("deep_sets", split.train, split.validation, linear.get());
     models.push_back(linear.get());
     models.push_back(deep.get());
     write_file((out / "models" / "physics.yaml").string(), physics::to_yaml(o.physics));

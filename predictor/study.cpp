@@ -27,7 +27,7 @@ double table_value(const std::vector<ComparisonRow>& rows, const std::string& fo
 }
 
 std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Dataset& tr, const Dataset& va, const TrainPlan& plan,
-                                            const std::string& path) {
+                                            const std::string& path, const LearntModel* baseline) {
     auto say = [&](const std::string& line) {
         if (plan.progress) plan.progress(line);
     };
@@ -41,8 +41,8 @@ std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Datas
     t.progress = [&](int epoch, double tl, double vl) {
         if (epoch % 10 == 0) say(log::cat("  ", kind, " epoch ", epoch, ": training ", tl, ", validation ", vl));
     };
-    say(log::cat("training ", kind, " on ", tr.samples.size(), " samples"));
-    auto r = train_model(tr, va, t);
+    say(log::cat("training ", kind, " on ", tr.samples.size(), " samples", baseline ? log::cat(" (on ", baseline->kind, ")") : ""));
+    auto r = train_model(tr, va, t, baseline);
     say(log::cat("  ", kind, ": ", r.epochs, " epochs (best ", r.best_epoch, "), ", r.seconds, " s"));
     r.model.save(path);
     return std::make_unique<LearntModel>(std::move(r.model));
@@ -93,13 +93,14 @@ StudyResult run_study(const StudyOptions& o) {
     // 2. Train.
     const TrainPlan plan{o.seed, o.max_epochs, o.threads, "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
                          o.progress, o.stop};
-    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file) {
-        return train_and_save(kind, tr, va, plan, (out / "models" / file).string());
+    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file,
+                     const LearntModel* baseline = nullptr) {
+        return train_and_save(kind, tr, va, plan, (out / "models" / file).string(), baseline);
     };
     auto singles = [](const Dataset& d) { return d.from_two_vehicle_flights().with_k(1, 1); };
     auto naive = train("naive_linear", singles(split.train), singles(split.validation), "naive_linear.json");
     auto linear = train("learnt_linear", split.train, split.validation, "learnt_linear.json");
-    auto deep = train("deep_sets", split.train, split.validation, "deep_sets.json");
+    auto deep = train("deep_sets", split.train, split.validation, "deep_sets.json", linear.get());
     PhysicsModel physics(o.physics);
     write_text(out / "models" / "physics.yaml", physics::to_yaml(o.physics));
 
@@ -130,14 +131,14 @@ StudyResult run_study(const StudyOptions& o) {
         k2_tr = without(k2_tr, "leader_follower K=3", "hybrid K=3");
         k2_va = without(k2_va, "leader_follower K=3", "hybrid K=3");
         auto lin2 = train("learnt_linear", k2_tr, k2_va, "learnt_linear.k_le_2.json");
-        auto deep2 = train("deep_sets", k2_tr, k2_va, "deep_sets.k_le_2.json");
+        auto deep2 = train("deep_sets", k2_tr, k2_va, "deep_sets.k_le_2.json", lin2.get());
         for (auto row : compare({naive.get(), lin2.get(), deep2.get()}, split.test.with_k(3, 3), o.arena)) {
             row.formation += " (trained on K ≤ 2)";
             r.generalisation.push_back(row);
         }
         auto ns_tr = without(split.train, "stack K=2", ""), ns_va = without(split.validation, "stack K=2", "");
         auto lin_s = train("learnt_linear", ns_tr, ns_va, "learnt_linear.no_stack.json");
-        auto deep_s = train("deep_sets", ns_tr, ns_va, "deep_sets.no_stack.json");
+        auto deep_s = train("deep_sets", ns_tr, ns_va, "deep_sets.no_stack.json", lin_s.get());
         for (auto row : compare({naive.get(), lin_s.get(), deep_s.get()}, split.test.with_formation("stack K=2"), o.arena)) {
             row.formation += " (stack left out)";
             r.generalisation.push_back(row);

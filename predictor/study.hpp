@@ -52,8 +52,9 @@ struct TrainPlan {
     std::function<void(const std::string&)> progress;  // one line per step
     std::stop_token stop;
 };
+// A deep_sets model is trained on `baseline` (a sum model; see train_model) when one is given.
 std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Dataset& train, const Dataset& validation,
-                                            const TrainPlan& plan, const std::string& path);
+                                            const TrainPlan& plan, const std::string& path, const LearntModel* baseline = nullptr);
 
 // The arena-metric value of `model` on `formation` and `axis` in a table (NaN if absent).
 double table_value(const std::vector<ComparisonRow>& rows, const std::string& formation, const std::string& model,

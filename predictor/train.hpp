@@ -47,7 +47,9 @@ struct TrainResult {
     double seconds = 0;
 };
 
-// Throws dw::InputError when there is nothing to train on.
-TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o);
+// Throws dw::InputError when there is nothing to train on. A deep_sets model given a sum model as
+// `baseline` learns only the residual on it (frozen), starting from exactly the baseline.
+TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o,
+                        const LearntModel* baseline = nullptr);
 
 }  // namespace dw::predictor

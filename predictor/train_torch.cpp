@@ -47,33 +47,76 @@ Mlp export_mlp(torch::nn::Sequential& seq) {
 
 struct Tensors {
     torch::Tensor x, mask, y;
+    torch::Tensor base;  // the frozen baseline's output (normalised), zeros without one
 };
 
+// The training tensors in the model's normalisation; the baseline (if any) evaluated once, here.
 Tensors tensors(const Dataset& d, const LearntModel& norm) {
     const auto n = static_cast<int64_t>(d.samples.size());
-    auto x = torch::zeros({n, kMaxNeighbours, kStateSize});
+    auto x = torch::zeros({n, kMaxNeighbours, kFeatureSize});
     auto mask = torch::zeros({n, kMaxNeighbours, 1});
     auto y = torch::zeros({n, 6});
+    auto base = torch::zeros({n, 6});
     auto xa = x.accessor<float, 3>();
     auto ma = mask.accessor<float, 3>();
     auto ya = y.accessor<float, 2>();
+    auto ba = base.accessor<float, 2>();
+    LearntModel baseline = norm;  // the baseline alone: a sum over its psi, and nothing else
+    baseline.structure = Structure::sum;
+    baseline.phi = norm.baseline;
+    baseline.baseline = {};
     for (int64_t i = 0; i < n; ++i) {
         const auto& s = d.samples[static_cast<std::size_t>(i)];
         for (int j = 0; j < s.k; ++j) {
             ma[i][j][0] = 1;
-            for (int a = 0; a < kStateSize; ++a) {
-                const auto ai = static_cast<std::size_t>(a);
-                xa[i][j][a] = (static_cast<float>(s.x[static_cast<std::size_t>(j)][ai]) - norm.input_mean[ai]) / norm.input_std[ai];
+            const Features f = features_of(s.x[static_cast<std::size_t>(j)]);
+            for (std::size_t a = 0; a < f.size(); ++a)
+                xa[i][j][static_cast<int64_t>(a)] = (static_cast<float>(f[a]) - norm.input_mean[a]) / norm.input_std[a];
+        }
+        const Wrench6 b = norm.baseline.layers.empty() ? Wrench6{} : baseline.predict(s.neighbours());
+        for (std::size_t a = 0; a < 6; ++a) {
+            ya[i][static_cast<int64_t>(a)] = static_cast<float>(s.y[a]) / norm.output_scale[a];
+            ba[i][static_cast<int64_t>(a)] = static_cast<float>(b[a]) / norm.output_scale[a];
+        }
+    }
+    return {x, mask, y, base};
+}
+
+// Per-feature mean and spread over every neighbour. The wrench is scaled by one RMS for the three
+// forces and one for the three moments (no offset: the sum structure must give 0 with nobody near):
+// the loss is then an error in newtons, dominated by the axes that carry a signal, not a per-axis
+// ratio in which an axis of pure noise (f_n, f_e under a hover) weighs as much as f_d.
+void normalise(const Dataset& train, LearntModel& m) {
+    std::array<double, kFeatureSize> sum{}, sq{};
+    std::array<double, 6> ysq{};
+    double count = 0;
+    for (const auto& s : train.samples) {
+        for (const auto& x : s.neighbours()) {
+            const Features f = features_of(x);
+            for (std::size_t a = 0; a < f.size(); ++a) {
+                sum[a] += f[a];
+                sq[a] += f[a] * f[a];
             }
         }
-        for (std::size_t a = 0; a < 6; ++a) ya[i][static_cast<int64_t>(a)] = static_cast<float>(s.y[a]) / norm.output_scale[a];
+        count += s.k;
+        for (std::size_t a = 0; a < 6; ++a) ysq[a] += s.y[a] * s.y[a];
     }
-    return {x, mask, y};
+    if (count == 0) throw InputError("training: no sample has a neighbour");
+    for (std::size_t a = 0; a < sum.size(); ++a) {
+        const double mean = sum[a] / count;
+        m.input_mean[a] = static_cast<float>(mean);
+        m.input_std[a] = static_cast<float>(std::max(1e-3, std::sqrt(std::max(0.0, sq[a] / count - mean * mean))));
+    }
+    const auto n = static_cast<double>(train.samples.size());
+    for (std::size_t group = 0; group < 6; group += 3) {
+        const double rms = std::sqrt((ysq[group] + ysq[group + 1] + ysq[group + 2]) / (3 * n));
+        for (std::size_t a = group; a < group + 3; ++a) m.output_scale[a] = static_cast<float>(std::max(1e-3, rms));
+    }
 }
 
 }  // namespace
 
-TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o) {
+TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o, const LearntModel* baseline) {
     const auto started = std::chrono::steady_clock::now();
     if (train.samples.empty()) throw InputError("training: no samples on the training legs");
     if (validation.samples.empty()) throw InputError("training: no samples on the validation legs");
@@ -84,41 +127,36 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
     LearntModel& m = r.model;
     m.kind = o.kind;
     m.structure = structure_of(o.kind);
-    // Normalisation from the training data: per-feature mean and spread over every neighbour;
-    // per-axis RMS of the wrench (no offset: the sum structure must give 0 with nobody near).
-    std::array<double, kStateSize> sum{}, sq{};
-    std::array<double, 6> ysq{};
-    double count = 0;
-    for (const auto& s : train.samples) {
-        for (int j = 0; j < s.k; ++j)
-            for (std::size_t a = 0; a < kStateSize; ++a) {
-                sum[a] += s.x[static_cast<std::size_t>(j)][a];
-                sq[a] += s.x[static_cast<std::size_t>(j)][a] * s.x[static_cast<std::size_t>(j)][a];
-            }
-        count += s.k;
-        for (std::size_t a = 0; a < 6; ++a) ysq[a] += s.y[a] * s.y[a];
+    if (baseline) {  // Deep Sets on a frozen sum model: its normalisation, its psi
+        if (m.structure != Structure::deep_sets || baseline->structure != Structure::sum)
+            throw InputError(log::cat("training: a baseline is a sum model (naive_linear or learnt_linear) under a deep_sets model, not ",
+                                      baseline->kind, " under ", o.kind));
+        m.input_mean = baseline->input_mean;
+        m.input_std = baseline->input_std;
+        m.output_scale = baseline->output_scale;
+        m.baseline = baseline->phi;
+    } else {
+        normalise(train, m);
     }
-    if (count == 0) throw InputError("training: no sample has a neighbour");
-    for (std::size_t a = 0; a < kStateSize; ++a) {
-        const double mean = sum[a] / count;
-        m.input_mean[a] = static_cast<float>(mean);
-        m.input_std[a] = static_cast<float>(std::max(1e-3, std::sqrt(std::max(0.0, sq[a] / count - mean * mean))));
-    }
-    for (std::size_t a = 0; a < 6; ++a)
-        m.output_scale[a] = static_cast<float>(std::max(1e-3, std::sqrt(ysq[a] / static_cast<double>(train.samples.size()))));
 
     const Tensors tr = tensors(train, m), va = tensors(validation, m);
     const int width = m.structure == Structure::deep_sets ? o.latent : 6;
-    auto phi = mlp(kStateSize, o.hidden, width);
+    auto phi = mlp(kFeatureSize, o.hidden, width);
     auto rho = mlp(o.latent, o.hidden, 6);
+    if (baseline) {  // the residual starts at zero: before any step the model is its baseline
+        torch::NoGradGuard no_grad;
+        auto last = rho[rho->size() - 1]->as<torch::nn::Linear>();
+        last->weight.zero_();
+        last->bias.zero_();
+    }
     std::vector<torch::Tensor> params = phi->parameters();
     if (m.structure == Structure::deep_sets)
         for (auto& p : rho->parameters()) params.push_back(p);
     torch::optim::Adam adam(params, torch::optim::AdamOptions(o.learning_rate));
 
-    auto forward = [&](const torch::Tensor& x, const torch::Tensor& mask) {
+    auto forward = [&](const torch::Tensor& x, const torch::Tensor& mask, const torch::Tensor& base) {
         auto pooled = (phi->forward(x) * mask).sum(1);
-        return m.structure == Structure::deep_sets ? rho->forward(pooled) : pooled;
+        return (m.structure == Structure::deep_sets ? rho->forward(pooled) : pooled) + base;
     };
     auto snapshot = [&] {
         std::vector<torch::Tensor> s;
@@ -127,6 +165,10 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
     };
     auto best = snapshot();
     r.best_validation_loss = INFINITY;
+    if (baseline) {  // the baseline alone is the score to beat
+        torch::NoGradGuard no_grad;
+        r.best_validation_loss = torch::mse_loss(forward(va.x, va.mask, va.base), va.y).item<double>();
+    }
     const int64_t n = tr.x.size(0);
     auto gen = torch::make_generator<torch::CPUGeneratorImpl>(o.seed);
     int since_best = 0;
@@ -138,7 +180,8 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
             throw_if_stopped(o.stop, "training");
             const auto idx = perm.slice(0, b, std::min(n, b + o.batch));
             adam.zero_grad();
-            auto loss = torch::mse_loss(forward(tr.x.index_select(0, idx), tr.mask.index_select(0, idx)), tr.y.index_select(0, idx));
+            auto loss = torch::mse_loss(forward(tr.x.index_select(0, idx), tr.mask.index_select(0, idx), tr.base.index_select(0, idx)),
+                                        tr.y.index_select(0, idx));
             loss.backward();
             adam.step();
             total += loss.item<double>();
@@ -147,7 +190,7 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
         double val = 0;
         {
             torch::NoGradGuard no_grad;
-            val = torch::mse_loss(forward(va.x, va.mask), va.y).item<double>();
+            val = torch::mse_loss(forward(va.x, va.mask, va.base), va.y).item<double>();
         }
         r.epochs = epoch;
         if (o.progress) o.progress(epoch, total / static_cast<double>(batches), val);
@@ -185,6 +228,7 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
                                      {"latent", o.latent},
                                      {"learning_rate", o.learning_rate},
                                      {"batch", o.batch},
+                                     {"baseline", baseline ? baseline->kind : "none"},
                                      {"training_seconds", r.seconds}}
                           .dump();
     return r;

@@ -19,16 +19,16 @@ using namespace dw::predictor;
 namespace {
 
 LearntModel linear_model(const std::string& kind, float gain) {
-    // psi(x) = gain * (dn, de, dd, 0, 0, 0): the sum is gain x the neighbours' summed offsets.
+    // psi(x) = gain * (dn, de, dd, 0, 0, 0) (the first features are the relative position): the sum is gain x the neighbours' summed offsets.
     LearntModel m;
     m.kind = kind;
     m.structure = Structure::sum;
-    m.input_mean = {0, 0, 0, 0, 0, 0};
-    m.input_std = {1, 1, 1, 1, 1, 1};
+    m.input_mean.fill(0);
+    m.input_std.fill(1);
     m.output_scale = {1, 1, 1, 1, 1, 1};
     Layer l;
     l.silu = false;
-    l.w = Eigen::MatrixXf::Zero(6, 6);
+    l.w = Eigen::MatrixXf::Zero(6, kFeatureSize);
     for (int i = 0; i < 3; ++i) l.w(i, i) = gain;
     l.b = Eigen::VectorXf::Zero(6);
     m.phi.layers.push_back(l);
@@ -128,7 +128,7 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
 
 TEST(PredictorProcess, BadModelIsOneLineAndExit2) {
     dw::test::TempDir dir;
-    std::ofstream(dir.file("m.json")) << "{\"format\": \"downwash-model/1\"}";
+    std::ofstream(dir.file("m.json")) << "{\"format\": \"downwash-model/2\"}";
     const auto r = dw::test::run({dw::test::bin("dw-predictor"), "run", "--model", dir.file("m.json")}, dir);
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
