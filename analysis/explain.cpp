@@ -17,6 +17,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
+#include "core/stats.hpp"
 #include "physics/bodies.hpp"
 
 namespace dw::analysis {
@@ -415,29 +416,6 @@ bool pinned(const Effect& e, const std::vector<double>& values) {
         if (at_lower || p.upper - values[k] < tol) return true;
     }
     return false;
-}
-
-// The evidence that paired held-out differences d (before - after, per piece) are positive, as a
-// normal z: the larger of the Wilcoxon signed-rank z (robust to a few huge pieces, blind to their
-// size) and the self-normalised sum sum(d)/sqrt(sum(d²)) (the sign-flip test's z: weighs the
-// pieces by how much they gain, so a handful of pieces that gain a lot is evidence while a single
-// one is not). Both are ~N(0,1) when the candidate predicts held-out data no better; taking the
-// larger at most doubles the chance of a false acceptance (the null flights stay clean).
-double paired_z(const std::vector<double>& d) {
-    std::vector<std::pair<double, double>> ranked;  // |d|, sign
-    double sum = 0, sq = 0;
-    for (double x : d) {
-        if (std::abs(x) > 1e-12) ranked.emplace_back(std::abs(x), x > 0 ? 1.0 : -1.0);
-        sum += x;
-        sq += x * x;
-    }
-    std::sort(ranked.begin(), ranked.end());
-    double w = 0;
-    for (std::size_t k = 0; k < ranked.size(); ++k)
-        if (ranked[k].second > 0) w += static_cast<double>(k + 1);
-    const double m = static_cast<double>(ranked.size());
-    const double ranks = m > 0 ? (w - m * (m + 1) / 4) / std::sqrt(m * (m + 1) * (2 * m + 1) / 24) : 0.0;
-    return std::max(ranks, sq > 0 ? sum / std::sqrt(sq) : 0.0);
 }
 
 // Paired comparison over held-out legs.

@@ -24,6 +24,9 @@ struct ArenaOptions {
 
 using AxisValues = std::array<double, 6>;
 
+// The model's prediction for one sample of `data` (the physics uses the sample's source's bodies).
+Wrench6 predict(const ForceModel& model, const Dataset& data, const Sample& s);
+
 // Over the samples whose source measures the axis (NaN where none does).
 AxisValues rmse(const ForceModel& model, const Dataset& data);
 // Peak-force error per block (encounter or leg): |max predicted - max recorded| of one axis

@@ -72,6 +72,15 @@ int run(int argc, char** argv) {
     study->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
     study->add_flag("--no-maps", no_maps, "skip the maps");
 
+    std::string regimes_dir;
+    RegimeOptions rgo;
+    auto* regimes = app.add_subcommand("regimes", "the regime map of a study's folder: each formation x altitude band chaotic, linear or "
+                                                  "non-linear on held-out legs (regimes.md, .csv, .png)");
+    regimes->add_option("--study", regimes_dir, "a dw-predictor study --out folder (its flights and models)")->required();
+    regimes->add_option("--min-z", rgo.min_z, "paired z Deep Sets must reach over the sum to call a band non-linear")->check(dw::cli::in(dw::Range{0, 20}));
+    regimes->add_option("--min-gain", rgo.min_gain, "fraction of the sum's squared error Deep Sets must remove")->check(dw::cli::in(dw::Range{0, 1}));
+    regimes->add_option("--min-explained", rgo.min_explained, "below this fraction of f_d's mean square explained, a band is chaotic")->check(dw::cli::in(dw::Range{0, 1}));
+
     TrainOptions to;
     std::vector<std::string> data;
     std::string model_out;
@@ -132,6 +141,11 @@ int run(int argc, char** argv) {
         ro.stop = dw::Shutdown::instance().token();
         const auto r = run_real(ro);
         std::cout << dw::read_file(r.markdown_path, "table") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.map_path << "\n";
+        return 0;
+    }
+    if (regimes->parsed()) {
+        const auto r = regimes_of_study(regimes_dir, rgo, dw::Shutdown::instance().token());
+        std::cout << dw::read_file(r.markdown_path, "regimes") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.png_path << "\n";
         return 0;
     }
     if (study->parsed()) {

@@ -1,5 +1,6 @@
 #include "predictor/study.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -115,6 +116,9 @@ StudyResult run_study(const StudyOptions& o) {
     };
     for (const double altitude : physics::GridOptions{}.altitudes_m)
         r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, o.arena.band_m), arena_at(altitude)));
+    say("classifying the regimes");
+    r.regimes = classify_regimes(*linear, *deep, split.test, physics::GridOptions{}.altitudes_m, RegimeOptions{}, o.stop);
+    write_regimes(r.regimes, out.string());
 
     // 4. Generalisation: K <= 2 -> K = 3, and a formation left out.
     if (o.generalisation) {
@@ -160,6 +164,7 @@ StudyResult run_study(const StudyOptions& o) {
             banded.push_back(row);
         }
     }
+    md += "\n## Regimes\n\n" + regimes_markdown(r.regimes, RegimeOptions{}) + "\n![regimes](regimes.png)\n";
     if (!r.generalisation.empty()) {
         md += "\n## Generalisation (held-out legs of formations the models were not trained on)\n\n";
         md += to_markdown(r.generalisation, o.arena);
@@ -187,6 +192,32 @@ StudyResult run_study(const StudyOptions& o) {
     write_text(r.markdown_path, md);
     write_text(r.csv_path, to_csv(r.table) + to_csv(r.generalisation, false) + to_csv(banded, false));
     return r;
+}
+
+RegimesFiles write_regimes(const std::vector<RegimeRow>& rows, const std::string& dir, const RegimeOptions& o) {
+    const fs::path out(dir);
+    RegimesFiles f{rows, (out / "regimes.md").string(), (out / "regimes.csv").string(), (out / "regimes.png").string()};
+    write_text(f.markdown_path, "# Regimes\n\n" + regimes_markdown(rows, o) + "\n![regimes](regimes.png)\n");
+    write_text(f.csv_path, regimes_csv(rows));
+    draw_regime_map(rows, f.png_path);
+    return f;
+}
+
+RegimesFiles regimes_of_study(const std::string& study_dir, const RegimeOptions& o, std::stop_token stop) {
+    const fs::path dir(study_dir), flights = dir / "flights", models = dir / "models";
+    if (!fs::is_directory(flights)) throw InputError(log::cat(study_dir, ": no flights/ folder (not a dw-predictor study's output)"));
+    Dataset all;
+    std::vector<fs::path> folders;
+    for (const auto& e : fs::directory_iterator(flights))
+        if (e.is_directory()) folders.push_back(e.path());
+    std::sort(folders.begin(), folders.end());
+    for (const auto& f : folders) {
+        throw_if_stopped(stop, "the regimes");
+        all.append(load_dataset(f.string()));
+    }
+    const LearntModel linear = LearntModel::load((models / "learnt_linear.json").string());
+    const LearntModel deep = LearntModel::load((models / "deep_sets.json").string());
+    return write_regimes(classify_regimes(linear, deep, split_by_leg(all).test, physics::GridOptions{}.altitudes_m, o, stop), dir.string(), o);
 }
 
 }  // namespace dw::predictor

@@ -12,6 +12,7 @@
 
 #include "physics/config.hpp"
 #include "predictor/evaluate.hpp"
+#include "predictor/regimes.hpp"
 #include "predictor/train.hpp"
 
 namespace dw::predictor {
@@ -38,10 +39,21 @@ struct StudyResult {
     // The same comparison at each altitude band the flights fly (0.3, 0.8, 1.3 m): the arena metric
     // at that altitude, RMSE over the held-out samples in the band.
     std::vector<std::pair<double, std::vector<ComparisonRow>>> by_altitude;
+    std::vector<RegimeRow> regimes;             // each formation x altitude band: chaotic, linear or non-linear
     std::string markdown_path, csv_path;
 };
 
 StudyResult run_study(const StudyOptions& o);
+
+// The regime map of a study's folder: its flights' held-out legs, its learnt linear and Deep Sets
+// models; written beside them as regimes.md, regimes.csv and regimes.png. Throws dw::InputError
+// naming what is missing for a folder that is not a study's.
+struct RegimesFiles {
+    std::vector<RegimeRow> rows;
+    std::string markdown_path, csv_path, png_path;
+};
+RegimesFiles regimes_of_study(const std::string& study_dir, const RegimeOptions& o = {}, std::stop_token stop = {});
+RegimesFiles write_regimes(const std::vector<RegimeRow>& rows, const std::string& dir, const RegimeOptions& o = {});
 
 // Training one learnt model the way the study and the real-flight comparison do, saved to path.
 struct TrainPlan {

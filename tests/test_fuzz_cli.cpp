@@ -90,7 +90,7 @@ struct Row {
     std::string sub;   // subcommand whose --help lists the numeric options ("" = the tool's own help)
     // A minimal valid command line. Placeholders: {out} (the run's work folder, also its working
     // directory), {domain} (this process's private DDS domain), {flight} {mcap} {model} {loads}
-    // {labfile} {ns_log} {ns_log2} (fixtures, made once per test process).
+    // {labfile} {ns_log} {ns_log2} {study} (fixtures, made once per test process).
     std::vector<std::string> argv;
     std::chrono::milliseconds bound;  // then SIGINT; batch rows finish well inside it
     // The row runs until stopped (a daemon, or a documented "until Ctrl-C" mode): its normal end
@@ -183,6 +183,8 @@ std::vector<Row> table() {
         {"predictor_real", "dw-predictor", "real", {"real", "--data", "{flight}", "--out", "{out}/real", "--epochs", "1"},
          std::chrono::milliseconds(40000), false, false, {},
          {{"--data", Role::in, ".mcap"}, {"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}}, {"{out}/real"}},
+        {"predictor_regimes", "dw-predictor", "regimes", {"regimes", "--study", "{study}"}, quick, false, false, {},
+         {{"--study", Role::in, ""}}, {}},
         {"predictor_map", "dw-predictor", "map",
          {"map", "--models", "{model}", "--formation", "single", "--out", "{out}/map.png"}, quick, false, false, {},
          {{"--models", Role::in, ".json"}, {"--data", Role::in, ".mcap"}, {"--out", Role::png, ".png"},
@@ -290,6 +292,13 @@ public:
             if (run_helper({bin("dw-predictor"), "train", "--kind", "learnt_linear", "--epochs", "1", "--data", flight,
                             "--out", path}, dir_, &err) != 0) {
                 *problem = "dw-predictor train: " + err;
+                return "";
+            }
+        } else if (name == "study") {
+            path = dir_ + "/study";  // the smallest study: its flights and models are what `regimes` reads
+            if (run_helper({bin("dw-predictor"), "study", "--out", path, "--legs", "15", "--epochs", "1", "--no-generalisation",
+                            "--no-maps"}, dir_, &err) != 0) {
+                *problem = "dw-predictor study: " + err;
                 return "";
             }
         } else if (name == "mcap") {
@@ -609,7 +618,7 @@ std::vector<Case> cases_of(const Row& row) {
 std::map<std::string, std::string> fixtures_for(const Row& row, Fixtures& fixtures, std::string* problem) {
     std::map<std::string, std::string> out;
     for (const auto& a : row.argv) {
-        for (const char* name : {"flight", "mcap", "model", "loads", "labfile", "ns_log", "ns_log2"}) {
+        for (const char* name : {"flight", "mcap", "model", "loads", "labfile", "ns_log", "ns_log2", "study"}) {
             if (a.find(std::string("{") + name + "}") == std::string::npos || out.count(name)) continue;
             const std::string path = fixtures.get(name, problem);
             if (path.empty()) return {};

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <opencv2/imgcodecs.hpp>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -18,6 +19,7 @@
 #include "predictor/evaluate.hpp"
 #include "predictor/maps.hpp"
 #include "predictor/model.hpp"
+#include "predictor/regimes.hpp"
 #include "predictor/study.hpp"
 #include "predictor/train.hpp"
 #include "support.hpp"
@@ -321,6 +323,68 @@ TEST(PredictorMaps, ASyntheticFieldDrawsItsPeakWhereItIsOnTheRightScale) {
     }
 }
 
+// f_d as a function of the neighbours: known fields for the regime rule.
+class FieldModel final : public ForceModel {
+public:
+    FieldModel(std::string name, std::function<double(std::span<const RelState>)> f) : name_(std::move(name)), f_(std::move(f)) {}
+    const std::string& name() const override { return name_; }
+    Wrench6 predict(std::span<const RelState> x) const override { return {0, 0, f_(x), 0, 0, 0}; }
+
+private:
+    std::string name_;
+    std::function<double(std::span<const RelState>)> f_;
+};
+
+double jet(const RelState& x) { return std::exp(-(x[0] * x[0] + x[1] * x[1]) / 0.05); }
+double jets(std::span<const RelState> x) {
+    double s = 0;
+    for (const auto& n : x) s += jet(n);
+    return s;
+}
+
+// Legs along E at 1.3 m: k neighbours 0.3 m apart, f_d = truth(neighbours) + noise.
+Dataset legs_of(int k, const std::function<double(std::span<const RelState>)>& truth, double noise_n) {
+    std::mt19937 rng(11);
+    std::normal_distribution<double> noise(0, noise_n);
+    Dataset d;
+    d.sources.push_back({});
+    d.sources[0].formation = k == 1 ? "single K=1" : "pair K=2";
+    for (int leg = 0; leg < 8; ++leg)
+        for (int i = 0; i < 320; ++i) {  // 4 s at 80 Hz, -1 .. 1 m
+            Sample s;
+            s.k = k, s.leg = leg, s.t = leg * 10.0 + i / 80.0;
+            const double e = -1 + i / 160.0, n = -0.35 + 0.1 * leg;
+            for (int j = 0; j < k; ++j) s.x[static_cast<std::size_t>(j)] = {n, e + 0.3 * j, -1.3, 0, 0.5, 0};
+            s.y[2] = truth(s.neighbours()) + noise(rng);
+            d.samples.push_back(s);
+        }
+    return d;
+}
+
+TEST(PredictorRegimes, TheRuleSeparatesNoiseSumsAndMergingJets) {
+    const FieldModel sum("sum", jets);
+    auto merged = [](std::span<const RelState> x) { return jets(x) + 0.8 * jets(x) * jets(x); };  // the square: jets that merge
+    const FieldModel deep("deep", merged);
+    auto regime = [](const Dataset& d, const ForceModel& s, const ForceModel& m) {
+        const auto rows = classify_regimes(s, m, d, {1.3});
+        EXPECT_EQ(rows.size(), 1u);
+        return rows.empty() ? RegimeRow{} : rows.front();
+    };
+    // Merging jets, and Deep Sets knows it: non-linear, with its gain measured.
+    const RegimeRow r = regime(legs_of(2, merged, 0.02), sum, deep);
+    EXPECT_EQ(r.regime, Regime::non_linear) << r.z << " " << r.gain;
+    EXPECT_GT(r.gain, 0.5);
+    EXPECT_EQ(r.legs, 8u);
+    // A plain sum: Deep Sets has nothing to add.
+    EXPECT_EQ(regime(legs_of(2, jets, 0.02), sum, FieldModel("deep", jets)).regime, Regime::linear);
+    // Noise and nothing else, which neither model explains: chaotic.
+    const RegimeRow c = regime(legs_of(2, [](auto) { return 0.0; }, 0.3), sum, deep);
+    EXPECT_EQ(c.regime, Regime::chaotic) << c.explained;
+    EXPECT_NEAR(c.signal_rms, 0.3, 0.02);
+    // One neighbour has no aggregate: never non-linear, however much better the second model is.
+    EXPECT_EQ(regime(legs_of(1, merged, 0.02), sum, deep).regime, Regime::linear);
+}
+
 TEST(PredictorMetric, ArenaErrorIsTheMeanCellDifference) {
     // Samples on two cells at 1.3 m; truth 1 N; a model predicting 1.5 N errs 0.5 everywhere.
     Dataset d;
@@ -388,6 +452,18 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
                 if (row.model == "deep_sets")
                     EXPECT_LE(row.arena[2], 1.1 * table_value(rows, row.formation, "learnt_linear", 2)) << row.formation << " at " << altitude << " m";
     EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));
+    // The regime map: merging jets high up are non-linear; where the physics is a sum nothing is.
+    auto regime_of = [](const StudyResult& r, const std::string& formation, double altitude) {
+        for (const auto& row : r.regimes)
+            if (row.formation == formation && std::abs(row.altitude_m - altitude) < 1e-9) return row.regime;
+        ADD_FAILURE() << formation << " at " << altitude << " m has no regime";
+        return Regime::chaotic;
+    };
+    EXPECT_EQ(regime_of(merging, "leader_follower K=3", 1.3), Regime::non_linear);
+    EXPECT_EQ(regime_of(merging, "leader_follower K=3", 0.3), Regime::linear);
+    EXPECT_EQ(sum.regimes.size(), 18u);  // six formations at three altitudes
+    for (const auto& row : sum.regimes) EXPECT_NE(row.regime, Regime::non_linear) << row.formation << " at " << row.altitude_m << " m";
+    EXPECT_TRUE(std::filesystem::exists(dir.file("sum/regimes.png")));
     // Every altitude band the flights fly has its own table, with the arena metric at that band.
     ASSERT_EQ(sum.by_altitude.size(), 3u);
     for (const auto& [altitude, rows] : sum.by_altitude) {

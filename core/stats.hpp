@@ -1,0 +1,16 @@
+#pragma once
+// Paired tests over held-out blocks, shared by the explainer (is a candidate effect better?) and
+// the predictor's regime map (is Deep Sets better than the sum?).
+#include <span>
+
+namespace dw {
+
+// The evidence that paired differences d (before − after, one per held-out piece) are positive,
+// as a normal z: the larger of the Wilcoxon signed-rank z (robust to a few huge pieces, blind to
+// their size) and the self-normalised sum Σd/√Σd² (the sign-flip test's z: weighs the pieces by
+// how much they gain, so a handful of pieces that gain a lot is evidence while a single one is
+// not). Both are ~N(0,1) when the two predict equally well; taking the larger at most doubles the
+// chance of a false acceptance. 0 for no pieces.
+double paired_z(std::span<const double> d);
+
+}  // namespace dw
