@@ -33,7 +33,8 @@ double percentile(std::vector<double> v, double q) {
     return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
 }
 
-// An untrained model of the study's sizes: inference time does not depend on the weights.
+// An untrained model of the study's sizes: inference time does not depend on the weights. Deep
+// Sets carries a learnt linear baseline, as the study's does.
 LearntModel sized_model(Structure s) {
     std::mt19937 rng(1);
     std::normal_distribution<float> g(0, 0.3f);
@@ -54,7 +55,10 @@ LearntModel sized_model(Structure s) {
     m.input_std.fill(1);
     m.output_scale.fill(1);
     m.phi = mlp({kFeatureSize, 64, 64, s == Structure::sum ? 6 : 32});
-    if (s == Structure::deep_sets) m.rho = mlp({32, 64, 64, 6});
+    if (s == Structure::deep_sets) {
+        m.rho = mlp({32, 64, 64, 6});
+        m.baseline = mlp({kFeatureSize, 64, 64, 6});
+    }
     return m;
 }
 

@@ -77,9 +77,9 @@ int run(int argc, char** argv) {
     auto* regimes = app.add_subcommand("regimes", "the regime map of a study's folder: each formation x altitude band chaotic, linear or "
                                                   "non-linear on held-out legs (regimes.md, .csv, .png)");
     regimes->add_option("--study", regimes_dir, "a dw-predictor study --out folder (its flights and models)")->required();
-    regimes->add_option("--min-z", rgo.min_z, "paired z Deep Sets must reach over the sum to call a band non-linear")->check(dw::cli::in(dw::Range{0, 20}));
-    regimes->add_option("--min-gain", rgo.min_gain, "fraction of the sum's squared error Deep Sets must remove")->check(dw::cli::in(dw::Range{0, 1}));
-    regimes->add_option("--min-explained", rgo.min_explained, "below this fraction of f_d's mean square explained, a band is chaotic")->check(dw::cli::in(dw::Range{0, 1}));
+    regimes->add_option("--min-z", rgo.min_z, "paired z Deep Sets must reach over the sum to call a band non-linear")->check(dw::cli::in(kMinZRange));
+    regimes->add_option("--min-gain", rgo.min_gain, "fraction of the sum's squared error Deep Sets must remove")->check(dw::cli::in(kFractionRange));
+    regimes->add_option("--min-explained", rgo.min_explained, "below this fraction of f_d's mean square explained, a band is chaotic")->check(dw::cli::in(kFractionRange));
 
     TrainOptions to;
     std::vector<std::string> data;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/numbers.hpp"
 #include "predictor/dataset.hpp"
 #include "predictor/model.hpp"
 
@@ -20,6 +21,9 @@ namespace dw::predictor {
 
 enum class Regime { chaotic, linear, non_linear };
 const char* regime_name(Regime r);
+
+inline constexpr Range kMinZRange{0, 20};     // a z beyond 20 is never reached by a few hundred pieces
+inline constexpr Range kFractionRange{0, 1};  // min_explained, min_gain
 
 struct RegimeOptions {
     double band_m = 0.15;         // ± around each altitude the flights fly
