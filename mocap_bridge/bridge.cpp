@@ -134,6 +134,11 @@ FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos recei
     if (last_frame_ >= 0 && f.frame_number > last_frame_ + 1) dropped_ += static_cast<std::uint64_t>(f.frame_number - last_frame_ - 1);
     last_frame_ = f.frame_number;
     const double t = camera_time_s(f, receive_wall_ns);
+    // Velocities and staleness run on Motive's own frame clock: exact spacing, whatever the
+    // network's jitter did to the receive times. It restarts with Motive: so do the estimators.
+    const double tc = f.timestamp_s;
+    if (tc < last_camera_s_) tracks_.clear();
+    last_camera_s_ = tc;
     const double freq = server_.clock_frequency ? static_cast<double>(server_.clock_frequency) : 1.0;
     auto& m = out.frame;
     m.header().stamp(dds::to_msg(static_cast<Nanos>(t * 1e9)));
@@ -175,10 +180,10 @@ FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos recei
         s.vehicle_id(r.name());
         s.tracking_valid(b.tracking_valid);
         if (b.tracking_valid) {
-            if (tr.last_valid_s >= 0 && t - tr.last_valid_s > options_.reset_gap_s) tr.recent.clear();  // back after a loss
-            tr.recent.emplace_back(t, p);
-            while (tr.recent.size() > 2 && t - tr.recent.front().first > options_.velocity_window_s) tr.recent.erase(tr.recent.begin());
-            tr.last_valid_s = t;
+            if (tr.last_valid_s >= 0 && tc - tr.last_valid_s > options_.reset_gap_s) tr.recent.clear();  // back after a loss
+            tr.recent.emplace_back(tc, p);
+            while (tr.recent.size() > 2 && tc - tr.recent.front().first > options_.velocity_window_s) tr.recent.erase(tr.recent.begin());
+            tr.last_valid_s = tc;
             s.position_m(r.position_m());
             s.orientation(r.orientation());
         } else if (!tr.recent.empty()) {
@@ -205,7 +210,7 @@ FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos recei
                 s.velocity_mps().z(num[2] / den);
             }
         }
-        s.staleness_s(tr.last_valid_s < 0 ? -1.0 : t - tr.last_valid_s);
+        s.staleness_s(tr.last_valid_s < 0 ? -1.0 : tc - tr.last_valid_s);
         s.airborne(true);
         out.states.push_back(s);
     }

@@ -85,6 +85,7 @@ private:
     ServerInfo server_;
     std::map<std::int32_t, std::string> names_;
     std::map<std::int32_t, Track> tracks_;
+    double last_camera_s_ = -1;  // Motive's frame clock of the last frame
     std::int32_t last_frame_ = -1;
     std::uint64_t dropped_ = 0;
     double clock_offset_s_ = 0;  // clock-sync mode: host wall time - server ticks
