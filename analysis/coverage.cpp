@@ -16,6 +16,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "flight/flight.hpp"
 
 namespace dw::analysis {
@@ -83,13 +84,7 @@ Outcome one_flight(const Target& t, const Effect& e, int seed, const CoverageOpt
     return out;
 }
 
-std::string fmt(double v, int p) {
-    std::ostringstream s;
-    s.setf(std::ios::fixed);
-    s.precision(p);
-    s << v;
-    return s.str();
-}
+std::string fmt(double v, int p) { return fixed(v, p); }
 
 void judge(CoverageRow& r) {
     using V = CoverageRow::Verdict;

@@ -1,11 +1,12 @@
 #pragma once
-// The candidate effects of ../shared/FLIGHT_FORMAT.md's vocabulary, as fittable terms: each has
-// named parameters with bounds and a starting point, and switches itself on in a physics
-// configuration. Names and parameter names are the contract's.
+// The candidate effects of the registered vocabulary (physics/effect_types.hpp) as fittable
+// terms: each has named parameters with the bounds the explainer searches and a starting point,
+// and switches itself on in a physics configuration. Names and parameter names are the contract's.
 #include <string>
 #include <vector>
 
 #include "physics/config.hpp"
+#include "physics/effect_types.hpp"
 
 namespace dw::analysis {
 
@@ -17,21 +18,22 @@ struct Parameter {
 };
 
 struct Effect {
+    const physics::EffectType* type = nullptr;
     std::string name;
     std::vector<Parameter> params;
-    // cell_crosstalk's axes, chosen before the fit (the pair whose residual the other axis explains best).
+    // The axes of an effect that acts between two (type->has_axes()), chosen before the fit.
     int from = 2, to = 0;
     // Switches the effect on in c with these parameter values.
     void apply(physics::PhysicsConfig& c, const std::vector<double>& values) const;
-    // The effect's parameters as set in c (its values if enabled, else the neutral ones).
+    // The neutral values (the effect absent).
     std::vector<double> neutral() const;
     // Whether evaluating it needs the physics again (flow effects) or only the recording's view.
-    bool changes_flow() const;
+    bool changes_flow() const { return type->changes_flow(); }
 };
 
-// Every candidate, in the vocabulary's order.
+// Every registered candidate, in the registry's order.
 std::vector<Effect> all_effects();
-// The named candidates; throws dw::InputError naming an unknown one.
+// The named candidates; throws dw::InputError naming an unknown one and the known ones.
 std::vector<Effect> effects_named(const std::vector<std::string>& names);
 
 }  // namespace dw::analysis

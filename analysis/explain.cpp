@@ -9,7 +9,9 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -32,6 +34,8 @@ struct Data {
     const std::vector<SampleInfo>& info;
     AxisValues sigma;
     std::vector<std::size_t> on_legs;  // sample indices on measurement legs
+    std::vector<Wrench6> buffeting;    // per sample: the lateral buffeting's standard deviation
+    std::size_t legs = 0;              // blocks that hold samples
 };
 
 double norm_sq(const Data& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a) {
@@ -226,15 +230,17 @@ AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const 
 
 // The residual's RMS over the blocks against what noise and turbulence alone explain, per measured
 // axis (0 where not measured): each sample's residual is divided by sqrt(sigma² + (2 I F)²), the
-// noise floor and the force fluctuation of a jet whose speed fluctuates by the turbulence
-// intensity I (F ∝ U², so δF ≈ 2 I F). About 1 when the physics is right.
+// noise floor, the force fluctuation of a jet whose speed fluctuates by the turbulence
+// intensity I (F ∝ U², so δF ≈ 2 I F) and the jets' lateral buffeting. About 1 when the physics
+// is right.
 AxisValues excess_of(const Data& d, const std::vector<Wrench6>& pred, double intensity) {
     AxisValues e{};
     for (auto i : d.on_legs)
         for (std::size_t a = 0; a < 6; ++a) {
             if (!d.replay.measured_axes()[a]) continue;
             const double r = d.replay.measured()[i][a] - pred[i][a], turbulent = 2 * intensity * pred[i][a];
-            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent * turbulent);
+            const double buffet = d.buffeting[i][a];
+            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent * turbulent + buffet * buffet);
         }
     for (auto& v : e) v = d.on_legs.empty() ? 0 : std::sqrt(v / static_cast<double>(d.on_legs.size()));
     return e;
@@ -384,13 +390,9 @@ std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
     return out;
 }
 
-// Whether an effect can act in this flight: merging needs two jets; a sufferer's own drag and the
-// ground effect need a sufferer that flies.
-bool applies(const Effect& e, const Replay& r) {
-    if (e.name == "jet_merging") return r.neighbours() >= 2;
-    if (e.name == "body_drag" || e.name == "ground_effect") return r.flying();
-    return true;
-}
+// Whether an effect can act in this flight (its type says: merging needs two jets, a sufferer's own
+// drag and the ground effect need a sufferer that flies).
+bool applies(const Effect& e, const Replay& r) { return e.type->applies(r.neighbours(), r.flying()); }
 
 struct Scores {
     std::map<int, AxisValues> before, after;  // per piece: normalised MSE sums per axis
@@ -556,219 +558,261 @@ std::vector<std::string> indistinguishable(const CandidateResult& best, const st
     return out;
 }
 
-}  // namespace
+// ---- explain(), stage by stage: replay -> locate -> screen -> cross-validate -> select -> report
 
-ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
-    // Ceres warns on stderr when a covariance is rank deficient (a parameter the rows cannot see:
-    // a group of passes where the effect does not act); its standard error is then infinite here,
-    // which is what that means.
-    FLAGS_minloglevel = google::GLOG_ERROR;
-    const auto started = std::chrono::steady_clock::now();
-    auto say = [&](const std::string& s) {
-        if (o.progress) o.progress(s);
-    };
-    ExplainResult R;
-    R.formation = f.meta.formation;
-    const Replay replay(f, o.physics);
-    const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
-    const auto& legs = blocks.blocks;
-    R.blocks = blocks.kind;
-    if (legs.size() < static_cast<std::size_t>(o.folds))
-        throw InputError(log::cat("poses.csv: ", legs.size(), " cross-validation blocks (", flight::to_string(blocks.kind),
-                                  ") in the flight; cross-validation needs at least ", o.folds));
-    const auto info = describe(replay, blocks);
-    say(log::cat("simulating the recorded flight: ", replay.stamps().size(), " wrench samples, ", replay.neighbours(), " neighbours, ",
-                 legs.size(), " blocks by ", flight::to_string(blocks.kind)));
-    const auto base_pred = replay.recorded(o.physics);
-    Data d{replay, info, floor_of(replay, info, base_pred, o.physics.stand.tare_s), {}};
+// The model the candidates are scored against: its physics, its prediction of the recording and
+// the autocorrelation of its residual.
+struct Baseline {
+    physics::PhysicsConfig physics;
+    std::vector<Wrench6> pred;
+    double factor = 1;  // effective-sample factor
+    double n_eff = 0;   // effective samples over every axis
+};
+
+Baseline baseline_of(const Data& d, const physics::PhysicsConfig& c, std::vector<Wrench6> pred) {
+    Baseline b{c, std::move(pred), 1, 0};
+    b.factor = neff_factor(d, b.pred);
+    b.n_eff = 6.0 * static_cast<double>(d.on_legs.size()) * b.factor;
+    return b;
+}
+
+Baseline baseline_of(const Data& d, const physics::PhysicsConfig& c) { return baseline_of(d, c, d.replay.recorded(c)); }
+
+double rss(const Data& d, const std::vector<Wrench6>& p) {
+    double s = 0;
+    for (auto i : d.on_legs)
+        for (std::size_t a = 0; a < 6; ++a) s += norm_sq(d, p, i, a);
+    return s;
+}
+
+// Blocked cross-validation: fold k holds out the legs with leg % folds == k.
+struct Folds {
+    std::vector<std::vector<std::size_t>> train, test;
+    std::map<int, double> leg_start;  // each leg's first wrench stamp (held-out pieces count from it)
+};
+
+Folds folds_of(const Data& d, int folds) {
+    Folds f{std::vector<std::vector<std::size_t>>(static_cast<std::size_t>(folds)), std::vector<std::vector<std::size_t>>(static_cast<std::size_t>(folds)), {}};
+    for (auto i : d.on_legs) {
+        for (int k = 0; k < folds; ++k) (d.info[i].leg % folds == k ? f.test : f.train)[static_cast<std::size_t>(k)].push_back(i);
+        if (!f.leg_start.count(d.info[i].leg)) f.leg_start[d.info[i].leg] = d.replay.stamps()[i];
+    }
+    return f;
+}
+
+// How much of axis `to`'s residual the measured axis `from` explains by regression: the slope,
+// and the squared error it removes.
+std::pair<double, double> regress_residual(const Data& d, const Baseline& b, int from, int to) {
+    double xy = 0, xx = 0;
+    for (auto i : d.on_legs) {
+        const double x = d.replay.measured()[i][static_cast<std::size_t>(from)];
+        xy += x * (d.replay.measured()[i][static_cast<std::size_t>(to)] - b.pred[i][static_cast<std::size_t>(to)]);
+        xx += x * x;
+    }
+    return xx > 0 ? std::pair{xy / xx, xy * xy / xx} : std::pair{0.0, 0.0};
+}
+
+// cell_crosstalk: the axis pair whose residual the model's other axis explains best.
+Effect with_crosstalk_axes(Effect e, const Data& d, const Baseline& b) {
+    double best = -1;
+    const auto& measured = d.replay.measured_axes();
+    for (int from = 0; from < 6; ++from)
+        for (int to = 0; to < 6; ++to) {
+            if (from == to || !measured[static_cast<std::size_t>(from)] || !measured[static_cast<std::size_t>(to)]) continue;
+            const double sigma = d.sigma[static_cast<std::size_t>(to)];
+            const double explained = regress_residual(d, b, from, to).second / (sigma * sigma);
+            if (explained > best) best = explained, e.from = from, e.to = to;
+        }
+    return e;
+}
+
+// The base model's own errors can look like a leak: the same regression on the axes of the same
+// kind where no leak is claimed measures how much (the largest slope).
+double crosstalk_discrepancy(const Data& d, const Baseline& b, const Effect& e) {
+    double disc = 0;
+    const bool force = e.to < 3;
+    for (int other = force ? 0 : 3; other < (force ? 3 : 6); ++other) {
+        if (other == e.to || other == e.from) continue;
+        disc = std::max(disc, std::abs(regress_residual(d, b, e.from, other).first));
+    }
+    return disc;
+}
+
+// Each fold fitted on its training legs (warm-started at `start`) and scored per piece of its
+// held-out legs; the fold's values are appended to `fold_values` (for the jackknife).
+Scores cross_validate(const Data& d, const Baseline& b, const Effect& e, const std::vector<double>& start, const Folds& folds,
+                      std::vector<std::vector<double>>& fold_values, std::stop_token stop) {
+    Scores s;
+    for (std::size_t k = 0; k < folds.train.size(); ++k) {
+        throw_if_stopped(stop, "the fits");
+        Fit fk(d, b.physics, e);
+        auto [vk, sek] = fk.solve(start, folds.train[k], false, b.factor);
+        fold_values.push_back(vk);
+        const auto& p = fk.predict(vk);
+        for (auto i : folds.test[k]) {
+            const int leg = d.info[i].leg;
+            const int piece = leg * 1000 + static_cast<int>(std::floor((d.replay.stamps()[i] - folds.leg_start.at(leg)) / kPiece_s));
+            ++s.n[piece];
+            for (std::size_t a = 0; a < 6; ++a) {
+                s.before[piece][a] += norm_sq(d, b.pred, i, a);
+                s.after[piece][a] += norm_sq(d, p, i, a);
+                if (d.replay.measured_axes()[a]) s.change[piece] += std::pow((p[i][a] - b.pred[i][a]) / d.sigma[a], 2);
+            }
+        }
+    }
+    return s;
+}
+
+// 95 % intervals: the wider of the leg-fold jackknife (t, folds - 1 dof) and the covariance, with
+// the tare's shared error added in quadrature (and crosstalk's discrepancy, see above).
+void set_intervals(CandidateResult& c, const Data& d, const Baseline& b, Fit& fit, const std::vector<double>& se,
+                   const std::vector<std::vector<double>>& fold_values) {
+    const auto tare = tare_spread(d, fit, c.effect, c.values, d.replay.tare_samples(b.physics));
+    const auto jack = jackknife_sd(fold_values);
+    const double t = t975(static_cast<int>(fold_values.size()) - 1);
+    for (std::size_t p = 0; p < c.values.size(); ++p) {
+        const double half = std::hypot(std::max(t * jack[p], 1.96 * se[p]), 1.96 * tare[p]);
+        c.lo.push_back(c.values[p] - half);
+        c.hi.push_back(c.values[p] + half);
+    }
+    if (c.effect.type->has_axes()) {
+        const double disc = crosstalk_discrepancy(d, b, c.effect);
+        c.lo[0] -= 1.96 * disc;
+        c.hi[0] += 1.96 * disc;
+    }
+}
+
+// One candidate: screened on the whole flight by ΔBIC and identifiability, then cross-validated.
+CandidateResult score(const Data& d, const Baseline& b, const Folds& folds, Effect e, int round, const ExplainOptions& o) {
+    CandidateResult c;
+    c.round = round;
+    c.effect = e.type->has_axes() ? with_crosstalk_axes(e, d, b) : e;
+    throw_if_stopped(o.stop, "the fits");
+    Fit fit(d, b.physics, c.effect);
+    auto [values, se] = fit.solve(c.effect.neutral(), d.on_legs, true, b.factor);
+    c.values = values;
+    const double dbic = b.n_eff * std::log(rss(d, fit.predict(values)) / rss(d, b.pred)) + static_cast<double>(values.size()) * std::log(b.n_eff);
+    c.delta_bic = dbic;
+    if (dbic >= o.max_delta_bic) {
+        c.note = log::cat("ΔBIC ", std::round(dbic), " on the whole flight: not worth a held-out test");
+        c.lo = c.hi = values;
+        return c;
+    }
+    if (pinned(c.effect, values)) {
+        c.note = log::cat("ΔBIC ", std::round(dbic), ", but a parameter is pinned at its bound: not identified (it stands in for something else)");
+        c.lo = c.hi = values;
+        return c;
+    }
+    std::vector<std::vector<double>> fold_values;
+    const Scores s = cross_validate(d, b, c.effect, values, folds, fold_values, o.stop);
+    set_intervals(c, d, b, fit, se, fold_values);
+    judge(c, s, d.sigma, o, dbic);
+    for (const auto& [piece, err] : s.after) c.heldout_pieces[piece] = std::accumulate(err.begin(), err.end(), 0.0);
+    return c;
+}
+
+// One forward-selection round: every remaining candidate scored; the accepted one with the lowest
+// held-out error that is one value for the whole flight (not a stand-in), if any.
+struct Round {
+    std::vector<CandidateResult> scored;
+    std::optional<std::size_t> best;  // index into scored
+    bool stand_in = false;            // a mismatch the vocabulary can only stand in for
+};
+
+Round select_round(const Data& d, const Baseline& b, const Folds& folds, const std::vector<Effect>& remaining, int round,
+                   const ExplainOptions& o, const std::function<void(const std::string&)>& say) {
+    Round r;
+    for (const auto& e : remaining) {
+        if (!applies(e, d.replay)) continue;
+        say(log::cat("round ", round, ": fitting ", e.name));
+        r.scored.push_back(score(d, b, folds, e, round, o));
+        say(log::cat("  ", r.scored.back().note));
+    }
+    std::vector<std::size_t> ranked;
+    for (std::size_t k = 0; k < r.scored.size(); ++k)
+        if (r.scored[k].accepted) ranked.push_back(k);
+    std::sort(ranked.begin(), ranked.end(), [&](std::size_t x, std::size_t y) { return r.scored[x].total_ratio < r.scored[y].total_ratio; });
+    for (auto k : ranked) {
+        say(log::cat("  is ", r.scored[k].effect.name, " one value for the whole flight?"));
+        stand_in_check(r.scored[k], d, b.physics, b.pred, b.factor);
+        if (r.scored[k].accepted) {
+            r.best = k;
+            break;
+        }
+    }
+    r.stand_in = std::any_of(r.scored.begin(), r.scored.end(), [](const CandidateResult& c) { return c.stand_in; });
+    return r;
+}
+
+// With several effects, each one's parameters refitted with the others in place.
+void refit_together(ExplainResult& R, const Data& d, const Folds& folds, const ExplainOptions& o,
+                    const std::function<void(const std::string&)>& say) {
+    for (std::size_t k = 0; k < R.accepted.size(); ++k) {
+        physics::PhysicsConfig others = o.physics;
+        for (std::size_t j = 0; j < R.accepted.size(); ++j)
+            if (j != k) R.accepted[j].effect.apply(others, R.accepted[j].values);
+        say(log::cat("refitting ", R.accepted[k].effect.name, " with the other effects in place"));
+        auto again = score(d, baseline_of(d, others), folds, R.accepted[k].effect, R.accepted[k].round, o);
+        if (again.accepted) {
+            again.heldout_before = R.accepted[k].heldout_before;
+            again.indistinguishable = R.accepted[k].indistinguishable;
+            R.accepted[k] = again;
+        }
+    }
+}
+
+// Forward selection from the base model: rounds until nothing more is accepted; returns the final model.
+Baseline select_effects(ExplainResult& R, const Data& d, const Baseline& base, const Folds& folds, const ExplainOptions& o,
+                        const std::function<void(const std::string&)>& say, bool& stand_in) {
+    Baseline current = base;
+    std::vector<Effect> remaining = o.candidates;
+    stand_in = false;
+    for (int round = 1; round <= o.max_effects && !remaining.empty(); ++round) {
+        Round r = select_round(d, current, folds, remaining, round, o, say);
+        R.candidates.insert(R.candidates.end(), r.scored.begin(), r.scored.end());
+        stand_in = r.stand_in;
+        if (!r.best) break;
+        const CandidateResult& best = r.scored[*r.best];
+        R.accepted.push_back(best);
+        R.accepted.back().indistinguishable = indistinguishable(best, r.scored, o.min_t);
+        physics::PhysicsConfig next = current.physics;
+        best.effect.apply(next, best.values);
+        current = baseline_of(d, next);
+        std::erase_if(remaining, [&](const Effect& e) { return e.name == best.effect.name; });
+        R.heldout_before = R.accepted.front().heldout_before;
+        R.heldout_after = best.heldout_after;
+    }
+    if (R.accepted.size() > 1) {
+        refit_together(R, d, folds, o, say);
+        physics::PhysicsConfig all = o.physics;
+        for (const auto& c : R.accepted) c.effect.apply(all, c.values);
+        current = baseline_of(d, all);
+    }
+    return current;
+}
+
+// Replay and sample bookkeeping: the data every later stage reads. Throws dw::InputError when
+// the flight has too few blocks for the folds.
+Data prepare(const Replay& replay, const std::vector<SampleInfo>& info, const flight::Blocks& blocks, const ExplainOptions& o,
+             const std::vector<Wrench6>& base_pred) {
+    Data d{replay, info, floor_of(replay, info, base_pred, o.physics.stand.tare_s), {}, replay.buffeting_sigma(o.physics), 0};
     for (std::size_t i = 0; i < info.size(); ++i)
         if (info[i].leg >= 0) d.on_legs.push_back(i);
     std::set<int> leg_ids;
     for (auto i : d.on_legs) leg_ids.insert(info[i].leg);
-    if (leg_ids.size() < static_cast<std::size_t>(o.folds)) {
-        throw InputError(log::cat("wrench.csv: ", leg_ids.size(), " of ", legs.size(), " cross-validation blocks (", flight::to_string(blocks.kind),
-                                  ") hold wrench samples (", d.on_legs.size(), " samples in blocks); cross-validation needs at least ", o.folds,
-                                  " — do the wrench and pose clocks overlap?"));
+    d.legs = leg_ids.size();
+    if (d.legs < static_cast<std::size_t>(o.folds)) {
+        throw InputError(log::cat("wrench.csv: ", d.legs, " of ", blocks.blocks.size(), " cross-validation blocks (",
+                                  flight::to_string(blocks.kind), ") hold wrench samples (", d.on_legs.size(),
+                                  " samples in blocks); cross-validation needs at least ", o.folds, " — do the wrench and pose clocks overlap?"));
     }
-    R.noise_floor = d.sigma;
-    R.samples = d.on_legs.size();
-    R.legs = leg_ids.size();
-    double factor = neff_factor(d, base_pred);
-    R.regions = locate(d, base_pred, factor, o.region_z, f.meta.formation);
-    R.shifts = shifts(d, o.physics);
-    say(log::cat(R.regions.size(), " significant regions; effective samples ", factor * 100, " % of the samples (autocorrelation)"));
+    return d;
+}
 
-    auto rss = [&](const std::vector<Wrench6>& p) {
-        double s = 0;
-        for (auto i : d.on_legs)
-            for (std::size_t a = 0; a < 6; ++a) s += norm_sq(d, p, i, a);
-        return s;
-    };
-    double n_eff = 0;
-    physics::PhysicsConfig current = o.physics;
-    std::vector<Wrench6> current_pred;
-    // The model the next candidates are scored against; the autocorrelation is that of its residual.
-    auto set_current = [&](const physics::PhysicsConfig& c) {
-        current = c;
-        current_pred = replay.recorded(current);
-        factor = neff_factor(d, current_pred);
-        n_eff = 6.0 * static_cast<double>(d.on_legs.size()) * factor;
-    };
-    set_current(o.physics);
-    std::vector<Effect> remaining = o.candidates;
-    std::vector<std::vector<std::size_t>> fold_train(static_cast<std::size_t>(o.folds)), fold_test(static_cast<std::size_t>(o.folds));
-    for (auto i : d.on_legs)
-        for (int k = 0; k < o.folds; ++k)
-            (info[i].leg % o.folds == k ? fold_test : fold_train)[static_cast<std::size_t>(k)].push_back(i);
-
-    std::map<int, double> leg_start;
-    for (auto i : d.on_legs)
-        if (!leg_start.count(info[i].leg)) leg_start[info[i].leg] = replay.stamps()[i];
-    auto score = [&](Effect e, int round) {
-        CandidateResult c;
-        c.round = round;
-        if (e.name == "cell_crosstalk") {  // the axis pair whose residual the model's other axis explains best
-            double best = -1;
-            for (int from = 0; from < 6; ++from)
-                for (int to = 0; to < 6; ++to) {
-                    if (from == to || !replay.measured_axes()[static_cast<std::size_t>(from)] || !replay.measured_axes()[static_cast<std::size_t>(to)]) continue;
-                    double xy = 0, xx = 0;
-                    for (auto i : d.on_legs) {
-                        const double x = replay.measured()[i][static_cast<std::size_t>(from)];
-                        const double r = replay.measured()[i][static_cast<std::size_t>(to)] - current_pred[i][static_cast<std::size_t>(to)];
-                        xy += x * r;
-                        xx += x * x;
-                    }
-                    const double explained = xx > 0 ? xy * xy / xx / (d.sigma[static_cast<std::size_t>(to)] * d.sigma[static_cast<std::size_t>(to)]) : 0;
-                    if (explained > best) best = explained, e.from = from, e.to = to;
-                }
-        }
-        c.effect = e;
-        throw_if_stopped(o.stop, "the fits");
-        Fit fit(d, current, e);
-        auto [values, se] = fit.solve(e.neutral(), d.on_legs, true, factor);
-        c.values = values;
-        const double dbic = n_eff * std::log(rss(fit.predict(values)) / rss(current_pred)) + static_cast<double>(values.size()) * std::log(n_eff);
-        c.delta_bic = dbic;
-        if (dbic >= -10) {
-            c.note = log::cat("ΔBIC ", std::round(dbic), " on the whole flight: not worth a held-out test");
-            c.lo = c.hi = values;
-            return c;
-        }
-        if (pinned(e, values)) {
-            c.note = log::cat("ΔBIC ", std::round(dbic), ", but a parameter is pinned at its bound: not identified (it stands in for something else)");
-            c.lo = c.hi = values;
-            return c;
-        }
-        // Blocked cross-validation by leg, each fold warm-started from the whole-flight fit.
-        Scores s;
-        std::vector<std::vector<double>> fold_values;
-        for (int k = 0; k < o.folds; ++k) {
-            throw_if_stopped(o.stop, "the fits");
-            Fit fk(d, current, e);
-            auto [vk, sek] = fk.solve(values, fold_train[static_cast<std::size_t>(k)], false, factor);
-            fold_values.push_back(vk);
-            const auto& p = fk.predict(vk);
-            for (auto i : fold_test[static_cast<std::size_t>(k)]) {
-                // Scored per piece of a held-out block (the residual decorrelates within ~0.1 s).
-                const int leg = info[i].leg * 1000 + static_cast<int>(std::floor((replay.stamps()[i] - leg_start.at(info[i].leg)) / kPiece_s));
-                ++s.n[leg];
-                for (std::size_t a = 0; a < 6; ++a) {
-                    s.before[leg][a] += norm_sq(d, current_pred, i, a);
-                    s.after[leg][a] += norm_sq(d, p, i, a);
-                    if (replay.measured_axes()[a]) s.change[leg] += std::pow((p[i][a] - current_pred[i][a]) / d.sigma[a], 2);
-                }
-            }
-        }
-        // 95 % intervals: the wider of the leg-fold jackknife (t, folds - 1 dof) and the
-        // covariance, with the tare's shared error added in quadrature.
-        const auto tare = tare_spread(d, fit, e, values, replay.tare_samples(current));
-        const auto jack = jackknife_sd(fold_values);
-        for (std::size_t p = 0; p < values.size(); ++p) {
-            const double half = std::hypot(std::max(t975(o.folds - 1) * jack[p], 1.96 * se[p]), 1.96 * tare[p]);
-            c.lo.push_back(values[p] - half);
-            c.hi.push_back(values[p] + half);
-        }
-        if (e.name == "cell_crosstalk") {
-            // The base model's own errors can look like a leak: the same regression on the axes of
-            // the same kind where no leak is claimed measures how much; the interval includes it.
-            double disc = 0;
-            const bool force = e.to < 3;
-            for (int other = force ? 0 : 3; other < (force ? 3 : 6); ++other) {
-                if (other == e.to || other == e.from) continue;
-                double xy = 0, xx = 0;
-                for (auto i : d.on_legs) {
-                    const double x = replay.measured()[i][static_cast<std::size_t>(e.from)];
-                    xy += x * (replay.measured()[i][static_cast<std::size_t>(other)] - current_pred[i][static_cast<std::size_t>(other)]);
-                    xx += x * x;
-                }
-                if (xx > 0) disc = std::max(disc, std::abs(xy / xx));
-            }
-            c.lo[0] -= 1.96 * disc;
-            c.hi[0] += 1.96 * disc;
-        }
-        judge(c, s, d.sigma, o, dbic);
-        for (const auto& [piece, err] : s.after) c.heldout_pieces[piece] = std::accumulate(err.begin(), err.end(), 0.0);
-        return c;
-    };
-
-    bool stand_in = false;  // in the last round scored: a mismatch the vocabulary can only stand in for
-    for (int round = 1; round <= o.max_effects && !remaining.empty(); ++round) {
-        std::vector<CandidateResult> scored;
-        for (const auto& e : remaining) {
-            if (!applies(e, replay)) continue;
-            say(log::cat("round ", round, ": fitting ", e.name));
-            scored.push_back(score(e, round));
-            say(log::cat("  ", scored.back().note));
-        }
-        // The accepted candidate with the lowest held-out error, unless it is only a stand-in (then the next).
-        std::vector<CandidateResult*> ranked;
-        for (auto& c : scored)
-            if (c.accepted) ranked.push_back(&c);
-        std::sort(ranked.begin(), ranked.end(), [](const CandidateResult* x, const CandidateResult* y) { return x->total_ratio < y->total_ratio; });
-        const CandidateResult* best = nullptr;
-        for (auto* c : ranked) {
-            say(log::cat("  is ", c->effect.name, " one value for the whole flight?"));
-            stand_in_check(*c, d, current, current_pred, factor);
-            if (c->accepted) {
-                best = c;
-                break;
-            }
-        }
-        R.candidates.insert(R.candidates.end(), scored.begin(), scored.end());
-        stand_in = std::any_of(scored.begin(), scored.end(), [](const CandidateResult& c) { return c.stand_in; });
-        if (!best) break;
-        R.accepted.push_back(*best);
-        R.accepted.back().indistinguishable = indistinguishable(*best, scored, o.min_t);
-        physics::PhysicsConfig next = current;
-        best->effect.apply(next, best->values);
-        set_current(next);
-        remaining.erase(std::remove_if(remaining.begin(), remaining.end(), [&](const Effect& e) { return e.name == best->effect.name; }),
-                        remaining.end());
-        R.heldout_before = R.accepted.front().heldout_before;
-        R.heldout_after = best->heldout_after;
-    }
-    // With several effects, each one's parameters are refitted with the others in place.
-    if (R.accepted.size() > 1) {
-        for (std::size_t k = 0; k < R.accepted.size(); ++k) {
-            physics::PhysicsConfig others = o.physics;
-            for (std::size_t j = 0; j < R.accepted.size(); ++j)
-                if (j != k) R.accepted[j].effect.apply(others, R.accepted[j].values);
-            const physics::PhysicsConfig saved = current;
-            set_current(others);
-            say(log::cat("refitting ", R.accepted[k].effect.name, " with the other effects in place"));
-            auto again = score(R.accepted[k].effect, R.accepted[k].round);
-            if (again.accepted) {
-                again.heldout_before = R.accepted[k].heldout_before;
-                again.indistinguishable = R.accepted[k].indistinguishable;
-                R.accepted[k] = again;
-            }
-            current = saved;
-        }
-        physics::PhysicsConfig all = o.physics;
-        for (const auto& c : R.accepted) c.effect.apply(all, c.values);
-        set_current(all);
-    }
+// The verdict: what the fit leaves, whether a mismatch is detected and whether it is explained.
+void conclude(ExplainResult& R, const Data& d, const Baseline& base, const Baseline& final_model, bool stand_in,
+              const ExplainOptions& o, const std::string& formation) {
+    const std::vector<Wrench6>& base_pred = base.pred;
     if (R.accepted.empty()) {
         AxisValues rm{};
         for (auto i : d.on_legs)
@@ -776,10 +820,10 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         for (std::size_t a = 0; a < 6; ++a) rm[a] = std::sqrt(rm[a] / static_cast<double>(d.on_legs.size())) * d.sigma[a];
         R.heldout_before = R.heldout_after = rm;
     }
-    R.fitted = current;
+    R.fitted = final_model.physics;
     const double intensity = o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0;
     R.excess_before = excess_of(d, base_pred, intensity);
-    R.excess_after = excess_of(d, current_pred, intensity);
+    R.excess_after = excess_of(d, final_model.pred, intensity);
     // Whether: an accepted effect, a candidate that predicts held-out data better but only as a
     // stand-in, or a residual beyond what noise and turbulence explain (the regions say where; on
     // their own they are many cells tested at once, not evidence).
@@ -787,8 +831,60 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     const bool any_stand_in = std::any_of(R.candidates.begin(), R.candidates.end(), [](const CandidateResult& c) { return c.stand_in; });
     R.detected = !R.accepted.empty() || excess || any_stand_in;
     if (R.detected && R.regions.empty())  // found by its size or a stand-in: say where, with the weaker threshold
-        R.regions = locate(d, base_pred, neff_factor(d, base_pred), o.weak_region_z, f.meta.formation);
+        R.regions = locate(d, base_pred, base.factor, o.weak_region_z, formation);
     R.unexplained = largest(R.excess_after) > o.detect_excess || stand_in;
+}
+
+}  // namespace
+
+void validate(const ExplainOptions& o) {
+    require_in(o.folds, kFoldsRange, "explain: folds");
+    require_in(o.max_delta_bic, kDeltaBicRange, "explain: max_delta_bic");
+    require_in(o.min_t, kZRange, "explain: min_t");
+    require_in(o.min_gain, kGainRange, "explain: min_gain");
+    require_in(o.region_z, kZRange, "explain: region_z");
+    require_in(o.weak_region_z, kZRange, "explain: weak_region_z");
+    require_in(o.detect_excess, kExcessRange, "explain: detect_excess");
+    require_in(o.max_effects, kMaxEffectsRange, "explain: max_effects");
+}
+
+ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
+    validate(o);
+    // Ceres warns on stderr when a covariance is rank deficient (a parameter the rows cannot see:
+    // a group of passes where the effect does not act); its standard error is then infinite here,
+    // which is what that means. Set once for the process, not per call.
+    static std::once_flag quiet_ceres;
+    std::call_once(quiet_ceres, [] { FLAGS_minloglevel = google::GLOG_ERROR; });
+    const auto started = std::chrono::steady_clock::now();
+    const std::function<void(const std::string&)> say = [&](const std::string& s) {
+        if (o.progress) o.progress(s);
+    };
+    ExplainResult R;
+    R.formation = f.meta.formation;
+    // Replay.
+    const Replay replay(f, o.physics);
+    const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
+    R.blocks = blocks.kind;
+    if (blocks.blocks.size() < static_cast<std::size_t>(o.folds))
+        throw InputError(log::cat("poses.csv: ", blocks.blocks.size(), " cross-validation blocks (", flight::to_string(blocks.kind),
+                                  ") in the flight; cross-validation needs at least ", o.folds));
+    const auto info = describe(replay, blocks);
+    say(log::cat("simulating the recorded flight: ", replay.stamps().size(), " wrench samples, ", replay.neighbours(), " neighbours, ",
+                 blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
+    auto base_pred = replay.recorded(o.physics);
+    const Data d = prepare(replay, info, blocks, o, base_pred);
+    const Baseline base = baseline_of(d, o.physics, std::move(base_pred));
+    R.noise_floor = d.sigma;
+    R.samples = d.on_legs.size();
+    R.legs = d.legs;
+    // Locate.
+    R.regions = locate(d, base.pred, base.factor, o.region_z, f.meta.formation);
+    R.shifts = shifts(d, o.physics);
+    say(log::cat(R.regions.size(), " significant regions; effective samples ", base.factor * 100, " % of the samples (autocorrelation)"));
+    // Screen, cross-validate and select; then the verdict.
+    bool stand_in = false;
+    const Baseline final_model = select_effects(R, d, base, folds_of(d, o.folds), o, say, stand_in);
+    conclude(R, d, base, final_model, stand_in, o, f.meta.formation);
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     return R;
 }

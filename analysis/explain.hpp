@@ -14,6 +14,7 @@
 
 #include "analysis/effects.hpp"
 #include "analysis/replay.hpp"
+#include "core/numbers.hpp"
 #include "flight/flight.hpp"
 #include "physics/config.hpp"
 
@@ -28,6 +29,7 @@ struct ExplainOptions {
     physics::PhysicsConfig physics;              // the simulation the recording is compared with
     std::vector<Effect> candidates = all_effects();
     int folds = 5;                               // blocked cross-validation: leg % folds
+    double max_delta_bic = -10.0;                // a candidate goes to the held-out test only below this ΔBIC (whole flight)
     double min_t = 3.0;                          // held-out improvement: Wilcoxon z over 1 s blocks of held-out legs, best axis
     double min_gain = 0.05;                      // ... and at least this fraction of that axis's error
     double region_z = 5.0;                       // a region is reported above this |z|
@@ -41,6 +43,15 @@ struct ExplainOptions {
     std::function<void(const std::string&)> progress;
     std::stop_token stop;                        // checked between fits: dw::Stopped
 };
+
+// Throws dw::InputError naming the first option outside its range (each range below).
+void validate(const ExplainOptions& o);
+inline constexpr Range kFoldsRange{2, 50, "folds"};
+inline constexpr Range kDeltaBicRange{-1e6, 0, ""};
+inline constexpr Range kZRange{0, 1e3, ""};
+inline constexpr Range kGainRange{0, 1, ""};
+inline constexpr Range kExcessRange{1, 1e3, "noise floors"};
+inline constexpr Range kMaxEffectsRange{1, 20, "effects"};
 
 struct Region {
     std::string axis;

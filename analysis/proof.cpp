@@ -11,6 +11,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "core/subprocess.hpp"
 
 namespace dw::analysis {
@@ -32,11 +33,7 @@ struct Case {
     std::uint64_t seed = 1;
 };
 
-std::string fmt(double v, int p = 3) {
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(p) << v;
-    return s.str();
-}
+std::string fmt(double v, int p = 3) { return fixed(v, p); }
 
 std::vector<Case> cases() {
     return {
@@ -206,7 +203,7 @@ struct Concealment {
 // The untouched flight's first fit of an effect (on top of its own fit), if it was scored.
 std::optional<double> untouched_value(const ExplainResult& r, const std::string& effect) {
     for (const auto& c : r.candidates)
-        if (c.effect.name == effect && !c.values.empty() && (effect != "cell_crosstalk" || (c.effect.from == 2 && c.effect.to == 0)))
+        if (c.effect.name == effect && !c.values.empty() && (!c.effect.type->has_axes() || (c.effect.from == 2 && c.effect.to == 0)))
             return c.values.front();
     return std::nullopt;
 }

@@ -7,6 +7,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "physics/effect_types.hpp"
 #include "physics/wrench_model.hpp"
 
 namespace dw::analysis {
@@ -72,26 +73,32 @@ namespace {
 // The part of a configuration that changes the air's wrench (not the recording's view of it).
 physics::PhysicsConfig flow_part(const physics::PhysicsConfig& c) {
     physics::PhysicsConfig f = c;
-    f.effects.clock_offset = {};
-    f.effects.sensor_lag = {};
-    f.effects.force_scale = {};
-    f.effects.cell_crosstalk = {};
-    f.effects.body_drag = {};      // the sufferer's own forces, added to the air's
-    f.effects.ground_effect = {};
+    for (const auto* t : physics::effect_types())  // the recording's view and the sufferer's own forces
+        if (!t->changes_flow()) t->clear(f.effects);
     f.turbulence.enabled = false;  // the mean flow
     return f;
 }
 
 }  // namespace
 
-const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
+physics::PhysicsConfig Replay::flow_of(const physics::PhysicsConfig& c) const {
     physics::PhysicsConfig flow = flow_part(c);
     flow.sufferer.vehicle = sufferer_params_;
+    return flow;
+}
+
+std::vector<physics::Jet> Replay::jets_of(const physics::PhysicsConfig& flow) const {
+    std::vector<physics::Jet> jets;
+    for (const auto& v : neighbour_params_) jets.push_back(physics::Jet::make(v, flow));
+    return jets;
+}
+
+const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
+    const physics::PhysicsConfig flow = flow_of(c);
     const std::string key = physics::to_yaml(flow);
     if (auto it = cache_.find(key); it != cache_.end()) return it->second;
     const physics::WrenchModel model(flow);
-    std::vector<physics::Jet> jets;
-    for (const auto& v : neighbour_params_) jets.push_back(physics::Jet::make(v, flow));
+    const std::vector<physics::Jet> jets = jets_of(flow);
     const auto& fx = flow.effects;
     const physics::Vec3 offset = fx.position_offset.enabled
                                      ? physics::Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1], fx.position_offset.offset_m[2])
@@ -100,18 +107,8 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
     std::vector<Wrench6> out(n_, Wrench6{});
     std::vector<physics::Producer> ps(neighbours_.size());
     for (std::size_t i = 0; i < n_; ++i) {
-        const auto& g = grid_[i];
-        const physics::Vec3 suf(g.sufferer[0], g.sufferer[1], g.sufferer[2]);
-        bool near = false;
-        for (std::size_t j = 0; j < neighbours_.size(); ++j) {
-            const auto& x = g.neighbours[j];
-            const physics::Vec3 pos = physics::Vec3(x[0], x[1], x[2]) - offset;  // recorded = true + offset
-            ps[j] = model.producer(pos, physics::Vec3(x[3], x[4], x[5]));
-            ps[j].axis = physics::Vec3(x[6], x[7], x[8]);
-            ps[j].jet = jets[j];
-            near = near || std::hypot(pos.x() - suf.x(), pos.y() - suf.y()) < near_radius_[j];
-        }
-        if (far_is_zero && !near) continue;
+        const physics::Vec3 suf = producers_at(i, model, jets, offset, ps);
+        if (far_is_zero && !near(suf, ps)) continue;
         const physics::Wrench w = model.evaluate(suf, ps);
         if (!w.allFinite())
             throw InputError(log::cat("the physics gave a non-finite wrench at t = ", t0_ + static_cast<double>(i) * dt_,
@@ -124,6 +121,42 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
     }
     cache_order_.push_back(key);
     return cache_.emplace(key, std::move(out)).first->second;
+}
+
+physics::Vec3 Replay::producers_at(std::size_t i, const physics::WrenchModel& model, const std::vector<physics::Jet>& jets,
+                                   const physics::Vec3& offset, std::vector<physics::Producer>& ps) const {
+    const auto& g = grid_[i];
+    for (std::size_t j = 0; j < neighbours_.size(); ++j) {
+        const auto& x = g.neighbours[j];
+        const physics::Vec3 pos = physics::Vec3(x[0], x[1], x[2]) - offset;  // recorded = true + offset
+        ps[j] = model.producer(pos, physics::Vec3(x[3], x[4], x[5]));
+        ps[j].axis = physics::Vec3(x[6], x[7], x[8]);
+        ps[j].jet = jets[j];
+    }
+    return physics::Vec3(g.sufferer[0], g.sufferer[1], g.sufferer[2]);
+}
+
+bool Replay::near(const physics::Vec3& suf, const std::vector<physics::Producer>& ps) const {
+    for (std::size_t j = 0; j < ps.size(); ++j)
+        if (std::hypot(ps[j].position.x() - suf.x(), ps[j].position.y() - suf.y()) < near_radius_[j]) return true;
+    return false;
+}
+
+std::vector<Wrench6> Replay::buffeting_sigma(const physics::PhysicsConfig& c) const {
+    std::vector<Wrench6> out(stamps_.size(), Wrench6{});
+    if (!c.turbulence.enabled || c.turbulence.lateral_intensity <= 0 || n_ == 0) return out;
+    const physics::PhysicsConfig flow = flow_of(c);
+    const physics::WrenchModel model(flow);
+    const std::vector<physics::Jet> jets = jets_of(flow);
+    std::vector<physics::Producer> ps(neighbours_.size());
+    for (std::size_t k = 0; k < stamps_.size(); ++k) {
+        const double x = std::round((stamps_[k] - t0_) / dt_);
+        const auto i = static_cast<std::size_t>(std::clamp(x, 0.0, static_cast<double>(n_ - 1)));
+        const physics::Vec3 suf = producers_at(i, model, jets, physics::Vec3::Zero(), ps);
+        const physics::Wrench s = model.buffeting_sigma(suf, ps, c.turbulence.lateral_intensity);
+        for (std::size_t a = 0; a < 6; ++a) out[k][a] = s[static_cast<Eigen::Index>(a)];
+    }
+    return out;
 }
 
 std::vector<Wrench6> Replay::own_forces(const physics::PhysicsConfig& c) const {
@@ -200,6 +233,7 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
         for (std::size_t i = 0; i < out.size(); ++i)
             out[i][static_cast<std::size_t>(fx.cell_crosstalk.to)] +=
                 fx.cell_crosstalk.coefficient * measured_[i][static_cast<std::size_t>(fx.cell_crosstalk.from)];
+    physics::apply_registered_effects(fx, stamps_, out);
     return out;
 }
 

@@ -17,6 +17,7 @@
 #include "flight/flight.hpp"
 #include "physics/bodies.hpp"
 #include "physics/config.hpp"
+#include "physics/wrench_model.hpp"
 
 namespace dw::analysis {
 
@@ -34,6 +35,9 @@ public:
     std::vector<Wrench6> recorded(const physics::PhysicsConfig& c) const;
     // The air's wrench on the sufferer on the grid (mocap time), for the flow part of c.
     const std::vector<Wrench6>& air(const physics::PhysicsConfig& c) const;
+    // At every wrench stamp, the standard deviation per axis of the lateral buffeting c's
+    // turbulence gives (zero without turbulence): noise the mean flow cannot predict.
+    std::vector<Wrench6> buffeting_sigma(const physics::PhysicsConfig& c) const;
 
     const std::vector<double>& stamps() const { return stamps_; }       // wrench.csv t
     const std::vector<Wrench6>& measured() const { return measured_; }  // wrench.csv values
@@ -54,6 +58,13 @@ public:
     std::size_t tare_samples(const physics::PhysicsConfig& c) const;
 
 private:
+    // c's flow part (what the air does) with the sufferer's own parameters; the neighbours' jets in it.
+    physics::PhysicsConfig flow_of(const physics::PhysicsConfig& c) const;
+    std::vector<physics::Jet> jets_of(const physics::PhysicsConfig& flow) const;
+    // The producers at grid point i (positions less `offset`) and the sufferer's position there.
+    physics::Vec3 producers_at(std::size_t i, const physics::WrenchModel& model, const std::vector<physics::Jet>& jets,
+                               const physics::Vec3& offset, std::vector<physics::Producer>& ps) const;
+    bool near(const physics::Vec3& sufferer, const std::vector<physics::Producer>& ps) const;
     // The flying sufferer's own forces on the grid: body_drag and ground_effect.
     std::vector<Wrench6> own_forces(const physics::PhysicsConfig& c) const;
     struct GridState {                       // the recorded states at one grid time

@@ -10,6 +10,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "plot/chart.hpp"
 #include "plot/field_map.hpp"
 
@@ -21,11 +22,7 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 using flight::kAxes;  // the axes as in wrench.csv
 
-std::string fmt(double v, int p = 3) {
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(p) << v;
-    return s.str();
-}
+std::string fmt(double v, int p = 3) { return fixed(v, p); }
 
 json axes_json(const AxisValues& v) {
     json j = json::object();
@@ -37,15 +34,15 @@ json params_json(const CandidateResult& c, bool ci) {
     json j = json::object();
     const auto& e = c.effect;
     auto val = [&](std::size_t k) { return ci ? json::array({c.lo[k], c.hi[k]}) : json(c.values[k]); };
-    if (e.name == "position_offset") {
-        j["offset_m"] = json::array({val(0), val(1), val(2)});
-    } else if (e.name == "cell_crosstalk") {
-        if (!ci) {
-            j["from"] = kAxes[e.from];
-            j["to"] = kAxes[e.to];
-        }
-        j["coefficient"] = val(0);
+    if (const std::string key = e.type->grouped_key(); !key.empty()) {
+        json all = json::array();
+        for (std::size_t k = 0; k < e.params.size(); ++k) all.push_back(val(k));
+        j[key] = all;
     } else {
+        if (e.type->has_axes() && !ci) {
+            j["from"] = kAxes[static_cast<std::size_t>(e.from)];
+            j["to"] = kAxes[static_cast<std::size_t>(e.to)];
+        }
         for (std::size_t k = 0; k < e.params.size(); ++k) j[e.params[k].name] = val(k);
     }
     return j;
@@ -57,7 +54,7 @@ std::string params_text(const CandidateResult& c) {
         if (k) s << ", ";
         s << c.effect.params[k].name << " = " << fmt(c.values[k], 4) << " [" << fmt(c.lo[k], 4) << ", " << fmt(c.hi[k], 4) << "]";
     }
-    if (c.effect.name == "cell_crosstalk") s << " (" << kAxes[c.effect.from] << " → " << kAxes[c.effect.to] << ")";
+    if (c.effect.type->has_axes()) s << " (" << kAxes[c.effect.from] << " → " << kAxes[c.effect.to] << ")";
     return s.str();
 }
 
@@ -72,65 +69,16 @@ std::string alternatives(const CandidateResult& c) {
 }
 
 // Who measured the force, in the report's words: a load stand, or a flying sufferer's estimate.
-struct Voice {
-    bool flying = false;
-    std::string sensor, clock, along;  // "the stand", "the stand's clock", where the force pattern moves
-    static Voice of(const Replay& r) {
-        if (!r.flying()) return {false, "the stand", "the stand's clock", "along each leg — towards the travel on one leg, against it on the next"};
-        return {true, "the sufferer's force estimate", "the sufferer's force log", "along the neighbour's path — towards its travel"};
-    }
-};
+physics::EffectVoice voice_of(const Replay& r) {
+    if (!r.flying()) return {false, "the stand", "the stand's clock", "along each leg — towards the travel on one leg, against it on the next"};
+    return {true, "the sufferer's force estimate", "the sufferer's force log", "along the neighbour's path — towards its travel"};
+}
 
-std::string paragraph(const CandidateResult& c, const Voice& who) {
-    const auto& v = c.values;
-    const std::string err = log::cat("Held-out RMSE on ", kAxes[c.best_axis], ": ", fmt(c.heldout_before[static_cast<std::size_t>(c.best_axis)]),
-                                     " → ", fmt(c.heldout_after[static_cast<std::size_t>(c.best_axis)]), " (", fmt(c.gain * 100, 0),
-                                     " % of its squared error removed on blocks the fit never saw).");
-    const auto& n = c.effect.name;
-    if (n == "clock_offset")
-        return log::cat("**clock_offset** — ", who.clock, " is ", fmt(std::abs(v[0]), 3), " s ", v[0] >= 0 ? "behind" : "ahead of",
-                        " the poses': the force on the sufferer at pose time t is stamped t ", v[0] >= 0 ? "+ " : "− ",
-                        fmt(std::abs(v[0]), 3), " s in wrench.csv. Nothing aerodynamic is missing; the two time bases differ. At 0.5 m/s it ",
-                        "moves the force pattern ", fmt(std::abs(v[0]) * 50, 1), " cm ", who.along,
-                        " — while the time shift is the same at every separation (table of shifts). ", err);
-    if (n == "sensor_lag")
-        return log::cat("**sensor_lag** — ", who.sensor, " is a first-order low-pass of the force with a time constant of ", fmt(v[0], 3),
-                        " s: peaks are late and flattened. ",
-                        who.flying ? "The estimate's own dynamics (the thrust model's motor lag, the state estimator's filtering)"
-                                   : "The stand's dynamics (filtering, mounting)",
-                        " were left out. ", err);
-    if (n == "wake_transport")
-        return log::cat("**wake_transport** — the downwash takes time to descend: the force follows each neighbour's state ",
-                        fmt(v[0], 2), " × τ(s) ago, τ(s) the turbulent jet's descent time over the vertical separation s (146 ms at 1.3 m for ",
-                        "k = 1). The simulation had the force follow the neighbour instantly. Its signature: the time shift grows with separation. ", err);
-    if (n == "position_offset")
-        return log::cat("**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", fmt(v[0], 3), ", ",
-                        fmt(v[1], 3), ", ", fmt(v[2], 3), ") m (N, E, D): the force pattern sits off the recorded positions by a fixed "
-                        "distance, the same ", who.flying ? "whichever way the neighbour passes" : "on +E and −E legs", ". ", err);
-    if (n == "force_scale")
-        return log::cat("**force_scale** — the recorded wrench is ", fmt(v[0], 3), " × the simulated one everywhere: a mass, drag "
-                        "coefficient or ", who.flying ? "thrust-model gain" : "load-cell gain", " that differs from the model by ", fmt((v[0] - 1) * 100, 1), " %. ", err);
-    if (n == "cell_crosstalk")
-        return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration", " leaks ", kAxes[c.effect.from],
-                        " into ", kAxes[c.effect.to], ": ", fmt(v[0] * 100, 2), " % of the true ", kAxes[c.effect.from], " appears on ",
-                        kAxes[c.effect.to], ". ",
-                        who.flying ? "A flying sufferer has no load cells: this stands for a force that follows another axis "
-                                     "(the vehicle tilting as it is pushed, or the thrust direction misestimated). "
-                                   : "Recalibrate the stand (dw-stand-agent calibrate). ",
-                        err);
-    if (n == "jet_merging")
-        return log::cat("**jet_merging** — neighbouring jets merge into one contracted, momentum-conserving column where their "
-                        "half-widths overlap (contraction ", fmt(v[0], 2), "): the aggregate is not the sum of single jets. It acts only with ",
-                        "two or more neighbours close together and far enough above the sufferer for the jets to widen. ", err);
-    if (n == "floor_recirculation")
-        return log::cat("**floor_recirculation** — jets hitting the floor come back as a bias that grows with the jets impinging "
-                        "(coefficient ", fmt(v[0], 3), "). ", err);
-    if (n == "body_drag")
-        return log::cat("**body_drag** — the flying sufferer's own drag against its motion through still air: C_d A = ", fmt(v[0], 4),
-                        " m² horizontally, ", fmt(v[1], 4), " m² vertically (f = −½ ρ C_d A |v| v). The simulation had only the neighbours' air. ", err);
-    if (n == "ground_effect")
-        return log::cat("**ground_effect** — extra lift near the floor: ", fmt(v[0], 2), " × the hover thrust × (R / 4h)². ", err);
-    return n;
+std::string paragraph(const CandidateResult& c, const physics::EffectVoice& who) {
+    const auto axis = static_cast<std::size_t>(c.best_axis);
+    const std::string err = log::cat("Held-out RMSE on ", kAxes[axis], ": ", fmt(c.heldout_before[axis]), " → ", fmt(c.heldout_after[axis]), " (",
+                                     fmt(c.gain * 100, 0), " % of its squared error removed on blocks the fit never saw).");
+    return c.effect.type->describe(c.values, {c.effect.from, c.effect.to}, who) + err;
 }
 
 // Mean of per-sample values binned over the formation's N-E position (0.1 m cells), for samples
@@ -277,7 +225,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
     const Figures figs{replay, describe(replay, blocks), replay.recorded(o.physics), replay.recorded(r.fitted),
                        r.regions.empty() ? std::size_t{2} : static_cast<std::size_t>(physics::axis_index(r.regions.front().axis)), dir};
-    const Voice who = Voice::of(replay);
+    const physics::EffectVoice who = voice_of(replay);
     const std::string figures_md = who.flying ? flying_figures(figs, blocks) : stand_figures(figs, r);
 
     // report.md

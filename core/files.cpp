@@ -3,6 +3,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -60,14 +62,14 @@ void require_output_dir(const std::string& path, std::string_view what) {
     }
 }
 
-void write_file(const std::string& path, std::string_view content) {
+void write_file(const std::string& path, std::string_view content, unsigned mode) {
     const fs::path parent = fs::path(path).parent_path();
     std::error_code ec;
     if (!parent.empty() && !fs::exists(parent, ec) && !fs::create_directories(parent, ec)) {
         throw RuntimeError(log::cat("cannot write ", path, ": cannot create ", parent.string(), ": ", ec.message()));
     }
     const std::string tmp = log::cat(path, ".tmp-", ::getpid());
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, static_cast<mode_t>(mode));
     if (fd < 0) throw RuntimeError(log::cat("cannot write ", path, ": ", std::strerror(errno)));
     std::size_t done = 0;
     int err = 0;
@@ -86,6 +88,11 @@ void write_file(const std::string& path, std::string_view content) {
         ::unlink(tmp.c_str());
         throw RuntimeError(log::cat("cannot write ", path, ": ", std::strerror(err)));
     }
+}
+
+bool is_plain_name(std::string_view name) {
+    if (name.empty() || name.front() == '.') return false;
+    return std::all_of(name.begin(), name.end(), [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.'; });
 }
 
 }  // namespace dw

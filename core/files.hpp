@@ -16,12 +16,17 @@ void require_readable_file(const std::string& path, std::string_view what);
 // Writes `content` to `path` atomically (temporary + rename), making missing folders. Throws
 // dw::RuntimeError naming the path and the system's reason; no file is left at `path` or beside
 // it on failure.
-void write_file(const std::string& path, std::string_view content);
+// `mode`: the file's permissions from its creation on (0600 for a private key).
+void write_file(const std::string& path, std::string_view content, unsigned mode = 0644);
 // Throws dw::InputError when `path` cannot become a file: it is empty or a directory, or its
 // folder does not exist or cannot be written. Creates nothing: for checking an output option
 // before long work starts.
 void require_writable_path(const std::string& path, std::string_view what);
 // The same for an output folder: `path` may exist as a directory or be made; creates nothing.
 void require_output_dir(const std::string& path, std::string_view what);
+
+// Letters, digits, '_', '-' and '.', not starting with '.': a name that can be a file name (a
+// process's log, a keystore identity's folder) and never a path.
+bool is_plain_name(std::string_view name);
 
 }  // namespace dw

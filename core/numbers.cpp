@@ -80,4 +80,11 @@ void append_fixed(std::string& out, double v, int decimals, std::string_view wha
     out.append(buf, static_cast<std::size_t>(ptr - buf));
 }
 
+std::string fixed(double v, int decimals) {
+    if (!std::isfinite(v)) return log::cat(v);
+    std::string s;
+    append_fixed(s, v, decimals, "fixed");
+    return s;
+}
+
 }  // namespace dw

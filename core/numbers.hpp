@@ -42,5 +42,7 @@ std::chrono::milliseconds to_millis(double seconds);
 // Appends v with `decimals` digits after the point. Throws dw::InputError naming `what` when v is
 // not finite: no NaN or inf reaches a file.
 void append_fixed(std::string& out, double v, int decimals, std::string_view what);
+// v with `decimals` digits after the point, for reports and tables ("nan" and "inf" as such).
+std::string fixed(double v, int decimals);
 
 }  // namespace dw

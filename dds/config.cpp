@@ -9,6 +9,7 @@
 
 #include "core/cli.hpp"
 #include "core/log.hpp"
+#include "dds/security.hpp"
 
 namespace dw::dds {
 namespace fdds = eprosima::fastdds::dds;
@@ -100,6 +101,14 @@ void validate(const DdsConfig& c, std::string_view where) {
     }
 }
 
+namespace {
+// Once the file and the flags are merged (a file may say `profile: lab` and the flags the keystore).
+void require_security_choice(const DdsConfig& c) {
+    if (c.profile == Profile::lab && c.security.empty() && !c.insecure)
+        throw InputError("the lab profile needs a keystore (--security DIR, made by dw-lab keys create) or an explicit --insecure");
+}
+}  // namespace
+
 void add_cli_options(CLI::App& app, DdsCliOptions& o) {
     app.add_option("--domain", o.domain, "DDS domain id (0-232)")->type_name("ID")->check(cli::in(kDomainRange));
     app.add_option("--profile", o.profile, "local (loopback only, default) or lab (real network)")
@@ -110,6 +119,10 @@ void add_cli_options(CLI::App& app, DdsCliOptions& o) {
         ->type_name("ADDR");
     app.add_option("--namespace", o.ns, "topic namespace: topics are rt/<ns>/... (default lab)")
         ->type_name("NS");
+    app.add_option("--security", o.security, "DDS Security keystore (dw-lab keys create); required by the lab profile")
+        ->type_name("DIR");
+    app.add_option("--identity", o.identity, "the keystore identity to join as (default: the process's name)")->type_name("NAME");
+    app.add_flag("--insecure", o.insecure, "the lab profile without DDS Security (anyone on the network can command the vehicles)");
 }
 
 DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
@@ -134,6 +147,8 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
         in_file("discovery_server", [&] { if (auto v = file.get_string("dds.discovery_server")) c.discovery_server = *v; });
         in_file("interfaces", [&] { if (auto v = file.get_strings("dds.interfaces")) c.interfaces = *v; });
         in_file("namespace", [&] { if (auto v = file.get_string("dds.namespace")) c.ns = *v; });
+        in_file("security", [&] { if (auto v = file.get_string("dds.security")) c.security = *v; });
+        in_file("identity", [&] { if (auto v = file.get_string("dds.identity")) c.identity = *v; });
         validate(c, file.path());
     }
     if (cli.domain) c.domain = *cli.domain;
@@ -142,7 +157,11 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
     if (!cli.peers.empty()) c.initial_peers = cli.peers;
     if (cli.discovery_server) c.discovery_server = *cli.discovery_server;
     if (cli.ns) c.ns = *cli.ns;
+    if (cli.security) c.security = *cli.security;
+    if (cli.identity) c.identity = *cli.identity;
+    if (cli.insecure) c.insecure = true, c.security.clear();
     validate(c);
+    require_security_choice(c);
     return c;
 }
 
@@ -151,6 +170,8 @@ std::vector<std::string> to_args(const DdsConfig& c) {
                                "--transport", to_string(c.transport), "--namespace", c.ns};
     for (const auto& peer : c.initial_peers) a.insert(a.end(), {"--peer", peer});
     if (!c.discovery_server.empty()) a.insert(a.end(), {"--discovery-server", c.discovery_server});
+    if (!c.security.empty()) a.insert(a.end(), {"--security", c.security});  // each child joins as its own identity
+    if (c.insecure) a.emplace_back("--insecure");
     return a;
 }
 
@@ -205,6 +226,7 @@ fdds::DomainParticipantQos participant_qos(const DdsConfig& c, const std::string
     // Lets a peer that vanishes without saying goodbye be dropped within a few seconds.
     builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(5, 0);
     builtin.discovery_config.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(1, 0);
+    if (!c.security.empty()) add_security(qos, c.security, c.identity.empty() ? name : c.identity);
     return qos;
 }
 

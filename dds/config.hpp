@@ -31,6 +31,9 @@ struct DdsConfig {
     std::string discovery_server;             // "ip:port" (lab profile); "" = multicast discovery
     std::vector<std::string> interfaces;      // lab profile: UDP interface whitelist (addresses)
     std::string ns{kDefaultNamespace};        // topics are rt/<ns>/...
+    std::string security;                     // keystore folder (dds/security.hpp); "" = no DDS Security
+    std::string identity;                     // the keystore identity; "" = the process's name
+    bool insecure = false;                    // the lab profile without a keystore, said explicitly
 };
 
 Profile parse_profile(std::string_view text);
@@ -49,6 +52,9 @@ struct DdsCliOptions {
     std::vector<std::string> peers;
     std::optional<std::string> discovery_server;
     std::optional<std::string> ns;
+    std::optional<std::string> security;
+    std::optional<std::string> identity;
+    bool insecure = false;
 };
 
 void add_cli_options(CLI::App& app, DdsCliOptions& options);

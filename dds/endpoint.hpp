@@ -21,6 +21,12 @@
 namespace dw::dds {
 
 namespace detail {
+// Under DDS Security the likely reason an endpoint is refused: the identity's permissions.
+inline std::string denied_hint(const Participant& p, const char* verb) {
+    if (p.config().security.empty()) return "";
+    return " (under DDS Security: identity '" + (p.config().identity.empty() ? p.process() : p.config().identity) + "' may not " + verb +
+           " it — its role's topics in dds/topics.hpp, its permissions in the keystore)";
+}
 // Waits until `count()` reaches n, or the timeout passes.
 template <class F>
 bool wait_until_count(F&& count, int n, std::chrono::milliseconds timeout) {
@@ -57,7 +63,7 @@ public:
         writer_ = p.publisher().create_datawriter(&p.topic(spec), qos_, this,
                                                   fdds::StatusMask::publication_matched() <<
                                                       fdds::StatusMask::offered_incompatible_qos());
-        if (writer_ == nullptr) throw RuntimeError("cannot create a DDS writer on " + name_);
+        if (writer_ == nullptr) throw RuntimeError("cannot create a DDS writer on " + name_ + detail::denied_hint(p, "publish"));
     }
     ~Writer() override {
         writer_->set_listener(nullptr);
@@ -153,7 +159,7 @@ public:
             fdds::StatusMask::data_available() << fdds::StatusMask::subscription_matched()
                 << fdds::StatusMask::requested_incompatible_qos() << fdds::StatusMask::liveliness_changed()
                 << fdds::StatusMask::sample_lost());
-        if (reader_ == nullptr) throw RuntimeError("cannot create a DDS reader on " + name_);
+        if (reader_ == nullptr) throw RuntimeError("cannot create a DDS reader on " + name_ + detail::denied_hint(p, "subscribe to"));
     }
     ~Reader() override {
         reader_->set_listener(nullptr);

@@ -30,3 +30,27 @@ std::vector<std::string> select_topics(const std::vector<std::string>& requested
 }
 
 }  // namespace dw::dds
+
+namespace dw::dds {
+
+std::string_view role_name(Role r) {
+    for (const auto& i : kRoles)
+        if (i.role == r) return i.name;
+    return "?";
+}
+
+std::optional<Role> role_named(std::string_view name) {
+    for (const auto& i : kRoles)
+        if (i.name == name) return i.role;
+    return std::nullopt;
+}
+
+std::optional<Role> role_of_executable(std::string_view executable) {
+    const auto slash = executable.rfind('/');
+    if (slash != std::string_view::npos) executable.remove_prefix(slash + 1);
+    for (const auto& i : kRoles)
+        if (i.executable == executable) return i.role;
+    return std::nullopt;
+}
+
+}  // namespace dw::dds

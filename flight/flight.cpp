@@ -27,6 +27,18 @@ constexpr std::array<const char*, 8> kMetaKeys = {"format", "sufferer", "neighbo
 
 const char* to_string(WrenchSource s) { return s == WrenchSource::stand ? "stand" : "residual"; }
 
+std::string axis_list() {
+    std::string s;
+    for (std::size_t i = 0; i < kAxes.size(); ++i) s += (i == 0 ? "" : i + 1 == kAxes.size() ? " or " : ", ") + std::string(kAxes[i]);
+    return s;
+}
+
+std::vector<std::string> wrench_columns() {
+    std::vector<std::string> c{"t"};
+    c.insert(c.end(), kAxes.begin(), kAxes.end());
+    return c;
+}
+
 std::uint16_t Flight::body_index(const std::string& name) {
     const int i = find_body(name);
     if (i >= 0) return static_cast<std::uint16_t>(i);
@@ -225,7 +237,7 @@ Flight read_flight(const std::string& dir) {
 
     {
         CsvReader csv(slurp(root / "wrench.csv"), (root / "wrench.csv").string());
-        csv.expect_header({"t", "f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"});
+        csv.expect_header(wrench_columns());
         std::vector<std::string_view> row;
         while (csv.next(row)) {
             WrenchSample s;
@@ -337,7 +349,8 @@ FlightText format_flight(const Flight& f) {
     static constexpr const char* kPosition[] = {"n", "e", "d"};
     FlightText t;
     t.meta = meta_text(f.meta);
-    t.wrench = "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
+    for (const auto& column : wrench_columns()) t.wrench += (t.wrench.empty() ? "" : ",") + column;
+    t.wrench += "\n";
     t.wrench.reserve(f.wrench.size() * 80);
     for (std::size_t i = 0; i < f.wrench.size(); ++i) {
         Row row(t.wrench, "wrench.csv", i + 2);

@@ -16,6 +16,10 @@ namespace dw::flight {
 inline constexpr const char* kFormat = "downwash-flight/1";
 inline constexpr Range kStandHeightRange{0.1, 10, "m"};
 inline constexpr std::array<const char*, 6> kAxes = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
+// kAxes for messages: "f_n, f_e, f_d, m_roll, m_pitch or m_yaw".
+std::string axis_list();
+// wrench.csv's columns: t, then kAxes.
+std::vector<std::string> wrench_columns();
 inline constexpr std::array<const char*, 6> kFormations = {"single", "side_by_side", "leader_follower",
                                                            "stack", "hybrid", "free"};
 

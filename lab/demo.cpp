@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <sstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -41,32 +43,13 @@ std::string first_line_with(const std::string& text, const std::string& needle) 
     return text.substr(p, e == std::string::npos ? std::string::npos : e - p);
 }
 
-}  // namespace
+struct DemoFlight {
+    std::string name, formation, vehicles, legs, altitudes;
+};
 
-int run_demo(const DemoOptions& o) {
-    const auto started = Clock::now();
-    const fs::path run = fs::absolute(o.out_dir);
-    fs::create_directories(run / "logs");
-    const int total = 7;
-    auto step = [&](int i) { return Step{i, total, started}; };
-
-    // The physics every simulated part shares: the documented defaults with jets merging.
-    physics::PhysicsConfig physics;
-    physics.effects.jet_merging.enabled = true;
-    const std::string physics_path = (run / "physics.yaml").string();
-    write_file(physics_path, physics::to_yaml(physics));
-    const std::string lab_path = (run / "lab.yaml").string();
-    write_file(lab_path, kLabSimYaml);
-    const LabFile lab = load_lab(lab_path);
-
-    // 1-2. Two experiments, every process separate, over loopback DDS.
-    struct Flight {
-        std::string name, formation, vehicles, legs, altitudes;
-    };
-    const std::vector<Flight> flights{
-        {"single", "single", "v1", o.quick ? "3" : "9", "0.3,0.8,1.3"},
-        {"lf3", "leader_follower3", "v1,v2,v3", o.quick ? "4" : "12", "1.3"},
-    };
+// 1-2. Two experiments, every process separate, over loopback DDS; each recording exported to a flight.
+std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& run, const LabFile& lab, const std::string& physics_path,
+                                          const std::vector<DemoFlight>& flights, const std::function<Step(int)>& step) {
     std::vector<LaunchResult> results;
     for (std::size_t k = 0; k < flights.size(); ++k) {
         const auto& f = flights[k];
@@ -87,17 +70,13 @@ int run_demo(const DemoOptions& o) {
                                         " (status ", r.experiment_status, "; logs in ", lo.run_dir, "/logs)"));
         results.push_back(r);
         run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight", (run / "flights" / f.name).string()},
-             (run / "logs" / ("export-" + f.name + ".log")).string());
+                    (run / "logs" / ("export-" + f.name + ".log")).string());
     }
+    return results;
+}
 
-    // 3. Train and compare (the study: simulated training flights of every formation).
-    step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
-    std::vector<std::string> study{"dw-predictor", "study", "--out", (run / "study").string(), "--physics", physics_path};
-    if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
-    run_sibling(study, (run / "logs" / "study.log").string());
-
-    // 4. The models on the recorded (DDS) flights, and the recorded maps.
-    step(4).begin("the models on the recorded flights: table and maps");
+// 4. The study's models on the recorded (DDS) flights, and the recorded map.
+void models_on_recorded(const fs::path& run, const std::string& physics_path) {
     const std::string models = (run / "study" / "models").string();
     std::vector<std::string> model_files{physics_path, models + "/naive_linear.json", models + "/learnt_linear.json", models + "/deep_sets.json"};
     std::vector<std::string> cmp{"dw-predictor", "compare", "--models"};
@@ -109,40 +88,32 @@ int run_demo(const DemoOptions& o) {
     map.insert(map.end(), {"--formation", "leader_follower3", "--altitude", "1.3", "--data", (run / "flights" / "lf3").string(), "--out",
                            (run / "recorded" / "lf3_map.png").string()});
     run_sibling(map, (run / "logs" / "map.log").string());
+}
 
-    // 5. A "real" flight with something the simulation leaves out.
-    step(5).begin("a 'real' flight with a hidden effect (a 0.1 s clock offset between stand and mocap)");
-    physics::PhysicsConfig hidden = physics;
-    hidden.effects.clock_offset = {true, 0.1};
-    const std::string hidden_path = (run / "hidden-physics.yaml").string();
-    write_file(hidden_path, physics::to_yaml(hidden));
-    run_sibling({"dw-sim", "fly", "--formation", "leader_follower", "--legs", o.quick ? "20" : "36", "--physics", hidden_path, "--seed", "42",
-          "--out", (run / "flights" / "real").string(), "--quiet"},
-         (run / "logs" / "real-flight.log").string());
-
-    // 6. Explain it.
-    step(6).begin("explaining the 'real' flight against the lab's physics");
-    run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "flights" / "real").string(), "--out", (run / "explain").string()},
-         (run / "logs" / "explain.log").string());
-
-    // 7. The index.
-    step(7).begin("writing index.md");
-    const auto report = nlohmann::json::parse(read_file((run / "explain" / "report.json").string()));
+// What report.json says was found: the effects, and each accepted one's values with intervals.
+std::pair<std::string, std::string> found_and_fitted(const nlohmann::json& report) {
     std::string found;
     for (const auto& e : report["explained_by"]) found += (found.empty() ? "" : ", ") + e.get<std::string>();
+    auto rounded = [](const nlohmann::json& v) { return std::round(v.get<double>() * 1e4) / 1e4; };
     std::string fitted;
     for (const auto& c : report["candidates"]) {
         if (!c["accepted"].get<bool>()) continue;
         fitted += c["effect"].get<std::string>() + ":";
         for (const auto& [k, v] : c["params"].items()) {
-            fitted += " " + k + " = " + (v.is_number() ? log::cat(std::round(v.get<double>() * 1e4) / 1e4) : v.dump());
+            fitted += " " + k + " = " + (v.is_number() ? log::cat(rounded(v)) : v.dump());
             if (c["ci95"].contains(k) && c["ci95"][k].size() == 2 && c["ci95"][k][0].is_number())
-                fitted += log::cat(" [", std::round(c["ci95"][k][0].get<double>() * 1e4) / 1e4, ", ", std::round(c["ci95"][k][1].get<double>() * 1e4) / 1e4, "]");
+                fitted += log::cat(" [", rounded(c["ci95"][k][0]), ", ", rounded(c["ci95"][k][1]), "]");
         }
         fitted += "\n";
     }
+    return {found, fitted};
+}
+
+// 7. index.md: what ran, where its outputs are, and what was found.
+std::string index_markdown(double seconds, const std::vector<DemoFlight>& flights, const std::vector<LaunchResult>& results,
+                           const nlohmann::json& report) {
+    const auto [found, fitted] = found_and_fitted(report);
     const double before = report["fit"]["heldout_rmse_before"]["f_d"].get<double>(), after = report["fit"]["heldout_rmse_after"]["f_d"].get<double>();
-    const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
     std::ostringstream md;
     md << "# Downwash Lab demo run\n\nEverything here is **simulated** (stand, motion capture, vehicles and the air), made by "
           "`dw-lab demo` in " << static_cast<int>(seconds) / 60 << " min " << static_cast<int>(seconds) % 60 << " s.\n\n";
@@ -161,11 +132,67 @@ int run_demo(const DemoOptions& o) {
        << "The recorded Leader Follower K=3 experiment against the models:\n\n![recorded](recorded/lf3_map.png)\n\n";
     md << "## 3. The explained mismatch\n\nA Leader Follower flight was made with a 0.1 s clock offset the lab's physics does not "
           "know ([hidden-physics.yaml](hidden-physics.yaml)) and given to `dw-explain` with the lab's physics. Found: **"
-       << (found.empty() ? "nothing" : found) << "**.\n\n```\n" << fitted << "```\n\nHeld-out f_d RMSE " << std::round(before * 1000) / 1000 << " N → " << std::round(after * 1000) / 1000
+       << (found.empty() ? "nothing" : found) << "**.\n\n```\n" << fitted << "```\n\nHeld-out f_d RMSE " << std::round(before * 1000) / 1000 << " N → "
+       << std::round(after * 1000) / 1000
        << " N. Report: [explain/report.md](explain/report.md) ([report.json](explain/report.json), fitted physics "
           "[explain/physics.yaml](explain/physics.yaml)).\n\n![residuals before](explain/residuals_before.png)\n\n"
           "![residuals after](explain/residuals_after.png)\n";
-    write_file((run / "index.md").string(), md.str());
+    return md.str();
+}
+
+}  // namespace
+
+int run_demo(const DemoOptions& o) {
+    const auto started = Clock::now();
+    const fs::path run = fs::absolute(o.out_dir);
+    fs::create_directories(run / "logs");
+    const int total = 7;
+    const std::function<Step(int)> step = [&](int i) { return Step{i, total, started}; };
+
+    // The physics every simulated part shares: the documented defaults with jets merging.
+    physics::PhysicsConfig physics;
+    physics.effects.jet_merging.enabled = true;
+    const std::string physics_path = (run / "physics.yaml").string();
+    write_file(physics_path, physics::to_yaml(physics));
+    const std::string lab_path = (run / "lab.yaml").string();
+    write_file(lab_path, kLabSimYaml);
+    const LabFile lab = load_lab(lab_path);
+
+    const std::vector<DemoFlight> flights{
+        {"single", "single", "v1", o.quick ? "3" : "9", "0.3,0.8,1.3"},
+        {"lf3", "leader_follower3", "v1,v2,v3", o.quick ? "4" : "12", "1.3"},
+    };
+    const std::vector<LaunchResult> results = fly_experiments(o, run, lab, physics_path, flights, step);
+
+    // 3. Train and compare (the study: simulated training flights of every formation).
+    step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
+    std::vector<std::string> study{"dw-predictor", "study", "--out", (run / "study").string(), "--physics", physics_path};
+    if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
+    run_sibling(study, (run / "logs" / "study.log").string());
+
+    step(4).begin("the models on the recorded flights: table and maps");
+    models_on_recorded(run, physics_path);
+
+    // 5. A "real" flight with something the simulation leaves out.
+    step(5).begin("a 'real' flight with a hidden effect (a 0.1 s clock offset between stand and mocap)");
+    physics::PhysicsConfig hidden = physics;
+    hidden.effects.clock_offset = {true, 0.1};
+    const std::string hidden_path = (run / "hidden-physics.yaml").string();
+    write_file(hidden_path, physics::to_yaml(hidden));
+    run_sibling({"dw-sim", "fly", "--formation", "leader_follower", "--legs", o.quick ? "20" : "36", "--physics", hidden_path, "--seed", "42",
+                 "--out", (run / "flights" / "real").string(), "--quiet"},
+                (run / "logs" / "real-flight.log").string());
+
+    // 6. Explain it.
+    step(6).begin("explaining the 'real' flight against the lab's physics");
+    run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "flights" / "real").string(), "--out", (run / "explain").string()},
+                (run / "logs" / "explain.log").string());
+
+    step(7).begin("writing index.md");
+    const auto report = nlohmann::json::parse(read_file((run / "explain" / "report.json").string()));
+    const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
+    write_file((run / "index.md").string(), index_markdown(seconds, flights, results, report));
+    const std::string found = found_and_fitted(report).first;
     std::cout << "demo done in " << static_cast<int>(seconds) << " s: " << (run / "index.md").string() << "\n"
               << "  experiments: " << results[0].phase << ", " << results[1].phase << "; explained by: " << (found.empty() ? "nothing" : found)
               << "\n  " << first_line_with(read_file((run / "study" / "table.md").string()), "| leader_follower K=3") << "\n";

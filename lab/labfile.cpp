@@ -45,11 +45,8 @@ struct Ctx {
 
 }  // namespace
 
-bool is_process_name(const std::string& name) {
-    // The name becomes a log file under the run folder and a heartbeat name: no paths.
-    if (name.empty() || name.front() == '.') return false;
-    return std::all_of(name.begin(), name.end(), [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.'; });
-}
+// The name becomes a log file under the run folder and a heartbeat name: no paths.
+bool is_process_name(const std::string& name) { return is_plain_name(name); }
 
 LabFile parse_lab(const std::string& yaml, const std::string& name) {
     Ctx c{name};

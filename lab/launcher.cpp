@@ -3,11 +3,13 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -19,6 +21,7 @@
 #include "core/subprocess.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/heartbeat.hpp"
+#include "dds/names.hpp"
 #include "dds/participant.hpp"
 #include "dds/time.hpp"
 
@@ -41,31 +44,6 @@ std::string progress_bar(unsigned flown, unsigned total, double progress, double
 
 namespace {
 
-const char* phase_name(msg::ExperimentPhase p) {
-    switch (p) {
-        case msg::PHASE_IDLE: return "IDLE";
-        case msg::PHASE_WAITING: return "WAITING";
-        case msg::PHASE_CALIBRATING: return "CALIBRATING";
-        case msg::PHASE_TAKING_OFF: return "TAKING_OFF";
-        case msg::PHASE_FLYING: return "FLYING";
-        case msg::PHASE_LANDING: return "LANDING";
-        case msg::PHASE_DONE: return "DONE";
-        case msg::PHASE_ABORTED: return "ABORTED";
-    }
-    return "?";
-}
-
-const char* state_name(msg::ProcessState s) {
-    switch (s) {
-        case msg::PROC_STARTING: return "STARTING";
-        case msg::PROC_RUNNING: return "RUNNING";
-        case msg::PROC_DEGRADED: return "DEGRADED";
-        case msg::PROC_FAULT: return "FAULT";
-        case msg::PROC_STOPPING: return "STOPPING";
-    }
-    return "?";
-}
-
 std::string quoted(const std::vector<std::string>& argv) {
     std::string s;
     for (const auto& a : argv) {
@@ -84,19 +62,12 @@ struct Running {
     int restarts = 0;
 };
 
-}  // namespace
-
-LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsConfig& monitor) {
+// Every command built first: a bad variable stops the run before anything starts.
+std::deque<Running> build_commands(const LabFile& lab, const LaunchOptions& o) {
     namespace fs = std::filesystem;
-    auto say = [&](const std::string& s) {
-        if (o.say) o.say(s);
-    };
-    fs::create_directories(fs::path(o.run_dir) / "logs");
     std::map<std::string, std::string> vars = lab.vars;
     for (const auto& [k, v] : o.vars) vars[k] = v;
     vars["run_dir"] = o.run_dir;
-
-    // Build every command first: a bad variable stops the run before anything starts.
     std::deque<Running> procs;
     for (const auto& p : lab.processes) {
         const HostSpec& host = lab.hosts.at(p.host);
@@ -106,11 +77,74 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
         argv.push_back(bin + "/" + args[0]);
         argv.insert(argv.end(), args.begin() + 1, args.end());
         argv.insert(argv.end(), o.dds_args.begin(), o.dds_args.end());
+        if (std::find(o.dds_args.begin(), o.dds_args.end(), "--security") != o.dds_args.end())
+            argv.insert(argv.end(), {"--identity", p.name});  // each process its own identity (dw-lab keys create --lab)
         procs.push_back({p, argv, (fs::path(o.run_dir) / "logs" / (p.name + ".log")).string(), nullptr, std::nullopt, 0});
     }
+    return procs;
+}
+
+// One status line per process (from its heartbeat) and the experiment's progress. `secure`: the
+// launcher itself joined with a keystore, so a heartbeat it hears comes from a participant that
+// authenticated with the lab's CA and may publish heartbeats ("auth"); otherwise "open".
+std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor& peers, const std::optional<msg::ExperimentState>& state,
+                        bool secure) {
+    std::ostringstream s;
+    const Nanos now = SystemClock().now_ns();
+    for (const auto& r : procs) {
+        char line[256];
+        const auto st = peers.last(r.spec.name);
+        std::string where = r.proc ? log::cat("pid ", r.proc->pid()) : "elsewhere";
+        if (r.ended) where = log::cat("exited ", *r.ended);
+        if (st) {
+            double out_hz = 0, in_hz = 0;
+            unsigned long long lost = 0;
+            for (const auto& t : st->rates()) {
+                (t.outgoing() ? out_hz : in_hz) += t.rate_hz();
+                lost += t.lost();
+            }
+            const double age_ms = static_cast<double>(now - dds::from_msg(st->header().stamp())) * 1e-6;
+            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s %-4s out %7.1f Hz  in %7.1f Hz  lost %-6llu hb %5.0f ms ago%s%s",
+                          r.spec.name.c_str(), dds::process_state_name(st->state()), where.c_str(), r.spec.host.c_str(), secure ? "auth" : "open",
+                          out_hz, in_hz, lost, age_ms, st->message().empty() ? "" : "  ", st->message().c_str());
+        } else {
+            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-", where.c_str(),
+                          r.spec.host.c_str());
+        }
+        s << line << "\n";
+    }
+    if (state)
+        s << "  experiment     " << dds::phase_name(state->phase()) << "  "
+          << progress_bar(state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index())),
+                          state->leg_count(), state->progress(), state->phase() == msg::PHASE_DONE ? -1.0 : state->eta_s())
+          << "\n";
+    return s.str();
+}
+
+// Stop in reverse order, so the recorder (started early) sees the others' last words.
+void stop_all(std::deque<Running>& procs, double grace_s, const std::function<void(const std::string&)>& say) {
+    for (auto it = procs.rbegin(); it != procs.rend(); ++it)
+        if (it->proc && !it->ended) it->proc->signal(SIGINT);
+    for (auto it = procs.rbegin(); it != procs.rend(); ++it) {
+        if (!it->proc || it->ended) continue;
+        const int st = it->proc->stop(std::chrono::milliseconds(static_cast<long>(grace_s * 1000)));
+        say(log::cat("stopped ", it->spec.name, " (status ", st, ")"));
+    }
+}
+
+}  // namespace
+
+LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsConfig& monitor) {
+    const std::function<void(const std::string&)> say = [&](const std::string& s) {
+        if (o.say) o.say(s);
+    };
+    std::filesystem::create_directories(std::filesystem::path(o.run_dir) / "logs");
+    std::deque<Running> procs = build_commands(lab, o);
 
     LaunchResult R;
-    dds::Participant participant(monitor, "lab");
+    dds::DdsConfig self = monitor;
+    if (!self.security.empty() && self.identity.empty()) self.identity = std::string(dds::role_name(dds::Role::launcher));
+    dds::Participant participant(self, "lab");
     dds::PeerMonitor peers(participant, [&](const dds::PeerEvent& e) {
         say(log::cat(e.process, e.kind == dds::PeerEvent::Kind::appeared ? " is up" : " is gone: " + e.reason));
     });
@@ -139,39 +173,12 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     const bool tty = o.live && ::isatty(STDERR_FILENO);
     int drawn = 0;
     auto draw = [&] {
-        std::ostringstream s;
-        const Nanos now = SystemClock().now_ns();
-        for (const auto& r : procs) {
-            char line[256];
-            const auto st = peers.last(r.spec.name);
-            std::string where = r.proc ? log::cat("pid ", r.proc->pid()) : "elsewhere";
-            if (r.ended) where = log::cat("exited ", *r.ended);
-            if (st) {
-                double out_hz = 0, in_hz = 0;
-                unsigned long long lost = 0;
-                for (const auto& t : st->rates()) {
-                    (t.outgoing() ? out_hz : in_hz) += t.rate_hz();
-                    lost += t.lost();
-                }
-                const double age_ms = static_cast<double>(now - dds::from_msg(st->header().stamp())) * 1e-6;
-                std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s out %7.1f Hz  in %7.1f Hz  lost %-6llu hb %5.0f ms ago%s%s",
-                              r.spec.name.c_str(), state_name(st->state()), where.c_str(), r.spec.host.c_str(), out_hz, in_hz, lost, age_ms,
-                              st->message().empty() ? "" : "  ", st->message().c_str());
-            } else {
-                std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-", where.c_str(),
-                              r.spec.host.c_str());
-            }
-            s << line << "\n";
-        }
+        std::optional<msg::ExperimentState> now_state;
         {
             std::lock_guard lock(m);
-            if (state)
-                s << "  experiment     " << phase_name(state->phase()) << "  "
-                  << progress_bar(state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index())),
-                                  state->leg_count(), state->progress(), state->phase() == msg::PHASE_DONE ? -1.0 : state->eta_s())
-                  << "\n";
+            now_state = state;
         }
-        const std::string text = s.str();
+        const std::string text = status_text(procs, peers, now_state, !self.security.empty());
         if (tty) {
             for (int i = 0; i < drawn; ++i) std::fputs("\033[F\033[K", stderr);
             drawn = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
@@ -217,19 +224,12 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     {
         std::lock_guard lock(m);
         if (state) {
-            R.phase = phase_name(state->phase());
+            R.phase = dds::phase_name(state->phase());
             R.legs_total = state->leg_count();
             R.legs_flown = state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index()));
         }
     }
-    // Stop in reverse order, so the recorder (started early) sees the others' last words.
-    for (auto it = procs.rbegin(); it != procs.rend(); ++it)
-        if (it->proc && !it->ended) it->proc->signal(SIGINT);
-    for (auto it = procs.rbegin(); it != procs.rend(); ++it) {
-        if (!it->proc || it->ended) continue;
-        const int st = it->proc->stop(std::chrono::milliseconds(static_cast<long>(o.stop_grace_s * 1000)));
-        say(log::cat("stopped ", it->spec.name, " (status ", st, ")"));
-    }
+    stop_all(procs, o.stop_grace_s, say);
     return R;
 }
 

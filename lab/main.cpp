@@ -12,6 +12,7 @@
 #include "core/subprocess.hpp"
 #include "dds/process_cli.hpp"
 #include "lab/demo.hpp"
+#include "lab/keys.hpp"
 #include "lab/launcher.hpp"
 #include "lab/loopback.hpp"
 
@@ -41,7 +42,19 @@ int run(int argc, char** argv) {
     runc->add_option("--run-dir", run_dir, "folder for logs and {run_dir} (default: runs/<time>)");
     runc->add_option("--var", var_args, "NAME=VALUE: set a lab-file variable (repeatable)");
 
+    dw::lab::KeysOptions ko;
+    auto* keys = app.add_subcommand("keys", "the lab's DDS Security keystore: create (or add missing identities), list");
+    keys->require_subcommand(1);
+    auto* keys_create = keys->add_subcommand("create", "a CA, one identity per process of --lab (or per role), signed governance and permissions");
+    keys_create->add_option("--keystore", ko.keystore, "keystore folder (made if missing)")->required();
+    keys_create->add_option("--lab", ko.lab_path, "lab file: one identity per process, named as the process (default: one per role)");
+    keys_create->add_option("--days", ko.days, "certificates and permissions expire after this many days")->check(dw::cli::in({1, 36500}));
+    auto* keys_list = keys->add_subcommand("list", "each identity, when it expires, and whether the keystore's CA signed it");
+    keys_list->add_option("--keystore", ko.keystore, "keystore folder")->required();
+
     cli.parse(argc, argv);  // validates the DDS settings once, before any child starts
+    if (keys_create->parsed()) return dw::lab::keys_create(ko, std::cout);
+    if (keys_list->parsed()) return dw::lab::keys_list(ko.keystore, std::cout);
     if (loopback->count("--summary")) dw::require_writable_path(lo.summary_path, "--summary");
     if (demo->count("--out")) dw::require_output_dir(demo_o.out_dir, "--out");
     if (runc->count("--run-dir")) dw::require_output_dir(run_dir, "--run-dir");

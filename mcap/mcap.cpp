@@ -213,6 +213,26 @@ struct Writer::ChunkIndexEntry {
     std::uint64_t index_length;
     std::string compression;
     std::uint64_t compressed_size, uncompressed_size;
+
+    std::string encode() const {  // the ChunkIndex record's body
+        Out o;
+        o.u64(start_time);
+        o.u64(end_time);
+        o.u64(chunk_offset);
+        o.u64(chunk_length);
+        Out offsets;
+        for (const auto& [ch, off] : index_offsets) {
+            offsets.u16(ch);
+            offsets.u64(off);
+        }
+        o.u32(static_cast<std::uint32_t>(offsets.s.size()));
+        o.s += offsets.s;
+        o.u64(index_length);
+        o.str(compression);
+        o.u64(compressed_size);
+        o.u64(uncompressed_size);
+        return o.s;
+    }
 };
 
 Writer::Writer(const std::string& path, const WriterOptions& options) : path_(path), options_(options) {
@@ -436,25 +456,7 @@ void Writer::close() {
         record(kStatistics, o.s);
     });
     group(kChunkIndex, [&] {
-        for (const auto& e : chunk_indexes_) {
-            Out o;
-            o.u64(e.start_time);
-            o.u64(e.end_time);
-            o.u64(e.chunk_offset);
-            o.u64(e.chunk_length);
-            Out offsets;
-            for (const auto& [ch, off] : e.index_offsets) {
-                offsets.u16(ch);
-                offsets.u64(off);
-            }
-            o.u32(static_cast<std::uint32_t>(offsets.s.size()));
-            o.s += offsets.s;
-            o.u64(e.index_length);
-            o.str(e.compression);
-            o.u64(e.compressed_size);
-            o.u64(e.uncompressed_size);
-            record(kChunkIndex, o.s);
-        }
+        for (const auto& e : chunk_indexes_) record(kChunkIndex, e.encode());
     });
     group(kAttachmentIndex, [&] {
         for (std::size_t i = 0; i < attachment_index_.size(); ++i) {

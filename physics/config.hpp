@@ -5,6 +5,8 @@
 // error naming file, line and key. config/physics.example.yaml documents every key.
 #include <array>
 #include <string>
+#include <map>
+#include <vector>
 
 #include "core/numbers.hpp"
 
@@ -39,6 +41,10 @@ struct SuffererParams {
     int disc_sectors = 6;
     bool thrust_loss = true;                 // rotors lose thrust in oncoming flow
     double kv_omega_n_per_mps = 0.1;         // per rotor
+    // In-plane rotor drag (H-force): per rotor, newtons per m/s of lateral air through its disc.
+    // Only the jets' turbulent lateral velocity drives it (lateral buffeting); the mean flow's
+    // lateral push is the bluff-body term above.
+    double rotor_drag_n_per_mps = 0.03;
 };
 
 struct StandParams {
@@ -52,10 +58,17 @@ struct StandParams {
     double tare_s = 1.0;                     // averaging time of the tare at the start
 };
 
+inline constexpr double kLateralIntensity = 0.2;  // v'/U of a round jet (Pope, Turbulent Flows)
+
 struct TurbulenceParams {
     bool enabled = true;
     double intensity = 0.1;                  // u'/U of the jet speed (Ornstein-Uhlenbeck)
     double time_scale_s = 0.025;             // ≈ r_half / U_c
+    // Lateral buffeting: each jet's lateral velocity fluctuation, v'/U of its local axial speed,
+    // per horizontal axis, with its own correlation time (Ornstein-Uhlenbeck). Off by default:
+    // kLateralIntensity is the physical value (README: why it is not the default yet).
+    double lateral_intensity = 0.0;
+    double lateral_time_scale_s = 0.03;
 };
 
 struct DynamicsParams {  // simulated vehicles
@@ -82,6 +95,8 @@ struct Effects {
     struct { bool enabled = false; double coefficient = 0.02; double length_m = 1.0; } floor_recirculation;
     struct { bool enabled = false; double cda_h_m2 = 0.0; double cda_v_m2 = 0.0; } body_drag;  // a flying sufferer's own drag
     struct { bool enabled = false; double coefficient = 0.0; } ground_effect;  // extra lift near the floor
+    // Effects registered beyond these (physics/effect_types.hpp): those switched on, with their values.
+    std::map<std::string, std::vector<double>> extra;
 };
 
 struct PhysicsConfig {

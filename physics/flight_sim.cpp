@@ -8,11 +8,37 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "physics/bodies.hpp"
+#include "physics/effect_types.hpp"
 #include "physics/stand.hpp"
 #include "physics/vehicle.hpp"
 
 namespace dw::physics {
 namespace {
+
+constexpr std::uint64_t kBuffetSeed = 0x9E3779B97F4A7C15ull;  // golden-ratio stride between vehicles
+
+// One jet's turbulence: a multiplier on its speed, and its lateral buffeting (two horizontal
+// fluctuations, made perpendicular to its axis). The buffeting's random stream is seeded apart
+// from the simulation's master stream, so the other streams stay as they were before it.
+class Turbulence {
+public:
+    Turbulence(const TurbulenceParams& t, Rng gust_rng, Rng buffet_rng)
+        : gust_(t.intensity, t.time_scale_s), lateral_{OrnsteinUhlenbeck(t.lateral_intensity, t.lateral_time_scale_s),
+                                                         OrnsteinUhlenbeck(t.lateral_intensity, t.lateral_time_scale_s)},
+          gust_rng_(gust_rng), buffet_rng_(buffet_rng), buffeting_(t.lateral_intensity > 0) {}
+    void step(double dt, Producer& p) {
+        p.gust = std::max(0.0, 1.0 + gust_.step(dt, gust_rng_));
+        if (!buffeting_) return;  // off: the gust stays zero, without drawing numbers every step
+        const Vec3 g(lateral_[0].step(dt, buffet_rng_), lateral_[1].step(dt, buffet_rng_), 0.0);
+        p.lateral_gust = g - g.dot(p.axis) * p.axis;
+    }
+
+private:
+    OrnsteinUhlenbeck gust_;
+    std::array<OrnsteinUhlenbeck, 2> lateral_;
+    Rng gust_rng_, buffet_rng_;
+    bool buffeting_;
+};
 
 // The wrench series at the base rate, read between samples by linear interpolation.
 Wrench interpolate(const std::vector<Wrench>& w, double t, double dt) {
@@ -22,6 +48,110 @@ Wrench interpolate(const std::vector<Wrench>& w, double t, double dt) {
     if (i + 1 >= w.size()) return w.back();
     const double a = x - static_cast<double>(i);
     return (1 - a) * w[i] + a * w[i + 1];
+}
+
+// 2. The stand's response: a first-order lag of the true wrench (sensor_lag).
+std::vector<Wrench> felt_wrench(const std::vector<Wrench>& truth, double dt, const Effects& fx) {
+    std::vector<Wrench> felt = truth;
+    if (fx.sensor_lag.enabled && fx.sensor_lag.tau_s > 0) {
+        const double a = std::exp(-dt / fx.sensor_lag.tau_s);
+        for (std::size_t n = 1; n < felt.size(); ++n) felt[n] = a * felt[n - 1] + (1 - a) * truth[n];
+    }
+    return felt;
+}
+
+using Counts = Eigen::Matrix<double, kCells, 1>;
+struct StandFrames {  // what the agent publishes: every chip's latest counts when chip 0 converts
+    std::vector<double> t;
+    std::vector<Counts> counts;
+};
+
+// 3. Eight HX711s on their own oscillators, each converting its cell's force.
+StandFrames convert_on_chips(const PhysicsConfig& c, const StandModel& stand, const std::vector<Wrench>& felt, double dt, double end,
+                             Rng& stand_rng) {
+    struct Chip {
+        double period, phase, offset;
+        std::vector<double> t;
+        std::vector<std::int32_t> counts;
+    };
+    std::array<Chip, kCells> chips;
+    for (int ci = 0; ci < kCells; ++ci) {
+        Chip& chip = chips[static_cast<std::size_t>(ci)];
+        chip.period = 1.0 / (c.stand.rate_hz * (1.0 + c.stand.rate_skew * (2 * stand_rng.uniform() - 1)));
+        chip.phase = chip.period * stand_rng.uniform();
+        chip.offset = c.stand.offset_sigma_counts * stand_rng.normal();
+        for (double t = chip.phase; t <= end; t += chip.period) {
+            const auto cells = stand.wrench_to_cells(interpolate(felt, t, dt));
+            const double force = cells[ci] + c.stand.noise_n * stand_rng.normal();
+            chip.t.push_back(t);
+            chip.counts.push_back(StandModel::to_counts(force, chip.offset, c.stand.counts_per_newton));
+        }
+    }
+    std::array<std::size_t, kCells> latest{};
+    StandFrames out;
+    for (std::size_t i = 0; i < chips[0].t.size(); ++i) {
+        const double t = chips[0].t[i];
+        Counts counts;
+        bool complete = true;
+        for (std::size_t ci = 0; ci < kCells; ++ci) {
+            while (latest[ci] + 1 < chips[ci].t.size() && chips[ci].t[latest[ci] + 1] <= t) ++latest[ci];
+            if (chips[ci].t.empty() || chips[ci].t[latest[ci]] > t) complete = false;
+            else counts[static_cast<Eigen::Index>(ci)] = chips[ci].counts[latest[ci]];
+        }
+        if (!complete) continue;
+        out.t.push_back(t);
+        out.counts.push_back(counts);
+    }
+    return out;
+}
+
+// Effects registered beyond the built-ins, on the recorded wrench (physics/effect_types.hpp).
+void apply_extra_effects(const Effects& fx, std::vector<flight::WrenchSample>& wrench) {
+    if (fx.extra.empty()) return;
+    std::vector<double> stamps;
+    RecordedWrench w;
+    for (const auto& s : wrench) stamps.push_back(s.t), w.push_back(s.w);
+    apply_registered_effects(fx, stamps, w);
+    for (std::size_t i = 0; i < wrench.size(); ++i) wrench[i].w = w[i];
+}
+
+// 4. Tare (the mean of the first tare_s: neighbours far away, sufferer at hover thrust), the
+// calibrated wrench, then the recording's own errors, stamped on the stand clock.
+void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandFrames& frames, flight::Flight& f) {
+    const auto& fx = c.effects;
+    Counts zero = Counts::Zero();
+    int tare_n = 0;
+    for (std::size_t i = 0; i < frames.t.size() && frames.t[i] < frames.t.front() + c.stand.tare_s; ++i, ++tare_n) zero += frames.counts[i];
+    zero /= std::max(tare_n, 1);
+    const double clock = fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0;
+    for (std::size_t i = 0; i < frames.t.size(); ++i) {
+        Wrench w = stand.cells_to_wrench() * ((frames.counts[i] - zero) / c.stand.counts_per_newton);
+        if (fx.force_scale.enabled) w *= fx.force_scale.scale;
+        if (fx.cell_crosstalk.enabled) w[fx.cell_crosstalk.to] += fx.cell_crosstalk.coefficient * w[fx.cell_crosstalk.from];
+        flight::WrenchSample s;
+        s.t = frames.t[i] + clock;
+        for (int a = 0; a < 6; ++a) s.w[static_cast<std::size_t>(a)] = w[a];
+        f.wrench.push_back(s);
+    }
+    apply_extra_effects(fx, f.wrench);
+}
+
+// The flight's bodies in meta.json: the sufferer, then v1..vK; returns the neighbours' indices.
+std::vector<std::uint16_t> describe_bodies(flight::Flight& f, const PhysicsConfig& c, const Formation& formation) {
+    f.meta.sufferer = "sufferer";
+    f.meta.formation = formation.meta_name;
+    f.meta.stand_height_m = c.stand.height_m;
+    f.meta.extra_json = R"({"generator":"dw-sim fly"})";
+    f.body_index("sufferer");
+    f.meta.vehicles["sufferer"] = to_info(c.sufferer.vehicle);
+    std::vector<std::uint16_t> bodies;
+    for (std::size_t j = 0; j < formation.offsets.size(); ++j) {
+        const std::string name = "v" + std::to_string(j + 1);
+        f.meta.neighbours.push_back(name);
+        f.meta.vehicles[name] = to_info(c.neighbour);
+        bodies.push_back(f.body_index(name));
+    }
+    return bodies;
 }
 
 }  // namespace
@@ -38,31 +168,18 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     Rng master(o.seed);
     const std::size_t k = formation.offsets.size();
     std::vector<SimVehicle> vehicles;
-    std::vector<OrnsteinUhlenbeck> gusts;
-    std::vector<Rng> gust_rng;
+    std::vector<Turbulence> turbulence;
     for (std::size_t j = 0; j < k; ++j) {
         vehicles.emplace_back(c.dynamics, c.gravity_m_s2, reference.at(0).position + formation.offsets[j], master.split());
-        gusts.emplace_back(c.turbulence.intensity, c.turbulence.time_scale_s);
-        gust_rng.push_back(master.split());
+        turbulence.emplace_back(c.turbulence, master.split(), Rng(o.seed ^ (kBuffetSeed * (j + 1))));
     }
     Rng mocap_rng = master.split();
     Rng stand_rng = master.split();
 
     SimResult out;
     flight::Flight& f = out.flight;
-    f.meta.sufferer = "sufferer";
-    f.meta.formation = formation.meta_name;
-    f.meta.stand_height_m = c.stand.height_m;
-    f.meta.extra_json = R"({"generator":"dw-sim fly"})";
+    const std::vector<std::uint16_t> bodies = describe_bodies(f, c, formation);
     const std::uint16_t sufferer_body = f.body_index("sufferer");
-    f.meta.vehicles["sufferer"] = to_info(c.sufferer.vehicle);
-    std::vector<std::uint16_t> bodies;
-    for (std::size_t j = 0; j < k; ++j) {
-        const std::string name = "v" + std::to_string(j + 1);
-        f.meta.neighbours.push_back(name);
-        f.meta.vehicles[name] = to_info(c.neighbour);
-        bodies.push_back(f.body_index(name));
-    }
     const Vec3 sufferer(0, 0, -c.stand.height_m);
 
     // 1. Fly, and evaluate the true wrench at every integration step.
@@ -98,7 +215,7 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
             }
             producers[j] = model.producer(s.position, s.velocity);
             producers[j].axis = vehicles[j].jet_axis();
-            if (c.turbulence.enabled) producers[j].gust = std::max(0.0, 1.0 + gusts[j].step(dt, gust_rng[j]));
+            if (c.turbulence.enabled) turbulence[j].step(dt, producers[j]);
         }
         out.truth_t.push_back(t);
         out.truth.push_back(model.evaluate(sufferer, producers));
@@ -119,67 +236,10 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
         }
     }
 
-    // 2. The stand's response: a first-order lag of the true wrench (sensor_lag).
-    std::vector<Wrench> felt = out.truth;
-    if (fx.sensor_lag.enabled && fx.sensor_lag.tau_s > 0) {
-        const double a = std::exp(-dt / fx.sensor_lag.tau_s);
-        for (std::size_t n = 1; n < felt.size(); ++n) felt[n] = a * felt[n - 1] + (1 - a) * out.truth[n];
-    }
-
-    // 3. Eight HX711s on their own oscillators, each converting its cell's force.
-    struct Chip {
-        double period, phase, offset;
-        std::vector<double> t;
-        std::vector<std::int32_t> counts;
-    };
-    std::array<Chip, kCells> chips;
-    const double end = out.truth_t.back();
-    for (int ci = 0; ci < kCells; ++ci) {
-        Chip& chip = chips[static_cast<std::size_t>(ci)];
-        chip.period = 1.0 / (c.stand.rate_hz * (1.0 + c.stand.rate_skew * (2 * stand_rng.uniform() - 1)));
-        chip.phase = chip.period * stand_rng.uniform();
-        chip.offset = c.stand.offset_sigma_counts * stand_rng.normal();
-        for (double t = chip.phase; t <= end; t += chip.period) {
-            const auto cells = stand.wrench_to_cells(interpolate(felt, t, dt));
-            const double force = cells[ci] + c.stand.noise_n * stand_rng.normal();
-            chip.t.push_back(t);
-            chip.counts.push_back(StandModel::to_counts(force, chip.offset, c.stand.counts_per_newton));
-        }
-    }
-    // The agent publishes a frame whenever chip 0 converts, with every chip's latest conversion.
-    std::array<std::size_t, kCells> latest{};
-    std::vector<double> frame_t;
-    std::vector<Eigen::Matrix<double, kCells, 1>> frame_counts;
-    for (std::size_t i = 0; i < chips[0].t.size(); ++i) {
-        const double t = chips[0].t[i];
-        Eigen::Matrix<double, kCells, 1> counts;
-        bool complete = true;
-        for (std::size_t ci = 0; ci < kCells; ++ci) {
-            while (latest[ci] + 1 < chips[ci].t.size() && chips[ci].t[latest[ci] + 1] <= t) ++latest[ci];
-            if (chips[ci].t.empty() || chips[ci].t[latest[ci]] > t) complete = false;
-            else counts[static_cast<Eigen::Index>(ci)] = chips[ci].counts[latest[ci]];
-        }
-        if (!complete) continue;
-        frame_t.push_back(t);
-        frame_counts.push_back(counts);
-    }
-    // Tare: the mean of the first tare_s (neighbours far away, sufferer at hover thrust).
-    Eigen::Matrix<double, kCells, 1> zero = Eigen::Matrix<double, kCells, 1>::Zero();
-    int tare_n = 0;
-    for (std::size_t i = 0; i < frame_t.size() && frame_t[i] < frame_t.front() + c.stand.tare_s; ++i, ++tare_n) zero += frame_counts[i];
-    zero /= std::max(tare_n, 1);
-
-    // 4. Calibrated wrench, then the recording's own errors, stamped on the stand clock.
-    const double clock = fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0;
-    for (std::size_t i = 0; i < frame_t.size(); ++i) {
-        Wrench w = stand.cells_to_wrench() * ((frame_counts[i] - zero) / c.stand.counts_per_newton);
-        if (fx.force_scale.enabled) w *= fx.force_scale.scale;
-        if (fx.cell_crosstalk.enabled) w[fx.cell_crosstalk.to] += fx.cell_crosstalk.coefficient * w[fx.cell_crosstalk.from];
-        flight::WrenchSample s;
-        s.t = frame_t[i] + clock;
-        for (int a = 0; a < 6; ++a) s.w[static_cast<std::size_t>(a)] = w[a];
-        f.wrench.push_back(s);
-    }
+    // 2-4. The stand's response, its chips, the tare and the recorded wrench.
+    const std::vector<Wrench> felt = felt_wrench(out.truth, dt, fx);
+    const StandFrames frames = convert_on_chips(c, stand, felt, dt, out.truth_t.back(), stand_rng);
+    record_wrench(c, stand, frames, f);
 
     std::vector<flight::Leg> legs;
     for (const auto& l : reference.legs()) legs.push_back({l.index, l.t_start, l.t_end});

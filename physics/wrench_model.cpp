@@ -175,6 +175,45 @@ Wrench WrenchModel::floor_bias(const Vec3& suf, std::span<const Producer> produc
     return w;
 }
 
+Wrench WrenchModel::buffeting(const Vec3& suf, std::span<const Producer> producers) const {
+    // Each jet's turbulent lateral velocity, scaled by its local axial speed at each rotor, drives
+    // that rotor's in-plane drag (H-force), which acts in the rotor plane: forces and yaw only.
+    Wrench w = Wrench::Zero();
+    const double c_h = config_.sufferer.rotor_drag_n_per_mps;
+    if (c_h <= 0) return w;
+    const auto& centres = planform_.rotor_centre;
+    std::array<double, 16> cx{}, cy{};
+    for (std::size_t r = 0; r < centres.size(); ++r) {
+        cx[r] = centres[r][0];
+        cy[r] = centres[r][1];
+    }
+    for (const auto& p : producers) {
+        if (p.lateral_gust.isZero()) continue;
+        std::array<double, 16> ux{}, uy{}, uz{};
+        add_velocity(suf, cx.data(), cy.data(), centres.size(), p, 1.0, ux.data(), uy.data(), uz.data());
+        for (std::size_t r = 0; r < centres.size(); ++r) {
+            const double axial = ux[r] * p.axis.x() + uy[r] * p.axis.y() + uz[r] * p.axis.z();
+            const double fx = c_h * axial * p.lateral_gust.x(), fy = c_h * axial * p.lateral_gust.y();
+            w[0] += fx;
+            w[1] += fy;
+            w[5] += cx[r] * fy - cy[r] * fx;
+        }
+    }
+    return w;
+}
+
+Wrench WrenchModel::buffeting_sigma(const Vec3& suf, std::span<const Producer> producers, double intensity) const {
+    Wrench var = Wrench::Zero();
+    for (const auto& p : producers) {
+        for (const Vec3& g : {Vec3(intensity, 0, 0), Vec3(0, intensity, 0)}) {
+            Producer one = p;
+            one.lateral_gust = g - g.dot(p.axis) * p.axis;
+            var += buffeting(suf, std::span<const Producer>(&one, 1)).cwiseAbs2();
+        }
+    }
+    return var.cwiseSqrt();
+}
+
 Producer WrenchModel::merged(std::span<const Producer> producers, const std::vector<int>& members) const {
     // Momentum flux adds; the merged axis sits at the momentum-weighted centroid; the column
     // contracts by κ with its centreline speed raised by 1/κ so that momentum is conserved.
@@ -216,7 +255,7 @@ Wrench WrenchModel::evaluate(const Vec3& suf, std::span<const Producer> producer
     thread_local Scratch sc;
     const std::size_t k = producers.size();
     const bool sum = config_.aggregation == Aggregation::force_sum;
-    Wrench total = floor_bias(suf, producers);
+    Wrench total = floor_bias(suf, producers) + buffeting(suf, producers);
     if (k == 0) return total;
     const std::size_t n = planform_.size();
     const auto& jm = config_.effects.jet_merging;

@@ -27,6 +27,7 @@ struct Producer {
     Vec3 velocity = Vec3::Zero();   // world NED [m/s]
     Jet jet;
     double gust = 1.0;              // turbulence: multiplier on the jet speed
+    Vec3 lateral_gust = Vec3::Zero();  // lateral buffeting: velocity across the axis / axial speed
 };
 
 // The sufferer's planform cells, in its own level frame centred on it (x north, y east).
@@ -44,6 +45,9 @@ public:
     explicit WrenchModel(const PhysicsConfig& config);
 
     Wrench evaluate(const Vec3& sufferer, std::span<const Producer> producers) const;
+    // The standard deviation, per axis, of the lateral buffeting `evaluate` adds when each
+    // producer's lateral gust has `intensity` per horizontal axis (independent across producers).
+    Wrench buffeting_sigma(const Vec3& sufferer, std::span<const Producer> producers, double intensity) const;
     // The air velocity (world NED) at a point, summed over producers (velocity superposition).
     Vec3 air_velocity(const Vec3& point, std::span<const Producer> producers) const;
 
@@ -61,6 +65,7 @@ private:
     void add_velocity(const Vec3& sufferer, const Producer& p, double weight, Scratch& s) const;
     Wrench drag(const Scratch& s) const;
     Wrench floor_bias(const Vec3& sufferer, std::span<const Producer> producers) const;
+    Wrench buffeting(const Vec3& sufferer, std::span<const Producer> producers) const;
     Producer merged(std::span<const Producer> producers, const std::vector<int>& members) const;
 
     PhysicsConfig config_;

@@ -9,6 +9,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 
 namespace dw::predictor {
 
@@ -126,10 +127,7 @@ namespace {
 const char* const kAxisTitles[6] = {"N", "E", "D", "roll", "pitch", "yaw"};
 
 std::string fmt(double v, int precision = 3) {
-    if (std::isnan(v)) return "–";
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(precision) << v;
-    return s.str();
+    return std::isnan(v) ? "–" : fixed(v, precision);
 }
 
 void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, AxisValues ComparisonRow::*metric) {

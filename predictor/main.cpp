@@ -13,6 +13,7 @@
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
+#include "flight/flight.hpp"
 #include "predictor/evaluate.hpp"
 #include "predictor/maps.hpp"
 #include "predictor/node.hpp"
@@ -52,114 +53,83 @@ std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>
     return out;
 }
 
-int run(int argc, char** argv) {
-    dw::dds::ProcessCli cli("dw-predictor: learnt downwash force models (naive linear, learnt linear, Deep Sets)");
-    CLI::App& app = cli.app();
-    app.require_subcommand(1);
+void say(const std::string& line) { std::cerr << "dw-predictor: " << line << "\n"; }
 
+// ---- one struct per subcommand: its options, how it is declared, what it does --------------------
+
+struct StudyCommand {
+    CLI::App* cmd = nullptr;
     StudyOptions so;
     std::string physics_path;
     bool jet_merging = false, no_generalisation = false, no_maps = false;
-    auto* study = app.add_subcommand("study", "simulate flights, train every model, compare on held-out legs, draw maps (one command for the table)");
-    study->add_option("--out", so.out_dir, "output folder (flights, models, table.md, table.csv, maps)")->required();
-    study->add_option("--physics", physics_path, "physics configuration (default: config/physics.example.yaml's defaults)");
-    study->add_flag("--jet-merging", jet_merging, "switch the jet_merging effect on (the aggregate is not a sum)");
-    study->add_option("--legs", so.legs, "legs per flight")->check(dw::cli::in(dw::Range{5, dw::physics::kLegsRange.hi}));
-    study->add_option("--seed", so.seed, "seed of the flights and the training")->check(dw::cli::in(dw::kSeedRange));
-    study->add_option("--epochs", so.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
-    study->add_option("--threads", so.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
-    study->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
-    study->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
-    study->add_flag("--no-maps", no_maps, "skip the maps");
 
-    std::string regimes_dir;
-    RegimeOptions rgo;
-    auto* regimes = app.add_subcommand("regimes", "the regime map of a study's folder: each formation x altitude band chaotic, linear or "
-                                                  "non-linear on held-out legs (regimes.md, .csv, .png)");
-    regimes->add_option("--study", regimes_dir, "a dw-predictor study --out folder (its flights and models)")->required();
-    regimes->add_option("--min-z", rgo.min_z, "paired z Deep Sets must reach over the sum to call a band non-linear")->check(dw::cli::in(kMinZRange));
-    regimes->add_option("--min-gain", rgo.min_gain, "fraction of the sum's squared error Deep Sets must remove")->check(dw::cli::in(kFractionRange));
-    regimes->add_option("--min-explained", rgo.min_explained, "below this fraction of f_d's mean square explained, a band is chaotic")->check(dw::cli::in(kFractionRange));
-
-    TrainOptions to;
-    std::vector<std::string> data;
-    std::string model_out;
-    auto* train = app.add_subcommand("train", "train one model on flight folders / recordings (split by leg)");
-    train->add_option("--kind", to.kind, "naive_linear, learnt_linear or deep_sets")->required();
-    train->add_option("--data", data, "flight folders or .mcap recordings")->required();
-    train->add_option("--out", model_out, "model file to write (JSON)")->required();
-    train->add_option("--epochs", to.max_epochs, "at most this many epochs")->check(dw::cli::in(kEpochsRange));
-    train->add_option("--threads", to.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
-    train->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
-    train->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
-    std::string baseline_path;
-    train->add_option("--baseline", baseline_path, "deep_sets only: a saved sum model (learnt_linear) to learn the residual on, as the study does");
-
-    std::vector<std::string> models;
-    std::string out_dir;
-    ArenaOptions arena;
-    auto* cmp = app.add_subcommand("compare", "compare models on the held-out legs (leg % 5 == 0) of flights: Table 1 metric and RMSE");
-    cmp->add_option("--models", models, "model files (.json), or a physics configuration (.yaml) for the simulator")->required();
-    cmp->add_option("--data", data, "flight folders or .mcap recordings")->required();
-    cmp->add_option("--out", out_dir, "folder for table.md and table.csv")->required();
-    cmp->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
-
-    RealOptions ro;
-    std::string real_physics;
-    auto* real = app.add_subcommand("real", "recorded flights without legs (e.g. dw-import's): train every model, compare with the physics "
-                                            "on held-out encounters, draw f_d by relative position");
-    real->add_option("--data", ro.data, "flight folders or .mcap recordings")->required();
-    real->add_option("--physics", real_physics, "physics configuration (e.g. config/physics.crazyflie.yaml); vehicles come from each flight");
-    real->add_option("--out", ro.out_dir, "output folder (models, table.md, table.csv, map_f_d.png)")->required();
-    real->add_option("--epochs", ro.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
-    real->add_option("--threads", ro.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
-    real->add_option("--seed", ro.seed, "seed of the training")->check(dw::cli::in(dw::kSeedRange));
-
-    MapRequest mr;
-    std::string axis = "f_d", png = "map.png", line;
-    auto* map = app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
-    map->add_option("--models", models, "model files (.json) or physics configurations (.yaml)")->required();
-    map->add_option("--formation", mr.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid");
-    map->add_option("--altitude", mr.altitude_m, "the formation's height above the sufferer [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
-    map->add_option("--axis", axis, "f_n, f_e, f_d, m_roll, m_pitch or m_yaw");
-    map->add_option("--data", data, "recorded flight of this formation: drawn as 'observed'");
-    map->add_option("--out", png, "the map (PNG)");
-    map->add_option("--line", line, "the line plot along E through the stand (PNG; default: <out>_line.png)");
-
-    NodeOptions no;
-    auto* runc = app.add_subcommand("run", "online: mocap/frame in, predictor/wrench out at the mocap rate");
-    runc->add_option("--model", no.model_path, "model file (.json) or physics configuration (.yaml); swapped in when it changes")->required();
-    runc->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
-    cli.parse(argc, argv);
-
-    if (study->parsed()) dw::require_output_dir(so.out_dir, "--out");
-    if (cmp->parsed()) dw::require_output_dir(out_dir, "--out");
-    if (real->parsed()) dw::require_output_dir(ro.out_dir, "--out");
-    if (real->parsed()) {
-        ro.physics = physics_from(real_physics);
-        ro.progress = [](const std::string& l) { std::cerr << "dw-predictor: " << l << "\n"; };
-        ro.stop = dw::Shutdown::instance().token();
-        const auto r = run_real(ro);
-        std::cout << dw::read_file(r.markdown_path, "table") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.map_path << "\n";
-        return 0;
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("study", "simulate flights, train every model, compare on held-out legs, draw maps (one command for the table)");
+        cmd->add_option("--out", so.out_dir, "output folder (flights, models, table.md, table.csv, maps)")->required();
+        cmd->add_option("--physics", physics_path, "physics configuration (default: config/physics.example.yaml's defaults)");
+        cmd->add_flag("--jet-merging", jet_merging, "switch the jet_merging effect on (the aggregate is not a sum)");
+        cmd->add_option("--legs", so.legs, "legs per flight")->check(dw::cli::in(dw::Range{5, dw::physics::kLegsRange.hi}));
+        cmd->add_option("--seed", so.seed, "seed of the flights and the training")->check(dw::cli::in(dw::kSeedRange));
+        cmd->add_option("--epochs", so.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+        cmd->add_option("--threads", so.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
+        cmd->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]")
+            ->check(dw::cli::in(dw::physics::kAltitudeRange));
+        cmd->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
+        cmd->add_flag("--no-maps", no_maps, "skip the maps");
     }
-    if (regimes->parsed()) {
-        const auto r = regimes_of_study(regimes_dir, rgo, dw::Shutdown::instance().token());
-        std::cout << dw::read_file(r.markdown_path, "regimes") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.png_path << "\n";
-        return 0;
-    }
-    if (study->parsed()) {
+    int run() {
+        dw::require_output_dir(so.out_dir, "--out");
         so.physics = physics_from(physics_path);
         if (jet_merging) so.physics.effects.jet_merging.enabled = true;
         so.generalisation = !no_generalisation;
         so.maps = !no_maps;
-        so.progress = [](const std::string& l) { std::cerr << "dw-predictor: " << l << "\n"; };
+        so.progress = say;
         so.stop = dw::Shutdown::instance().token();
         const auto r = run_study(so);
         std::cout << "wrote " << r.markdown_path << " and " << r.csv_path << "\n";
         return 0;
     }
-    if (train->parsed()) {
+};
+
+struct RegimesCommand {
+    CLI::App* cmd = nullptr;
+    std::string dir;
+    RegimeOptions o;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("regimes", "the regime map of a study's folder: each formation x altitude band chaotic, linear or "
+                                            "non-linear on held-out legs (regimes.md, .csv, .png)");
+        cmd->add_option("--study", dir, "a dw-predictor study --out folder (its flights and models)")->required();
+        cmd->add_option("--min-z", o.min_z, "paired z Deep Sets must reach over the sum to call a band non-linear")->check(dw::cli::in(kMinZRange));
+        cmd->add_option("--min-gain", o.min_gain, "fraction of the sum's squared error Deep Sets must remove")->check(dw::cli::in(kFractionRange));
+        cmd->add_option("--min-explained", o.min_explained, "below this fraction of f_d's mean square explained, a band is chaotic")
+            ->check(dw::cli::in(kFractionRange));
+    }
+    int run() {
+        const auto r = regimes_of_study(dir, o, dw::Shutdown::instance().token());
+        std::cout << dw::read_file(r.markdown_path, "regimes") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.png_path << "\n";
+        return 0;
+    }
+};
+
+struct TrainCommand {
+    CLI::App* cmd = nullptr;
+    TrainOptions to;
+    std::vector<std::string> data;
+    std::string model_out, baseline_path;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("train", "train one model on flight folders / recordings (split by leg)");
+        cmd->add_option("--kind", to.kind, "naive_linear, learnt_linear or deep_sets")->required();
+        cmd->add_option("--data", data, "flight folders or .mcap recordings")->required();
+        cmd->add_option("--out", model_out, "model file to write (JSON)")->required();
+        cmd->add_option("--epochs", to.max_epochs, "at most this many epochs")->check(dw::cli::in(kEpochsRange));
+        cmd->add_option("--threads", to.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
+        cmd->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
+        cmd->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
+        cmd->add_option("--baseline", baseline_path, "deep_sets only: a saved sum model (learnt_linear) to learn the residual on, as the study does");
+    }
+    int run() {
         dw::require_writable_path(model_out, "--out");
         to.stop = dw::Shutdown::instance().token();
         Dataset d = load_all(data);
@@ -176,11 +146,27 @@ int run(int argc, char** argv) {
         const auto r = train_model(s.train, s.validation, to, baseline ? &*baseline : nullptr);
         std::fprintf(stderr, "\n");
         r.model.save(model_out);
-        std::cout << to.kind << ": " << r.epochs << " epochs (best " << r.best_epoch << ", validation "
-                  << r.best_validation_loss << "), " << r.seconds << " s; wrote " << model_out << "\n";
+        std::cout << to.kind << ": " << r.epochs << " epochs (best " << r.best_epoch << ", validation " << r.best_validation_loss << "), "
+                  << r.seconds << " s; wrote " << model_out << "\n";
         return 0;
     }
-    if (cmp->parsed()) {
+};
+
+struct CompareCommand {
+    CLI::App* cmd = nullptr;
+    std::vector<std::string> models, data;
+    std::string out_dir;
+    ArenaOptions arena;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("compare", "compare models on the held-out legs (leg % 5 == 0) of flights: Table 1 metric and RMSE");
+        cmd->add_option("--models", models, "model files (.json), or a physics configuration (.yaml) for the simulator")->required();
+        cmd->add_option("--data", data, "flight folders or .mcap recordings")->required();
+        cmd->add_option("--out", out_dir, "folder for table.md and table.csv")->required();
+        cmd->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
+    }
+    int run() {
+        dw::require_output_dir(out_dir, "--out");
         const auto ms = load_models(models);
         const Dataset all = load_all(data);
         const Dataset test = split_by_leg(all).test;
@@ -191,9 +177,53 @@ int run(int argc, char** argv) {
         std::cout << to_markdown(rows, arena);
         return 0;
     }
-    if (map->parsed()) {
+};
+
+struct RealCommand {
+    CLI::App* cmd = nullptr;
+    RealOptions ro;
+    std::string physics_path;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("real", "recorded flights without legs (e.g. dw-import's): train every model, compare with the physics "
+                                         "on held-out encounters, draw f_d by relative position");
+        cmd->add_option("--data", ro.data, "flight folders or .mcap recordings")->required();
+        cmd->add_option("--physics", physics_path, "physics configuration (e.g. config/physics.crazyflie.yaml); vehicles come from each flight");
+        cmd->add_option("--out", ro.out_dir, "output folder (models, table.md, table.csv, map_f_d.png)")->required();
+        cmd->add_option("--epochs", ro.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+        cmd->add_option("--threads", ro.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
+        cmd->add_option("--seed", ro.seed, "seed of the training")->check(dw::cli::in(dw::kSeedRange));
+    }
+    int run() {
+        dw::require_output_dir(ro.out_dir, "--out");
+        ro.physics = physics_from(physics_path);
+        ro.progress = say;
+        ro.stop = dw::Shutdown::instance().token();
+        const auto r = run_real(ro);
+        std::cout << dw::read_file(r.markdown_path, "table") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.map_path << "\n";
+        return 0;
+    }
+};
+
+struct MapCommand {
+    CLI::App* cmd = nullptr;
+    MapRequest mr;
+    std::vector<std::string> models, data;
+    std::string axis = "f_d", png = "map.png", line;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
+        cmd->add_option("--models", models, "model files (.json) or physics configurations (.yaml)")->required();
+        cmd->add_option("--formation", mr.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid");
+        cmd->add_option("--altitude", mr.altitude_m, "the formation's height above the sufferer [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
+        cmd->add_option("--axis", axis, dw::flight::axis_list());
+        cmd->add_option("--data", data, "recorded flight of this formation: drawn as 'observed'");
+        cmd->add_option("--out", png, "the map (PNG)");
+        cmd->add_option("--line", line, "the line plot along E through the stand (PNG; default: <out>_line.png)");
+    }
+    int run() {
         mr.axis = dw::physics::axis_index(axis);
-        if (mr.axis < 0) throw dw::InputError("--axis: '" + axis + "' (expected f_n, f_e, f_d, m_roll, m_pitch or m_yaw)");
+        if (mr.axis < 0) throw dw::InputError("--axis: '" + axis + "' (expected " + dw::flight::axis_list() + ")");
         (void)dw::physics::make_formation(mr.formation);  // validates the name
         if (line.empty()) line = std::filesystem::path(png).replace_extension().string() + "_line.png";
         dw::plot::require_png_path(png, "--out");
@@ -205,14 +235,55 @@ int run(int argc, char** argv) {
         std::cout << "wrote " << png << " and " << line << "\n";
         return 0;
     }
-    dw::dds::Participant participant(cli.dds(), "predictor");
-    dw::dds::Heartbeat heartbeat(participant);
-    dw::SystemClock clock;
-    PredictorNode node(participant, no, clock);
-    heartbeat.set_state(dw::msg::PROC_RUNNING);
-    while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
-    std::cout << "published " << node.published() << " predictions, " << node.reloads() << " model swaps\n";
-    return 0;
+};
+
+struct OnlineCommand {
+    CLI::App* cmd = nullptr;
+    NodeOptions no;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("run", "online: mocap/frame in, predictor/wrench out at the mocap rate");
+        cmd->add_option("--model", no.model_path, "model file (.json) or physics configuration (.yaml); swapped in when it changes")->required();
+        cmd->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
+    }
+    int run(const dw::dds::ProcessCli& cli) {
+        dw::dds::Participant participant(cli.dds(), "predictor");
+        dw::dds::Heartbeat heartbeat(participant);
+        dw::SystemClock clock;
+        PredictorNode node(participant, no, clock);
+        heartbeat.set_state(dw::msg::PROC_RUNNING);
+        while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
+        std::cout << "published " << node.published() << " predictions, " << node.reloads() << " model swaps\n";
+        return 0;
+    }
+};
+
+int run(int argc, char** argv) {
+    dw::dds::ProcessCli cli("dw-predictor: learnt downwash force models (naive linear, learnt linear, Deep Sets)");
+    CLI::App& app = cli.app();
+    app.require_subcommand(1);
+    StudyCommand study;
+    RegimesCommand regimes;
+    TrainCommand train;
+    CompareCommand compare_cmd;
+    RealCommand real;
+    MapCommand map;
+    OnlineCommand online;
+    study.add(app);
+    regimes.add(app);
+    train.add(app);
+    compare_cmd.add(app);
+    real.add(app);
+    map.add(app);
+    online.add(app);
+    cli.parse(argc, argv);
+    if (study.cmd->parsed()) return study.run();
+    if (regimes.cmd->parsed()) return regimes.run();
+    if (train.cmd->parsed()) return train.run();
+    if (compare_cmd.cmd->parsed()) return compare_cmd.run();
+    if (real.cmd->parsed()) return real.run();
+    if (map.cmd->parsed()) return map.run();
+    return online.run(cli);
 }
 
 }  // namespace

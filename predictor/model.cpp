@@ -8,6 +8,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "flight/flight.hpp"
 #include "physics/wrench_model.hpp"
 
 namespace dw::predictor {
@@ -123,7 +124,7 @@ void LearntModel::save(const std::string& path) const {
     j["kind"] = kind;
     j["structure"] = structure == Structure::sum ? "sum" : "deep_sets";
     j["input"] = {{"features", kFeatureNames}, {"mean", input_mean}, {"std", input_std}};
-    j["output"] = {{"axes", {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"}}, {"scale", output_scale}};
+    j["output"] = {{"axes", flight::kAxes}, {"scale", output_scale}};
     j["phi"] = to_json(phi);
     if (structure == Structure::deep_sets) j["rho"] = to_json(rho);
     if (!baseline.layers.empty()) j["baseline"] = to_json(baseline);

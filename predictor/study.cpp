@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 
@@ -53,19 +54,12 @@ namespace {
 
 void write_text(const fs::path& p, const std::string& text) { write_file(p.string(), text); }
 
-}  // namespace
+using Say = std::function<void(const std::string&)>;
 
-StudyResult run_study(const StudyOptions& o) {
-    auto say = [&](const std::string& line) {
-        if (o.progress) o.progress(line);
-    };
-    const fs::path out(o.out_dir);
-    fs::create_directories(out / "flights");
-    fs::create_directories(out / "models");
-
-    // 1. Fly: one flight folder per formation.
+// 1. Fly: one flight folder per formation, read back through the contract. `label` maps each
+// physics formation name to its dataset label.
+Dataset fly_flights(const StudyOptions& o, const fs::path& out, std::map<std::string, std::string>& label, const Say& say) {
     Dataset all;
-    std::map<std::string, std::string> label;  // physics formation name -> the dataset's formation label
     std::uint64_t seed = o.seed;
     for (const auto& f : o.formations) {
         physics::FlyOptions fly;
@@ -83,82 +77,84 @@ StudyResult run_study(const StudyOptions& o) {
         const fs::path dir = out / "flights" / f;
         say(log::cat("flying ", f, " (", fly.grid.legs, " legs, simulated)"));
         flight::write_flight(physics::simulate_flight(o.physics, fly).flight, dir.string());
-        const Dataset d = load_dataset(dir.string());  // back through the contract
+        const Dataset d = load_dataset(dir.string());
         label[f] = d.sources.front().formation;
         all.append(d);
     }
-    const Split split = split_by_leg(all);
-    say(log::cat(all.samples.size(), " samples; on legs: ", split.train.samples.size(), " training, ",
-                 split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
+    return all;
+}
 
-    // 2. Train.
-    const TrainPlan plan{o.seed, o.max_epochs, o.threads, "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
-                         o.progress, o.stop};
-    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file,
-                     const LearntModel* baseline = nullptr) {
-        return train_and_save(kind, tr, va, plan, (out / "models" / file).string(), baseline);
-    };
-    auto singles = [](const Dataset& d) { return d.from_two_vehicle_flights().with_k(1, 1); };
-    auto naive = train("naive_linear", singles(split.train), singles(split.validation), "naive_linear.json");
-    auto linear = train("learnt_linear", split.train, split.validation, "learnt_linear.json");
-    auto deep = train("deep_sets", split.train, split.validation, "deep_sets.json", linear.get());
-    PhysicsModel physics(o.physics);
-    write_text(out / "models" / "physics.yaml", physics::to_yaml(o.physics));
-
-    // 3. Compare on held-out legs.
-    StudyResult r;
-    const std::vector<const ForceModel*> models{&physics, naive.get(), linear.get(), deep.get()};
-    r.table = compare(models, split.test, o.arena);
-    auto arena_at = [&](double altitude) {  // the study's arena, at one of the flights' altitudes
-        ArenaOptions at = o.arena;
-        at.altitude_m = altitude;
-        return at;
-    };
-    for (const double altitude : physics::GridOptions{}.altitudes_m)
-        r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, o.arena.band_m), arena_at(altitude)));
-    say("classifying the regimes");
-    r.regimes = classify_regimes(*linear, *deep, split.test, physics::GridOptions{}.altitudes_m, RegimeOptions{}, o.stop);
-    write_regimes(r.regimes, out.string());
-
-    // 4. Generalisation: K <= 2 -> K = 3, and a formation left out.
-    if (o.generalisation) {
-        auto without = [](const Dataset& d, const std::string& f1, const std::string& f2) {
-            Dataset x;
-            x.sources = d.sources;
-            for (const auto& s : d.samples) {
-                const auto& f = d.sources[static_cast<std::size_t>(s.source)].formation;
-                if (f != f1 && f != f2) x.samples.push_back(s);
-            }
-            return x;
-        };
-        auto k2_tr = split.train.with_k(0, 2), k2_va = split.validation.with_k(0, 2);
-        k2_tr = without(k2_tr, "leader_follower K=3", "hybrid K=3");
-        k2_va = without(k2_va, "leader_follower K=3", "hybrid K=3");
-        auto lin2 = train("learnt_linear", k2_tr, k2_va, "learnt_linear.k_le_2.json");
-        auto deep2 = train("deep_sets", k2_tr, k2_va, "deep_sets.k_le_2.json", lin2.get());
-        for (auto row : compare({naive.get(), lin2.get(), deep2.get()}, split.test.with_k(3, 3), o.arena)) {
-            row.formation += " (trained on K ≤ 2)";
-            r.generalisation.push_back(row);
-        }
-        auto ns_tr = without(split.train, "stack K=2", ""), ns_va = without(split.validation, "stack K=2", "");
-        auto lin_s = train("learnt_linear", ns_tr, ns_va, "learnt_linear.no_stack.json");
-        auto deep_s = train("deep_sets", ns_tr, ns_va, "deep_sets.no_stack.json", lin_s.get());
-        for (auto row : compare({naive.get(), lin_s.get(), deep_s.get()}, split.test.with_formation("stack K=2"), o.arena)) {
-            row.formation += " (stack left out)";
-            r.generalisation.push_back(row);
-        }
+Dataset without(const Dataset& d, const std::string& f1, const std::string& f2) {
+    Dataset x;
+    x.sources = d.sources;
+    for (const auto& s : d.samples) {
+        const auto& f = d.sources[static_cast<std::size_t>(s.source)].formation;
+        if (f != f1 && f != f2) x.samples.push_back(s);
     }
+    return x;
+}
 
-    // 5. Tables and maps.
+using Trainer = std::function<std::unique_ptr<LearntModel>(const std::string& kind, const Dataset& tr, const Dataset& va,
+                                                           const std::string& file, const LearntModel* baseline)>;
+
+// 4. Generalisation: K <= 2 -> K = 3, and a formation left out.
+std::vector<ComparisonRow> generalisation(const Split& split, const ForceModel& naive, const Trainer& train, const ArenaOptions& arena) {
+    std::vector<ComparisonRow> out;
+    auto k2_tr = without(split.train.with_k(0, 2), "leader_follower K=3", "hybrid K=3");
+    auto k2_va = without(split.validation.with_k(0, 2), "leader_follower K=3", "hybrid K=3");
+    auto lin2 = train("learnt_linear", k2_tr, k2_va, "learnt_linear.k_le_2.json", nullptr);
+    auto deep2 = train("deep_sets", k2_tr, k2_va, "deep_sets.k_le_2.json", lin2.get());
+    for (auto row : compare({&naive, lin2.get(), deep2.get()}, split.test.with_k(3, 3), arena)) {
+        row.formation += " (trained on K ≤ 2)";
+        out.push_back(row);
+    }
+    auto ns_tr = without(split.train, "stack K=2", ""), ns_va = without(split.validation, "stack K=2", "");
+    auto lin_s = train("learnt_linear", ns_tr, ns_va, "learnt_linear.no_stack.json", nullptr);
+    auto deep_s = train("deep_sets", ns_tr, ns_va, "deep_sets.no_stack.json", lin_s.get());
+    for (auto row : compare({&naive, lin_s.get(), deep_s.get()}, split.test.with_formation("stack K=2"), arena)) {
+        row.formation += " (stack left out)";
+        out.push_back(row);
+    }
+    return out;
+}
+
+ArenaOptions arena_at(const ArenaOptions& arena, double altitude) {  // the study's arena, at one of the flights' altitudes
+    ArenaOptions at = arena;
+    at.altitude_m = altitude;
+    return at;
+}
+
+// The maps of every multi-vehicle formation; returns their Markdown.
+std::string draw_maps(const StudyOptions& o, const fs::path& out, const std::vector<const ForceModel*>& models, const Dataset& all,
+                      const std::map<std::string, std::string>& label) {
+    fs::create_directories(out / "maps");
+    std::string md = "\n## Maps\n\n";
+    for (const auto& f : o.formations) {
+        if (f == "single") continue;
+        throw_if_stopped(o.stop, "the maps");
+        MapRequest req;
+        req.formation = f;
+        req.altitude_m = o.arena.altitude_m;
+        req.observed = all.with_formation(label.at(f));
+        const auto png = (out / "maps" / (f + ".png")).string();
+        const auto line = (out / "maps" / (f + "_line.png")).string();
+        draw_force_map(models, req, png);
+        draw_force_line(models, req, line);
+        md += log::cat("![", f, "](maps/", f, ".png)\n![", f, " along E](maps/", f, "_line.png)\n\n");
+    }
+    return md;
+}
+
+// 5. table.md (without the maps) and the banded rows for the CSV.
+std::string tables_markdown(const StudyOptions& o, const StudyResult& r, std::vector<ComparisonRow>& banded) {
     std::string md = "# Force models compared\n\n";
     md += log::cat("Simulated flights (", o.legs, " legs each, seed ", o.seed, "; aggregation ",
                    o.physics.aggregation == physics::Aggregation::force_sum ? "force sum" : "velocity superposition",
                    ", jet merging ", o.physics.effects.jet_merging.enabled ? "on" : "off", ").\n\n");
     md += to_markdown(r.table, o.arena);
     md += "\n## By altitude band (the flights' three altitudes; RMSE over the held-out samples within the band)\n\n";
-    std::vector<ComparisonRow> banded;  // for the CSV: the formation labelled with its band
     for (const auto& [altitude, rows] : r.by_altitude) {
-        md += log::cat("### ", altitude, " m\n\n", to_markdown(rows, arena_at(altitude)), "\n");
+        md += log::cat("### ", altitude, " m\n\n", to_markdown(rows, arena_at(o.arena, altitude)), "\n");
         for (auto row : rows) {
             row.formation += log::cat(" @ ", altitude, " m");
             banded.push_back(row);
@@ -169,23 +165,56 @@ StudyResult run_study(const StudyOptions& o) {
         md += "\n## Generalisation (held-out legs of formations the models were not trained on)\n\n";
         md += to_markdown(r.generalisation, o.arena);
     }
+    return md;
+}
+
+}  // namespace
+
+StudyResult run_study(const StudyOptions& o) {
+    const Say say = [&](const std::string& line) {
+        if (o.progress) o.progress(line);
+    };
+    const fs::path out(o.out_dir);
+    fs::create_directories(out / "flights");
+    fs::create_directories(out / "models");
+
+    std::map<std::string, std::string> label;
+    const Dataset all = fly_flights(o, out, label, say);
+    const Split split = split_by_leg(all);
+    say(log::cat(all.samples.size(), " samples; on legs: ", split.train.samples.size(), " training, ",
+                 split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
+
+    // 2. Train.
+    const TrainPlan plan{o.seed, o.max_epochs, o.threads, "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
+                         o.progress, o.stop};
+    const Trainer train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file, const LearntModel* baseline) {
+        return train_and_save(kind, tr, va, plan, (out / "models" / file).string(), baseline);
+    };
+    auto singles = [](const Dataset& d) { return d.from_two_vehicle_flights().with_k(1, 1); };
+    auto naive = train("naive_linear", singles(split.train), singles(split.validation), "naive_linear.json", nullptr);
+    auto linear = train("learnt_linear", split.train, split.validation, "learnt_linear.json", nullptr);
+    auto deep = train("deep_sets", split.train, split.validation, "deep_sets.json", linear.get());
+    PhysicsModel physics(o.physics);
+    write_text(out / "models" / "physics.yaml", physics::to_yaml(o.physics));
+
+    // 3. Compare on held-out legs, overall and by altitude band; the regimes.
+    StudyResult r;
+    const std::vector<const ForceModel*> models{&physics, naive.get(), linear.get(), deep.get()};
+    r.table = compare(models, split.test, o.arena);
+    for (const double altitude : physics::GridOptions{}.altitudes_m)
+        r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, o.arena.band_m), arena_at(o.arena, altitude)));
+    say("classifying the regimes");
+    r.regimes = classify_regimes(*linear, *deep, split.test, physics::GridOptions{}.altitudes_m, RegimeOptions{}, o.stop);
+    write_regimes(r.regimes, out.string());
+
+    if (o.generalisation) r.generalisation = generalisation(split, *naive, train, o.arena);
+
+    // 5. Tables and maps.
+    std::vector<ComparisonRow> banded;  // for the CSV: the formation labelled with its band
+    std::string md = tables_markdown(o, r, banded);
     if (o.maps) {
         say("drawing maps");
-        fs::create_directories(out / "maps");
-        md += "\n## Maps\n\n";
-        for (const auto& f : o.formations) {
-            if (f == "single") continue;
-            throw_if_stopped(o.stop, "the maps");
-            MapRequest req;
-            req.formation = f;
-            req.altitude_m = o.arena.altitude_m;
-            req.observed = all.with_formation(label[f]);
-            const auto png = (out / "maps" / (f + ".png")).string();
-            const auto line = (out / "maps" / (f + "_line.png")).string();
-            draw_force_map(models, req, png);
-            draw_force_line(models, req, line);
-            md += log::cat("![", f, "](maps/", f, ".png)\n![", f, " along E](maps/", f, "_line.png)\n\n");
-        }
+        md += draw_maps(o, out, models, all, label);
     }
     r.markdown_path = (out / "table.md").string();
     r.csv_path = (out / "table.csv").string();

@@ -114,6 +114,46 @@ void normalise(const Dataset& train, LearntModel& m) {
     }
 }
 
+// The model's kind, structure and normalisation: its own, or a frozen sum baseline's (Deep Sets
+// learning the residual on it: its normalisation and its psi).
+void prepare(LearntModel& m, const Dataset& train, const TrainOptions& o, const LearntModel* baseline) {
+    m.kind = o.kind;
+    m.structure = structure_of(o.kind);
+    if (!baseline) {
+        normalise(train, m);
+        return;
+    }
+    if (m.structure != Structure::deep_sets || baseline->structure != Structure::sum)
+        throw InputError(log::cat("training: a baseline is a sum model (naive_linear or learnt_linear) under a deep_sets model, not ",
+                                  baseline->kind, " under ", o.kind));
+    m.input_mean = baseline->input_mean;
+    m.input_std = baseline->input_std;
+    m.output_scale = baseline->output_scale;
+    m.baseline = baseline->phi;
+}
+
+// What the model file records about its training.
+std::string training_metadata(const Dataset& train, const Dataset& validation, const TrainOptions& o, const TrainResult& r,
+                              const LearntModel* baseline) {
+    nlohmann::json sources = nlohmann::json::array();
+    for (const auto& s : train.sources) sources.push_back({{"name", s.name}, {"formation", s.formation}});
+    return nlohmann::json{{"trained_on", sources},
+                          {"train_samples", train.samples.size()},
+                          {"validation_samples", validation.samples.size()},
+                          {"split", o.split},
+                          {"epochs", r.epochs},
+                          {"best_epoch", r.best_epoch},
+                          {"best_validation_mse_normalised", r.best_validation_loss},
+                          {"seed", o.seed},
+                          {"hidden", o.hidden},
+                          {"latent", o.latent},
+                          {"learning_rate", o.learning_rate},
+                          {"batch", o.batch},
+                          {"baseline", baseline ? baseline->kind : "none"},
+                          {"training_seconds", r.seconds}}
+        .dump();
+}
+
 }  // namespace
 
 TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o, const LearntModel* baseline) {
@@ -125,19 +165,7 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
 
     TrainResult r;
     LearntModel& m = r.model;
-    m.kind = o.kind;
-    m.structure = structure_of(o.kind);
-    if (baseline) {  // Deep Sets on a frozen sum model: its normalisation, its psi
-        if (m.structure != Structure::deep_sets || baseline->structure != Structure::sum)
-            throw InputError(log::cat("training: a baseline is a sum model (naive_linear or learnt_linear) under a deep_sets model, not ",
-                                      baseline->kind, " under ", o.kind));
-        m.input_mean = baseline->input_mean;
-        m.input_std = baseline->input_std;
-        m.output_scale = baseline->output_scale;
-        m.baseline = baseline->phi;
-    } else {
-        normalise(train, m);
-    }
+    prepare(m, train, o, baseline);
 
     const Tensors tr = tensors(train, m), va = tensors(validation, m);
     const int width = m.structure == Structure::deep_sets ? o.latent : 6;
@@ -213,24 +241,7 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
     m.phi = export_mlp(phi);
     if (m.structure == Structure::deep_sets) m.rho = export_mlp(rho);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-
-    nlohmann::json sources = nlohmann::json::array();
-    for (const auto& s : train.sources) sources.push_back({{"name", s.name}, {"formation", s.formation}});
-    m.metadata_json = nlohmann::json{{"trained_on", sources},
-                                     {"train_samples", train.samples.size()},
-                                     {"validation_samples", validation.samples.size()},
-                                     {"split", o.split},
-                                     {"epochs", r.epochs},
-                                     {"best_epoch", r.best_epoch},
-                                     {"best_validation_mse_normalised", r.best_validation_loss},
-                                     {"seed", o.seed},
-                                     {"hidden", o.hidden},
-                                     {"latent", o.latent},
-                                     {"learning_rate", o.learning_rate},
-                                     {"batch", o.batch},
-                                     {"baseline", baseline ? baseline->kind : "none"},
-                                     {"training_seconds", r.seconds}}
-                          .dump();
+    m.metadata_json = training_metadata(train, validation, o, r, baseline);
     return r;
 }
 

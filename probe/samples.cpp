@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "core/log.hpp"
+#include "dds/names.hpp"
 
 namespace dw::probe {
 namespace {
@@ -200,8 +201,7 @@ std::string summary(const msg::LoadCellFrame& m) {
     return log::cat("counts", counts, "  gain ", static_cast<int>(m.gain()));
 }
 std::string summary(const msg::StandStatus& m) {
-    static const char* kStates[] = {"STARTING", "TARING", "RUNNING", "FAULT"};
-    return log::cat(kStates[m.state()], "  ", m.fault_cells().size(), " faulty cells  ",
+    return log::cat(dds::stand_state_name(m.state()), "  ", m.fault_cells().size(), " faulty cells  ",
                     m.sample_rate_hz(), " Hz  '", m.message(), "'");
 }
 std::string summary(const msg::MocapFrame& m) {
@@ -220,20 +220,17 @@ std::string summary(const msg::ExperimentPlan& m) {
                     m.legs().size(), " legs");
 }
 std::string summary(const msg::ExperimentCommand& m) {
-    static const char* kKinds[] = {"START", "CALIBRATE", "PAUSE", "RESUME", "ABORT", "STOP"};
-    return log::cat(kKinds[m.kind()], " from ", m.issuer(), "  '", m.reason(), "'");
+    return log::cat(dds::command_name(m.kind()), " from ", m.issuer(), "  '", m.reason(), "'");
 }
 std::string summary(const msg::ExperimentState& m) {
-    static const char* kPhases[] = {"IDLE", "WAITING", "CALIBRATING", "TAKING_OFF", "FLYING", "LANDING", "DONE", "ABORTED"};
-    return log::cat(kPhases[m.phase()], "  leg ", m.leg_index(), "/", m.leg_count(), "  ",
+    return log::cat(dds::phase_name(m.phase()), "  leg ", m.leg_index(), "/", m.leg_count(), "  ",
                     static_cast<int>(m.progress() * 100), " %");
 }
 std::string summary(const msg::WrenchPrediction& m) {
     return log::cat(m.model_name(), "  force ", fmt3(m.force_n()), " N  age ", m.input_age_s() * 1e6, " µs");
 }
 std::string summary(const msg::ProcessStatus& m) {
-    static const char* kStates[] = {"STARTING", "RUNNING", "DEGRADED", "FAULT", "STOPPING"};
-    return log::cat(m.process(), "@", m.host(), " pid ", m.pid(), "  ", kStates[m.state()], "  ",
+    return log::cat(m.process(), "@", m.host(), " pid ", m.pid(), "  ", dds::process_state_name(m.state()), "  ",
                     m.rates().size(), " topics  ", m.error_count(), " errors");
 }
 

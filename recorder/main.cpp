@@ -14,65 +14,99 @@
 
 namespace {
 
-int run(int argc, char** argv) {
-    dw::dds::ProcessCli cli("dw-recorder: record every lab topic to MCAP; inspect, recover, export and replay recordings");
-    CLI::App& app = cli.app();
-    app.require_subcommand(1);
+// ---- one struct per subcommand: its options, how it is declared, what it does --------------------
 
+struct RecordCommand {
+    CLI::App* cmd = nullptr;
     dw::recorder::RecordOptions rec;
     std::string compression = "zstd";
     double flush_s = 1.0, split_mb = 0, duration_s = 0;
     std::vector<std::string> attach;
-    bool quiet = false, no_fsync = false;
-    auto* record = app.add_subcommand("record", "record lab topics (default: all) to an MCAP file");
-    record->add_option("topics", rec.topics, "topic suffixes (stand/wrench) or full names; default all");
-    record->add_option("-o,--out", rec.out, "output file (with splitting: <stem>_NNNN.mcap)");
-    record->add_option("--compression", compression, "zstd (default), lz4 or none");
-    record->add_option("--flush-interval", flush_s, "seconds: at most this much is lost on a crash")->check(dw::cli::in({0.05, 60, "s"}));
-    record->add_option("--chunk-size", rec.writer.chunk_size, "bytes of messages per chunk at most")->check(dw::cli::in({1024, 1 << 30, "bytes"}));
-    record->add_option("--split-size", split_mb, "start a new file after this many MB (0 = never)")->check(dw::cli::in({0, 1e6, "MB"}));
-    record->add_option("--split-duration", rec.split_seconds, "start a new file after this many seconds (0 = never)")->check(dw::cli::in(dw::kTimeoutRange));
-    record->add_option("--attach", attach, "NAME=PATH: store a file (stand calibration, physics config)");
-    record->add_flag("--paused", rec.start_paused, "start paused (resume: RESUME command or SIGUSR1)");
-    bool no_commands = false;
-    record->add_flag("--no-command-control", no_commands, "record PAUSE/RESUME commands but do not obey them");
-    record->add_option("--duration", duration_s, "stop after this many seconds (0, the default: until Ctrl-C)")->check(dw::cli::in(dw::kTimeoutRange));
-    record->add_flag("--no-fsync", no_fsync, "do not fdatasync each chunk (faster, loses more on a power cut)");
-    record->add_flag("--quiet", quiet, "no live status line");
+    bool quiet = false, no_fsync = false, no_commands = false;
 
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("record", "record lab topics (default: all) to an MCAP file");
+        cmd->add_option("topics", rec.topics, "topic suffixes (stand/wrench) or full names; default all");
+        cmd->add_option("-o,--out", rec.out, "output file (with splitting: <stem>_NNNN.mcap)");
+        cmd->add_option("--compression", compression, "zstd (default), lz4 or none");
+        cmd->add_option("--flush-interval", flush_s, "seconds: at most this much is lost on a crash")->check(dw::cli::in({0.05, 60, "s"}));
+        cmd->add_option("--chunk-size", rec.writer.chunk_size, "bytes of messages per chunk at most")->check(dw::cli::in({1024, 1 << 30, "bytes"}));
+        cmd->add_option("--split-size", split_mb, "start a new file after this many MB (0 = never)")->check(dw::cli::in({0, 1e6, "MB"}));
+        cmd->add_option("--split-duration", rec.split_seconds, "start a new file after this many seconds (0 = never)")
+            ->check(dw::cli::in(dw::kTimeoutRange));
+        cmd->add_option("--attach", attach, "NAME=PATH: store a file (stand calibration, physics config)");
+        cmd->add_flag("--paused", rec.start_paused, "start paused (resume: RESUME command or SIGUSR1)");
+        cmd->add_flag("--no-command-control", no_commands, "record PAUSE/RESUME commands but do not obey them");
+        cmd->add_option("--duration", duration_s, "stop after this many seconds (0, the default: until Ctrl-C)")->check(dw::cli::in(dw::kTimeoutRange));
+        cmd->add_flag("--no-fsync", no_fsync, "do not fdatasync each chunk (faster, loses more on a power cut)");
+        cmd->add_flag("--quiet", quiet, "no live status line");
+    }
+    // The options as the Recorder takes them; throws dw::InputError on a bad --attach or compression.
+    void complete(const dw::dds::DdsConfig& dds) {
+        rec.writer.compression = dw::mcap::parse_compression(compression);
+        rec.writer.fsync = !no_fsync;
+        rec.command_control = !no_commands;
+        // Ticks every 50 ms, so a chunk is written out no later than the interval.
+        rec.writer.flush_interval_ns = static_cast<std::uint64_t>(std::max(0.0, flush_s - 0.05) * 1e9);
+        rec.split_bytes = static_cast<std::uint64_t>(std::ceil(split_mb * 1e6));  // a positive size is never 0 ("never")
+        rec.topics = dw::dds::select_topics(rec.topics, dds.ns);
+        for (const auto& a : attach) {
+            const auto eq = a.find('=');
+            if (eq == std::string::npos || eq == 0) throw dw::InputError("--attach '" + a + "': expected NAME=PATH");
+            rec.attachments.emplace_back(a.substr(0, eq), a.substr(eq + 1));
+        }
+    }
+    int run(dw::dds::Participant& participant) {
+        dw::recorder::Recorder recorder(participant, rec);
+        dw::Shutdown::instance().on_user_signal([&] { recorder.toggle("SIGUSR1"); });
+        dw::log::info("recording to ", recorder.files().front(), " (", compression, ", flush every ", flush_s, " s)");
+        const auto start = std::chrono::steady_clock::now();
+        auto last_status = start;
+        while (!dw::Shutdown::instance().wait_for(std::chrono::milliseconds(50))) {
+            recorder.tick();
+            const auto now = std::chrono::steady_clock::now();
+            if (!quiet && now - last_status >= std::chrono::seconds(1)) {
+                std::fprintf(stderr, "\r%s   ", recorder.status_line().c_str());
+                last_status = now;
+            }
+            if (duration_s > 0 && now - start >= std::chrono::duration<double>(duration_s)) break;
+        }
+        if (!quiet) std::fprintf(stderr, "\n");
+        recorder.close();
+        for (const auto& s : recorder.stats()) {
+            if (s.lost > 0) dw::log::warn(s.topic, ": ", s.lost, " samples lost (gaps in the writers' sequence numbers)");
+        }
+        for (const auto& f : recorder.files()) std::cout << "wrote " << f << "\n";
+        return 0;
+    }
+};
+
+struct InfoCommand {
+    CLI::App* cmd = nullptr;
     std::string file;
-    auto* info = app.add_subcommand("info", "topics, counts, rates, duration, losses, metadata");
-    info->add_option("file", file, "MCAP file")->required();
 
-    std::string out;
-    auto* recover = app.add_subcommand("recover", "rebuild a readable file from a truncated or damaged one");
-    recover->add_option("file", file, "damaged MCAP file")->required();
-    recover->add_option("out", out, "recovered file to write")->required();
-
-    std::string flight_dir, csv_dir;
-    dw::recorder::ExportOptions ex;
-    auto* exp = app.add_subcommand("export", "export a recording to a flight folder and/or per-topic CSV");
-    exp->add_option("file", file, "MCAP file")->required();
-    exp->add_option("--flight", flight_dir, "flight folder to write (downwash-flight/1)");
-    exp->add_option("--csv", csv_dir, "directory for one CSV per topic");
-    exp->add_option("--sufferer", ex.sufferer, "rigid body on the stand (default sufferer)");
-
-    dw::recorder::ReplayOptions rp;
-    auto* replay = app.add_subcommand("replay", "publish a recording back on DDS with its original timing");
-    replay->add_option("file", file, "MCAP file")->required();
-    replay->add_option("topics", rp.topics, "topic suffixes to replay; default all");
-    replay->add_option("--speed", rp.speed, "x N of the original rate")->check(dw::cli::in({0.01, 1000}));
-    replay->add_option("--wait-readers", rp.wait_readers, "wait for this many readers per topic first")->check(dw::cli::in(dw::dds::kReadersRange));
-
-    cli.parse(argc, argv);
-
-    if (info->parsed()) {
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("info", "topics, counts, rates, duration, losses, metadata");
+        cmd->add_option("file", file, "MCAP file")->required();
+    }
+    int run() {
         if (!dw::recorder::print_info(file, std::cout)) {
             throw dw::InputError(file + ": damaged (see above); dw-recorder recover rebuilds what is readable");
         }
         return 0;
     }
-    if (recover->parsed()) {
+};
+
+struct RecoverCommand {
+    CLI::App* cmd = nullptr;
+    std::string file, out;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("recover", "rebuild a readable file from a truncated or damaged one");
+        cmd->add_option("file", file, "damaged MCAP file")->required();
+        cmd->add_option("out", out, "recovered file to write")->required();
+    }
+    int run() {
         dw::require_writable_path(out, "recover output");
         dw::mcap::WriterOptions o;
         const auto r = dw::mcap::recover(file, out, o);
@@ -84,10 +118,24 @@ int run(int argc, char** argv) {
         }
         return 0;
     }
-    if (exp->parsed()) {
+};
+
+struct ExportCommand {
+    CLI::App* cmd = nullptr;
+    std::string file, flight_dir, csv_dir;
+    dw::recorder::ExportOptions ex;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("export", "export a recording to a flight folder and/or per-topic CSV");
+        cmd->add_option("file", file, "MCAP file")->required();
+        cmd->add_option("--flight", flight_dir, "flight folder to write (downwash-flight/1)");
+        cmd->add_option("--csv", csv_dir, "directory for one CSV per topic");
+        cmd->add_option("--sufferer", ex.sufferer, "rigid body on the stand (default sufferer)");
+    }
+    int run() {
         // Both outputs are checked before either is written.
-        if (exp->count("--flight")) dw::require_output_dir(flight_dir, "--flight");
-        if (exp->count("--csv")) dw::require_output_dir(csv_dir, "--csv");
+        if (cmd->count("--flight")) dw::require_output_dir(flight_dir, "--flight");
+        if (cmd->count("--csv")) dw::require_output_dir(csv_dir, "--csv");
         if (flight_dir.empty() && csv_dir.empty()) throw dw::InputError("export: give --flight DIR and/or --csv DIR");
         if (!flight_dir.empty()) {
             ex.stop = dw::Shutdown::instance().token();
@@ -100,52 +148,56 @@ int run(int argc, char** argv) {
         }
         return 0;
     }
+};
 
-    if (record->parsed()) dw::require_writable_path(rec.out, "--out");
-    dw::dds::Participant participant(cli.dds(), record->parsed() ? "recorder" : "replay");
-    dw::dds::Heartbeat heartbeat(participant);
-    heartbeat.set_state(dw::msg::PROC_RUNNING);
-    if (replay->parsed()) {
+struct ReplayCommand {
+    CLI::App* cmd = nullptr;
+    std::string file;
+    dw::recorder::ReplayOptions rp;
+
+    void add(CLI::App& app) {
+        cmd = app.add_subcommand("replay", "publish a recording back on DDS with its original timing");
+        cmd->add_option("file", file, "MCAP file")->required();
+        cmd->add_option("topics", rp.topics, "topic suffixes to replay; default all");
+        cmd->add_option("--speed", rp.speed, "x N of the original rate")->check(dw::cli::in({0.01, 1000}));
+        cmd->add_option("--wait-readers", rp.wait_readers, "wait for this many readers per topic first")->check(dw::cli::in(dw::dds::kReadersRange));
+    }
+    int run(dw::dds::Participant& participant) {
         rp.progress = [](double done) { std::fprintf(stderr, "\rdw-recorder: replaying %3d %%", static_cast<int>(done * 100)); };
         const auto n = dw::recorder::replay(file, participant, rp);
         std::fprintf(stderr, "\n");
         std::cout << "replayed " << n << " samples\n";
         return 0;
     }
+};
 
-    rec.writer.compression = dw::mcap::parse_compression(compression);
-    rec.writer.fsync = !no_fsync;
-    rec.command_control = !no_commands;
-    // Ticks every 50 ms, so a chunk is written out no later than the interval.
-    rec.writer.flush_interval_ns = static_cast<std::uint64_t>(std::max(0.0, flush_s - 0.05) * 1e9);
-    rec.split_bytes = static_cast<std::uint64_t>(std::ceil(split_mb * 1e6));  // a positive size is never 0 ("never")
-    rec.topics = dw::dds::select_topics(rec.topics, cli.dds().ns);
-    for (const auto& a : attach) {
-        const auto eq = a.find('=');
-        if (eq == std::string::npos || eq == 0) throw dw::InputError("--attach '" + a + "': expected NAME=PATH");
-        rec.attachments.emplace_back(a.substr(0, eq), a.substr(eq + 1));
-    }
-    dw::recorder::Recorder recorder(participant, rec);
-    dw::Shutdown::instance().on_user_signal([&] { recorder.toggle("SIGUSR1"); });
-    dw::log::info("recording to ", recorder.files().front(), " (", compression, ", flush every ", flush_s, " s)");
-    const auto start = std::chrono::steady_clock::now();
-    auto last_status = start;
-    while (!dw::Shutdown::instance().wait_for(std::chrono::milliseconds(50))) {
-        recorder.tick();
-        const auto now = std::chrono::steady_clock::now();
-        if (!quiet && now - last_status >= std::chrono::seconds(1)) {
-            std::fprintf(stderr, "\r%s   ", recorder.status_line().c_str());
-            last_status = now;
-        }
-        if (duration_s > 0 && now - start >= std::chrono::duration<double>(duration_s)) break;
-    }
-    if (!quiet) std::fprintf(stderr, "\n");
-    recorder.close();
-    for (const auto& s : recorder.stats()) {
-        if (s.lost > 0) dw::log::warn(s.topic, ": ", s.lost, " samples lost (gaps in the writers' sequence numbers)");
-    }
-    for (const auto& f : recorder.files()) std::cout << "wrote " << f << "\n";
-    return 0;
+int run(int argc, char** argv) {
+    dw::dds::ProcessCli cli("dw-recorder: record every lab topic to MCAP; inspect, recover, export and replay recordings");
+    CLI::App& app = cli.app();
+    app.require_subcommand(1);
+    RecordCommand record;
+    InfoCommand info;
+    RecoverCommand recover;
+    ExportCommand exp;
+    ReplayCommand replay;
+    record.add(app);
+    info.add(app);
+    recover.add(app);
+    exp.add(app);
+    replay.add(app);
+    cli.parse(argc, argv);
+    if (info.cmd->parsed()) return info.run();
+    if (recover.cmd->parsed()) return recover.run();
+    if (exp.cmd->parsed()) return exp.run();
+
+    const bool recording = record.cmd->parsed();
+    if (recording) dw::require_writable_path(record.rec.out, "--out");
+    dw::dds::Participant participant(cli.dds(), recording ? "recorder" : "replay");
+    dw::dds::Heartbeat heartbeat(participant);
+    heartbeat.set_state(dw::msg::PROC_RUNNING);
+    if (!recording) return replay.run(participant);
+    record.complete(cli.dds());
+    return record.run(participant);
 }
 
 }  // namespace

@@ -135,6 +135,9 @@ void Recorder::open_file() {
                                          {"fast_dds", "2.9 (Debian bookworm)"},
                                          {"dds_domain", std::to_string(dds.domain)},
                                          {"namespace", dds.ns},
+                                         // Who recorded: the DDS Security identity (what it may read is its permissions).
+                                         {"dds_security", dds.security.empty() ? std::string("none")
+                                                                               : "identity " + (dds.identity.empty() ? participant_.process() : dds.identity)},
                                          {"file_index", std::to_string(files_.size() - 1)}}});
     for (const auto& [name, data] : attachment_data_) {
         const auto now = static_cast<std::uint64_t>(participant_.clock().now_ns());

@@ -120,13 +120,20 @@ bool print_info(const std::string& path, std::ostream& out) {
     }
     out << "file:      " << path << (r.complete ? "" : "  (INCOMPLETE)") << "\n";
     out << "messages:  " << total << " in " << std::fixed << std::setprecision(2) << duration << " s\n";
-    out << std::left << std::setw(30) << "topic" << std::setw(28) << "type" << std::right << std::setw(9) << "count"
+    // Columns as wide as the longest name (long namespaces make long topics), two spaces apart.
+    std::size_t topic_w = 30, type_w = 28;
+    for (const auto& [id, c] : l.channels) {
+        topic_w = std::max(topic_w, c.topic.size() + 2);
+        if (c.schema_id && l.schemas.count(c.schema_id)) type_w = std::max(type_w, l.schemas.at(c.schema_id).name.size() + 2);
+    }
+    const auto tw = static_cast<int>(topic_w), yw = static_cast<int>(type_w);
+    out << std::left << std::setw(tw) << "topic" << std::setw(yw) << "type" << std::right << std::setw(9) << "count"
         << std::setw(10) << "rate_hz" << std::setw(12) << "bytes" << "  losses\n";
     for (const auto& [id, c] : l.channels) {
         const PerChannel p = per.count(id) ? per.at(id) : PerChannel{};
         const double span = p.count > 1 ? static_cast<double>(p.last - p.first) * 1e-9 : 0.0;
         const std::string type = c.schema_id && l.schemas.count(c.schema_id) ? l.schemas.at(c.schema_id).name : "";
-        out << std::left << std::setw(30) << c.topic << std::setw(28) << type << std::right << std::setw(9) << p.count
+        out << std::left << std::setw(tw) << c.topic << std::setw(yw) << type << std::right << std::setw(9) << p.count
             << std::setw(10) << std::setprecision(1) << (span > 0 ? static_cast<double>(p.count - 1) / span : 0.0)
             << std::setw(12) << p.bytes << "  " << (loss.count(c.topic) ? loss.at(c.topic) : "(not stored)") << "\n";
     }

@@ -14,3 +14,4 @@ done
 "$here/build/bin/dw-bench-mocap" --seconds 60
 "$here/build/bin/dw-bench-predictor"
 "$here/build/bin/dw-bench-explain"
+"$here/build/bin/dw-bench-security"

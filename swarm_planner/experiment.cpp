@@ -6,12 +6,12 @@
 #include "core/log.hpp"
 #include "core/numbers.hpp"
 #include "core/shutdown.hpp"
+#include "dds/names.hpp"
 #include "dds/time.hpp"
 
 namespace dw::planner {
 namespace {
 constexpr double kFenceTolerance_m = 0.1;  // hover noise on the floor or at a wall is not a breach
-const char* kPhaseNames[] = {"IDLE", "WAITING", "CALIBRATING", "TAKING_OFF", "FLYING", "LANDING", "DONE", "ABORTED"};
 
 physics::Setpoint min_jerk(const physics::Vec3& a, const physics::Vec3& b, double t, double T) {
     const double s = std::clamp(t / T, 0.0, 1.0);
@@ -20,6 +20,33 @@ physics::Setpoint min_jerk(const physics::Vec3& a, const physics::Vec3& b, doubl
     sp.velocity = (b - a) / T * (30 * s * s - 60 * std::pow(s, 3) + 30 * std::pow(s, 4));
     return sp;
 }
+
+// The plan as a DDS message (latched, for the recorder and everyone else).
+msg::ExperimentPlan plan_message(const Plan& plan, const std::string& run_id) {
+    msg::ExperimentPlan pm;
+    pm.header().run_id(run_id);
+    pm.name(run_id);
+    pm.formation(plan.formation.meta_name);
+    pm.vehicles(plan.vehicles);
+    for (const auto& off : plan.formation.offsets) {
+        msg::Vector3 v;
+        v.x(off.x()); v.y(off.y()); v.z(off.z());
+        pm.offsets_m().push_back(v);
+    }
+    for (const auto& l : plan.reference.legs()) {
+        msg::Leg leg;
+        leg.index(static_cast<std::uint32_t>(l.index));
+        const auto a = plan.reference.at(l.t_start).position, b = plan.reference.at(l.t_end).position;
+        leg.start_m().x(a.x()); leg.start_m().y(a.y()); leg.start_m().z(a.z());
+        leg.end_m().x(b.x()); leg.end_m().y(b.y()); leg.end_m().z(b.z());
+        leg.speed_mps(plan.options.grid.speed_mps);
+        leg.relative_altitude_m(l.altitude_m);
+        pm.legs().push_back(leg);
+    }
+    pm.document(to_document(plan, false));
+    return pm;
+}
+
 }  // namespace
 
 Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& o)
@@ -38,7 +65,7 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
       operator_(p, dds::topics::experiment_command, [this](const msg::ExperimentCommand& c, const dds::SampleMeta&) {
           if (c.kind() == msg::CMD_ABORT || c.kind() == msg::CMD_STOP) {
               std::lock_guard lock(mutex_);
-              abort_reason_ = log::cat("operator ", c.kind() == msg::CMD_ABORT ? "ABORT" : "STOP", " from ", c.issuer(),
+              abort_reason_ = log::cat("operator ", dds::command_name(c.kind()), " from ", c.issuer(),
                                        c.reason().empty() ? "" : ": " + c.reason());
               abort_requested_ = true;
           }
@@ -125,7 +152,7 @@ std::optional<std::string> Experiment::fly(double duration, const std::function<
         }
         const int report = static_cast<int>(t * 2);  // the latched state twice a second
         if (report != last_report) {
-            publish_state(phase, leg_, phase == msg::PHASE_FLYING ? t / plan_.duration_s() : 0.0, kPhaseNames[phase]);
+            publish_state(phase, leg_, phase == msg::PHASE_FLYING ? t / plan_.duration_s() : 0.0, dds::phase_name(phase));
             last_report = report;
         }
         next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
@@ -157,27 +184,7 @@ void Experiment::land_safely(const std::string& why) {
 msg::ExperimentPhase Experiment::run() {
     const std::size_t k = plan_.vehicles.size();
     // The plan, latched, for the recorder and everyone else.
-    msg::ExperimentPlan pm;
-    pm.header().run_id(o_.run_id);
-    pm.name(o_.run_id);
-    pm.formation(plan_.formation.meta_name);
-    pm.vehicles(plan_.vehicles);
-    for (const auto& off : plan_.formation.offsets) {
-        msg::Vector3 v;
-        v.x(off.x()); v.y(off.y()); v.z(off.z());
-        pm.offsets_m().push_back(v);
-    }
-    for (const auto& l : plan_.reference.legs()) {
-        msg::Leg leg;
-        leg.index(static_cast<std::uint32_t>(l.index));
-        const auto a = plan_.reference.at(l.t_start).position, b = plan_.reference.at(l.t_end).position;
-        leg.start_m().x(a.x()); leg.start_m().y(a.y()); leg.start_m().z(a.z());
-        leg.end_m().x(b.x()); leg.end_m().y(b.y()); leg.end_m().z(b.z());
-        leg.speed_mps(plan_.options.grid.speed_mps);
-        leg.relative_altitude_m(l.altitude_m);
-        pm.legs().push_back(leg);
-    }
-    pm.document(to_document(plan_, false));
+    msg::ExperimentPlan pm = plan_message(plan_, o_.run_id);
     plan_writer_.write(pm);
 
     publish_state(msg::PHASE_WAITING, -1, 0, "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");

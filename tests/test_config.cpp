@@ -115,6 +115,7 @@ TEST(DdsConfig, AddressesAreChecked) {
     EXPECT_NE(error_of([&] { dw::dds::resolve(cli, ConfigFile()); }).find("not an IPv4 address"), std::string::npos);
     DdsCliOptions ds;
     ds.profile = "lab";
+    ds.insecure = true;
     ds.discovery_server = "127.0.0.1";
     EXPECT_NE(error_of([&] { dw::dds::resolve(ds, ConfigFile()); }).find("needs a port"), std::string::npos);
     ds.discovery_server = "127.0.0.1:11811";
@@ -155,10 +156,23 @@ TEST(DdsConfig, ShmTransportHasNoUdp) {
 TEST(DdsConfig, DiscoveryServerMakesAClient) {
     DdsConfig c;
     c.profile = dw::dds::Profile::lab;
+    c.insecure = true;  // the lab profile without a keystore
     c.discovery_server = "127.0.0.1:11811";
     const auto qos = dw::dds::participant_qos(c, "t");
     const auto& d = qos.wire_protocol().builtin.discovery_config;
     EXPECT_EQ(d.discoveryProtocol, eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT);
     ASSERT_EQ(d.m_DiscoveryServers.size(), 1u);
     EXPECT_EQ(d.m_DiscoveryServers.front().metatrafficUnicastLocatorList.begin()->port, 11811u);
+}
+
+TEST(DdsConfig, TheLabProfileWantsAKeystoreFromTheFileOrTheFlags) {
+    const auto file = ConfigFile::parse("dds:\n  profile: lab\n", "lab.yaml");
+    EXPECT_NE(error_of([&] { dw::dds::resolve({}, file); }).find("--insecure"), std::string::npos);
+    DdsCliOptions keys;
+    keys.security = "keys";
+    EXPECT_EQ(dw::dds::resolve(keys, file).security, "keys");  // the file's profile, the flag's keystore
+    DdsCliOptions open;
+    open.insecure = true;
+    EXPECT_TRUE(dw::dds::resolve(open, file).insecure);
+    EXPECT_EQ(dw::dds::resolve({}, ConfigFile::parse("dds:\n  profile: lab\n  security: keys\n", "lab.yaml")).security, "keys");
 }

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <signal.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <thread>
 
 #include "support.hpp"
@@ -139,4 +141,61 @@ TEST(Finding6, ProofOfUnknownCasesAndExplainWithoutWrenchOnLegs) {
     }
     std::ofstream(d.file("f/legs.csv")) << header << "\n" << moved;
     expect_one_line_exit_2(run({bin("dw-explain"), "--real", d.file("f"), "--out", d.file("e"), "--quiet"}, d), "hold wrench samples");
+}
+
+// Issue 17: a full disk ends a tool with one line and exit 1 (a runtime failure), and leaves no
+// partial file: every file the tools write goes to a temporary name, is checked, and renamed. A
+// read-only output folder is found before any work, so it is the bad-input line and exit 2. Each tool runs in its own mount namespace over a tiny tmpfs (16 KiB, or read-only);
+// what is left there is listed from inside the namespace, before the mount goes away.
+namespace {
+struct Confined {
+    dw::test::RunResult run;
+    std::vector<std::string> left;  // files left in the confined folder (relative paths)
+};
+
+// Runs argv (in which "@" stands for the confined folder) with that folder mounted as `mount_options`.
+Confined confined(const std::vector<std::string>& argv, const std::string& mount_options, const TempDir& d) {
+    const std::string dir = d.file("confined"), listing = d.file("left.txt");
+    fs::create_directories(dir);
+    std::string command = "mount -t tmpfs -o " + mount_options + " none " + dir + " && cd / && \"$@\"; rc=$?; (cd " + dir +
+                          " && find . -type f) > " + listing + "; exit $rc";
+    std::vector<std::string> full{"unshare", "-m", "sh", "-c", command, "sh"};
+    for (const auto& a : argv) full.push_back(a == "@" ? dir : a.starts_with("@/") ? dir + a.substr(1) : a);
+    Confined c{run(full, d), {}};
+    std::ifstream in(listing);
+    for (std::string line; std::getline(in, line);) c.left.push_back(line);
+    return c;
+}
+
+bool can_confine() {
+    TempDir d;
+    return ::geteuid() == 0 && run({"unshare", "-m", "sh", "-c", "mount -t tmpfs -o size=16k none " + d.file("") + " && true"}, d).status == 0;
+}
+
+void expect_one_line_nothing_partial(const Confined& c, int status, const std::string& needle, const std::set<std::string>& whole) {
+    EXPECT_EQ(c.run.status, status) << c.run.err;
+    const auto l = lines(c.run.err);
+    ASSERT_EQ(l.size(), 1u) << c.run.err;
+    EXPECT_NE(l[0].find(needle), std::string::npos) << l[0];
+    for (const auto& f : c.left) EXPECT_TRUE(whole.count(f)) << f << " left behind (only whole files may be)";
+}
+}  // namespace
+
+TEST(Issue17, AFullDiskIsOneLineExit1AndNoPartialFile) {
+    if (!can_confine()) GTEST_SKIP() << "needs root and mount namespaces (unshare -m) for a tiny tmpfs; CI has both";
+    TempDir d;
+    // A flight much larger than 16 KiB: its small meta.json fits whole, wrench.csv does not.
+    auto full = confined({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", "@/flight"}, "size=16k", d);
+    expect_one_line_nothing_partial(full, 1, "No space left on device", {"./flight/meta.json"});
+    auto ro = confined({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", "@/flight"}, "ro,size=16k", d);
+    expect_one_line_nothing_partial(ro, 2, "Read-only file system", {});
+
+    // The explainer's report and figures into a full folder.
+    ASSERT_EQ(run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status, 0);
+    auto report = confined({bin("dw-explain"), "--real", d.file("f"), "--quiet", "--out", "@/explain"}, "size=16k", d);
+    EXPECT_EQ(report.run.status, 1) << report.run.err;
+    const auto l = lines(report.run.err);
+    ASSERT_EQ(l.size(), 1u) << report.run.err;
+    EXPECT_NE(l[0].find("No space left on device"), std::string::npos) << l[0];
+    for (const auto& f : report.left) EXPECT_EQ(f.find(".tmp-"), std::string::npos) << f << ": a temporary left behind";
 }

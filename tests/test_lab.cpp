@@ -101,6 +101,51 @@ TEST(LabRun, FliesALabFileRestartsAFailingProcessAndPrintsOtherHostsCommands) {
     EXPECT_NE(dw::read_file(dir.file("run/logs/planner.log")).find("DONE"), std::string::npos);
 }
 
+// Issue 18: the simulated lab with DDS Security, every process its own identity from a keystore
+// made from the lab file; the recording is complete and says who recorded it.
+TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
+    dw::test::TempDir dir;
+    std::string lab = lab_text("", "local");
+    const auto flaky = lab.find("  - name: flaky");
+    lab.erase(flaky, lab.find("  - name: planner") - flaky);
+    lab.replace(lab.find("    host: elsewhere\n"), std::string("    host: elsewhere\n").size(), "");
+    lab.replace(lab.find("physics.yaml]"), std::string("physics.yaml").size(), dir.file("physics.yaml"));  // here, not elsewhere
+    std::ofstream(dir.file("lab.yaml")) << lab;
+    std::ofstream(dir.file("physics.yaml")) << "format: downwash-physics/1\n";  // the predictor's model: the physics
+    const auto keys = dw::test::run({bin("dw-lab"), "keys", "create", "--keystore", dir.file("keys"), "--lab", dir.file("lab.yaml")}, dir);
+    ASSERT_EQ(keys.status, 0) << keys.err;
+    EXPECT_NE(keys.out.find("created identity planner"), std::string::npos) << keys.out;
+    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--security", dir.file("keys"),
+                                  "--domain", std::to_string(dw::test::test_domain()), "--namespace", "labsec" + std::to_string(::getpid())},
+                                 dir, 300000ms);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
+    EXPECT_NE(r.err.find("@local    auth"), std::string::npos) << "the status line says each process authenticated\n" << r.err;
+    const auto info = dw::test::run({bin("dw-recorder"), "info", dir.file("run/exp.mcap")}, dir);
+    ASSERT_EQ(info.status, 0) << info.err;
+    for (const char* topic : {"stand/wrench", "mocap/frame", "vehicles/setpoint", "experiment/command", "predictor/wrench"}) {
+        const auto at = info.out.find(std::string("/") + topic + " ");
+        ASSERT_NE(at, std::string::npos) << topic << "\n" << info.out;
+        EXPECT_EQ(info.out.find("lost 0", at), info.out.find("lost ", at)) << topic << ": no sample lost";
+    }
+    EXPECT_NE(info.out.find("dds_security=identity recorder"), std::string::npos) << info.out;
+    for (const char* log : {"planner", "stand_agent", "recorder", "predictor", "mocap_bridge"})
+        EXPECT_EQ(dw::read_file(dir.file(std::string("run/logs/") + log + ".log")).find("SECURITY"), std::string::npos) << log;
+}
+
+TEST(LabRun, TheLabProfileWantsAKeystoreOrAnExplicitInsecure) {
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("lab.yaml")) << lab_text("", "local");
+    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--profile", "lab"}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("--insecure"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("run"))) << "refused before anything started";
+    const auto bad = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--security", dir.file("no-keys")}, dir);
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("no-keys"), std::string::npos) << bad.err;
+}
+
 TEST(LabRun, BadLabFileIsOneLineAndExit2) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("lab.yaml")) << "format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe], restart: sometimes}\n";
@@ -135,7 +180,7 @@ TEST(LabRun, AcrossTwoHostsInNetworkNamespaces) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("lab.yaml")) << lab_text("hostb: {launch: [ip, netns, exec, " + b + "]}", "hostb");
     const auto r = dw::test::run({"ip", "netns", "exec", a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
-                                  "--profile", "lab", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
+                                  "--profile", "lab", "--insecure", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
                                  dir, 300000ms);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;

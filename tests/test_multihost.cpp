@@ -82,19 +82,19 @@ protected:
 }  // namespace
 
 TEST_F(TwoHosts, MulticastDiscoveryAndDeliveryAcrossTheVeth) {
-    expect_delivery({"--profile", "lab", "--transport", "udp"});
+    expect_delivery({"--profile", "lab", "--insecure", "--transport", "udp"});
 }
 
 TEST_F(TwoHosts, UnicastInitialPeerOnly) {
     // No multicast route: discovery can only go by the initial peers each host names.
     ASSERT_EQ(sh("ip -n " + a_ + " route del 224.0.0.0/4"), 0);
     ASSERT_EQ(sh("ip -n " + b_ + " route del 224.0.0.0/4"), 0);
-    expect_delivery({"--profile", "lab", "--transport", "udp", "--peer", addr_a_, "--peer", addr_b_});
+    expect_delivery({"--profile", "lab", "--insecure", "--transport", "udp", "--peer", addr_a_, "--peer", addr_b_});
 }
 
 TEST_F(TwoHosts, DiscoveryServerOnHostA) {
     dw::Subprocess server({in(a_, {"fast-discovery-server", "-i", "0", "-l", addr_a_, "-p", "11811"}),
                            dir_.file("server.out"), dir_.file("server.err"), {}});
-    expect_delivery({"--profile", "lab", "--transport", "udp", "--discovery-server", addr_a_ + ":11811"});
+    expect_delivery({"--profile", "lab", "--insecure", "--transport", "udp", "--discovery-server", addr_a_ + ":11811"});
     server.stop();
 }

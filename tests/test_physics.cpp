@@ -417,6 +417,45 @@ TEST(Effects, TurbulenceHasItsIntensityAndTimeScale) {
     EXPECT_NEAR(lag / var, std::exp(-1.0), 0.03);
 }
 
+// Lateral buffeting: under one producer the stand's N force (zero in the mean flow on a leg along
+// E straight over it) fluctuates by the order the paper measured, 0.05-0.2 N, at every altitude;
+// without the jets' lateral turbulence it is at the load cells' noise.
+namespace {
+constexpr double kOverheadRadius_m = 0.15;  // the neighbour counts as overhead within this
+
+double lateral_rms_overhead(const PhysicsConfig& c, double altitude) {
+    FlyOptions o = over_the_stand(altitude);
+    o.grid.lines_n_m = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    o.grid.legs = 6;
+    const auto f = simulate_flight(c, o).flight;
+    const auto tracks = dw::flight::tracks(f);
+    const auto& track = tracks[static_cast<std::size_t>(f.find_body(f.meta.neighbours.front()))];
+    double sum2 = 0;
+    int n = 0;
+    for (const auto& s : f.wrench) {
+        const auto p = track.position_at(s.t);
+        if (std::hypot(p[0], p[1]) > kOverheadRadius_m) continue;
+        sum2 += s.w[0] * s.w[0];
+        ++n;
+    }
+    EXPECT_GT(n, 100) << altitude;
+    return std::sqrt(sum2 / n);
+}
+}  // namespace
+
+TEST(Effects, LateralBuffetingIsOfThePapersOrderUnderOneProducer) {
+    PhysicsConfig buffeted, calm;
+    buffeted.turbulence.lateral_intensity = kLateralIntensity;
+    calm.turbulence.lateral_intensity = 0;
+    for (double altitude : {0.3, 0.8, 1.3}) {
+        const double rms = lateral_rms_overhead(buffeted, altitude);
+        const double calm_rms = lateral_rms_overhead(calm, altitude);
+        EXPECT_GT(rms, 0.05) << altitude << " m";
+        EXPECT_LT(rms, 0.2) << altitude << " m";
+        EXPECT_LT(calm_rms, 0.05) << altitude << " m";  // the load cells alone
+    }
+}
+
 TEST(Effects, LoadCellNoiseIsAboutFiveHundredthsOfANewton) {
     PhysicsConfig c;
     c.turbulence.enabled = false;

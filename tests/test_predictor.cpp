@@ -222,6 +222,13 @@ TEST(PredictorTraining, DeepSetsOnTheSumModelIsNeverWorseOnValidationAndLearnsTh
     const TrainResult deep = train_model(s.train, s.validation, o, &sum.model);
     EXPECT_LT(deep.best_validation_loss, 0.8 * sum.best_validation_loss) << "the residual learns what the sum cannot";
     EXPECT_EQ(deep.model.input_mean, sum.model.input_mean);  // the baseline's normalisation
+    // The served model (Eigen) is the trained one (libtorch): the same validation error.
+    double se = 0;
+    for (const auto& v : s.validation.samples) {
+        const auto p = deep.model.predict(v.neighbours());
+        for (std::size_t a = 0; a < 6; ++a) se += std::pow((p[a] - v.y[a]) / deep.model.output_scale[a], 2);
+    }
+    EXPECT_NEAR(se / (6.0 * static_cast<double>(s.validation.samples.size())), deep.best_validation_loss, 1e-3 * deep.best_validation_loss);
     // On its validation legs the result is never worse than the baseline it started from.
     o.max_epochs = 1;
     const TrainResult one = train_model(s.train, s.validation, o, &sum.model);

@@ -1,0 +1,104 @@
+#include "physics/effect_types.hpp"
+
+#include <stdexcept>
+
+#include "core/errors.hpp"
+#include "core/log.hpp"
+#include "physics/yaml_section.hpp"
+
+namespace dw::physics {
+
+namespace {
+
+// Built once, thread-safely (a function's static); registrations come at start-up only.
+struct Registry {
+    std::vector<std::unique_ptr<EffectType>> owned;
+    std::vector<const EffectType*> views;
+    void add(std::unique_ptr<EffectType> t) {
+        views.push_back(t.get());
+        owned.push_back(std::move(t));
+    }
+};
+
+Registry& registry() {
+    static Registry r = [] {
+        Registry built;
+        for (auto& t : builtin_effects()) built.add(std::move(t));
+        return built;
+    }();
+    return r;
+}
+
+}  // namespace
+
+const std::vector<const EffectType*>& effect_types() { return registry().views; }
+
+std::string effect_names() {
+    std::string known;
+    for (const auto* t : effect_types()) known += (known.empty() ? "" : ", ") + t->name();
+    return known;
+}
+
+const EffectType& effect_type(const std::string& name, const std::string& what) {
+    for (const auto* t : effect_types())
+        if (t->name() == name) return *t;
+    throw InputError(log::cat(what, ": unknown effect '", name, "' (expected one of ", effect_names(), ")"));
+}
+
+void register_effect(std::unique_ptr<EffectType> type) {
+    for (const auto* t : effect_types())
+        if (t->name() == type->name()) throw std::logic_error("effect registered twice: " + type->name());
+    registry().add(std::move(type));
+}
+
+void apply_registered_effects(const Effects& e, const std::vector<double>& stamps, RecordedWrench& w) {
+    for (const auto* t : effect_types()) {
+        auto it = e.extra.find(t->name());
+        if (it != e.extra.end()) t->on_recording(it->second, stamps, w);
+    }
+}
+
+bool EffectType::applies(int neighbours, bool flying) const {
+    (void)neighbours;
+    (void)flying;
+    return true;
+}
+
+std::vector<double> EffectType::neutral() const {
+    std::vector<double> v;
+    for (const auto& p : parameters()) v.push_back(p.start);
+    return v;
+}
+
+void EffectType::set(Effects& e, const std::vector<double>& values, AxisPair axes) const { store(e, true, values, axes); }
+void EffectType::store(Effects& e, bool on, const std::vector<double>& values, AxisPair) const {
+    if (on) e.extra[name()] = values;
+    else e.extra.erase(name());
+}
+void EffectType::clear(Effects& e) const { e.extra.erase(name()); }
+bool EffectType::enabled(const Effects& e) const { return e.extra.count(name()) > 0; }
+std::vector<double> EffectType::values(const Effects& e) const {
+    auto it = e.extra.find(name());
+    return it == e.extra.end() ? neutral() : it->second;
+}
+
+void EffectType::read(Section& s, Effects& e) const {
+    bool on = enabled(e);
+    s.flag("enabled", on);
+    std::vector<double> v = values(e);
+    const auto params = parameters();
+    for (std::size_t k = 0; k < params.size(); ++k) s.number(params[k].name, v[k], params[k].config_min, params[k].config_max);
+    store(e, on, v, {});
+}
+
+void EffectType::write(YAML::Emitter& o, const Effects& e) const {
+    o << YAML::Key << name() << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value << enabled(e);
+    const auto params = parameters();
+    const auto v = values(e);
+    for (std::size_t k = 0; k < params.size(); ++k) o << YAML::Key << params[k].name << YAML::Value << v[k];
+    o << YAML::EndMap;
+}
+
+void EffectType::on_recording(const std::vector<double>&, const std::vector<double>&, RecordedWrench&) const {}
+
+}  // namespace dw::physics

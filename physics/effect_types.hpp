@@ -1,0 +1,101 @@
+#pragma once
+// The effect vocabulary (../shared/FLIGHT_FORMAT.md) as types, registered once. Each effect says
+// its name, its parameters (units, what a configuration may say, what the explainer searches),
+// where it acts, how it is switched on in a configuration, its YAML section and its paragraph in
+// the report. The configuration, the simulator, the replay, the explainer and the report iterate
+// the registry; none of them compares effect names.
+//
+// The ten built-in effects (builtin_effects.cpp) act through the simulator's and the replay's own
+// code (the air, the stand, the recording). An effect added in a file of its own keeps its values
+// in Effects::extra and acts through on_recording, which the simulator and the replay both call on
+// the recorded wrench (after the tare): adding such an effect is that one file and its tests.
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "physics/config.hpp"
+
+namespace dw::physics {
+
+class Section;
+
+struct EffectParameter {
+    std::string name, unit;
+    double config_min = 0, config_max = 0;  // what a configuration may say
+    double fit_min = 0, fit_max = 0;        // what the explainer searches
+    std::vector<double> grid;               // the explainer's starting points before the local fit (may be empty)
+    double start = 0;                       // the neutral value (the effect absent)
+};
+
+// cell_crosstalk's axes (0-5, flight::kAxes), chosen before the fit.
+struct AxisPair {
+    int from = 2, to = 0;
+    bool operator==(const AxisPair&) const = default;
+};
+
+// Who measured the force, in the report's words: a load stand, or a flying sufferer's estimate.
+struct EffectVoice {
+    bool flying = false;
+    std::string sensor, clock, along;  // "the stand", "the stand's clock", where the force pattern moves
+};
+
+using RecordedWrench = std::vector<std::array<double, 6>>;
+
+class EffectType {
+public:
+    virtual ~EffectType() = default;
+    virtual std::string name() const = 0;
+    virtual std::vector<EffectParameter> parameters() const = 0;
+    // Whether evaluating it needs the air again, or only the recording's view of it.
+    virtual bool changes_flow() const { return false; }
+    // Whether it can act in a flight with this many neighbours and this kind of sufferer.
+    virtual bool applies(int neighbours, bool flying) const;
+    // Whether it acts between two axes chosen before the fit (AxisPair).
+    virtual bool has_axes() const { return false; }
+    // The report's JSON gives the parameters as one array under this key ("" : one key each).
+    virtual std::string grouped_key() const { return ""; }
+
+    // The configuration: on or off with these values (and axes) kept; on; off and back to its
+    // defaults; whether on; the values it holds.
+    virtual void store(Effects& e, bool on, const std::vector<double>& values, AxisPair axes) const;
+    void set(Effects& e, const std::vector<double>& values, AxisPair axes = {}) const;
+    virtual void clear(Effects& e) const;
+    virtual bool enabled(const Effects& e) const;
+    virtual std::vector<double> values(const Effects& e) const;
+    // Its section `effects.<name>`: by default `enabled` and each parameter by name.
+    virtual void read(Section& s, Effects& e) const;
+    virtual void write(YAML::Emitter& o, const Effects& e) const;
+
+    // The change to the recorded wrench (stamps in s) of an effect the engine does not know by
+    // name; the built-ins act in the simulator and the replay themselves.
+    virtual void on_recording(const std::vector<double>& values, const std::vector<double>& stamps, RecordedWrench& w) const;
+    // Its paragraph in the report (without the held-out numbers, which the report adds).
+    virtual std::string describe(const std::vector<double>& values, AxisPair axes, const EffectVoice& who) const = 0;
+
+    std::vector<double> neutral() const;
+};
+
+// Every registered effect, built-ins first in the vocabulary's order.
+const std::vector<const EffectType*>& effect_types();
+// The named effect; throws dw::InputError "<what>: unknown effect 'x' (expected one of ...)".
+const EffectType& effect_type(const std::string& name, const std::string& what = "effect");
+// The known names, comma separated (for messages).
+std::string effect_names();
+// Adds an effect (at start-up: a static EffectRegistration in the effect's own file). Throws
+// std::logic_error for a name already registered.
+void register_effect(std::unique_ptr<EffectType> type);
+template <class T>
+struct EffectRegistration {
+    EffectRegistration() { register_effect(std::make_unique<T>()); }
+};
+
+// Every switched-on effect outside the built-ins applied to a recorded wrench, in registry order.
+void apply_registered_effects(const Effects& e, const std::vector<double>& stamps, RecordedWrench& w);
+
+// The built-ins (builtin_effects.cpp).
+std::vector<std::unique_ptr<EffectType>> builtin_effects();
+
+}  // namespace dw::physics

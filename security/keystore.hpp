@@ -1,0 +1,50 @@
+#pragma once
+// The lab's keystore (layout: dds/security.hpp), made with the OpenSSL library: one CA (identity
+// and permissions CA in one, ECDSA P-256), one identity per lab process (certificate + private key,
+// written 0600), the signed governance and each identity's signed permissions (S/MIME, as Fast
+// DDS and ROS 2's SROS2 read them). Re-running adds what is missing and never replaces an
+// existing identity.
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "dds/roles.hpp"
+
+namespace dw::security {
+
+struct IdentityRequest {
+    std::string name;  // the certificate's CN and the identity's folder
+    dds::Role role;
+};
+
+struct KeystoreOptions {
+    std::string dir;
+    std::vector<IdentityRequest> identities;
+    int days = 365;  // every certificate and permission expires
+};
+
+struct KeystoreResult {
+    std::vector<std::string> created, kept;  // identities
+    bool new_ca = false;
+};
+
+// Throws dw::InputError for a bad request (name, days, an unreadable keystore), dw::RuntimeError
+// when OpenSSL or the disk fails.
+KeystoreResult create_keystore(const KeystoreOptions& o);
+
+struct IdentityStatus {
+    std::string name;
+    std::string subject;
+    std::chrono::system_clock::time_point not_after;
+    bool verifies = false;  // the certificate is signed by the keystore's CA, and its permissions too
+};
+struct KeystoreListing {
+    std::chrono::system_clock::time_point ca_not_after;
+    std::vector<IdentityStatus> identities;
+};
+KeystoreListing list_keystore(const std::string& dir);
+
+// The default identities: one per lab role, named as the role.
+std::vector<IdentityRequest> role_identities();
+
+}  // namespace dw::security

@@ -1,0 +1,91 @@
+#include "security/policy.hpp"
+
+#include <ctime>
+#include <sstream>
+
+#include "dds/config.hpp"
+#include "dds/topics.hpp"
+
+namespace dw::security {
+
+namespace {
+
+constexpr const char* kHeader = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+
+// Signed: the whole submessage (header and payload) carries a GMAC, the payload itself is left
+// alone — Fast DDS 2.9.1 cannot decode a payload protected with SIGN (every sample fails with
+// "Error decoding encoded payload"; measured, tests/test_security.cpp), and the submessage's MAC
+// covers the payload anyway. Encrypted: both.
+const char* metadata_kind(dds::Protection p) { return p == dds::Protection::encrypt ? "ENCRYPT" : "SIGN"; }
+const char* data_kind(dds::Protection p) { return p == dds::Protection::encrypt ? "ENCRYPT" : "NONE"; }
+
+// Every domain a lab may use (tests pick their own): the keystore is the lab's, not a domain's.
+std::string domains() { return "<domains><id_range><min>0</min><max>" + std::to_string(dds::kMaxDomainId) + "</max></id_range></domains>"; }
+
+std::string utc(std::chrono::system_clock::time_point t) {
+    const std::time_t s = std::chrono::system_clock::to_time_t(t);
+    std::tm tm{};
+    gmtime_r(&s, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+    return buf;
+}
+
+}  // namespace
+
+std::string topic_expression(std::string_view suffix) { return "rt/*/" + std::string(suffix); }
+
+std::string governance_xml() {
+    std::ostringstream o;
+    o << kHeader << "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+      << "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd\">\n"
+      << "  <domain_access_rules>\n    <domain_rule>\n      " << domains() << "\n"
+      << "      <allow_unauthenticated_participants>false</allow_unauthenticated_participants>\n"
+      << "      <enable_join_access_control>true</enable_join_access_control>\n"
+      << "      <discovery_protection_kind>ENCRYPT</discovery_protection_kind>\n"
+      << "      <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>\n"
+      << "      <rtps_protection_kind>NONE</rtps_protection_kind>\n"
+      << "      <topic_access_rules>\n";
+    dds::topics::for_each([&](const auto& t) {
+        o << "        <!-- " << t.suffix << ": " << t.protection_reason << " -->\n"
+          << "        <topic_rule>\n          <topic_expression>" << topic_expression(t.suffix) << "</topic_expression>\n"
+          << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
+          << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
+          << "          <enable_read_access_control>true</enable_read_access_control>\n"
+          << "          <enable_write_access_control>true</enable_write_access_control>\n"
+          << "          <metadata_protection_kind>" << metadata_kind(t.protection) << "</metadata_protection_kind>\n"
+          << "          <data_protection_kind>" << data_kind(t.protection) << "</data_protection_kind>\n        </topic_rule>\n";
+    });
+    o << "        <!-- anything else: access-controlled (the permissions deny it), signed -->\n"
+      << "        <topic_rule>\n          <topic_expression>*</topic_expression>\n"
+      << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
+      << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
+      << "          <enable_read_access_control>true</enable_read_access_control>\n"
+      << "          <enable_write_access_control>true</enable_write_access_control>\n"
+      << "          <metadata_protection_kind>" << metadata_kind(dds::Protection::sign) << "</metadata_protection_kind>\n"
+      << "          <data_protection_kind>" << data_kind(dds::Protection::sign) << "</data_protection_kind>\n        </topic_rule>\n"
+      << "      </topic_access_rules>\n    </domain_rule>\n  </domain_access_rules>\n</dds>\n";
+    return o.str();
+}
+
+std::string permissions_xml(const Grant& g) {
+    std::ostringstream pub, sub;
+    dds::topics::for_each([&](const auto& t) {
+        if (dds::has(t.producers, g.role)) pub << "            <topic>" << topic_expression(t.suffix) << "</topic>\n";
+        if (dds::has(t.consumers, g.role)) sub << "            <topic>" << topic_expression(t.suffix) << "</topic>\n";
+    });
+    std::ostringstream o;
+    o << kHeader << "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+      << "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd\">\n"
+      << "  <permissions>\n    <grant name=\"" << g.identity << "\">\n"
+      << "      <subject_name>CN=" << g.identity << "</subject_name>\n"
+      << "      <validity><not_before>" << utc(g.not_before) << "</not_before><not_after>" << utc(g.not_after) << "</not_after></validity>\n"
+      << "      <!-- role " << dds::role_name(g.role) << " -->\n"
+      << "      <allow_rule>\n        " << domains() << "\n"
+      << "        <publish>\n          <topics>\n" << pub.str() << "          </topics>\n        </publish>\n"
+      << "        <subscribe>\n          <topics>\n" << sub.str() << "          </topics>\n        </subscribe>\n"
+      << "      </allow_rule>\n      <default>DENY</default>\n    </grant>\n  </permissions>\n</dds>\n";
+    return o.str();
+}
+
+}  // namespace dw::security

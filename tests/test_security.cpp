@@ -1,0 +1,291 @@
+// Issue 18: the lab's DDS Security keystore (dw-lab keys) and participants that use it, in one
+// process on loopback: who may publish and read what is what the topic registry says.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <linux/if_packet.h>
+#include <net/ethernet.h>
+#include <net/if.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+#include "core/errors.hpp"
+#include "core/files.hpp"
+#include "dds/endpoint.hpp"
+#include "dds/security.hpp"
+#include "probe/samples.hpp"
+#include "security/keystore.hpp"
+#include "support.hpp"
+
+using namespace std::chrono_literals;
+using dw::dds::Participant;
+namespace topics = dw::dds::topics;
+
+namespace {
+
+// One keystore for the suite: making keys is the slow part.
+const std::string& keystore() {
+    static dw::test::TempDir dir;
+    static const std::string path = [] {
+        dw::security::KeystoreOptions o;
+        o.dir = dir.file("keys");
+        o.days = 30;
+        o.identities = dw::security::role_identities();
+        dw::security::create_keystore(o);
+        return o.dir;
+    }();
+    return path;
+}
+
+dw::dds::DdsConfig secure(const std::string& identity) {
+    dw::dds::DdsConfig c;
+    c.domain = dw::test::test_domain();
+    c.ns = "sec" + std::to_string(::getpid());
+    c.security = keystore();
+    c.identity = identity;
+    return c;
+}
+
+unsigned mode_of(const std::string& path) {
+    struct stat st {};
+    ::stat(path.c_str(), &st);
+    return st.st_mode & 0777;
+}
+
+}  // namespace
+
+TEST(Keystore, MakesACaAndOneSignedIdentityPerRoleWithPrivateKeys) {
+    const dw::dds::KeystorePaths k{keystore()};
+    EXPECT_EQ(mode_of(k.ca_key()), 0600u);
+    const auto listing = dw::security::list_keystore(k.dir);
+    ASSERT_EQ(listing.identities.size(), dw::dds::kRoles.size());
+    for (const auto& i : listing.identities) {
+        SCOPED_TRACE(i.name);
+        EXPECT_TRUE(i.verifies);
+        EXPECT_EQ(mode_of(k.key(i.name)), 0600u);
+        EXPECT_EQ(i.subject, "/CN=" + i.name);
+        const auto days = std::chrono::duration_cast<std::chrono::hours>(i.not_after - std::chrono::system_clock::now()).count() / 24.0;
+        EXPECT_NEAR(days, 30, 1);
+    }
+    std::string governance;
+    ASSERT_TRUE(dw::dds::verify_signed(k.governance(), k.ca_cert(), &governance));
+    EXPECT_NE(governance.find("<topic_expression>rt/*/vehicles/setpoint</topic_expression>"), std::string::npos);
+    // What each identity may do is the registry's: the stand agent publishes the wrench, the
+    // predictor does not; the operator commands the experiment.
+    std::string stand, predictor, op;
+    ASSERT_TRUE(dw::dds::verify_signed(k.permissions("stand_agent"), k.ca_cert(), &stand));
+    ASSERT_TRUE(dw::dds::verify_signed(k.permissions("predictor"), k.ca_cert(), &predictor));
+    ASSERT_TRUE(dw::dds::verify_signed(k.permissions("operator"), k.ca_cert(), &op));
+    const auto publishes = [](const std::string& doc, const std::string& topic) {
+        const auto pub = doc.find("<publish>"), end = doc.find("</publish>");
+        const auto at = doc.find("<topic>rt/*/" + topic + "</topic>", pub);
+        return at != std::string::npos && at < end;
+    };
+    EXPECT_TRUE(publishes(stand, "stand/wrench"));
+    EXPECT_FALSE(publishes(predictor, "stand/wrench"));
+    EXPECT_TRUE(publishes(op, "experiment/command"));
+    EXPECT_FALSE(publishes(op, "vehicles/setpoint"));
+}
+
+TEST(Keystore, RerunningKeepsEveryIdentityAndAddsTheMissingOne) {
+    const dw::dds::KeystorePaths k{keystore()};
+    const std::string before = dw::read_file(k.cert("planner"), "cert");
+    dw::security::KeystoreOptions o;
+    o.dir = k.dir;
+    o.identities = dw::security::role_identities();
+    o.identities.push_back({"second_operator", dw::dds::Role::operator_});
+    const auto r = dw::security::create_keystore(o);
+    EXPECT_FALSE(r.new_ca);
+    EXPECT_EQ(r.kept.size(), dw::dds::kRoles.size());
+    ASSERT_EQ(r.created, std::vector<std::string>{"second_operator"});
+    EXPECT_EQ(dw::read_file(k.cert("planner"), "cert"), before);
+    o.identities = {{"../escape", dw::dds::Role::operator_}};
+    EXPECT_THROW(dw::security::create_keystore(o), dw::InputError);
+}
+
+TEST(Keystore, ATamperedPermissionsFileDoesNotVerify) {
+    dw::test::TempDir dir;
+    const dw::dds::KeystorePaths k{keystore()};
+    std::string text = dw::read_file(k.permissions("predictor"), "permissions");
+    const auto at = text.find("rt/*/mocap/frame");
+    ASSERT_NE(at, std::string::npos);
+    text[at + 5] = 'n';  // one byte: mocap/frame -> nocap/frame
+    dw::write_file(dir.file("tampered.p7s"), text);
+    EXPECT_FALSE(dw::dds::verify_signed(dir.file("tampered.p7s"), k.ca_cert()));
+    EXPECT_TRUE(dw::dds::verify_signed(k.permissions("predictor"), k.ca_cert()));
+}
+
+TEST(SecureDds, PermittedIdentitiesTalkAndAnOpenParticipantSeesNothing) {
+    Participant stand(secure("stand_agent"), "stand_agent");
+    Participant recorder(secure("recorder"), "recorder");
+    auto open_config = secure("");
+    open_config.security.clear();
+    Participant stranger(open_config, "stranger");
+    std::atomic<int> recorded{0}, overheard{0};
+    dw::dds::Reader<dw::msg::WrenchStamped> r(recorder, topics::stand_wrench, [&](const auto&, const auto&) { ++recorded; });
+    dw::dds::Reader<dw::msg::WrenchStamped> eavesdrop(stranger, topics::stand_wrench, [&](const auto&, const auto&) { ++overheard; });
+    dw::dds::Writer<dw::msg::WrenchStamped> w(stand, topics::stand_wrench);
+    ASSERT_TRUE(w.wait_for_readers(1, 30000ms)) << "the recorder never matched the stand agent";
+    // The crypto keys follow the match: a best-effort stream flows once they have arrived.
+    const auto end = std::chrono::steady_clock::now() + 20s;
+    std::uint64_t sent = 0;
+    while (recorded < 20 && std::chrono::steady_clock::now() < end) {
+        auto s = dw::probe::make_sample<dw::msg::WrenchStamped>(sent++);
+        ASSERT_TRUE(w.write(s));
+        std::this_thread::sleep_for(10ms);
+    }
+    EXPECT_GE(recorded.load(), 20);
+    std::this_thread::sleep_for(500ms);
+    EXPECT_EQ(overheard.load(), 0) << "a participant without the lab's keys read the wrench";
+    EXPECT_EQ(w.matched(), 1) << "only the recorder matched";
+}
+
+TEST(SecureDds, AnIdentityMayNotPublishWhatItsRoleDoesNotProduce) {
+    Participant predictor(secure("predictor"), "predictor");
+    EXPECT_THROW(dw::dds::Writer<dw::msg::WrenchStamped>(predictor, topics::stand_wrench), dw::RuntimeError);
+    EXPECT_NO_THROW(dw::dds::Writer<dw::msg::WrenchPrediction>(predictor, topics::wrench_prediction));
+}
+
+TEST(SecureDds, AMissingKeystoreIsOneLineNamingIt) {
+    auto c = secure("planner");
+    c.security = "/nonexistent/keys";
+    try {
+        Participant p(c, "planner");
+        ADD_FAILURE() << "joined without a keystore";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("/nonexistent/keys"), std::string::npos) << e.what();
+    }
+    c = secure("nobody");
+    EXPECT_THROW(Participant(c, "nobody"), dw::InputError);
+}
+
+TEST(SecureDds, ATamperedOrMismatchedKeystoreIsRefusedNamingTheFile) {
+    dw::test::TempDir dir;
+    const std::string copy = dir.file("keys");
+    std::filesystem::copy(keystore(), copy, std::filesystem::copy_options::recursive);
+    const dw::dds::KeystorePaths k{copy};
+    auto c = secure("predictor");
+    c.security = copy;
+    auto refused = [&](const std::string& file) {
+        try {
+            Participant p(c, "predictor");
+            ADD_FAILURE() << "joined with a bad " << file;
+        } catch (const dw::InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+        }
+    };
+    std::string text = dw::read_file(k.permissions("predictor"), "permissions");
+    const auto at = text.find("rt/*/mocap/frame");
+    ASSERT_NE(at, std::string::npos);
+    text[at + 5] = 'n';  // one byte: subscribe to nocap/frame instead
+    dw::write_file(k.permissions("predictor"), text);
+    refused(k.permissions("predictor"));
+    std::filesystem::copy_file(k.permissions("planner"), k.permissions("predictor"), std::filesystem::copy_options::overwrite_existing);
+    std::filesystem::copy_file(k.key("planner"), k.key("predictor"), std::filesystem::copy_options::overwrite_existing);
+    refused(k.key("predictor"));  // another identity's key
+}
+
+namespace {
+
+// Every UDP datagram on the loopback interface while it is open (an AF_PACKET socket: root or
+// CAP_NET_RAW). The bytes of frames, not parsed: the test only searches them.
+class LoopbackCapture {
+public:
+    LoopbackCapture() {
+        fd_ = ::socket(AF_PACKET, SOCK_RAW, htons(ETH_P_ALL));
+        if (fd_ < 0) return;
+        sockaddr_ll addr{};
+        addr.sll_family = AF_PACKET;
+        addr.sll_protocol = htons(ETH_P_ALL);
+        addr.sll_ifindex = static_cast<int>(::if_nametoindex("lo"));
+        timeval tv{0, 100000};
+        ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+        if (::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+            ::close(fd_);
+            fd_ = -1;
+            return;
+        }
+        thread_ = std::thread([this] {
+            std::vector<char> buf(65536);
+            while (!stop_) {
+                const ssize_t n = ::recv(fd_, buf.data(), buf.size(), 0);
+                if (n > 0) {
+                    std::lock_guard lock(m_);
+                    bytes_.append(buf.data(), static_cast<std::size_t>(n));
+                }
+            }
+        });
+    }
+    ~LoopbackCapture() {
+        stop_ = true;
+        if (thread_.joinable()) thread_.join();
+        if (fd_ >= 0) ::close(fd_);
+    }
+    bool ok() const { return fd_ >= 0; }
+    bool contains(const std::string& needle) {
+        std::lock_guard lock(m_);
+        return bytes_.find(needle) != std::string::npos;
+    }
+    std::size_t size() {
+        std::lock_guard lock(m_);
+        return bytes_.size();
+    }
+
+private:
+    int fd_ = -1;
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+    std::mutex m_;
+    std::string bytes_;
+};
+
+std::string bytes_of(double v) { return std::string(reinterpret_cast<const char*>(&v), sizeof v); }
+
+// Publishes samples from `writer_identity` to `reader_identity` over UDP only (shared memory
+// would bypass the wire) until 20 have arrived.
+template <class T, class Topic, class Fill>
+int deliver(const std::string& writer_identity, const std::string& reader_identity, const Topic& topic, Fill fill) {
+    auto wc = secure(writer_identity), rc = secure(reader_identity);
+    wc.transport = rc.transport = dw::dds::Transport::udp;
+    Participant a(wc, writer_identity), b(rc, reader_identity);
+    std::atomic<int> got{0};
+    dw::dds::Reader<T> r(b, topic, [&](const auto&, const auto&) { ++got; });
+    dw::dds::Writer<T> w(a, topic);
+    if (!w.wait_for_readers(1, 30000ms)) return 0;
+    const auto end = std::chrono::steady_clock::now() + 20s;
+    for (std::uint64_t i = 0; got < 20 && std::chrono::steady_clock::now() < end; ++i) {
+        T s = dw::probe::make_sample<T>(i);
+        fill(s);
+        w.write(s);
+        std::this_thread::sleep_for(10ms);
+    }
+    return got.load();
+}
+
+}  // namespace
+
+// The encrypted topics carry no plaintext on the wire; a signed one does (which shows the capture
+// sees the samples at all).
+TEST(SecureDds, EncryptedTopicsAreNotReadableOnTheWire) {
+    LoopbackCapture capture;
+    if (!capture.ok()) GTEST_SKIP() << "no packet capture here (needs root or CAP_NET_RAW)";
+    const double secret = 12345.678901, open = 8765.4321012;
+    const int setpoints = deliver<dw::msg::VehicleSetpoint>("planner", "mocap_bridge", topics::vehicle_setpoint, [&](auto& s) {
+        s.vehicle_id("needle-vehicle");
+        s.position_m().x(secret);
+    });
+    ASSERT_EQ(setpoints, 20) << "the setpoints did not flow";
+    const int wrenches = deliver<dw::msg::WrenchStamped>("stand_agent", "recorder", topics::stand_wrench, [&](auto& s) { s.force_n().x(open); });
+    ASSERT_EQ(wrenches, 20);
+    std::this_thread::sleep_for(200ms);
+    ASSERT_GT(capture.size(), 10000u);
+    EXPECT_TRUE(capture.contains(bytes_of(open))) << "the signed wrench is readable: the capture works";
+    EXPECT_FALSE(capture.contains(bytes_of(secret))) << "a setpoint's position in plaintext on the wire";
+    EXPECT_FALSE(capture.contains("needle-vehicle")) << "a setpoint's vehicle id in plaintext on the wire";
+}
