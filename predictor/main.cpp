@@ -127,6 +127,7 @@ struct TrainCommand {
         cmd->add_option("--threads", to.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
         cmd->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
         cmd->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
+        cmd->add_option("--patience", to.patience, "epochs without a better validation loss before stopping")->check(dw::cli::in(kPatienceRange));
         cmd->add_option("--baseline", baseline_path, "deep_sets only: a saved sum model (learnt_linear) to learn the residual on, as the study does");
     }
     int run() {

@@ -15,6 +15,7 @@ namespace dw::predictor {
 
 inline constexpr Range kEpochsRange{1, 100000};
 inline constexpr Range kHiddenRange{4, 4096};
+inline constexpr Range kPatienceRange{1, 100000};
 inline constexpr Range kThreadsRange{1, 64};
 // libtorch's threads per training. One by default: the models are small, and two OpenMP threads
 // spin against each other and against any other busy process on a 2-core machine (docs/BENCHMARKS.md).
