@@ -43,11 +43,13 @@ struct Leg {
     double t_end = 0;
 };
 
+// A vehicle's parameters as meta.json gives them; the physics takes them as they are
+// (physics::VehicleParams is this type).
 struct VehicleInfo {
     double mass_kg = 0.7;
     int rotors = 4;
-    double prop_radius_m = 0.0635;
-    double motor_distance_m = 0.25;
+    double prop_radius_m = 0.0635;   // 5" propellers
+    double motor_distance_m = 0.25;  // diagonal motor-to-motor distance l
 };
 
 // Where wrench.csv comes from: a load stand's calibrated wrench, or the force a flying sufferer's

@@ -7,10 +7,6 @@
 
 namespace dw::physics {
 
-VehicleParams to_params(const flight::VehicleInfo& v) { return {v.mass_kg, v.rotors, v.prop_radius_m, v.motor_distance_m}; }
-
-flight::VehicleInfo to_info(const VehicleParams& v) { return {v.mass_kg, v.rotors, v.prop_radius_m, v.motor_distance_m}; }
-
 namespace {
 
 void require_usable(const VehicleParams& v, const std::string& body) {
@@ -26,7 +22,7 @@ void require_usable(const VehicleParams& v, const std::string& body) {
 
 VehicleParams vehicle_of(const flight::Meta& m, const std::string& body, const VehicleParams& fallback) {
     const auto it = m.vehicles.find(body);
-    const VehicleParams v = it == m.vehicles.end() ? fallback : to_params(it->second);
+    const VehicleParams v = it == m.vehicles.end() ? fallback : it->second;
     require_usable(v, body);
     return v;
 }

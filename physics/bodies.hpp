@@ -16,9 +16,6 @@ inline constexpr double kNearSizes = 6.0;
 // ... and within how many sizes a pass of a neighbour is an encounter (a cross-validation block).
 inline constexpr double kEncounterSizes = 2.5;
 
-VehicleParams to_params(const flight::VehicleInfo& v);
-flight::VehicleInfo to_info(const VehicleParams& v);
-
 // The body's parameters from meta.json, or `fallback` when the flight does not list it.
 VehicleParams vehicle_of(const flight::Meta& m, const std::string& body, const VehicleParams& fallback);
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/numbers.hpp"
+#include "flight/flight.hpp"
 
 namespace dw::physics {
 
@@ -17,12 +18,8 @@ inline constexpr Range kCellNoiseRange{0, 10, "N"};  // load-cell noise, 1 sigma
 enum class JetModelKind { bauersfeld, jain };
 enum class Aggregation { force_sum, velocity_superposition };
 
-struct VehicleParams {
-    double mass_kg = 0.7;
-    int rotors = 4;
-    double prop_radius_m = 0.0635;   // 5" propellers
-    double motor_distance_m = 0.25;  // diagonal motor-to-motor distance l
-};
+// One definition with the flight format's (meta.json's vehicles).
+using VehicleParams = flight::VehicleInfo;
 
 struct JainParams {  // Jain et al., ICUAS 2019; published constants disagree: fit them
     double c_ax = 5.0;

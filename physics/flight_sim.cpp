@@ -143,12 +143,12 @@ std::vector<std::uint16_t> describe_bodies(flight::Flight& f, const PhysicsConfi
     f.meta.stand_height_m = c.stand.height_m;
     f.meta.extra_json = R"({"generator":"dw-sim fly"})";
     f.body_index("sufferer");
-    f.meta.vehicles["sufferer"] = to_info(c.sufferer.vehicle);
+    f.meta.vehicles["sufferer"] = c.sufferer.vehicle;
     std::vector<std::uint16_t> bodies;
     for (std::size_t j = 0; j < formation.offsets.size(); ++j) {
         const std::string name = "v" + std::to_string(j + 1);
         f.meta.neighbours.push_back(name);
-        f.meta.vehicles[name] = to_info(c.neighbour);
+        f.meta.vehicles[name] = c.neighbour;
         bodies.push_back(f.body_index(name));
     }
     return bodies;
