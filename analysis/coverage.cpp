@@ -69,7 +69,7 @@ Outcome one_flight(const Target& t, const Effect& e, int seed, const CoverageOpt
     physics::PhysicsConfig truth;
     hide.apply(truth, out.hidden);
     const std::string dir = (fs::path(o.out_dir) / t.effect / log::cat("seed_", seed)).string();
-    fly_simulated(truth, t.formation, 1000 + static_cast<std::uint64_t>(seed), dir + "/flight", o.legs);
+    fly_simulated(truth, t.formation, 1000 + static_cast<std::uint64_t>(seed), dir + "/flight", o.stop, o.legs);
     ExplainOptions eo;
     eo.candidates = {e};
     eo.max_effects = 1;

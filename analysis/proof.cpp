@@ -111,13 +111,14 @@ std::string table(const std::vector<ProofRow>& rows, const std::string& flight, 
 
 }  // namespace
 
-void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir, int legs) {
+void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir,
+                   const std::stop_token& stop, int legs) {
     fs::create_directories(fs::path(dir).parent_path());
     const std::string yaml = dir + ".physics.yaml";
     write_file(yaml, physics::to_yaml(hidden));
     run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--legs", std::to_string(legs), "--out",
                  dir, "--quiet"},
-                dir + ".log");
+                dir + ".log", stop);
 }
 
 namespace {
@@ -148,7 +149,7 @@ ProofResult run_proof(const ProofOptions& o) {
         physics::PhysicsConfig hidden;
         c.hide(hidden);
         say(log::cat("case ", c.name, ": dw-sim fly --formation ", c.formation, " with ", c.hidden));
-        fly_simulated(hidden, c.formation, c.seed, dir + "/flight");
+        fly_simulated(hidden, c.formation, c.seed, dir + "/flight", o.stop);
         ExplainOptions eo;
         eo.physics = plain;
         eo.stop = o.stop;
@@ -163,7 +164,7 @@ ProofResult run_proof(const ProofOptions& o) {
     if (wanted("null")) {
         for (int k = 0; k < o.null_seeds; ++k) {
             const std::string dir = (fs::path(o.out_dir) / log::cat("null_", k)).string();
-            fly_simulated(plain, "single", 100 + static_cast<std::uint64_t>(k), dir + "/flight");
+            fly_simulated(plain, "single", 100 + static_cast<std::uint64_t>(k), dir + "/flight", o.stop);
             ExplainOptions eo;
             eo.physics = plain;
             eo.stop = o.stop;

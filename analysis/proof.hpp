@@ -39,8 +39,9 @@ struct ProofResult {
 ProofResult run_proof(const ProofOptions& o);
 
 // `dw-sim fly` (a sibling executable) with this physics hidden in it, into the flight folder dir.
+// A stop request stops it (dw::Stopped).
 void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir,
-                   int legs = physics::GridOptions{}.legs);
+                   const std::stop_token& stop, int legs = physics::GridOptions{}.legs);
 
 // The proof on recorded flights (another lab's: the physics is not the truth there). Each flight
 // is first explained as it is — its own fit, whatever the real data shows. Known effects are then

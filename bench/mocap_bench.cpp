@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/files.hpp"
 #include "core/subprocess.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/process_cli.hpp"

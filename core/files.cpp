@@ -38,6 +38,14 @@ std::string read_file(const std::string& path, std::string_view what) {
     return out.str();
 }
 
+std::string read_file(const std::string& path) {
+    try {
+        return read_file(path, "file");
+    } catch (const InputError& e) {
+        throw RuntimeError(e.what());
+    }
+}
+
 void require_writable_path(const std::string& path, std::string_view what) {
     if (path.empty()) throw InputError(log::cat(what, ": no path given"));
     std::error_code ec;

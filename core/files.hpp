@@ -10,6 +10,9 @@ namespace dw {
 
 // The bytes of a regular file. `what` names the input in the error ("--config", "meta.json").
 std::string read_file(const std::string& path, std::string_view what);
+// The bytes of a file the lab wrote itself (a child's log, a report it just made): the same read,
+// but a failure is the lab's, a dw::RuntimeError (exit 1), not bad input.
+std::string read_file(const std::string& path);
 // Throws dw::InputError unless `path` is an existing regular file that can be opened for reading.
 void require_readable_file(const std::string& path, std::string_view what);
 

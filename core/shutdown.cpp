@@ -96,6 +96,15 @@ void throw_if_stopped(const std::stop_token& stop, std::string_view what) {
     if (stop.stop_requested()) throw Stopped(log::cat("stopped during ", what));
 }
 
+bool wait_for(const std::stop_token& stop, std::chrono::nanoseconds d) {
+    if (stop.stop_requested() || d <= std::chrono::nanoseconds::zero()) return stop.stop_requested();
+    std::mutex m;
+    std::condition_variable_any cv;
+    std::unique_lock lock(m);
+    cv.wait_for(lock, stop, d, [] { return false; });  // wakes at the stop request or after d
+    return stop.stop_requested();
+}
+
 int Shutdown::signal_number() const { return state().signal; }
 
 void Shutdown::on_user_signal(std::function<void()> f) {

@@ -13,6 +13,10 @@ namespace dw {
 // Throws dw::Stopped ("stopped during <what>") when `stop` has been requested. Long loops call it
 // once per step, so a stop takes effect within one step.
 void throw_if_stopped(const std::stop_token& stop, std::string_view what);
+// Sleeps up to d; returns true as soon as `stop` is requested (at once if it already is). Library
+// code waits on the stop token it was given, never on the process's Shutdown: the caller decides
+// what stops it (main passes Shutdown::instance().token(), a test its own std::stop_source).
+bool wait_for(const std::stop_token& stop, std::chrono::nanoseconds d);
 
 class Shutdown {
 public:

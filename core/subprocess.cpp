@@ -8,11 +8,10 @@
 
 #include <cerrno>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <thread>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 
@@ -121,21 +120,13 @@ std::string executable_dir() {
     return path.substr(0, path.find_last_of('/'));
 }
 
-std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw RuntimeError("cannot read " + path + ": " + std::strerror(errno));
-    std::ostringstream out;
-    out << in.rdbuf();
-    return out.str();
-}
-
-void run_sibling(const std::vector<std::string>& args, const std::string& log_file) {
+void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop) {
     std::vector<std::string> argv{executable_dir() + "/" + args.at(0)};
     argv.insert(argv.end(), args.begin() + 1, args.end());
     Subprocess p({argv, log_file, log_file, {}});
     std::optional<int> st;
     while (!(st = p.wait_for(std::chrono::milliseconds(200)))) {
-        if (Shutdown::instance().requested()) {
+        if (stop.stop_requested()) {
             p.stop();
             throw Stopped(log::cat("stopped during ", args[0]));
         }

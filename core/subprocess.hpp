@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -42,11 +43,10 @@ private:
 
 // The directory holding the running executable (siblings live there).
 std::string executable_dir();
-std::string read_file(const std::string& path);
 
 // Runs a sibling lab executable (args[0], a name in executable_dir()) to completion with its
-// output in log_file; stops it when shutdown is requested. Throws dw::RuntimeError naming it,
-// its status and the end of its log when it fails or is interrupted.
-void run_sibling(const std::vector<std::string>& args, const std::string& log_file);
+// output in log_file; stops it when `stop` is requested (dw::Stopped). Throws dw::RuntimeError
+// naming it, its status and the end of its log when it fails.
+void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop);
 
 }  // namespace dw

@@ -63,31 +63,32 @@ std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& 
         fs::create_directories(run / "recordings");
         lo.dds_args = o.dds_args;
         lo.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
+        lo.stop = o.stop;
         auto r = launch(lab, lo, o.dds);
-        if (Shutdown::instance().requested()) throw Stopped("stopped during the demo");
+        throw_if_stopped(o.stop, "the demo");
         if (r.experiment_status != 0 || r.phase != "DONE")
             throw RuntimeError(log::cat("the ", f.formation, " experiment ended ", r.phase.empty() ? "without a state" : r.phase,
                                         " (status ", r.experiment_status, "; logs in ", lo.run_dir, "/logs)"));
         results.push_back(r);
         run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight", (run / "flights" / f.name).string()},
-                    (run / "logs" / ("export-" + f.name + ".log")).string());
+                    (run / "logs" / ("export-" + f.name + ".log")).string(), o.stop);
     }
     return results;
 }
 
 // 4. The study's models on the recorded (DDS) flights, and the recorded map.
-void models_on_recorded(const fs::path& run, const std::string& physics_path) {
+void models_on_recorded(const fs::path& run, const std::string& physics_path, const std::stop_token& stop) {
     const std::string models = (run / "study" / "models").string();
     std::vector<std::string> model_files{physics_path, models + "/naive_linear.json", models + "/learnt_linear.json", models + "/deep_sets.json"};
     std::vector<std::string> cmp{"dw-predictor", "compare", "--models"};
     cmp.insert(cmp.end(), model_files.begin(), model_files.end());
     cmp.insert(cmp.end(), {"--data", (run / "flights" / "single").string(), (run / "flights" / "lf3").string(), "--out", (run / "recorded").string()});
-    run_sibling(cmp, (run / "logs" / "compare.log").string());
+    run_sibling(cmp, (run / "logs" / "compare.log").string(), stop);
     std::vector<std::string> map{"dw-predictor", "map", "--models"};
     map.insert(map.end(), model_files.begin(), model_files.end());
     map.insert(map.end(), {"--formation", "leader_follower3", "--altitude", "1.3", "--data", (run / "flights" / "lf3").string(), "--out",
                            (run / "recorded" / "lf3_map.png").string()});
-    run_sibling(map, (run / "logs" / "map.log").string());
+    run_sibling(map, (run / "logs" / "map.log").string(), stop);
 }
 
 // What report.json says was found: the effects, and each accepted one's values with intervals.
@@ -168,10 +169,10 @@ int run_demo(const DemoOptions& o) {
     step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
     std::vector<std::string> study{"dw-predictor", "study", "--out", (run / "study").string(), "--physics", physics_path};
     if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
-    run_sibling(study, (run / "logs" / "study.log").string());
+    run_sibling(study, (run / "logs" / "study.log").string(), o.stop);
 
     step(4).begin("the models on the recorded flights: table and maps");
-    models_on_recorded(run, physics_path);
+    models_on_recorded(run, physics_path, o.stop);
 
     // 5. A "real" flight with something the simulation leaves out.
     step(5).begin("a 'real' flight with a hidden effect (a 0.1 s clock offset between stand and mocap)");
@@ -181,12 +182,12 @@ int run_demo(const DemoOptions& o) {
     write_file(hidden_path, physics::to_yaml(hidden));
     run_sibling({"dw-sim", "fly", "--formation", "leader_follower", "--legs", o.quick ? "20" : "36", "--physics", hidden_path, "--seed", "42",
                  "--out", (run / "flights" / "real").string(), "--quiet"},
-                (run / "logs" / "real-flight.log").string());
+                (run / "logs" / "real-flight.log").string(), o.stop);
 
     // 6. Explain it.
     step(6).begin("explaining the 'real' flight against the lab's physics");
     run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "flights" / "real").string(), "--out", (run / "explain").string()},
-                (run / "logs" / "explain.log").string());
+                (run / "logs" / "explain.log").string(), o.stop);
 
     step(7).begin("writing index.md");
     const auto report = nlohmann::json::parse(read_file((run / "explain" / "report.json").string()));

@@ -4,6 +4,7 @@
 // config/lab.sim.yaml), records MCAP, exports flight folders, trains and compares the models
 // (naive linear, learnt linear, Deep Sets), draws maps, then explains a "real" flight made with
 // a hidden effect — all into one run folder with an index.md.
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@ struct DemoOptions {
     bool quick = false;                 // fewer legs and epochs (the CI test)
     std::vector<std::string> dds_args;  // for every process
     dds::DdsConfig dds;                 // the launcher's own participant
+    std::stop_token stop;               // every step and child stops: dw::Stopped
 };
 
 // Returns the exit code (0 when every step succeeded).

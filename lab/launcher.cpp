@@ -191,7 +191,7 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     for (auto& r : procs)
         if (r.spec.experiment) experiment = &r;
     auto last_draw = std::chrono::steady_clock::now() - std::chrono::hours(1);
-    while (!Shutdown::instance().requested()) {
+    while (!o.stop.stop_requested()) {
         for (auto& r : procs) {
             if (!r.proc || r.ended) continue;
             if (auto st = r.proc->poll()) {
@@ -212,7 +212,7 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
             draw();
             last_draw = now;
         }
-        Shutdown::instance().wait_for(std::chrono::milliseconds(100));
+        wait_for(o.stop, std::chrono::milliseconds(100));
     }
     draw();
     if (experiment && experiment->ended) {

@@ -6,6 +6,7 @@
 // stops everything cleanly when the experiment ends or on Ctrl-C.
 #include <functional>
 #include <map>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,7 @@ struct LaunchOptions {
     bool live = true;                             // redraw the status block (a terminal) or print it every 10 s
     double stop_grace_s = 15;                     // SIGINT, then SIGKILL after this
     std::function<void(const std::string&)> say;  // one line per event
+    std::stop_token stop;                         // stops every process (SIGINT, then SIGKILL after the grace)
 };
 
 struct LaunchResult {

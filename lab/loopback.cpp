@@ -32,7 +32,7 @@ int run_loopback(const LoopbackOptions& o) {
 
     std::optional<int> status;
     while (!(status = echo.wait_for(std::chrono::milliseconds(100)))) {
-        if (Shutdown::instance().requested()) {
+        if (o.stop.stop_requested()) {
             echo.stop();
             pub.stop();
             log::warn("interrupted");

@@ -3,6 +3,7 @@
 // lab topic published, received, checked and shown. The lab's main job until the simulated lab
 // exists.
 #include <cstdint>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@ struct LoopbackOptions {
     double timeout_s = 60.0;
     bool quiet = false;                // children print only the summary
     std::string summary_path;          // echo's JSON summary ("" = a temporary file)
+    std::stop_token stop;              // stops both children: exit 130
 };
 
 // Runs the session; returns the echo's exit status (0 = every topic arrived intact).

@@ -68,6 +68,7 @@ int run(int argc, char** argv) {
         if (demo_o.out_dir.empty()) demo_o.out_dir = "runs/demo-" + stamp();
         demo_o.dds_args = cli.dds_args();
         demo_o.dds = cli.dds();
+        demo_o.stop = dw::Shutdown::instance().token();
         return dw::lab::run_demo(demo_o);
     }
     if (runc->parsed()) {
@@ -81,6 +82,7 @@ int run(int argc, char** argv) {
         }
         o.dds_args = cli.dds_args();
         o.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
+        o.stop = dw::Shutdown::instance().token();
         const auto r = dw::lab::launch(lab, o, cli.dds());
         for (const auto& p : r.printed) std::cout << "started elsewhere: " << p << "\n";
         std::cout << (r.phase.empty() ? "no experiment state seen" : r.phase) << ": " << r.legs_flown << " of " << r.legs_total
@@ -90,6 +92,7 @@ int run(int argc, char** argv) {
     }
     lo.probe_path = dw::executable_dir() + "/dw-probe";
     lo.dds_args = cli.dds_args();
+    lo.stop = dw::Shutdown::instance().token();
     return dw::lab::run_loopback(lo);
 }
 

@@ -91,12 +91,14 @@ int run(int argc, char** argv) {
         pub.qos = qos;
         pub.wait_timeout = dw::to_millis(wait_timeout_s);
         pub.linger = dw::to_millis(linger_s);
+        pub.stop = dw::Shutdown::instance().token();
         return dw::probe::run_pub(participant, pub, std::cout) ? 0 : dw::kExitRuntime;
     }
 
     echo.topics = selected;
     echo.qos = qos;
     echo.timeout = dw::to_millis(timeout_s);
+    echo.stop = dw::Shutdown::instance().token();
     const auto report = dw::probe::run_echo(participant, echo, std::cout);
     dw::probe::print_table(report, std::cout);
     if (!summary_path.empty()) {

@@ -153,22 +153,22 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
     }
     const auto period = std::chrono::duration<double>(o.rate_hz > 0 ? 1.0 / o.rate_hz : 0.0);
     auto next = std::chrono::steady_clock::now();
-    for (std::uint64_t i = 0; i < o.count && !Shutdown::instance().requested(); ++i) {
+    for (std::uint64_t i = 0; i < o.count && !o.stop.stop_requested(); ++i) {
         for (const auto& c : channels) {
             if (!c->publish(i)) log::warn("write failed on ", c->name(), " (sample ", i, ")");
             if (!o.quiet) out << c->name() << "  #" << i << "  " << c->last_summary() << "\n";
         }
         next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
-        if (Shutdown::instance().wait_for(next - std::chrono::steady_clock::now())) break;  // a slow rate still stops at once
+        if (wait_for(o.stop, next - std::chrono::steady_clock::now())) break;  // a slow rate still stops at once
     }
     out.flush();
     for (const auto& c : channels) {
         if (!c->wait_for_acknowledgments(std::chrono::seconds(5))) log::warn("not every reader acknowledged ", c->name());
     }
     if (o.linger.count() < 0) {
-        while (!Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
+        while (!wait_for(o.stop, std::chrono::seconds(1))) {}
     } else if (o.linger.count() > 0) {
-        Shutdown::instance().wait_for(o.linger);
+        wait_for(o.stop, o.linger);
     }
     return true;
 }
@@ -205,7 +205,7 @@ EchoReport run_echo(dds::Participant& p, const EchoOptions& o, std::ostream& out
     const auto start = std::chrono::steady_clock::now();
     const bool bounded = o.expect > 0 || o.expect_latched > 0;
     for (;;) {
-        if (Shutdown::instance().wait_for(std::chrono::milliseconds(20))) break;
+        if (wait_for(o.stop, std::chrono::milliseconds(20))) break;
         if (bounded && std::all_of(channels.begin(), channels.end(), [](const auto& c) { return c->result().met; })) break;
         if (o.timeout.count() > 0 && std::chrono::steady_clock::now() - start >= o.timeout) {
             report.timed_out = true;

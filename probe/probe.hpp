@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <iosfwd>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@ struct PubOptions {
     // After publishing, keep the writers (and so the latched samples) alive this long;
     // negative = until shutdown is requested.
     std::chrono::milliseconds linger{0};
+    std::stop_token stop;  // ends the publishing and the linger
 };
 
 // Publishes, then lingers; returns false when the readers did not show up in time (nothing is published then).
@@ -50,6 +52,7 @@ struct EchoOptions {
     std::chrono::milliseconds timeout{0};  // 0 = none
     dds::QosOverrides qos;
     bool quiet = false;
+    std::stop_token stop;  // ends the echo (a report of what arrived so far)
 };
 
 struct EchoReport {

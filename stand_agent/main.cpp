@@ -105,7 +105,7 @@ int run(int argc, char** argv) {
     }
     dw::stand::Hx711Driver driver(*lines, dopt);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
-    const auto n = dw::stand::run_agent(participant, driver, agent, {realtime});
+    const auto n = dw::stand::run_agent(participant, driver, agent, {realtime, dw::Shutdown::instance().token()});
     dw::log::info("published ", n, " wrench samples");
     return 0;
 }

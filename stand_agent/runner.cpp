@@ -8,7 +8,6 @@
 #include <cstring>
 
 #include "core/log.hpp"
-#include "core/shutdown.hpp"
 
 namespace dw::stand {
 
@@ -58,7 +57,7 @@ std::uint64_t run_agent(dds::Participant& p, Hx711Driver& driver, StandAgent& ag
         });
     std::uint64_t published = 0;
     Nanos last_status = 0;
-    while (!Shutdown::instance().requested()) {
+    while (!o.stop.stop_requested()) {
         if (tare.exchange(false)) {
             agent.request_tare();
             log::info("CALIBRATE: taring at hover thrust");

@@ -4,6 +4,7 @@
 // cells feel the physics of the neighbours seen on the mocap topic.
 #include <atomic>
 #include <mutex>
+#include <stop_token>
 #include <vector>
 
 #include "dds/endpoint.hpp"
@@ -31,9 +32,10 @@ private:
 
 struct RunOptions {
     bool realtime = false;            // SCHED_FIFO + mlockall for the sampling thread
+    std::stop_token stop;             // sampling ends when it is requested
 };
 
-// Samples until shutdown is requested. Returns the number of wrench samples published.
+// Samples until o.stop is requested. Returns the number of wrench samples published.
 std::uint64_t run_agent(dds::Participant& p, Hx711Driver& driver, StandAgent& agent, const RunOptions& o);
 
 }  // namespace dw::stand

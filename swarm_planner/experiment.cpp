@@ -5,7 +5,6 @@
 
 #include "core/log.hpp"
 #include "core/numbers.hpp"
-#include "core/shutdown.hpp"
 #include "dds/names.hpp"
 #include "dds/time.hpp"
 
@@ -133,7 +132,7 @@ std::optional<std::string> Experiment::fly(double duration, const std::function<
     for (;;) {
         const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (!(t <= duration)) break;
-        if (Shutdown::instance().requested() && supervise) return std::string("interrupted (SIGINT/SIGTERM)");
+        if (o_.stop.stop_requested() && supervise) return std::string("interrupted (SIGINT/SIGTERM)");
         const auto sps = target(t);
         if (auto refused = send(sps)) {
             if (supervise) return refused;
@@ -189,8 +188,8 @@ msg::ExperimentPhase Experiment::run() {
 
     publish_state(msg::PHASE_WAITING, -1, 0, "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");
     log::info("waiting for ", o_.wait_for.size(), " processes and ", k, " vehicles");
-    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s), Shutdown::instance().token())) {
-        if (Shutdown::instance().requested()) reason_ = "interrupted (SIGINT/SIGTERM) while waiting";
+    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s), o_.stop)) {
+        if (o_.stop.stop_requested()) reason_ = "interrupted (SIGINT/SIGTERM) while waiting";
         else reason_ = "not every participant came up within the wait timeout";
         publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
         return msg::PHASE_ABORTED;
@@ -198,7 +197,7 @@ msg::ExperimentPhase Experiment::run() {
     std::vector<physics::Vec3> parked(k);
     // The vehicles' parked poses, from the motion capture, within the same wait timeout.
     const auto deadline = std::chrono::steady_clock::now() + to_millis(o_.wait_timeout_s);
-    while (!Shutdown::instance().requested()) {
+    while (!o_.stop.stop_requested()) {
         std::size_t n = 0;
         {
             std::lock_guard lock(mutex_);
@@ -213,7 +212,7 @@ msg::ExperimentPhase Experiment::run() {
         if (n == k || std::chrono::steady_clock::now() >= deadline) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    if (Shutdown::instance().requested()) {  // before anything is armed
+    if (o_.stop.stop_requested()) {  // before anything is armed
         reason_ = "interrupted (SIGINT/SIGTERM) while waiting";
         publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
         return msg::PHASE_ABORTED;

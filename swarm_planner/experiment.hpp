@@ -8,6 +8,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <stop_token>
 #include <string>
 
 #include "dds/heartbeat.hpp"
@@ -28,6 +29,7 @@ struct RunOptions {
     double tracking_error_m = 0.3;
     std::string run_id;
     std::string link = "sim";                 // sim or px4
+    std::stop_token stop;                     // a stop request: ABORTED, every vehicle landed
 };
 
 class Experiment {

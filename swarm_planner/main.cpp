@@ -49,6 +49,7 @@ int run(int argc, char** argv) {
         dw::plot::require_png_path(picture, "--picture");
     }
     const auto stop = dw::Shutdown::instance().token();
+    ro.stop = stop;
     const auto p = dw::planner::make_plan(o);
     if (const auto v = dw::planner::check(p, stop)) throw dw::InputError("infeasible plan: " + v->what);
     if (runc->parsed()) {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/files.hpp"
 #include "core/subprocess.hpp"
 
 namespace dw::test {
