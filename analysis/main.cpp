@@ -13,7 +13,7 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
-#include "recorder/tools.hpp"
+#include "recordings/recordings.hpp"
 
 namespace {
 
@@ -110,7 +110,7 @@ int run(int argc, char** argv) {
     o.seed = seed;
     o.progress = progress;
     o.stop = dw::Shutdown::instance().token();
-    const auto f = dw::recorder::read_flight_or_recording(real);
+    const auto f = dw::recordings::read_flight_or_recording(real);
     const auto r = dw::analysis::explain(f, o);
     dw::analysis::write_report(f, r, o, out);
     std::string by;

@@ -22,6 +22,8 @@
 #include "predictor/maps.hpp"
 #include "predictor/model.hpp"
 #include "predictor/train.hpp"
+#include "testkit/mlp.hpp"
+#include "testkit/mocap.hpp"
 
 using namespace dw::predictor;
 using Clock = std::chrono::steady_clock;
@@ -37,18 +39,7 @@ double percentile(std::vector<double> v, double q) {
 // Sets carries a learnt linear baseline, as the study's does.
 LearntModel sized_model(Structure s) {
     std::mt19937 rng(1);
-    std::normal_distribution<float> g(0, 0.3f);
-    auto mlp = [&](std::vector<int> sizes) {
-        Mlp m;
-        for (std::size_t i = 0; i + 1 < sizes.size(); ++i) {
-            Layer l;
-            l.w = Eigen::MatrixXf(sizes[i + 1], sizes[i]).unaryExpr([&](float) { return g(rng); });
-            l.b = Eigen::VectorXf(sizes[i + 1]).unaryExpr([&](float) { return g(rng); });
-            l.silu = i + 2 < sizes.size();
-            m.layers.push_back(l);
-        }
-        return m;
-    };
+    auto mlp = [&](const std::vector<int>& sizes) { return dw::testkit::random_mlp(rng, sizes, 0.3f); };
     LearntModel m;
     m.kind = s == Structure::sum ? "learnt_linear" : "deep_sets";
     m.structure = s;
@@ -154,18 +145,9 @@ void e2e(const dw::dds::DdsConfig& cfg, int frames) {
     for (int i = 0; i < frames; ++i) {
         dw::msg::MocapFrame f;
         f.frame_number(static_cast<std::uint64_t>(i));
-        auto body = [&](const std::string& name, double x, double y, double z) {
-            dw::msg::RigidBody b;
-            b.name(name);
-            b.position_m().x(x);
-            b.position_m().y(y);
-            b.position_m().z(z);
-            b.tracking_valid(true);
-            f.bodies().push_back(b);
-        };
         const double e = -1.0 + 2.0 * (i % 720) / 720.0;
-        body("sufferer", 0, 0, -1.4);
-        for (int j = 0; j < 3; ++j) body("v" + std::to_string(j + 1), 0, e + 0.5 * (j - 1), -2.7);
+        dw::testkit::add_body(f, "sufferer", 0, 0, -1.4);
+        for (int j = 0; j < 3; ++j) dw::testkit::add_body(f, "v" + std::to_string(j + 1), 0, e + 0.5 * (j - 1), -2.7);
         f.header().stamp(dw::dds::to_msg(clock.now_ns()));
         writer.write(f);
         std::this_thread::sleep_for(std::chrono::microseconds(5556));  // 180 Hz

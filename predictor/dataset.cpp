@@ -7,7 +7,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "physics/bodies.hpp"
-#include "recorder/tools.hpp"
+#include "recordings/recordings.hpp"
 
 namespace dw::predictor {
 
@@ -138,7 +138,7 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
 }
 
 Dataset load_dataset(const std::string& path, const DatasetOptions& o) {
-    return from_flight(recorder::read_flight_or_recording(path), path, o);
+    return from_flight(recordings::read_flight_or_recording(path), path, o);
 }
 
 }  // namespace dw::predictor

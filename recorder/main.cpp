@@ -11,6 +11,7 @@
 #include "dds/process_cli.hpp"
 #include "recorder/recorder.hpp"
 #include "recorder/tools.hpp"
+#include "recordings/recordings.hpp"
 
 namespace {
 
@@ -90,7 +91,7 @@ struct InfoCommand {
         cmd->add_option("file", file, "MCAP file")->required();
     }
     int run() {
-        if (!dw::recorder::print_info(file, std::cout)) {
+        if (!dw::recordings::print_info(file, std::cout)) {
             throw dw::InputError(file + ": damaged (see above); dw-recorder recover rebuilds what is readable");
         }
         return 0;
@@ -123,7 +124,7 @@ struct RecoverCommand {
 struct ExportCommand {
     CLI::App* cmd = nullptr;
     std::string file, flight_dir, csv_dir;
-    dw::recorder::ExportOptions ex;
+    dw::recordings::ExportOptions ex;
 
     void add(CLI::App& app) {
         cmd = app.add_subcommand("export", "export a recording to a flight folder and/or per-topic CSV");
@@ -139,11 +140,11 @@ struct ExportCommand {
         if (flight_dir.empty() && csv_dir.empty()) throw dw::InputError("export: give --flight DIR and/or --csv DIR");
         if (!flight_dir.empty()) {
             ex.stop = dw::Shutdown::instance().token();
-            dw::recorder::export_flight(file, flight_dir, ex);
+            dw::recordings::export_flight(file, flight_dir, ex);
             std::cout << "flight folder: " << flight_dir << "\n";
         }
         if (!csv_dir.empty()) {
-            dw::recorder::export_csv(file, csv_dir, dw::Shutdown::instance().token());
+            dw::recordings::export_csv(file, csv_dir, dw::Shutdown::instance().token());
             std::cout << "CSV per topic: " << csv_dir << "\n";
         }
         return 0;
@@ -164,6 +165,7 @@ struct ReplayCommand {
     }
     int run(dw::dds::Participant& participant) {
         rp.progress = [](double done) { std::fprintf(stderr, "\rdw-recorder: replaying %3d %%", static_cast<int>(done * 100)); };
+        rp.stop = dw::Shutdown::instance().token();
         const auto n = dw::recorder::replay(file, participant, rp);
         std::fprintf(stderr, "\n");
         std::cout << "replayed " << n << " samples\n";

@@ -13,7 +13,7 @@
 #include "analysis/proof.hpp"
 #include "core/errors.hpp"
 #include "physics/flight_sim.hpp"
-#include "recorder/tools.hpp"
+#include "recordings/recordings.hpp"
 #include "support.hpp"
 
 using namespace dw::analysis;
@@ -105,7 +105,7 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
     meta["lab"] = "elsewhere";
     std::ofstream(dir.file("theirs/meta.json")) << meta.dump(1);
     ExplainOptions o;
-    const auto f = dw::recorder::read_flight_or_recording(dir.file("theirs"));
+    const auto f = dw::recordings::read_flight_or_recording(dir.file("theirs"));
     ASSERT_FALSE(f.legs.has_value());
     const auto r = explain(f, o);
     write_report(f, r, o, dir.file("out"));

@@ -34,6 +34,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -273,78 +274,104 @@ class Fixtures {
 public:
     explicit Fixtures(std::string dir) : dir_(std::move(dir)) {}
 
+    // Every fixture a row's command line may name as {name}: the makers' list below.
+    static std::vector<std::string> names() {
+        std::vector<std::string> out;
+        for (const auto& m : kMakers) out.emplace_back(m.name);
+        return out;
+    }
+
     // The fixture's path; empty and *problem set when it could not be made.
     std::string get(const std::string& name, std::string* problem) {
         if (auto it = made_.find(name); it != made_.end()) return it->second;
-        std::string path, err;
-        const std::string domain = std::to_string(dw::test::test_domain());
-        if (name == "flight") {
-            path = dir_ + "/flight";
-            if (run_helper({bin("dw-sim"), "fly", "--formation", "single", "--legs", "5", "--quiet", "--out", path}, dir_,
-                           &err) != 0) {
-                *problem = "dw-sim fly: " + err;
-                return "";
-            }
-        } else if (name == "model") {
-            const std::string flight = get("flight", problem);
-            if (flight.empty()) return "";
-            path = dir_ + "/model.json";
-            if (run_helper({bin("dw-predictor"), "train", "--kind", "learnt_linear", "--epochs", "1", "--data", flight,
-                            "--out", path}, dir_, &err) != 0) {
-                *problem = "dw-predictor train: " + err;
-                return "";
-            }
-        } else if (name == "study") {
-            path = dir_ + "/study";  // the smallest study: its flights and models are what `regimes` reads
-            if (run_helper({bin("dw-predictor"), "study", "--out", path, "--legs", "15", "--epochs", "1", "--no-generalisation",
-                            "--no-maps"}, dir_, &err) != 0) {
-                *problem = "dw-predictor study: " + err;
-                return "";
-            }
-        } else if (name == "mcap") {
-            // A short recording of dw-probe's deterministic samples on this process's own domain. If
-            // the publisher finds no reader in time the recording still holds the heartbeats: a
-            // valid, smaller file, good enough for info/recover/export/replay.
-            path = dir_ + "/recording.mcap";
-            dw::Subprocess rec({{bin("dw-recorder"), "record", "--domain", domain, "--duration", "3", "--quiet",
-                                 "--no-command-control", "-o", path},
-                                dir_ + "/rec.out", dir_ + "/rec.err", {}});
-            std::this_thread::sleep_for(300ms);
-            run_helper({bin("dw-probe"), "pub", "--domain", domain, "--count", "50", "--rate", "100", "--wait-readers",
-                        "1", "--wait-timeout", "5", "--quiet"}, dir_);
-            const auto st = rec.wait_for(30s);
-            if (!st || *st != 0 || !fs::exists(path)) {
-                *problem = "dw-recorder record: " + slurp(dir_ + "/rec.err");
-                return "";
-            }
-        } else if (name == "loads") {
-            path = dir_ + "/loads.csv";
-            std::ofstream(path) << known_loads_csv();
-        } else if (name == "ns_log" || name == "ns_log2") {
-            // Two vehicles of one Neural-Swarm trial, read in place (as tests/test_import.cpp).
-            const std::string data = std::string(DW_SOURCE_DIR) +
-                                     "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020/swap_ss/";
-            path = data + (name == "ns_log" ? "cf50_01.csv" : "cf51_01.csv");
-            if (!fs::exists(path)) {
-                *problem = "skip: the shared Neural-Swarm logs are not at " + data;
-                return "";
-            }
-        } else if (name == "labfile") {
-            // One process that runs until stopped: dw-lab run then runs until stopped too.
-            path = dir_ + "/lab.yaml";
-            std::ofstream(path) << "format: downwash-lab/1\nprocesses:\n  - name: echo\n    run: [dw-probe, echo, --quiet]\n";
-        } else {
+        const auto m = std::find_if(kMakers.begin(), kMakers.end(), [&](const Maker& k) { return name == k.name; });
+        if (m == kMakers.end()) {
             *problem = "unknown fixture {" + name + "}";
             return "";
         }
-        made_[name] = path;
+        const std::string path = (this->*(m->make))(name, problem);
+        if (!path.empty()) made_[name] = path;
         return path;
     }
 
 private:
+    using Make = std::string (Fixtures::*)(const std::string& name, std::string* problem);
+    struct Maker {
+        const char* name;
+        Make make;
+    };
+    static const std::array<Maker, 8> kMakers;
+
+    // The path when the helper succeeded; else "" and *problem = what: its output.
+    std::string made_by(const std::vector<std::string>& argv, const std::string& path, const char* what, std::string* problem) {
+        std::string err;
+        if (run_helper(argv, dir_, &err) == 0) return path;
+        *problem = std::string(what) + ": " + err;
+        return "";
+    }
+    std::string flight(const std::string&, std::string* problem) {
+        const std::string path = dir_ + "/flight";
+        return made_by({bin("dw-sim"), "fly", "--formation", "single", "--legs", "5", "--quiet", "--out", path}, path, "dw-sim fly", problem);
+    }
+    std::string model(const std::string&, std::string* problem) {
+        const std::string flight = get("flight", problem);
+        if (flight.empty()) return "";
+        const std::string path = dir_ + "/model.json";
+        return made_by({bin("dw-predictor"), "train", "--kind", "learnt_linear", "--epochs", "1", "--data", flight, "--out", path},
+                       path, "dw-predictor train", problem);
+    }
+    std::string study(const std::string&, std::string* problem) {
+        const std::string path = dir_ + "/study";  // the smallest study: its flights and models are what `regimes` reads
+        return made_by({bin("dw-predictor"), "study", "--out", path, "--legs", "15", "--epochs", "1", "--no-generalisation", "--no-maps"},
+                       path, "dw-predictor study", problem);
+    }
+    // A short recording of dw-probe's deterministic samples on this process's own domain. If the
+    // publisher finds no reader in time the recording still holds the heartbeats: a valid, smaller
+    // file, good enough for info/recover/export/replay.
+    std::string mcap(const std::string&, std::string* problem) {
+        const std::string path = dir_ + "/recording.mcap", domain = std::to_string(dw::test::test_domain());
+        dw::Subprocess rec({{bin("dw-recorder"), "record", "--domain", domain, "--duration", "3", "--quiet", "--no-command-control", "-o", path},
+                            dir_ + "/rec.out", dir_ + "/rec.err", {}});
+        std::this_thread::sleep_for(300ms);
+        run_helper({bin("dw-probe"), "pub", "--domain", domain, "--count", "50", "--rate", "100", "--wait-readers", "1", "--wait-timeout",
+                    "5", "--quiet"}, dir_);
+        const auto st = rec.wait_for(30s);
+        if (st && *st == 0 && fs::exists(path)) return path;
+        *problem = "dw-recorder record: " + slurp(dir_ + "/rec.err");
+        return "";
+    }
+    std::string loads(const std::string&, std::string*) {
+        const std::string path = dir_ + "/loads.csv";
+        std::ofstream(path) << known_loads_csv();
+        return path;
+    }
+    // Two vehicles of one Neural-Swarm trial, read in place (as tests/test_import.cpp).
+    std::string ns_log(const std::string& name, std::string* problem) {
+        const std::string data = std::string(DW_SOURCE_DIR) + "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020/swap_ss/";
+        const std::string path = data + (name == "ns_log" ? "cf50_01.csv" : "cf51_01.csv");
+        if (fs::exists(path)) return path;
+        *problem = "skip: the shared Neural-Swarm logs are not at " + data;
+        return "";
+    }
+    // One process that runs until stopped: dw-lab run then runs until stopped too.
+    std::string labfile(const std::string&, std::string*) {
+        const std::string path = dir_ + "/lab.yaml";
+        std::ofstream(path) << "format: downwash-lab/1\nprocesses:\n  - name: echo\n    run: [dw-probe, echo, --quiet]\n";
+        return path;
+    }
+
     std::string dir_;
     std::map<std::string, std::string> made_;
 };
+
+const std::array<Fixtures::Maker, 8> Fixtures::kMakers{{{"flight", &Fixtures::flight},
+                                                        {"mcap", &Fixtures::mcap},
+                                                        {"model", &Fixtures::model},
+                                                        {"loads", &Fixtures::loads},
+                                                        {"labfile", &Fixtures::labfile},
+                                                        {"ns_log", &Fixtures::ns_log},
+                                                        {"ns_log2", &Fixtures::ns_log},
+                                                        {"study", &Fixtures::study}}};
 
 // ----------------------------------------------------------------------------------------------
 // One run
@@ -618,7 +645,7 @@ std::vector<Case> cases_of(const Row& row) {
 std::map<std::string, std::string> fixtures_for(const Row& row, Fixtures& fixtures, std::string* problem) {
     std::map<std::string, std::string> out;
     for (const auto& a : row.argv) {
-        for (const char* name : {"flight", "mcap", "model", "loads", "labfile", "ns_log", "ns_log2", "study"}) {
+        for (const auto& name : Fixtures::names()) {
             if (a.find(std::string("{") + name + "}") == std::string::npos || out.count(name)) continue;
             const std::string path = fixtures.get(name, problem);
             if (path.empty()) return {};

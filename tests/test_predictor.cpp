@@ -23,6 +23,7 @@
 #include "predictor/study.hpp"
 #include "predictor/train.hpp"
 #include "support.hpp"
+#include "testkit/mlp.hpp"
 
 using namespace dw::predictor;
 
@@ -39,19 +40,6 @@ std::string small_flight(const dw::test::TempDir& dir, const std::string& format
     return path;
 }
 
-Mlp random_mlp(std::mt19937& rng, std::vector<int> sizes) {
-    std::normal_distribution<float> g(0, 0.5f);
-    Mlp m;
-    for (std::size_t i = 0; i + 1 < sizes.size(); ++i) {
-        Layer l;
-        l.w = Eigen::MatrixXf(sizes[i + 1], sizes[i]).unaryExpr([&](float) { return g(rng); });
-        l.b = Eigen::VectorXf(sizes[i + 1]).unaryExpr([&](float) { return g(rng); });
-        l.silu = i + 2 < sizes.size();
-        m.layers.push_back(l);
-    }
-    return m;
-}
-
 LearntModel random_model(Structure s, unsigned seed) {
     std::mt19937 rng(seed);
     LearntModel m;
@@ -60,8 +48,8 @@ LearntModel random_model(Structure s, unsigned seed) {
     m.input_mean = {0.1f, -0.2f, -1.0f, 0, 0.3f, 0, 0.8f, 0.6f, 1.2f};
     m.input_std = {0.6f, 0.7f, 0.4f, 0.1f, 0.5f, 0.1f, 0.5f, 0.4f, 0.6f};
     m.output_scale = {0.1f, 0.1f, 1.5f, 0.01f, 0.01f, 0.005f};
-    m.phi = random_mlp(rng, {kFeatureSize, 16, 16, s == Structure::sum ? 6 : 8});
-    if (s == Structure::deep_sets) m.rho = random_mlp(rng, {8, 16, 6});
+    m.phi = dw::testkit::random_mlp(rng, {kFeatureSize, 16, 16, s == Structure::sum ? 6 : 8}, 0.5f);
+    if (s == Structure::deep_sets) m.rho = dw::testkit::random_mlp(rng, {8, 16, 6}, 0.5f);
     return m;
 }
 

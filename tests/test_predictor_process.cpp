@@ -12,6 +12,7 @@
 #include "dds/time.hpp"
 #include "predictor/model.hpp"
 #include "support.hpp"
+#include "testkit/mocap.hpp"
 
 using namespace std::chrono_literals;
 using namespace dw::predictor;
@@ -39,18 +40,9 @@ dw::msg::MocapFrame frame(std::uint64_t n, double t_s, double e_offset) {
     dw::msg::MocapFrame f;
     f.header().stamp(dw::dds::to_msg(static_cast<dw::Nanos>(t_s * 1e9)));
     f.frame_number(n);
-    auto body = [&](const std::string& name, double x, double y, double z) {
-        dw::msg::RigidBody b;
-        b.name(name);
-        b.position_m().x(x);
-        b.position_m().y(y);
-        b.position_m().z(z);
-        b.tracking_valid(true);
-        f.bodies().push_back(b);
-    };
-    body("sufferer", 0, 0, -1.4);
-    body("v1", 0.2, e_offset, -2.7);
-    body("v2", -0.1, e_offset + 0.5, -2.7);
+    dw::testkit::add_body(f, "sufferer", 0, 0, -1.4);
+    dw::testkit::add_body(f, "v1", 0.2, e_offset, -2.7);
+    dw::testkit::add_body(f, "v2", -0.1, e_offset + 0.5, -2.7);
     return f;
 }
 

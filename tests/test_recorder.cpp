@@ -5,10 +5,12 @@
 #include <signal.h>
 
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "core/clock.hpp"
+#include "core/errors.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/msg_json.hpp"
 #include "dds/time.hpp"
@@ -18,6 +20,7 @@
 #include "probe/samples.hpp"
 #include "recorder/recorder.hpp"
 #include "recorder/tools.hpp"
+#include "recordings/recordings.hpp"
 #include "support.hpp"
 
 using namespace std::chrono_literals;
@@ -323,7 +326,7 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
         }
         w.close();
     }
-    dw::recorder::export_flight(file, dir.file("flight"), {});
+    dw::recordings::export_flight(file, dir.file("flight"), {});
     const auto f = dw::flight::read_flight(dir.file("flight"));
     ASSERT_EQ(f.wrench.size(), sim.wrench.size());
     ASSERT_EQ(f.poses.size(), sim.poses.size());
@@ -333,4 +336,43 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
         for (std::size_t k = 0; k < 6; ++k) EXPECT_NEAR(f.wrench[i].w[k], sim.wrench[i].w[k], 1e-6);
     }
     for (std::size_t i = 0; i < f.poses.size(); i += 997) EXPECT_NEAR(f.poses[i].p[1], sim.poses[i].p[1], 1e-6);
+    // What the analysis tools read: the same flight, in memory, without a folder on the way.
+    const auto m = dw::recordings::read_flight_or_recording(file);
+    ASSERT_EQ(m.wrench.size(), f.wrench.size());
+    ASSERT_EQ(m.poses.size(), f.poses.size());
+    EXPECT_EQ(m.bodies, f.bodies);
+    EXPECT_EQ(m.meta.neighbours, f.meta.neighbours);
+    EXPECT_EQ(m.meta.extra_json, f.meta.extra_json);
+    for (std::size_t i = 0; i < m.wrench.size(); ++i) {
+        EXPECT_NEAR(m.wrench[i].t, f.wrench[i].t, 1e-6);
+        for (std::size_t k = 0; k < 6; ++k) EXPECT_NEAR(m.wrench[i].w[k], f.wrench[i].w[k], 1e-6);
+    }
+    for (std::size_t i = 0; i < m.poses.size(); ++i) {
+        EXPECT_EQ(m.poses[i].body, f.poses[i].body);
+        for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(m.poses[i].p[k], f.poses[i].p[k], 1e-6);
+    }
+}
+
+TEST(Recorder, ARecordedNonFiniteValueIsOneLineNamingTheRecording) {
+    TempDir dir;
+    const std::string file = dir.file("nan.mcap");
+    {
+        dw::mcap::WriterOptions wo;
+        wo.fsync = false;
+        dw::mcap::Writer w(file, wo);
+        const auto cw = w.add_channel("rt/lab/stand/wrench", w.add_schema("dw::msg::WrenchStamped", "omgidl", ""), "cdr", {});
+        dw::msg::WrenchStamped m;
+        m.force_n().z(std::numeric_limits<double>::quiet_NaN());
+        dw::msg::WrenchStampedPubSubType support;
+        eprosima::fastrtps::rtps::SerializedPayload_t p(support.getSerializedSizeProvider(&m)());
+        support.serialize(&m, &p);
+        w.write({cw, 0, 1, 1, {p.data, p.length}}, 0);
+        w.close();
+    }
+    try {
+        dw::recordings::read_flight_or_recording(file);
+        ADD_FAILURE() << "a NaN force was read as a flight";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(file + ": stand/wrench message 1 carries a non-finite value"), std::string::npos) << e.what();
+    }
 }

@@ -10,6 +10,7 @@
 #include "dds/time.hpp"
 #include "physics/wrench_model.hpp"
 #include "support.hpp"
+#include "testkit/mocap.hpp"
 
 using namespace std::chrono_literals;
 
@@ -53,16 +54,8 @@ TEST(StandAgentProcess, SimulatedStandFeelsTheNeighbourOnTheMocapTopic) {
     // A neighbour hovering 0.3 m above: the stand reads what the physics says, within noise.
     auto frame = [&] {
         dw::msg::MocapFrame f;
-        dw::msg::RigidBody suf, v1;
-        suf.name("sufferer");
-        suf.position_m().z(-1.4);
-        suf.orientation().w(1);
-        suf.tracking_valid(true);
-        v1.name("v1");
-        v1.position_m().z(-1.7);
-        v1.orientation().w(1);
-        v1.tracking_valid(true);
-        f.bodies({suf, v1});
+        dw::testkit::add_body(f, "sufferer", 0, 0, -1.4);
+        dw::testkit::add_body(f, "v1", 0, 0, -1.7);
         return f;
     };
     for (int i = 0; i < 30; ++i) {

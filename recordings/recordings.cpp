@@ -1,0 +1,275 @@
+#include "recordings/recordings.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <tuple>
+
+#include "core/errors.hpp"
+#include "core/files.hpp"
+#include "core/log.hpp"
+#include "core/shutdown.hpp"
+#include "dds/msg_json.hpp"
+#include "dds/time.hpp"
+
+namespace dw::recordings {
+namespace {
+
+constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks while exporting
+
+// Calls f(spec) with the topic spec whose type has this scoped name.
+template <class F>
+bool with_type(const std::string& type_name, F&& f) {
+    bool found = false;
+    dds::topics::for_each([&](const auto& spec) {
+        if (!found && spec.type_name == type_name) {
+            found = true;
+            f(spec);
+        }
+    });
+    return found;
+}
+
+// A recorded value the flight cannot carry (NaN, inf) is the recording's fault: named there.
+template <std::size_t N>
+void require_finite(const std::array<double, N>& v, const std::string& path, std::string_view topic, std::uint64_t message) {
+    for (double x : v) {
+        if (!std::isfinite(x)) throw InputError(log::cat(path, ": ", topic, " message ", message, " carries a non-finite value"));
+    }
+}
+
+}  // namespace
+
+void Catalogue::watch(mcap::Handlers& h) {
+    h.on_schema = [this](const mcap::Schema& s) { schemas[s.id] = s; };
+    h.on_channel = [this](const mcap::Channel& c) { channels[c.id] = c; };
+}
+
+std::string Catalogue::type_of(const mcap::Channel& c) const {
+    const auto it = c.schema_id ? schemas.find(c.schema_id) : schemas.end();
+    return it == schemas.end() ? "" : it->second.name;
+}
+
+std::string topic_suffix(const std::string& topic) {
+    if (topic.rfind("rt/", 0) != 0) return topic;
+    const auto slash = topic.find('/', 3);
+    return slash == std::string::npos ? topic : topic.substr(slash + 1);
+}
+
+void require_sound(const mcap::ReadResult& r, const std::string& path) {
+    if (r.error) {
+        throw InputError(log::cat(path, ": ", *r.error, " (dw-recorder recover can rebuild a damaged file)"));
+    }
+}
+
+std::optional<nlohmann::json> decode(const std::string& type_name, std::span<const std::uint8_t> cdr) {
+    std::optional<nlohmann::json> out;
+    with_type(type_name, [&](const auto& spec) {
+        typename std::decay_t<decltype(spec)>::type m;
+        if (!deserialize(cdr, m)) throw InputError(log::cat("a ", type_name, " message of ", cdr.size(), " bytes does not decode"));
+        out = dds::to_json(m);
+    });
+    return out;
+}
+
+bool print_info(const std::string& path, std::ostream& out) {
+    Catalogue l;
+    struct PerChannel {
+        std::uint64_t count = 0, first = UINT64_MAX, last = 0, bytes = 0;
+    };
+    std::map<std::uint16_t, PerChannel> per;
+    std::vector<mcap::Metadata> metadata;
+    std::vector<mcap::Attachment> attachments;
+    mcap::Handlers h;
+    l.watch(h);
+    h.on_message = [&](const mcap::Message& m) {
+        auto& p = per[m.channel_id];
+        ++p.count;
+        p.bytes += m.data.size();
+        p.first = std::min(p.first, m.log_time);
+        p.last = std::max(p.last, m.log_time);
+    };
+    h.on_metadata = [&](const mcap::Metadata& m) { metadata.push_back(m); };
+    h.on_attachment = [&](const mcap::Attachment& a) { attachments.push_back(a); };
+    const auto r = mcap::read_file(path, h);
+
+    std::uint64_t first = UINT64_MAX, last = 0, total = 0;
+    for (const auto& [id, p] : per) {
+        first = std::min(first, p.first);
+        last = std::max(last, p.last);
+        total += p.count;
+    }
+    const double duration = total ? static_cast<double>(last - first) * 1e-9 : 0.0;
+    std::map<std::string, std::string> loss;
+    for (const auto& m : metadata) {
+        if (m.name == "loss") loss = m.entries;
+    }
+    out << "file:      " << path << (r.complete ? "" : "  (INCOMPLETE)") << "\n";
+    out << "messages:  " << total << " in " << std::fixed << std::setprecision(2) << duration << " s\n";
+    // Columns as wide as the longest name (long namespaces make long topics), two spaces apart.
+    std::size_t topic_w = 30, type_w = 28;
+    for (const auto& [id, c] : l.channels) {
+        topic_w = std::max(topic_w, c.topic.size() + 2);
+        type_w = std::max(type_w, l.type_of(c).size() + 2);
+    }
+    const auto tw = static_cast<int>(topic_w), yw = static_cast<int>(type_w);
+    out << std::left << std::setw(tw) << "topic" << std::setw(yw) << "type" << std::right << std::setw(9) << "count"
+        << std::setw(10) << "rate_hz" << std::setw(12) << "bytes" << "  losses\n";
+    for (const auto& [id, c] : l.channels) {
+        const PerChannel p = per.count(id) ? per.at(id) : PerChannel{};
+        const double span = p.count > 1 ? static_cast<double>(p.last - p.first) * 1e-9 : 0.0;
+        const std::string type = l.type_of(c);
+        out << std::left << std::setw(tw) << c.topic << std::setw(yw) << type << std::right << std::setw(9) << p.count
+            << std::setw(10) << std::setprecision(1) << (span > 0 ? static_cast<double>(p.count - 1) / span : 0.0)
+            << std::setw(12) << p.bytes << "  " << (loss.count(c.topic) ? loss.at(c.topic) : "(not stored)") << "\n";
+    }
+    for (const auto& m : metadata) {
+        if (m.name == "loss") continue;
+        out << "metadata " << m.name << ":";
+        for (const auto& [k, v] : m.entries) {
+            std::string shown = v.size() > 60 ? v.substr(0, 57) + "..." : v;
+            std::replace(shown.begin(), shown.end(), '\n', ' ');
+            out << " " << k << "=" << shown;
+        }
+        out << "\n";
+    }
+    for (const auto& a : attachments) out << "attachment " << a.name << " (" << a.media_type << ", " << a.data.size() << " bytes)\n";
+    if (r.error) out << "DAMAGED: " << *r.error << " — `dw-recorder recover` rebuilds what is readable\n";
+    return !r.error.has_value();
+}
+
+flight::Flight flight_from_recording(const std::string& path, const ExportOptions& o) {
+    namespace topics = dds::topics;
+    Catalogue l;
+    flight::Flight f;
+    f.meta.sufferer = o.sufferer;
+    std::string formation = "free";
+    double epoch = -1;
+    struct Row { double t; std::array<double, 6> w; };
+    std::vector<Row> wrench;
+    std::vector<std::tuple<double, std::string, std::array<double, 3>, std::array<double, 4>>> poses;
+    mcap::Handlers h;
+    l.watch(h);
+    std::uint64_t read = 0;
+    h.on_message = [&](const mcap::Message& m) {
+        if (++read % kStopCheckEvery == 0) throw_if_stopped(o.stop, "the export");
+        const auto& c = l.channels.at(m.channel_id);
+        const std::string suffix = topic_suffix(c.topic);
+        if (suffix == topics::stand_wrench.suffix) {
+            msg::WrenchStamped w;
+            if (!deserialize(m.data, w)) throw InputError(log::cat(path, ": a ", suffix, " message does not decode"));
+            const double t = static_cast<double>(dds::from_msg(w.header().stamp())) * 1e-9;
+            wrench.push_back({t, {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(), w.torque_nm().z()}});
+            require_finite(wrench.back().w, path, suffix, read);
+        } else if (suffix == topics::mocap_frame.suffix) {
+            msg::MocapFrame fr;
+            if (!deserialize(m.data, fr)) throw InputError(log::cat(path, ": a ", suffix, " message does not decode"));
+            const double t = static_cast<double>(dds::from_msg(fr.header().stamp())) * 1e-9;
+            for (const auto& b : fr.bodies()) {
+                poses.emplace_back(t, b.name(), std::array<double, 3>{b.position_m().x(), b.position_m().y(), b.position_m().z()},
+                                   std::array<double, 4>{b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z()});
+                require_finite(std::get<2>(poses.back()), path, suffix, read);
+                require_finite(std::get<3>(poses.back()), path, suffix, read);
+            }
+        } else if (suffix == topics::experiment_plan.suffix) {
+            msg::ExperimentPlan p;
+            if (deserialize(m.data, p)) formation = p.formation();
+        }
+    };
+    require_sound(mcap::read_file(path, h), path);
+    if (wrench.empty()) throw InputError(log::cat(path, ": no ", topics::stand_wrench.suffix, " messages: nothing to export as a flight"));
+    if (poses.empty()) throw InputError(log::cat(path, ": no ", topics::mocap_frame.suffix, " messages: nothing to export as a flight"));
+    // Both clocks are written relative to one epoch (whole seconds), kept in meta.json.
+    epoch = std::floor(std::min(wrench.front().t, std::get<0>(poses.front())));
+    std::sort(wrench.begin(), wrench.end(), [](const Row& a, const Row& b) { return a.t < b.t; });
+    std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return std::get<0>(a) < std::get<0>(b); });
+    for (const auto& r : wrench) f.wrench.push_back({r.t - epoch, r.w});
+    for (const auto& [t, name, p, q] : poses) {
+        const std::uint16_t body = f.body_index(name);
+        double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (norm == 0) norm = 1;
+        f.poses.push_back({t - epoch, body, p, {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm}});
+    }
+    if (f.find_body(o.sufferer) < 0) throw InputError(log::cat(path, ": no rigid body named '", o.sufferer, "' (use --sufferer)"));
+    for (const auto& b : f.bodies) {
+        if (b == o.sufferer) continue;
+        f.meta.neighbours.push_back(b);
+        f.meta.vehicles[b] = flight::VehicleInfo{};
+    }
+    const bool known = std::find_if(flight::kFormations.begin(), flight::kFormations.end(),
+                                    [&](const char* k) { return formation == k; }) != flight::kFormations.end();
+    f.meta.formation = known ? formation : "free";
+    f.meta.extra_json = nlohmann::json{{"source", path}, {"epoch_unix_s", epoch}}.dump();
+    return f;
+}
+
+void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
+    flight::write_flight(flight_from_recording(path, o), dir);
+}
+
+flight::Flight read_flight_or_recording(const std::string& path) {
+    namespace fs = std::filesystem;
+    if (fs::is_directory(path)) return flight::read_flight(path);
+    if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
+    if (fs::path(path).extension() != ".mcap") throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
+    return flight_from_recording(path, {});
+}
+
+void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop) {
+    Catalogue l;
+    struct Table {
+        std::vector<std::string> columns;
+        std::map<std::string, std::size_t> index;
+        std::vector<std::vector<std::string>> rows;
+    };
+    std::map<std::uint16_t, Table> tables;
+    mcap::Handlers h;
+    l.watch(h);
+    std::uint64_t read = 0;
+    h.on_message = [&](const mcap::Message& m) {
+        if (++read % kStopCheckEvery == 0) throw_if_stopped(stop, "the export");
+        const auto& c = l.channels.at(m.channel_id);
+        const std::string type = l.type_of(c);
+        const auto j = decode(type, m.data);
+        if (!j) return;
+        Table& t = tables[m.channel_id];
+        std::vector<std::string> row(t.columns.size());
+        auto put = [&](const std::string& col, std::string value) {
+            auto [it, added] = t.index.try_emplace(col, t.columns.size());
+            if (added) t.columns.push_back(col);
+            if (row.size() <= it->second) row.resize(it->second + 1);
+            row[it->second] = std::move(value);
+        };
+        put("log_time", std::to_string(m.log_time));
+        put("publish_time", std::to_string(m.publish_time));
+        for (const auto& [k, v] : dds::flatten(*j)) {
+            std::string s = v.is_string() ? v.get<std::string>() : v.dump();
+            if (v.is_string()) {  // CSV-quote strings with separators or quotes
+                if (s.find_first_of(",\"\n") != std::string::npos) {
+                    std::string q = "\"";
+                    for (char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+                    s = q + "\"";
+                }
+            }
+            put(k, std::move(s));
+        }
+        t.rows.push_back(std::move(row));
+    };
+    require_sound(mcap::read_file(path, h), path);
+    for (const auto& [id, t] : tables) {
+        std::string name = topic_suffix(l.channels.at(id).topic);
+        std::replace(name.begin(), name.end(), '/', '_');
+        std::string text;
+        for (std::size_t i = 0; i < t.columns.size(); ++i) text += (i ? "," : "") + t.columns[i];
+        text += "\n";
+        for (const auto& row : t.rows) {
+            for (std::size_t i = 0; i < t.columns.size(); ++i) text += (i ? "," : "") + (i < row.size() ? row[i] : std::string());
+            text += "\n";
+        }
+        write_file((std::filesystem::path(dir) / (name + ".csv")).string(), text);
+    }
+}
+
+}  // namespace dw::recordings

@@ -1,0 +1,78 @@
+#pragma once
+// Reading the lab's recordings (MCAP, CDR messages of the lab's IDL types) without joining DDS:
+// what `dw-recorder info/export` print and write, and the flight a recording holds, which the
+// predictor and the explainer read. Topics and types are the registry's (dds/topics.hpp); the
+// recorder's replay, which does publish on DDS, builds on the helpers at the end.
+#include <cstdint>
+#include <iosfwd>
+#include <map>
+#include <optional>
+#include <span>
+#include <stop_token>
+#include <string>
+
+#include <fastdds/rtps/common/SerializedPayload.h>
+#include <nlohmann/json.hpp>
+
+#include "dds/topics.hpp"
+#include "flight/flight.hpp"
+#include "mcap/mcap.hpp"
+
+namespace dw::recordings {
+
+// Decodes one recorded CDR message of a lab type (by its scoped name) into JSON; nullopt for a
+// type the lab does not know. Throws dw::InputError for bytes that do not decode.
+std::optional<nlohmann::json> decode(const std::string& type_name, std::span<const std::uint8_t> cdr);
+
+// Prints topics, counts, rates, duration, losses, metadata and attachments. Returns false when
+// the file is damaged (what could be read is still printed, then the problem).
+bool print_info(const std::string& path, std::ostream& out);
+
+struct ExportOptions {
+    std::string sufferer = "sufferer";  // the rigid body on the stand
+    std::stop_token stop;               // checked while reading: dw::Stopped, nothing written
+};
+// The flight a recording holds, in memory: stand/wrench and mocap/frame (+ the plan's formation),
+// the topics named by the registry. Throws dw::InputError naming the recording.
+flight::Flight flight_from_recording(const std::string& path, const ExportOptions& o);
+// That flight written as a flight folder (downwash-flight/1).
+void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o);
+// A flight folder as it is, or an .mcap recording's flight (no temporary folder): what the
+// analysis tools take. Throws dw::InputError naming the path.
+flight::Flight read_flight_or_recording(const std::string& path);
+// One CSV per topic: log_time, publish_time and every field (flattened JSON paths).
+void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop = {});
+
+// ---- for code that reads a recording message by message ----
+
+// The schemas and channels of a recording, as the reader meets them.
+struct Catalogue {
+    std::map<std::uint16_t, mcap::Schema> schemas;
+    std::map<std::uint16_t, mcap::Channel> channels;
+    // Makes h fill this catalogue.
+    void watch(mcap::Handlers& h);
+    // The scoped type name of a channel's schema ("" without one).
+    std::string type_of(const mcap::Channel& c) const;
+};
+
+// "rt/<ns>/<suffix>" -> "<suffix>" (the registry's name); other names as they are.
+std::string topic_suffix(const std::string& topic);
+
+// Throws dw::InputError naming the file when the read met damage.
+void require_sound(const mcap::ReadResult& r, const std::string& path);
+
+// A recorded CDR message into a lab type; false when the bytes do not decode.
+template <class T>
+bool deserialize(std::span<const std::uint8_t> cdr, T& out) {
+    typename dds::PubSubOf<T>::type support;
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(cdr.size()));
+    std::copy(cdr.begin(), cdr.end(), payload.data);
+    payload.length = static_cast<std::uint32_t>(cdr.size());
+    try {
+        return support.deserialize(&payload, &out);
+    } catch (const std::exception&) {
+        return false;  // Fast CDR throws NotEnoughMemoryException on short buffers
+    }
+}
+
+}  // namespace dw::recordings
