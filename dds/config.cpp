@@ -99,6 +99,11 @@ void validate(const DdsConfig& c, std::string_view where) {
     if (c.ns.empty() || c.ns.find_first_of(" \t/") != std::string::npos) {
         throw InputError(log::cat(p, "namespace '", c.ns, "' must be one non-empty word without '/'"));
     }
+    for (const auto& name : c.await_readers)
+        if (name.empty() || name.find_first_of(" \t,/") != std::string::npos)
+            throw InputError(log::cat(p, "await readers: '", name, "' is not a process name"));
+    if (const auto problem = range_problem(c.await_timeout_s, kAwaitTimeoutRange); !problem.empty())
+        throw InputError(log::cat(p, "await timeout: ", problem));
 }
 
 namespace {
@@ -123,6 +128,11 @@ void add_cli_options(CLI::App& app, DdsCliOptions& o) {
         ->type_name("DIR");
     app.add_option("--identity", o.identity, "the keystore identity to join as (default: the process's name)")->type_name("NAME");
     app.add_flag("--insecure", o.insecure, "the lab profile without DDS Security (anyone on the network can command the vehicles)");
+    app.add_option("--await-readers", o.await_readers,
+                   "processes (e.g. recorder) whose readers each sensor topic waits for before its first sample")
+        ->type_name("NAME")->delimiter(',');
+    app.add_option("--await-timeout", o.await_timeout_s, "how long a sensor topic waits for them, s (default 5)")
+        ->type_name("S")->check(cli::in(kAwaitTimeoutRange));
 }
 
 DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
@@ -149,6 +159,10 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
         in_file("namespace", [&] { if (auto v = file.get_string("dds.namespace")) c.ns = *v; });
         in_file("security", [&] { if (auto v = file.get_string("dds.security")) c.security = *v; });
         in_file("identity", [&] { if (auto v = file.get_string("dds.identity")) c.identity = *v; });
+        in_file("await_readers", [&] { if (auto v = file.get_strings("dds.await_readers")) c.await_readers = *v; });
+        in_file("await_timeout_s", [&] {
+            if (auto v = file.get_double("dds.await_timeout_s", kAwaitTimeoutRange)) c.await_timeout_s = *v;
+        });
         validate(c, file.path());
     }
     if (cli.domain) c.domain = *cli.domain;
@@ -160,6 +174,8 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
     if (cli.security) c.security = *cli.security;
     if (cli.identity) c.identity = *cli.identity;
     if (cli.insecure) c.insecure = true, c.security.clear();
+    if (!cli.await_readers.empty()) c.await_readers = cli.await_readers;
+    if (cli.await_timeout_s) c.await_timeout_s = *cli.await_timeout_s;
     validate(c);
     require_security_choice(c);
     return c;
@@ -172,6 +188,11 @@ std::vector<std::string> to_args(const DdsConfig& c) {
     if (!c.discovery_server.empty()) a.insert(a.end(), {"--discovery-server", c.discovery_server});
     if (!c.security.empty()) a.insert(a.end(), {"--security", c.security});  // each child joins as its own identity
     if (c.insecure) a.emplace_back("--insecure");
+    if (!c.await_readers.empty()) {
+        std::string names;
+        for (const auto& n : c.await_readers) names += (names.empty() ? "" : ",") + n;
+        a.insert(a.end(), {"--await-readers", names, "--await-timeout", log::cat(c.await_timeout_s)});
+    }
     return a;
 }
 

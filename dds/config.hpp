@@ -22,6 +22,9 @@ inline constexpr int kMaxDomainId = 232;  // RTPS port mapping: 7400 + 250 * dom
 inline constexpr Range kDomainRange{0, kMaxDomainId};
 inline constexpr Range kReadersRange{0, 1000};  // "wait for this many readers per topic"
 inline constexpr std::string_view kDefaultNamespace = "lab";
+// How long a sensor writer holds its first sample for the lab's required readers (--await-readers).
+inline constexpr double kDefaultAwaitTimeoutS = 5.0;
+inline constexpr Range kAwaitTimeoutRange{0.1, 120.0, "s"};
 
 struct DdsConfig {
     int domain = 0;
@@ -34,6 +37,11 @@ struct DdsConfig {
     std::string security;                     // keystore folder (dds/security.hpp); "" = no DDS Security
     std::string identity;                     // the keystore identity; "" = the process's name
     bool insecure = false;                    // the lab profile without a keystore, said explicitly
+    // Processes (their participant names: recorder, predictor, ...) whose readers every sensor
+    // writer waits for before its first sample, so a recorder already running loses nothing of a
+    // process that starts after it. Bounded by await_timeout_s; empty = publish at once.
+    std::vector<std::string> await_readers;
+    double await_timeout_s = kDefaultAwaitTimeoutS;
 };
 
 Profile parse_profile(std::string_view text);
@@ -55,6 +63,8 @@ struct DdsCliOptions {
     std::optional<std::string> security;
     std::optional<std::string> identity;
     bool insecure = false;
+    std::vector<std::string> await_readers;
+    std::optional<double> await_timeout_s;
 };
 
 void add_cli_options(CLI::App& app, DdsCliOptions& options);

@@ -6,9 +6,10 @@
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <algorithm>
 #include <chrono>
-#include <mutex>
 #include <set>
+#include <vector>
 #include <condition_variable>
 #include <functional>
 #include <map>
@@ -74,6 +75,7 @@ public:
 
     // Publishes the sample; its header.seq is set to this writer's next sequence number.
     bool write(T& sample) {
+        before_first_sample();
         sample.header().seq(next_seq_++);
         const bool ok = writer_->write(&sample);
         if (ok) {
@@ -86,12 +88,15 @@ public:
 
     // Publishes the sample exactly as given, header.seq included (replaying a recording).
     bool write_as_is(const T& sample) {
+        before_first_sample();
         const bool ok = writer_->write(const_cast<T*>(&sample));
         (ok ? stats_->samples : stats_->lost).fetch_add(1, std::memory_order_relaxed);
         return ok;
     }
 
     int matched() const { return matched_.load(); }
+    // False when the first sample went out because awaiting the required readers timed out.
+    bool awaited_readers_arrived() const { return readers_arrived_; }
     // True once n readers matched. The writer sees a match before the reader has finished its
     // side, and best-effort samples sent in between are dropped, so this waits a little more.
     bool wait_for_readers(int n, std::chrono::milliseconds timeout) const {
@@ -112,9 +117,27 @@ public:
     eprosima::fastdds::dds::DataWriter& native() { return *writer_; }
 
 private:
+    // A sensor topic's first sample waits for the lab's required readers (DdsConfig::await_readers):
+    // best-effort samples sent before they match are lost to them.
+    void before_first_sample() {
+        if (awaited_) return;
+        awaited_ = true;
+        if (spec_.qos != QosProfile::sensor) return;
+        readers_arrived_ = await_required_readers(participant_, [this] {
+            std::lock_guard lock(readers_mutex_);
+            return matched_readers_;
+        }, name_);
+    }
     void on_publication_matched(eprosima::fastdds::dds::DataWriter*,
                                 const eprosima::fastdds::dds::PublicationMatchedStatus& s) override {
         matched_ = s.current_count;
+        std::lock_guard lock(readers_mutex_);
+        auto& v = matched_readers_;
+        if (s.current_count_change > 0) {
+            v.push_back(s.last_subscription_handle);
+        } else if (s.current_count_change < 0) {
+            v.erase(std::remove(v.begin(), v.end(), s.last_subscription_handle), v.end());
+        }
     }
     void on_offered_incompatible_qos(eprosima::fastdds::dds::DataWriter*,
                                      const eprosima::fastdds::dds::OfferedIncompatibleQosStatus& s) override {
@@ -133,6 +156,10 @@ private:
     eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
     std::atomic<int> matched_{0};
     std::uint64_t next_seq_ = 0;
+    bool awaited_ = false;
+    bool readers_arrived_ = true;
+    std::mutex readers_mutex_;
+    std::vector<eprosima::fastdds::dds::InstanceHandle_t> matched_readers_;  // from the listener
 };
 
 // What a reader knows about a sample besides its content.

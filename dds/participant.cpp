@@ -1,18 +1,51 @@
 #include "dds/participant.hpp"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/rtps/common/InstanceHandle.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <thread>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 
 namespace dw::dds {
 namespace fdds = eprosima::fastdds::dds;
+namespace frtps = eprosima::fastrtps::rtps;
+
+class Participant::Discovery final : public fdds::DomainParticipantListener {
+public:
+    void on_participant_discovery(fdds::DomainParticipant*, frtps::ParticipantDiscoveryInfo&& info) override {
+        std::lock_guard lock(mutex_);
+        const bool gone = info.status == frtps::ParticipantDiscoveryInfo::REMOVED_PARTICIPANT ||
+                          info.status == frtps::ParticipantDiscoveryInfo::DROPPED_PARTICIPANT;
+        if (gone) {
+            names_.erase(info.info.m_guid.guidPrefix);
+        } else {
+            names_[info.info.m_guid.guidPrefix] = info.info.m_participantName.to_string();
+        }
+    }
+    std::string name_of(const frtps::GuidPrefix_t& prefix) const {
+        std::lock_guard lock(mutex_);
+        const auto it = names_.find(prefix);
+        return it == names_.end() ? std::string() : it->second;
+    }
+
+private:
+    mutable std::mutex mutex_;
+    std::map<frtps::GuidPrefix_t, std::string> names_;
+};
 
 Participant::Participant(const DdsConfig& config, std::string process, Clock& clock)
-    : config_(config), process_(std::move(process)), clock_(clock) {
+    : config_(config), process_(std::move(process)), clock_(clock), discovery_(std::make_unique<Discovery>()) {
     auto* factory = fdds::DomainParticipantFactory::get_instance();
     participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(config_.domain),
-                                               participant_qos(config_, process_));
+                                               participant_qos(config_, process_), discovery_.get(),
+                                               fdds::StatusMask::none());
     if (participant_ == nullptr) {
         throw RuntimeError(log::cat("cannot create a DDS participant on domain ", config_.domain,
                                     " (profile ", to_string(config_.profile), ", transport ",
@@ -32,6 +65,47 @@ Participant::Participant(const DdsConfig& config, std::string process, Clock& cl
 Participant::~Participant() {
     participant_->delete_contained_entities();
     fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+std::vector<std::string> Participant::unmatched_readers(const std::vector<fdds::InstanceHandle_t>& matched,
+                                                       const std::vector<std::string>& processes) const {
+    std::vector<std::string> missing = processes;
+    for (const auto& h : matched) {
+        const std::string name = discovery_->name_of(frtps::iHandle2GUID(h).guidPrefix);
+        missing.erase(std::remove(missing.begin(), missing.end(), name), missing.end());
+    }
+    return missing;
+}
+
+namespace {
+constexpr auto kAwaitPoll = std::chrono::milliseconds(5);
+// The writer sees a reader match before the reader has matched the writer; a best-effort sample
+// sent in between is dropped by the reader. This covers the reader's side on one network.
+constexpr auto kReaderSideMargin = std::chrono::milliseconds(100);
+}  // namespace
+
+bool await_required_readers(Participant& p, const std::function<std::vector<fdds::InstanceHandle_t>()>& matched,
+                            const std::string& topic) {
+    const auto& wanted = p.config().await_readers;
+    if (wanted.empty()) return true;
+    const auto start = std::chrono::steady_clock::now();
+    const auto deadline = start + to_millis(p.config().await_timeout_s);
+    std::vector<std::string> missing = p.unmatched_readers(matched(), wanted);
+    while (!missing.empty() && std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(kAwaitPoll);
+        missing = p.unmatched_readers(matched(), wanted);
+    }
+    if (!missing.empty()) {
+        std::string names;
+        for (const auto& n : missing) names += (names.empty() ? "" : ", ") + n;
+        log::warn(topic, ": no reader from ", names, " after ", p.config().await_timeout_s,
+                  " s; publishing anyway (what it misses until it joins is lost)");
+        return false;
+    }
+    std::this_thread::sleep_for(kReaderSideMargin);
+    log::debug(topic, ": awaited readers matched after ",
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), " s");
+    return true;
 }
 
 std::string Participant::topic_name(std::string_view suffix) const {

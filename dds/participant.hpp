@@ -2,6 +2,7 @@
 // A lab process's membership of the DDS domain: one participant, one publisher, one subscriber,
 // topics created once, per-endpoint statistics for the heartbeat, and problem reporting (QoS
 // mismatches) as one clear line each.
+#include <fastdds/dds/common/InstanceHandle.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
@@ -62,7 +63,13 @@ public:
     void on_problem(std::function<void(const std::string&)> hook);
     std::uint64_t problem_count() const { return problems_; }
 
+    // The names in `processes` (participant names: recorder, predictor, ...) that own none of the
+    // `matched` readers (a writer's matched subscriptions).
+    std::vector<std::string> unmatched_readers(const std::vector<eprosima::fastdds::dds::InstanceHandle_t>& matched,
+                                               const std::vector<std::string>& processes) const;
+
 private:
+    class Discovery;  // remembers each discovered participant's name
     eprosima::fastdds::dds::Topic& find_or_create_topic(
         const std::string& name, const std::function<eprosima::fastdds::dds::TypeSupport()>& make_type);
 
@@ -76,7 +83,16 @@ private:
     std::vector<std::weak_ptr<EndpointStats>> endpoints_;
     std::vector<std::function<void(const std::string&)>> hooks_;
     std::atomic<std::uint64_t> problems_{0};
+    std::unique_ptr<Discovery> discovery_;
 };
+
+// Holds a sensor writer's first sample until the readers of the processes in the participant's
+// `await_readers` matched it, or `await_timeout_s` passed (then one warning line; it publishes
+// anyway). Returns at once when there is nothing to await. True: they matched (or none awaited).
+// `matched`: the writer's matched subscriptions now (Fast DDS 2.9.1 leaves
+// DataWriter::get_matched_subscriptions unsupported, so the writer keeps them from its listener).
+bool await_required_readers(Participant& p, const std::function<std::vector<eprosima::fastdds::dds::InstanceHandle_t>()>& matched,
+                            const std::string& topic);
 
 // "QoS mismatch on rt/lab/stand/wrench (dw::msg::WrenchStamped): this reader requests
 // RELIABLE VOLATILE KEEP_LAST(16) but a writer offers an incompatible RELIABILITY; no samples

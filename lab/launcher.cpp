@@ -68,12 +68,27 @@ struct Running {
     int restarts = 0;
 };
 
+bool is_recorder(const std::vector<std::string>& args) {
+    return dds::role_of_executable(args[0]) == dds::Role::recorder && args.size() > 1 && args[1] == "record";
+}
+
+// When the lab records, every other process holds its sensor topics' first samples until the
+// recorder's readers matched (dds::DdsConfig::await_readers), unless the flags already say whom to await.
+std::vector<std::string> await_args(const LabFile& lab, const std::map<std::string, std::string>& vars,
+                                    const std::vector<std::string>& dds_args) {
+    if (std::find(dds_args.begin(), dds_args.end(), "--await-readers") != dds_args.end()) return {};
+    for (const auto& p : lab.processes)
+        if (is_recorder(expand(p, vars))) return {"--await-readers", std::string(dds::role_name(dds::Role::recorder))};
+    return {};
+}
+
 // Every command built first: a bad variable stops the run before anything starts.
 std::deque<Running> build_commands(const LabFile& lab, const LaunchOptions& o) {
     namespace fs = std::filesystem;
     std::map<std::string, std::string> vars = lab.vars;
     for (const auto& [k, v] : o.vars) vars[k] = v;
     vars["run_dir"] = o.run_dir;
+    const std::vector<std::string> await = await_args(lab, vars, o.dds_args);
     std::deque<Running> procs;
     for (const auto& p : lab.processes) {
         const HostSpec& host = lab.hosts.at(p.host);
@@ -83,6 +98,7 @@ std::deque<Running> build_commands(const LabFile& lab, const LaunchOptions& o) {
         argv.push_back(bin + "/" + args[0]);
         argv.insert(argv.end(), args.begin() + 1, args.end());
         argv.insert(argv.end(), o.dds_args.begin(), o.dds_args.end());
+        if (!is_recorder(args)) argv.insert(argv.end(), await.begin(), await.end());
         if (std::find(o.dds_args.begin(), o.dds_args.end(), "--security") != o.dds_args.end())
             argv.insert(argv.end(), {"--identity", p.name});  // each process its own identity (dw-lab keys create --lab)
         procs.push_back({p, argv, (fs::path(o.run_dir) / "logs" / (p.name + ".log")).string(), nullptr, std::nullopt, 0});

@@ -177,6 +177,66 @@ TEST(Endpoints, LatchedStateReachesALateReader) {
     EXPECT_EQ(got[0], dw::probe::make_sample<dw::msg::ExperimentState>(4));
 }
 
+// A process that awaits the recorder's readers (issue 19).
+dw::dds::DdsConfig awaiting_recorder(double timeout_s) {
+    auto config = test_config();
+    config.await_readers = {"recorder"};
+    config.await_timeout_s = timeout_s;
+    return config;
+}
+
+// Issue 19: a sensor writer whose process awaits the recorder holds its first sample until the
+// recorder's reader (a participant named "recorder", started later) matched; nothing is lost.
+TEST(Endpoints, ASensorWritersFirstSampleWaitsForTheAwaitedReader) {
+    Participant a(awaiting_recorder(30), "stand_agent");
+    dw::dds::Writer<dw::msg::WrenchStamped> writer(a, topics::stand_wrench);
+    // A reader of another process does not count: only the awaited one releases the sample.
+    Participant other(test_config(), "predictor");
+    dw::dds::Reader<dw::msg::WrenchStamped> bystander(other, topics::stand_wrench, [](const auto&, const auto&) {});
+    std::atomic<int> written{0};
+    std::thread publisher([&] {
+        for (std::uint64_t i = 0; i < 50; ++i) {
+            auto s = dw::probe::make_sample<dw::msg::WrenchStamped>(i);
+            writer.write(s);
+            written = static_cast<int>(i) + 1;
+        }
+    });
+    ASSERT_TRUE(eventually([&] { return writer.matched() >= 1; }));
+    std::this_thread::sleep_for(300ms);
+    EXPECT_EQ(written.load(), 0) << "the first sample went out before the awaited reader existed";
+    Participant rec(test_config(), "recorder");
+    std::mutex m;
+    std::vector<std::uint64_t> seqs;
+    dw::dds::Reader<dw::msg::WrenchStamped> reader(rec, topics::stand_wrench, [&](const dw::msg::WrenchStamped& s, const dw::dds::SampleMeta&) {
+        std::lock_guard lock(m);
+        seqs.push_back(s.header().seq());
+    });
+    publisher.join();
+    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return seqs.size() == 50; })) << seqs.size() << " of 50 received";
+    std::lock_guard lock(m);
+    EXPECT_EQ(seqs.front(), 0u);
+    EXPECT_TRUE(writer.awaited_readers_arrived()) << "released by the timeout, not by the recorder's reader";
+}
+
+// Awaiting is bounded: with the awaited process absent, the writer publishes after the timeout.
+TEST(Endpoints, AnAbsentAwaitedReaderDelaysTheFirstSampleOnlyUntilTheTimeout) {
+    Participant a(awaiting_recorder(0.5), "stand_agent");
+    dw::dds::Writer<dw::msg::WrenchStamped> writer(a, topics::stand_wrench);
+    Participant b(test_config(), "predictor");
+    std::atomic<int> got{0};
+    dw::dds::Reader<dw::msg::WrenchStamped> reader(b, topics::stand_wrench, [&](const auto&, const auto&) { ++got; });
+    ASSERT_TRUE(eventually([&] { return reader.matched() >= 1 && writer.matched() >= 1; }));
+    std::this_thread::sleep_for(200ms);
+    auto s = dw::probe::make_sample<dw::msg::WrenchStamped>(0);
+    EXPECT_TRUE(writer.write(s));
+    EXPECT_FALSE(writer.awaited_readers_arrived());
+    EXPECT_TRUE(eventually([&] { return got.load() == 1; }));
+    // State topics are reliable and latched: they never wait.
+    dw::dds::Writer<dw::msg::ExperimentState> state(a, topics::experiment_state);
+    auto st = dw::probe::make_sample<dw::msg::ExperimentState>(0);
+    EXPECT_TRUE(state.write(st));
+}
+
 TEST(PeerTable, AppearsThenExpiresAfterThreePeriods) {
     dw::dds::PeerTable t;
     dw::msg::ProcessStatus s;

@@ -11,6 +11,7 @@
 #include "core/errors.hpp"
 #include "lab/labfile.hpp"
 #include "lab/launcher.hpp"
+#include "mcap/mcap.hpp"
 #include "support.hpp"
 
 using namespace std::chrono_literals;
@@ -59,6 +60,20 @@ std::string lab_text(const std::string& b_host, const std::string& planner_host)
     return s;
 }
 
+// The lowest header.seq recorded per topic (suffix after the namespace).
+std::map<std::string, std::uint64_t> first_recorded_seq(const std::string& file) {
+    std::map<std::uint16_t, std::string> topics;
+    std::map<std::string, std::uint64_t> first;
+    const auto r = dw::mcap::read_file(file, {
+        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic.substr(c.topic.find('/', 3) + 1); },
+        .on_message = [&](const dw::mcap::Message& m) {
+            auto [it, fresh] = first.try_emplace(topics[m.channel_id], m.sequence);
+            if (!fresh) it->second = std::min<std::uint64_t>(it->second, m.sequence);
+        }});
+    EXPECT_FALSE(r.error) << *r.error;
+    return first;
+}
+
 }  // namespace
 
 TEST(LabFile, ReadsTheSimulatedLabAndNamesWhereItIsWrong) {
@@ -99,6 +114,14 @@ TEST(LabRun, FliesALabFileRestartsAFailingProcessAndPrintsOtherHostsCommands) {
     EXPECT_NE(r.err.find("stand_agent    RUNNING"), std::string::npos) << r.err;
     EXPECT_TRUE(std::filesystem::exists(dir.file("run/exp.mcap")));
     EXPECT_NE(dw::read_file(dir.file("run/logs/planner.log")).find("DONE"), std::string::npos);
+    // Issue 19: the stand agent and the bridge start before the recorder, yet their first samples
+    // are recorded (the launcher made them await the recorder's readers).
+    EXPECT_NE(r.out.find("--await-readers recorder"), std::string::npos) << r.out;
+    const auto first = first_recorded_seq(dir.file("run/exp.mcap"));
+    for (const char* topic : {"stand/wrench", "stand/cells", "mocap/frame", "vehicles/state", "vehicles/setpoint"}) {
+        ASSERT_TRUE(first.count(topic)) << topic;
+        EXPECT_EQ(first.at(topic), 0u) << topic << ": the first samples were not recorded";
+    }
 }
 
 // Issue 18: the simulated lab with DDS Security, every process its own identity from a keystore
