@@ -70,32 +70,73 @@ void require_output_dir(const std::string& path, std::string_view what) {
     }
 }
 
-void write_file(const std::string& path, std::string_view content, unsigned mode) {
-    const fs::path parent = fs::path(path).parent_path();
+namespace {
+constexpr std::size_t kWriteBuffer = 1 << 20;
+}  // namespace
+
+AtomicFile::AtomicFile(std::string path, unsigned mode) : path_(std::move(path)), tmp_(log::cat(path_, ".tmp-", ::getpid())) {
+    const fs::path parent = fs::path(path_).parent_path();
     std::error_code ec;
     if (!parent.empty() && !fs::exists(parent, ec) && !fs::create_directories(parent, ec)) {
-        throw RuntimeError(log::cat("cannot write ", path, ": cannot create ", parent.string(), ": ", ec.message()));
+        throw RuntimeError(log::cat("cannot write ", path_, ": cannot create ", parent.string(), ": ", ec.message()));
     }
-    const std::string tmp = log::cat(path, ".tmp-", ::getpid());
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, static_cast<mode_t>(mode));
-    if (fd < 0) throw RuntimeError(log::cat("cannot write ", path, ": ", std::strerror(errno)));
+    fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, static_cast<mode_t>(mode));
+    if (fd_ < 0) throw RuntimeError(log::cat("cannot write ", path_, ": ", std::strerror(errno)));
+    buffer_.reserve(kWriteBuffer);
+}
+
+AtomicFile::~AtomicFile() {
+    if (fd_ < 0) return;
+    ::close(fd_);
+    ::unlink(tmp_.c_str());
+}
+
+void AtomicFile::fail(int err) {
+    ::close(fd_);
+    fd_ = -1;
+    ::unlink(tmp_.c_str());
+    throw RuntimeError(log::cat("cannot write ", path_, ": ", std::strerror(err)));
+}
+
+void AtomicFile::flush() {
     std::size_t done = 0;
-    int err = 0;
-    while (done < content.size()) {
-        const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+    while (done < buffer_.size()) {
+        const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
         if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            err = n < 0 ? errno : ENOSPC;
-            break;
-        }
+        if (n <= 0) fail(n < 0 ? errno : ENOSPC);
         done += static_cast<std::size_t>(n);
     }
-    if (::close(fd) != 0 && err == 0) err = errno;
-    if (err == 0 && ::rename(tmp.c_str(), path.c_str()) != 0) err = errno;
-    if (err != 0) {
-        ::unlink(tmp.c_str());
-        throw RuntimeError(log::cat("cannot write ", path, ": ", std::strerror(err)));
+    buffer_.clear();
+}
+
+void AtomicFile::write(std::string_view bytes) {
+    if (fd_ < 0) throw RuntimeError(log::cat("cannot write ", path_, ": already closed"));
+    if (buffer_.size() + bytes.size() > kWriteBuffer) flush();
+    if (bytes.size() >= kWriteBuffer) {
+        buffer_.assign(bytes);
+        flush();
+    } else {
+        buffer_.append(bytes);
     }
+}
+
+void AtomicFile::commit() {
+    if (fd_ < 0) throw RuntimeError(log::cat("cannot write ", path_, ": already closed"));
+    flush();
+    const int fd = fd_;
+    fd_ = -1;
+    int err = ::close(fd) != 0 ? errno : 0;
+    if (err == 0 && ::rename(tmp_.c_str(), path_.c_str()) != 0) err = errno;
+    if (err != 0) {
+        ::unlink(tmp_.c_str());
+        throw RuntimeError(log::cat("cannot write ", path_, ": ", std::strerror(err)));
+    }
+}
+
+void write_file(const std::string& path, std::string_view content, unsigned mode) {
+    AtomicFile f(path, mode);
+    f.write(content);
+    f.commit();
 }
 
 bool is_plain_name(std::string_view name) {

@@ -21,6 +21,29 @@ void require_readable_file(const std::string& path, std::string_view what);
 // it on failure.
 // `mode`: the file's permissions from its creation on (0600 for a private key).
 void write_file(const std::string& path, std::string_view content, unsigned mode = 0644);
+// A file written piece by piece with write_file's promise: it appears at `path` (renamed from a
+// temporary beside it) only when commit() succeeds; destroyed before that, it leaves nothing.
+// Throws dw::RuntimeError naming the path and the system's reason.
+class AtomicFile {
+public:
+    explicit AtomicFile(std::string path, unsigned mode = 0644);
+    ~AtomicFile();
+    AtomicFile(const AtomicFile&) = delete;
+    AtomicFile& operator=(const AtomicFile&) = delete;
+
+    void write(std::string_view bytes);  // buffered
+    void commit();
+    const std::string& path() const { return path_; }
+
+private:
+    void flush();
+    void fail(int err);
+
+    std::string path_, tmp_;
+    int fd_ = -1;
+    std::string buffer_;
+};
+
 // Throws dw::InputError when `path` cannot become a file: it is empty or a directory, or its
 // folder does not exist or cannot be written. Creates nothing: for checking an output option
 // before long work starts.

@@ -1,6 +1,8 @@
 #include "mcap/mcap.hpp"
 
 #include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <lz4frame.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -605,10 +607,29 @@ std::uint64_t next_sound_chunk(std::span<const std::uint8_t> file, std::uint64_t
     return file.size();
 }
 
+// The data section's CRC as the Data End record states it, found from the footer without reading
+// the file; 0 (nothing to check) when the file does not end in a sound footer.
+std::uint32_t stated_data_crc(std::span<const std::uint8_t> file) {
+    constexpr std::size_t kFooterRecord = 9 + 8 + 8 + 4, kDataEndRecord = 9 + 4;
+    if (file.size() < 8 + kDataEndRecord + kFooterRecord + 8) return 0;
+    const std::size_t footer = file.size() - 8 - kFooterRecord;
+    if (file[footer] != kFooter) return 0;
+    std::uint64_t summary_start = 0;
+    std::memcpy(&summary_start, file.data() + footer + 9, 8);
+    const std::uint64_t data_end = (summary_start != 0 ? summary_start : footer) - kDataEndRecord;
+    if (summary_start > footer || data_end < 8 || file[data_end] != kDataEnd) return 0;
+    std::uint32_t crc = 0;
+    std::memcpy(&crc, file.data() + data_end + 9, 4);
+    return crc;
+}
+
 class LinearRead {
 public:
-    LinearRead(std::span<const std::uint8_t> file, const Handlers& h, ReadMode mode)
-        : file_(file), h_(h), mode_(mode), reading_{h, {}, {}, 0, mode == ReadMode::salvage, 0} {}
+    // `consumed(offset)`: nothing before offset will be read again (a mapped file lets it go).
+    LinearRead(std::span<const std::uint8_t> file, const Handlers& h, ReadMode mode,
+               std::function<void(std::uint64_t)> consumed = {})
+        : file_(file), h_(h), mode_(mode), reading_{h, {}, {}, 0, mode == ReadMode::salvage, 0},
+          consumed_(std::move(consumed)), check_data_crc_(mode == ReadMode::strict && stated_data_crc(file) != 0) {}
 
     ReadResult run() {
         try {
@@ -617,7 +638,13 @@ public:
             }
             r_.valid_until = 8;
             std::uint64_t pos = 8;
-            while (pos != kDone) pos = step(pos);
+            while (pos != kDone) {
+                pos = step(pos);
+                if (pos == kDone) break;
+                advance_crc(pos);
+                if (consumed_) consumed_(pos);
+                if (h_.on_progress) h_.on_progress(pos, file_.size());
+            }
         } catch (const InputError& e) {
             note(e.what());
         }
@@ -628,6 +655,13 @@ public:
 
 private:
     static constexpr std::uint64_t kDone = ~0ULL;
+
+    // The data section's CRC, carried along as the read goes (the bytes behind may be released).
+    void advance_crc(std::uint64_t to) {
+        if (!check_data_crc_ || in_summary_ || to <= crc_at_) return;
+        data_crc_ = crc32(file_.subspan(static_cast<std::size_t>(crc_at_), static_cast<std::size_t>(to - crc_at_)), data_crc_);
+        crc_at_ = to;
+    }
 
     void note(const std::string& problem) {
         if (!r_.error) r_.error = problem;
@@ -677,7 +711,8 @@ private:
         (void)len;
         if (op == kDataEnd) {
             const std::uint32_t crc = in.u32();
-            if (crc != 0 && mode_ == ReadMode::strict && crc != crc32(file_.subspan(0, static_cast<std::size_t>(pos)))) {
+            advance_crc(pos);
+            if (crc != 0 && check_data_crc_ && crc != data_crc_) {
                 throw InputError(log::cat("offset ", pos, ": data section CRC mismatch"));
             }
             in_summary_ = true;
@@ -737,12 +772,56 @@ private:
     Reading reading_;
     ReadResult r_;
     bool in_summary_ = false;
+    std::function<void(std::uint64_t)> consumed_;
+    bool check_data_crc_ = false;
+    std::uint64_t crc_at_ = 0;
+    std::uint32_t data_crc_ = 0;
 };
 
-std::vector<std::uint8_t> file_bytes(const std::string& path) {
-    const std::string text = dw::read_file(path, "MCAP file");
-    return std::vector<std::uint8_t>(text.begin(), text.end());
-}
+// A file mapped read-only. The reader hands back the pages behind it, so a file of any size keeps
+// about kResidentWindow of itself resident: memory bounded independent of the file's size.
+class MappedFile {
+public:
+    static constexpr std::uint64_t kResidentWindow = 16 << 20;
+
+    explicit MappedFile(const std::string& path) {
+        require_readable_file(path, "MCAP file");
+        fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        struct stat st{};
+        if (fd_ < 0 || ::fstat(fd_, &st) != 0) throw InputError(log::cat(path, ": cannot read: ", std::strerror(errno)));
+        size_ = static_cast<std::size_t>(st.st_size);
+        if (size_ == 0) return;  // nothing to map: the reader reports "not an MCAP file"
+        base_ = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+        if (base_ == MAP_FAILED) {
+            base_ = nullptr;
+            ::close(fd_);
+            throw InputError(log::cat(path, ": cannot map: ", std::strerror(errno)));
+        }
+        ::madvise(base_, size_, MADV_SEQUENTIAL);
+    }
+    ~MappedFile() {
+        if (base_) ::munmap(base_, size_);
+        if (fd_ >= 0) ::close(fd_);
+    }
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+
+    std::span<const std::uint8_t> bytes() const { return {static_cast<const std::uint8_t*>(base_), base_ ? size_ : 0}; }
+    // Whole pages below `offset` leave the process (read again from the page cache if needed).
+    void release_before(std::uint64_t offset) {
+        static const std::uint64_t page = static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+        const std::uint64_t end = offset / page * page;
+        if (!base_ || end < released_ + kResidentWindow) return;
+        ::madvise(static_cast<char*>(base_) + released_, end - released_, MADV_DONTNEED);
+        released_ = end;
+    }
+
+private:
+    int fd_ = -1;
+    void* base_ = nullptr;
+    std::size_t size_ = 0;
+    std::uint64_t released_ = 0;
+};
 
 }  // namespace
 
@@ -750,10 +829,14 @@ ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers, Re
     return LinearRead(file, handlers, mode).run();
 }
 
-ReadResult read_file(const std::string& path, const Handlers& handlers) { return read(file_bytes(path), handlers); }
+ReadResult read_file(const std::string& path, const Handlers& handlers) {
+    MappedFile file(path);
+    return LinearRead(file.bytes(), handlers, ReadMode::strict, [&](std::uint64_t at) { file.release_before(at); }).run();
+}
 
 ReadResult recover(const std::string& in_path, const std::string& out_path, const WriterOptions& options) {
-    const auto bytes = file_bytes(in_path);  // the input is checked before any output exists
+    MappedFile mapped(in_path);  // the input is checked before any output exists
+    const auto bytes = mapped.bytes();
     if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) {
         throw InputError(log::cat(in_path, ": not an MCAP file (no MCAP magic at offset 0); nothing to recover"));
     }
@@ -774,7 +857,7 @@ ReadResult recover(const std::string& in_path, const std::string& out_path, cons
         };
         h.on_metadata = [&](const Metadata& m) { out.add_metadata(m); };
         h.on_attachment = [&](const Attachment& a) { out.add_attachment(a); };
-        const ReadResult r = read(bytes, h, ReadMode::salvage);
+        const ReadResult r = LinearRead(bytes, h, ReadMode::salvage, [&](std::uint64_t at) { mapped.release_before(at); }).run();
         out.close();
         if (::rename(tmp.c_str(), out_path.c_str()) != 0) throw RuntimeError(log::cat("cannot write ", out_path, ": ", std::strerror(errno)));
         return r;

@@ -129,6 +129,7 @@ struct Handlers {
     std::function<void(const Message&)> on_message;
     std::function<void(const Metadata&)> on_metadata;
     std::function<void(const Attachment&)> on_attachment;
+    std::function<void(std::uint64_t done, std::uint64_t size)> on_progress;  // after each record: bytes read of the file's
 };
 
 struct ReadResult {
@@ -149,6 +150,8 @@ enum class ReadMode { strict, salvage };
 // Reads every record in file order, decompressing chunks and checking CRCs, and reports the first
 // problem; what was read before it (strict) or around it (salvage) has been handed to the handlers.
 ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers, ReadMode mode = ReadMode::strict);
+// The same, streamed from the file: memory stays bounded whatever its size (it is mapped and read
+// front to back; pages behind the reader are released).
 ReadResult read_file(const std::string& path, const Handlers& handlers);
 
 // Rebuilds a readable file (indexes, summary, footer) from a truncated or damaged one: every

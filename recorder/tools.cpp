@@ -1,6 +1,9 @@
 #include "recorder/tools.hpp"
 
 #include <algorithm>
+#include <optional>
+#include <queue>
+#include <tuple>
 #include <map>
 #include <memory>
 #include <thread>
@@ -38,49 +41,76 @@ private:
 };
 }  // namespace
 
+namespace {
+// Messages are published in log-time order within this window (a file may hold them slightly out
+// of order across topics); the replay holds no more than the window's messages, whatever the
+// recording's size.
+constexpr std::uint64_t kReorderWindowNs = 500'000'000;
+
+struct Pending {
+    std::uint64_t log_time;
+    std::uint64_t order;  // file order: equal times keep it
+    std::uint16_t channel;
+    std::vector<std::uint8_t> data;
+    bool operator>(const Pending& o) const { return std::tie(log_time, order) > std::tie(o.log_time, o.order); }
+};
+
+// The writer replaying one recorded channel, or null when it is not replayed.
+std::unique_ptr<ReplayChannel> writer_for(const mcap::Channel& c, const std::string& type, dds::Participant& p, const ReplayOptions& o) {
+    const std::string suffix = recordings::topic_suffix(c.topic);
+    if (!o.topics.empty() && std::find(o.topics.begin(), o.topics.end(), suffix) == o.topics.end()) return nullptr;
+    std::unique_ptr<ReplayChannel> w;
+    dds::topics::for_each([&](const auto& spec) {
+        using T = typename std::decay_t<decltype(spec)>::type;
+        if (spec.suffix == suffix && spec.type_name == type) w = std::make_unique<TypedReplay<T>>(p, spec);
+    });
+    if (w && o.wait_readers > 0)
+        while (!w->wait_for_readers(o.wait_readers, std::chrono::seconds(1)) && !o.stop.stop_requested()) {}
+    return w;
+}
+}  // namespace
+
 std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayOptions& o) {
     recordings::Catalogue l;
-    struct Item {
-        std::uint64_t log_time;
-        std::uint16_t channel;
-        std::vector<std::uint8_t> data;
+    std::map<std::uint16_t, std::unique_ptr<ReplayChannel>> writers;
+    std::priority_queue<Pending, std::vector<Pending>, std::greater<>> pending;
+    std::optional<std::chrono::steady_clock::time_point> start;
+    std::uint64_t t0 = 0, newest = 0, order = 0, sent = 0;
+    auto publish = [&](const Pending& it) {
+        if (!start) start = std::chrono::steady_clock::now(), t0 = it.log_time;
+        const auto offset = it.log_time > t0 ? it.log_time - t0 : 0;
+        std::this_thread::sleep_until(*start + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(offset) / o.speed)));
+        if (writers.at(it.channel)->publish(it.data)) ++sent;
     };
-    std::vector<Item> items;
     mcap::Handlers h;
     l.watch(h);
-    h.on_message = [&](const mcap::Message& m) { items.push_back({m.log_time, m.channel_id, {m.data.begin(), m.data.end()}}); };
-    recordings::require_sound(mcap::read_file(path, h), path);
-    std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.log_time < b.log_time; });
-
-    std::map<std::uint16_t, std::unique_ptr<ReplayChannel>> writers;
-    for (const auto& [id, c] : l.channels) {
-        const std::string suffix = recordings::topic_suffix(c.topic);
-        if (!o.topics.empty() && std::find(o.topics.begin(), o.topics.end(), suffix) == o.topics.end()) continue;
-        const std::string type = l.type_of(c);
-        dds::topics::for_each([&](const auto& spec) {
-            using T = typename std::decay_t<decltype(spec)>::type;
-            if (spec.suffix == suffix && spec.type_name == type) writers[id] = std::make_unique<TypedReplay<T>>(p, spec);
-        });
-    }
-    if (writers.empty()) throw InputError(log::cat(path, ": no recorded topic to replay"));
-    if (o.wait_readers > 0) {
-        for (const auto& [id, w] : writers) {
-            while (!w->wait_for_readers(o.wait_readers, std::chrono::seconds(1)) && !o.stop.stop_requested()) {}
+    h.on_channel = [&](const mcap::Channel& c) {
+        l.channels[c.id] = c;
+        if (!writers.count(c.id)) writers[c.id] = writer_for(c, l.type_of(c), p, o);
+    };
+    h.on_message = [&](const mcap::Message& m) {
+        if (o.stop.stop_requested()) throw Stopped("the replay");
+        const auto w = writers.find(m.channel_id);
+        if (w == writers.end() || !w->second) return;
+        newest = std::max(newest, m.log_time);
+        pending.push({m.log_time, order++, m.channel_id, {m.data.begin(), m.data.end()}});
+        while (!pending.empty() && pending.top().log_time + kReorderWindowNs < newest) {
+            publish(pending.top());
+            pending.pop();
         }
+    };
+    h.on_progress = [&](std::uint64_t done, std::uint64_t size) {
+        if (o.progress) o.progress(static_cast<double>(done) / static_cast<double>(std::max<std::uint64_t>(size, 1)));
+    };
+    try {
+        recordings::require_sound(mcap::read_file(path, h), path);
+        for (; !pending.empty() && !o.stop.stop_requested(); pending.pop()) publish(pending.top());
+    } catch (const Stopped&) {
     }
-    const auto start = std::chrono::steady_clock::now();
-    const std::uint64_t t0 = items.empty() ? 0 : items.front().log_time;
-    std::uint64_t sent = 0;
-    for (std::size_t i = 0; i < items.size() && !o.stop.stop_requested(); ++i) {
-        const Item& it = items[i];
-        auto w = writers.find(it.channel);
-        if (w == writers.end()) continue;
-        const auto due = start + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(it.log_time - t0) / o.speed));
-        std::this_thread::sleep_until(due);
-        if (w->second->publish(it.data)) ++sent;
-        if (o.progress && i % 256 == 0) o.progress(static_cast<double>(i) / static_cast<double>(items.size()));
-    }
-    for (const auto& [id, w] : writers) w->wait_for_acknowledgments();
+    if (std::none_of(writers.begin(), writers.end(), [](const auto& w) { return w.second != nullptr; }))
+        throw InputError(log::cat(path, ": no recorded topic to replay"));
+    for (const auto& [id, w] : writers)
+        if (w) w->wait_for_acknowledgments();
     if (o.progress) o.progress(1.0);
     return sent;
 }

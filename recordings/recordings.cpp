@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <iomanip>
 #include <ostream>
 #include <tuple>
@@ -81,7 +83,7 @@ bool print_info(const std::string& path, std::ostream& out) {
     };
     std::map<std::uint16_t, PerChannel> per;
     std::vector<mcap::Metadata> metadata;
-    std::vector<mcap::Attachment> attachments;
+    std::vector<std::string> attachments;  // described, not kept: memory stays bounded
     mcap::Handlers h;
     l.watch(h);
     h.on_message = [&](const mcap::Message& m) {
@@ -92,7 +94,9 @@ bool print_info(const std::string& path, std::ostream& out) {
         p.last = std::max(p.last, m.log_time);
     };
     h.on_metadata = [&](const mcap::Metadata& m) { metadata.push_back(m); };
-    h.on_attachment = [&](const mcap::Attachment& a) { attachments.push_back(a); };
+    h.on_attachment = [&](const mcap::Attachment& a) {
+        attachments.push_back(log::cat("attachment ", a.name, " (", a.media_type, ", ", a.data.size(), " bytes)"));
+    };
     const auto r = mcap::read_file(path, h);
 
     std::uint64_t first = UINT64_MAX, last = 0, total = 0;
@@ -135,7 +139,7 @@ bool print_info(const std::string& path, std::ostream& out) {
         }
         out << "\n";
     }
-    for (const auto& a : attachments) out << "attachment " << a.name << " (" << a.media_type << ", " << a.data.size() << " bytes)\n";
+    for (const auto& a : attachments) out << a << "\n";
     if (r.error) out << "DAMAGED: " << *r.error << " — `dw-recorder recover` rebuilds what is readable\n";
     return !r.error.has_value();
 }
@@ -217,59 +221,100 @@ flight::Flight read_flight_or_recording(const std::string& path) {
     return flight_from_recording(path, {});
 }
 
-void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop) {
+namespace {
+
+// A string CSV-quoted when it holds a separator, a quote or a line break.
+std::string csv_value(const nlohmann::json& v) {
+    if (!v.is_string()) return v.dump();
+    std::string s = v.get<std::string>();
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+    return q + "\"";
+}
+
+// One topic's CSV, written as its messages are read: its columns are its first message's. A later
+// message with more (a longer sequence) makes the table "grown": it is written in a second read,
+// once every column is known. Memory stays bounded by one row, whatever the recording's size.
+struct CsvTable {
+    std::vector<std::string> columns;
+    std::map<std::string, std::size_t> index;
+    std::unique_ptr<AtomicFile> out;
+    std::uint64_t rows = 0;
+    bool grew = false;
+
+    // The message's fields in this table's column order (new columns added at the end).
+    std::vector<std::string> row(const mcap::Message& m, const nlohmann::json& j) {
+        std::vector<std::string> r(columns.size());
+        auto put = [&](const std::string& col, std::string value) {
+            auto [it, added] = index.try_emplace(col, columns.size());
+            if (added) {
+                columns.push_back(col);
+                grew = grew || rows > 0;
+            }
+            if (r.size() <= it->second) r.resize(it->second + 1);
+            r[it->second] = std::move(value);
+        };
+        put("log_time", std::to_string(m.log_time));
+        put("publish_time", std::to_string(m.publish_time));
+        for (const auto& [k, v] : dds::flatten(j)) put(k, csv_value(v));
+        return r;
+    }
+    void write_line(const std::vector<std::string>& fields) {
+        std::string line;
+        for (std::size_t i = 0; i < columns.size(); ++i) line += (i ? "," : "") + (i < fields.size() ? fields[i] : std::string());
+        out->write(line + "\n");
+    }
+};
+
+std::string csv_path(const std::string& dir, const mcap::Channel& c) {
+    std::string name = topic_suffix(c.topic);
+    std::replace(name.begin(), name.end(), '/', '_');
+    return (std::filesystem::path(dir) / (name + ".csv")).string();
+}
+
+// One read of the recording: rows of the tables `wanted` says to write (all on the first read,
+// the grown ones on the second).
+void csv_pass(const std::string& path, const std::string& dir, const std::stop_token& stop, std::map<std::uint16_t, CsvTable>& tables,
+              const std::function<bool(std::uint16_t)>& wanted) {
     Catalogue l;
-    struct Table {
-        std::vector<std::string> columns;
-        std::map<std::string, std::size_t> index;
-        std::vector<std::vector<std::string>> rows;
-    };
-    std::map<std::uint16_t, Table> tables;
     mcap::Handlers h;
     l.watch(h);
     std::uint64_t read = 0;
     h.on_message = [&](const mcap::Message& m) {
         if (++read % kStopCheckEvery == 0) throw_if_stopped(stop, "the export");
-        const auto& c = l.channels.at(m.channel_id);
-        const std::string type = l.type_of(c);
-        const auto j = decode(type, m.data);
+        if (!wanted(m.channel_id)) return;
+        const auto j = decode(l.type_of(l.channels.at(m.channel_id)), m.data);
         if (!j) return;
-        Table& t = tables[m.channel_id];
-        std::vector<std::string> row(t.columns.size());
-        auto put = [&](const std::string& col, std::string value) {
-            auto [it, added] = t.index.try_emplace(col, t.columns.size());
-            if (added) t.columns.push_back(col);
-            if (row.size() <= it->second) row.resize(it->second + 1);
-            row[it->second] = std::move(value);
-        };
-        put("log_time", std::to_string(m.log_time));
-        put("publish_time", std::to_string(m.publish_time));
-        for (const auto& [k, v] : dds::flatten(*j)) {
-            std::string s = v.is_string() ? v.get<std::string>() : v.dump();
-            if (v.is_string()) {  // CSV-quote strings with separators or quotes
-                if (s.find_first_of(",\"\n") != std::string::npos) {
-                    std::string q = "\"";
-                    for (char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-                    s = q + "\"";
-                }
-            }
-            put(k, std::move(s));
-        }
-        t.rows.push_back(std::move(row));
+        CsvTable& t = tables[m.channel_id];
+        const bool first = !t.out;
+        if (first) t.out = std::make_unique<AtomicFile>(csv_path(dir, l.channels.at(m.channel_id)));
+        const auto fields = t.row(m, *j);
+        if (t.grew) return;  // written again in the second read
+        if (first) t.write_line(t.columns);
+        t.write_line(fields);
+        ++t.rows;
     };
     require_sound(mcap::read_file(path, h), path);
-    for (const auto& [id, t] : tables) {
-        std::string name = topic_suffix(l.channels.at(id).topic);
-        std::replace(name.begin(), name.end(), '/', '_');
-        std::string text;
-        for (std::size_t i = 0; i < t.columns.size(); ++i) text += (i ? "," : "") + t.columns[i];
-        text += "\n";
-        for (const auto& row : t.rows) {
-            for (std::size_t i = 0; i < t.columns.size(); ++i) text += (i ? "," : "") + (i < row.size() ? row[i] : std::string());
-            text += "\n";
-        }
-        write_file((std::filesystem::path(dir) / (name + ".csv")).string(), text);
+}
+
+}  // namespace
+
+void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop) {
+    std::map<std::uint16_t, CsvTable> tables;
+    csv_pass(path, dir, stop, tables, [](std::uint16_t) { return true; });
+    std::map<std::uint16_t, CsvTable> grown;
+    for (auto& [id, t] : tables) {
+        if (!t.grew) continue;
+        t.out.reset();  // its first version had too few columns: dropped, written again below
+        grown[id].columns = t.columns;
+        for (std::size_t i = 0; i < t.columns.size(); ++i) grown[id].index[t.columns[i]] = i;
     }
+    if (!grown.empty()) csv_pass(path, dir, stop, grown, [&](std::uint16_t id) { return grown.count(id) > 0; });
+    for (auto& [id, t] : tables)
+        if (!t.grew) t.out->commit();
+    for (auto& [id, t] : grown)
+        if (t.out) t.out->commit();
 }
 
 }  // namespace dw::recordings

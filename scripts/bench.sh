@@ -15,3 +15,4 @@ done
 "$here/build/bin/dw-bench-predictor"
 "$here/build/bin/dw-bench-explain"
 "$here/build/bin/dw-bench-security"
+"$here/build/bin/dw-bench-stream" --dir "${DW_BENCH_DIR:-/tmp}"

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <cstring>
 #include <random>
+#include <sys/resource.h>
+#include <algorithm>
 
 #include "core/errors.hpp"
 #include "core/subprocess.hpp"
@@ -40,6 +42,14 @@ void write_sample(const std::string& path, Compression c, std::uint32_t n, std::
     w.add_attachment({5, 6, "physics.yaml", "application/yaml", "format: downwash-physics/1\n"});
     w.close();
 }
+
+long peak_rss_kb() {
+    rusage u{};
+    ::getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss;
+}
+
+void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes);
 
 std::vector<std::uint8_t> bytes_of(const std::string& path) {
     const std::string s = dw::read_file(path);
@@ -135,6 +145,70 @@ TEST(Mcap, CrcMismatchesAreCaught) {
     const ReadResult r = read(bytes, {});
     ASSERT_TRUE(r.error);
     EXPECT_NE(r.error->find("CRC mismatch"), std::string::npos) << *r.error;
+}
+
+// Issue 19: read_file streams the file; it reads exactly what a read of the whole file in memory
+// reads, and still checks the data section's CRC (carried along as it goes).
+TEST(Mcap, StreamedReadEqualsTheInMemoryReadAndChecksTheDataCrc) {
+    dw::test::TempDir d;
+    write_sample(d.file("crc.mcap"), Compression::lz4, 20000, 2048);  // data_crc on for lz4
+    auto bytes = bytes_of(d.file("crc.mcap"));
+    std::vector<std::uint32_t> streamed, whole;
+    std::vector<std::uint64_t> progress;
+    Handlers h{.on_message = [&](const Message& m) { streamed.push_back(m.sequence); }};
+    h.on_progress = [&](std::uint64_t done, std::uint64_t size) { progress.push_back(done * 1000 / size); };
+    const ReadResult a = read_file(d.file("crc.mcap"), h);
+    const ReadResult b = read(bytes, {.on_message = [&](const Message& m) { whole.push_back(m.sequence); }});
+    ASSERT_FALSE(a.error) << *a.error;
+    ASSERT_FALSE(b.error) << *b.error;
+    EXPECT_EQ(streamed, whole);
+    EXPECT_EQ(streamed.size(), 20000u);
+    EXPECT_TRUE(std::is_sorted(progress.begin(), progress.end()));
+    ASSERT_FALSE(progress.empty());
+    EXPECT_LE(progress.back(), 1000u);
+    // A byte changed outside any chunk (the metadata record has no CRC of its own): only the
+    // data section's CRC can tell, streamed or not.
+    const std::string host = "test";
+    const auto at = std::search(bytes.begin(), bytes.end(), host.begin(), host.end());
+    ASSERT_NE(at, bytes.end());
+    *at = 'T';
+    write_bytes(d.file("bad.mcap"), bytes);
+    for (const ReadResult& r : {read_file(d.file("bad.mcap"), {}), read(bytes, {})}) {
+        ASSERT_TRUE(r.error);
+        EXPECT_NE(r.error->find("data section CRC mismatch"), std::string::npos) << *r.error;
+    }
+}
+
+// Issue 19: memory stays bounded whatever the file's size (the file is not held in memory).
+TEST(Mcap, StreamedReadOfALargeFileKeepsMemoryBounded) {
+    dw::test::TempDir d;
+    const std::string path = d.file("large.mcap");
+    {
+        WriterOptions o;
+        o.fsync = false;
+        o.compression = Compression::none;  // the file as large as its messages
+        Writer w(path, o);
+        const auto s = w.add_schema("dw::msg::Test", "omgidl", "");
+        const auto ch = w.add_channel("rt/lab/a", s, "cdr", {});
+        std::vector<std::uint8_t> big(1 << 20);
+        for (std::uint32_t i = 0; i < 320; ++i) {
+            std::fill(big.begin(), big.end(), static_cast<std::uint8_t>(i));
+            w.write({ch, i, i * 1000ull, i * 1000ull, big}, 0);
+        }
+        w.close();
+    }
+    ASSERT_GT(std::filesystem::file_size(path), 300u << 20);
+    const long before_kb = peak_rss_kb();
+    std::uint64_t sum = 0, n = 0;
+    const ReadResult r = read_file(path, {.on_message = [&](const Message& m) {
+        ++n;
+        for (std::size_t k = 0; k < m.data.size(); k += 4096) sum += m.data[k];  // touch every page
+    }});
+    ASSERT_FALSE(r.error) << *r.error;
+    EXPECT_EQ(n, 320u);
+    EXPECT_GT(sum, 0u);
+    const long grew_mb = (peak_rss_kb() - before_kb) / 1024;
+    EXPECT_LT(grew_mb, 64) << "peak RSS grew by " << grew_mb << " MB reading a 320 MB file";
 }
 
 TEST(Mcap, SurvivesThousandsOfCorruptedAndTruncatedFiles) {

@@ -23,6 +23,8 @@
 #include "recorder/tools.hpp"
 #include "recordings/recordings.hpp"
 #include "support.hpp"
+#include "testkit/recording.hpp"
+#include "testkit/mocap.hpp"
 
 using namespace std::chrono_literals;
 using dw::test::bin;
@@ -398,20 +400,46 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
     }
 }
 
+// Issue 19: the CSV export streams; a topic whose later messages have more columns (a longer
+// sequence) is written again once every column is known: every row as wide as the header.
+TEST(Recorder, CsvExportOfATopicThatGrowsColumnsIsWrittenWithEveryColumn) {
+    TempDir dir;
+    const std::string file = dir.file("grow.mcap");
+    {
+        dw::testkit::LabRecording w(file);
+        const auto cm = w.channel(dw::dds::topics::mocap_frame);
+        const auto cw = w.channel(dw::dds::topics::stand_wrench);
+        for (std::uint32_t i = 0; i < 6; ++i) {
+            dw::msg::MocapFrame f;
+            for (std::uint32_t b = 0; b <= i / 2; ++b) dw::testkit::add_body(f, "b" + std::to_string(b), 0.1 * i, 0, -1);
+            w.write(cm, i, 10 + i, f);
+            dw::msg::WrenchStamped m;
+            m.header().seq(i);
+            w.write(cw, i, 10 + i, m);
+        }
+        w.close();
+    }
+    dw::recordings::export_csv(file, dir.file("csv"));
+    const auto mocap = dw::test::lines(dw::read_file(dir.file("csv/mocap_frame.csv")));
+    ASSERT_EQ(mocap.size(), 7u);
+    EXPECT_NE(mocap[0].find("bodies[2].name"), std::string::npos) << mocap[0];
+    const auto commas = [](const std::string& s) { return std::count(s.begin(), s.end(), ','); };
+    for (const auto& row : mocap) EXPECT_EQ(commas(row), commas(mocap[0])) << row;
+    EXPECT_EQ(mocap[1].substr(0, 5), "10,10");
+    EXPECT_EQ(dw::test::lines(dw::read_file(dir.file("csv/stand_wrench.csv"))).size(), 7u);
+    for (const auto& entry : std::filesystem::directory_iterator(dir.file("csv")))
+        EXPECT_EQ(entry.path().extension(), ".csv") << "a temporary file was left: " << entry.path();
+}
+
 TEST(Recorder, ARecordedNonFiniteValueIsOneLineNamingTheRecording) {
     TempDir dir;
     const std::string file = dir.file("nan.mcap");
     {
-        dw::mcap::WriterOptions wo;
-        wo.fsync = false;
-        dw::mcap::Writer w(file, wo);
-        const auto cw = w.add_channel("rt/lab/stand/wrench", w.add_schema("dw::msg::WrenchStamped", "omgidl", ""), "cdr", {});
+        dw::testkit::LabRecording w(file);
+        const auto cw = w.channel(dw::dds::topics::stand_wrench);
         dw::msg::WrenchStamped m;
         m.force_n().z(std::numeric_limits<double>::quiet_NaN());
-        dw::msg::WrenchStampedPubSubType support;
-        eprosima::fastrtps::rtps::SerializedPayload_t p(support.getSerializedSizeProvider(&m)());
-        support.serialize(&m, &p);
-        w.write({cw, 0, 1, 1, {p.data, p.length}}, 0);
+        w.write(cw, 0, 1, m);
         w.close();
     }
     try {
