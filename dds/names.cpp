@@ -1,5 +1,8 @@
 #include "dds/names.hpp"
 
+#include <algorithm>
+#include <cctype>
+
 namespace dw::dds {
 
 const char* phase_name(msg::ExperimentPhase p) {
@@ -26,6 +29,18 @@ const char* command_name(msg::CommandKind k) {
         case msg::CMD_STOP: return "STOP";
     }
     return "?";
+}
+
+std::optional<msg::CommandKind> command_named(std::string_view name) {
+    // CMD_START .. CMD_STOP: the IDL's first and last enumerators.
+    for (int k = msg::CMD_START; k <= msg::CMD_STOP; ++k) {
+        const std::string_view n = command_name(static_cast<msg::CommandKind>(k));
+        if (n.size() == name.size() && std::equal(n.begin(), n.end(), name.begin(), [](char a, char b) {
+                return std::toupper(static_cast<unsigned char>(a)) == std::toupper(static_cast<unsigned char>(b));
+            }))
+            return static_cast<msg::CommandKind>(k);
+    }
+    return std::nullopt;
 }
 
 const char* process_state_name(msg::ProcessState s) {

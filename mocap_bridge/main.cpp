@@ -29,6 +29,9 @@ int run(int argc, char** argv) {
     app.add_option("--name", name_map, "RIGIDBODY=VEHICLE (repeatable)");
     app.add_option("--timestamps", mode, "receive, compensated (default) or clock_sync");
     app.add_option("--sim-vehicles", sim_vehicles, "sim: the neighbours' names (they follow vehicles/setpoint)");
+    std::string sim_fault;
+    app.add_option("--sim-fault", sim_fault, "sim: KIND:VEHICLE:AFTER_S — the vehicle stops following its setpoints (stuck) or mocap "
+                                             "reports it 10 m away (jump), AFTER_S after its first setpoint (fault tests)");
     app.add_option("--sim-rate", sim_rate, "sim: camera rate [Hz]")->check(dw::cli::in({1, 1000, "Hz"}));
     cli.parse(argc, argv);
     if (sim) source = "sim";
@@ -46,6 +49,8 @@ int run(int argc, char** argv) {
         bo.names[n.substr(0, eq)] = n.substr(eq + 1);
     }
 
+    std::optional<dw::natnet::SimFault> fault;
+    if (!sim_fault.empty()) fault = dw::natnet::parse_sim_fault(sim_fault);
     dw::dds::Participant participant(cli.dds(), "mocap_bridge");
     dw::dds::Heartbeat heartbeat(participant);
     std::unique_ptr<dw::natnet::SimSource> simulated;
@@ -53,7 +58,7 @@ int run(int argc, char** argv) {
         std::vector<std::string> names{"sufferer"};
         std::stringstream in(sim_vehicles);
         for (std::string v; std::getline(in, v, ',');) names.push_back(v);
-        simulated = std::make_unique<dw::natnet::SimSource>(participant, names, sim_rate);
+        simulated = std::make_unique<dw::natnet::SimSource>(participant, names, sim_rate, fault);
         client.server_ip = "127.0.0.1";
         client.local_ip = "127.0.0.1";
         client.command_port = simulated->port();

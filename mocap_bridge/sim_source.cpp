@@ -1,11 +1,28 @@
 #include "mocap_bridge/sim_source.hpp"
 
+#include <algorithm>
 #include <cmath>
+
+#include "core/errors.hpp"
 
 namespace dw::natnet {
 
-SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz)
-    : names_(names),
+SimFault parse_sim_fault(const std::string& text) {
+    const auto a = text.find(':'), b = text.rfind(':');
+    const std::string what = "--sim-fault '" + text + "'";
+    if (a == std::string::npos || a == b || a == 0 || b == a + 1) throw InputError(what + ": expected KIND:VEHICLE:AFTER_S (stuck:v1:8)");
+    SimFault f;
+    const std::string kind = text.substr(0, a);
+    if (kind == "stuck") f.kind = SimFault::Kind::stuck;
+    else if (kind == "jump") f.kind = SimFault::Kind::jump;
+    else throw InputError(what + ": unknown fault '" + kind + "' (expected stuck or jump)");
+    f.vehicle = text.substr(a + 1, b - a - 1);
+    f.after_s = require_in(parse_number(text.substr(b + 1), what), kFaultAfterRange, what);
+    return f;
+}
+
+SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz, std::optional<SimFault> fault)
+    : names_(names), fault_(std::move(fault)),
       reader_(p, dds::topics::vehicle_setpoint, [this](const msg::VehicleSetpoint& s, const dds::SampleMeta&) {
           physics::Setpoint sp;
           sp.position = physics::Vec3(s.position_m().x(), s.position_m().y(), s.position_m().z());
@@ -15,8 +32,12 @@ SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names,
           // A simulated vehicle, like a real one, must never be driven by a non-finite setpoint.
           if (!physics::is_finite(sp)) return;
           std::lock_guard lock(mutex_);
+          if (fault_ && s.vehicle_id() == fault_->vehicle && !fault_clock_start_) fault_clock_start_ = t_;
+          if (fault_active(s.vehicle_id(), SimFault::Kind::stuck)) return;  // it no longer follows
           setpoints_[s.vehicle_id()] = sp;
       }) {
+    if (fault_ && std::find(names_.begin() + 1, names_.end(), fault_->vehicle) == names_.end())
+        throw InputError("--sim-fault: no simulated vehicle named '" + fault_->vehicle + "'");
     physics::Rng rng(1);
     for (std::size_t i = 1; i < names_.size(); ++i) {
         // Parked on the floor west of the stand until setpoints arrive.
@@ -30,6 +51,10 @@ SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names,
     o.names = names_;
     o.motion = [this](int body, double t) { return pose(body, t); };
     emulator_ = std::make_unique<NatNetEmulator>(o);
+}
+
+bool SimSource::fault_active(const std::string& vehicle, SimFault::Kind kind) const {
+    return fault_ && fault_->kind == kind && fault_->vehicle == vehicle && fault_clock_start_ && t_ >= *fault_clock_start_ + fault_->after_s;
 }
 
 BodyPose SimSource::pose(int body, double t) {
@@ -49,6 +74,7 @@ BodyPose SimSource::pose(int body, double t) {
     const auto& s = vehicles_[static_cast<std::size_t>(body - 1)].state();
     BodyPose p;
     p.ned = {s.position.x(), s.position.y(), s.position.z()};
+    if (fault_active(names_[static_cast<std::size_t>(body)], SimFault::Kind::jump)) p.ned[0] += kJumpDistance_m;
     p.q_ned = {s.orientation.w(), s.orientation.x(), s.orientation.y(), s.orientation.z()};
     return p;
 }

@@ -5,6 +5,9 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
+
+#include "core/numbers.hpp"
 
 #include "dds/endpoint.hpp"
 #include "mocap_bridge/emulator.hpp"
@@ -12,13 +15,28 @@
 
 namespace dw::natnet {
 
+// A fault injected into one simulated vehicle, `after_s` seconds (simulated) after its first
+// setpoint: `stuck`, it stops following its setpoints (the planner sees a tracking error); `jump`,
+// motion capture reports it kJumpDistance_m north of where it is (a geofence breach).
+struct SimFault {
+    enum class Kind { stuck, jump };
+    Kind kind = Kind::stuck;
+    std::string vehicle;
+    double after_s = 0;
+};
+inline constexpr double kJumpDistance_m = 10.0;
+inline constexpr Range kFaultAfterRange{0, 3600, "s"};
+// "stuck:v1:8" or "jump:v2:5.5"; throws dw::InputError naming what is wrong.
+SimFault parse_sim_fault(const std::string& text);
+
 class SimSource {
 public:
-    SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz);
+    SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz, std::optional<SimFault> fault = {});
     std::uint16_t port() const { return emulator_->port(); }
 
 private:
     BodyPose pose(int body, double t);
+    bool fault_active(const std::string& vehicle, SimFault::Kind kind) const;  // under mutex_
 
     std::vector<std::string> names_;
     physics::PhysicsConfig physics_;
@@ -26,6 +44,8 @@ private:
     std::map<std::string, physics::Setpoint> setpoints_;
     std::vector<physics::SimVehicle> vehicles_;
     double t_ = 0;
+    std::optional<SimFault> fault_;
+    std::optional<double> fault_clock_start_;  // simulated time of the faulty vehicle's first setpoint
     dds::Reader<msg::VehicleSetpoint> reader_;
     std::unique_ptr<NatNetEmulator> emulator_;
 };

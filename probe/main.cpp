@@ -10,6 +10,7 @@
 #include "core/numbers.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
+#include "dds/names.hpp"
 #include "probe/probe.hpp"
 
 namespace {
@@ -68,7 +69,19 @@ int run(int argc, char** argv) {
     echo_cmd->add_option("--summary", summary_path, "write a JSON summary here");
     echo_cmd->add_flag("--quiet", echo.quiet, "print only the summary table");
 
+    dw::probe::CommandOptions command;
+    std::string command_kind;
+    const std::string kinds = "abort, stop, pause, resume, calibrate or start";
+    auto* command_cmd = app.add_subcommand("command", "send the experiment a command as the operator: " + kinds);
+    command_cmd->add_option("kind", command_kind, kinds)->required();
+    command_cmd->add_option("--reason", command.reason, "why (in the planner's log and the experiment state)");
+
     cli.parse(argc, argv);
+    if (command_cmd->parsed()) {
+        const auto kind = dw::dds::command_named(command_kind);
+        if (!kind) throw dw::InputError("command: unknown kind '" + command_kind + "' (expected " + kinds + ")");
+        command.kind = *kind;
+    }
     if (echo_cmd->count("--summary")) dw::require_writable_path(summary_path, "--summary");
     const dw::dds::DdsConfig& dds_config = cli.dds();
 
@@ -86,6 +99,10 @@ int run(int argc, char** argv) {
     dw::dds::Heartbeat heartbeat(participant);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
 
+    if (command_cmd->parsed()) {
+        dw::probe::send_command(participant, command, std::cout);
+        return 0;
+    }
     if (pub_cmd->parsed()) {
         pub.topics = selected;
         pub.qos = qos;

@@ -11,8 +11,10 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "dds/names.hpp"
 #include "core/shutdown.hpp"
 #include "dds/endpoint.hpp"
+#include "dds/time.hpp"
 #include "probe/samples.hpp"
 
 namespace dw::probe {
@@ -227,6 +229,21 @@ void print_table(const EchoReport& report, std::ostream& out) {
     }
     out << (report.ok() ? "all topics arrived intact" : report.timed_out ? "timed out before every topic arrived" : "FAILED")
         << "\n";
+}
+
+void send_command(dds::Participant& p, const CommandOptions& o, std::ostream& out) {
+    dds::Writer<msg::ExperimentCommand> w(p, dds::topics::experiment_command);
+    if (!w.wait_for_readers(1, o.wait))
+        throw RuntimeError(log::cat("no reader of ", w.name(), " within ", o.wait.count() / 1000.0, " s: is the planner running?"));
+    msg::ExperimentCommand c;
+    c.header().stamp(dds::to_msg(p.clock().now_ns()));
+    c.kind(o.kind);
+    c.issuer(p.process());
+    c.reason(o.reason);
+    w.write(c);
+    const bool acked = w.wait_for_acknowledgments(o.wait);
+    out << "sent " << dds::command_name(o.kind) << " to " << w.matched() << " reader(s) of " << w.name()
+        << (acked ? "" : " (not every reader acknowledged it)") << "\n";
 }
 
 }  // namespace dw::probe

@@ -67,4 +67,14 @@ EchoReport run_echo(dds::Participant& p, const EchoOptions& o, std::ostream& out
 
 void print_table(const EchoReport& report, std::ostream& out);
 
+// Sends one experiment command (as the operator: dw-probe command abort) once a reader of
+// experiment/command matched, and waits until it was acknowledged. Throws dw::RuntimeError when
+// no reader appears within `wait`.
+struct CommandOptions {
+    msg::CommandKind kind = msg::CMD_ABORT;
+    std::string reason;
+    std::chrono::milliseconds wait{10000};
+};
+void send_command(dds::Participant& p, const CommandOptions& o, std::ostream& out);
+
 }  // namespace dw::probe

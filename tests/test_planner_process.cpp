@@ -1,10 +1,15 @@
 // A short experiment with the simulated stand, simulated mocap and vehicles, the recorder and the
-// planner as separate processes on loopback DDS: it ends in DONE with every leg flown; killing
-// the mocap bridge mid-leg ends in ABORTED with that reason and every vehicle landed.
+// planner as separate processes on loopback DDS: it ends in DONE with every leg flown. Each fault
+// (issue 19) ends in ABORTED with its reason and every vehicle commanded down: mocap killed, a
+// vehicle leaving the geofence, a vehicle that stops following (tracking error), the stand agent
+// killed (lost participant), an operator ABORT; killing the predictor does not stop it.
 #include <gtest/gtest.h>
 #include <signal.h>
 
 #include <deque>
+#include <fstream>
+#include <functional>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -62,41 +67,106 @@ TEST(Experiment, ShortExperimentEndsInDoneWithEveryLegFlown) {
     EXPECT_GT(counts[p + "stand/wrench"], 80 * 20);
 }
 
-TEST(Experiment, KillingTheMocapBridgeMidLegAbortsAndLandsEveryVehicle) {
-    Lab lab("expabort");
-    lab.start("dw-stand-agent", {"run", "--sim"}, "stand.log");
-    auto& mocap = lab.start("dw-mocap-bridge", {"--sim", "--sim-vehicles", "v1"}, "mocap.log");
-    lab.start("dw-recorder", {"record", "--out", lab.dir.file("exp.mcap"), "--quiet", "--no-fsync"}, "rec.log");
-    dw::dds::Participant p(lab.cfg, "observer");
-    std::mutex m;
+namespace {
+// What a supervised experiment ended in, seen by an observer on DDS.
+struct Outcome {
+    std::optional<int> status;  // the planner's exit status
+    std::string log;            // the planner's log
     dw::msg::ExperimentState state;
-    dw::msg::VehicleSetpoint last_setpoint;
+    std::map<std::string, dw::msg::VehicleSetpoint> last_setpoint;  // per vehicle
+};
+
+// Issue 19: the simulated lab (stand, mocap with two vehicles, recorder, predictor) flies a
+// side-by-side experiment; once a leg is under way (or the experiment already ends), `inject` runs
+// — the fault. Returns how it ended.
+Outcome fly_with_fault(Lab& lab, const std::vector<std::string>& mocap_extra,
+                       const std::function<void(Lab&, dw::dds::Participant&)>& inject) {
+    std::ofstream(lab.dir.file("physics.yaml")) << "format: downwash-physics/1\n";
+    lab.start("dw-stand-agent", {"run", "--sim"}, "stand.log");
+    std::vector<std::string> mocap{"--sim", "--sim-vehicles", "v1,v2"};
+    mocap.insert(mocap.end(), mocap_extra.begin(), mocap_extra.end());
+    lab.start("dw-mocap-bridge", mocap, "mocap.log");
+    lab.start("dw-recorder", {"record", "--out", lab.dir.file("exp.mcap"), "--quiet", "--no-fsync"}, "rec.log");
+    lab.start("dw-predictor", {"run", "--model", lab.dir.file("physics.yaml")}, "predictor.log");
+    dw::dds::Participant p(lab.cfg, "operator");
+    std::mutex m;
+    Outcome out;
     dw::dds::Reader<dw::msg::ExperimentState> sr(p, dw::dds::topics::experiment_state, [&](const auto& s, const auto&) {
         std::lock_guard lock(m);
-        state = s;
+        out.state = s;
     });
     dw::dds::Reader<dw::msg::VehicleSetpoint> spr(p, dw::dds::topics::vehicle_setpoint, [&](const auto& s, const auto&) {
         std::lock_guard lock(m);
-        last_setpoint = s;
+        out.last_setpoint[s.vehicle_id()] = s;
     });
-    auto& planner = lab.start("dw-planner", {"run", "--formation", "single", "--legs", "4", "--altitudes", "0.5",
+    auto& planner = lab.start("dw-planner", {"run", "--formation", "side_by_side", "--legs", "4", "--altitudes", "0.5",
                                             "--speed", "1.0"}, "planner.log");
-    bool mid_leg = false;
-    for (int i = 0; i < 6000 && !mid_leg; ++i) {
+    for (int i = 0; i < 9000; ++i) {
         std::this_thread::sleep_for(10ms);
         std::lock_guard lock(m);
-        mid_leg = state.phase() == dw::msg::PHASE_FLYING && state.leg_index() >= 1;
+        const auto ph = out.state.phase();
+        if ((ph == dw::msg::PHASE_FLYING && out.state.leg_index() >= 1) || ph == dw::msg::PHASE_LANDING || ph >= dw::msg::PHASE_DONE) break;
     }
-    ASSERT_TRUE(mid_leg) << lab.log("planner.log");
-    mocap.signal(SIGKILL);
-    const auto status = planner.wait_for(60000ms);
-    EXPECT_EQ(status, std::optional<int>(1)) << lab.log("planner.log");
-    const std::string log = lab.log("planner.log");
-    EXPECT_NE(log.find("ABORTED: mocap lost"), std::string::npos) << log;
-    std::this_thread::sleep_for(300ms);
+    inject(lab, p);
+    out.status = planner.wait_for(120000ms);
+    out.log = lab.log("planner.log");
+    std::this_thread::sleep_for(300ms);  // the last state and setpoints in flight
     std::lock_guard lock(m);
-    EXPECT_EQ(state.phase(), dw::msg::PHASE_ABORTED);
-    EXPECT_NE(state.message().find("mocap lost"), std::string::npos) << state.message();
-    EXPECT_NE(state.message().find("every vehicle landed"), std::string::npos) << state.message();
-    EXPECT_NEAR(last_setpoint.position_m().z(), 0.0, 1e-6);  // the last setpoint is on the floor
+    return out;
+}
+
+// ABORTED with the reason, said in the log and the state, and every vehicle's last setpoint on the floor.
+void expect_aborted_and_landed(const Outcome& o, const std::string& reason) {
+    EXPECT_EQ(o.status, std::optional<int>(1)) << o.log;
+    EXPECT_NE(o.log.find("ABORTED: " + reason), std::string::npos) << o.log;
+    EXPECT_EQ(o.state.phase(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(o.state.message().find(reason), std::string::npos) << o.state.message();
+    EXPECT_NE(o.state.message().find("every vehicle landed"), std::string::npos) << o.state.message();
+    ASSERT_EQ(o.last_setpoint.size(), 2u);
+    for (const auto& [v, sp] : o.last_setpoint) EXPECT_NEAR(sp.position_m().z(), 0.0, 1e-6) << v << ": its last setpoint is not on the floor";
+}
+
+const auto kNoFault = [](Lab&, dw::dds::Participant&) {};
+}  // namespace
+
+TEST(Experiment, KillingTheMocapBridgeMidLegAbortsAndLandsEveryVehicle) {
+    Lab lab("expabort");
+    const auto o = fly_with_fault(lab, {}, [](Lab& l, dw::dds::Participant&) { l.procs[1].signal(SIGKILL); });
+    expect_aborted_and_landed(o, "mocap lost");
+}
+
+TEST(Experiment, AVehicleLeavingTheGeofenceAbortsAndLandsEveryVehicle) {
+    Lab lab("expfence");
+    expect_aborted_and_landed(fly_with_fault(lab, {"--sim-fault", "jump:v1:9"}, kNoFault), "geofence breach by v1");
+}
+
+TEST(Experiment, AVehicleThatStopsFollowingAbortsOnTrackingError) {
+    Lab lab("exptrack");
+    expect_aborted_and_landed(fly_with_fault(lab, {"--sim-fault", "stuck:v2:9"}, kNoFault), "tracking error of v2");
+}
+
+TEST(Experiment, KillingTheStandAgentAbortsOnALostParticipant) {
+    Lab lab("explost");
+    const auto o = fly_with_fault(lab, {}, [](Lab& l, dw::dds::Participant&) { l.procs[0].signal(SIGKILL); });
+    expect_aborted_and_landed(o, "lost participant stand_agent");
+}
+
+TEST(Experiment, AnOperatorAbortAbortsAndLandsEveryVehicle) {
+    Lab lab("expop");
+    const auto o = fly_with_fault(lab, {}, [](Lab& l, dw::dds::Participant&) {
+        // What the operator types: dw-probe command abort.
+        const auto r = dw::test::run({dw::test::bin("dw-probe"), "--name", "fault-test", "command", "abort", "--reason", "wind gust",
+                                      "--domain", std::to_string(l.cfg.domain), "--namespace", l.cfg.ns}, l.dir);
+        EXPECT_EQ(r.status, 0) << r.err;
+        EXPECT_NE(r.out.find("sent ABORT to"), std::string::npos) << r.out;
+    });
+    expect_aborted_and_landed(o, "operator ABORT from fault-test: wind gust");
+}
+
+TEST(Experiment, KillingThePredictorDoesNotStopTheExperiment) {
+    Lab lab("exppred");
+    const auto o = fly_with_fault(lab, {}, [](Lab& l, dw::dds::Participant&) { l.procs[3].signal(SIGKILL); });
+    EXPECT_EQ(o.status, std::optional<int>(0)) << o.log;
+    EXPECT_NE(o.log.find("DONE: 4 of 4 legs flown"), std::string::npos) << o.log;
+    EXPECT_EQ(o.state.phase(), dw::msg::PHASE_DONE);
 }
