@@ -39,6 +39,19 @@ private:
     Nanos now_;
 };
 
+// Another clock's wall time shifted by a fixed offset (a simulated process's clock error:
+// --clock-offset); its monotonic time is the other clock's.
+class OffsetClock final : public Clock {
+public:
+    OffsetClock(const Clock& base, Nanos offset_ns) : base_(&base), offset_ns_(offset_ns) {}
+    Nanos now_ns() const override { return base_->now_ns() + offset_ns_; }
+    Nanos monotonic_ns() const override { return base_->monotonic_ns(); }
+
+private:
+    const Clock* base_;
+    Nanos offset_ns_;
+};
+
 inline double to_seconds(Nanos ns) { return static_cast<double>(ns) * 1e-9; }
 inline Nanos from_seconds(double s) { return static_cast<Nanos>(s * 1e9); }
 

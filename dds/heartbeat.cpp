@@ -25,7 +25,7 @@ std::uint64_t handle_key(const eprosima::fastdds::dds::InstanceHandle_t& h) {
 }  // namespace
 
 Heartbeat::Heartbeat(Participant& p, std::chrono::milliseconds period)
-    : participant_(p), period_(period), writer_(p, topics::process_status), host_(hostname()) {
+    : participant_(p), period_(period), writer_(p, topics::process_status), clock_(p), host_(hostname()) {
     last_snapshot_ns_ = p.clock().monotonic_ns();
     publish_now();  // peers hear of us at once; the thread publishes every period after this
     thread_ = std::thread([this] { loop(); });
@@ -71,8 +71,14 @@ msg::ProcessStatus Heartbeat::snapshot() {
     s.period_s(std::chrono::duration<double>(period_).count());
     s.error_count(participant_.problem_count());
     s.message(message_);
+    const auto clock = clock_.estimate();
+    s.clock_offset_s(clock ? clock->offset_s : 0.0);
+    s.clock_uncertainty_s(clock ? clock->uncertainty_s : -1.0);
     for (const auto& ep : participant_.endpoints()) {
-        if (ep->topic == writer_.name() && ep->outgoing) continue;  // not our own heartbeat
+        // Not our own heartbeat, nor the clock service's probes: the rates are the process's work.
+        const bool service = (ep->topic == writer_.name() && ep->outgoing) || ep->topic == participant_.topic_name(topics::clock_request.suffix) ||
+                             ep->topic == participant_.topic_name(topics::clock_reply.suffix);
+        if (service) continue;
         msg::TopicRate r;
         r.topic(ep->topic);
         r.outgoing(ep->outgoing);
@@ -96,6 +102,7 @@ void Heartbeat::loop() {
     std::unique_lock lock(mutex_);
     while (!cv_.wait_for(lock, period_, [this] { return stop_; })) {
         lock.unlock();
+        clock_.ask();
         publish_now();
         lock.lock();
     }

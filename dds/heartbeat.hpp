@@ -1,5 +1,6 @@
 #pragma once
-// Heartbeats: every lab process publishes its ProcessStatus periodically; a PeerMonitor notices
+// Heartbeats: every lab process publishes its ProcessStatus periodically, with its clock's offset
+// from the reference (dds/clock_sync.hpp); a PeerMonitor notices
 // peers that appear, and peers that vanish (writer unmatched or liveliness lost: at once; silent:
 // after 3 heartbeat periods).
 #include <chrono>
@@ -13,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "dds/clock_sync.hpp"
 #include "dds/endpoint.hpp"
 
 namespace dw::dds {
@@ -37,6 +39,7 @@ private:
     Participant& participant_;
     std::chrono::milliseconds period_;
     Writer<msg::ProcessStatus> writer_;
+    ClockClient clock_;  // asks the reference clock every period; its estimate rides on the status
     std::mutex mutex_;
     std::condition_variable cv_;
     bool stop_ = false;

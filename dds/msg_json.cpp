@@ -90,7 +90,12 @@ json to_json(const msg::TopicRate& m) {
 json to_json(const msg::ProcessStatus& m) {
     return json{{"header", to_json(m.header())}, {"process", m.process()}, {"host", m.host()}, {"pid", m.pid()},
                 {"state", e(m.state())}, {"period_s", m.period_s()}, {"rates", array_of(m.rates())},
-                {"error_count", m.error_count()}, {"message", m.message()}};
+                {"error_count", m.error_count()}, {"message", m.message()}, {"clock_offset_s", m.clock_offset_s()},
+                {"clock_uncertainty_s", m.clock_uncertainty_s()}};
+}
+json to_json(const msg::ClockProbe& m) {
+    return json{{"header", to_json(m.header())}, {"process", m.process()}, {"probe", m.probe()},
+                {"reference_receive", to_json(m.reference_receive())}, {"reference_send", to_json(m.reference_send())}};
 }
 
 namespace {

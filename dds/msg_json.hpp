@@ -25,6 +25,7 @@ nlohmann::json to_json(const msg::ExperimentState& m);
 nlohmann::json to_json(const msg::WrenchPrediction& m);
 nlohmann::json to_json(const msg::TopicRate& m);
 nlohmann::json to_json(const msg::ProcessStatus& m);
+nlohmann::json to_json(const msg::ClockProbe& m);
 
 // Flattens nested objects and arrays into "a.b", "a[2].c" keys, in document order.
 std::vector<std::pair<std::string, nlohmann::json>> flatten(const nlohmann::json& j);

@@ -5,10 +5,13 @@
 #include <string>
 
 #include "core/cli.hpp"
+#include "core/clock.hpp"
 #include "core/config.hpp"
 #include "dds/config.hpp"
 
 namespace dw::dds {
+
+inline constexpr Range kClockOffsetRange{-3600, 3600, "s"};
 
 class ProcessCli {
 public:
@@ -20,6 +23,8 @@ public:
     const cli::BaseOptions& base() const { return base_; }
     const ConfigFile& config() const { return config_; }
     const DdsConfig& dds() const { return dds_; }
+    // The process's wall clock: the system's, or shifted by --clock-offset (a simulated clock error).
+    Clock& clock() const { return clock_offset_s_ == 0 ? static_cast<Clock&>(SystemClock::instance()) : offset_clock_; }
     // The resolved DDS settings and the log level as flags, to hand to a child process.
     std::vector<std::string> dds_args() const;
 
@@ -29,6 +34,8 @@ private:
     DdsCliOptions dds_cli_;
     ConfigFile config_;
     DdsConfig dds_;
+    double clock_offset_s_ = 0;
+    mutable OffsetClock offset_clock_{SystemClock::instance(), 0};
 };
 
 }  // namespace dw::dds

@@ -32,6 +32,7 @@ DW_PUBSUB(ExperimentCommand);
 DW_PUBSUB(ExperimentState);
 DW_PUBSUB(WrenchPrediction);
 DW_PUBSUB(ProcessStatus);
+DW_PUBSUB(ClockProbe);
 #undef DW_PUBSUB
 
 // What DDS Security does to a topic's samples on the wire: signed (anyone on the wire may read,
@@ -98,6 +99,14 @@ inline constexpr Topic<ProcessStatus> process_status{"processes/status", QosProf
     "dw::msg::ProcessStatus", "heartbeat and status of every lab process (keyed by process)", "Status",
     kEveryRole, kEveryRole,
     Protection::sign, "forged heartbeats would hide a dead process from the supervision"};
+inline constexpr Topic<ClockProbe> clock_request{"clock/request", QosProfile::command,
+    "dw::msg::ClockProbe", "a process asks the reference clock (the recorder) for its time (every 0.5 s)", "Status",
+    kEveryRole, Roles(Role::recorder),
+    Protection::sign, "forged requests only cost the recorder an answer"};
+inline constexpr Topic<ClockProbe> clock_reply{"clock/reply", QosProfile::command,
+    "dw::msg::ClockProbe", "the reference clock's answer: its time at receipt and at reply", "Status",
+    Roles(Role::recorder), kEveryRole,
+    Protection::sign, "forged answers would skew every process's measured clock offset, and the export's correction"};
 
 // Calls f(topic) for every lab topic, in a fixed order.
 template <class F>
@@ -113,6 +122,8 @@ constexpr void for_each(F&& f) {
     f(experiment_state);
     f(wrench_prediction);
     f(process_status);
+    f(clock_request);
+    f(clock_reply);
 }
 // How many: counted from the list above, never kept by hand.
 inline constexpr int kTopicCount = [] {

@@ -106,13 +106,21 @@ std::deque<Running> build_commands(const LabFile& lab, const LaunchOptions& o) {
     return procs;
 }
 
+// The process's clock against the reference (the recorder's), as its heartbeat states it:
+// "+12.31 ms ±0.08", or "not measured" (no recorder yet).
+std::string clock_text(const msg::ProcessStatus& s) {
+    if (!(s.clock_uncertainty_s() >= 0)) return "not measured";
+    char text[64];
+    std::snprintf(text, sizeof text, "%+8.2f ms ±%.2f", s.clock_offset_s() * 1e3, s.clock_uncertainty_s() * 1e3);
+    return text;
+}
+
 // One status line per process (from its heartbeat) and the experiment's progress. `secure`: the
 // launcher itself joined with a keystore, so a heartbeat it hears comes from a participant that
 // authenticated with the lab's CA and may publish heartbeats ("auth"); otherwise "open".
 std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor& peers, const std::optional<msg::ExperimentState>& state,
                         bool secure) {
     std::ostringstream s;
-    const Nanos now = SystemClock().now_ns();
     for (const auto& r : procs) {
         char line[256];
         const auto st = peers.last(r.spec.name);
@@ -125,10 +133,9 @@ std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor
                 (t.outgoing() ? out_hz : in_hz) += t.rate_hz();
                 lost += t.lost();
             }
-            const double age_ms = static_cast<double>(now - dds::from_msg(st->header().stamp())) * 1e-6;
-            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s %-4s out %7.1f Hz  in %7.1f Hz  lost %-6llu hb %5.0f ms ago%s%s",
+            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s %-4s out %7.1f Hz  in %7.1f Hz  lost %-6llu clock %s%s%s",
                           r.spec.name.c_str(), dds::process_state_name(st->state()), where.c_str(), r.spec.host.c_str(), secure ? "auth" : "open",
-                          out_hz, in_hz, lost, age_ms, st->message().empty() ? "" : "  ", st->message().c_str());
+                          out_hz, in_hz, lost, clock_text(*st).c_str(), st->message().empty() ? "" : "  ", st->message().c_str());
         } else {
             std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-", where.c_str(),
                           r.spec.host.c_str());

@@ -51,7 +51,7 @@ int run(int argc, char** argv) {
 
     std::optional<dw::natnet::SimFault> fault;
     if (!sim_fault.empty()) fault = dw::natnet::parse_sim_fault(sim_fault);
-    dw::dds::Participant participant(cli.dds(), "mocap_bridge");
+    dw::dds::Participant participant(cli.dds(), "mocap_bridge", cli.clock());
     dw::dds::Heartbeat heartbeat(participant);
     std::unique_ptr<dw::natnet::SimSource> simulated;
     if (source == "sim") {

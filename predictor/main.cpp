@@ -248,7 +248,7 @@ struct OnlineCommand {
         cmd->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
     }
     int run(const dw::dds::ProcessCli& cli) {
-        dw::dds::Participant participant(cli.dds(), "predictor");
+        dw::dds::Participant participant(cli.dds(), "predictor", cli.clock());
         dw::dds::Heartbeat heartbeat(participant);
         dw::SystemClock clock;
         PredictorNode node(participant, no, clock);

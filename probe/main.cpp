@@ -95,7 +95,7 @@ int run(int argc, char** argv) {
 
     const auto selected = dw::dds::select_topics(topics, dds_config.ns);
     const auto qos = qos_overrides(reliability, durability);
-    dw::dds::Participant participant(dds_config, name);
+    dw::dds::Participant participant(dds_config, name, cli.clock());
     dw::dds::Heartbeat heartbeat(participant);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
 

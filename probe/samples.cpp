@@ -189,6 +189,17 @@ void fill(msg::ProcessStatus& m, std::uint64_t i) {
     }
     m.error_count(i / 4);
     m.message(log::cat("heartbeat #", i));
+    m.clock_offset_s(1e-4 * static_cast<double>(i % 7) - 3e-4);
+    m.clock_uncertainty_s(i % 4 == 0 ? -1.0 : 5e-5 * static_cast<double>(1 + i % 3));
+}
+
+void fill(msg::ClockProbe& m, std::uint64_t i) {
+    m.process(log::cat("probe-", i % 2));
+    m.probe(i * 3);
+    m.reference_receive().sec(static_cast<std::int32_t>(1'700'000'000 + i));
+    m.reference_receive().nanosec(static_cast<std::uint32_t>(i % 1000) * 1000);
+    m.reference_send().sec(static_cast<std::int32_t>(1'700'000'000 + i));
+    m.reference_send().nanosec(static_cast<std::uint32_t>(i % 1000) * 1000 + 20'000);
 }
 
 std::string summary(const msg::WrenchStamped& m) {
@@ -231,7 +242,10 @@ std::string summary(const msg::WrenchPrediction& m) {
 }
 std::string summary(const msg::ProcessStatus& m) {
     return log::cat(m.process(), "@", m.host(), " pid ", m.pid(), "  ", dds::process_state_name(m.state()), "  ",
-                    m.rates().size(), " topics  ", m.error_count(), " errors");
+                    m.rates().size(), " topics  ", m.error_count(), " errors  clock ", m.clock_offset_s() * 1e3, " ms");
+}
+std::string summary(const msg::ClockProbe& m) {
+    return log::cat(m.process(), " probe ", m.probe(), m.reference_send().sec() == 0 ? "  (request)" : "  (answer)");
 }
 
 }  // namespace dw::probe

@@ -23,6 +23,7 @@ void fill(msg::ExperimentCommand& m, std::uint64_t i);
 void fill(msg::ExperimentState& m, std::uint64_t i);
 void fill(msg::WrenchPrediction& m, std::uint64_t i);
 void fill(msg::ProcessStatus& m, std::uint64_t i);
+void fill(msg::ClockProbe& m, std::uint64_t i);
 
 // Sample i: header.seq = i, a stamp derived from i, run id kProbeRunId, the body from fill().
 template <class T>
@@ -48,5 +49,6 @@ std::string summary(const msg::ExperimentCommand& m);
 std::string summary(const msg::ExperimentState& m);
 std::string summary(const msg::WrenchPrediction& m);
 std::string summary(const msg::ProcessStatus& m);
+std::string summary(const msg::ClockProbe& m);
 
 }  // namespace dw::probe

@@ -132,6 +132,8 @@ struct ExportCommand {
         cmd->add_option("--flight", flight_dir, "flight folder to write (downwash-flight/1)");
         cmd->add_option("--csv", csv_dir, "directory for one CSV per topic");
         cmd->add_option("--sufferer", ex.sufferer, "rigid body on the stand (default sufferer)");
+        cmd->add_flag("--raw-stamps", ex.raw_stamps,
+                      "flight: keep each topic's stamps as recorded (default: moved onto the recorder's clock by the measured clock offsets)");
     }
     int run() {
         // Both outputs are checked before either is written.
@@ -194,7 +196,10 @@ int run(int argc, char** argv) {
 
     const bool recording = record.cmd->parsed();
     if (recording) dw::require_writable_path(record.rec.out, "--out");
-    dw::dds::Participant participant(cli.dds(), recording ? "recorder" : "replay");
+    dw::dds::Participant participant(cli.dds(), recording ? "recorder" : "replay", cli.clock());
+    // The recorder's clock stamps every recorded message: the lab's reference clock.
+    std::optional<dw::dds::ClockReference> reference;
+    if (recording) reference.emplace(participant);
     dw::dds::Heartbeat heartbeat(participant);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
     if (!recording) return replay.run(participant);

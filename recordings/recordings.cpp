@@ -42,6 +42,24 @@ void require_finite(const std::array<double, N>& v, const std::string& path, std
     }
 }
 
+// The process that stamps a topic (the lab's processes are named after their roles).
+template <class T>
+std::string producer_of(const dds::Topic<T>& spec) {
+    for (const auto& r : dds::kRoles)
+        if (dds::has(spec.producers, r.role)) return std::string(r.name);
+    return "";
+}
+
+// Each process's clock offsets as its heartbeats stated them (measured ones only).
+using Offsets = std::map<std::string, std::vector<double>>;
+double median_offset(const Offsets& offsets, const std::string& process) {
+    const auto it = offsets.find(process);
+    if (it == offsets.end() || it->second.empty()) return 0.0;
+    auto v = it->second;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
 }  // namespace
 
 void Catalogue::watch(mcap::Handlers& h) {
@@ -157,6 +175,7 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
     mcap::Handlers h;
     l.watch(h);
     std::uint64_t read = 0;
+    Offsets offsets;
     h.on_message = [&](const mcap::Message& m) {
         if (++read % kStopCheckEvery == 0) throw_if_stopped(o.stop, "the export");
         const auto& c = l.channels.at(m.channel_id);
@@ -180,11 +199,21 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
         } else if (suffix == topics::experiment_plan.suffix) {
             msg::ExperimentPlan p;
             if (deserialize(m.data, p)) formation = p.formation();
+        } else if (suffix == topics::process_status.suffix) {
+            msg::ProcessStatus s;
+            if (deserialize(m.data, s) && s.clock_uncertainty_s() >= 0 && std::isfinite(s.clock_offset_s()))
+                offsets[s.process()].push_back(s.clock_offset_s());
         }
     };
     require_sound(mcap::read_file(path, h), path);
     if (wrench.empty()) throw InputError(log::cat(path, ": no ", topics::stand_wrench.suffix, " messages: nothing to export as a flight"));
     if (poses.empty()) throw InputError(log::cat(path, ": no ", topics::mocap_frame.suffix, " messages: nothing to export as a flight"));
+    // Onto the recorder's clock: each topic less its producer's offset.
+    const std::string stand = producer_of(topics::stand_wrench), mocap = producer_of(topics::mocap_frame);
+    const double stand_offset = o.raw_stamps ? 0.0 : median_offset(offsets, stand);
+    const double mocap_offset = o.raw_stamps ? 0.0 : median_offset(offsets, mocap);
+    for (auto& r : wrench) r.t -= stand_offset;
+    for (auto& p : poses) std::get<0>(p) -= mocap_offset;
     // Both clocks are written relative to one epoch (whole seconds), kept in meta.json.
     epoch = std::floor(std::min(wrench.front().t, std::get<0>(poses.front())));
     std::sort(wrench.begin(), wrench.end(), [](const Row& a, const Row& b) { return a.t < b.t; });
@@ -205,7 +234,10 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
     const bool known = std::find_if(flight::kFormations.begin(), flight::kFormations.end(),
                                     [&](const char* k) { return formation == k; }) != flight::kFormations.end();
     f.meta.formation = known ? formation : "free";
-    f.meta.extra_json = nlohmann::json{{"source", path}, {"epoch_unix_s", epoch}}.dump();
+    nlohmann::json clocks = nlohmann::json::object();
+    if (!o.raw_stamps) clocks = {{stand, stand_offset}, {mocap, mocap_offset}};
+    f.meta.extra_json = nlohmann::json{{"source", path}, {"epoch_unix_s", epoch}, {"raw_stamps", o.raw_stamps},
+                                       {"clock_offsets_applied_s", clocks}}.dump();
     return f;
 }
 

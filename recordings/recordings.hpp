@@ -30,10 +30,14 @@ bool print_info(const std::string& path, std::ostream& out);
 
 struct ExportOptions {
     std::string sufferer = "sufferer";  // the rigid body on the stand
+    // false: each topic's stamps are moved onto the recorder's clock by its producer's measured
+    // clock offset (the median of its heartbeats' clock_offset_s); true: as recorded.
+    bool raw_stamps = false;
     std::stop_token stop;               // checked while reading: dw::Stopped, nothing written
 };
 // The flight a recording holds, in memory: stand/wrench and mocap/frame (+ the plan's formation),
-// the topics named by the registry. Throws dw::InputError naming the recording.
+// the topics named by the registry, on the recorder's clock unless raw_stamps (meta.json's extra
+// says which offsets were applied). Throws dw::InputError naming the recording.
 flight::Flight flight_from_recording(const std::string& path, const ExportOptions& o);
 // That flight written as a flight folder (downwash-flight/1).
 void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o);

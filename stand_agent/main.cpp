@@ -75,11 +75,11 @@ int run(int argc, char** argv) {
     else if (gain == "a64") dopt.gain = dw::stand::Gain::a64;
     else if (gain == "b32") dopt.gain = dw::stand::Gain::b32;
     else throw dw::InputError("--gain: '" + gain + "' (expected a128, a64 or b32)");
-    dw::dds::Participant participant(cli.dds(), "stand_agent");
+    dw::dds::Participant participant(cli.dds(), "stand_agent", cli.clock());
     dw::dds::Heartbeat heartbeat(participant);
     dw::stand::AgentOptions aopt;
     aopt.calibration = cal;
-    dw::stand::StandAgent agent(aopt, dw::SystemClock::instance());
+    dw::stand::StandAgent agent(aopt, cli.clock());
 
     std::unique_ptr<dw::stand::Hx711Lines> lines;
     std::unique_ptr<dw::stand::PhysicsSource> source;

@@ -59,7 +59,7 @@ int run(int argc, char** argv) {
         for (std::string item; std::getline(w, item, ',');) {
             if (!item.empty()) ro.wait_for.push_back(item);
         }
-        dw::dds::Participant participant(cli.dds(), "planner");
+        dw::dds::Participant participant(cli.dds(), "planner", cli.clock());
         dw::dds::Heartbeat heartbeat(participant);
         heartbeat.set_state(dw::msg::PROC_RUNNING);
         dw::planner::Experiment experiment(participant, p, ro);

@@ -237,6 +237,46 @@ TEST(Endpoints, AnAbsentAwaitedReaderDelaysTheFirstSampleOnlyUntilTheTimeout) {
     EXPECT_TRUE(state.write(st));
 }
 
+// Issue 19: the clock service's arithmetic: offset = process minus reference, from the exchange
+// with the smallest round trip.
+TEST(ClockSync, TheFilterTakesTheOffsetOfTheQuickestExchange) {
+    dw::dds::ClockFilter f;
+    EXPECT_FALSE(f.estimate());
+    const dw::Nanos ms = 1'000'000;
+    // The process runs 50 ms ahead: the reference's clock reads 50 ms less. 4 ms each way.
+    f.add(1000 * ms, 1000 * ms - 50 * ms + 4 * ms, 1000 * ms - 50 * ms + 5 * ms, 1000 * ms + 9 * ms);
+    // A slow exchange: 1 ms out, 20 ms back (queueing) — its offset is off by 9.5 ms.
+    f.add(2000 * ms, 2000 * ms - 50 * ms + 1 * ms, 2000 * ms - 50 * ms + 2 * ms, 2000 * ms + 22 * ms);
+    auto e = f.estimate();
+    ASSERT_TRUE(e);
+    EXPECT_NEAR(e->offset_s, 0.050, 1e-9);
+    EXPECT_NEAR(e->uncertainty_s, 0.004, 1e-9);
+    f.add(3000 * ms, 3000 * ms, 2999 * ms, 3001 * ms);  // the reference went backwards: ignored
+    EXPECT_NEAR(f.estimate()->offset_s, 0.050, 1e-9);
+    for (int i = 0; i < 10; ++i) f.add(5000 * ms, 5000 * ms + 10 * ms, 5000 * ms + 10 * ms, 5000 * ms + 20 * ms);
+    EXPECT_NEAR(f.estimate()->offset_s, 0.0, 1e-9) << "only the last exchanges count";
+}
+
+TEST(ClockSync, AProcessWithAHiddenClockErrorMeasuresIt) {
+    Participant ref(test_config(), "recorder");
+    dw::dds::ClockReference reference(ref);
+    dw::OffsetClock ahead(dw::SystemClock::instance(), 37'000'000);  // 37 ms ahead
+    Participant p(test_config(), "stand_agent", ahead);
+    dw::dds::ClockClient client(p);
+    ASSERT_TRUE(eventually([&] {
+        client.ask();
+        std::this_thread::sleep_for(20ms);
+        const auto e = client.estimate();
+        return e && e->uncertainty_s < 0.001;
+    }));
+    for (int i = 0; i < 10; ++i) {
+        client.ask();
+        std::this_thread::sleep_for(20ms);
+    }
+    const auto e = client.estimate();
+    EXPECT_NEAR(e->offset_s, 0.037, 0.002);
+}
+
 TEST(PeerTable, AppearsThenExpiresAfterThreePeriods) {
     dw::dds::PeerTable t;
     dw::msg::ProcessStatus s;

@@ -12,6 +12,7 @@
 #include "lab/labfile.hpp"
 #include "lab/launcher.hpp"
 #include "mcap/mcap.hpp"
+#include "recordings/recordings.hpp"
 #include "support.hpp"
 
 using namespace std::chrono_literals;
@@ -181,36 +182,97 @@ TEST(LabRun, BadLabFileIsOneLineAndExit2) {
 // The lab across two hosts: network namespaces joined by a veth pair. The launcher, stand agent,
 // mocap bridge and recorder run in host A; the planner is started in host B through its launch
 // prefix (as ssh would on a real lab). Needs root; skipped otherwise.
-TEST(LabRun, AcrossTwoHostsInNetworkNamespaces) {
-    if (::geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
-    auto sh = [](const std::string& c) { return std::system((c + " >/dev/null 2>&1").c_str()); };
-    const std::string id = std::to_string(::getpid() % 100000), a = "dwla" + id, b = "dwlb" + id;
-    const std::string net = "10.232." + std::to_string(::getpid() % 250);
-    struct Cleanup {
-        std::function<void()> f;
-        ~Cleanup() { f(); }
-    } cleanup{[&] {
+namespace {
+int sh(const std::string& c) { return std::system((c + " >/dev/null 2>&1").c_str()); }
+
+// Two hosts: network namespaces a and b joined by a veth pair (multicast routed over it), removed
+// when this goes out of scope. The launcher runs in a; a lab file's host `hostb` launches in b.
+struct TwoHosts {
+    std::string id = std::to_string(::getpid() % 100000), a = "dwla" + id, b = "dwlb" + id;
+    std::string net = "10.232." + std::to_string(::getpid() % 250);
+    bool up() const {
+        for (const auto& s : std::vector<std::string>{
+                 "ip netns add " + a, "ip netns add " + b, "ip link add " + a + " type veth peer name " + b, "ip link set " + a + " netns " + a,
+                 "ip link set " + b + " netns " + b, "ip -n " + a + " addr add " + net + ".1/24 dev " + a,
+                 "ip -n " + b + " addr add " + net + ".2/24 dev " + b, "ip -n " + a + " link set " + a + " up", "ip -n " + b + " link set " + b + " up",
+                 "ip -n " + a + " link set lo up", "ip -n " + b + " link set lo up", "ip -n " + a + " route add 224.0.0.0/4 dev " + a,
+                 "ip -n " + b + " route add 224.0.0.0/4 dev " + b}) {
+            if (sh(s) != 0) {
+                ADD_FAILURE() << s;
+                return false;
+            }
+        }
+        return true;
+    }
+    ~TwoHosts() {
         sh("ip netns del " + a);
         sh("ip netns del " + b);
-    }};
-    for (const auto& s : std::vector<std::string>{
-             "ip netns add " + a, "ip netns add " + b, "ip link add " + a + " type veth peer name " + b, "ip link set " + a + " netns " + a,
-             "ip link set " + b + " netns " + b, "ip -n " + a + " addr add " + net + ".1/24 dev " + a,
-             "ip -n " + b + " addr add " + net + ".2/24 dev " + b, "ip -n " + a + " link set " + a + " up", "ip -n " + b + " link set " + b + " up",
-             "ip -n " + a + " link set lo up", "ip -n " + b + " link set lo up", "ip -n " + a + " route add 224.0.0.0/4 dev " + a,
-             "ip -n " + b + " route add 224.0.0.0/4 dev " + b})
-        ASSERT_EQ(sh(s), 0) << s;
+    }
+    std::string host_b() const { return "hostb: {launch: [ip, netns, exec, " + b + "]}"; }
+    dw::test::RunResult run_lab(const dw::test::TempDir& dir) const {
+        return dw::test::run({"ip", "netns", "exec", a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
+                              "--profile", "lab", "--insecure", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
+                             dir, 300000ms);
+    }
+};
+}  // namespace
+
+TEST(LabRun, AcrossTwoHostsInNetworkNamespaces) {
+    if (::geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
+    TwoHosts hosts;
+    ASSERT_TRUE(hosts.up());
+    const std::string b = hosts.b;
     dw::test::TempDir dir;
-    std::ofstream(dir.file("lab.yaml")) << lab_text("hostb: {launch: [ip, netns, exec, " + b + "]}", "hostb");
-    const auto r = dw::test::run({"ip", "netns", "exec", a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
-                                  "--profile", "lab", "--insecure", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
-                                 dir, 300000ms);
+    std::ofstream(dir.file("lab.yaml")) << lab_text(hosts.host_b(), "hostb");
+    const auto r = hosts.run_lab(dir);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
     EXPECT_NE(r.err.find("started planner on hostb"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("ip netns exec " + b), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("@hostb"), std::string::npos) << r.err;  // its status line, heard across the veth
     EXPECT_TRUE(std::filesystem::exists(dir.file("run/exp.mcap")));
+}
+
+// Issue 19: a clock error hidden in the stand agent on another host (--clock-offset 0.05) is
+// measured live by the clock service within 2 ms, shown in the status lines, recorded, and taken
+// out of the exported flight's stamps (kept with --raw-stamps).
+TEST(LabRun, MeasuresAClockErrorHiddenOnAnotherHost) {
+    if (::geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
+    TwoHosts hosts;
+    ASSERT_TRUE(hosts.up());
+    dw::test::TempDir dir;
+    std::string lab = lab_text(hosts.host_b(), "local");
+    const auto flaky = lab.find("  - name: flaky");
+    lab.erase(flaky, lab.find("  - name: planner") - flaky);
+    const std::string stand = "    run: [dw-stand-agent, run, --sim]\n";
+    lab.replace(lab.find(stand), stand.size(), "    host: hostb\n    run: [dw-stand-agent, run, --sim, --clock-offset, \"0.05\"]\n");
+    std::ofstream(dir.file("lab.yaml")) << lab;
+    const auto r = hosts.run_lab(dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("clock   +50."), std::string::npos) << "the status line shows the stand agent's offset\n" << r.err;
+
+    std::map<std::uint16_t, std::string> topics;
+    std::vector<double> measured;
+    dw::mcap::read_file(dir.file("run/exp.mcap"), {
+        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+        .on_message = [&](const dw::mcap::Message& m) {
+            if (!topics[m.channel_id].ends_with("/processes/status")) return;
+            dw::msg::ProcessStatus s;
+            ASSERT_TRUE(dw::recordings::deserialize(m.data, s));
+            if (s.process() == "stand_agent" && s.clock_uncertainty_s() >= 0) measured.push_back(s.clock_offset_s());
+        }});
+    ASSERT_GT(measured.size(), 10u) << "the recording holds the stand agent's measured offsets";
+    EXPECT_NEAR(measured.back(), 0.05, 0.002);
+
+    const auto corrected = dw::recordings::flight_from_recording(dir.file("run/exp.mcap"), {});
+    const auto raw = dw::recordings::flight_from_recording(dir.file("run/exp.mcap"), {.raw_stamps = true});
+    const auto applied = nlohmann::json::parse(corrected.meta.extra_json)["clock_offsets_applied_s"];
+    EXPECT_NEAR(applied["stand_agent"].get<double>(), 0.05, 0.002) << applied;
+    EXPECT_TRUE(nlohmann::json::parse(raw.meta.extra_json)["clock_offsets_applied_s"].empty());
+    ASSERT_EQ(corrected.wrench.size(), raw.wrench.size());
+    const double shift = (raw.wrench.front().t + nlohmann::json::parse(raw.meta.extra_json)["epoch_unix_s"].get<double>()) -
+                         (corrected.wrench.front().t + nlohmann::json::parse(corrected.meta.extra_json)["epoch_unix_s"].get<double>());
+    EXPECT_NEAR(shift, 0.05, 0.002) << "the wrench stamps moved onto the recorder's clock";
 }
 
 TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {

@@ -5,6 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "dds/topics.hpp"
+
 #include "support.hpp"
 
 using namespace std::chrono_literals;
@@ -68,7 +70,7 @@ protected:
         ASSERT_EQ(*status, 0) << dw::read_file(dir_.file("echo.out")) << dw::read_file(dir_.file("echo.err"))
                               << dw::read_file(dir_.file("pub.err"));
         const auto s = nlohmann::json::parse(dw::read_file(dir_.file("summary.json")));
-        ASSERT_EQ(s["topics"].size(), 11u);
+        ASSERT_EQ(s["topics"].size(), static_cast<std::size_t>(dw::dds::topics::kTopicCount));
         for (const auto& t : s["topics"]) {
             EXPECT_EQ(t["intact"], 10) << t.dump();
             EXPECT_EQ(t["corrupt"], 0) << t.dump();

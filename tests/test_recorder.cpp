@@ -112,7 +112,7 @@ TEST(Recorder, IndependentReadersDecodeExactlyWhatWasPublished) {
             EXPECT_EQ(m["message"], want) << m["topic"] << " #" << seq;
             ++probe_messages[m["topic"]];
         }
-        EXPECT_EQ(probe_messages.size(), 11u);
+        EXPECT_EQ(probe_messages.size(), static_cast<std::size_t>(dw::dds::topics::kTopicCount));
         for (const auto& [topic, n] : probe_messages) EXPECT_EQ(n, 20) << topic;
     }
 }
