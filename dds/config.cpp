@@ -17,7 +17,7 @@ namespace frtps = eprosima::fastrtps::rtps;
 
 namespace {
 constexpr std::uint32_t kSocketBuffer = 4 * 1024 * 1024;  // large samples over UDP need it
-constexpr std::uint32_t kInitialPeersRange = 32;         // participants per host reachable
+constexpr std::uint32_t kInitialPeersRange = kMaxParticipantId + 1;  // participants per host reachable
 
 std::string prefix(std::string_view where) {
     return where.empty() ? std::string() : std::string(where) + ": ";
@@ -104,6 +104,10 @@ void validate(const DdsConfig& c, std::string_view where) {
             throw InputError(log::cat(p, "await readers: '", name, "' is not a process name"));
     if (const auto problem = range_problem(c.await_timeout_s, kAwaitTimeoutRange); !problem.empty())
         throw InputError(log::cat(p, "await timeout: ", problem));
+    if (c.participant_id != kAutoParticipantId) {
+        if (const auto problem = range_problem(c.participant_id, kParticipantIdRange); !problem.empty())
+            throw InputError(log::cat(p, "participant id: ", problem));
+    }
 }
 
 namespace {
@@ -133,6 +137,8 @@ void add_cli_options(CLI::App& app, DdsCliOptions& o) {
         ->type_name("NAME")->delimiter(',');
     app.add_option("--await-timeout", o.await_timeout_s, "how long a sensor topic waits for them, s (default 5)")
         ->type_name("S")->check(cli::in(kAwaitTimeoutRange));
+    app.add_option("--participant-id", o.participant_id, "RTPS participant id (default: the lowest free; dw-lab gives a restarted process a fresh one)")
+        ->type_name("N")->check(cli::in(kParticipantIdRange));
 }
 
 DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
@@ -176,6 +182,7 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
     if (cli.insecure) c.insecure = true, c.security.clear();
     if (!cli.await_readers.empty()) c.await_readers = cli.await_readers;
     if (cli.await_timeout_s) c.await_timeout_s = *cli.await_timeout_s;
+    if (cli.participant_id) c.participant_id = *cli.participant_id;
     validate(c);
     require_security_choice(c);
     return c;
@@ -217,11 +224,12 @@ fdds::DomainParticipantQos participant_qos(const DdsConfig& c, const std::string
         transport.user_transports.push_back(udp);
     }
     if (want_shm) {
-        transport.user_transports.push_back(
-            std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+        auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
+        transport.user_transports.push_back(shm);
     }
 
     auto& builtin = qos.wire_protocol().builtin;
+    qos.wire_protocol().participant_id = c.participant_id;
     std::vector<std::string> peers = c.initial_peers;
     if (c.profile == Profile::local && want_udp) peers.emplace_back("127.0.0.1");
     for (const auto& peer : peers) {

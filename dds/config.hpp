@@ -25,6 +25,10 @@ inline constexpr std::string_view kDefaultNamespace = "lab";
 // How long a sensor writer holds its first sample for the lab's required readers (--await-readers).
 inline constexpr double kDefaultAwaitTimeoutS = 5.0;
 inline constexpr Range kAwaitTimeoutRange{0.1, 120.0, "s"};
+// RTPS participant ids: the local profile's initial peers reach ids 0..kMaxParticipantId on a host.
+inline constexpr int kMaxParticipantId = 31;
+inline constexpr int kAutoParticipantId = -1;  // the lowest free one
+inline constexpr Range kParticipantIdRange{0, kMaxParticipantId};
 
 struct DdsConfig {
     int domain = 0;
@@ -42,6 +46,10 @@ struct DdsConfig {
     // process that starts after it. Bounded by await_timeout_s; empty = publish at once.
     std::vector<std::string> await_readers;
     double await_timeout_s = kDefaultAwaitTimeoutS;
+    // Per process, never from a shared file. A restarted process needs one its predecessor did not
+    // have: Fast DDS 2.9.1's peers keep sending to the dead one's shared-memory port, and a new
+    // participant on the same id heard nothing for ~2 s (measured: dw_lab_tests ARecorderKilled...).
+    int participant_id = kAutoParticipantId;
 };
 
 Profile parse_profile(std::string_view text);
@@ -65,6 +73,7 @@ struct DdsCliOptions {
     bool insecure = false;
     std::vector<std::string> await_readers;
     std::optional<double> await_timeout_s;
+    std::optional<int> participant_id;
 };
 
 void add_cli_options(CLI::App& app, DdsCliOptions& options);

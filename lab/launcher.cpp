@@ -66,10 +66,24 @@ struct Running {
     std::unique_ptr<Subprocess> proc;  // null: started elsewhere (printed)
     std::optional<int> ended;
     int restarts = 0;
+    bool recorder = false;                  // dw-recorder record
+    std::vector<std::string> restart_args;  // appended to argv when restarted
 };
+
+// A restarted recorder keeps what its predecessor wrote: a new file, the old one recovered.
+constexpr std::string_view kRecorderKeepExisting = "--keep-existing";
 
 bool is_recorder(const std::vector<std::string>& args) {
     return dds::role_of_executable(args[0]) == dds::Role::recorder && args.size() > 1 && args[1] == "record";
+}
+
+// A restarted process joins with a participant id of its own, counted down from the top of the
+// range (auto ids are the lowest free), never its predecessor's (dds::DdsConfig::participant_id
+// says why); a restarted recorder keeps what its predecessor wrote.
+std::vector<std::string> restart_args(const Running& r, int participant_id) {
+    std::vector<std::string> a{"--participant-id", std::to_string(std::max(participant_id, 0))};
+    if (r.recorder) a.emplace_back(kRecorderKeepExisting);
+    return a;
 }
 
 // When the lab records, every other process holds its sensor topics' first samples until the
@@ -101,7 +115,7 @@ std::deque<Running> build_commands(const LabFile& lab, const LaunchOptions& o) {
         if (!is_recorder(args)) argv.insert(argv.end(), await.begin(), await.end());
         if (std::find(o.dds_args.begin(), o.dds_args.end(), "--security") != o.dds_args.end())
             argv.insert(argv.end(), {"--identity", p.name});  // each process its own identity (dw-lab keys create --lab)
-        procs.push_back({p, argv, (fs::path(o.run_dir) / "logs" / (p.name + ".log")).string(), nullptr, std::nullopt, 0});
+        procs.push_back({p, argv, (fs::path(o.run_dir) / "logs" / (p.name + ".log")).string(), nullptr, std::nullopt, 0, is_recorder(args), {}});
     }
     return procs;
 }
@@ -184,8 +198,11 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
         state = s;
     });
 
+    int next_participant_id = dds::kMaxParticipantId;
     auto start = [&](Running& r) {
-        r.proc = std::make_unique<Subprocess>(SpawnOptions{r.argv, r.log, r.log, {}});
+        std::vector<std::string> argv = r.argv;
+        argv.insert(argv.end(), r.restart_args.begin(), r.restart_args.end());
+        r.proc = std::make_unique<Subprocess>(SpawnOptions{argv, r.log, r.log, {}});
         r.ended.reset();
     };
     for (auto& r : procs) {
@@ -231,7 +248,8 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
                 if (r.spec.restart == Restart::on_failure && *st != 0 && r.restarts < 3) {
                     ++r.restarts;
                     ++R.restarts[r.spec.name];
-                    say(log::cat("restarting ", r.spec.name, " (", r.restarts, " of 3)"));
+                    r.restart_args = restart_args(r, next_participant_id--);
+                    say(log::cat("restarting ", r.spec.name, " (", r.restarts, " of 3) with ", quoted(r.restart_args)));
                     start(r);
                 }
             }

@@ -834,6 +834,14 @@ ReadResult read_file(const std::string& path, const Handlers& handlers) {
     return LinearRead(file.bytes(), handlers, ReadMode::strict, [&](std::uint64_t at) { file.release_before(at); }).run();
 }
 
+bool is_closed(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in || in.tellg() < static_cast<std::streamoff>(2 * sizeof kMagic)) return false;
+    char tail[sizeof kMagic];
+    in.seekg(-static_cast<std::streamoff>(sizeof kMagic), std::ios::end);
+    return in.read(tail, sizeof tail) && std::memcmp(tail, kMagic, sizeof kMagic) == 0;
+}
+
 ReadResult recover(const std::string& in_path, const std::string& out_path, const WriterOptions& options) {
     MappedFile mapped(in_path);  // the input is checked before any output exists
     const auto bytes = mapped.bytes();

@@ -160,6 +160,10 @@ ReadResult read_file(const std::string& path, const Handlers& handlers);
 // appears only when complete. Returns what the read of `in` found.
 ReadResult recover(const std::string& in, const std::string& out, const WriterOptions& options);
 
+// True when the file ends with the closing magic: its writer closed it (a killed writer's file does
+// not, and needs recover() to be read).
+bool is_closed(const std::string& path);
+
 std::uint32_t crc32(std::span<const std::uint8_t> data, std::uint32_t crc = 0);
 
 }  // namespace dw::mcap

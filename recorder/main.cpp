@@ -41,6 +41,9 @@ struct RecordCommand {
         cmd->add_option("--duration", duration_s, "stop after this many seconds (0, the default: until Ctrl-C)")->check(dw::cli::in(dw::kTimeoutRange));
         cmd->add_flag("--no-fsync", no_fsync, "do not fdatasync each chunk (faster, loses more on a power cut)");
         cmd->add_flag("--quiet", quiet, "no live status line");
+        cmd->add_flag("--keep-existing", rec.keep_existing,
+                      "never overwrite: write the next free <stem>_NNNN.mcap, and recover in place a file a killed recorder left unfinished "
+                      "(dw-lab run adds it when it restarts a recorder)");
     }
     // The options as the Recorder takes them; throws dw::InputError on a bad --attach or compression.
     void complete(const dw::dds::DdsConfig& dds) {

@@ -80,6 +80,7 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
         std::lock_guard lock(mutex_);
         open_file();  // before the readers: a latched sample may arrive at once
     }
+    if (!unfinished_.empty()) repairing_ = std::jthread([this, files = std::move(unfinished_)] { repair(files); });
     channels_.reserve(dds::topics::kTopicCount);
     channel_ids_.reserve(dds::topics::kTopicCount);
     dds::topics::for_each([&](const auto& spec) {
@@ -117,13 +118,32 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
 
 Recorder::~Recorder() { close(); }
 
+// File 0 is --out itself unless files split; file N is <stem>_NNNN.mcap.
+std::string Recorder::path_for(std::size_t index) const {
+    const bool split = options_.split_bytes > 0 || options_.split_seconds > 0;
+    if (index == 0 && !split) return options_.out;
+    const std::filesystem::path p(options_.out);
+    char suffix[16];
+    std::snprintf(suffix, sizeof(suffix), "_%04zu", index);
+    return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
+}
+
+void Recorder::repair(std::vector<std::string> unfinished) {
+    for (const auto& path : unfinished) {
+        try {
+            const auto r = mcap::recover(path, path, options_.writer);
+            log::info("recovered ", path, " (left unfinished by a recorder before this one): ", r.messages, " messages");
+        } catch (const std::exception& e) {
+            log::warn("cannot recover ", path, ": ", e.what(), " (left as it is)");
+        }
+    }
+}
+
 void Recorder::open_file() {
-    std::string path = options_.out;
-    if (options_.split_bytes > 0 || options_.split_seconds > 0) {
-        const std::filesystem::path p(options_.out);
-        char suffix[16];
-        std::snprintf(suffix, sizeof(suffix), "_%04zu", files_.size());
-        path = (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
+    std::string path = path_for(next_index_++);
+    while (options_.keep_existing && std::filesystem::exists(path)) {
+        if (!mcap::is_closed(path)) unfinished_.push_back(path);
+        path = path_for(next_index_++);
     }
     writer_ = std::make_unique<mcap::Writer>(path, options_.writer);
     files_.push_back(path);
@@ -138,7 +158,7 @@ void Recorder::open_file() {
                                          // Who recorded: the DDS Security identity (what it may read is its permissions).
                                          {"dds_security", dds.security.empty() ? std::string("none")
                                                                                : "identity " + (dds.identity.empty() ? participant_.process() : dds.identity)},
-                                         {"file_index", std::to_string(files_.size() - 1)}}});
+                                         {"file_index", std::to_string(next_index_ - 1)}}});
     for (const auto& [name, data] : attachment_data_) {
         const auto now = static_cast<std::uint64_t>(participant_.clock().now_ns());
         const std::string ext = std::filesystem::path(name).extension().string();

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "dds/participant.hpp"
@@ -25,6 +26,9 @@ struct RecordOptions {
     std::vector<std::pair<std::string, std::string>> attachments;  // name, path (read at start)
     bool start_paused = false;
     bool command_control = true;                 // PAUSE/RESUME experiment commands pause/resume
+    // Never overwrite: a file name already taken is skipped (the next <stem>_NNNN.mcap is used), and
+    // a taken file left unfinished (its recorder was killed) is recovered in place, in the background.
+    bool keep_existing = false;
 };
 
 struct TopicStats {
@@ -59,6 +63,9 @@ public:
 private:
     friend class Channel;
     void open_file();
+    std::string path_for(std::size_t index) const;
+    // Recovers each file in place (keep_existing: files a killed recorder left unfinished).
+    void repair(std::vector<std::string> unfinished);
     void close_file();
     struct ChannelInfo {
         std::string topic, type, qos, qos_profile, idl;
@@ -79,12 +86,15 @@ private:
     std::vector<ChannelInfo> infos_;          // by channel index
     std::vector<std::uint16_t> channel_ids_;  // in the current file, by channel index
     std::int64_t file_opened_ns_ = 0;
+    std::size_t next_index_ = 0;              // of the next file name to try
+    std::vector<std::string> unfinished_;     // found by open_file, handed to repair
     std::atomic<bool> paused_{false};
     std::string run_id_;
     std::string last_plan_;
     std::vector<std::unique_ptr<Channel>> channels_;
     std::uint64_t last_total_ = 0;
     std::int64_t last_status_ns_ = 0;
+    std::jthread repairing_;                  // last member: joined first
 };
 
 }  // namespace dw::recorder

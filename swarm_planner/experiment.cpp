@@ -70,10 +70,14 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
           }
       }),
       peers_(p, [this](const dds::PeerEvent& e) {
-          if (e.kind != dds::PeerEvent::Kind::lost) return;
           if (std::find(o_.wait_for.begin(), o_.wait_for.end(), e.process) == o_.wait_for.end()) return;
           std::lock_guard lock(mutex_);
-          if (lost_peer_.empty()) lost_peer_ = log::cat("lost participant ", e.process, " (", e.reason, ")");
+          if (e.kind == dds::PeerEvent::Kind::lost) {
+              lost_.try_emplace(e.process, Lost{p_.clock().monotonic_ns(), e.reason});
+              if (o_.rejoin_grace_s > 0) log::warn("lost ", e.process, " (", e.reason, "): aborting unless it is back within ", o_.rejoin_grace_s, " s");
+          } else if (lost_.erase(e.process) > 0) {
+              log::info(e.process, " is back");
+          }
       }) {
     if (o_.run_id.empty()) o_.run_id = log::cat("run-", p.clock().now_ns() / 1'000'000'000);
     if (o_.link == "px4") link_ = std::make_unique<Px4Link>(p, plan_.vehicles, std::vector<physics::Vec3>{});
@@ -106,8 +110,9 @@ std::optional<std::string> Experiment::send(const std::vector<physics::Setpoint>
 std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint>& sps) {
     std::lock_guard lock(mutex_);
     if (abort_requested_) return abort_reason_;
-    if (!lost_peer_.empty()) return lost_peer_;
     const Nanos now = p_.clock().monotonic_ns();
+    for (const auto& [process, lost] : lost_)
+        if (!(to_seconds(now - lost.since) < o_.rejoin_grace_s)) return log::cat("lost participant ", process, " (", lost.reason, ")");
     // Each check passes only when positively satisfied: a NaN anywhere is a fault.
     for (std::size_t i = 0; i < sps.size(); ++i) {
         const auto it = seen_.find(plan_.vehicles[i]);

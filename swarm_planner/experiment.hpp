@@ -3,7 +3,8 @@
 // (heartbeats) and the vehicles (mocap) -> CALIBRATE the stand -> take off -> fly the legs
 // (setpoints at >= 50 Hz) -> land -> DONE. Experiment state (phase, leg, progress) is latched.
 // Aborts safely — hold, then land — on mocap loss, a tracking error, a geofence breach, a lost
-// participant or an operator's ABORT; the reason is published and logged.
+// participant (not back within the rejoin grace: a restarted recorder may be) or an operator's
+// ABORT; the reason is published and logged.
 #include <atomic>
 #include <functional>
 #include <map>
@@ -17,6 +18,8 @@
 
 namespace dw::planner {
 
+inline constexpr Range kRejoinGraceRange{0, 60, "s"};
+
 struct RunOptions {
     std::vector<std::string> wait_for{"stand_agent", "mocap_bridge", "recorder"};
     double wait_timeout_s = 30;
@@ -27,6 +30,7 @@ struct RunOptions {
     double hold_s = 1;
     double mocap_timeout_s = 0.2;
     double tracking_error_m = 0.3;
+    double rejoin_grace_s = 0;                // a required process lost aborts unless it is back within this
     std::string run_id;
     std::string link = "sim";                 // sim or px4
     std::stop_token stop;                     // a stop request: ABORTED, every vehicle landed
@@ -64,7 +68,11 @@ private:
     std::unique_ptr<VehicleLink> link_;
     std::mutex mutex_;
     std::map<std::string, VehicleSeen> seen_;
-    std::string lost_peer_;
+    struct Lost {
+        Nanos since = 0;
+        std::string reason;
+    };
+    std::map<std::string, Lost> lost_;  // required processes gone, until they return
     std::atomic<bool> abort_requested_{false};
     std::string abort_reason_;
     dds::Reader<msg::VehicleState> states_;

@@ -39,6 +39,8 @@ int run(int argc, char** argv) {
     runc->add_option("--wait-for", wait, "processes to wait for (heartbeats), comma-separated; '' = none");
     runc->add_option("--run-id", ro.run_id, "experiment run id (default: run-<unix time>)");
     runc->add_option("--wait-timeout", ro.wait_timeout_s, "seconds to wait for the participants")->check(dw::cli::in(dw::kTimeoutRange));
+    runc->add_option("--rejoin-grace", ro.rejoin_grace_s, "seconds a lost required process may take to come back (a restarted recorder) before the experiment aborts; 0 = abort at once")
+        ->check(dw::cli::in(dw::planner::kRejoinGraceRange));
     runc->add_option("--vehicles", ro.link, "sim (vehicles/setpoint) or px4 (uXRCE-DDS: rt/<vehicle>/fmu/in/...)");
     cli.parse(argc, argv);
     o.grid.altitudes_m = dw::parse_number_list(altitudes, dw::planner::kPlanAltitudeRange, "--altitudes");

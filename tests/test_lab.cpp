@@ -4,11 +4,16 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
+#include "core/subprocess.hpp"
 #include "lab/labfile.hpp"
 #include "lab/launcher.hpp"
 #include "mcap/mcap.hpp"
@@ -273,6 +278,85 @@ TEST(LabRun, MeasuresAClockErrorHiddenOnAnotherHost) {
     const double shift = (raw.wrench.front().t + nlohmann::json::parse(raw.meta.extra_json)["epoch_unix_s"].get<double>()) -
                          (corrected.wrench.front().t + nlohmann::json::parse(corrected.meta.extra_json)["epoch_unix_s"].get<double>());
     EXPECT_NEAR(shift, 0.05, 0.002) << "the wrench stamps moved onto the recorder's clock";
+}
+
+namespace {
+
+// Waits (bounded) until `file` holds `text`; returns the file's text then.
+std::string await_text(const std::string& file, const std::string& text, std::chrono::seconds limit = 120s) {
+    const auto until = std::chrono::steady_clock::now() + limit;
+    std::string now;
+    while (std::chrono::steady_clock::now() < until) {
+        if (std::filesystem::exists(file) && (now = dw::read_file(file)).find(text) != std::string::npos) return now;
+        std::this_thread::sleep_for(100ms);
+    }
+    ADD_FAILURE() << file << " never said '" << text << "':\n" << now;
+    return now;
+}
+
+// Every header.seq recorded of one topic, over several files, and whether each file read whole.
+std::vector<std::uint64_t> recorded_seqs(const std::vector<std::string>& files, const std::string& suffix) {
+    std::vector<std::uint64_t> seqs;
+    for (const auto& file : files) {
+        std::map<std::uint16_t, std::string> topics;
+        const auto r = dw::mcap::read_file(file, {
+            .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+            .on_message = [&](const dw::mcap::Message& m) {
+                if (topics[m.channel_id].ends_with("/" + suffix)) seqs.push_back(m.sequence);
+            }});
+        EXPECT_FALSE(r.error) << file << ": " << *r.error;
+        EXPECT_TRUE(r.complete) << file << " does not read whole";
+    }
+    std::sort(seqs.begin(), seqs.end());
+    return seqs;
+}
+
+}  // namespace
+
+// Issue 19: the recorder killed (SIGKILL) mid-experiment with `restart: on-failure`. The launcher
+// restarts it with --keep-existing: it writes exp_0001.mcap and recovers the killed one's exp.mcap
+// in place; the planner waits out the gap (--rejoin-grace) and ends DONE; every file reads whole
+// and the stand's wrench misses at most a second between them.
+TEST(LabRun, ARecorderKilledMidExperimentIsRestartedIntoANewFileAndEveryFileReads) {
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("lab.yaml")) << R"(format: downwash-lab/1
+processes:
+  - name: stand_agent
+    run: [dw-stand-agent, run, --sim]
+  - name: mocap_bridge
+    run: [dw-mocap-bridge, --sim, --sim-vehicles, v1]
+  - name: recorder
+    run: [dw-recorder, record, --out, "{run_dir}/exp.mcap", --quiet, --no-fsync, --flush-interval, "0.25"]
+    restart: on-failure
+  - name: planner
+    run: [dw-planner, run, --formation, single, --legs, "4", --altitudes, "0.5", --speed, "1.0", --rejoin-grace, "10"]
+    experiment: true
+)";
+    dw::Subprocess lab({{bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--domain",
+                         std::to_string(dw::test::test_domain()), "--namespace", "labkill" + std::to_string(::getpid())},
+                        dir.file("lab.out"), dir.file("lab.err"), {}});
+    const std::string started = await_text(dir.file("lab.err"), "started recorder on local (pid ");
+    await_text(dir.file("run/logs/planner.log"), "flying 4 legs");
+    std::this_thread::sleep_for(3s);
+    const auto at = started.find("started recorder on local (pid ") + std::strlen("started recorder on local (pid ");
+    const pid_t recorder = std::stoi(started.substr(at));
+    ASSERT_EQ(::kill(recorder, SIGKILL), 0);
+    const auto status = lab.wait_for(300000ms);
+    ASSERT_TRUE(status) << "dw-lab did not end";
+    const std::string out = dw::read_file(dir.file("lab.out")), err = dw::read_file(dir.file("lab.err"));
+    ASSERT_EQ(*status, 0) << err;
+    EXPECT_NE(out.find("DONE: 4 of 4 legs"), std::string::npos) << out << err;
+    EXPECT_NE(err.find("restarting recorder (1 of 3)"), std::string::npos) << err;
+    EXPECT_NE(dw::read_file(dir.file("run/logs/recorder.log")).find("recovered " + dir.file("run/exp.mcap")), std::string::npos)
+        << dw::read_file(dir.file("run/logs/recorder.log"));
+    const auto seqs = recorded_seqs({dir.file("run/exp.mcap"), dir.file("run/exp_0001.mcap")}, "stand/wrench");
+    ASSERT_GT(seqs.size(), 100u);
+    std::uint64_t gap = 0;
+    for (std::size_t i = 1; i < seqs.size(); ++i) gap = std::max(gap, seqs[i] - seqs[i - 1] - 1);
+    const double gap_s = static_cast<double>(gap) / 80.0;  // the simulated stand publishes at 80 Hz
+    std::printf("stand/wrench: %zu samples recorded in two files, the longest run missing %llu samples (%.2f s)\n", seqs.size(),
+                static_cast<unsigned long long>(gap), gap_s);
+    EXPECT_LE(gap_s, 1.0) << "more than a second of the stand's wrench lost";
 }
 
 TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
