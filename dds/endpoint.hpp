@@ -167,6 +167,7 @@ struct SampleMeta {
     Nanos source_time_ns = 0;       // the writer's DDS source timestamp
     Nanos reception_time_ns = 0;    // when Fast DDS received it
     eprosima::fastdds::dds::InstanceHandle_t writer;  // which writer sent it
+    std::uint64_t missing_before = 0;  // header.seq values of this writer skipped just before this sample
 };
 
 template <class T>
@@ -221,7 +222,7 @@ private:
             meta.source_time_ns = info.source_timestamp.to_ns();
             meta.reception_time_ns = info.reception_timestamp.to_ns();
             meta.writer = info.publication_handle;
-            account(meta.writer, sample_.header().seq());
+            meta.missing_before = account(meta.writer, sample_.header().seq());
             on_sample_(sample_, meta);
         }
     }
@@ -242,7 +243,8 @@ private:
                                                       s.last_policy_id, s.total_count));
     }
 
-    void account(const eprosima::fastdds::dds::InstanceHandle_t& writer, std::uint64_t seq) {
+    // Returns how many of the writer's sequence numbers were skipped before this one.
+    std::uint64_t account(const eprosima::fastdds::dds::InstanceHandle_t& writer, std::uint64_t seq) {
         stats_->samples.fetch_add(1, std::memory_order_relaxed);
         // Most topics have one writer: skip the map lookup while the writer stays the same.
         if (next_ == nullptr || !(last_writer_ == writer)) {
@@ -250,8 +252,10 @@ private:
             last_writer_ = writer;
             next_ = &it->second;
         }
-        if (seq > *next_) stats_->lost.fetch_add(seq - *next_, std::memory_order_relaxed);
+        const std::uint64_t missing = seq > *next_ ? seq - *next_ : 0;
+        stats_->lost.fetch_add(missing, std::memory_order_relaxed);
         if (seq >= *next_) *next_ = seq + 1;
+        return missing;
     }
     void writer_gone(const eprosima::fastdds::dds::InstanceHandle_t& handle) {
         WriterGone f;

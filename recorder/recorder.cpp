@@ -22,7 +22,36 @@ class Recorder::Channel {
 public:
     virtual ~Channel() = default;
     virtual TopicStats stats() const = 0;
+    // The gaps since the last call, as the "gaps" metadata's text: "after_s-before_s (silence s): N missing; ...".
+    std::string take_gaps_text() {
+        std::lock_guard lock(gaps_mutex_);
+        std::ostringstream s;
+        s << std::fixed;
+        for (const auto& g : gaps_) {
+            if (s.tellp() > 0) s << "; ";
+            s.precision(3);
+            if (g.after_ns > 0) s << to_seconds(g.after_ns) << "-" << to_seconds(g.before_ns) << " (" << to_seconds(g.before_ns - g.after_ns) << " s)";
+            else s << "before " << to_seconds(g.before_ns);
+            s << ": " << g.missing << " missing";
+        }
+        if (gaps_unlisted_ > 0) s << "; and " << gaps_unlisted_ << " more gaps";
+        gaps_.clear();
+        gaps_unlisted_ = 0;
+        return s.str();
+    }
     std::atomic<std::uint64_t> recorded{0}, skipped{0};
+
+protected:
+    void note_gap(const Gap& g) {
+        std::lock_guard lock(gaps_mutex_);
+        if (gaps_.size() < kMaxGapsPerFile) gaps_.push_back(g);
+        else ++gaps_unlisted_;
+    }
+
+private:
+    std::mutex gaps_mutex_;
+    std::vector<Gap> gaps_;
+    std::uint64_t gaps_unlisted_ = 0;
 };
 
 namespace {
@@ -42,6 +71,8 @@ public:
 private:
     void on_sample(const T& m, const dds::SampleMeta& meta) {
         if (observe_) observe_(m);
+        if (meta.missing_before > 0) note_gap({last_received_ns_, meta.reception_time_ns, meta.missing_before});
+        last_received_ns_ = meta.reception_time_ns;
         const std::uint32_t size = support_.getSerializedSizeProvider(const_cast<T*>(&m))();
         if (payload_.max_size < size) payload_.reserve(size);
         payload_.length = 0;
@@ -53,6 +84,7 @@ private:
     std::function<void(const T&)> observe_;
     std::function<void(std::uint16_t, std::span<const std::uint8_t>, std::uint64_t, std::uint64_t, std::uint32_t)> sink_;
     std::uint16_t index_;
+    Nanos last_received_ns_ = 0;  // listener thread only
     typename dds::PubSubOf<T>::type support_;
     eprosima::fastrtps::rtps::SerializedPayload_t payload_{256};
     dds::Reader<T> reader_;  // last: its callback uses the members above
@@ -188,6 +220,10 @@ void Recorder::close_file() {
         loss[s.topic] = log::cat("recorded ", s.recorded, ", lost ", s.lost, ", skipped while paused ", s.skipped);
     }
     writer_->add_metadata({"loss", loss});
+    std::map<std::string, std::string> gaps;
+    for (const auto& c : channels_)
+        if (auto text = c->take_gaps_text(); !text.empty()) gaps[c->stats().topic] = std::move(text);
+    if (!gaps.empty()) writer_->add_metadata({"gaps", gaps});
     writer_->close();
     writer_.reset();
 }

@@ -31,6 +31,14 @@ struct RecordOptions {
     bool keep_existing = false;
 };
 
+// Samples a writer's header.seq says were sent but never arrived: the last sample of the topic
+// before (0: none yet) and the one after, by receive time. Stored per file in the "gaps" metadata.
+struct Gap {
+    std::int64_t after_ns = 0, before_ns = 0;
+    std::uint64_t missing = 0;
+};
+inline constexpr std::size_t kMaxGapsPerFile = 200;  // per topic; more are counted, not listed
+
 struct TopicStats {
     std::string topic;
     std::uint64_t recorded = 0;

@@ -359,6 +359,62 @@ processes:
     EXPECT_LE(gap_s, 1.0) << "more than a second of the stand's wrench lost";
 }
 
+// Issue 19: a 2 s network partition of the stand's host (its veth down, then up again). The lab's
+// decision: a required process gone for less than the planner's --rejoin-grace is waited out (the
+// experiment ends DONE); for longer, or without a grace, it aborts (the stand-agent-killed test).
+// The recording says where the gap was: the "gaps" metadata names the stand's silence.
+TEST(LabRun, ATwoSecondPartitionOfTheStandsHostIsWaitedOutAndTheRecordingSaysWhere) {
+    if (::geteuid() != 0) GTEST_SKIP() << "network namespaces need root";
+    TwoHosts hosts;
+    ASSERT_TRUE(hosts.up());
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("lab.yaml")) << "format: downwash-lab/1\nhosts:\n  local: {}\n  " << hosts.host_b() << R"(
+processes:
+  - name: stand_agent
+    host: hostb
+    run: [dw-stand-agent, run, --sim]
+  - name: mocap_bridge
+    run: [dw-mocap-bridge, --sim, --sim-vehicles, v1]
+  - name: recorder
+    run: [dw-recorder, record, --out, "{run_dir}/exp.mcap", --quiet, --no-fsync]
+  - name: planner
+    run: [dw-planner, run, --formation, single, --legs, "4", --altitudes, "0.5", --speed, "1.0", --rejoin-grace, "10"]
+    experiment: true
+)";
+    dw::Subprocess lab({{"ip", "netns", "exec", hosts.a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
+                         "--profile", "lab", "--insecure", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
+                        dir.file("lab.out"), dir.file("lab.err"), {}});
+    await_text(dir.file("run/logs/planner.log"), "flying 4 legs");
+    std::this_thread::sleep_for(2s);
+    ASSERT_EQ(sh("ip -n " + hosts.b + " link set " + hosts.b + " down"), 0);
+    std::this_thread::sleep_for(2s);
+    ASSERT_EQ(sh("ip -n " + hosts.b + " link set " + hosts.b + " up"), 0);
+    sh("ip -n " + hosts.b + " route add 224.0.0.0/4 dev " + hosts.b);  // a link going down takes its routes
+    sh("ip -n " + hosts.a + " route add 224.0.0.0/4 dev " + hosts.a);
+    const auto status = lab.wait_for(300000ms);
+    ASSERT_TRUE(status) << "dw-lab did not end";
+    const std::string out = dw::read_file(dir.file("lab.out")), err = dw::read_file(dir.file("lab.err"));
+    ASSERT_EQ(*status, 0) << err;
+    EXPECT_NE(out.find("DONE: 4 of 4 legs"), std::string::npos) << out << err;
+    const std::string planner = dw::read_file(dir.file("run/logs/planner.log"));
+    EXPECT_NE(planner.find("stand_agent is back"), std::string::npos) << planner;
+
+    std::map<std::string, std::string> gaps;
+    dw::mcap::read_file(dir.file("run/exp.mcap"), {.on_metadata = [&](const dw::mcap::Metadata& m) {
+                                                       if (m.name == "gaps") gaps = m.entries;
+                                                   }});
+    std::string wrench;
+    for (const auto& [topic, text] : gaps)
+        if (topic.ends_with("/stand/wrench")) wrench = text;
+    ASSERT_FALSE(wrench.empty()) << "no gap of stand/wrench stored";
+    double longest = 0;
+    for (std::size_t at = wrench.find(" ("); at != std::string::npos; at = wrench.find(" (", at + 1))
+        longest = std::max(longest, std::stod(wrench.substr(at + 2)));
+    std::printf("stand/wrench gaps: %s\n", wrench.c_str());
+    EXPECT_GE(longest, 1.5) << wrench;
+    EXPECT_LE(longest, 4.0) << wrench;
+}
+
 TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
     dw::test::TempDir dir;
     const auto r = dw::test::run({bin("dw-lab"), "demo", "--quick", "--out", dir.file("demo"), "--domain",
