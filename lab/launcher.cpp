@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -24,6 +25,7 @@
 #include "dds/names.hpp"
 #include "dds/participant.hpp"
 #include "dds/time.hpp"
+#include "lab/resources.hpp"
 
 namespace dw::lab {
 
@@ -164,6 +166,20 @@ std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor
     return s.str();
 }
 
+// One row per running process of this host: its memory, CPU time and losses (logs/resources.csv).
+void log_resources(std::ofstream& out, const std::deque<Running>& procs, const dds::PeerMonitor& peers, double t_s) {
+    for (const auto& r : procs) {
+        if (!r.proc || r.ended) continue;
+        const auto usage = usage_of(r.proc->pid());
+        if (!usage) continue;
+        std::uint64_t lost = 0;
+        if (const auto st = peers.last(r.spec.name))
+            for (const auto& t : st->rates()) lost += t.lost();
+        out << to_csv_line({t_s, r.spec.name, r.proc->pid(), *usage, lost}) << "\n";
+    }
+    out.flush();
+}
+
 // Stop in reverse order, so the recorder (started early) sees the others' last words.
 void stop_all(std::deque<Running>& procs, double grace_s, const std::function<void(const std::string&)>& say) {
     for (auto it = procs.rbegin(); it != procs.rend(); ++it)
@@ -238,6 +254,10 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     for (auto& r : procs)
         if (r.spec.experiment) experiment = &r;
     auto last_draw = std::chrono::steady_clock::now() - std::chrono::hours(1);
+    const auto launched = std::chrono::steady_clock::now();
+    auto last_resources = launched - std::chrono::hours(1);
+    std::ofstream resources(std::filesystem::path(o.run_dir) / "logs" / kResourceFile);
+    resources << kResourceHeader << "\n";
     while (!o.stop.stop_requested()) {
         for (auto& r : procs) {
             if (!r.proc || r.ended) continue;
@@ -256,6 +276,10 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
         }
         if (experiment && experiment->ended) break;
         const auto now = std::chrono::steady_clock::now();
+        if (now - last_resources >= std::chrono::duration<double>(kResourcePeriodS)) {
+            log_resources(resources, procs, peers, std::chrono::duration<double>(now - launched).count());
+            last_resources = now;
+        }
         if (now - last_draw >= (tty ? std::chrono::seconds(1) : std::chrono::seconds(10))) {
             draw();
             last_draw = now;

@@ -15,6 +15,7 @@
 #include "lab/keys.hpp"
 #include "lab/launcher.hpp"
 #include "lab/loopback.hpp"
+#include "lab/soak.hpp"
 
 namespace {
 
@@ -43,6 +44,10 @@ int run(int argc, char** argv) {
     runc->add_option("--var", var_args, "NAME=VALUE: set a lab-file variable (repeatable)");
 
     dw::lab::KeysOptions ko;
+    dw::lab::SoakOptions soak_o;
+    auto* soak = app.add_subcommand("soak", "a long simulated lab run with every process's memory, CPU and losses sampled: no growth, no loss");
+    soak->add_option("--minutes", soak_o.minutes, "how long (default 3)")->check(dw::cli::in(dw::lab::kSoakMinutesRange));
+    soak->add_option("--out", soak_o.out_dir, "folder for soak.md, soak.json, the charts and the run (default: runs/soak-<time>)");
     auto* keys = app.add_subcommand("keys", "the lab's DDS Security keystore: create (or add missing identities), list");
     keys->require_subcommand(1);
     auto* keys_create = keys->add_subcommand("create", "a CA, one identity per process of --lab (or per role), signed governance and permissions");
@@ -57,6 +62,7 @@ int run(int argc, char** argv) {
     if (keys_list->parsed()) return dw::lab::keys_list(ko.keystore, std::cout);
     if (loopback->count("--summary")) dw::require_writable_path(lo.summary_path, "--summary");
     if (demo->count("--out")) dw::require_output_dir(demo_o.out_dir, "--out");
+    if (soak->count("--out")) dw::require_output_dir(soak_o.out_dir, "--out");
     if (runc->count("--run-dir")) dw::require_output_dir(run_dir, "--run-dir");
     auto stamp = [] {
         char buf[32];
@@ -70,6 +76,13 @@ int run(int argc, char** argv) {
         demo_o.dds = cli.dds();
         demo_o.stop = dw::Shutdown::instance().token();
         return dw::lab::run_demo(demo_o);
+    }
+    if (soak->parsed()) {
+        if (soak_o.out_dir.empty()) soak_o.out_dir = "runs/soak-" + stamp();
+        soak_o.dds_args = cli.dds_args();
+        soak_o.dds = cli.dds();
+        soak_o.stop = dw::Shutdown::instance().token();
+        return dw::lab::run_soak(soak_o);
     }
     if (runc->parsed()) {
         const auto lab = dw::lab::load_lab(lab_path);

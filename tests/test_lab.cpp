@@ -16,6 +16,7 @@
 #include "core/subprocess.hpp"
 #include "lab/labfile.hpp"
 #include "lab/launcher.hpp"
+#include "lab/soak.hpp"
 #include "mcap/mcap.hpp"
 #include "recordings/recordings.hpp"
 #include "support.hpp"
@@ -446,4 +447,51 @@ TEST(LabFile, ProcessNamesAreNotPathsAndTheLauncherIsNotAProcess) {
     const std::string e = error_of("format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, lab.yaml]}\n");
     EXPECT_NE(e.find("cannot start the launcher"), std::string::npos) << e;
     EXPECT_EQ(error_of("format: downwash-lab/1\nprocesses:\n  - {name: probe-1.a_b, run: [dw-probe, list]}\n"), "");
+}
+
+// Issue 19, the soak's judgement: flat memory and no loss pass; growth after the warm-up, a
+// process's losses or the recording's fail, each named.
+TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
+    std::vector<dw::lab::ResourceRow> rows;
+    for (int i = 0; i <= 36; ++i) {
+        const double t = 5.0 * i;
+        rows.push_back({t, "flat", 10, {i == 0 ? 2.0 : 30.0 + 0.01 * (i % 2), 0.1 * t}, 0});  // start-up jump, then flat
+        rows.push_back({t, "leaky", 11, {20.0 + 0.02 * t, 0.05 * t}, i >= 30 ? 3u : 0u});     // 1.2 MB/min, loses 3 late
+    }
+    const auto t = dw::lab::trends(rows);
+    ASSERT_EQ(t.size(), 2u);
+    EXPECT_EQ(t[0].process, "flat");
+    EXPECT_NEAR(t[0].rss_slope_mb_per_min, 0.0, 0.01) << "the warm-up's jump is left out";
+    EXPECT_NEAR(t[0].cpu_percent, 10.0, 1e-9);
+    EXPECT_NEAR(t[1].rss_slope_mb_per_min, 1.2, 1e-9);
+    EXPECT_EQ(t[1].lost, 3u);
+    EXPECT_EQ(dw::lab::judge({t[0]}, 0), "");
+    const std::string why = dw::lab::judge(t, 5);
+    EXPECT_NE(why.find("leaky's memory grows 1.2 MB/min"), std::string::npos) << why;
+    EXPECT_NE(why.find("leaky lost 3 samples"), std::string::npos) << why;
+    EXPECT_NE(why.find("the recording is missing 5 samples"), std::string::npos) << why;
+    EXPECT_EQ(why.find("flat"), std::string::npos) << why;
+}
+
+// Issue 19: the soak CI runs (3 minutes; docs/BENCHMARKS.md has a 30-minute one): every process
+// sampled through the run, memory flat after the warm-up, nothing lost, the charts drawn.
+TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
+    dw::test::TempDir dir;
+    const auto r = dw::test::run({bin("dw-lab"), "soak", "--minutes", "3", "--out", dir.file("soak"), "--domain",
+                                  std::to_string(dw::test::test_domain()), "--namespace", "soak" + std::to_string(::getpid())},
+                                 dir, 900000ms);
+    std::printf("%s\n", r.out.c_str());
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    const auto j = nlohmann::json::parse(dw::read_file(dir.file("soak/soak.json")));
+    EXPECT_EQ(j["verdict"], "pass");
+    EXPECT_EQ(j["phase"], "DONE");
+    EXPECT_GE(j["sampled_s"].get<double>(), 150.0);
+    ASSERT_EQ(j["processes"].size(), 5u);
+    for (const auto& p : j["processes"]) {
+        EXPECT_GE(p["samples"].get<int>(), 30) << p;
+        EXPECT_EQ(p["lost"].get<std::uint64_t>(), 0u) << p;
+        EXPECT_LE(p["rss_slope_mb_per_min"].get<double>(), dw::lab::kRssSlopeLimitMbPerMin) << p;
+    }
+    EXPECT_EQ(j["recorder_lost"].get<std::uint64_t>(), 0u);
+    for (const char* png : {"soak/soak_rss.png", "soak/soak_cpu.png"}) EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
 }
