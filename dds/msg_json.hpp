@@ -1,31 +1,31 @@
 #pragma once
-// Every lab message as JSON, field names exactly as in the IDL: for exports (CSV columns are the
-// flattened JSON paths) and for comparing with what independent decoders read.
+// Every lab message as JSON, field names exactly as in the IDL (dds/msg_fields.hpp): for exports
+// and for comparing with what independent decoders read.
+#include <cstdint>
 #include <nlohmann/json.hpp>
+#include <type_traits>
 
-#include "dds/topics.hpp"
+#include "dds/msg_fields.hpp"
 
 namespace dw::dds {
 
-nlohmann::json to_json(const msg::Time& m);
-nlohmann::json to_json(const msg::Header& m);
-nlohmann::json to_json(const msg::Vector3& m);
-nlohmann::json to_json(const msg::Quaternion& m);
-nlohmann::json to_json(const msg::WrenchStamped& m);
-nlohmann::json to_json(const msg::LoadCellFrame& m);
-nlohmann::json to_json(const msg::StandStatus& m);
-nlohmann::json to_json(const msg::RigidBody& m);
-nlohmann::json to_json(const msg::MocapFrame& m);
-nlohmann::json to_json(const msg::VehicleState& m);
-nlohmann::json to_json(const msg::VehicleSetpoint& m);
-nlohmann::json to_json(const msg::Leg& m);
-nlohmann::json to_json(const msg::ExperimentPlan& m);
-nlohmann::json to_json(const msg::ExperimentCommand& m);
-nlohmann::json to_json(const msg::ExperimentState& m);
-nlohmann::json to_json(const msg::WrenchPrediction& m);
-nlohmann::json to_json(const msg::TopicRate& m);
-nlohmann::json to_json(const msg::ProcessStatus& m);
-nlohmann::json to_json(const msg::ClockProbe& m);
+template <class T>
+nlohmann::json to_json(const T& value) {
+    if constexpr (IsMessage<T>) {
+        nlohmann::json j = nlohmann::json::object();
+        auto put = [&j](const char* name, const auto& field) { j[name] = to_json(field); };
+        fields(value, put);
+        return j;
+    } else if constexpr (IsSequence<T>) {
+        nlohmann::json a = nlohmann::json::array();
+        for (const auto& e : value) a.push_back(to_json(e));
+        return a;
+    } else if constexpr (std::is_enum_v<T>) {
+        return static_cast<std::int64_t>(value);
+    } else {
+        return value;
+    }
+}
 
 // Flattens nested objects and arrays into "a.b", "a[2].c" keys, in document order.
 std::vector<std::pair<std::string, nlohmann::json>> flatten(const nlohmann::json& j);

@@ -21,19 +21,6 @@ namespace {
 
 constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks while exporting
 
-// Calls f(spec) with the topic spec whose type has this scoped name.
-template <class F>
-bool with_type(const std::string& type_name, F&& f) {
-    bool found = false;
-    dds::topics::for_each([&](const auto& spec) {
-        if (!found && spec.type_name == type_name) {
-            found = true;
-            f(spec);
-        }
-    });
-    return found;
-}
-
 // A recorded value the flight cannot carry (NaN, inf) is the recording's fault: named there.
 template <std::size_t N>
 void require_finite(const std::array<double, N>& v, const std::string& path, std::string_view topic, std::uint64_t message) {
@@ -251,102 +238,6 @@ flight::Flight read_flight_or_recording(const std::string& path) {
     if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
     if (fs::path(path).extension() != ".mcap") throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
     return flight_from_recording(path, {});
-}
-
-namespace {
-
-// A string CSV-quoted when it holds a separator, a quote or a line break.
-std::string csv_value(const nlohmann::json& v) {
-    if (!v.is_string()) return v.dump();
-    std::string s = v.get<std::string>();
-    if (s.find_first_of(",\"\n") == std::string::npos) return s;
-    std::string q = "\"";
-    for (char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-    return q + "\"";
-}
-
-// One topic's CSV, written as its messages are read: its columns are its first message's. A later
-// message with more (a longer sequence) makes the table "grown": it is written in a second read,
-// once every column is known. Memory stays bounded by one row, whatever the recording's size.
-struct CsvTable {
-    std::vector<std::string> columns;
-    std::map<std::string, std::size_t> index;
-    std::unique_ptr<AtomicFile> out;
-    std::uint64_t rows = 0;
-    bool grew = false;
-
-    // The message's fields in this table's column order (new columns added at the end).
-    std::vector<std::string> row(const mcap::Message& m, const nlohmann::json& j) {
-        std::vector<std::string> r(columns.size());
-        auto put = [&](const std::string& col, std::string value) {
-            auto [it, added] = index.try_emplace(col, columns.size());
-            if (added) {
-                columns.push_back(col);
-                grew = grew || rows > 0;
-            }
-            if (r.size() <= it->second) r.resize(it->second + 1);
-            r[it->second] = std::move(value);
-        };
-        put("log_time", std::to_string(m.log_time));
-        put("publish_time", std::to_string(m.publish_time));
-        for (const auto& [k, v] : dds::flatten(j)) put(k, csv_value(v));
-        return r;
-    }
-    void write_line(const std::vector<std::string>& fields) {
-        std::string line;
-        for (std::size_t i = 0; i < columns.size(); ++i) line += (i ? "," : "") + (i < fields.size() ? fields[i] : std::string());
-        out->write(line + "\n");
-    }
-};
-
-std::string csv_path(const std::string& dir, const mcap::Channel& c) {
-    std::string name = topic_suffix(c.topic);
-    std::replace(name.begin(), name.end(), '/', '_');
-    return (std::filesystem::path(dir) / (name + ".csv")).string();
-}
-
-// One read of the recording: rows of the tables `wanted` says to write (all on the first read,
-// the grown ones on the second).
-void csv_pass(const std::string& path, const std::string& dir, const std::stop_token& stop, std::map<std::uint16_t, CsvTable>& tables,
-              const std::function<bool(std::uint16_t)>& wanted) {
-    Catalogue l;
-    mcap::Handlers h;
-    l.watch(h);
-    std::uint64_t read = 0;
-    h.on_message = [&](const mcap::Message& m) {
-        if (++read % kStopCheckEvery == 0) throw_if_stopped(stop, "the export");
-        if (!wanted(m.channel_id)) return;
-        const auto j = decode(l.type_of(l.channels.at(m.channel_id)), m.data);
-        if (!j) return;
-        CsvTable& t = tables[m.channel_id];
-        const bool first = !t.out;
-        if (first) t.out = std::make_unique<AtomicFile>(csv_path(dir, l.channels.at(m.channel_id)));
-        const auto fields = t.row(m, *j);
-        if (t.grew) return;  // written again in the second read
-        if (first) t.write_line(t.columns);
-        t.write_line(fields);
-        ++t.rows;
-    };
-    require_sound(mcap::read_file(path, h), path);
-}
-
-}  // namespace
-
-void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop) {
-    std::map<std::uint16_t, CsvTable> tables;
-    csv_pass(path, dir, stop, tables, [](std::uint16_t) { return true; });
-    std::map<std::uint16_t, CsvTable> grown;
-    for (auto& [id, t] : tables) {
-        if (!t.grew) continue;
-        t.out.reset();  // its first version had too few columns: dropped, written again below
-        grown[id].columns = t.columns;
-        for (std::size_t i = 0; i < t.columns.size(); ++i) grown[id].index[t.columns[i]] = i;
-    }
-    if (!grown.empty()) csv_pass(path, dir, stop, grown, [&](std::uint16_t id) { return grown.count(id) > 0; });
-    for (auto& [id, t] : tables)
-        if (!t.grew) t.out->commit();
-    for (auto& [id, t] : grown)
-        if (t.out) t.out->commit();
 }
 
 }  // namespace dw::recordings

@@ -44,7 +44,8 @@ void export_flight(const std::string& path, const std::string& dir, const Export
 // A flight folder as it is, or an .mcap recording's flight (no temporary folder): what the
 // analysis tools take. Throws dw::InputError naming the path.
 flight::Flight read_flight_or_recording(const std::string& path);
-// One CSV per topic: log_time, publish_time and every field (flattened JSON paths).
+// One CSV per topic: log_time, publish_time and every field in IDL order ("a.b", "a[2].c"), decoded
+// straight from the typed message (recordings/csv_export.cpp).
 void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop = {});
 
 // ---- for code that reads a recording message by message ----
@@ -64,6 +65,19 @@ std::string topic_suffix(const std::string& topic);
 
 // Throws dw::InputError naming the file when the read met damage.
 void require_sound(const mcap::ReadResult& r, const std::string& path);
+
+// Calls f(spec) with the topic spec whose type has this scoped name; false when no lab type has it.
+template <class F>
+bool with_type(const std::string& type_name, F&& f) {
+    bool found = false;
+    dds::topics::for_each([&](const auto& spec) {
+        if (!found && spec.type_name == type_name) {
+            found = true;
+            f(spec);
+        }
+    });
+    return found;
+}
 
 // A recorded CDR message into a lab type; false when the bytes do not decode.
 template <class T>

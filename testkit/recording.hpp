@@ -23,6 +23,10 @@ public:
     void write(std::uint16_t channel, std::uint32_t seq, std::uint64_t log_time_ns, T& message) {
         writer_.write({channel, seq, log_time_ns, log_time_ns, cdr_of(message)}, 0);
     }
+    // Bytes as they are (a damaged message, say).
+    void write_bytes(std::uint16_t channel, std::uint32_t seq, std::uint64_t log_time_ns, std::span<const std::uint8_t> bytes) {
+        writer_.write({channel, seq, log_time_ns, log_time_ns, bytes}, 0);
+    }
     void close() { writer_.close(); }
     std::uint64_t bytes_written() const { return writer_.bytes_written(); }
 

@@ -400,6 +400,44 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
     }
 }
 
+// Issue 19: the CSV export splits the topics between two threads, in batches: every row written,
+// in order, on both; a message that does not decode stops the export with one line naming the
+// topic, and leaves no CSV behind.
+TEST(Recorder, CsvExportOnTwoThreadsKeepsEveryRowInOrderAndStopsOnAnUndecodableMessage) {
+    TempDir dir;
+    auto record = [&](const std::string& file, bool damaged) {
+        dw::testkit::LabRecording w(file);
+        const auto cw = w.channel(dw::dds::topics::stand_wrench), cs = w.channel(dw::dds::topics::vehicle_state);
+        for (std::uint32_t i = 0; i < 10000; ++i) {
+            dw::msg::WrenchStamped m;
+            m.header().seq(i);
+            m.force_n().z(0.001 * i);
+            w.write(cw, i, 1000 + i, m);
+            dw::msg::VehicleState v;
+            v.header().seq(i);
+            v.vehicle_id("v1");
+            if (damaged && i == 7000) w.write_bytes(cs, i, 1000 + i, std::vector<std::uint8_t>{0, 1, 0, 0, 9});
+            else w.write(cs, i, 1000 + i, v);
+        }
+        w.close();
+    };
+    record(dir.file("ok.mcap"), false);
+    dw::recordings::export_csv(dir.file("ok.mcap"), dir.file("ok"));
+    for (const char* csv : {"ok/stand_wrench.csv", "ok/vehicles_state.csv"}) {
+        const auto rows = dw::test::lines(dw::read_file(dir.file(csv)));
+        ASSERT_EQ(rows.size(), 10001u) << csv;
+        for (std::size_t i = 1; i < rows.size(); ++i) ASSERT_EQ(rows[i].substr(0, rows[i].find(',')), std::to_string(999 + i)) << csv;
+    }
+    record(dir.file("bad.mcap"), true);
+    try {
+        dw::recordings::export_csv(dir.file("bad.mcap"), dir.file("bad"));
+        ADD_FAILURE() << "an undecodable message was exported";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("vehicles/state: message 7000 (5 bytes) does not decode"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(!std::filesystem::exists(dir.file("bad")) || std::filesystem::is_empty(dir.file("bad"))) << "a CSV was left";
+}
+
 // Issue 19: the CSV export streams; a topic whose later messages have more columns (a longer
 // sequence) is written again once every column is known: every row as wide as the header.
 TEST(Recorder, CsvExportOfATopicThatGrowsColumnsIsWrittenWithEveryColumn) {
