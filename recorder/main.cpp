@@ -77,6 +77,8 @@ struct RecordCommand {
         }
         if (!quiet) std::fprintf(stderr, "\n");
         recorder.close();
+        if (const auto d = recorder.dropped())
+            dw::log::warn(d, " messages dropped: more than ", dw::recorder::kMaxPendingBytes >> 20, " MB were waiting for a stalled disk");
         for (const auto& s : recorder.stats()) {
             if (s.lost > 0) dw::log::warn(s.topic, ": ", s.lost, " samples lost (gaps in the writers' sequence numbers)");
         }

@@ -143,7 +143,7 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
         // No lock is held while the reader is created: its listener may already be running
         // (a latched sample) and Fast DDS must not wait on us.
         auto channel = std::make_unique<TypedChannel<T>>(participant_, spec, index, observe, sink);
-        std::lock_guard lock(mutex_);
+        std::lock_guard lock(pending_mutex_);
         channels_.push_back(std::move(channel));
     });
 }
@@ -203,7 +203,7 @@ void Recorder::open_file() {
     if (!infos_.empty()) {
         channel_ids_.clear();
         for (const auto& info : infos_) channel_ids_.push_back(announce(info));
-        if (!run_id_.empty()) writer_->add_metadata({"run", {{"run_id", run_id_}}});
+        if (const std::string run = run_id(); !run.empty()) writer_->add_metadata({"run", {{"run_id", run}}});
     }
 }
 
@@ -230,31 +230,54 @@ void Recorder::close_file() {
 
 void Recorder::on_message(std::uint16_t index, std::span<const std::uint8_t> cdr, std::uint64_t log_time,
                           std::uint64_t publish_time, std::uint32_t sequence) {
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(pending_mutex_);
     Channel* c = index < channels_.size() ? channels_[index].get() : nullptr;  // null while being set up
     if (paused_) {
         if (c) ++c->skipped;
         return;
     }
+    if (pending_data_.size() + cdr.size() > kMaxPendingBytes) {
+        ++dropped_;
+        return;
+    }
+    pending_.push_back({index, sequence, log_time, publish_time, pending_data_.size(), cdr.size()});
+    pending_data_.append(reinterpret_cast<const char*>(cdr.data()), cdr.size());
+}
+
+void Recorder::drain_pending() {
+    std::vector<Pending> messages;
+    std::string data;
+    std::vector<mcap::Metadata> metadata;
+    {
+        std::lock_guard lock(pending_mutex_);
+        messages.swap(pending_);
+        data.swap(pending_data_);
+        metadata.swap(pending_metadata_);
+    }
     if (!writer_) return;
-    writer_->write({channel_ids_[index], sequence, log_time, publish_time, cdr}, participant_.clock().monotonic_ns());
-    if (c) ++c->recorded;
+    for (const auto& m : metadata) writer_->add_metadata(m);
+    const std::int64_t now = participant_.clock().monotonic_ns();
+    const auto bytes = std::span(reinterpret_cast<const std::uint8_t*>(data.data()), data.size());
+    for (const auto& m : messages) {
+        writer_->write({channel_ids_[m.index], m.sequence, m.log_time, m.publish_time, bytes.subspan(m.offset, m.size)}, now);
+        if (m.index < channels_.size()) ++channels_[m.index]->recorded;
+    }
 }
 
 void Recorder::note_run(const std::string& run_id) {
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(pending_mutex_);
     if (run_id.empty() || run_id == run_id_) return;
     run_id_ = run_id;
-    if (writer_) writer_->add_metadata({"run", {{"run_id", run_id}, {"since_unix_ns", std::to_string(participant_.clock().now_ns())}}});
+    pending_metadata_.push_back({"run", {{"run_id", run_id}, {"since_unix_ns", std::to_string(participant_.clock().now_ns())}}});
     log::info("run id ", run_id);
 }
 
 void Recorder::note_plan(const std::string& name, const std::string& formation, const std::string& document) {
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(pending_mutex_);
     const std::string key = name + '\n' + formation + '\n' + document;
     if (key == last_plan_) return;  // latched plans are re-sent: store each plan once
     last_plan_ = key;
-    if (writer_) writer_->add_metadata({"experiment_plan", {{"name", name}, {"formation", formation}, {"document", document}}});
+    pending_metadata_.push_back({"experiment_plan", {{"name", name}, {"formation", formation}, {"document", document}}});
 }
 
 void Recorder::pause(const std::string& why) {
@@ -267,6 +290,7 @@ void Recorder::toggle(const std::string& why) { paused_ ? resume(why) : pause(wh
 
 void Recorder::tick() {
     std::lock_guard lock(mutex_);
+    drain_pending();
     if (!writer_) return;
     const std::int64_t now = participant_.clock().monotonic_ns();
     writer_->flush_if_due(now);
@@ -281,7 +305,13 @@ void Recorder::tick() {
 
 void Recorder::close() {
     std::lock_guard lock(mutex_);
+    drain_pending();
     close_file();
+}
+
+std::uint64_t Recorder::dropped() const {
+    std::lock_guard lock(pending_mutex_);
+    return dropped_;
 }
 
 std::vector<TopicStats> Recorder::stats() const {
@@ -296,7 +326,7 @@ std::vector<std::string> Recorder::files() const {
 }
 
 std::string Recorder::run_id() const {
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(pending_mutex_);
     return run_id_;
 }
 
@@ -316,6 +346,7 @@ std::string Recorder::status_line() {
     std::ostringstream out;
     out << (paused_ ? "PAUSED " : "recording ") << total << " messages on " << active << "/" << channels_.size()
         << " topics, " << static_cast<long>(rate) << " msg/s, lost " << lost;
+    if (const auto d = dropped()) out << ", dropped " << d << " (disk stalled)";
     return out.str();
 }
 

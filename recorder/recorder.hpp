@@ -39,6 +39,10 @@ struct Gap {
 };
 inline constexpr std::size_t kMaxGapsPerFile = 200;  // per topic; more are counted, not listed
 
+// Received messages waiting for the file at most: beyond, they are dropped and counted (a disk
+// stalled for minutes must not take the machine's memory).
+inline constexpr std::size_t kMaxPendingBytes = 256u << 20;
+
 struct TopicStats {
     std::string topic;
     std::uint64_t recorded = 0;
@@ -61,6 +65,8 @@ public:
     void close();
 
     std::vector<TopicStats> stats() const;
+    // Messages not recorded because kMaxPendingBytes were already waiting for a stalled disk.
+    std::uint64_t dropped() const;
     std::vector<std::string> files() const;
     std::string run_id() const;
     // One line for the live display: messages, rate, losses.
@@ -80,6 +86,8 @@ private:
     };
     // Schema and channel records of one topic in the current file; returns the channel id.
     std::uint16_t announce(const ChannelInfo& c);
+    // Writes what the listeners queued (messages, metadata) into the file; mutex_ held.
+    void drain_pending();
     void on_message(std::uint16_t channel_index, std::span<const std::uint8_t> cdr, std::uint64_t log_time,
                     std::uint64_t publish_time, std::uint32_t sequence);
     void note_run(const std::string& run_id);
@@ -87,7 +95,22 @@ private:
 
     dds::Participant& participant_;
     RecordOptions options_;
+    // Two locks, taken in this order: mutex_ guards the file (the owner's tick: compression, writes,
+    // fdatasync); pending_mutex_ guards what DDS's listeners queue for it. A listener never waits on
+    // the disk: a slow fdatasync once held the receive thread, losing samples and the recorder's own
+    // heartbeat (found by dw-lab soak on a busy machine).
     mutable std::mutex mutex_;
+    mutable std::mutex pending_mutex_;
+    struct Pending {
+        std::uint16_t index;
+        std::uint32_t sequence;
+        std::uint64_t log_time, publish_time;
+        std::size_t offset, size;  // in pending_data_
+    };
+    std::vector<Pending> pending_;
+    std::string pending_data_;
+    std::vector<mcap::Metadata> pending_metadata_;
+    std::uint64_t dropped_ = 0;
     std::unique_ptr<mcap::Writer> writer_;
     std::vector<std::string> files_;
     std::vector<std::pair<std::string, std::string>> attachment_data_;  // name, bytes
@@ -97,8 +120,8 @@ private:
     std::size_t next_index_ = 0;              // of the next file name to try
     std::vector<std::string> unfinished_;     // found by open_file, handed to repair
     std::atomic<bool> paused_{false};
-    std::string run_id_;
-    std::string last_plan_;
+    std::string run_id_;                      // pending_mutex_
+    std::string last_plan_;                   // pending_mutex_
     std::vector<std::unique_ptr<Channel>> channels_;
     std::uint64_t last_total_ = 0;
     std::int64_t last_status_ns_ = 0;
