@@ -110,7 +110,12 @@ int run(int argc, char** argv) {
     o.seed = seed;
     o.progress = progress;
     o.stop = dw::Shutdown::instance().token();
-    const auto f = dw::recordings::read_flight_or_recording(real);
+    // A recording is explained with its stamps as recorded: the explainer checks the clocks itself,
+    // and the report puts the time service's measurement beside what it fits.
+    dw::recordings::ExportOptions raw;
+    raw.raw_stamps = true;
+    raw.stop = dw::Shutdown::instance().token();
+    const auto f = dw::recordings::read_flight_or_recording(real, raw);
     const auto r = dw::analysis::explain(f, o);
     dw::analysis::write_report(f, r, o, out);
     std::string by;

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iomanip>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "analysis/explain.hpp"
@@ -11,6 +12,7 @@
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "physics/effect_types.hpp"
 #include "plot/chart.hpp"
 #include "plot/field_map.hpp"
 
@@ -188,6 +190,31 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
 
 }  // namespace
 
+// The stand's clock against the mocap's as the lab's time service measured it while recording
+// (meta.json extra, dw-recorder export), if it did.
+std::optional<double> measured_clock_offset(const flight::Flight& f) {
+    const json extra = json::parse(f.meta.extra_json, nullptr, false);
+    if (!extra.is_object() || !extra.contains(flight::kMeasuredClockOffsetKey) || !extra[flight::kMeasuredClockOffsetKey].is_number())
+        return std::nullopt;
+    return extra[flight::kMeasuredClockOffsetKey].get<double>();
+}
+
+// "Measured live: ... Fitted: ..." — the time service beside the explainer, when there is a measurement.
+std::string measured_clock_text(const flight::Flight& f, const ExplainResult& r) {
+    const auto measured = measured_clock_offset(f);
+    if (!measured) return "";
+    const json extra = json::parse(f.meta.extra_json, nullptr, false);
+    const bool raw = extra.value("raw_stamps", true);
+    std::string fitted = "not fitted (not a candidate)";
+    for (const auto& c : r.candidates)
+        if (c.effect.name == physics::kClockOffsetEffect)
+            fitted = log::cat(fmt(c.values[0], 4), " s [", fmt(c.lo[0], 4), ", ", fmt(c.hi[0], 4), "], ", c.accepted ? "accepted" : "not accepted");
+    return log::cat("**Clock offset, measured beside fitted.** The lab's time service measured the stand's clock against the mocap's "
+                    "while recording: ", fmt(*measured, 4), " s",
+                    raw ? " (these stamps are as recorded)" : " (already taken out of these stamps by the export: expect a fit near 0)",
+                    ". The explainer's clock_offset: ", fitted, ".\n\n");
+}
+
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir) {
     fs::create_directories(dir);
     // report.json
@@ -211,6 +238,11 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         if (c.stand_in) cands.back()["stands_in"] = true;
     }
     j["candidates"] = cands;
+    if (const auto measured = measured_clock_offset(f)) {
+        j["clock_offset_measured"] = {{"offset_s", *measured}, {"by", "the lab's time service (processes/status clock_offset_s, median)"}};
+        for (auto& c : j["candidates"])
+            if (c["effect"] == physics::kClockOffsetEffect) c["measured"] = {{"offset_s", *measured}};
+    }
     json by = json::array();
     for (const auto& c : r.accepted) by.push_back(c.effect.name);
     j["explained_by"] = by;
@@ -248,6 +280,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
         for (const auto& c : r.accepted) md << paragraph(c, who) << alternatives(c) << "\n\n";
     }
+    md << measured_clock_text(f, r);
     md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes << " of its own motor distances horizontally): ";
     for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
     if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";

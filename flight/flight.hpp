@@ -57,6 +57,11 @@ struct VehicleInfo {
 enum class WrenchSource { stand, residual };
 const char* to_string(WrenchSource s);
 
+// meta.json extra key of a flight exported from a recording (dw-recorder export): the stand's clock
+// against the mocap's as the lab's time service measured it live, in seconds, in the sense of the
+// clock_offset effect (a force at mocap time t stamped t + offset).
+inline constexpr const char* kMeasuredClockOffsetKey = "clock_offset_measured_s";
+
 struct Meta {
     std::string sufferer = "sufferer";
     std::vector<std::string> neighbours;

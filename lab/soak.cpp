@@ -29,7 +29,8 @@ constexpr const char* kFormation = "leader_follower3";
 constexpr double kAltitude_m = 1.3, kSpeed_mps = 0.5;
 constexpr double kCalibrateTakeoffLandS = 12;  // flown around the legs (planner defaults, rounded up)
 
-// Legs of the soak's plan that fill `minutes` (the plan's own duration per leg).
+// The fewest legs whose plan fills `minutes` (the plan's own duration; legs differ in length, so a
+// search, not a rate: the first leg's transition is long).
 int legs_for(double minutes) {
     auto duration = [](int legs) {
         planner::PlanOptions p;
@@ -37,11 +38,15 @@ int legs_for(double minutes) {
         p.grid.legs = legs;
         p.grid.altitudes_m = {kAltitude_m};
         p.grid.speed_mps = kSpeed_mps;
-        return planner::make_plan(p).duration_s();
+        return planner::make_plan(p).duration_s() + kCalibrateTakeoffLandS;
     };
-    const double one = duration(1), per_leg = duration(2) - one;
-    const double want = minutes * 60 - kCalibrateTakeoffLandS - (one - per_leg);
-    return std::clamp(static_cast<int>(std::ceil(want / per_leg)), 1, static_cast<int>(physics::kLegsRange.hi));
+    int lo = static_cast<int>(physics::kLegsRange.lo), hi = static_cast<int>(physics::kLegsRange.hi);
+    while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (duration(mid) >= minutes * 60) hi = mid;
+        else lo = mid + 1;
+    }
+    return lo;
 }
 
 // Samples the recorder stored as lost ("loss" metadata: "recorded N, lost M, ...").

@@ -47,7 +47,7 @@ private:
 class ClockOffset final : public OneNumber<DW_FIELD(clock_offset)> {
 public:
     ClockOffset() : OneNumber(&Effects::clock_offset, &DW_FIELD(clock_offset)::offset_s) {}
-    std::string name() const override { return "clock_offset"; }
+    std::string name() const override { return kClockOffsetEffect; }
     std::vector<EffectParameter> parameters() const override { return {{"offset_s", "s", -10, 10, -0.5, 0.5, range(-0.3, 0.3, 25), 0.0}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**clock_offset** — ", who.clock, " is ", f3(std::abs(v[0])), " s ", v[0] >= 0 ? "behind" : "ahead of",

@@ -20,6 +20,10 @@
 
 namespace dw::physics {
 
+// The effect the lab's time service measures live (dds/clock_sync.hpp): its name is the contract's.
+inline constexpr const char* kClockOffsetEffect = "clock_offset";
+
+
 class Section;
 
 struct EffectParameter {

@@ -39,12 +39,24 @@ std::string producer_of(const dds::Topic<T>& spec) {
 
 // Each process's clock offsets as its heartbeats stated them (measured ones only).
 using Offsets = std::map<std::string, std::vector<double>>;
-double median_offset(const Offsets& offsets, const std::string& process) {
+std::optional<double> median_offset(const Offsets& offsets, const std::string& process) {
     const auto it = offsets.find(process);
-    if (it == offsets.end() || it->second.empty()) return 0.0;
+    if (it == offsets.end() || it->second.empty()) return std::nullopt;
     auto v = it->second;
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
+}
+
+// What the lab's time service measured, for meta.json's extra: each producer's median offset and,
+// when both clocks were measured, the stand's against the mocap's (the explainer's clock_offset:
+// a force at mocap time t is stamped t + offset by the stand).
+nlohmann::json measured_clocks(const std::optional<double>& stand, const std::optional<double>& mocap, const std::string& stand_name,
+                               const std::string& mocap_name) {
+    nlohmann::json j{{"clock_offsets_measured_s", nlohmann::json::object()}};
+    if (stand) j["clock_offsets_measured_s"][stand_name] = *stand;
+    if (mocap) j["clock_offsets_measured_s"][mocap_name] = *mocap;
+    if (stand && mocap) j[flight::kMeasuredClockOffsetKey] = *stand - *mocap;
+    return j;
 }
 
 }  // namespace
@@ -197,8 +209,9 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
     if (poses.empty()) throw InputError(log::cat(path, ": no ", topics::mocap_frame.suffix, " messages: nothing to export as a flight"));
     // Onto the recorder's clock: each topic less its producer's offset.
     const std::string stand = producer_of(topics::stand_wrench), mocap = producer_of(topics::mocap_frame);
-    const double stand_offset = o.raw_stamps ? 0.0 : median_offset(offsets, stand);
-    const double mocap_offset = o.raw_stamps ? 0.0 : median_offset(offsets, mocap);
+    const auto stand_measured = median_offset(offsets, stand), mocap_measured = median_offset(offsets, mocap);
+    const double stand_offset = o.raw_stamps ? 0.0 : stand_measured.value_or(0.0);
+    const double mocap_offset = o.raw_stamps ? 0.0 : mocap_measured.value_or(0.0);
     for (auto& r : wrench) r.t -= stand_offset;
     for (auto& p : poses) std::get<0>(p) -= mocap_offset;
     // Both clocks are written relative to one epoch (whole seconds), kept in meta.json.
@@ -223,8 +236,9 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
     f.meta.formation = known ? formation : "free";
     nlohmann::json clocks = nlohmann::json::object();
     if (!o.raw_stamps) clocks = {{stand, stand_offset}, {mocap, mocap_offset}};
-    f.meta.extra_json = nlohmann::json{{"source", path}, {"epoch_unix_s", epoch}, {"raw_stamps", o.raw_stamps},
-                                       {"clock_offsets_applied_s", clocks}}.dump();
+    nlohmann::json extra{{"source", path}, {"epoch_unix_s", epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
+    extra.update(measured_clocks(stand_measured, mocap_measured, stand, mocap));
+    f.meta.extra_json = extra.dump();
     return f;
 }
 
@@ -232,12 +246,12 @@ void export_flight(const std::string& path, const std::string& dir, const Export
     flight::write_flight(flight_from_recording(path, o), dir);
 }
 
-flight::Flight read_flight_or_recording(const std::string& path) {
+flight::Flight read_flight_or_recording(const std::string& path, const ExportOptions& o) {
     namespace fs = std::filesystem;
     if (fs::is_directory(path)) return flight::read_flight(path);
     if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
     if (fs::path(path).extension() != ".mcap") throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
-    return flight_from_recording(path, {});
+    return flight_from_recording(path, o);
 }
 
 }  // namespace dw::recordings

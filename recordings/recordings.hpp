@@ -43,7 +43,7 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
 void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o);
 // A flight folder as it is, or an .mcap recording's flight (no temporary folder): what the
 // analysis tools take. Throws dw::InputError naming the path.
-flight::Flight read_flight_or_recording(const std::string& path);
+flight::Flight read_flight_or_recording(const std::string& path, const ExportOptions& o = {});
 // One CSV per topic: log_time, publish_time and every field in IDL order ("a.b", "a[2].c"), decoded
 // straight from the typed message (recordings/csv_export.cpp).
 void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop = {});
