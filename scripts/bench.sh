@@ -16,3 +16,5 @@ done
 "$here/build/bin/dw-bench-explain"
 "$here/build/bin/dw-bench-security"
 "$here/build/bin/dw-bench-stream" --dir "${DW_BENCH_DIR:-/tmp}"
+# The soak (issue 19): 30 minutes of the simulated lab, memory, CPU and losses judged.
+"$here/build/bin/dw-lab" soak --minutes 30 --out "${DW_BENCH_DIR:-/tmp}/dw-soak"
