@@ -188,32 +188,43 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
                     "Recorded vs simulated through the flight, each encounter in its block:\n\n![encounters](encounters.png)\n\n");
 }
 
-}  // namespace
-
 // The stand's clock against the mocap's as the lab's time service measured it while recording
-// (meta.json extra, dw-recorder export), if it did.
-std::optional<double> measured_clock_offset(const flight::Flight& f) {
+// (meta.json extra, dw-recorder export), if it did; and whether the stamps are still as recorded.
+struct MeasuredClock {
+    double offset_s = 0;
+    bool raw_stamps = true;
+};
+std::optional<MeasuredClock> measured_clock(const flight::Flight& f) {
     const json extra = json::parse(f.meta.extra_json, nullptr, false);
     if (!extra.is_object() || !extra.contains(flight::kMeasuredClockOffsetKey) || !extra[flight::kMeasuredClockOffsetKey].is_number())
         return std::nullopt;
-    return extra[flight::kMeasuredClockOffsetKey].get<double>();
+    const auto raw = extra.find("raw_stamps");
+    return MeasuredClock{extra[flight::kMeasuredClockOffsetKey].get<double>(), raw == extra.end() || !raw->is_boolean() || raw->get<bool>()};
+}
+
+// What the report says of an effect: its accepted (final, refitted) result, else its latest score.
+const CandidateResult* final_result(const ExplainResult& r, const std::string& effect) {
+    const CandidateResult* found = nullptr;
+    for (const auto& c : r.candidates)
+        if (c.effect.name == effect) found = &c;
+    for (const auto& c : r.accepted)
+        if (c.effect.name == effect) found = &c;
+    return found;
 }
 
 // "Measured live: ... Fitted: ..." — the time service beside the explainer, when there is a measurement.
-std::string measured_clock_text(const flight::Flight& f, const ExplainResult& r) {
-    const auto measured = measured_clock_offset(f);
+std::string measured_clock_text(const std::optional<MeasuredClock>& measured, const ExplainResult& r) {
     if (!measured) return "";
-    const json extra = json::parse(f.meta.extra_json, nullptr, false);
-    const bool raw = extra.value("raw_stamps", true);
     std::string fitted = "not fitted (not a candidate)";
-    for (const auto& c : r.candidates)
-        if (c.effect.name == physics::kClockOffsetEffect)
-            fitted = log::cat(fmt(c.values[0], 4), " s [", fmt(c.lo[0], 4), ", ", fmt(c.hi[0], 4), "], ", c.accepted ? "accepted" : "not accepted");
+    if (const auto* c = final_result(r, physics::kClockOffsetEffect))
+        fitted = log::cat(fmt(c->values[0], 4), " s [", fmt(c->lo[0], 4), ", ", fmt(c->hi[0], 4), "], ", c->accepted ? "accepted" : "not accepted");
     return log::cat("**Clock offset, measured beside fitted.** The lab's time service measured the stand's clock against the mocap's "
-                    "while recording: ", fmt(*measured, 4), " s",
-                    raw ? " (these stamps are as recorded)" : " (already taken out of these stamps by the export: expect a fit near 0)",
+                    "while recording: ", fmt(measured->offset_s, 4), " s",
+                    measured->raw_stamps ? " (these stamps are as recorded)" : " (already taken out of these stamps by the export: expect a fit near 0)",
                     ". The explainer's clock_offset: ", fitted, ".\n\n");
 }
+
+}  // namespace
 
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir) {
     fs::create_directories(dir);
@@ -225,12 +236,10 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     j["mismatch"] = {{"detected", r.detected}, {"noise_floor", axes_json(r.noise_floor)}, {"regions", regions},
                      {"excess", {{"before", axes_json(r.excess_before)}, {"after", axes_json(r.excess_after)}, {"threshold", o.detect_excess}}}};
     json cands = json::array();
-    std::map<std::string, const CandidateResult*> last;  // each effect once: its accepted (final) or latest score
-    for (const auto& c : r.candidates) last[c.effect.name] = &c;
-    for (const auto& c : r.accepted) last[c.effect.name] = &c;
-    for (const auto& e : o.candidates) {
-        if (!last.count(e.name)) continue;
-        const auto& c = *last[e.name];
+    for (const auto& e : o.candidates) {  // each effect once: its accepted (final) or latest score
+        const CandidateResult* final = final_result(r, e.name);
+        if (!final) continue;
+        const auto& c = *final;
         cands.push_back({{"effect", e.name}, {"params", params_json(c, false)}, {"ci95", params_json(c, true)},
                          {"heldout_rmse_before", axes_json(c.heldout_before)}, {"heldout_rmse_after", axes_json(c.heldout_after)},
                          {"delta_bic", c.delta_bic}, {"accepted", c.accepted}, {"heldout_z", c.t}, {"note", c.note}});
@@ -238,10 +247,11 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         if (c.stand_in) cands.back()["stands_in"] = true;
     }
     j["candidates"] = cands;
-    if (const auto measured = measured_clock_offset(f)) {
-        j["clock_offset_measured"] = {{"offset_s", *measured}, {"by", "the lab's time service (processes/status clock_offset_s, median)"}};
+    const auto measured = measured_clock(f);
+    if (measured) {
+        j["clock_offset_measured"] = {{"offset_s", measured->offset_s}, {"by", "the lab's time service (processes/status clock_offset_s, median)"}};
         for (auto& c : j["candidates"])
-            if (c["effect"] == physics::kClockOffsetEffect) c["measured"] = {{"offset_s", *measured}};
+            if (c["effect"] == physics::kClockOffsetEffect) c["measured"] = {{"offset_s", measured->offset_s}};
     }
     json by = json::array();
     for (const auto& c : r.accepted) by.push_back(c.effect.name);
@@ -280,7 +290,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
         md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
         for (const auto& c : r.accepted) md << paragraph(c, who) << alternatives(c) << "\n\n";
     }
-    md << measured_clock_text(f, r);
+    md << measured_clock_text(measured, r);
     md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes << " of its own motor distances horizontally): ";
     for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
     if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";

@@ -83,7 +83,7 @@ bool is_recorder(const std::vector<std::string>& args) {
 // range (auto ids are the lowest free), never its predecessor's (dds::DdsConfig::participant_id
 // says why); a restarted recorder keeps what its predecessor wrote.
 std::vector<std::string> restart_args(const Running& r, int participant_id) {
-    std::vector<std::string> a{"--participant-id", std::to_string(std::max(participant_id, 0))};
+    std::vector<std::string> a{"--participant-id", std::to_string(participant_id)};
     if (r.recorder) a.emplace_back(kRecorderKeepExisting);
     return a;
 }
@@ -191,6 +191,53 @@ void stop_all(std::deque<Running>& procs, double grace_s, const std::function<vo
     }
 }
 
+using Say = std::function<void(const std::string&)>;
+
+void start_process(Running& r) {
+    std::vector<std::string> argv = r.argv;
+    argv.insert(argv.end(), r.restart_args.begin(), r.restart_args.end());
+    r.proc = std::make_unique<Subprocess>(SpawnOptions{argv, r.log, r.log, {}});
+    r.ended.reset();
+}
+
+// Each process started here, or its command printed for a host the launcher cannot reach.
+void start_all(std::deque<Running>& procs, const LabFile& lab, bool secure, const std::stop_token& stop, LaunchResult& R, const Say& say) {
+    for (auto& r : procs) {
+        const HostSpec& host = lab.hosts.at(r.spec.host);
+        if (r.spec.host != "local" && host.launch.empty()) {
+            R.printed.push_back(log::cat(r.spec.host, ": ", quoted(r.argv)));
+            say(log::cat("start on ", r.spec.host, ":  ", quoted(r.argv)));
+            continue;
+        }
+        if (secure && &r != &procs.front()) wait_for(stop, kSecureStartGap);
+        start_process(r);
+        say(log::cat("started ", r.spec.name, " on ", r.spec.host, " (pid ", r.proc->pid(), "): ", quoted(r.argv), "  → ", r.log));
+    }
+}
+
+// A process (not the experiment) ended: restarted when its lab file says so, up to 3 times, each
+// time with a participant id no first start has (counted down; refused once they run out).
+void on_exit(Running& r, int status, std::size_t lab_size, int& next_participant_id, LaunchResult& R, const Say& say) {
+    say(log::cat(r.spec.name, " exited with status ", status, " (log: ", r.log, ")"));
+    if (r.spec.restart != Restart::on_failure || status == 0 || r.restarts >= 3) return;
+    if (next_participant_id < static_cast<int>(lab_size)) {
+        say(log::cat("not restarting ", r.spec.name, ": no fresh DDS participant id left (ids below ", lab_size, " are the lab's first starts)"));
+        return;
+    }
+    ++r.restarts;
+    ++R.restarts[r.spec.name];
+    r.restart_args = restart_args(r, next_participant_id--);
+    say(log::cat("restarting ", r.spec.name, " (", r.restarts, " of 3) with ", quoted(r.restart_args)));
+    start_process(r);
+}
+
+void note_final_state(const std::optional<msg::ExperimentState>& state, LaunchResult& R) {
+    if (!state) return;
+    R.phase = dds::phase_name(state->phase());
+    R.legs_total = state->leg_count();
+    R.legs_flown = state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index()));
+}
+
 }  // namespace
 
 LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsConfig& monitor) {
@@ -215,23 +262,7 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     });
 
     int next_participant_id = dds::kMaxParticipantId;
-    auto start = [&](Running& r) {
-        std::vector<std::string> argv = r.argv;
-        argv.insert(argv.end(), r.restart_args.begin(), r.restart_args.end());
-        r.proc = std::make_unique<Subprocess>(SpawnOptions{argv, r.log, r.log, {}});
-        r.ended.reset();
-    };
-    for (auto& r : procs) {
-        const HostSpec& host = lab.hosts.at(r.spec.host);
-        if (r.spec.host != "local" && host.launch.empty()) {
-            R.printed.push_back(log::cat(r.spec.host, ": ", quoted(r.argv)));
-            say(log::cat("start on ", r.spec.host, ":  ", quoted(r.argv)));
-            continue;
-        }
-        if (!self.security.empty() && &r != &procs.front()) wait_for(o.stop, kSecureStartGap);
-        start(r);
-        say(log::cat("started ", r.spec.name, " on ", r.spec.host, " (pid ", r.proc->pid(), "): ", quoted(r.argv), "  → ", r.log));
-    }
+    start_all(procs, lab, !self.security.empty(), o.stop, R, say);
 
     const bool tty = o.live && ::isatty(STDERR_FILENO);
     int drawn = 0;
@@ -257,21 +288,14 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     const auto launched = std::chrono::steady_clock::now();
     auto last_resources = launched - std::chrono::hours(1);
     std::ofstream resources(std::filesystem::path(o.run_dir) / "logs" / kResourceFile);
-    resources << kResourceHeader << "\n";
+    if (!(resources << kResourceHeader << "\n")) say(log::cat("cannot write ", o.run_dir, "/logs/", kResourceFile, ": no resource samples this run"));
     while (!o.stop.stop_requested()) {
         for (auto& r : procs) {
             if (!r.proc || r.ended) continue;
             if (auto st = r.proc->poll()) {
                 r.ended = st;
                 if (&r == experiment) break;
-                say(log::cat(r.spec.name, " exited with status ", *st, " (log: ", r.log, ")"));
-                if (r.spec.restart == Restart::on_failure && *st != 0 && r.restarts < 3) {
-                    ++r.restarts;
-                    ++R.restarts[r.spec.name];
-                    r.restart_args = restart_args(r, next_participant_id--);
-                    say(log::cat("restarting ", r.spec.name, " (", r.restarts, " of 3) with ", quoted(r.restart_args)));
-                    start(r);
-                }
+                on_exit(r, *st, procs.size(), next_participant_id, R, say);
             }
         }
         if (experiment && experiment->ended) break;
@@ -295,11 +319,7 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     }
     {
         std::lock_guard lock(m);
-        if (state) {
-            R.phase = dds::phase_name(state->phase());
-            R.legs_total = state->leg_count();
-            R.legs_flown = state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index()));
-        }
+        note_final_state(state, R);
     }
     stop_all(procs, o.stop_grace_s, say);
     return R;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/errors.hpp"
@@ -39,7 +40,7 @@ public:
         gaps_unlisted_ = 0;
         return s.str();
     }
-    std::atomic<std::uint64_t> recorded{0}, skipped{0};
+    std::atomic<std::uint64_t> recorded{0}, skipped{0}, dropped{0};
 
 protected:
     void note_gap(const Gap& g) {
@@ -65,14 +66,15 @@ public:
         : observe_(std::move(observe)), sink_(std::move(sink)), index_(index),
           reader_(p, spec, [this](const T& m, const dds::SampleMeta& meta) { on_sample(m, meta); }) {}
     TopicStats stats() const override {
-        return {reader_.name(), recorded.load(), reader_.lost(), skipped.load()};
+        return {reader_.name(), recorded.load(), reader_.lost(), skipped.load(), dropped.load()};
     }
 
 private:
     void on_sample(const T& m, const dds::SampleMeta& meta) {
         if (observe_) observe_(m);
-        if (meta.missing_before > 0) note_gap({last_received_ns_, meta.reception_time_ns, meta.missing_before});
-        last_received_ns_ = meta.reception_time_ns;
+        Nanos& last = last_received_ns_[meta.writer];  // per writer: its own silence, not the topic's
+        if (meta.missing_before > 0) note_gap({last, meta.reception_time_ns, meta.missing_before});
+        last = meta.reception_time_ns;
         const std::uint32_t size = support_.getSerializedSizeProvider(const_cast<T*>(&m))();
         if (payload_.max_size < size) payload_.reserve(size);
         payload_.length = 0;
@@ -84,7 +86,7 @@ private:
     std::function<void(const T&)> observe_;
     std::function<void(std::uint16_t, std::span<const std::uint8_t>, std::uint64_t, std::uint64_t, std::uint32_t)> sink_;
     std::uint16_t index_;
-    Nanos last_received_ns_ = 0;  // listener thread only
+    std::map<eprosima::fastdds::dds::InstanceHandle_t, Nanos> last_received_ns_;  // per writer; listener thread only
     typename dds::PubSubOf<T>::type support_;
     eprosima::fastrtps::rtps::SerializedPayload_t payload_{256};
     dds::Reader<T> reader_;  // last: its callback uses the members above
@@ -148,7 +150,13 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
     });
 }
 
-Recorder::~Recorder() { close(); }
+Recorder::~Recorder() {
+    try {
+        close();
+    } catch (const std::exception& e) {  // a destructor must not throw (a full disk, say): said, not thrown
+        log::error("closing the recording failed: ", e.what());
+    }
+}
 
 // File 0 is --out itself unless files split; file N is <stem>_NNNN.mcap.
 std::string Recorder::path_for(std::size_t index) const {
@@ -174,7 +182,7 @@ void Recorder::repair(std::vector<std::string> unfinished) {
 void Recorder::open_file() {
     std::string path = path_for(next_index_++);
     while (options_.keep_existing && std::filesystem::exists(path)) {
-        if (!mcap::is_closed(path)) unfinished_.push_back(path);
+        if (files_.empty() && !mcap::is_closed(path)) unfinished_.push_back(path);  // the first file only: its predecessors'
         path = path_for(next_index_++);
     }
     writer_ = std::make_unique<mcap::Writer>(path, options_.writer);
@@ -217,7 +225,7 @@ void Recorder::close_file() {
     std::map<std::string, std::string> loss;
     for (const auto& c : channels_) {
         const TopicStats s = c->stats();
-        loss[s.topic] = log::cat("recorded ", s.recorded, ", lost ", s.lost, ", skipped while paused ", s.skipped);
+        loss[s.topic] = log::cat("recorded ", s.recorded, ", lost ", s.lost, ", skipped while paused ", s.skipped, ", dropped (disk stalled) ", s.dropped);
     }
     writer_->add_metadata({"loss", loss});
     std::map<std::string, std::string> gaps;
@@ -238,6 +246,7 @@ void Recorder::on_message(std::uint16_t index, std::span<const std::uint8_t> cdr
     }
     if (pending_data_.size() + cdr.size() > kMaxPendingBytes) {
         ++dropped_;
+        if (c) ++c->dropped;
         return;
     }
     pending_.push_back({index, sequence, log_time, publish_time, pending_data_.size(), cdr.size()});

@@ -48,13 +48,14 @@ struct TopicStats {
     std::uint64_t recorded = 0;
     std::uint64_t lost = 0;       // gaps in the writers' header.seq
     std::uint64_t skipped = 0;    // arrived while paused
+    std::uint64_t dropped = 0;    // arrived while kMaxPendingBytes waited for a stalled disk
 };
 
 class Recorder {
 public:
     // Throws dw::InputError for a bad topic or attachment, dw::RuntimeError when the file fails.
     Recorder(dds::Participant& participant, const RecordOptions& options);
-    ~Recorder();  // closes the file
+    ~Recorder();  // closes the file (a failure then is logged: close() first to see it)
 
     void pause(const std::string& why);
     void resume(const std::string& why);
@@ -65,7 +66,8 @@ public:
     void close();
 
     std::vector<TopicStats> stats() const;
-    // Messages not recorded because kMaxPendingBytes were already waiting for a stalled disk.
+    // Messages not recorded because kMaxPendingBytes were already waiting for a stalled disk
+    // (every topic; each topic's share is in stats() and the file's loss metadata).
     std::uint64_t dropped() const;
     std::vector<std::string> files() const;
     std::string run_id() const;

@@ -1,6 +1,7 @@
 // dw-recorder export --csv: one CSV per topic, each message decoded once into its row — straight
 // from the typed message to text (dds/msg_fields.hpp), no JSON in between.
 #include <array>
+#include <atomic>
 #include <charconv>
 #include <condition_variable>
 #include <deque>
@@ -143,6 +144,7 @@ constexpr std::string_view kTimeColumns[] = {"log_time", "publish_time"};
 struct CsvTable {
     std::unique_ptr<RowCodec> codec;
     std::unique_ptr<AtomicFile> out;
+    std::string where;                                // "<recording>: <topic>", for errors
     std::vector<std::string> columns;
     std::map<std::string, std::size_t> index;         // built at the first row of another shape
     std::optional<std::vector<std::uint32_t>> shape;  // rows of this shape are written as they come
@@ -174,15 +176,14 @@ struct CsvTable {
         for (std::size_t i = 0; i < columns.size(); ++i) (text += i ? "," : "") += i < row.size() ? row[i] : std::string();
         return text + "\n";
     }
-    // `where` names the recording and topic in an error.
-    void add(const mcap::Message& m, const std::function<std::string()>& where) {
+    void add(const mcap::Message& m) {
         line.clear();
         row_shape.clear();
         append_number(line, m.log_time);
         line += ',';
         append_number(line, m.publish_time);
         if (!codec->cells(m.data, line, row_shape))
-            throw InputError(log::cat(where(), ": message ", m.sequence, " (", m.data.size(), " bytes) does not decode"));
+            throw InputError(log::cat(where, ": message ", m.sequence, " (", m.data.size(), " bytes) does not decode"));
         if (columns.empty()) {  // the first row: its columns are the file's
             std::vector<std::string> values;
             columns.assign(std::begin(kTimeColumns), std::end(kTimeColumns));
@@ -210,7 +211,6 @@ std::string csv_path(const std::string& dir, const mcap::Channel& c) {
 // and its bytes (at `offset` in the batch's storage).
 struct Handed {
     CsvTable* table;
-    const std::string* topic;
     mcap::Message m;  // data: empty here, set from the batch's bytes by the worker
     std::size_t offset;
 };
@@ -225,8 +225,10 @@ struct Batch {
 class CsvWorker {
 public:
     static constexpr std::size_t kQueued = 4, kBatch = 4096;
-    explicit CsvWorker(std::string path) : path_(std::move(path)), thread_([this] { loop(); }) {}
+    CsvWorker() : thread_([this] { loop(); }) {}
     ~CsvWorker() { join(); }  // after an error elsewhere: what this worker met is dropped
+    // A worker that met an error takes no more: the reader stops reading (csv_pass).
+    bool failed() const { return failed_.load(); }
     void push(Batch&& b) {
         std::unique_lock lock(mutex_);
         cv_.wait(lock, [&] { return queue_.size() < kQueued || error_; });
@@ -263,18 +265,19 @@ private:
             try {
                 for (auto& h : b.messages) {
                     h.m.data = std::span<const std::uint8_t>(b.bytes).subspan(h.offset, h.m.data.size());
-                    h.table->add(h.m, [&] { return log::cat(path_, ": ", *h.topic); });
+                    h.table->add(h.m);
                 }
             } catch (...) {
                 std::lock_guard lock(mutex_);
                 error_ = std::current_exception();
+                failed_ = true;
                 cv_.notify_all();
                 return;
             }
         }
     }
 
-    std::string path_;
+    std::atomic<bool> failed_{false};
     std::mutex mutex_;
     std::condition_variable cv_;
     std::deque<Batch> queue_;
@@ -291,7 +294,8 @@ void csv_pass(const std::string& path, const std::string& dir, const std::stop_t
     Catalogue l;
     mcap::Handlers h;
     l.watch(h);
-    std::array<CsvWorker, 2> workers{CsvWorker(path), CsvWorker(path)};
+    std::array<CsvWorker, 2> workers;
+    struct WorkerFailed {};  // stops the read: the worker's own error is rethrown below
     std::array<Batch, 2> batches;
     auto hand_over = [&](std::size_t w) {
         workers[w].push(std::move(batches[w]));
@@ -304,14 +308,19 @@ void csv_pass(const std::string& path, const std::string& dir, const std::stop_t
         const mcap::Channel& c = l.channels.at(m.channel_id);
         CsvTable& t = tables[m.channel_id];
         if (!t.codec && !(t.codec = codec_for(l.type_of(c)))) return;  // not a lab type: no CSV
-        if (!t.out) t.out = std::make_unique<AtomicFile>(csv_path(dir, c));
+        if (!t.out) t.out = std::make_unique<AtomicFile>(csv_path(dir, c)), t.where = log::cat(path, ": ", c.topic);
         const std::size_t w = m.channel_id % workers.size();
+        if (workers[w].failed()) throw WorkerFailed{};
         Batch& b = batches[w];
-        b.messages.push_back({&t, &c.topic, m, b.bytes.size()});
+        b.messages.push_back({&t, m, b.bytes.size()});
         b.bytes.insert(b.bytes.end(), m.data.begin(), m.data.end());
         if (b.messages.size() >= CsvWorker::kBatch) hand_over(w);
     };
-    const auto result = mcap::read_file(path, h);
+    mcap::ReadResult result;
+    try {
+        result = mcap::read_file(path, h);
+    } catch (const WorkerFailed&) {
+    }
     for (std::size_t w = 0; w < workers.size(); ++w) hand_over(w);
     for (auto& w : workers) w.finish();
     require_sound(result, path);

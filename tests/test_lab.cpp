@@ -480,6 +480,18 @@ TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
     EXPECT_NE(why.find("leaky lost 3 samples"), std::string::npos) << why;
     EXPECT_NE(why.find("the recording is missing 5 samples"), std::string::npos) << why;
     EXPECT_EQ(why.find("flat"), std::string::npos) << why;
+
+    // A restarted process is a new instance, judged on its own; a restart fails the soak; a run too
+    // short to judge memory says so instead of passing.
+    std::vector<dw::lab::ResourceRow> restarted;
+    for (int i = 0; i <= 36; ++i) restarted.push_back({5.0 * i, "p", i < 20 ? 20 : 21, {10.0, 0.0}, 0});
+    const auto r = dw::lab::trends(restarted);
+    ASSERT_EQ(r.size(), 2u);
+    EXPECT_EQ(r[1].pid, 21);
+    EXPECT_EQ(dw::lab::restarts_text({{"p", 1}}), "p restarted 1 time(s)");
+    const auto short_run = dw::lab::trends({{0, "q", 5, {1, 0}, 0}, {40, "q", 5, {1, 0}, 0}});
+    EXPECT_NE(dw::lab::judge(short_run, 0).find("q (pid 5): 1 samples after the warm-up, too few"), std::string::npos)
+        << dw::lab::judge(short_run, 0);
 }
 
 // Issue 19: the soak CI runs (3 minutes; docs/BENCHMARKS.md has a 30-minute one): every process
