@@ -97,6 +97,11 @@ public:
     int matched() const { return matched_.load(); }
     // False when the first sample went out because awaiting the required readers timed out.
     bool awaited_readers_arrived() const { return readers_arrived_; }
+    // The readers matched now (kept from the listener: Fast DDS 2.9.1 has no get_matched_subscriptions).
+    std::vector<eprosima::fastdds::dds::InstanceHandle_t> matched_readers() {
+        std::lock_guard lock(readers_mutex_);
+        return matched_readers_;
+    }
     // True once n readers matched. The writer sees a match before the reader has finished its
     // side, and best-effort samples sent in between are dropped, so this waits a little more.
     bool wait_for_readers(int n, std::chrono::milliseconds timeout) const {

@@ -75,6 +75,7 @@ int run(int argc, char** argv) {
     auto* command_cmd = app.add_subcommand("command", "send the experiment a command as the operator: " + kinds);
     command_cmd->add_option("kind", command_kind, kinds)->required();
     command_cmd->add_option("--reason", command.reason, "why (in the planner's log and the experiment state)");
+    command_cmd->add_option("--to", command.to, "the process that must hear it (default planner)");
 
     cli.parse(argc, argv);
     if (command_cmd->parsed()) {

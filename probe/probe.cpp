@@ -233,8 +233,12 @@ void print_table(const EchoReport& report, std::ostream& out) {
 
 void send_command(dds::Participant& p, const CommandOptions& o, std::ostream& out) {
     dds::Writer<msg::ExperimentCommand> w(p, dds::topics::experiment_command);
-    if (!w.wait_for_readers(1, o.wait))
-        throw RuntimeError(log::cat("no reader of ", w.name(), " within ", o.wait.count() / 1000.0, " s: is the planner running?"));
+    const auto until = std::chrono::steady_clock::now() + o.wait;
+    while (!p.unmatched_readers(w.matched_readers(), {o.to}).empty()) {
+        if (std::chrono::steady_clock::now() >= until)
+            throw RuntimeError(log::cat("no reader of ", w.name(), " from ", o.to, " within ", o.wait.count() / 1000.0, " s: is it running?"));
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
     msg::ExperimentCommand c;
     c.header().stamp(dds::to_msg(p.clock().now_ns()));
     c.kind(o.kind);

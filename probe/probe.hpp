@@ -74,6 +74,9 @@ struct CommandOptions {
     msg::CommandKind kind = msg::CMD_ABORT;
     std::string reason;
     std::chrono::milliseconds wait{10000};
+    // The process whose reader must have matched before the command is sent: the first reader to
+    // match may be the recorder's, and a command written then never reaches the planner.
+    std::string to{dds::role_name(dds::Role::planner)};
 };
 void send_command(dds::Participant& p, const CommandOptions& o, std::ostream& out);
 
