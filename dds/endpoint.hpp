@@ -94,6 +94,15 @@ public:
         return ok;
     }
 
+    // Holds the caller until the lab's required readers matched (once, bounded: DdsConfig).
+    // write() does it before the first sample; a writer fed from a reader's callback calls it
+    // before subscribing, so the wait never blocks Fast DDS's reception thread (the samples
+    // arriving meanwhile would overflow that reader's history and be lost).
+    bool await_readers() {
+        before_first_sample();
+        return readers_arrived_;
+    }
+
     int matched() const { return matched_.load(); }
     // False when the first sample went out because awaiting the required readers timed out.
     bool awaited_readers_arrived() const { return readers_arrived_; }

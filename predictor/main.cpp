@@ -254,7 +254,8 @@ struct OnlineCommand {
         PredictorNode node(participant, no, clock);
         heartbeat.set_state(dw::msg::PROC_RUNNING);
         while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
-        std::cout << "published " << node.published() << " predictions, " << node.reloads() << " model swaps\n";
+        std::cout << "published " << node.published() << " predictions, " << node.reloads() << " model swaps, "
+                  << node.frames_lost() << " mocap frames lost\n";
         return 0;
     }
 };

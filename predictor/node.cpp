@@ -50,8 +50,10 @@ std::optional<std::vector<RelState>> FrameFeatures::update(const msg::MocapFrame
 
 PredictorNode::PredictorNode(dds::Participant& p, const NodeOptions& o, const Clock& clock)
     : options_(o), clock_(clock), model_(load_model(o.model_path)), features_(o.sufferer),
-      writer_(p, dds::topics::wrench_prediction),
-      reader_(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) { on_frame(f); }) {
+      writer_(p, dds::topics::wrench_prediction) {
+    // Predictions are written from the reader's callback: wait for the required readers first.
+    writer_.await_readers();
+    reader_.emplace(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) { on_frame(f); });
     log::info("predicting with ", model_->name(), " (", o.model_path, ") for '", o.sufferer, "'");
     watcher_ = std::thread([this] { watch(); });
 }

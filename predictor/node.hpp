@@ -56,6 +56,8 @@ public:
 
     std::uint64_t published() const { return published_.load(); }
     std::uint64_t reloads() const { return reloads_.load(); }
+    // Mocap frames missing from the bridge's sequence since the first one received.
+    std::uint64_t frames_lost() const { return reader_->lost(); }
     std::string model_name() const;
 
 private:
@@ -68,7 +70,7 @@ private:
     std::shared_ptr<const ForceModel> model_;
     FrameFeatures features_;
     dds::Writer<msg::WrenchPrediction> writer_;
-    dds::Reader<msg::MocapFrame> reader_;
+    std::optional<dds::Reader<msg::MocapFrame>> reader_;  // subscribed once the writer's readers are awaited
     std::atomic<std::uint64_t> published_{0}, reloads_{0};
     std::atomic<bool> stop_{false};
     std::thread watcher_;

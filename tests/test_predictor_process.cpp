@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
@@ -46,18 +47,31 @@ dw::msg::MocapFrame frame(std::uint64_t n, double t_s, double e_offset) {
     return f;
 }
 
+// A loopback configuration of the test's own namespace.
+dw::dds::DdsConfig node_config(const std::string& ns) {
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = ns + std::to_string(::getpid());
+    return cfg;
+}
+
+// `dw-predictor run` on the model file, in cfg's namespace; output in dir/node.out and node.err.
+dw::Subprocess start_node(dw::test::TempDir& dir, const std::string& model, const dw::dds::DdsConfig& cfg,
+                          std::vector<std::string> extra = {}) {
+    std::vector<std::string> args{dw::test::bin("dw-predictor"), "run", "--model", model, "--domain", std::to_string(cfg.domain),
+                                  "--namespace", cfg.ns};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return dw::Subprocess({args, dir.file("node.out"), dir.file("node.err"), {}});
+}
+
 }  // namespace
 
 TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     dw::test::TempDir dir;
     const auto model = dir.file("model.json");
     linear_model("model_a", 1.0f).save(model);
-    dw::dds::DdsConfig cfg;
-    cfg.domain = dw::test::test_domain();
-    cfg.ns = "pred" + std::to_string(::getpid());
-    dw::Subprocess node({{dw::test::bin("dw-predictor"), "run", "--model", model, "--domain", std::to_string(cfg.domain),
-                          "--namespace", cfg.ns},
-                         dir.file("node.out"), dir.file("node.err"), {}});
+    const auto cfg = node_config("pred");
+    dw::Subprocess node = start_node(dir, model, cfg);
     dw::dds::Participant p(cfg, "test");
     std::mutex m;
     std::vector<dw::msg::WrenchPrediction> got;
@@ -128,4 +142,41 @@ TEST(PredictorProcess, BadModelIsOneLineAndExit2) {
     const auto r2 = dw::test::run({dw::test::bin("dw-predictor"), "map", "--models", dir.file("none.json")}, dir);
     EXPECT_EQ(r2.status, 2);
     EXPECT_EQ(dw::test::lines(r2.err).size(), 1u) << r2.err;
+}
+
+// CI found it (soak): the predictor writes from its mocap callback, and its first prediction waits
+// for the recorder (--await-readers). Waiting on Fast DDS's reception thread overflowed the mocap
+// reader's history: 235 frames lost at every start. It waits before it subscribes now.
+TEST(PredictorProcess, AwaitingTheRecorderLosesNoMocapFrame) {
+    dw::test::TempDir dir;
+    const auto model = dir.file("model.json");
+    linear_model("model_a", 1.0f).save(model);
+    const auto cfg = node_config("predawait");
+    dw::Subprocess node = start_node(dir, model, cfg, {"--await-readers", "recorder", "--await-timeout", "30"});
+    dw::dds::Participant bridge(cfg, "mocap_bridge");
+    dw::dds::Writer<dw::msg::MocapFrame> writer(bridge, dw::dds::topics::mocap_frame);
+    std::atomic<bool> stop{false};
+    std::thread publisher([&] {
+        for (int i = 0; !stop; ++i) {
+            auto f = frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0, -1.0 + 0.5 * i / 180.0);
+            writer.write(f);
+            std::this_thread::sleep_for(std::chrono::microseconds(5556));
+        }
+    });
+    // Let the predictor start and (before the fix) block on its first prediction for a while.
+    std::this_thread::sleep_for(3000ms);
+    dw::dds::Participant recorder(cfg, "recorder");
+    std::atomic<int> got{0};
+    dw::dds::Reader<dw::msg::WrenchPrediction> reader(recorder, dw::dds::topics::wrench_prediction,
+                                                      [&](const auto&, const auto&) { ++got; });
+    const auto deadline = std::chrono::steady_clock::now() + 30s;
+    while (got.load() < 360 && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(20ms);
+    const bool predicted = got.load() >= 360;
+    stop = true;
+    publisher.join();
+    node.signal(SIGINT);
+    EXPECT_EQ(node.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("node.err"));
+    ASSERT_TRUE(predicted) << got.load() << " predictions; " << dw::read_file(dir.file("node.err"));
+    const auto out = dw::read_file(dir.file("node.out"));
+    EXPECT_NE(out.find(" 0 mocap frames lost"), std::string::npos) << out;
 }
