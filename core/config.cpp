@@ -59,6 +59,7 @@ YAML::Node ConfigFile::at(const std::string& dotted) const {
     if (empty()) return YAML::Node(YAML::NodeType::Undefined);
     YAML::Node node;
     node.reset(root_);
+    if (dotted.empty()) return node;  // the whole document
     std::size_t start = 0;
     while (start <= dotted.size()) {
         const std::size_t dot = dotted.find('.', start);

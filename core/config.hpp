@@ -27,7 +27,7 @@ public:
 
     const std::string& path() const { return path_; }
     bool empty() const { return !root_ || root_.IsNull(); }
-    // The node at a dotted path ("dds.domain"), or an undefined node.
+    // The node at a dotted path ("dds.domain"; "" = the whole document), or an undefined node.
     YAML::Node at(const std::string& dotted) const;
 
     // Typed reads of an optional key: nullopt when absent, InputError when of the wrong type.

@@ -236,7 +236,11 @@ private:
             meta.source_time_ns = info.source_timestamp.to_ns();
             meta.reception_time_ns = info.reception_timestamp.to_ns();
             meta.writer = info.publication_handle;
-            meta.missing_before = account(meta.writer, sample_.header().seq());
+            if constexpr (requires(T& s) { s.header().seq(); }) {
+                meta.missing_before = account(meta.writer, sample_.header().seq());
+            } else {  // another system's type (PX4's): no sequence to account
+                stats_->samples.fetch_add(1, std::memory_order_relaxed);
+            }
             on_sample_(sample_, meta);
         }
     }

@@ -1,7 +1,16 @@
 #pragma once
-// PX4's uXRCE-DDS types (idl/Px4.idl) for the lab's typed writers and readers.
+// PX4's uXRCE-DDS types (idl/Px4.idl, idl/Px4v114.idl) for the lab's typed writers and readers,
+// the PX4 versions the lab supports, and PX4's own numbers (commands, states, results), each
+// defined once here. Sources: ../shared/SPECS.md §3, docs/research/PX4_LINK.md.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "core/errors.hpp"
 #include "dds/topics.hpp"
 #include "dw/msg/Px4PubSubTypes.h"
+#include "dw/msg/Px4v114PubSubTypes.h"
 
 namespace dw::dds {
 
@@ -10,6 +19,91 @@ DW_PX4_PUBSUB(TrajectorySetpoint);
 DW_PX4_PUBSUB(OffboardControlMode);
 DW_PX4_PUBSUB(VehicleCommand);
 DW_PX4_PUBSUB(VehicleOdometry);
+DW_PX4_PUBSUB(VehicleStatus);
+DW_PX4_PUBSUB(VehicleCommandAck);
 #undef DW_PX4_PUBSUB
+
+// PX4 v1.14's types go on the wire under PX4's one type name per message.
+#define DW_PX4_V114_PUBSUB(T)                                                                \
+    struct T##V114PubSubType : px4_msgs_v114::msg::dds_::T##_PubSubType {                    \
+        T##V114PubSubType() { setName("px4_msgs::msg::dds_::" #T "_"); }                      \
+    };                                                                                       \
+    template <> struct PubSubOf<px4_msgs_v114::msg::dds_::T##_> { using type = T##V114PubSubType; }
+DW_PX4_V114_PUBSUB(OffboardControlMode);
+DW_PX4_V114_PUBSUB(VehicleCommand);
+DW_PX4_V114_PUBSUB(VehicleStatus);
+DW_PX4_V114_PUBSUB(VehicleCommandAck);
+#undef DW_PX4_V114_PUBSUB
+
+// The PX4 releases the lab speaks to, and what differs between them on the wire.
+enum class Px4Version { v1_14, v1_15, v1_16 };
+struct Px4VersionInfo {
+    Px4Version version;
+    std::string_view name;          // as written in the planner's PX4 file: "1.15"
+    std::string_view status_topic;  // fmu/out/<this>: v1.16 versions VehicleStatus (MESSAGE_VERSION 1)
+    std::string_view ack_topic;     // unversioned through v1.16 (VehicleCommandAck_v1 is later: unverified)
+};
+inline constexpr std::array<Px4VersionInfo, 3> kPx4Versions{{
+    {Px4Version::v1_14, "1.14", "vehicle_status", "vehicle_command_ack"},
+    {Px4Version::v1_15, "1.15", "vehicle_status", "vehicle_command_ack"},
+    {Px4Version::v1_16, "1.16", "vehicle_status_v1", "vehicle_command_ack"},
+}};
+inline const Px4VersionInfo& px4_version(Px4Version v) {
+    for (const auto& i : kPx4Versions)
+        if (i.version == v) return i;
+    throw RuntimeError("unknown PX4 version");
+}
+// "1.15" -> Px4Version::v1_15; anything else is an InputError naming `where` (if any) and the versions known.
+inline Px4Version parse_px4_version(std::string_view text, std::string_view where) {
+    std::string known;
+    for (const auto& i : kPx4Versions) {
+        if (i.name == text) return i.version;
+        known += (known.empty() ? "" : ", ") + std::string(i.name);
+    }
+    throw InputError((where.empty() ? "" : std::string(where) + ": ") + "PX4 version '" + std::string(text) + "' is not supported (supported: " + known + ")");
+}
+
+// rt/[<ns>/]fmu/<in|out>/<name>: PX4's uXRCE-DDS client names (its start line's -n gives ns).
+inline std::string px4_topic(std::string_view ns, std::string_view direction, std::string_view name) {
+    return "rt/" + (ns.empty() ? std::string() : std::string(ns) + "/") + "fmu/" + std::string(direction) + "/" + std::string(name);
+}
+
+namespace px4 {
+// VehicleCommand.command (MAVLink MAV_CMD), as PX4's Commander handles them.
+inline constexpr std::uint32_t kCmdNavLand = 21;
+inline constexpr std::uint32_t kCmdDoSetMode = 176;
+inline constexpr std::uint32_t kCmdArmDisarm = 400;
+inline constexpr float kModeFlagCustom = 1.0f;         // DO_SET_MODE param1: custom main mode in param2
+inline constexpr float kCustomMainModeOffboard = 6.0f;  // PX4_CUSTOM_MAIN_MODE_OFFBOARD
+// Commander answers commands for its own MAV_SYS_ID / MAV_COMP_ID, or for 0 ("every").
+inline constexpr std::uint8_t kAutopilotComponent = 1;
+// The planner's own MAVLink identity (a ground station's: system 255, component 190).
+inline constexpr std::uint8_t kPlannerSystem = 255;
+inline constexpr std::uint8_t kPlannerComponent = 190;
+
+inline constexpr std::uint8_t kArmed = 2;  // arming_state, every version
+inline constexpr std::uint8_t kNavOffboard = 14;
+inline constexpr std::uint8_t kNavAutoLand = 18;
+inline constexpr std::uint8_t kNavTermination = 13;
+
+inline constexpr std::array<std::pair<std::uint8_t, std::string_view>, 17> kNavStateNames{{
+    {0, "MANUAL"}, {1, "ALTCTL"}, {2, "POSCTL"}, {3, "AUTO_MISSION"}, {4, "AUTO_LOITER"}, {5, "AUTO_RTL"},
+    {6, "POSITION_SLOW"}, {10, "ACRO"}, {12, "DESCEND"}, {13, "TERMINATION"}, {14, "OFFBOARD"}, {15, "STAB"},
+    {17, "AUTO_TAKEOFF"}, {18, "AUTO_LAND"}, {19, "AUTO_FOLLOW_TARGET"}, {20, "AUTO_PRECLAND"}, {21, "ORBIT"},
+}};
+inline std::string nav_state_name(std::uint8_t s) {
+    for (const auto& [v, n] : kNavStateNames)
+        if (v == s) return std::string(n);
+    return "nav_state " + std::to_string(s);
+}
+
+// VehicleCommandAck.result
+enum class AckResult : std::uint8_t { accepted = 0, temporarily_rejected = 1, denied = 2, unsupported = 3, failed = 4, in_progress = 5, cancelled = 6 };
+inline constexpr std::array<std::string_view, 7> kAckResultNames{"ACCEPTED", "TEMPORARILY_REJECTED", "DENIED", "UNSUPPORTED",
+                                                                 "FAILED", "IN_PROGRESS", "CANCELLED"};
+inline std::string ack_result_name(std::uint8_t r) {
+    return r < kAckResultNames.size() ? std::string(kAckResultNames[r]) : "result " + std::to_string(r);
+}
+}  // namespace px4
 
 }  // namespace dw::dds

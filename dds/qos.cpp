@@ -20,6 +20,7 @@ Shape shape_of(QosProfile p, const QosOverrides& o) {
         case QosProfile::state: s = {true, true, 1, false}; break;
         case QosProfile::command: s = {true, false, 64, false}; break;
         case QosProfile::heartbeat: s = {true, false, 1, true}; break;
+        case QosProfile::px4: s = {false, false, 16, false}; break;
     }
     if (o.reliable) s.reliable = *o.reliable;
     if (o.transient_local) s.transient_local = *o.transient_local;
@@ -46,6 +47,7 @@ std::string to_string(QosProfile p) {
         case QosProfile::state: return "state";
         case QosProfile::command: return "command";
         case QosProfile::heartbeat: return "heartbeat";
+        case QosProfile::px4: return "px4";
     }
     return "?";
 }
@@ -78,6 +80,9 @@ fdds::DataReaderQos reader_qos(QosProfile p, const QosOverrides& o) {
         q.liveliness().kind = fdds::AUTOMATIC_LIVELINESS_QOS;
         q.liveliness().lease_duration = kLease;
     }
+    // Another system's messages may be longer than the part the lab reads (PX4's VehicleStatus:
+    // the lab's type is its prefix); a preallocated payload pool would drop them.
+    if (p == QosProfile::px4) q.endpoint().history_memory_policy = eprosima::fastrtps::rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
     return q;
 }
 

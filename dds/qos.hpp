@@ -13,6 +13,8 @@ enum class QosProfile {
     state,      // latched state and plans: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 per instance
     command,    // commands: RELIABLE, VOLATILE, KEEP_LAST (deep)
     heartbeat,  // process status: RELIABLE, VOLATILE, KEEP_LAST 1, automatic liveliness
+    px4,        // PX4's uXRCE-DDS topics: BEST_EFFORT, VOLATILE, KEEP_LAST, as PX4's own readers
+                // (its writers are TRANSIENT_LOCAL BEST_EFFORT: they match); never awaits the lab's readers
 };
 
 // Deliberate deviations from a profile (tools and tests).

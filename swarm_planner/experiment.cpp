@@ -80,8 +80,8 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
           }
       }) {
     if (o_.run_id.empty()) o_.run_id = log::cat("run-", p.clock().now_ns() / 1'000'000'000);
-    if (o_.link == "px4") link_ = std::make_unique<Px4Link>(p, plan_.vehicles, std::vector<physics::Vec3>{});
-    else link_ = std::make_unique<SimLink>(p, plan_.vehicles, o_.run_id);
+    if (o_.px4.vehicles.empty()) o_.px4 = default_px4_options(plan_.vehicles);
+    link_ = make_link(o_.link, p, plan_.vehicles, o_.run_id, o_.px4);
 }
 
 void Experiment::publish_state(msg::ExperimentPhase phase, int leg, double progress, const std::string& message) {
@@ -110,6 +110,7 @@ std::optional<std::string> Experiment::send(const std::vector<physics::Setpoint>
 std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint>& sps) {
     std::lock_guard lock(mutex_);
     if (abort_requested_) return abort_reason_;
+    if (auto f = link_->failsafe()) return f;
     const Nanos now = p_.clock().monotonic_ns();
     for (const auto& [process, lost] : lost_)
         if (!(to_seconds(now - lost.since) < o_.rejoin_grace_s)) return log::cat("lost participant ", process, " (", lost.reason, ")");
@@ -185,6 +186,27 @@ void Experiment::land_safely(const std::string& why) {
     publish_state(msg::PHASE_ABORTED, leg_, 0, "ABORTED: " + why + "; every vehicle landed");
 }
 
+std::optional<std::string> Experiment::arm_vehicles(const std::vector<physics::Setpoint>& hold) {
+    publish_state(msg::PHASE_TAKING_OFF, -1, 0, "arming");
+    const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(1.0 / o_.setpoint_hz));
+    auto next = std::chrono::steady_clock::now();
+    for (;;) {  // bounded by the link's own attempts and timeouts
+        if (o_.stop.stop_requested()) return std::string("interrupted (SIGINT/SIGTERM) while arming");
+        send(hold);
+        const ArmProgress a = link_->arm();
+        if (a.state == ArmProgress::State::ready) return std::nullopt;
+        if (a.state == ArmProgress::State::refused) return a.reason;
+        next += period;
+        std::this_thread::sleep_until(next);
+    }
+}
+
+msg::ExperimentPhase Experiment::abort_on_ground(const std::string& why) {
+    reason_ = why;
+    publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
+    return msg::PHASE_ABORTED;
+}
+
 msg::ExperimentPhase Experiment::run() {
     const std::size_t k = plan_.vehicles.size();
     // The plan, latched, for the recorder and everyone else.
@@ -193,12 +215,9 @@ msg::ExperimentPhase Experiment::run() {
 
     publish_state(msg::PHASE_WAITING, -1, 0, "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");
     log::info("waiting for ", o_.wait_for.size(), " processes and ", k, " vehicles");
-    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s), o_.stop)) {
-        if (o_.stop.stop_requested()) reason_ = "interrupted (SIGINT/SIGTERM) while waiting";
-        else reason_ = "not every participant came up within the wait timeout";
-        publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
-        return msg::PHASE_ABORTED;
-    }
+    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s), o_.stop))
+        return abort_on_ground(o_.stop.stop_requested() ? "interrupted (SIGINT/SIGTERM) while waiting"
+                                                        : "not every participant came up within the wait timeout");
     std::vector<physics::Vec3> parked(k);
     // The vehicles' parked poses, from the motion capture, within the same wait timeout.
     const auto deadline = std::chrono::steady_clock::now() + to_millis(o_.wait_timeout_s);
@@ -217,20 +236,13 @@ msg::ExperimentPhase Experiment::run() {
         if (n == k || std::chrono::steady_clock::now() >= deadline) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    if (o_.stop.stop_requested()) {  // before anything is armed
-        reason_ = "interrupted (SIGINT/SIGTERM) while waiting";
-        publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
-        return msg::PHASE_ABORTED;
-    }
+    if (o_.stop.stop_requested()) return abort_on_ground("interrupted (SIGINT/SIGTERM) while waiting");  // before anything is armed
     {
         std::lock_guard lock(mutex_);
         for (std::size_t v = 0; v < k; ++v) {
             const auto it = seen_.find(plan_.vehicles[v]);
-            if (it == seen_.end() || !it->second.tracking) {  // never take off from an unknown pose
-                reason_ = "vehicle " + plan_.vehicles[v] + " is not seen by the motion capture";
-                publish_state(msg::PHASE_ABORTED, -1, 0, "ABORTED: " + reason_);
-                return msg::PHASE_ABORTED;
-            }
+            if (it == seen_.end() || !it->second.tracking)  // never take off from an unknown pose
+                return abort_on_ground("vehicle " + plan_.vehicles[v] + " is not seen by the motion capture");
         }
     }
     std::vector<physics::Setpoint> hold(k);
@@ -248,7 +260,10 @@ msg::ExperimentPhase Experiment::run() {
         for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(parked[v], plan_.setpoint(v, 0).position, t, o_.takeoff_s));
         return sps;
     };
-    link_->start();
+    if (auto refused = arm_vehicles(hold)) {
+        link_->land();  // whatever did arm lands (on the ground: PX4 disarms)
+        return abort_on_ground(*refused);
+    }
     if (auto f = fly(o_.takeoff_s, takeoff, msg::PHASE_TAKING_OFF, true)) {
         land_safely(*f);
         return msg::PHASE_ABORTED;

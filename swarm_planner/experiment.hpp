@@ -32,7 +32,8 @@ struct RunOptions {
     double tracking_error_m = 0.3;
     double rejoin_grace_s = 0;                // a required process lost aborts unless it is back within this
     std::string run_id;
-    std::string link = "sim";                 // sim or px4
+    LinkKind link = LinkKind::sim;
+    Px4Options px4;                           // --vehicles px4: per-vehicle settings (none: the defaults)
     std::stop_token stop;                     // a stop request: ABORTED, every vehicle landed
 };
 
@@ -58,6 +59,10 @@ private:
     std::optional<std::string> fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,
                                    msg::ExperimentPhase phase, bool supervise);
     void land_safely(const std::string& why);
+    // Holds the parked setpoints while the link arms the vehicles; the refusal if it refuses.
+    std::optional<std::string> arm_vehicles(const std::vector<physics::Setpoint>& hold);
+    // ABORTED before take-off, with the reason (published and kept).
+    msg::ExperimentPhase abort_on_ground(const std::string& why);
 
     dds::Participant& p_;
     Plan plan_;

@@ -1,5 +1,5 @@
 // dw-planner: formations, grid legs, safe trajectories. `plan` writes a checked plan and its
-// picture. (`run`, the supervised experiment over DDS, is not built yet.)
+// picture; `run` flies it: the supervised experiment over DDS, with simulated or PX4 vehicles.
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -24,7 +24,7 @@ int run(int argc, char** argv) {
     dw::planner::PlanOptions o;
     std::string altitudes = "0.3,0.8,1.3", out = "plan.yaml", picture;
     auto* plan = app.add_subcommand("plan", "write a checked plan (YAML, or JSON by extension) and a picture (PNG)");
-    auto* runc = app.add_subcommand("run", "fly the plan: the supervised experiment over DDS (vehicles: sim)");
+    auto* runc = app.add_subcommand("run", "fly the plan: the supervised experiment over DDS (vehicles: sim or px4)");
     dw::planner::RunOptions ro;
     std::string wait = "stand_agent,mocap_bridge,recorder";
     for (auto* sub : {plan, runc}) {
@@ -41,7 +41,9 @@ int run(int argc, char** argv) {
     runc->add_option("--wait-timeout", ro.wait_timeout_s, "seconds to wait for the participants")->check(dw::cli::in(dw::kTimeoutRange));
     runc->add_option("--rejoin-grace", ro.rejoin_grace_s, "seconds a lost required process may take to come back (a restarted recorder) before the experiment aborts; 0 = abort at once")
         ->check(dw::cli::in(dw::planner::kRejoinGraceRange));
-    runc->add_option("--vehicles", ro.link, "sim (vehicles/setpoint) or px4 (uXRCE-DDS: rt/<vehicle>/fmu/in/...)");
+    std::string link = "sim", px4_file;
+    runc->add_option("--vehicles", link, "sim (vehicles/setpoint) or px4 (PX4's uXRCE-DDS topics)");
+    runc->add_option("--px4", px4_file, "with --vehicles px4: the PX4 settings file (version, each vehicle's namespace, MAV_SYS_ID, origin, heading; docs/OPERATOR.md)");
     cli.parse(argc, argv);
     o.grid.altitudes_m = dw::parse_number_list(altitudes, dw::planner::kPlanAltitudeRange, "--altitudes");
     const bool json = std::filesystem::path(out).extension() == ".json";
@@ -55,7 +57,11 @@ int run(int argc, char** argv) {
     const auto p = dw::planner::make_plan(o);
     if (const auto v = dw::planner::check(p, stop)) throw dw::InputError("infeasible plan: " + v->what);
     if (runc->parsed()) {
-        if (ro.link != "sim" && ro.link != "px4") throw dw::InputError("--vehicles: '" + ro.link + "' (expected sim or px4)");
+        ro.link = dw::planner::parse_link(link, "--vehicles");
+        if (runc->count("--px4") > 0) {  // given: "" is a missing file, not "no file"
+            if (ro.link != dw::planner::LinkKind::px4) throw dw::InputError("--px4: only with --vehicles px4");
+            ro.px4 = dw::planner::load_px4_options(px4_file, p.vehicles);
+        }
         ro.wait_for.clear();
         std::stringstream w(wait);
         for (std::string item; std::getline(w, item, ',');) {

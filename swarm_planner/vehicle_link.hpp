@@ -1,26 +1,42 @@
 #pragma once
 // How the planner's setpoints reach the vehicles, behind one interface: `sim` (the lab's
 // vehicles/setpoint topic, which the simulated vehicles follow) and `px4` (PX4 through its
-// uXRCE-DDS bridge on the same domain: OffboardControlMode + TrajectorySetpoint on
-// rt/<vehicle>/fmu/in/..., VehicleCommand to switch to offboard, arm and land).
-#include <deque>
+// uXRCE-DDS bridge: swarm_planner/px4_link.hpp).
+#include <array>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "dds/endpoint.hpp"
-#include "dds/px4.hpp"
 #include "physics/vehicle.hpp"
+#include "swarm_planner/px4_config.hpp"
 
 namespace dw::planner {
+
+// Where arming stands, asked at the setpoint rate while the vehicles hold on the ground.
+struct ArmProgress {
+    enum class State { pending, ready, refused };
+    State state = State::pending;
+    std::string reason;  // refused: why, in one line
+};
 
 class VehicleLink {
 public:
     virtual ~VehicleLink() = default;
     virtual void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) = 0;
-    virtual void start() {}  // before take-off
-    virtual void land() {}   // after the landing setpoints
+    // Advances arming (mode, arm, confirmation, retries); the setpoint stream goes on meanwhile.
+    virtual ArmProgress arm() { return {ArmProgress::State::ready, ""}; }
+    // In flight: why the vehicles no longer follow this link (a PX4 failsafe), if so.
+    virtual std::optional<std::string> failsafe() { return std::nullopt; }
+    virtual void land() {}  // after the landing setpoints
 };
+
+enum class LinkKind { sim, px4 };
+inline constexpr std::array<std::pair<LinkKind, std::string_view>, 2> kLinkNames{{{LinkKind::sim, "sim"}, {LinkKind::px4, "px4"}}};
+// "px4" -> LinkKind::px4; anything else: InputError naming `option` and the known names.
+LinkKind parse_link(std::string_view name, std::string_view option);
 
 class SimLink final : public VehicleLink {
 public:
@@ -33,31 +49,8 @@ private:
     dds::Writer<msg::VehicleSetpoint> writer_;
 };
 
-class Px4Link final : public VehicleLink {
-public:
-    // `home_ned[i]`: where vehicle i's PX4 local origin is in the lab's NED frame.
-    Px4Link(dds::Participant& p, const std::vector<std::string>& vehicles, std::vector<physics::Vec3> home_ned);
-    void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) override;
-    void start() override;  // DO_SET_MODE offboard, then arm
-    void land() override;   // NAV_LAND
-
-private:
-    struct Vehicle {
-        std::string traj_topic, mode_topic, cmd_topic;
-        std::unique_ptr<dds::Writer<px4_msgs::msg::dds_::TrajectorySetpoint_>> traj;
-        std::unique_ptr<dds::Writer<px4_msgs::msg::dds_::OffboardControlMode_>> mode;
-        std::unique_ptr<dds::Writer<px4_msgs::msg::dds_::VehicleCommand_>> cmd;
-        physics::Vec3 home;
-    };
-    void command(Vehicle& v, std::uint32_t command, float p1, float p2);
-    std::deque<Vehicle> vehicles_;  // stable: topic names are referenced by the writers' specs
-    std::deque<dds::Topic<px4_msgs::msg::dds_::TrajectorySetpoint_>> traj_specs_;
-    std::deque<dds::Topic<px4_msgs::msg::dds_::OffboardControlMode_>> mode_specs_;
-    std::deque<dds::Topic<px4_msgs::msg::dds_::VehicleCommand_>> cmd_specs_;
-};
-
-inline constexpr std::uint32_t kVehicleCmdDoSetMode = 176;
-inline constexpr std::uint32_t kVehicleCmdArmDisarm = 400;
-inline constexpr std::uint32_t kVehicleCmdNavLand = 21;
+// The link of that kind for the plan's vehicles (`px4`: with these PX4 settings).
+std::unique_ptr<VehicleLink> make_link(LinkKind kind, dds::Participant& p, const std::vector<std::string>& vehicles,
+                                       const std::string& run_id, const Px4Options& px4);
 
 }  // namespace dw::planner

@@ -18,7 +18,7 @@
 //    AND DW_BUILD_STAND_AGENT AND DW_BUILD_MOCAP_BRIDGE)
 //   dw_test(dw_fuzz_cli_tests SOURCES test_fuzz_cli.cpp LIBS dw_core LABELS fuzz integration
 //           DEPENDS dw-probe dw-lab dw-sim dw-recorder dw-stand-agent dw-mocap-bridge dw-natnet-emulator dw-planner dw-predictor
-//                   dw-explain dw-import
+//                   dw-explain dw-import dw-px4-sim
 //           LOCK heavy)
 // endif()
 //
@@ -162,14 +162,18 @@ std::vector<Row> table() {
         {"mocap_bridge", "dw-mocap-bridge", "", {"--sim", "--domain", "{domain}"}, daemon, true, false, {"--domain"},
          {kConfig}, {}},
         {"natnet_emulator", "dw-natnet-emulator", "", {"--port", "0"}, daemon, true, false, {}, {kConfig}, {}},
+        // ---- dw-px4-sim (issue 20)
+        {"px4_sim", "dw-px4-sim", "", {"--vehicles", "v1", "--domain", "{domain}"}, daemon, true, false, {"--domain"},
+         {{"--px4", Role::in, ".yaml"}, kConfig}, {}},
         // ---- dw-planner
         {"planner_plan", "dw-planner", "plan", {"plan", "--formation", "single", "--legs", "2", "--out", "{out}/plan.yaml"},
          quick, false, true, {},
          {{"--out", Role::out, ".yaml"}, {"--picture", Role::png, ".png", true}, kConfig}, {"{out}/plan.yaml", "{out}/plan.png"}},
         // --wait-for '': no process to wait for; it then waits up to 30 s for the vehicle's pose (no
         // vehicle here): stopped after 3 s.
-        {"planner_run", "dw-planner", "run", {"run", "--formation", "single", "--legs", "2", "--domain", "{domain}", "--wait-for", ""},
-         std::chrono::milliseconds(3000), false, false, {}, {}, {}},
+        {"planner_run", "dw-planner", "run", {"run", "--formation", "single", "--legs", "2", "--domain", "{domain}", "--wait-for", "",
+                                              "--vehicles", "px4"},
+         std::chrono::milliseconds(3000), false, false, {}, {{"--px4", Role::in, ".yaml"}}, {}},
         // ---- dw-predictor
         {"predictor_study", "dw-predictor", "study",
          {"study", "--out", "{out}/study", "--legs", "5", "--epochs", "1", "--no-generalisation", "--no-maps"},

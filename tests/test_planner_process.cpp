@@ -170,3 +170,29 @@ TEST(Experiment, KillingThePredictorDoesNotStopTheExperiment) {
     EXPECT_NE(o.log.find("DONE: 4 of 4 legs flown"), std::string::npos) << o.log;
     EXPECT_EQ(o.state.phase(), dw::msg::PHASE_DONE);
 }
+
+// Issue 20: `dw-planner run --vehicles px4` with a PX4 settings file, against simulated PX4s in
+// their own process (dw-px4-sim: PX4's topics, layouts and Commander rules): DONE; and a PX4
+// whose pre-arm check fails refuses, which the planner says in one line and exits 1.
+TEST(Experiment, ThePlannerFliesPx4VehiclesFromItsSettingsFileAndReportsARefusalInOneLine) {
+    Lab lab("exppx4");
+    const std::string settings = lab.dir.file("px4.yaml");
+    std::ofstream(settings) << "version: \"1.14\"\nvehicles:\n  v1: {namespace: " << lab.cfg.ns << "_a, system_id: 3}\n"
+                            << "  v2: {namespace: " << lab.cfg.ns << "_b, system_id: 4, origin_m: [0.5, 0, 0], heading_deg: 30}\n";
+    auto& sim = lab.start("dw-px4-sim", {"--vehicles", "v1,v2", "--px4", settings}, "sim.log");
+    auto& planner = lab.start("dw-planner", {"run", "--formation", "side_by_side", "--legs", "1", "--altitudes", "1.3", "--speed", "1.0",
+                                             "--wait-for", "", "--vehicles", "px4", "--px4", settings}, "planner.log");
+    ASSERT_EQ(planner.wait_for(120000ms), std::optional<int>(0)) << lab.log("planner.log") << lab.log("sim.log");
+    EXPECT_NE(lab.log("planner.log").find("DONE: 1 of 1 legs flown"), std::string::npos) << lab.log("planner.log");
+    sim.signal(SIGINT);
+    ASSERT_EQ(sim.wait_for(20000ms), std::optional<int>(0)) << lab.log("sim.log");
+    EXPECT_NE(lab.log("sim.log").find("v2: armed, 0 commands ignored"), std::string::npos) << lab.log("sim.log");
+
+    auto& refusing = lab.start("dw-px4-sim", {"--vehicles", "v1", "--refuse-arm", "battery below BAT_LOW_THR"}, "sim2.log");
+    auto& planner2 = lab.start("dw-planner", {"run", "--formation", "single", "--legs", "1", "--altitudes", "1.3", "--wait-for", "",
+                                              "--vehicles", "px4"}, "planner2.log");
+    ASSERT_EQ(planner2.wait_for(120000ms), std::optional<int>(1)) << lab.log("planner2.log");
+    const auto out = lab.log("planner2.log");
+    EXPECT_NE(out.find("error: ABORTED: v1: PX4 (system 1) refused to arm: DENIED after 3 tries"), std::string::npos) << out;
+    refusing.signal(SIGINT);
+}

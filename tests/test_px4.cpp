@@ -1,132 +1,322 @@
-// The PX4 vehicle link: a subscriber built from the px4_msgs definitions, with PX4's own QoS for
-// its fmu/in topics (BEST_EFFORT, VOLATILE, KEEP_LAST), receives the planner's setpoints on the
-// right topic names and type names, with the right values in PX4's local frame.
+// The PX4 link (issue 20), checked against PX4's rules rather than the lab's own:
+// - the bytes it sends, decoded by a decoder written from px4_msgs' .msg definitions for each
+//   supported version (px4_sim/wire.hpp), on PX4's topic names with PX4's type names and QoS;
+// - the planner driving a simulated PX4 (px4_sim/simulated_px4.hpp: the Commander's rules on
+//   target system, offboard stream, local position and arming) through take-off, legs and
+//   landing, and each refusal a real PX4 makes, reported in one line.
 #include <gtest/gtest.h>
 
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
-#include <fastdds/dds/subscriber/DataReader.hpp>
-#include <fastdds/dds/subscriber/DataReaderListener.hpp>
-#include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <cmath>
 #include <mutex>
+#include <numbers>
 #include <thread>
 
-#include "swarm_planner/vehicle_link.hpp"
+#include "dds/time.hpp"
+#include "px4_sim/raw.hpp"
+#include "px4_sim/simulated_px4.hpp"
+#include "px4_sim/wire.hpp"
 #include "support.hpp"
+#include "swarm_planner/experiment.hpp"
+#include "swarm_planner/px4_link.hpp"
 
-namespace fdds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
+using dw::dds::Px4Version;
+using dw::px4sim::Msg;
+namespace px4 = dw::dds::px4;
 
 namespace {
-// A plain Fast DDS subscriber, as PX4's agent side would be: PX4's type names and QoS.
-template <class T, class Support>
-class Px4Side : public fdds::DataReaderListener {
-public:
-    Px4Side(fdds::DomainParticipant* p, const std::string& topic) {
-        fdds::TypeSupport type(new Support());
-        type_name = type.get_type_name();
-        type.register_type(p);
-        auto* t = p->create_topic(topic, type_name, fdds::TOPIC_QOS_DEFAULT);
-        fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
-        q.reliability().kind = fdds::BEST_EFFORT_RELIABILITY_QOS;
-        q.durability().kind = fdds::VOLATILE_DURABILITY_QOS;
-        q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
-        q.history().depth = 8;
-        subscriber_ = p->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-        reader_ = subscriber_->create_datareader(t, q, this);
-    }
-    ~Px4Side() override { reader_->set_listener(nullptr); }
-    void on_data_available(fdds::DataReader* r) override {
-        T s;
-        fdds::SampleInfo info;
-        while (r->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK) {
-            if (!info.valid_data) continue;
-            std::lock_guard lock(mutex);
-            got.push_back(s);
-        }
-    }
-    std::mutex mutex;
-    std::vector<T> got;
-    std::string type_name;
-
-private:
-    fdds::Subscriber* subscriber_ = nullptr;
-    fdds::DataReader* reader_ = nullptr;
-};
 
 template <class F>
-bool eventually(F&& f) {
-    for (int i = 0; i < 2000; ++i) {
+bool eventually(F&& f, std::chrono::milliseconds limit = 20000ms) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < end) {
         if (f()) return true;
         std::this_thread::sleep_for(10ms);
     }
-    return false;
+    return f();
 }
-}  // namespace
 
-TEST(Px4Link, SetpointsReachAPx4SubscriberWithItsNamesTypesQosValuesAndFrame) {
+dw::dds::DdsConfig loopback(const std::string& ns) {
     dw::dds::DdsConfig cfg;
     cfg.domain = dw::test::test_domain();
-    dw::dds::Participant lab(cfg, "planner");
-    auto* px4 = fdds::DomainParticipantFactory::get_instance()->create_participant(
-        static_cast<fdds::DomainId_t>(cfg.domain), dw::dds::participant_qos(cfg, "px4-agent"));
-    {
-        using namespace px4_msgs::msg::dds_;
-        const std::string ns = "uav" + std::to_string(::getpid());
-        Px4Side<TrajectorySetpoint_, TrajectorySetpoint_PubSubType> traj(px4, "rt/" + ns + "/fmu/in/trajectory_setpoint");
-        Px4Side<OffboardControlMode_, OffboardControlMode_PubSubType> mode(px4, "rt/" + ns + "/fmu/in/offboard_control_mode");
-        Px4Side<VehicleCommand_, VehicleCommand_PubSubType> cmd(px4, "rt/" + ns + "/fmu/in/vehicle_command");
-        EXPECT_EQ(traj.type_name, "px4_msgs::msg::dds_::TrajectorySetpoint_");
-        EXPECT_EQ(mode.type_name, "px4_msgs::msg::dds_::OffboardControlMode_");
-        EXPECT_EQ(cmd.type_name, "px4_msgs::msg::dds_::VehicleCommand_");
+    cfg.ns = ns + std::to_string(::getpid());
+    return cfg;
+}
 
-        // The vehicle's PX4 home is 1 m north and 0.5 m east of the lab's origin, on the floor.
-        dw::planner::Px4Link link(lab, {ns}, {dw::physics::Vec3(1.0, 0.5, 0.0)});
-        std::this_thread::sleep_for(1500ms);  // discovery; then a stream, as PX4 expects (> 2 Hz)
-        link.start();
-        dw::physics::Setpoint sp;
-        sp.position = dw::physics::Vec3(0.2, -0.3, -1.9);
-        sp.velocity = dw::physics::Vec3(0, 0.5, 0);
-        sp.yaw_rad = 0.25;
-        for (int i = 0; i < 50; ++i) {
-            link.send({sp}, 1'700'000'000'000'000'000 + i * 20'000'000LL);
-            std::this_thread::sleep_for(20ms);
-        }
-        link.land();
-        ASSERT_TRUE(eventually([&] { std::lock_guard l(traj.mutex); return traj.got.size() >= 10; }));
-        ASSERT_TRUE(eventually([&] { std::lock_guard l(cmd.mutex); return cmd.got.size() >= 3; }));
-        ASSERT_TRUE(eventually([&] { std::lock_guard l(mode.mutex); return !mode.got.empty(); }));
-        {
-            std::lock_guard l(traj.mutex);
-            const auto& t = traj.got.back();
-            EXPECT_FLOAT_EQ(t.position()[0], -0.8f);  // lab NED minus PX4's home
-            EXPECT_FLOAT_EQ(t.position()[1], -0.8f);
-            EXPECT_FLOAT_EQ(t.position()[2], -1.9f);
-            EXPECT_FLOAT_EQ(t.velocity()[1], 0.5f);
-            EXPECT_FLOAT_EQ(t.yaw(), 0.25f);
-            EXPECT_TRUE(std::isnan(t.yawspeed()));
-            EXPECT_EQ(t.timestamp() % 20000, 0u);  // microseconds
-        }
-        {
-            std::lock_guard l(mode.mutex);
-            EXPECT_TRUE(mode.got.back().position());
-            EXPECT_FALSE(mode.got.back().attitude());
-        }
-        std::lock_guard l(cmd.mutex);
-        std::vector<std::uint32_t> kinds;
-        for (const auto& c : cmd.got) kinds.push_back(c.command());
-        ASSERT_GE(kinds.size(), 3u);
-        EXPECT_EQ(kinds[0], dw::planner::kVehicleCmdDoSetMode);
-        EXPECT_FLOAT_EQ(cmd.got[0].param1(), 1.0f);
-        EXPECT_FLOAT_EQ(cmd.got[0].param2(), 6.0f);  // PX4_CUSTOM_MAIN_MODE_OFFBOARD
-        EXPECT_EQ(kinds[1], dw::planner::kVehicleCmdArmDisarm);
-        EXPECT_FLOAT_EQ(cmd.got[1].param1(), 1.0f);
-        EXPECT_EQ(kinds.back(), dw::planner::kVehicleCmdNavLand);
-        EXPECT_EQ(cmd.got[0].target_system(), 1);
-        EXPECT_TRUE(cmd.got[0].from_external());
+// What PX4's side of the DDS bridge received on one topic, as bytes.
+struct Captured {
+    std::mutex m;
+    std::vector<std::vector<std::uint8_t>> samples;
+    std::vector<std::uint8_t> last() {
+        std::lock_guard lock(m);
+        return samples.empty() ? std::vector<std::uint8_t>{} : samples.back();
     }
-    px4->delete_contained_entities();
-    fdds::DomainParticipantFactory::get_instance()->delete_participant(px4);
+    std::size_t size() {
+        std::lock_guard lock(m);
+        return samples.size();
+    }
+};
+
+void capture(dw::px4sim::RawParticipant& px4side, const std::string& topic, const std::string& type, Captured& c) {
+    px4side.subscribe(topic, "px4_msgs::msg::dds_::" + type + "_", [&c](std::span<const std::uint8_t> b) {
+        std::lock_guard lock(c.m);
+        c.samples.emplace_back(b.begin(), b.end());
+    });
+}
+
+class Px4Wire : public ::testing::TestWithParam<Px4Version> {};
+
+}  // namespace
+
+// The link's bytes, decoded by PX4's .msg layout of the configured version: names, types,
+// values, frames (origin 1 m N 0.5 m E, PX4's north = the lab's east) and the version's layout.
+TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
+    const Px4Version version = GetParam();
+    const auto cfg = loopback("px4wire" + std::string(dw::dds::px4_version(version).name).substr(2));
+    dw::dds::Participant lab(cfg, "planner");
+    dw::px4sim::RawParticipant px4side(cfg, "px4");
+    dw::planner::Px4Options o;
+    o.version = version;
+    o.odometry_hz = 0;
+    o.vehicles = {{"v1", "uav" + std::to_string(::getpid()), 7, dw::physics::Vec3(1.0, 0.5, 0.0), std::numbers::pi / 2}};
+    const auto in = [&](const char* t) { return dw::dds::px4_topic(o.vehicles[0].ns, "in", t); };
+    Captured traj, mode, cmd, odom;
+    capture(px4side, in("trajectory_setpoint"), "TrajectorySetpoint", traj);
+    capture(px4side, in("offboard_control_mode"), "OffboardControlMode", mode);
+    capture(px4side, in("vehicle_command"), "VehicleCommand", cmd);
+    capture(px4side, in("vehicle_visual_odometry"), "VehicleOdometry", odom);
+    auto link = dw::planner::make_px4_link(lab, o);
+    dw::dds::Writer<dw::msg::VehicleState> mocap(lab, dw::dds::topics::vehicle_state);
+    dw::physics::Setpoint sp;
+    sp.position = dw::physics::Vec3(0.2, -0.3, -1.9);
+    sp.velocity = dw::physics::Vec3(0, 0.5, 0);
+    sp.yaw_rad = 0.25;
+    const dw::Nanos t0 = 1'700'000'000'000'000'000;
+    ASSERT_TRUE(eventually([&] {
+        link->send({sp}, t0);
+        link->land();
+        dw::msg::VehicleState s;
+        s.header().stamp(dw::dds::to_msg(t0));
+        s.vehicle_id("v1");
+        s.position_m().x(1.0), s.position_m().y(1.5), s.position_m().z(-0.2);
+        s.orientation().w(1.0);
+        s.tracking_valid(true);
+        mocap.write(s);
+        std::this_thread::sleep_for(20ms);
+        return traj.size() > 0 && mode.size() > 0 && cmd.size() > 0 && odom.size() > 0;
+    })) << "PX4's side heard nothing on " << in("...");
+
+    const auto def = [&](Msg m) { return dw::px4sim::msg_def(m, version); };
+    const auto t = dw::px4sim::decode(def(Msg::trajectory_setpoint), traj.last());
+    EXPECT_EQ(dw::px4sim::value(t, "timestamp"), static_cast<double>(t0 / 1000));  // microseconds
+    EXPECT_NEAR(t.at("position")[0], -0.8, 1e-6);  // lab east offset -0.8 m = PX4 north
+    EXPECT_NEAR(t.at("position")[1], 0.8, 1e-6);   // lab north offset -0.8 m = PX4 east +0.8
+    EXPECT_NEAR(t.at("position")[2], -1.9, 1e-6);
+    EXPECT_NEAR(t.at("velocity")[0], 0.5, 1e-6);
+    EXPECT_NEAR(dw::px4sim::value(t, "yaw"), 0.25 - std::numbers::pi / 2, 1e-6);
+    EXPECT_TRUE(std::isnan(t.at("jerk")[0]));
+
+    const auto m = dw::px4sim::decode(def(Msg::offboard_control_mode), mode.last());
+    EXPECT_EQ(mode.last().size() - 4, dw::px4sim::body_size(def(Msg::offboard_control_mode)));  // 14 B in 1.14, 15 B after
+    EXPECT_EQ(dw::px4sim::value(m, "position"), 1);
+    EXPECT_EQ(dw::px4sim::value(m, "attitude"), 0);
+
+    const auto bytes = cmd.last();
+    const auto c = dw::px4sim::decode(def(Msg::vehicle_command), bytes);
+    EXPECT_EQ(dw::px4sim::value(c, "command"), px4::kCmdNavLand);
+    EXPECT_EQ(dw::px4sim::value(c, "target_system"), 7);  // its own MAV_SYS_ID
+    EXPECT_EQ(dw::px4sim::value(c, "target_component"), px4::kAutopilotComponent);
+    EXPECT_EQ(dw::px4sim::value(c, "source_system"), px4::kPlannerSystem);
+    EXPECT_EQ(dw::px4sim::value(c, "source_component"), px4::kPlannerComponent);
+    EXPECT_EQ(dw::px4sim::value(c, "from_external"), 1);
+    // The layouts differ: the other version's rule would misread these bytes.
+    const Px4Version other = version == Px4Version::v1_14 ? Px4Version::v1_15 : Px4Version::v1_14;
+    bool misread = true;
+    try {
+        const auto wrong = dw::px4sim::decode(dw::px4sim::msg_def(Msg::vehicle_command, other), bytes);
+        misread = dw::px4sim::value(wrong, "source_component") != px4::kPlannerComponent || dw::px4sim::value(wrong, "from_external") != 1;
+    } catch (const dw::InputError&) {
+    }
+    EXPECT_TRUE(misread);
+
+    const auto od = dw::px4sim::decode(def(Msg::vehicle_odometry), odom.last());
+    EXPECT_EQ(dw::px4sim::value(od, "pose_frame"), 1);  // NED
+    EXPECT_EQ(dw::px4sim::value(od, "timestamp_sample"), static_cast<double>(t0 / 1000));
+    EXPECT_NEAR(od.at("position")[0], 1.0, 1e-6);  // lab (1, 1.5) - origin (1, 0.5) = 1 m east = PX4 north
+    EXPECT_NEAR(od.at("position")[1], 0.0, 1e-6);
+    const auto& q = od.at("q");  // w first; the lab's level attitude is 90° left of PX4's north
+    EXPECT_NEAR(std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]), 1.0, 1e-5);
+    EXPECT_NEAR(q[0], std::cos(std::numbers::pi / 4), 1e-6);
+    EXPECT_NEAR(q[3], -std::sin(std::numbers::pi / 4), 1e-6);
+}
+
+INSTANTIATE_TEST_SUITE_P(Versions, Px4Wire, ::testing::Values(Px4Version::v1_14, Px4Version::v1_15, Px4Version::v1_16),
+                         [](const auto& info) { return "v" + std::string(dw::dds::px4_version(info.param).name).replace(1, 1, "_"); });
+
+namespace {
+
+// A lab with simulated PX4 vehicles, and the planner's PX4 settings for them.
+struct Px4Lab {
+    dw::dds::DdsConfig cfg;
+    dw::dds::Participant lab;
+    dw::planner::Px4Options options;
+    std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> vehicles;
+
+    Px4Lab(const std::string& ns, Px4Version version, int count) : cfg(loopback(ns)), lab(cfg, "planner") {
+        options.version = version;
+        options.answer_timeout_s = 0.5;
+        for (int i = 0; i < count; ++i) {
+            const std::string name = "v" + std::to_string(i + 1);
+            // Each PX4 its own namespace and system id; the second's frame turned and moved.
+            dw::planner::Px4Vehicle v{name, cfg.ns + "_px4_" + std::to_string(i + 1), 2 + i};
+            if (i == 1) v.origin = dw::physics::Vec3(0.5, -0.5, 0), v.heading_rad = std::numbers::pi / 2;
+            options.vehicles.push_back(v);
+        }
+    }
+    // Starts each simulated PX4 parked where the plan takes off; `tweak` sets its faults.
+    void start(const dw::planner::Plan& plan, const std::function<void(dw::px4sim::SimulatedPx4Options&)>& tweak = {}) {
+        for (std::size_t i = 0; i < options.vehicles.size(); ++i) {
+            dw::px4sim::SimulatedPx4Options o;
+            o.version = options.version;
+            o.ns = options.vehicles[i].ns;
+            o.system_id = options.vehicles[i].system_id;
+            o.vehicle = options.vehicles[i].name;
+            o.frame = dw::planner::local_frame(options.vehicles[i]);
+            const auto first = plan.setpoint(i, 0).position;
+            o.parked = dw::physics::Vec3(first.x(), first.y(), 0.0);
+            if (tweak) tweak(o);
+            vehicles.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cfg, o));
+        }
+    }
+    dw::planner::RunOptions run_options() const {
+        dw::planner::RunOptions ro;
+        ro.wait_for = {};
+        ro.link = dw::planner::LinkKind::px4;
+        ro.px4 = options;
+        ro.calibrate_s = 1.5;  // the setpoint stream runs > 1 s before OFFBOARD is asked for
+        ro.takeoff_s = 3;
+        ro.land_s = 2;
+        ro.run_id = "px4test";
+        return ro;
+    }
+};
+
+dw::planner::Plan short_plan(const std::string& formation, double start_hover_s = 0.5) {
+    dw::planner::PlanOptions o;
+    o.formation = formation;
+    o.grid.legs = 1;
+    o.grid.altitudes_m = {1.3};
+    o.grid.speed_mps = 1.0;
+    o.grid.start_hover_s = start_hover_s;
+    return dw::planner::make_plan(o);
+}
+
+// Asks the link to arm until it is ready or refuses; with `stream`, setpoints flow for 1.5 s
+// before (as the planner's calibration streams them) and meanwhile.
+dw::planner::ArmProgress arm(dw::planner::VehicleLink& link, dw::dds::Participant& p, const std::vector<dw::physics::Setpoint>& hold, bool stream) {
+    for (int i = 0; stream && i < 75; ++i) {
+        link.send(hold, p.clock().now_ns());
+        std::this_thread::sleep_for(20ms);
+    }
+    for (int i = 0; i < 2000; ++i) {
+        if (stream) link.send(hold, p.clock().now_ns());
+        const auto a = link.arm();
+        if (a.state != dw::planner::ArmProgress::State::pending) return a;
+        std::this_thread::sleep_for(20ms);
+    }
+    return {};
+}
+
+class Px4Flight : public ::testing::TestWithParam<Px4Version> {};
+
+}  // namespace
+
+// Two PX4s of the configured version, each its own namespace, system id and frame: DONE.
+TEST_P(Px4Flight, ThePlannerFliesSimulatedPx4sThroughTakeOffLegsAndLanding) {
+    Px4Lab lab("px4fly", GetParam(), 2);
+    const auto plan = short_plan("side_by_side");
+    lab.start(plan);
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_DONE) << e.reason();
+    for (auto& v : lab.vehicles) {
+        EXPECT_TRUE(eventually([&] { return !v->report().armed; })) << "still armed after NAV_LAND";
+        const auto r = v->report();
+        EXPECT_TRUE(r.was_offboard);
+        EXPECT_TRUE(r.was_armed);
+        EXPECT_EQ(r.ignored_commands, 0);
+        EXPECT_EQ(r.undecodable, 0);
+        EXPECT_EQ(r.rejected_odometry, 0);
+        EXPECT_EQ(r.nav_state, px4::kNavAutoLand);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Versions, Px4Flight, ::testing::Values(Px4Version::v1_14, Px4Version::v1_15, Px4Version::v1_16),
+                         [](const auto& info) { return "v" + std::string(dw::dds::px4_version(info.param).name).replace(1, 1, "_"); });
+
+// A PX4 whose MAV_SYS_ID is not the one configured ignores every command, as the Commander does.
+TEST(Px4Refusals, CommandsForAnotherSystemGoUnansweredAndArmingIsRefusedInOneLine) {
+    Px4Lab lab("px4sysid", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single");
+    lab.start(plan, [](auto& o) { o.system_id = 5; });  // the planner believes it is 2
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
+    ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
+    EXPECT_NE(a.reason.find("no answer from PX4 system 2"), std::string::npos) << a.reason;
+    EXPECT_NE(a.reason.find("MAV_SYS_ID"), std::string::npos) << a.reason;
+    EXPECT_EQ(a.reason.find('\n'), std::string::npos);
+    EXPECT_EQ(lab.vehicles[0]->report().ignored_commands, lab.options.attempts);
+    EXPECT_FALSE(lab.vehicles[0]->report().was_offboard);
+}
+
+TEST(Px4Refusals, OffboardWithoutASetpointStreamIsRefused) {
+    Px4Lab lab("px4nostream", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single");
+    lab.start(plan);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, false);
+    ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
+    EXPECT_NE(a.reason.find("refused to switch to OFFBOARD: TEMPORARILY_REJECTED"), std::string::npos) << a.reason;
+    const auto r = lab.vehicles[0]->report();
+    EXPECT_FALSE(r.was_offboard);
+    ASSERT_FALSE(r.events.empty());
+    EXPECT_NE(r.events.back().find("no offboard_control_mode stream"), std::string::npos) << r.events.back();
+}
+
+TEST(Px4Refusals, OffboardWithoutALocalPositionIsRefused) {
+    Px4Lab lab("px4nopos", Px4Version::v1_15, 1);
+    lab.options.odometry = false;  // nothing feeds the motion capture to PX4's estimator
+    const auto plan = short_plan("single");
+    lab.start(plan);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
+    ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
+    EXPECT_NE(a.reason.find("TEMPORARILY_REJECTED"), std::string::npos) << a.reason;
+    EXPECT_NE(a.reason.find("local position"), std::string::npos) << a.reason;
+    const auto r = lab.vehicles[0]->report();
+    ASSERT_FALSE(r.events.empty());
+    EXPECT_NE(r.events.back().find("no local position"), std::string::npos) << r.events.back();
+}
+
+// A failing pre-arm check: the experiment ends ABORTED on the ground with PX4's answer.
+TEST(Px4Refusals, ARefusedArmAbortsTheExperimentBeforeTakeOff) {
+    Px4Lab lab("px4noarm", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single");
+    lab.start(plan, [](auto& o) { o.refuse_arm = "battery below the arming threshold"; });
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(e.reason().find("v1: PX4 (system 2) refused to arm: DENIED after 3 tries"), std::string::npos) << e.reason();
+    EXPECT_EQ(e.legs_flown(), 0);
+    EXPECT_FALSE(lab.vehicles[0]->report().armed);
+}
+
+// The offboard stream stops reaching PX4 in flight: its failsafe lands it, and the planner aborts
+// with that reason instead of a tracking error later.
+TEST(Px4Refusals, ALostOffboardStreamIsSeenAsPx4sFailsafeAndAborts) {
+    Px4Lab lab("px4lost", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single", 4.0);  // lost while hovering after take-off (3 s)
+    lab.start(plan, [](auto& o) { o.lose_offboard_after_s = 3.5; });
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(e.reason().find("v1: PX4 left OFFBOARD for AUTO_LAND (PX4 failsafe"), std::string::npos) << e.reason();
+    EXPECT_TRUE(eventually([&] { return !lab.vehicles[0]->report().armed; }));
 }

@@ -1,0 +1,86 @@
+#pragma once
+// A simulated PX4 for the lab's tests and demos: PX4's uXRCE-DDS topics under its client's
+// namespace, read and written as PX4 lays them out (px4_sim/wire.hpp, per version), with the
+// Commander's rules the lab relies on:
+// - a VehicleCommand for another system (target_system not MAV_SYS_ID nor 0) or component is
+//   ignored: no answer at all;
+// - OFFBOARD is refused (TEMPORARILY_REJECTED) without a fresh offboard_control_mode stream
+//   (its timestamp within COM_OF_LOSS_T of this host's clock) that has lasted over 1 s, or
+//   without a local position (vehicle_visual_odometry that EKF2 would accept, recently);
+// - arming is DENIED without a local position or when a pre-arm check fails;
+// - in OFFBOARD, a stream older than COM_OF_LOSS_T is a failsafe: AUTO_LAND (COM_OBL_RC_ACT 4);
+// - landed in AUTO_LAND, it disarms.
+// It also plays the vehicle and the motion capture: it follows the trajectory setpoints in its
+// local frame and publishes its pose as the lab's vehicles/state (lab NED).
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "dds/endpoint.hpp"
+#include "px4_sim/raw.hpp"
+#include "px4_sim/wire.hpp"
+#include "swarm_planner/px4_config.hpp"
+
+namespace dw::px4sim {
+
+struct SimulatedPx4Options {
+    dds::Px4Version version = dds::Px4Version::v1_15;
+    std::string ns;                       // its client's -n ("" = rt/fmu/...)
+    int system_id = 1;                    // MAV_SYS_ID
+    std::string vehicle = "v1";           // its name in the lab (vehicles/state)
+    planner::LocalFrame frame;            // where its local frame sits in the lab
+    physics::Vec3 parked = physics::Vec3::Zero();  // lab NED, on the ground
+    double com_of_loss_t_s = 1.0;         // COM_OF_LOSS_T
+    double offboard_warmup_s = 1.0;       // the stream's age before OFFBOARD is accepted
+    double position_timeout_s = 0.5;      // visual odometry older than this: no local position
+    std::string refuse_arm;               // non-empty: a pre-arm check that fails (arming DENIED)
+    std::optional<double> lose_offboard_after_s;  // after arming it hears no more offboard stream
+    double rate_hz = 100;                 // dynamics and vehicles/state
+    double status_period_s = 0.5;         // vehicle_status (also on every change)
+};
+
+class SimulatedPx4 {
+public:
+    // `lab`: the lab's participant (vehicles/state); `px4_side`: where PX4's Agent would be.
+    SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side, SimulatedPx4Options o);
+    ~SimulatedPx4();
+    SimulatedPx4(const SimulatedPx4&) = delete;
+    SimulatedPx4& operator=(const SimulatedPx4&) = delete;
+
+    struct Report {
+        int ignored_commands = 0;       // for another system or component
+        int undecodable = 0;            // payloads shorter than this version's definition
+        int rejected_odometry = 0;      // samples EKF2 would drop
+        bool was_offboard = false, was_armed = false, armed = false;
+        std::uint8_t nav_state = 0;
+        std::vector<std::string> events;  // one line each: what it accepted, refused and why
+    };
+    Report report() const;
+
+private:
+    struct State;
+    void on_mode(std::span<const std::uint8_t> b);
+    void on_trajectory(std::span<const std::uint8_t> b);
+    void on_odometry(std::span<const std::uint8_t> b);
+    void on_command(std::span<const std::uint8_t> b);
+    dds::px4::AckResult commander(const Values& cmd, std::string& why);  // under mutex_
+    void loop(std::stop_token stop);
+    void step(double dt);                                                // under mutex_
+    void publish_status();
+    std::optional<Values> decode_or_count(Msg m, std::span<const std::uint8_t> b);
+    void event(const std::string& line);                                 // under mutex_
+
+    SimulatedPx4Options o_;
+    dds::Participant& lab_;
+    dds::Writer<msg::VehicleState> states_;
+    RawParticipant px4_;
+    mutable std::mutex mutex_;
+    std::unique_ptr<State> s_;
+    std::jthread thread_;
+};
+
+}  // namespace dw::px4sim

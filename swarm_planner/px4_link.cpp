@@ -1,0 +1,327 @@
+#include "swarm_planner/px4_link.hpp"
+
+#include <deque>
+#include <limits>
+#include <map>
+#include <mutex>
+
+#include "core/log.hpp"
+#include "dds/px4.hpp"
+#include "dds/time.hpp"
+
+namespace dw::planner {
+namespace {
+
+namespace px4 = dds::px4;
+using px4_msgs::msg::dds_::TrajectorySetpoint_;
+using px4_msgs::msg::dds_::VehicleOdometry_;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr std::uint8_t kFrameNed = 1;       // VehicleOdometry pose_frame / velocity_frame
+constexpr std::int8_t kQualityBest = 100;   // VehicleOdometry quality
+
+// The message types of one PX4 version (the others are the same in every supported version).
+struct Types115 {
+    using Mode = px4_msgs::msg::dds_::OffboardControlMode_;
+    using Command = px4_msgs::msg::dds_::VehicleCommand_;
+    using Status = px4_msgs::msg::dds_::VehicleStatus_;
+    using Ack = px4_msgs::msg::dds_::VehicleCommandAck_;
+};
+struct Types114 {
+    using Mode = px4_msgs_v114::msg::dds_::OffboardControlMode_;
+    using Command = px4_msgs_v114::msg::dds_::VehicleCommand_;
+    using Status = px4_msgs_v114::msg::dds_::VehicleStatus_;
+    using Ack = px4_msgs_v114::msg::dds_::VehicleCommandAck_;
+};
+
+template <class T>
+dds::Topic<T> px4_spec(const std::string& name, std::string_view type) {
+    return {name, dds::QosProfile::px4, type, "PX4 uXRCE-DDS", "Px4"};
+}
+
+// Each arming step: the command that asks for it and what vehicle_status shows when it is done.
+enum class Step { await_status, offboard, arm, ready, refused };
+
+struct StatusSeen {
+    std::uint8_t arming = 0, nav = 0, intention = 0;
+    bool failsafe = false;
+    Nanos seen_ns = 0;  // monotonic; 0 = never
+};
+struct AckSeen {
+    std::uint32_t command = 0;
+    std::uint8_t result = 0;
+    Nanos seen_ns = 0;
+};
+
+template <class Types>
+class Px4Link final : public VehicleLink {
+public:
+    Px4Link(dds::Participant& p, const Px4Options& o) : p_(p), o_(o) {
+        for (std::size_t i = 0; i < o.vehicles.size(); ++i) add_vehicle(o.vehicles[i]);
+        states_ = std::make_unique<dds::Reader<msg::VehicleState>>(p, dds::topics::vehicle_state,
+            [this](const msg::VehicleState& s, const dds::SampleMeta&) { on_state(s); });
+        log::info("PX4 link (", dds::px4_version(o.version).name, "): ", o.vehicles.size(), " vehicles, odometry ",
+                  o.odometry ? log::cat(o.odometry_hz > 0 ? o.odometry_hz : 0.0, " Hz (0 = every mocap frame)") : std::string("off"));
+    }
+
+    void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) override {
+        const auto us = static_cast<std::uint64_t>(now_ns / 1000);
+        for (std::size_t i = 0; i < sps.size() && i < vehicles_.size(); ++i) {
+            Vehicle& v = vehicles_[i];
+            typename Types::Mode mode;  // proof of life, with every setpoint (PX4 wants > 2 Hz)
+            mode.timestamp(us);
+            mode.position(true);
+            mode.velocity(true);
+            mode.acceleration(true);
+            v.mode->write_as_is(mode);
+            v.traj->write_as_is(trajectory(v.frame, sps[i], us));
+        }
+    }
+
+    ArmProgress arm() override {
+        const Nanos now = p_.clock().monotonic_ns();
+        ArmProgress out{ArmProgress::State::ready, ""};
+        for (auto& v : vehicles_) {
+            if (v.step_since == 0) v.step_since = now;
+            advance(v, now);
+            if (v.step == Step::refused) return {ArmProgress::State::refused, v.cfg.name + ": " + v.refusal};
+            if (v.step != Step::ready) out.state = ArmProgress::State::pending;
+        }
+        return out;
+    }
+
+    std::optional<std::string> failsafe() override {
+        const Nanos now = p_.clock().monotonic_ns();
+        for (auto& v : vehicles_) {
+            const StatusSeen s = status_of(v);
+            const double age = to_seconds(now - s.seen_ns);
+            if (!(age <= o_.status_timeout_s))
+                return log::cat(v.cfg.name, ": no vehicle_status from PX4 for ", age, " s (its link or the Agent lost)");
+            const std::string why = s.failsafe ? " (PX4 failsafe: offboard lost, battery, or another check)" : "";
+            if (s.arming != px4::kArmed) return log::cat(v.cfg.name, ": PX4 disarmed in flight", why);
+            if (s.nav != px4::kNavOffboard) return log::cat(v.cfg.name, ": PX4 left OFFBOARD for ", px4::nav_state_name(s.nav), why);
+        }
+        return std::nullopt;
+    }
+
+    void land() override {
+        for (auto& v : vehicles_) command(v, px4::kCmdNavLand, 0.0f, 0.0f);
+    }
+
+private:
+    struct Vehicle {
+        Px4Vehicle cfg;
+        LocalFrame frame;
+        std::string traj_name, mode_name, cmd_name, odom_name, status_name, ack_name;  // stable: specs view them
+        std::unique_ptr<dds::Writer<TrajectorySetpoint_>> traj;
+        std::unique_ptr<dds::Writer<typename Types::Mode>> mode;
+        std::unique_ptr<dds::Writer<typename Types::Command>> cmd;
+        std::unique_ptr<dds::Writer<VehicleOdometry_>> odom;
+        std::unique_ptr<dds::Reader<typename Types::Status>> status;
+        std::unique_ptr<dds::Reader<typename Types::Ack>> ack;
+        StatusSeen st;      // under mutex_
+        AckSeen last_ack;   // under mutex_
+        Nanos odom_sent_ns = 0;
+        bool tracking = false;
+        std::uint8_t reset_counter = 0;
+        Step step = Step::await_status;  // arming: the planner's thread only
+        int tries = 0;
+        Nanos step_since = 0, sent_ns = 0;
+        std::string refusal;
+    };
+
+    void add_vehicle(const Px4Vehicle& cfg) {
+        Vehicle& v = vehicles_.emplace_back();
+        v.cfg = cfg;
+        v.frame = local_frame(cfg);
+        const auto& version = dds::px4_version(o_.version);
+        v.traj_name = dds::px4_topic(cfg.ns, "in", "trajectory_setpoint");
+        v.mode_name = dds::px4_topic(cfg.ns, "in", "offboard_control_mode");
+        v.cmd_name = dds::px4_topic(cfg.ns, "in", "vehicle_command");
+        v.odom_name = dds::px4_topic(cfg.ns, "in", "vehicle_visual_odometry");
+        v.status_name = dds::px4_topic(cfg.ns, "out", version.status_topic);
+        v.ack_name = dds::px4_topic(cfg.ns, "out", version.ack_topic);
+        v.traj = std::make_unique<dds::Writer<TrajectorySetpoint_>>(p_, px4_spec<TrajectorySetpoint_>(v.traj_name, "px4_msgs::msg::dds_::TrajectorySetpoint_"));
+        v.mode = std::make_unique<dds::Writer<typename Types::Mode>>(p_, px4_spec<typename Types::Mode>(v.mode_name, "px4_msgs::msg::dds_::OffboardControlMode_"));
+        v.cmd = std::make_unique<dds::Writer<typename Types::Command>>(p_, px4_spec<typename Types::Command>(v.cmd_name, "px4_msgs::msg::dds_::VehicleCommand_"));
+        v.odom = std::make_unique<dds::Writer<VehicleOdometry_>>(p_, px4_spec<VehicleOdometry_>(v.odom_name, "px4_msgs::msg::dds_::VehicleOdometry_"));
+        Vehicle* vp = &v;
+        v.status = std::make_unique<dds::Reader<typename Types::Status>>(p_, px4_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
+            [this, vp](const typename Types::Status& s, const dds::SampleMeta&) {
+                std::lock_guard lock(mutex_);
+                vp->st = {s.arming_state(), s.nav_state(), s.nav_state_user_intention(), s.failsafe(), p_.clock().monotonic_ns()};
+            });
+        v.ack = std::make_unique<dds::Reader<typename Types::Ack>>(p_, px4_spec<typename Types::Ack>(v.ack_name, "px4_msgs::msg::dds_::VehicleCommandAck_"),
+            [this, vp](const typename Types::Ack& a, const dds::SampleMeta&) {
+                if (a.target_system() != px4::kPlannerSystem) return;  // an answer to someone else
+                std::lock_guard lock(mutex_);
+                vp->last_ack = {a.command(), a.result(), p_.clock().monotonic_ns()};
+            });
+        by_name_[cfg.name] = &v;
+    }
+
+    static TrajectorySetpoint_ trajectory(const LocalFrame& f, const physics::Setpoint& sp, std::uint64_t us) {
+        TrajectorySetpoint_ t;
+        t.timestamp(us);
+        const physics::Vec3 p = f.point(sp.position), vel = f.vector(sp.velocity), acc = f.vector(sp.acceleration);
+        for (std::size_t k = 0; k < 3; ++k) {
+            t.position()[k] = static_cast<float>(p[static_cast<int>(k)]);
+            t.velocity()[k] = static_cast<float>(vel[static_cast<int>(k)]);
+            t.acceleration()[k] = static_cast<float>(acc[static_cast<int>(k)]);
+            t.jerk()[k] = kNaN;
+        }
+        t.yaw(static_cast<float>(f.yaw(sp.yaw_rad)));
+        t.yawspeed(kNaN);
+        return t;
+    }
+
+    // The motion capture into the vehicle's estimator (EKF2 fuses vehicle_visual_odometry only).
+    void on_state(const msg::VehicleState& s) {
+        if (!o_.odometry) return;
+        const auto it = by_name_.find(s.vehicle_id());
+        if (it == by_name_.end()) return;
+        Vehicle& v = *it->second;
+        const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
+        const Eigen::Quaterniond q(s.orientation().w(), s.orientation().x(), s.orientation().y(), s.orientation().z());
+        const bool valid = s.tracking_valid() && x.allFinite() && q.coeffs().allFinite() && q.norm() > 0.5;
+        std::lock_guard lock(odom_mutex_);
+        if (!valid) {
+            v.tracking = false;
+            return;
+        }
+        if (!v.tracking) ++v.reset_counter;  // tracking came back: the estimator may see a jump
+        v.tracking = true;
+        const Nanos now = p_.clock().monotonic_ns();
+        if (o_.odometry_hz > 0 && v.odom_sent_ns != 0 && to_seconds(now - v.odom_sent_ns) < 1.0 / o_.odometry_hz) return;
+        v.odom_sent_ns = now;
+        v.odom->write_as_is(odometry(v, s, x, q));
+    }
+
+    VehicleOdometry_ odometry(const Vehicle& v, const msg::VehicleState& s, const physics::Vec3& x, const Eigen::Quaterniond& q) const {
+        VehicleOdometry_ m;
+        m.timestamp(static_cast<std::uint64_t>(p_.clock().now_ns() / 1000));
+        m.timestamp_sample(static_cast<std::uint64_t>(dds::from_msg(s.header().stamp()) / 1000));  // the capture time
+        m.pose_frame(kFrameNed);
+        m.velocity_frame(kFrameNed);
+        const physics::Vec3 p = v.frame.point(x);
+        const physics::Vec3 vel = v.frame.vector(physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z()));
+        // Normalised in float, as EKF2 checks it (|‖q‖ - 1| <= 1e-5), w first (Hamilton, FRD -> NED).
+        const Eigen::Quaterniond qd = v.frame.attitude(q.normalized());
+        Eigen::Quaternionf ql = qd.cast<float>();
+        ql.normalize();
+        const float pv = static_cast<float>(o_.position_std_m * o_.position_std_m);
+        const float ov = static_cast<float>(o_.orientation_std_rad * o_.orientation_std_rad);
+        const float vv = static_cast<float>(o_.velocity_std_mps * o_.velocity_std_mps);
+        m.q() = {ql.w(), ql.x(), ql.y(), ql.z()};
+        for (std::size_t k = 0; k < 3; ++k) {
+            m.position()[k] = static_cast<float>(p[static_cast<int>(k)]);
+            m.velocity()[k] = static_cast<float>(vel[static_cast<int>(k)]);
+            m.angular_velocity()[k] = kNaN;
+            m.position_variance()[k] = pv;
+            m.orientation_variance()[k] = ov;
+            m.velocity_variance()[k] = vv;
+        }
+        m.reset_counter(v.reset_counter);
+        m.quality(static_cast<std::uint8_t>(kQualityBest));
+        return m;
+    }
+
+    void command(Vehicle& v, std::uint32_t command, float p1, float p2) {
+        typename Types::Command c;
+        c.timestamp(static_cast<std::uint64_t>(p_.clock().now_ns() / 1000));
+        c.command(command);
+        c.param1(p1);
+        c.param2(p2);
+        c.param5(std::numeric_limits<double>::quiet_NaN());
+        c.param6(std::numeric_limits<double>::quiet_NaN());
+        c.param7(kNaN);
+        c.target_system(static_cast<std::uint8_t>(v.cfg.system_id));  // PX4 ignores any other (but 0)
+        c.target_component(px4::kAutopilotComponent);
+        c.source_system(px4::kPlannerSystem);
+        c.source_component(px4::kPlannerComponent);
+        c.confirmation(0);
+        c.from_external(true);
+        v.cmd->write_as_is(c);
+    }
+
+    StatusSeen status_of(const Vehicle& v) {
+        std::lock_guard lock(mutex_);
+        return v.st;
+    }
+
+    // One step of a vehicle's arming: ask, watch vehicle_status, retry, or refuse with the reason.
+    void advance(Vehicle& v, Nanos now) {
+        const StatusSeen s = status_of(v);
+        const double waited = to_seconds(now - (v.step == Step::await_status ? v.step_since : v.sent_ns));
+        switch (v.step) {
+            case Step::await_status:
+                if (s.seen_ns != 0) return ask(v, Step::offboard, now, true);
+                if (waited > o_.status_timeout_s)
+                    refuse(v, log::cat("no vehicle_status from PX4 on ", v.status_name, " in ", waited, " s (is the Agent running on domain ",
+                                       p_.config().domain, ", and the vehicle's uXRCE-DDS client started with -n ", v.cfg.ns, "?)"));
+                return;
+            case Step::offboard:
+                if (s.nav == px4::kNavOffboard) return ask(v, Step::arm, now, true);
+                if (waited > o_.answer_timeout_s) retry_or_refuse(v, now, "switch to OFFBOARD", px4::kCmdDoSetMode,
+                    "PX4 needs a valid local position (vehicle_visual_odometry into its estimator) and a setpoint stream of more than 1 s");
+                return;
+            case Step::arm:
+                if (s.arming == px4::kArmed) {
+                    v.step = Step::ready;
+                    log::info(v.cfg.name, ": PX4 system ", v.cfg.system_id, " armed in OFFBOARD");
+                    return;
+                }
+                if (waited > o_.answer_timeout_s) retry_or_refuse(v, now, "arm", px4::kCmdArmDisarm,
+                    "its pre-arm checks failed (see QGroundControl or `commander check` on the PX4 console)");
+                return;
+            case Step::ready:
+            case Step::refused: return;
+        }
+    }
+
+    // Sends the command of `step` (a first try when `first`).
+    void ask(Vehicle& v, Step step, Nanos now, bool first) {
+        v.step = step;
+        v.tries = first ? 1 : v.tries + 1;
+        v.sent_ns = now;
+        if (step == Step::offboard) command(v, px4::kCmdDoSetMode, px4::kModeFlagCustom, px4::kCustomMainModeOffboard);
+        if (step == Step::arm) command(v, px4::kCmdArmDisarm, 1.0f, 0.0f);
+    }
+
+    void retry_or_refuse(Vehicle& v, Nanos now, const std::string& what, std::uint32_t cmd, const std::string& hint) {
+        if (v.tries < o_.attempts) {
+            log::warn(v.cfg.name, ": PX4 did not ", what, " within ", o_.answer_timeout_s, " s; asking again (", v.tries + 1, " of ", o_.attempts, ")");
+            return ask(v, v.step, now, false);
+        }
+        AckSeen a;
+        {
+            std::lock_guard lock(mutex_);
+            a = v.last_ack;
+        }
+        if (a.seen_ns != 0 && a.command == cmd)
+            return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") refused to ", what, ": ", px4::ack_result_name(a.result), " after ",
+                                      v.tries, " tries; ", hint));
+        refuse(v, log::cat("no answer from PX4 system ", v.cfg.system_id, " to ", what, " after ", v.tries,
+                           " tries (is its MAV_SYS_ID ", v.cfg.system_id, "? PX4 ignores commands for another system)"));
+    }
+
+    void refuse(Vehicle& v, const std::string& why) {
+        v.step = Step::refused;
+        v.refusal = why;
+    }
+
+    dds::Participant& p_;
+    Px4Options o_;
+    std::mutex mutex_, odom_mutex_;
+    std::deque<Vehicle> vehicles_;  // stable addresses: callbacks and specs refer to them
+    std::map<std::string, Vehicle*> by_name_;
+    std::unique_ptr<dds::Reader<msg::VehicleState>> states_;
+};
+
+}  // namespace
+
+std::unique_ptr<VehicleLink> make_px4_link(dds::Participant& p, const Px4Options& o) {
+    if (o.version == dds::Px4Version::v1_14) return std::make_unique<Px4Link<Types114>>(p, o);
+    return std::make_unique<Px4Link<Types115>>(p, o);
+}
+
+}  // namespace dw::planner
