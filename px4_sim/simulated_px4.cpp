@@ -40,8 +40,8 @@ struct SimulatedPx4::State {
 };
 
 SimulatedPx4::SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side, SimulatedPx4Options o)
-    : o_(std::move(o)), lab_(lab), states_(lab, dds::topics::vehicle_state), px4_(px4_side, "px4_" + o_.vehicle),
-      s_(std::make_unique<State>()) {
+    : o_(std::move(o)), lab_(lab), s_(std::make_unique<State>()), states_(lab, dds::topics::vehicle_state),
+      px4_(px4_side, "px4_" + o_.vehicle) {
     s_->x = o_.frame.point(o_.parked);
     s_->ground_z = s_->x.z();
     const auto in = [&](std::string_view t) { return dds::px4_topic(o_.ns, "in", t); };
@@ -89,8 +89,8 @@ void SimulatedPx4::on_mode(std::span<const std::uint8_t> b) {
     std::lock_guard lock(mutex_);
     if (s_->armed && o_.lose_offboard_after_s && to_seconds(mono - s_->armed_ns) > *o_.lose_offboard_after_s) return;  // the link is cut
     // PX4's ucdr rule for an incoming timestamp: 0 = now, else at most now.
-    const auto stamp = static_cast<std::uint64_t>(value(*v, "timestamp"));
-    const std::uint64_t ts = stamp == 0 ? now_us : std::min(stamp, now_us);
+    const double stamp = value(*v, "timestamp");
+    const std::uint64_t ts = stamp == 0 ? now_us : stamp >= static_cast<double>(now_us) ? now_us : static_cast<std::uint64_t>(stamp);
     if (s_->last_mode_ns == 0 || to_seconds(mono - s_->last_mode_ns) > o_.com_of_loss_t_s) s_->stream_since_ns = mono;
     s_->last_mode_ns = mono;
     s_->last_mode_us = ts;
@@ -148,12 +148,14 @@ dds::px4::AckResult SimulatedPx4::commander(const Values& cmd, std::string& why)
     const Nanos mono = lab_.clock().monotonic_ns();
     const bool position = s_->odometry_ns != 0 && to_seconds(mono - s_->odometry_ns) <= o_.position_timeout_s;
     const auto now_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
-    const bool fresh = s_->last_mode_us != 0 && static_cast<double>(now_us - s_->last_mode_us) * 1e-6 < o_.com_of_loss_t_s &&
+    const double stream_age_s = (static_cast<double>(now_us) - static_cast<double>(s_->last_mode_us)) * 1e-6;  // signed: a clock step back
+    const bool fresh = s_->last_mode_us != 0 && stream_age_s < o_.com_of_loss_t_s &&
                        to_seconds(mono - s_->last_mode_ns) < o_.com_of_loss_t_s;
     const auto command = static_cast<std::uint32_t>(value(cmd, "command"));
     const double p1 = value(cmd, "param1");
     if (command == px4::kCmdDoSetMode) {
-        if (!((static_cast<int>(p1) & 1) && value(cmd, "param2") == px4::kCustomMainModeOffboard)) return why = "only OFFBOARD is simulated", R::unsupported;
+        const bool custom = std::isfinite(p1) && p1 >= 0 && p1 < 256 && (static_cast<int>(p1) & 1);  // PX4 reads param1 as uint8 base_mode
+        if (!(custom && value(cmd, "param2") == px4::kCustomMainModeOffboard)) return why = "only OFFBOARD is simulated", R::unsupported;
         if (!fresh || !s_->mode_flag) return why = "no offboard_control_mode stream", R::temporarily_rejected;
         if (to_seconds(mono - s_->stream_since_ns) < o_.offboard_warmup_s) return why = "offboard stream shorter than 1 s", R::temporarily_rejected;
         if (s_->position_flag && !position) return why = "no local position", R::temporarily_rejected;

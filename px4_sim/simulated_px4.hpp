@@ -74,12 +74,14 @@ private:
     std::optional<Values> decode_or_count(Msg m, std::span<const std::uint8_t> b);
     void event(const std::string& line);                                 // under mutex_
 
+    // Destroyed in reverse: the thread stops first, then PX4's endpoints (their callbacks use the
+    // state), then the state.
     SimulatedPx4Options o_;
     dds::Participant& lab_;
-    dds::Writer<msg::VehicleState> states_;
-    RawParticipant px4_;
     mutable std::mutex mutex_;
     std::unique_ptr<State> s_;
+    dds::Writer<msg::VehicleState> states_;
+    RawParticipant px4_;
     std::jthread thread_;
 };
 

@@ -1,6 +1,10 @@
 #include "px4_sim/wire.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
+#include <type_traits>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
@@ -84,7 +88,14 @@ std::size_t align(std::size_t at, Kind k) {
 
 template <class T>
 void put(std::vector<std::uint8_t>& out, std::size_t at, double v) {
-    const T x = static_cast<T>(v);
+    T x{};
+    if constexpr (std::is_floating_point_v<T>) {
+        x = static_cast<T>(v);
+    } else if (std::isfinite(v)) {  // integers: clamped to the type (a cast out of range is undefined)
+        double hi = static_cast<double>(std::numeric_limits<T>::max());
+        if constexpr (sizeof(T) == 8) hi = std::nextafter(hi, 0.0);  // 2^64 - 1 rounds up to 2^64 in a double
+        x = static_cast<T>(std::clamp(v, static_cast<double>(std::numeric_limits<T>::lowest()), hi));
+    }
     std::memcpy(out.data() + at, &x, sizeof x);
 }
 template <class T>

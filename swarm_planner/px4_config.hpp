@@ -9,7 +9,7 @@
 // `namespace` is the -n of the vehicle's uXRCE-DDS client start line; `system_id` its MAV_SYS_ID
 // (commands go to it); `origin_m` (lab NED) and `heading_deg` place PX4's local frame in the lab:
 // local = Rz(-heading) (lab - origin). Without a file: namespace = the vehicle's name, system id
-// = its index + 1 (PX4 SITL's convention), origin 0, heading 0.
+// = its index + 1 (as PX4 SITL numbers its instances' MAV_SYS_ID), origin 0, heading 0.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>

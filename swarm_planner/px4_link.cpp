@@ -125,7 +125,7 @@ private:
         std::uint8_t reset_counter = 0;
         Step step = Step::await_status;  // arming: the planner's thread only
         int tries = 0;
-        Nanos step_since = 0, sent_ns = 0;
+        Nanos step_since = 0, first_sent_ns = 0, sent_ns = 0;  // monotonic
         std::string refusal;
     };
 
@@ -145,17 +145,21 @@ private:
         v.cmd = std::make_unique<dds::Writer<typename Types::Command>>(p_, px4_spec<typename Types::Command>(v.cmd_name, "px4_msgs::msg::dds_::VehicleCommand_"));
         v.odom = std::make_unique<dds::Writer<VehicleOdometry_>>(p_, px4_spec<VehicleOdometry_>(v.odom_name, "px4_msgs::msg::dds_::VehicleOdometry_"));
         Vehicle* vp = &v;
+        // PX4's fmu/out writers are TRANSIENT_LOCAL, and the ack's appears with its first answer:
+        // a transient-local reader still gets that answer once it has matched the new writer.
+        const dds::QosOverrides latest{.transient_local = true};
         v.status = std::make_unique<dds::Reader<typename Types::Status>>(p_, px4_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
             [this, vp](const typename Types::Status& s, const dds::SampleMeta&) {
                 std::lock_guard lock(mutex_);
                 vp->st = {s.arming_state(), s.nav_state(), s.nav_state_user_intention(), s.failsafe(), p_.clock().monotonic_ns()};
-            });
+            }, latest);
         v.ack = std::make_unique<dds::Reader<typename Types::Ack>>(p_, px4_spec<typename Types::Ack>(v.ack_name, "px4_msgs::msg::dds_::VehicleCommandAck_"),
             [this, vp](const typename Types::Ack& a, const dds::SampleMeta&) {
-                if (a.target_system() != px4::kPlannerSystem) return;  // an answer to someone else
+                // An answer to someone else (a ground station is system 255 too) is not ours.
+                if (a.target_system() != px4::kPlannerSystem || a.target_component() != px4::kPlannerComponent) return;
                 std::lock_guard lock(mutex_);
                 vp->last_ack = {a.command(), a.result(), p_.clock().monotonic_ns()};
-            });
+            }, latest);
         by_name_[cfg.name] = &v;
     }
 
@@ -265,6 +269,9 @@ private:
                     "PX4 needs a valid local position (vehicle_visual_odometry into its estimator) and a setpoint stream of more than 1 s");
                 return;
             case Step::arm:
+                if (s.arming == px4::kArmed && s.nav != px4::kNavOffboard)
+                    return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") armed but left OFFBOARD for ", px4::nav_state_name(s.nav),
+                                              s.failsafe ? " (failsafe)" : ""));
                 if (s.arming == px4::kArmed) {
                     v.step = Step::ready;
                     log::info(v.cfg.name, ": PX4 system ", v.cfg.system_id, " armed in OFFBOARD");
@@ -282,6 +289,7 @@ private:
     void ask(Vehicle& v, Step step, Nanos now, bool first) {
         v.step = step;
         v.tries = first ? 1 : v.tries + 1;
+        if (first) v.first_sent_ns = now;
         v.sent_ns = now;
         if (step == Step::offboard) command(v, px4::kCmdDoSetMode, px4::kModeFlagCustom, px4::kCustomMainModeOffboard);
         if (step == Step::arm) command(v, px4::kCmdArmDisarm, 1.0f, 0.0f);
@@ -297,11 +305,16 @@ private:
             std::lock_guard lock(mutex_);
             a = v.last_ack;
         }
-        if (a.seen_ns != 0 && a.command == cmd)
+        const bool answered = a.command == cmd && a.seen_ns >= v.first_sent_ns;  // an answer to this step
+        const auto accepted = static_cast<std::uint8_t>(px4::AckResult::accepted), in_progress = static_cast<std::uint8_t>(px4::AckResult::in_progress);
+        if (answered && a.result != accepted && a.result != in_progress)
             return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") refused to ", what, ": ", px4::ack_result_name(a.result), " after ",
                                       v.tries, " tries; ", hint));
-        refuse(v, log::cat("no answer from PX4 system ", v.cfg.system_id, " to ", what, " after ", v.tries,
-                           " tries (is its MAV_SYS_ID ", v.cfg.system_id, "? PX4 ignores commands for another system)"));
+        if (answered)
+            return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") answered ", px4::ack_result_name(a.result), " to ", what,
+                                      " but vehicle_status never showed it after ", v.tries, " tries"));
+        refuse(v, log::cat("no answer from PX4 system ", v.cfg.system_id, " to ", what, " after ", v.tries, " tries (is its MAV_SYS_ID ",
+                           v.cfg.system_id, "? PX4 ignores commands for another system", v.ack->matched() == 0 ? "; or its vehicle_command_ack is not bridged" : "", ")"));
     }
 
     void refuse(Vehicle& v, const std::string& why) {

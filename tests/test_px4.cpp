@@ -73,6 +73,7 @@ class Px4Wire : public ::testing::TestWithParam<Px4Version> {};
 TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     const Px4Version version = GetParam();
     const auto cfg = loopback("px4wire" + std::string(dw::dds::px4_version(version).name).substr(2));
+    Captured traj, mode, cmd, odom;  // outlive the callbacks that fill them
     dw::dds::Participant lab(cfg, "planner");
     dw::px4sim::RawParticipant px4side(cfg, "px4");
     dw::planner::Px4Options o;
@@ -80,7 +81,6 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     o.odometry_hz = 0;
     o.vehicles = {{"v1", "uav" + std::to_string(::getpid()), 7, dw::physics::Vec3(1.0, 0.5, 0.0), std::numbers::pi / 2}};
     const auto in = [&](const char* t) { return dw::dds::px4_topic(o.vehicles[0].ns, "in", t); };
-    Captured traj, mode, cmd, odom;
     capture(px4side, in("trajectory_setpoint"), "TrajectorySetpoint", traj);
     capture(px4side, in("offboard_control_mode"), "OffboardControlMode", mode);
     capture(px4side, in("vehicle_command"), "VehicleCommand", cmd);
@@ -268,14 +268,18 @@ TEST(Px4Refusals, CommandsForAnotherSystemGoUnansweredAndArmingIsRefusedInOneLin
     EXPECT_FALSE(lab.vehicles[0]->report().was_offboard);
 }
 
+// One try: the answer to the first command is heard. (PX4 creates its ack writer with that answer;
+// the link reads fmu/out transient-local for it. In one process Fast DDS matches the new writer at
+// once, so this test passes with a volatile reader too: it does not prove the late-writer case.)
 TEST(Px4Refusals, OffboardWithoutASetpointStreamIsRefused) {
     Px4Lab lab("px4nostream", Px4Version::v1_15, 1);
+    lab.options.attempts = 1;
     const auto plan = short_plan("single");
     lab.start(plan);
     auto link = dw::planner::make_px4_link(lab.lab, lab.options);
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, false);
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
-    EXPECT_NE(a.reason.find("refused to switch to OFFBOARD: TEMPORARILY_REJECTED"), std::string::npos) << a.reason;
+    EXPECT_NE(a.reason.find("refused to switch to OFFBOARD: TEMPORARILY_REJECTED after 1 tries"), std::string::npos) << a.reason;
     const auto r = lab.vehicles[0]->report();
     EXPECT_FALSE(r.was_offboard);
     ASSERT_FALSE(r.events.empty());
