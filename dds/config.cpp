@@ -96,6 +96,9 @@ void validate(const DdsConfig& c, std::string_view where) {
     if (c.transport == Transport::shm && !c.discovery_server.empty()) {
         throw InputError(p + "a discovery server cannot be reached over shared memory only");
     }
+    if (c.transport == Transport::shm && !c.security.empty()) {
+        throw InputError(p + "DDS Security over shared memory sometimes never authenticates (Fast DDS 2.9.1); use --transport udp or default");
+    }
     if (c.ns.empty() || c.ns.find_first_of(" \t/") != std::string::npos) {
         throw InputError(log::cat(p, "namespace '", c.ns, "' must be one non-empty word without '/'"));
     }
@@ -122,7 +125,7 @@ void add_cli_options(CLI::App& app, DdsCliOptions& o) {
     app.add_option("--domain", o.domain, "DDS domain id (0-232)")->type_name("ID")->check(cli::in(kDomainRange));
     app.add_option("--profile", o.profile, "local (loopback only, default) or lab (real network)")
         ->type_name("NAME");
-    app.add_option("--transport", o.transport, "default (UDP+SHM), shm or udp")->type_name("NAME");
+    app.add_option("--transport", o.transport, "default (UDP+SHM; UDP alone under --security), shm or udp")->type_name("NAME");
     app.add_option("--peer", o.peers, "initial peer ip[:port] (repeatable)")->type_name("ADDR");
     app.add_option("--discovery-server", o.discovery_server, "discovery server ip:port (lab profile)")
         ->type_name("ADDR");
@@ -209,7 +212,10 @@ fdds::DomainParticipantQos participant_qos(const DdsConfig& c, const std::string
     qos.name(name);
     auto& transport = qos.transport();
     const bool want_udp = c.transport != Transport::shm;
-    const bool want_shm = c.transport != Transport::udp;
+    // Under DDS Security the default is UDP alone: with shared memory beside it, Fast DDS 2.9.1
+    // sometimes never authenticates a pair of participants, and under load drops samples in
+    // bursts (measured: docs/BENCHMARKS.md, DDS Security).
+    const bool want_shm = c.transport == Transport::shm || (c.transport == Transport::default_ && c.security.empty());
     transport.use_builtin_transports = false;
     if (want_udp) {
         auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();

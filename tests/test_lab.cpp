@@ -148,7 +148,7 @@ TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
     const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--security", dir.file("keys"),
                                   "--domain", std::to_string(dw::test::test_domain()), "--namespace", "labsec" + std::to_string(::getpid())},
                                  dir, 300000ms);
-    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_EQ(r.status, 0) << r.err << "\nplanner log:\n" << dw::read_file(dir.file("run/logs/planner.log"));
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
     EXPECT_NE(r.err.find("@local    auth"), std::string::npos) << "the status line says each process authenticated\n" << r.err;
     const auto info = dw::test::run({bin("dw-recorder"), "info", dir.file("run/exp.mcap")}, dir);
@@ -156,7 +156,7 @@ TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
     for (const char* topic : {"stand/wrench", "mocap/frame", "vehicles/setpoint", "experiment/command", "predictor/wrench"}) {
         const auto at = info.out.find(std::string("/") + topic + " ");
         ASSERT_NE(at, std::string::npos) << topic << "\n" << info.out;
-        EXPECT_EQ(info.out.find("lost 0", at), info.out.find("lost ", at)) << topic << ": no sample lost";
+        EXPECT_EQ(info.out.find("lost 0", at), info.out.find("lost ", at)) << topic << ": no sample lost\n" << info.out;
     }
     EXPECT_NE(info.out.find("dds_security=identity recorder"), std::string::npos) << info.out;
     for (const char* log : {"planner", "stand_agent", "recorder", "predictor", "mocap_bridge"})
