@@ -63,9 +63,7 @@ std::string params_text(const CandidateResult& c) {
 // What the held-out data cannot tell an accepted effect from, said beside it.
 std::string alternatives(const CandidateResult& c) {
     if (c.indistinguishable.empty()) return "";
-    std::string names;
-    for (const auto& n : c.indistinguishable) names += (names.empty() ? "" : " or ") + n;
-    return log::cat(" *Not distinguishable on this flight from ", names, "*: it was accepted too, and on the held-out blocks neither fits ",
+    return log::cat(" *Not distinguishable on this flight from ", log::join(c.indistinguishable, " or "), "*: it was accepted too, and on the held-out blocks neither fits ",
                     "significantly better. ", c.effect.name,
                     " is kept for its lower held-out error; a flight with faster changes would tell them apart.");
 }

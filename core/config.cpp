@@ -76,8 +76,19 @@ YAML::Node ConfigFile::at(const std::string& dotted) const {
     return node;
 }
 
-void ConfigFile::fail(const std::string& dotted, const std::string& problem) const {
+void ConfigFile::require_keys(const std::string& dotted, const std::set<std::string>& known) const {
     const YAML::Node node = at(dotted);
+    if (!node || !node.IsMap()) return;
+    for (const auto& kv : node) {
+        const std::string key = kv.first.Scalar();
+        if (known.count(key)) continue;
+        fail_at(kv.first, dotted.empty() ? key : dotted + "." + key, "unknown key (known: " + log::join(known) + ")");
+    }
+}
+
+void ConfigFile::fail(const std::string& dotted, const std::string& problem) const { fail_at(at(dotted), dotted, problem); }
+
+void ConfigFile::fail_at(const YAML::Node& node, const std::string& dotted, const std::string& problem) const {
     if (node && node.Mark().line >= 0) {
         throw InputError(log::cat(path_, ":", node.Mark().line + 1, ":", node.Mark().column + 1,
                                   ": ", dotted, ": ", problem));

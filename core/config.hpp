@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -38,10 +39,16 @@ public:
     std::optional<std::string> get_string(const std::string& dotted) const;
     std::optional<std::vector<std::string>> get_strings(const std::string& dotted) const;
 
+    // Refuses a key of the mapping at `dotted` that is not in `known` ("file:line:col:
+    // dds.domian: unknown key (known: ...)"); nothing when that mapping is absent.
+    void require_keys(const std::string& dotted, const std::set<std::string>& known) const;
+
     // "file:line:col: key: problem" for a problem with a key (the key's position if known).
     [[noreturn]] void fail(const std::string& dotted, const std::string& problem) const;
 
 private:
+    [[noreturn]] void fail_at(const YAML::Node& node, const std::string& dotted, const std::string& problem) const;
+
     std::string path_;
     YAML::Node root_;
 };

@@ -25,6 +25,19 @@ std::string cat(const Args&... args) {
     return out.str();
 }
 
+// The items of a range, printed with `sep` between them ("a, b, c").
+template <class Range>
+std::string join(const Range& items, std::string_view sep = ", ") {
+    std::ostringstream out;
+    bool first = true;
+    for (const auto& item : items) {
+        if (!first) out << sep;
+        out << item;
+        first = false;
+    }
+    return out.str();
+}
+
 template <class... Args> void trace(const Args&... a) { if (level() <= Level::trace) write(Level::trace, cat(a...)); }
 template <class... Args> void debug(const Args&... a) { if (level() <= Level::debug) write(Level::debug, cat(a...)); }
 template <class... Args> void info(const Args&... a) { if (level() <= Level::info) write(Level::info, cat(a...)); }

@@ -144,34 +144,51 @@ void add_cli_options(CLI::App& app, DdsCliOptions& o) {
         ->type_name("N")->check(cli::in(kParticipantIdRange));
 }
 
-DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
-    DdsConfig c;
-    // File values first, each wrapped so errors name file, line and key.
-    auto in_file = [&](const std::string& key, auto&& apply) {
+namespace {
+
+// The `dds:` section of a configuration file: each key once, with how it is read.
+struct FileKey {
+    const char* name;
+    void (*read)(const ConfigFile& f, const std::string& at, DdsConfig& c);
+};
+constexpr FileKey kFileKeys[] = {
+    {"domain", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_int(at, kDomainRange)) c.domain = static_cast<int>(*v); }},
+    {"profile", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.profile = parse_profile(*v); }},
+    {"transport", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.transport = parse_transport(*v); }},
+    {"initial_peers", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_strings(at)) c.initial_peers = *v; }},
+    {"discovery_server", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.discovery_server = *v; }},
+    {"interfaces", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_strings(at)) c.interfaces = *v; }},
+    {"namespace", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.ns = *v; }},
+    {"security", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.security = *v; }},
+    {"identity", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.identity = *v; }},
+    {"await_readers", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_strings(at)) c.await_readers = *v; }},
+    {"await_timeout_s", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_double(at, kAwaitTimeoutRange)) c.await_timeout_s = *v; }},
+};
+constexpr const char* kFileSection = "dds";
+
+// The file's values, each error naming file, line and key; an unknown key is refused.
+void read_file_section(const ConfigFile& file, DdsConfig& c) {
+    std::set<std::string> known;
+    for (const auto& k : kFileKeys) known.insert(k.name);
+    file.require_keys(kFileSection, known);
+    for (const auto& k : kFileKeys) {
+        const std::string at = std::string(kFileSection) + "." + k.name;
         try {
-            apply();
+            k.read(file, at, c);
         } catch (const InputError& e) {
             const std::string msg = e.what();
             if (msg.rfind(file.path(), 0) == 0) throw;  // already located
-            file.fail("dds." + key, msg);
+            file.fail(at, msg);
         }
-    };
+    }
+}
+
+}  // namespace
+
+DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
+    DdsConfig c;
     if (!file.empty()) {
-        in_file("domain", [&] {
-            if (auto v = file.get_int("dds.domain", kDomainRange)) c.domain = static_cast<int>(*v);
-        });
-        in_file("profile", [&] { if (auto v = file.get_string("dds.profile")) c.profile = parse_profile(*v); });
-        in_file("transport", [&] { if (auto v = file.get_string("dds.transport")) c.transport = parse_transport(*v); });
-        in_file("initial_peers", [&] { if (auto v = file.get_strings("dds.initial_peers")) c.initial_peers = *v; });
-        in_file("discovery_server", [&] { if (auto v = file.get_string("dds.discovery_server")) c.discovery_server = *v; });
-        in_file("interfaces", [&] { if (auto v = file.get_strings("dds.interfaces")) c.interfaces = *v; });
-        in_file("namespace", [&] { if (auto v = file.get_string("dds.namespace")) c.ns = *v; });
-        in_file("security", [&] { if (auto v = file.get_string("dds.security")) c.security = *v; });
-        in_file("identity", [&] { if (auto v = file.get_string("dds.identity")) c.identity = *v; });
-        in_file("await_readers", [&] { if (auto v = file.get_strings("dds.await_readers")) c.await_readers = *v; });
-        in_file("await_timeout_s", [&] {
-            if (auto v = file.get_double("dds.await_timeout_s", kAwaitTimeoutRange)) c.await_timeout_s = *v;
-        });
+        read_file_section(file, c);
         validate(c, file.path());
     }
     if (cli.domain) c.domain = *cli.domain;
@@ -199,9 +216,7 @@ std::vector<std::string> to_args(const DdsConfig& c) {
     if (!c.security.empty()) a.insert(a.end(), {"--security", c.security});  // each child joins as its own identity
     if (c.insecure) a.emplace_back("--insecure");
     if (!c.await_readers.empty()) {
-        std::string names;
-        for (const auto& n : c.await_readers) names += (names.empty() ? "" : ",") + n;
-        a.insert(a.end(), {"--await-readers", names, "--await-timeout", log::cat(c.await_timeout_s)});
+        a.insert(a.end(), {"--await-readers", log::join(c.await_readers, ","), "--await-timeout", log::cat(c.await_timeout_s)});
     }
     return a;
 }

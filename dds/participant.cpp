@@ -96,9 +96,7 @@ bool await_required_readers(Participant& p, const std::function<std::vector<fdds
         missing = p.unmatched_readers(matched(), wanted);
     }
     if (!missing.empty()) {
-        std::string names;
-        for (const auto& n : missing) names += (names.empty() ? "" : ", ") + n;
-        log::warn(topic, ": no reader from ", names, " after ", p.config().await_timeout_s,
+        log::warn(topic, ": no reader from ", log::join(missing), " after ", p.config().await_timeout_s,
                   " s; publishing anyway (what it misses until it joins is lost)");
         return false;
     }

@@ -4,10 +4,12 @@
 // defined once here. Sources: ../shared/SPECS.md §3, docs/research/PX4_LINK.md.
 #include <array>
 #include <cstdint>
+#include <ranges>
 #include <string>
 #include <string_view>
 
 #include "core/errors.hpp"
+#include "core/log.hpp"
 #include "dds/topics.hpp"
 #include "dw/msg/Px4PubSubTypes.h"
 #include "dw/msg/Px4v114PubSubTypes.h"
@@ -55,12 +57,10 @@ inline const Px4VersionInfo& px4_version(Px4Version v) {
 }
 // "1.15" -> Px4Version::v1_15; anything else is an InputError naming `where` (if any) and the versions known.
 inline Px4Version parse_px4_version(std::string_view text, std::string_view where) {
-    std::string known;
-    for (const auto& i : kPx4Versions) {
+    for (const auto& i : kPx4Versions)
         if (i.name == text) return i.version;
-        known += (known.empty() ? "" : ", ") + std::string(i.name);
-    }
-    throw InputError((where.empty() ? "" : std::string(where) + ": ") + "PX4 version '" + std::string(text) + "' is not supported (supported: " + known + ")");
+    const auto names = std::views::transform(kPx4Versions, [](const Px4VersionInfo& i) { return i.name; });
+    throw InputError((where.empty() ? "" : std::string(where) + ": ") + "PX4 version '" + std::string(text) + "' is not supported (supported: " + log::join(names) + ")");
 }
 
 // rt/[<ns>/]fmu/<in|out>/<name>: PX4's uXRCE-DDS client names (its start line's -n gives ns).

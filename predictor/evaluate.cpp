@@ -165,10 +165,8 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
     std::vector<std::string> models;
     for (const auto& r : rows)
         if (std::find(models.begin(), models.end(), r.model) == models.end()) models.push_back(r.model);
-    std::string names;
-    for (const auto& m : models) names += (names.empty() ? "" : " / ") + m;
     std::ostringstream out;
-    out << "Held-out blocks (legs, or encounters in flights without legs). Each cell: " << names << ".\n\n";
+    out << "Held-out blocks (legs, or encounters in flights without legs). Each cell: " << log::join(models, " / ") << ".\n\n";
     const bool any_arena = std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) {
         return std::any_of(r.arena.begin(), r.arena.end(), [](double v) { return std::isfinite(v); });
     });

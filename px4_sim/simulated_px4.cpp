@@ -81,13 +81,18 @@ std::optional<Values> SimulatedPx4::decode_or_count(Msg m, std::span<const std::
     }
 }
 
+// The test's cut link: after `lose_offboard_after_s` armed, the planner's stream no longer arrives.
+bool SimulatedPx4::link_cut(Nanos mono) const {
+    return s_->armed && o_.lose_offboard_after_s && to_seconds(mono - s_->armed_ns) > *o_.lose_offboard_after_s;
+}
+
 void SimulatedPx4::on_mode(std::span<const std::uint8_t> b) {
     const auto v = decode_or_count(Msg::offboard_control_mode, b);
     if (!v) return;
     const Nanos mono = lab_.clock().monotonic_ns();
     const auto now_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
     std::lock_guard lock(mutex_);
-    if (s_->armed && o_.lose_offboard_after_s && to_seconds(mono - s_->armed_ns) > *o_.lose_offboard_after_s) return;  // the link is cut
+    if (link_cut(mono)) return;
     // PX4's ucdr rule for an incoming timestamp: 0 = now, else at most now.
     const double stamp = value(*v, "timestamp");
     const std::uint64_t ts = stamp == 0 ? now_us : stamp >= static_cast<double>(now_us) ? now_us : static_cast<std::uint64_t>(stamp);
@@ -105,7 +110,7 @@ void SimulatedPx4::on_trajectory(std::span<const std::uint8_t> b) {
     const auto& p = v->at("position");
     const physics::Vec3 sp(p[0], p[1], p[2]);
     std::lock_guard lock(mutex_);
-    if (s_->armed && o_.lose_offboard_after_s && to_seconds(lab_.clock().monotonic_ns() - s_->armed_ns) > *o_.lose_offboard_after_s) return;
+    if (link_cut(lab_.clock().monotonic_ns())) return;
     if (sp.allFinite()) s_->setpoint = sp;
 }
 

@@ -63,6 +63,7 @@ public:
 
 private:
     struct State;
+    bool link_cut(Nanos mono) const;  // under mutex_
     void on_mode(std::span<const std::uint8_t> b);
     void on_trajectory(std::span<const std::uint8_t> b);
     void on_odometry(std::span<const std::uint8_t> b);

@@ -46,6 +46,22 @@ msg::ExperimentPlan plan_message(const Plan& plan, const std::string& run_id) {
     return pm;
 }
 
+// Paces a fixed-rate loop (the setpoint stream) without drift: each wait ends one period after the last.
+class Ticker {
+public:
+    explicit Ticker(double hz)
+        : period_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(1.0 / hz))),
+          next_(std::chrono::steady_clock::now()) {}
+    void wait() {
+        next_ += period_;
+        std::this_thread::sleep_until(next_);
+    }
+
+private:
+    std::chrono::steady_clock::duration period_;
+    std::chrono::steady_clock::time_point next_;
+};
+
 }  // namespace
 
 Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& o)
@@ -131,9 +147,8 @@ std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint
 
 std::optional<std::string> Experiment::fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,
                                            msg::ExperimentPhase phase, bool supervise) {
-    const auto period = std::chrono::duration<double>(1.0 / o_.setpoint_hz);
     const auto start = std::chrono::steady_clock::now();
-    auto next = start;
+    Ticker ticker(o_.setpoint_hz);
     int last_report = -1;
     for (;;) {
         const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -160,8 +175,7 @@ std::optional<std::string> Experiment::fly(double duration, const std::function<
             publish_state(phase, leg_, phase == msg::PHASE_FLYING ? t / plan_.duration_s() : 0.0, dds::phase_name(phase));
             last_report = report;
         }
-        next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
-        std::this_thread::sleep_until(next);
+        ticker.wait();
     }
     return send(target(duration));  // end exactly where the segment ends
 }
@@ -188,16 +202,14 @@ void Experiment::land_safely(const std::string& why) {
 
 std::optional<std::string> Experiment::arm_vehicles(const std::vector<physics::Setpoint>& hold) {
     publish_state(msg::PHASE_TAKING_OFF, -1, 0, "arming");
-    const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(1.0 / o_.setpoint_hz));
-    auto next = std::chrono::steady_clock::now();
+    Ticker ticker(o_.setpoint_hz);
     for (;;) {  // bounded by the link's own attempts and timeouts
         if (o_.stop.stop_requested()) return std::string("interrupted (SIGINT/SIGTERM) while arming");
         send(hold);
         const ArmProgress a = link_->arm();
         if (a.state == ArmProgress::State::ready) return std::nullopt;
         if (a.state == ArmProgress::State::refused) return a.reason;
-        next += period;
-        std::this_thread::sleep_until(next);
+        ticker.wait();
     }
 }
 

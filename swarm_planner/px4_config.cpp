@@ -15,26 +15,10 @@ const std::set<std::string> kTopKeys{"version", "odometry", "odometry_hz", "posi
                                      "velocity_std_mps", "answer_timeout_s", "attempts", "status_timeout_s", "vehicles"};
 const std::set<std::string> kVehicleKeys{"namespace", "system_id", "origin_m", "heading_deg"};
 
-std::string join(const std::vector<std::string>& names) {
-    std::string s;
-    for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-    return s;
-}
-
-void require_known_keys(const ConfigFile& c, const std::string& at, const std::set<std::string>& known) {
-    const YAML::Node node = c.at(at);
-    if (!node || !node.IsMap()) return;
-    for (const auto& kv : node) {
-        const std::string key = kv.first.Scalar();
-        if (known.count(key)) continue;
-        c.fail(at.empty() ? key : at + "." + key, "unknown key (known: " + join({known.begin(), known.end()}) + ")");
-    }
-}
-
 Px4Vehicle read_vehicle(const ConfigFile& c, const std::string& name, std::size_t index) {
     const std::string at = "vehicles." + name;
     if (!c.at(at).IsMap()) c.fail(at, "expected a mapping (namespace, system_id, origin_m, heading_deg)");
-    require_known_keys(c, at, kVehicleKeys);
+    c.require_keys(at, kVehicleKeys);
     Px4Vehicle v{name, name, static_cast<int>(index + 1)};
     if (auto ns = c.get_string(at + ".namespace")) v.ns = *ns;
     if (auto id = c.get_int(at + ".system_id", kSystemIdRange)) v.system_id = static_cast<int>(*id);
@@ -80,7 +64,7 @@ Px4Options default_px4_options(const std::vector<std::string>& plan_vehicles) {
 
 Px4Options load_px4_options(const std::string& path, const std::vector<std::string>& plan_vehicles) {
     const ConfigFile c = ConfigFile::load(path);
-    require_known_keys(c, "", kTopKeys);
+    c.require_keys("", kTopKeys);
     Px4Options o;
     read_top(c, o);
     const YAML::Node vehicles = c.at("vehicles");
@@ -88,7 +72,7 @@ Px4Options load_px4_options(const std::string& path, const std::vector<std::stri
     for (const auto& kv : vehicles) {
         const std::string name = kv.first.Scalar();
         if (std::find(plan_vehicles.begin(), plan_vehicles.end(), name) == plan_vehicles.end())
-            c.fail("vehicles." + name, "not a vehicle of this plan (" + join(plan_vehicles) + ")");
+            c.fail("vehicles." + name, "not a vehicle of this plan (" + log::join(plan_vehicles) + ")");
     }
     std::set<int> ids;
     for (std::size_t i = 0; i < plan_vehicles.size(); ++i) {

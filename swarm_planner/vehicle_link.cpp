@@ -1,17 +1,18 @@
 #include "swarm_planner/vehicle_link.hpp"
 
+#include <ranges>
+
+#include "core/log.hpp"
 #include "dds/time.hpp"
 #include "swarm_planner/px4_link.hpp"
 
 namespace dw::planner {
 
 LinkKind parse_link(std::string_view name, std::string_view option) {
-    std::string known;
-    for (const auto& [kind, n] : kLinkNames) {
+    for (const auto& [kind, n] : kLinkNames)
         if (n == name) return kind;
-        known += (known.empty() ? "" : " or ") + std::string(n);
-    }
-    throw InputError(std::string(option) + ": '" + std::string(name) + "' (expected " + known + ")");
+    const auto names = std::views::transform(kLinkNames, [](const auto& e) { return e.second; });
+    throw InputError(std::string(option) + ": '" + std::string(name) + "' (expected " + log::join(names, " or ") + ")");
 }
 
 SimLink::SimLink(dds::Participant& p, std::vector<std::string> vehicles, std::string run_id)

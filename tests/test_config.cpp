@@ -109,6 +109,15 @@ TEST(DdsConfig, DomainOutOfRange) {
     EXPECT_EQ(dw::dds::resolve(ok, ConfigFile()).domain, 232);
 }
 
+// A misspelt key was silently ignored; now it is one line naming it and the known ones.
+TEST(DdsConfig, AnUnknownKeyInTheFileIsRefusedWhereItIs) {
+    const auto file = ConfigFile::parse("dds:\n  domain: 3\n  domian: 4\n", "lab.yaml");
+    const std::string e = error_of([&] { dw::dds::resolve({}, file); });
+    EXPECT_EQ(e.rfind("lab.yaml:3:3: dds.domian: unknown key (known: await_readers, await_timeout_s, ", 0), 0u) << e;
+    EXPECT_NE(e.find("transport"), std::string::npos) << e;
+    EXPECT_EQ(dw::dds::resolve({}, ConfigFile::parse("other:\n  colour: red\n", "lab.yaml")).domain, 0) << "other sections are other readers'";
+}
+
 TEST(DdsConfig, AddressesAreChecked) {
     DdsCliOptions cli;
     cli.peers = {"not-an-ip"};

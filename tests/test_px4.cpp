@@ -7,10 +7,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <mutex>
 #include <numbers>
 #include <thread>
 
+#include "core/errors.hpp"
 #include "dds/time.hpp"
 #include "px4_sim/raw.hpp"
 #include "px4_sim/simulated_px4.hpp"
@@ -323,4 +325,29 @@ TEST(Px4Refusals, ALostOffboardStreamIsSeenAsPx4sFailsafeAndAborts) {
     EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
     EXPECT_NE(e.reason().find("v1: PX4 left OFFBOARD for AUTO_LAND (PX4 failsafe"), std::string::npos) << e.reason();
     EXPECT_TRUE(eventually([&] { return !lab.vehicles[0]->report().armed; }));
+}
+
+// The planner's PX4 settings file: each mistake is one line naming file, line and key.
+TEST(Px4Settings, EachMistakeInTheFileIsOneLineWhereItIs) {
+    dw::test::TempDir dir;
+    const std::vector<std::string> plan{"v1", "v2"};
+    auto error_of = [&](const std::string& text) {
+        std::ofstream(dir.file("px4.yaml")) << text;
+        try {
+            dw::planner::load_px4_options(dir.file("px4.yaml"), plan);
+        } catch (const dw::InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    const std::string ok = "vehicles:\n  v1: {system_id: 2}\n  v2: {system_id: 3, heading_deg: 90}\n";
+    EXPECT_EQ(error_of(ok), "accepted");
+    const auto o = dw::planner::load_px4_options(dir.file("px4.yaml"), plan);
+    EXPECT_EQ(o.vehicles[1].system_id, 3);
+    EXPECT_NEAR(o.vehicles[1].heading_rad, std::numbers::pi / 2, 1e-12);
+    EXPECT_EQ(error_of("verison: \"1.15\"\n" + ok).rfind(dir.file("px4.yaml") + ":1:1: verison: unknown key (known: ", 0), 0u);
+    EXPECT_NE(error_of("vehicles:\n  v1: {system_id: 2, sysid: 4}\n  v2: {}\n").find(":2:22: vehicles.v1.sysid: unknown key"), std::string::npos);
+    EXPECT_NE(error_of(ok + "  v3: {}\n").find("vehicles.v3: not a vehicle of this plan (v1, v2)"), std::string::npos);
+    EXPECT_NE(error_of("vehicles:\n  v1: {system_id: 2}\n  v2: {system_id: 2}\n").find("vehicles.v2.system_id: used by two vehicles"), std::string::npos);
+    EXPECT_NE(error_of("version: \"1.13\"\n" + ok).find("not supported (supported: 1.14, 1.15, 1.16)"), std::string::npos);
 }
