@@ -76,25 +76,27 @@ YAML::Node ConfigFile::at(const std::string& dotted) const {
     return node;
 }
 
-void ConfigFile::require_keys(const std::string& dotted, const std::set<std::string>& known) const {
-    const YAML::Node node = at(dotted);
-    if (!node || !node.IsMap()) return;
-    for (const auto& kv : node) {
+void fail_at_node(const std::string& file, const YAML::Node& node, const std::string& key, const std::string& problem) {
+    if (node && node.Mark().line >= 0) {
+        throw InputError(log::cat(file, ":", node.Mark().line + 1, ":", node.Mark().column + 1, ": ", key, ": ", problem));
+    }
+    throw InputError(log::cat(file, ": ", key, ": ", problem));
+}
+
+void require_known_keys(const std::string& file, const YAML::Node& map, const std::string& where, const std::set<std::string>& known) {
+    if (!map || !map.IsMap()) return;
+    for (const auto& kv : map) {
         const std::string key = kv.first.Scalar();
         if (known.count(key)) continue;
-        fail_at(kv.first, dotted.empty() ? key : dotted + "." + key, "unknown key (known: " + log::join(known) + ")");
+        fail_at_node(file, kv.first, where.empty() ? key : where + "." + key, "unknown key (known: " + log::join(known) + ")");
     }
 }
 
-void ConfigFile::fail(const std::string& dotted, const std::string& problem) const { fail_at(at(dotted), dotted, problem); }
-
-void ConfigFile::fail_at(const YAML::Node& node, const std::string& dotted, const std::string& problem) const {
-    if (node && node.Mark().line >= 0) {
-        throw InputError(log::cat(path_, ":", node.Mark().line + 1, ":", node.Mark().column + 1,
-                                  ": ", dotted, ": ", problem));
-    }
-    throw InputError(log::cat(path_, ": ", dotted, ": ", problem));
+void ConfigFile::require_keys(const std::string& dotted, const std::set<std::string>& known) const {
+    require_known_keys(path_, at(dotted), dotted, known);
 }
+
+void ConfigFile::fail(const std::string& dotted, const std::string& problem) const { fail_at_node(path_, at(dotted), dotted, problem); }
 
 namespace {
 template <class T>

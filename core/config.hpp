@@ -19,6 +19,12 @@ YAML::Node load_yaml(const std::string& text, const std::string& name);
 // load_yaml() of a file's bytes (missing, directory, unreadable: one clear InputError).
 YAML::Node load_yaml_file(const std::string& path, std::string_view what);
 
+// The one form of a located error: "file:line:col: key: problem" at `node` (its position if known).
+[[noreturn]] void fail_at_node(const std::string& file, const YAML::Node& node, const std::string& key, const std::string& problem);
+// The one unknown-key rule: a key of the mapping `map` (at `where`) not in `known` is
+// "file:line:col: where.key: unknown key (known: a, b)"; nothing when `map` is not a mapping.
+void require_known_keys(const std::string& file, const YAML::Node& map, const std::string& where, const std::set<std::string>& known);
+
 class ConfigFile {
 public:
     ConfigFile() = default;  // empty: every key absent
@@ -47,8 +53,6 @@ public:
     [[noreturn]] void fail(const std::string& dotted, const std::string& problem) const;
 
 private:
-    [[noreturn]] void fail_at(const YAML::Node& node, const std::string& dotted, const std::string& problem) const;
-
     std::string path_;
     YAML::Node root_;
 };

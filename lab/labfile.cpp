@@ -19,11 +19,7 @@ namespace {
 
 struct Ctx {
     std::string file;
-    [[noreturn]] void fail(const YAML::Node& n, const std::string& key, const std::string& problem) const {
-        const auto m = n.Mark();
-        if (m.line >= 0) throw InputError(log::cat(file, ":", m.line + 1, ":", m.column + 1, ": ", key, ": ", problem));
-        throw InputError(log::cat(file, ": ", key, ": ", problem));
-    }
+    [[noreturn]] void fail(const YAML::Node& n, const std::string& key, const std::string& problem) const { fail_at_node(file, n, key, problem); }
     std::string str(const YAML::Node& n, const std::string& key) const {
         if (!n.IsScalar()) fail(n, key, "expected a string");
         return n.as<std::string>();
@@ -36,10 +32,7 @@ struct Ctx {
     }
     void only(const YAML::Node& n, const std::string& where, const std::set<std::string>& keys) const {
         if (!n.IsMap()) fail(n, where, "expected a mapping");
-        for (const auto& kv : n) {
-            const auto k = kv.first.as<std::string>();
-            if (!keys.count(k)) fail(kv.first, where.empty() ? k : where + "." + k, "unknown key");
-        }
+        require_known_keys(file, n, where, keys);
     }
 };
 

@@ -9,6 +9,7 @@
 #include <set>
 #include <string>
 
+#include "core/config.hpp"
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
@@ -66,11 +67,7 @@ public:
     const YAML::Node& node() const { return node_; }
     Section sub(const std::string& key) { return Section(get(key), path_.empty() ? key : path_ + "." + key, file_); }
     [[noreturn]] void fail(const YAML::Node& n, const std::string& what, const std::string& key = "") const {
-        const std::string where = path_.empty() ? key : (key.empty() ? path_ : path_ + "." + key);
-        if (n && n.Mark().line >= 0) {
-            throw InputError(log::cat(file_, ":", n.Mark().line + 1, ":", n.Mark().column + 1, ": ", where, ": ", what));
-        }
-        throw InputError(log::cat(file_, ": ", where, ": ", what));
+        fail_at_node(file_, n, path_.empty() ? key : (key.empty() ? path_ : path_ + "." + key), what);
     }
 
 private:

@@ -30,10 +30,7 @@ physics::Wrench Calibration::wrench(const CellVector& tared) const {
 
 Calibration Calibration::load(const std::string& path) {
     const YAML::Node root = load_yaml_file(path, "calibration file");
-    auto fail = [&](const YAML::Node& n, const std::string& key, const std::string& what) {
-        if (n && n.Mark().line >= 0) throw InputError(log::cat(path, ":", n.Mark().line + 1, ":", n.Mark().column + 1, ": ", key, ": ", what));
-        throw InputError(log::cat(path, ": ", key, ": ", what));
-    };
+    auto fail = [&](const YAML::Node& n, const std::string& key, const std::string& what) { fail_at_node(path, n, key, what); };
     if (!root.IsMap() || !root["format"] || root["format"].Scalar() != "downwash-stand-calibration/1") {
         fail(root["format"], "format", "expected downwash-stand-calibration/1");
     }
