@@ -37,6 +37,19 @@ std::string join(const Range& items, std::string_view sep = ", ") {
     }
     return out.str();
 }
+// The alternatives of a range for a message: "a, b or c".
+template <class Range>
+std::string alternatives(const Range& items) {
+    std::ostringstream out;
+    const std::size_t n = std::size(items);
+    std::size_t i = 0;
+    for (const auto& item : items) {
+        if (i > 0) out << (i + 1 == n ? " or " : ", ");
+        out << item;
+        ++i;
+    }
+    return out.str();
+}
 
 template <class... Args> void trace(const Args&... a) { if (level() <= Level::trace) write(Level::trace, cat(a...)); }
 template <class... Args> void debug(const Args&... a) { if (level() <= Level::debug) write(Level::debug, cat(a...)); }

@@ -27,11 +27,7 @@ constexpr std::array<const char*, 8> kMetaKeys = {"format", "sufferer", "neighbo
 
 const char* to_string(WrenchSource s) { return s == WrenchSource::stand ? "stand" : "residual"; }
 
-std::string axis_list() {
-    std::string s;
-    for (std::size_t i = 0; i < kAxes.size(); ++i) s += (i == 0 ? "" : i + 1 == kAxes.size() ? " or " : ", ") + std::string(kAxes[i]);
-    return s;
-}
+std::string axis_list() { return log::alternatives(kAxes); }
 
 std::vector<std::string> wrench_columns() {
     std::vector<std::string> c{"t"};
@@ -88,7 +84,7 @@ public:
                 start = comma + 1;
             }
             if (!columns_.empty() && fields.size() != columns_.size()) {
-                fail(line_, log::cat(fields.size(), " fields, expected ", columns_.size(), " (", join_columns(), ")"));
+                fail(line_, log::cat(fields.size(), " fields, expected ", columns_.size(), " (", log::join(columns_, ","), ")"));
             }
             return true;
         }
@@ -110,11 +106,6 @@ public:
     std::size_t line() const { return line_; }
 
 private:
-    std::string join_columns() const {
-        std::string s;
-        for (const auto& c : columns_) s += (s.empty() ? "" : ",") + c;
-        return s;
-    }
     std::string text_;
     std::string file_;
     std::size_t pos_ = 0;

@@ -8,7 +8,6 @@
 #include "core/numbers.hpp"
 #include "flight/flight.hpp"
 #include "physics/effect_types.hpp"
-#include "physics/yaml_section.hpp"
 
 namespace dw::physics {
 namespace {
@@ -123,25 +122,10 @@ public:
     void clear(Effects& e) const override { e.position_offset = {}; }
     bool enabled(const Effects& e) const override { return e.position_offset.enabled; }
     std::vector<double> values(const Effects& e) const override { return {e.position_offset.offset_m.begin(), e.position_offset.offset_m.end()}; }
-    void read(Section& s, Effects& e) const override {
-        s.flag("enabled", e.position_offset.enabled);
-        const YAML::Node n = s.get("offset_m");
-        if (!n) return;
-        if (!n.IsSequence() || n.size() != 3) s.fail(n, "expected [n, e, d] in metres", "offset_m");
-        const auto p = parameters();
-        for (std::size_t i = 0; i < 3; ++i) {
-            const Range range{p[i].config_min, p[i].config_max, "m"};
-            double v = 0;
-            if (!YAML::convert<double>::decode(n[i], v)) s.fail(n, "expected [n, e, d] in metres", "offset_m");
-            if (!range.contains(v)) s.fail(n, range_problem(v, range), "offset_m");
-            e.position_offset.offset_m[i] = v;
-        }
-    }
-    void write(YAML::Emitter& o, const Effects& e) const override {
-        const auto& x = e.position_offset;
-        o << YAML::Key << name() << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value << x.enabled << YAML::Key
-          << grouped_key() << YAML::Value << YAML::Flow << YAML::BeginSeq << x.offset_m[0] << x.offset_m[1] << x.offset_m[2] << YAML::EndSeq
-          << YAML::EndMap;
+    void keys(KeyVisitor& k, Effects& e) const override {
+        k.flag("enabled", e.position_offset.enabled);
+        const auto p = parameters().front();  // the three axes share their bounds
+        k.numbers(grouped_key(), e.position_offset.offset_m, {p.config_min, p.config_max, "m"}, "expected [n, e, d] in metres");
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", f3(v[0]), ", ",
@@ -159,23 +143,13 @@ public:
     void clear(Effects& e) const override { e.cell_crosstalk = {}; }
     bool enabled(const Effects& e) const override { return e.cell_crosstalk.enabled; }
     std::vector<double> values(const Effects& e) const override { return {e.cell_crosstalk.coefficient}; }
-    void read(Section& s, Effects& e) const override {
+    void keys(KeyVisitor& k, Effects& e) const override {
         auto& x = e.cell_crosstalk;
-        s.flag("enabled", x.enabled);
-        for (auto [key, out] : {std::pair<const char*, int*>{"from", &x.from}, {"to", &x.to}}) {
-            const std::string axis = s.text(key, axis_name(*out));
-            const int idx = axis_index(axis);
-            if (idx < 0) s.fail(s.get(key), log::cat("unknown axis '", axis, "' (expected ", flight::axis_list(), ")"), key);
-            *out = idx;
-        }
+        k.flag("enabled", x.enabled);
+        k.choice("from", x.from, kAxes, "axis");
+        k.choice("to", x.to, kAxes, "axis");
         const auto p = parameters().front();
-        s.number(p.name, x.coefficient, p.config_min, p.config_max);
-    }
-    void write(YAML::Emitter& o, const Effects& e) const override {
-        const auto& x = e.cell_crosstalk;
-        o << YAML::Key << name() << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value << x.enabled << YAML::Key << "from"
-          << YAML::Value << axis_name(x.from) << YAML::Key << "to" << YAML::Value << axis_name(x.to) << YAML::Key << "coefficient" << YAML::Value
-          << x.coefficient << YAML::EndMap;
+        k.number(p.name, x.coefficient, {p.config_min, p.config_max});
     }
     std::string describe(const std::vector<double>& v, AxisPair a, const EffectVoice& who) const override {
         return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration", " leaks ", kAxes[a.from], " into ",
@@ -199,17 +173,11 @@ public:
     void clear(Effects& e) const override { e.jet_merging = {}; }
     bool enabled(const Effects& e) const override { return e.jet_merging.enabled; }
     std::vector<double> values(const Effects& e) const override { return {e.jet_merging.contraction}; }
-    void read(Section& s, Effects& e) const override {
-        EffectType::read(s, e);
-        s.number("onset", e.jet_merging.onset, 0, 10);
-        s.number("full", e.jet_merging.full, 0, 10);
-        if (e.jet_merging.full <= e.jet_merging.onset) s.fail(s.get("full"), "must be greater than onset", "full");
-    }
-    void write(YAML::Emitter& o, const Effects& e) const override {
-        const auto& x = e.jet_merging;
-        o << YAML::Key << name() << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value << x.enabled << YAML::Key
-          << "contraction" << YAML::Value << x.contraction << YAML::Key << "onset" << YAML::Value << x.onset << YAML::Key << "full"
-          << YAML::Value << x.full << YAML::EndMap;
+    void keys(KeyVisitor& k, Effects& e) const override {
+        EffectType::keys(k, e);
+        k.number("onset", e.jet_merging.onset, {0, 10});
+        k.number("full", e.jet_merging.full, {0, 10});
+        k.require(e.jet_merging.full > e.jet_merging.onset, "full", "must be greater than onset");
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**jet_merging** — neighbouring jets merge into one contracted, momentum-conserving column where their "
@@ -230,14 +198,9 @@ public:
     void clear(Effects& e) const override { e.floor_recirculation = {}; }
     bool enabled(const Effects& e) const override { return e.floor_recirculation.enabled; }
     std::vector<double> values(const Effects& e) const override { return {e.floor_recirculation.coefficient}; }
-    void read(Section& s, Effects& e) const override {
-        EffectType::read(s, e);
-        s.number("length_m", e.floor_recirculation.length_m, 0.01, 100);
-    }
-    void write(YAML::Emitter& o, const Effects& e) const override {
-        const auto& x = e.floor_recirculation;
-        o << YAML::Key << name() << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value << x.enabled << YAML::Key
-          << "coefficient" << YAML::Value << x.coefficient << YAML::Key << "length_m" << YAML::Value << x.length_m << YAML::EndMap;
+    void keys(KeyVisitor& k, Effects& e) const override {
+        EffectType::keys(k, e);
+        k.number("length_m", e.floor_recirculation.length_m, {0.01, 100});
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**floor_recirculation** — jets hitting the floor come back as a bias that grows with the jets impinging (coefficient ",

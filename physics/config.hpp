@@ -16,7 +16,9 @@ namespace dw::physics {
 inline constexpr Range kCellNoiseRange{0, 10, "N"};  // load-cell noise, 1 sigma
 
 enum class JetModelKind { bauersfeld, jain };
+inline constexpr std::array<const char*, 2> kJetModelNames = {"bauersfeld", "jain"};  // JetModelKind's order
 enum class Aggregation { force_sum, velocity_superposition };
+inline constexpr std::array<const char*, 2> kAggregationNames = {"force_sum", "velocity_superposition"};  // Aggregation's order
 
 // One definition with the flight format's (meta.json's vehicles).
 using VehicleParams = flight::VehicleInfo;

@@ -4,7 +4,6 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
-#include "physics/yaml_section.hpp"
 
 namespace dw::physics {
 
@@ -82,21 +81,13 @@ std::vector<double> EffectType::values(const Effects& e) const {
     return it == e.extra.end() ? neutral() : it->second;
 }
 
-void EffectType::read(Section& s, Effects& e) const {
+void EffectType::keys(KeyVisitor& k, Effects& e) const {
     bool on = enabled(e);
-    s.flag("enabled", on);
+    k.flag("enabled", on);
     std::vector<double> v = values(e);
     const auto params = parameters();
-    for (std::size_t k = 0; k < params.size(); ++k) s.number(params[k].name, v[k], params[k].config_min, params[k].config_max);
+    for (std::size_t i = 0; i < params.size(); ++i) k.number(params[i].name, v[i], {params[i].config_min, params[i].config_max});
     store(e, on, v, {});
-}
-
-void EffectType::write(YAML::Emitter& o, const Effects& e) const {
-    o << YAML::Key << name() << YAML::Value << YAML::BeginMap << YAML::Key << "enabled" << YAML::Value << enabled(e);
-    const auto params = parameters();
-    const auto v = values(e);
-    for (std::size_t k = 0; k < params.size(); ++k) o << YAML::Key << params[k].name << YAML::Value << v[k];
-    o << YAML::EndMap;
 }
 
 void EffectType::on_recording(const std::vector<double>&, const std::vector<double>&, RecordedWrench&) const {}

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/keys.hpp"
 #include "physics/config.hpp"
 
 namespace dw::physics {
@@ -23,8 +24,6 @@ namespace dw::physics {
 // The effect the lab's time service measures live (dds/clock_sync.hpp): its name is the contract's.
 inline constexpr const char* kClockOffsetEffect = "clock_offset";
 
-
-class Section;
 
 struct EffectParameter {
     std::string name, unit;
@@ -69,9 +68,9 @@ public:
     virtual void clear(Effects& e) const;
     virtual bool enabled(const Effects& e) const;
     virtual std::vector<double> values(const Effects& e) const;
-    // Its section `effects.<name>`: by default `enabled` and each parameter by name.
-    virtual void read(Section& s, Effects& e) const;
-    virtual void write(YAML::Emitter& o, const Effects& e) const;
+    // The keys of its section `effects.<name>`, declared once for reading and writing
+    // (core/keys.hpp): by default `enabled` and each parameter by name.
+    virtual void keys(KeyVisitor& k, Effects& e) const;
 
     // The change to the recorded wrench (stamps in s) of an effect the engine does not know by
     // name; the built-ins act in the simulator and the replay themselves.

@@ -31,8 +31,13 @@ int run(int argc, char** argv) {
     std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> sims;
     for (std::size_t i = 0; i < options.vehicles.size(); ++i) {
         const auto& v = options.vehicles[i];
-        dw::px4sim::SimulatedPx4Options o{options.version, v.ns, v.system_id, v.name, dw::planner::local_frame(v),
-                                          dw::physics::Vec3(kParkedNorth_m, kParkedEast0_m + kParkedSpacing_m * static_cast<double>(i), 0)};
+        dw::px4sim::SimulatedPx4Options o;
+        o.version = options.version;
+        o.ns = v.ns;
+        o.system_id = v.system_id;
+        o.vehicle = v.name;
+        o.frame = dw::planner::local_frame(v);
+        o.parked = dw::physics::Vec3(kParkedNorth_m, kParkedEast0_m + kParkedSpacing_m * static_cast<double>(i), 0);
         o.refuse_arm = refuse_arm;
         if (lose_after > 0) o.lose_offboard_after_s = lose_after;
         sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));

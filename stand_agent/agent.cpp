@@ -60,15 +60,11 @@ StandAgent::Output StandAgent::process(const Hx711Sample& s) {
     if (s.not_ready != 0 || s.stuck != 0) {
         const std::uint8_t bad = s.not_ready | s.stuck;
         std::vector<std::uint32_t> cells;
-        std::string names;
         for (std::uint32_t c = 0; c < kChips; ++c) {
-            if (bad & (1u << c)) {
-                cells.push_back(c);
-                names += (names.empty() ? "" : ", ") + std::to_string(c);
-            }
+            if (bad & (1u << c)) cells.push_back(c);
         }
         ++discarded_;
-        set_state(msg::STAND_FAULT, log::cat("cell", cells.size() > 1 ? "s " : " ", names,
+        set_state(msg::STAND_FAULT, log::cat("cell", cells.size() > 1 ? "s " : " ", log::join(cells),
                                              s.not_ready ? " not ready within the timeout: unplugged, unpowered or broken?"
                                                          : " DOUT stuck low: shorted line or dead chip?"), cells);
         out.status_changed = state_ != before || message_ != before_msg;

@@ -147,7 +147,8 @@ private:
         Vehicle* vp = &v;
         // PX4's fmu/out writers are TRANSIENT_LOCAL, and the ack's appears with its first answer:
         // a transient-local reader still gets that answer once it has matched the new writer.
-        const dds::QosOverrides latest{.transient_local = true};
+        dds::QosOverrides latest;
+        latest.transient_local = true;
         v.status = std::make_unique<dds::Reader<typename Types::Status>>(p_, px4_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
             [this, vp](const typename Types::Status& s, const dds::SampleMeta&) {
                 std::lock_guard lock(mutex_);

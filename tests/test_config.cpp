@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "core/config.hpp"
+#include "core/keys.hpp"
 #include "dds/config.hpp"
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
@@ -62,6 +63,72 @@ TEST(ConfigFile, UnreadableFileIsAnInputError) {
 
 TEST(ConfigFile, TopLevelMustBeAMapping) {
     EXPECT_NE(error_of([] { ConfigFile::parse("- a\n- b\n", "l.yaml"); }).find("l.yaml:1:1"), std::string::npos);
+}
+
+namespace {
+// A configuration declared once (core/keys.hpp), read and written through the same list.
+enum class Shade { light, dark };
+constexpr std::array<const char*, 2> kShades = {"light", "dark"};
+struct Toy {
+    double gain = 1.5;
+    int count = 3;
+    bool on = false;
+    Shade shade = Shade::light;
+    std::array<double, 2> xy{0, 0};
+    double lo = 0, hi = 1;
+};
+void toy_keys(dw::KeyVisitor& k, Toy& t) {
+    k.constant("format", "toy/1");
+    k.number("gain", t.gain, {0, 10});
+    k.integer("count", t.count, {1, 9});
+    k.flag("on", t.on);
+    k.enumeration("shade", t.shade, kShades, "shade", "; nothing else");
+    k.numbers("xy", t.xy, {-1, 1}, "expected [x, y]");
+    k.section("band", [&](dw::KeyVisitor& b) {
+        b.number("lo", t.lo, {0, 5});
+        b.number("hi", t.hi, {0, 5});
+        b.require(t.hi > t.lo, "hi", "must be greater than lo");
+    }, " (a band has lo and hi)");
+}
+Toy read_toy(const std::string& yaml) {
+    Toy t;
+    dw::read_keys(dw::load_yaml(yaml, "t.yaml"), "t.yaml", [&](dw::KeyVisitor& k) { toy_keys(k, t); });
+    return t;
+}
+std::string write_toy(Toy t) {
+    YAML::Emitter o;
+    dw::write_keys(o, [&](dw::KeyVisitor& k) { toy_keys(k, t); });
+    return o.c_str();
+}
+}  // namespace
+
+TEST(DeclaredKeys, WhatIsWrittenReadsBackTheSameAndAbsentKeysKeepTheirDefaults) {
+    EXPECT_EQ(read_toy("").gain, 1.5);
+    const Toy t = read_toy("gain: 2.5\ncount: 7\non: true\nshade: dark\nxy: [0.5, -0.25]\nband: {lo: 1, hi: 4}\n");
+    EXPECT_EQ(t.gain, 2.5);
+    EXPECT_EQ(t.count, 7);
+    EXPECT_TRUE(t.on);
+    EXPECT_EQ(t.shade, Shade::dark);
+    EXPECT_EQ(t.xy[1], -0.25);
+    EXPECT_EQ(t.hi, 4);
+    const std::string text = write_toy(t);
+    EXPECT_NE(text.find("format: toy/1"), std::string::npos) << text;
+    EXPECT_NE(text.find("shade: dark"), std::string::npos) << text;
+    EXPECT_EQ(write_toy(read_toy(text)), text);
+}
+
+TEST(DeclaredKeys, EachMistakeIsOneLocatedLine) {
+    const auto error = [](const std::string& yaml) { return error_of([&] { read_toy(yaml); }); };
+    EXPECT_EQ(error("format: toy/2\n"), "t.yaml:1:9: format: expected toy/1");
+    EXPECT_EQ(error("gain: 11\n"), "t.yaml:1:7: gain: 11 is not in [0, 10]");
+    EXPECT_EQ(error("count: 2.5\n"), "t.yaml:1:8: count: expected a whole number");
+    EXPECT_EQ(error("on: maybe\n"), "t.yaml:1:5: on: expected true or false");
+    EXPECT_EQ(error("shade: pink\n"), "t.yaml:1:8: shade: unknown shade 'pink' (expected light or dark; nothing else)");
+    EXPECT_EQ(error("xy: [1]\n"), "t.yaml:1:5: xy: expected [x, y]");
+    EXPECT_EQ(error("band:\n  lo: 2\n  hi: 1\n"), "t.yaml:3:7: band.hi: must be greater than lo");
+    EXPECT_EQ(error("band:\n  mid: 2\n"), "t.yaml:2:3: band.mid: unknown key 'mid' (a band has lo and hi)");
+    EXPECT_EQ(error("gian: 2\n"), "t.yaml:1:1: gian: unknown key 'gian'");
+    EXPECT_EQ(error("band: 3\n"), "t.yaml:1:7: band: expected a mapping of keys");
 }
 
 TEST(DdsConfig, DefaultsAreLocalDomainZeroNamespaceLab) {

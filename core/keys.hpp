@@ -1,0 +1,52 @@
+#pragma once
+// A configuration's keys declared once and both read and written from that declaration. A struct's
+// keys are listed in one function that visits them with a KeyVisitor; reading YAML (strictly:
+// every key must be visited, numbers range-checked, errors "file:line:col: path.key: problem")
+// and writing YAML are two visitors of that one list, so a key cannot be parsed and forgotten by
+// the writer, or written under another name.
+#include <yaml-cpp/yaml.h>
+
+#include <functional>
+#include <span>
+#include <string>
+
+#include "core/numbers.hpp"
+
+namespace dw {
+
+class KeyVisitor {
+public:
+    using Body = std::function<void(KeyVisitor&)>;
+    virtual ~KeyVisitor() = default;
+
+    virtual void number(const std::string& key, double& v, const Range& r) = 0;
+    virtual void integer(const std::string& key, int& v, const Range& r) = 0;
+    virtual void flag(const std::string& key, bool& v) = 0;
+    // One of `names` (v is its index): "unknown <what> 'x' (expected a, b or c<note>)".
+    virtual void choice(const std::string& key, int& v, std::span<const char* const> names, const std::string& what,
+                        const std::string& note = "") = 0;
+    // A fixed-length list of numbers, each in r; `shape` is the message when it is not ("expected [n, e, d] in metres").
+    virtual void numbers(const std::string& key, std::span<double> v, const Range& r, const std::string& shape) = 0;
+    // A key that, when given, must say exactly `value` (a format tag); always written.
+    virtual void constant(const std::string& key, const std::string& value) = 0;
+    // The mapping under `key`; a key in it that `body` does not visit is "unknown key 'x'" + unknown_hint.
+    virtual void section(const std::string& key, const Body& body, const std::string& unknown_hint = "") = 0;
+    // A rule between values already visited: when reading, !ok is an error at `key`.
+    virtual void require(bool ok, const std::string& key, const std::string& problem) = 0;
+
+    // choice() of an enum whose values are 0..N-1 in the order of `names`.
+    template <class E>
+    void enumeration(const std::string& key, E& v, std::span<const char* const> names, const std::string& what, const std::string& note = "") {
+        int index = static_cast<int>(v);
+        choice(key, index, names, what, note);
+        v = static_cast<E>(index);
+    }
+};
+
+// Reads the mapping `root` (or an empty document) of `file` through `body`; throws dw::InputError
+// at the first problem.
+void read_keys(const YAML::Node& root, const std::string& file, const KeyVisitor::Body& body);
+// Writes what `body` visits as one YAML mapping.
+void write_keys(YAML::Emitter& out, const KeyVisitor::Body& body);
+
+}  // namespace dw
