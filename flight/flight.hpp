@@ -62,8 +62,11 @@ const char* to_string(WrenchSource s);
 // clock_offset effect (a force at mocap time t stamped t + offset).
 inline constexpr const char* kMeasuredClockOffsetKey = "clock_offset_measured_s";
 
+// The sufferer's rigid-body name unless a flight or an option names another.
+inline constexpr const char* kSufferer = "sufferer";
+
 struct Meta {
-    std::string sufferer = "sufferer";
+    std::string sufferer = kSufferer;
     std::vector<std::string> neighbours;
     std::string formation = "free";
     std::map<std::string, VehicleInfo> vehicles;

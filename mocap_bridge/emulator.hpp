@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/clock.hpp"
+#include "flight/flight.hpp"
 #include "mocap_bridge/natnet.hpp"
 #include "mocap_bridge/udp.hpp"
 
@@ -33,7 +34,7 @@ struct EmulatorOptions {
     double latency_s = 0.004;                     // mid-exposure to transmit
     double drop_probability = 0.0;                // frames not sent (the bridge must see the gap)
     std::vector<TrackingLoss> losses;
-    std::vector<std::string> names{"sufferer", "v1", "v2", "v3"};
+    std::vector<std::string> names{flight::kSufferer, "v1", "v2", "v3"};
     bool other_sections = true;                   // marker sets, skeletons, assets, ... to skip
     std::uint64_t seed = 1;
     // Where body i is at time t (seconds since start); default: the sufferer on the stand and

@@ -55,7 +55,7 @@ int run(int argc, char** argv) {
     dw::dds::Heartbeat heartbeat(participant);
     std::unique_ptr<dw::natnet::SimSource> simulated;
     if (source == "sim") {
-        std::vector<std::string> names{"sufferer"};
+        std::vector<std::string> names{dw::flight::kSufferer};
         std::stringstream in(sim_vehicles);
         for (std::string v; std::getline(in, v, ',');) names.push_back(v);
         simulated = std::make_unique<dw::natnet::SimSource>(participant, names, sim_rate, fault);

@@ -138,12 +138,12 @@ void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandF
 
 // The flight's bodies in meta.json: the sufferer, then v1..vK; returns the neighbours' indices.
 std::vector<std::uint16_t> describe_bodies(flight::Flight& f, const PhysicsConfig& c, const Formation& formation) {
-    f.meta.sufferer = "sufferer";
+    f.meta.sufferer = flight::kSufferer;
     f.meta.formation = formation.meta_name;
     f.meta.stand_height_m = c.stand.height_m;
     f.meta.extra_json = R"({"generator":"dw-sim fly"})";
-    f.body_index("sufferer");
-    f.meta.vehicles["sufferer"] = c.sufferer.vehicle;
+    f.body_index(flight::kSufferer);
+    f.meta.vehicles[flight::kSufferer] = c.sufferer.vehicle;
     std::vector<std::uint16_t> bodies;
     for (std::size_t j = 0; j < formation.offsets.size(); ++j) {
         const std::string name = "v" + std::to_string(j + 1);
@@ -179,7 +179,7 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     SimResult out;
     flight::Flight& f = out.flight;
     const std::vector<std::uint16_t> bodies = describe_bodies(f, c, formation);
-    const std::uint16_t sufferer_body = f.body_index("sufferer");
+    const std::uint16_t sufferer_body = f.body_index(flight::kSufferer);
     const Vec3 sufferer(0, 0, -c.stand.height_m);
 
     // 1. Fly, and evaluate the true wrench at every integration step.

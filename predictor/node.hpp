@@ -18,6 +18,7 @@
 #include "dds/participant.hpp"
 #include "dw/msg/Mocap.h"
 #include "dw/msg/Prediction.h"
+#include "flight/flight.hpp"
 #include "predictor/model.hpp"
 
 namespace dw::predictor {
@@ -25,7 +26,7 @@ namespace dw::predictor {
 // Relative states from a stream of frames (no DDS: tests and benchmarks call it directly).
 class FrameFeatures {
 public:
-    explicit FrameFeatures(std::string sufferer = "sufferer", double max_distance_m = 3.0)
+    explicit FrameFeatures(std::string sufferer = flight::kSufferer, double max_distance_m = 3.0)
         : sufferer_(std::move(sufferer)), max_distance_m_(max_distance_m) {}
     // The neighbours' relative states at this frame; empty if the sufferer is not tracked.
     std::optional<std::vector<RelState>> update(const msg::MocapFrame& frame);
@@ -42,7 +43,7 @@ private:
 
 struct NodeOptions {
     std::string model_path;
-    std::string sufferer = "sufferer";
+    std::string sufferer = flight::kSufferer;
     double reload_check_s = 0.5;
 };
 

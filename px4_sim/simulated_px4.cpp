@@ -40,7 +40,7 @@ struct SimulatedPx4::State {
 };
 
 SimulatedPx4::SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side, SimulatedPx4Options o)
-    : o_(std::move(o)), lab_(lab), s_(std::make_unique<State>()), states_(lab, dds::topics::vehicle_state),
+    : o_(std::move(o)), lab_(lab), s_(std::make_unique<State>()), states_(o_.publish_state ? std::make_unique<dds::Writer<msg::VehicleState>>(lab, dds::topics::vehicle_state) : nullptr),
       px4_(px4_side, "px4_" + o_.vehicle) {
     s_->x = o_.frame.point(o_.parked);
     s_->ground_z = s_->x.z();
@@ -55,6 +55,11 @@ SimulatedPx4::SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side
 SimulatedPx4::~SimulatedPx4() {
     thread_.request_stop();
     if (thread_.joinable()) thread_.join();
+}
+
+physics::Vec3 SimulatedPx4::lab_position() const {
+    std::lock_guard lock(mutex_);
+    return o_.frame.lab_point(s_->x);
 }
 
 SimulatedPx4::Report SimulatedPx4::report() const {
@@ -249,7 +254,7 @@ void SimulatedPx4::loop(std::stop_token stop) {
             status_due = s_->status_changed || !s_->acks.empty() || to_seconds(mono - last_status) >= o_.status_period_s;
             if (status_due) last_status = mono;
         }
-        states_.write(st);
+        if (states_) states_->write(st);
         if (status_due) publish_status();
         next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
         std::this_thread::sleep_until(next);

@@ -41,6 +41,7 @@ struct SimulatedPx4Options {
     std::optional<double> lose_offboard_after_s;  // after arming it hears no more offboard stream
     double rate_hz = 100;                 // dynamics and vehicles/state
     double status_period_s = 0.5;         // vehicle_status (also on every change)
+    bool publish_state = true;            // vehicles/state (false: the motion capture is played elsewhere)
 };
 
 class SimulatedPx4 {
@@ -60,6 +61,8 @@ public:
         std::vector<std::string> events;  // one line each: what it accepted, refused and why
     };
     Report report() const;
+    // Where it is now, lab NED (what a motion capture would see).
+    physics::Vec3 lab_position() const;
 
 private:
     struct State;
@@ -81,7 +84,7 @@ private:
     dds::Participant& lab_;
     mutable std::mutex mutex_;
     std::unique_ptr<State> s_;
-    dds::Writer<msg::VehicleState> states_;
+    std::unique_ptr<dds::Writer<msg::VehicleState>> states_;  // when o_.publish_state
     RawParticipant px4_;
     std::jthread thread_;
 };

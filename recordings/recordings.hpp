@@ -29,7 +29,7 @@ std::optional<nlohmann::json> decode(const std::string& type_name, std::span<con
 bool print_info(const std::string& path, std::ostream& out);
 
 struct ExportOptions {
-    std::string sufferer = "sufferer";  // the rigid body on the stand
+    std::string sufferer = flight::kSufferer;  // the rigid body on the stand
     // false: each topic's stamps are moved onto the recorder's clock by its producer's measured
     // clock offset (the median of its heartbeats' clock_offset_s); true: as recorded.
     bool raw_stamps = false;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dds/endpoint.hpp"
+#include "flight/flight.hpp"
 #include "physics/stand.hpp"
 #include "physics/wrench_model.hpp"
 #include "stand_agent/agent.hpp"
@@ -17,7 +18,7 @@ namespace dw::stand {
 // Forces on the 8 load cells from the physics of the neighbours on the mocap topic.
 class PhysicsSource {
 public:
-    PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, std::string sufferer = "sufferer");
+    PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, std::string sufferer = flight::kSufferer);
     double force(int chip, Nanos t);  // callable from the bank (any thread)
 
 private:

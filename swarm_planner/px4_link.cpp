@@ -259,8 +259,12 @@ private:
         const double waited = to_seconds(now - (v.step == Step::await_status ? v.step_since : v.sent_ns));
         switch (v.step) {
             case Step::await_status:
-                if (s.seen_ns != 0) return ask(v, Step::offboard, now, true);
-                if (waited > o_.status_timeout_s)
+                // A command sent before PX4's command reader has matched would reach no one.
+                if (s.seen_ns != 0 && v.cmd->matched() > 0) return ask(v, Step::offboard, now, true);
+                if (waited > o_.status_timeout_s && s.seen_ns != 0)
+                    refuse(v, log::cat("PX4 publishes vehicle_status but nothing reads ", v.cmd_name, " after ", waited,
+                                       " s (is vehicle_command among the Agent's bridged topics?)"));
+                else if (waited > o_.status_timeout_s)
                     refuse(v, log::cat("no vehicle_status from PX4 on ", v.status_name, " in ", waited, " s (is the Agent running on domain ",
                                        p_.config().domain, ", and the vehicle's uXRCE-DDS client started with -n ", v.cfg.ns, "?)"));
                 return;
