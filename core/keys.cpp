@@ -1,6 +1,7 @@
 #include "core/keys.hpp"
 
 #include <cmath>
+#include <optional>
 #include <set>
 
 #include "core/config.hpp"
@@ -43,12 +44,12 @@ public:
         if (!n.IsScalar() || !YAML::convert<bool>::decode(n, v)) fail(n, key, "expected true or false");
     }
     void choice(const std::string& key, int& v, std::span<const char* const> names, const std::string& what, const std::string& note) override {
-        const std::string word = text(key);
-        if (word.empty()) return;
+        const auto word = text(key);
+        if (!word) return;
         for (std::size_t i = 0; i < names.size(); ++i)
-            if (word == names[i]) v = static_cast<int>(i);
-        if (word != names[static_cast<std::size_t>(v)])
-            fail(get(key), key, log::cat("unknown ", what, " '", word, "' (expected ", log::alternatives(names), note, ")"));
+            if (*word == names[i]) v = static_cast<int>(i);
+        if (*word != names[static_cast<std::size_t>(v)])
+            fail(get(key), key, log::cat("unknown ", what, " '", *word, "' (expected ", log::alternatives(names), note, ")"));
     }
     void numbers(const std::string& key, std::span<double> v, const Range& r, const std::string& shape) override {
         const YAML::Node n = get(key);
@@ -62,8 +63,8 @@ public:
         }
     }
     void constant(const std::string& key, const std::string& value) override {
-        const std::string word = text(key);
-        if (!word.empty() && word != value) fail(get(key), key, log::cat("expected ", value));
+        const auto word = text(key);
+        if (word && *word != value) fail(get(key), key, log::cat("expected ", value));
     }
     void section(const std::string& key, const Body& body, const std::string& unknown_hint) override {
         Reader inner(get(key), path_.empty() ? key : path_ + "." + key, file_);
@@ -81,10 +82,10 @@ private:
         const YAML::Node& view = node_;  // a const lookup never inserts the key
         return view[key];
     }
-    // The scalar at key, or "" when absent.
-    std::string text(const std::string& key) {
+    // The scalar at key, or nullopt when absent (an empty scalar is a word like any other).
+    std::optional<std::string> text(const std::string& key) {
         const YAML::Node n = get(key);
-        if (!n) return "";
+        if (!n) return std::nullopt;
         if (!n.IsScalar()) fail(n, key, "expected a word");
         return n.Scalar();
     }

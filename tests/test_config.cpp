@@ -120,6 +120,8 @@ TEST(DeclaredKeys, WhatIsWrittenReadsBackTheSameAndAbsentKeysKeepTheirDefaults) 
 TEST(DeclaredKeys, EachMistakeIsOneLocatedLine) {
     const auto error = [](const std::string& yaml) { return error_of([&] { read_toy(yaml); }); };
     EXPECT_EQ(error("format: toy/2\n"), "t.yaml:1:9: format: expected toy/1");
+    EXPECT_EQ(error("format: \"\"\n"), "t.yaml:1:9: format: expected toy/1");
+    EXPECT_EQ(error("shade: \"\"\n"), "t.yaml:1:8: shade: unknown shade '' (expected light or dark; nothing else)");
     EXPECT_EQ(error("gain: 11\n"), "t.yaml:1:7: gain: 11 is not in [0, 10]");
     EXPECT_EQ(error("count: 2.5\n"), "t.yaml:1:8: count: expected a whole number");
     EXPECT_EQ(error("on: maybe\n"), "t.yaml:1:5: on: expected true or false");
