@@ -19,7 +19,6 @@ int axis_index(const std::string& name) {
     }
     return -1;
 }
-const char* axis_name(int i) { return flight::kAxes.at(static_cast<std::size_t>(i)); }
 
 // Every key of the physics configuration, declared once: parse_physics reads and to_yaml writes
 // through these (core/keys.hpp).

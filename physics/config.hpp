@@ -121,6 +121,5 @@ PhysicsConfig parse_physics(const std::string& yaml, const std::string& name);
 std::string to_yaml(const PhysicsConfig& c);
 
 int axis_index(const std::string& name);  // "f_n" -> 0 ... "m_yaw" -> 5, -1 if unknown
-const char* axis_name(int index);
 
 }  // namespace dw::physics
