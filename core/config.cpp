@@ -18,8 +18,8 @@ void require_unique_keys(const YAML::Node& node, const std::string& name) {
     for (const auto& kv : node) {
         const std::string key = kv.first.Scalar();
         if (kv.first.IsScalar() && !seen.insert(key).second) {
-            throw InputError(log::cat(name, ":", kv.first.Mark().line + 1, ":", kv.first.Mark().column + 1,
-                                      ": key '", key, "' appears twice in the same mapping"));
+            throw InputError(log::cat(name, ":", kv.first.Mark().line + 1, ":", kv.first.Mark().column + 1, ": key '",
+                                      key, "' appears twice in the same mapping"));
         }
         require_unique_keys(kv.second, name);
     }
@@ -41,9 +41,7 @@ YAML::Node load_yaml_file(const std::string& path, std::string_view what) {
     return load_yaml(read_file(path, what), path);
 }
 
-ConfigFile ConfigFile::load(const std::string& path) {
-    return parse(read_file(path, "config"), path);
-}
+ConfigFile ConfigFile::load(const std::string& path) { return parse(read_file(path, "config"), path); }
 
 ConfigFile ConfigFile::parse(const std::string& text, const std::string& name) {
     ConfigFile c;
@@ -78,17 +76,23 @@ YAML::Node ConfigFile::at(const std::string& dotted) const {
 
 void fail_at_node(const std::string& file, const YAML::Node& node, const std::string& key, const std::string& problem) {
     if (node && node.Mark().line >= 0) {
-        throw InputError(log::cat(file, ":", node.Mark().line + 1, ":", node.Mark().column + 1, ": ", key, ": ", problem));
+        throw InputError(
+            log::cat(file, ":", node.Mark().line + 1, ":", node.Mark().column + 1, ": ", key, ": ", problem));
     }
     throw InputError(log::cat(file, ": ", key, ": ", problem));
 }
 
-void require_known_keys(const std::string& file, const YAML::Node& map, const std::string& where, const std::set<std::string>& known) {
+std::string unknown_key_problem(const std::string& key, const std::set<std::string>& known) {
+    return log::cat("unknown key '", key, "' (known: ", log::join(known), ")");
+}
+
+void require_known_keys(const std::string& file, const YAML::Node& map, const std::string& where,
+                        const std::set<std::string>& known) {
     if (!map || !map.IsMap()) return;
     for (const auto& kv : map) {
         const std::string key = kv.first.Scalar();
         if (known.count(key)) continue;
-        fail_at_node(file, kv.first, where.empty() ? key : where + "." + key, "unknown key (known: " + log::join(known) + ")");
+        fail_at_node(file, kv.first, where.empty() ? key : where + "." + key, unknown_key_problem(key, known));
     }
 }
 
@@ -96,7 +100,9 @@ void ConfigFile::require_keys(const std::string& dotted, const std::set<std::str
     require_known_keys(path_, at(dotted), dotted, known);
 }
 
-void ConfigFile::fail(const std::string& dotted, const std::string& problem) const { fail_at_node(path_, at(dotted), dotted, problem); }
+void ConfigFile::fail(const std::string& dotted, const std::string& problem) const {
+    fail_at_node(path_, at(dotted), dotted, problem);
+}
 
 namespace {
 template <class T>

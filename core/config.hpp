@@ -20,10 +20,14 @@ YAML::Node load_yaml(const std::string& text, const std::string& name);
 YAML::Node load_yaml_file(const std::string& path, std::string_view what);
 
 // The one form of a located error: "file:line:col: key: problem" at `node` (its position if known).
-[[noreturn]] void fail_at_node(const std::string& file, const YAML::Node& node, const std::string& key, const std::string& problem);
+[[noreturn]] void fail_at_node(const std::string& file, const YAML::Node& node, const std::string& key,
+                               const std::string& problem);
+// The one unknown-key message: "unknown key 'x' (known: a, b)".
+std::string unknown_key_problem(const std::string& key, const std::set<std::string>& known);
 // The one unknown-key rule: a key of the mapping `map` (at `where`) not in `known` is
-// "file:line:col: where.key: unknown key (known: a, b)"; nothing when `map` is not a mapping.
-void require_known_keys(const std::string& file, const YAML::Node& map, const std::string& where, const std::set<std::string>& known);
+// "file:line:col: where.key: unknown key 'key' (known: a, b)"; nothing when `map` is not a mapping.
+void require_known_keys(const std::string& file, const YAML::Node& map, const std::string& where,
+                        const std::set<std::string>& known);
 
 class ConfigFile {
 public:

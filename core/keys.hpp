@@ -22,6 +22,10 @@ public:
     virtual void number(const std::string& key, double& v, const Range& r) = 0;
     virtual void integer(const std::string& key, int& v, const Range& r) = 0;
     virtual void flag(const std::string& key, bool& v) = 0;
+    // Free text: a name, a namespace.
+    virtual void text(const std::string& key, std::string& v) = 0;
+    // Whether the mapping holds `key` (always, when writing): for keys that must be given.
+    virtual bool has(const std::string& key) = 0;
     // One of `names` (v is its index): "unknown <what> 'x' (expected a, b or c<note>)".
     virtual void choice(const std::string& key, int& v, std::span<const char* const> names, const std::string& what,
                         const std::string& note = "") = 0;
@@ -36,7 +40,8 @@ public:
 
     // choice() of an enum whose values are 0..N-1 in the order of `names`.
     template <class E>
-    void enumeration(const std::string& key, E& v, std::span<const char* const> names, const std::string& what, const std::string& note = "") {
+    void enumeration(const std::string& key, E& v, std::span<const char* const> names, const std::string& what,
+                     const std::string& note = "") {
         int index = static_cast<int>(v);
         choice(key, index, names, what, note);
         v = static_cast<E>(index);

@@ -11,11 +11,11 @@ namespace dw::px4sim {
 namespace px4 = dds::px4;
 
 namespace {
-constexpr double kFollowRate = 20.0;      // 1/s: how fast the simulated vehicle closes on its setpoint
-constexpr double kLandSpeed = 0.7;        // m/s in AUTO_LAND
-constexpr double kGroundTolerance = 0.02;  // m: landed
+constexpr double kFollowRate = 20.0;               // 1/s: how fast the simulated vehicle closes on its setpoint
+constexpr double kLandSpeed = 0.7;                 // m/s in AUTO_LAND
+constexpr double kGroundTolerance = 0.02;          // m: landed
 constexpr double kQuaternionNormTolerance = 1e-5;  // EKF2's check on vehicle_visual_odometry.q
-constexpr std::uint8_t kNavPosctl = 2;    // after boot
+constexpr std::uint8_t kNavPosctl = 2;             // after boot
 constexpr std::uint8_t kFrameNed = 1, kFrameFrd = 2;
 const std::string kTypePrefix = "px4_msgs::msg::dds_::";
 
@@ -24,23 +24,27 @@ std::string type_name(std::string_view msg) { return kTypePrefix + std::string(m
 
 struct SimulatedPx4::State {
     physics::Vec3 x = physics::Vec3::Zero();  // local NED
-    std::optional<physics::Vec3> setpoint;     // local NED
+    std::optional<physics::Vec3> setpoint;    // local NED
     double ground_z = 0;
     bool armed = false;
     std::uint8_t nav = kNavPosctl, intention = kNavPosctl;
     bool failsafe = false;
-    Nanos armed_ns = 0;                 // monotonic
+    Nanos armed_ns = 0;                           // monotonic
     Nanos stream_since_ns = 0, last_mode_ns = 0;  // monotonic: the offboard stream's start and last sample
-    std::uint64_t last_mode_us = 0;     // its timestamp, as PX4 reads it (this host's realtime µs)
+    std::uint64_t last_mode_us = 0;               // its timestamp, as PX4 reads it (this host's realtime µs)
     bool mode_flag = false, position_flag = false;
-    Nanos odometry_ns = 0;              // the last odometry EKF2 would accept
+    Nanos odometry_ns = 0;  // the last odometry EKF2 would accept
     bool status_changed = true;
     std::vector<std::vector<std::uint8_t>> acks;  // to publish from the loop
     Report report;
 };
 
 SimulatedPx4::SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side, SimulatedPx4Options o)
-    : o_(std::move(o)), lab_(lab), s_(std::make_unique<State>()), states_(o_.publish_state ? std::make_unique<dds::Writer<msg::VehicleState>>(lab, dds::topics::vehicle_state) : nullptr),
+    : o_(std::move(o)),
+      lab_(lab),
+      s_(std::make_unique<State>()),
+      states_(o_.publish_state ? std::make_unique<dds::Writer<msg::VehicleState>>(lab, dds::topics::vehicle_state)
+                               : nullptr),
       px4_(px4_side, "px4_" + o_.vehicle) {
     s_->x = o_.frame.point(o_.parked);
     s_->ground_z = s_->x.z();
@@ -48,7 +52,8 @@ SimulatedPx4::SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side
     px4_.subscribe(in("offboard_control_mode"), type_name("OffboardControlMode"), [this](auto b) { on_mode(b); });
     px4_.subscribe(in("trajectory_setpoint"), type_name("TrajectorySetpoint"), [this](auto b) { on_trajectory(b); });
     px4_.subscribe(in("vehicle_visual_odometry"), type_name("VehicleOdometry"), [this](auto b) { on_odometry(b); });
-    px4_.subscribe(in("vehicle_command"), type_name("VehicleCommand"), [this](auto b) { on_command(b); });
+    if (o_.reads_commands)
+        px4_.subscribe(in("vehicle_command"), type_name("VehicleCommand"), [this](auto b) { on_command(b); });
     thread_ = std::jthread([this](std::stop_token st) { loop(st); });
 }
 
@@ -100,7 +105,9 @@ void SimulatedPx4::on_mode(std::span<const std::uint8_t> b) {
     if (link_cut(mono)) return;
     // PX4's ucdr rule for an incoming timestamp: 0 = now, else at most now.
     const double stamp = value(*v, "timestamp");
-    const std::uint64_t ts = stamp == 0 ? now_us : stamp >= static_cast<double>(now_us) ? now_us : static_cast<std::uint64_t>(stamp);
+    const std::uint64_t ts = stamp == 0                             ? now_us
+                             : stamp >= static_cast<double>(now_us) ? now_us
+                                                                    : static_cast<std::uint64_t>(stamp);
     if (s_->last_mode_ns == 0 || to_seconds(mono - s_->last_mode_ns) > o_.com_of_loss_t_s) s_->stream_since_ns = mono;
     s_->last_mode_ns = mono;
     s_->last_mode_us = ts;
@@ -126,8 +133,9 @@ void SimulatedPx4::on_odometry(std::span<const std::uint8_t> b) {
     const auto& p = v->at("position");
     const double frame = value(*v, "pose_frame");
     const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    const bool ok = (frame == kFrameNed || frame == kFrameFrd) && std::isfinite(norm) && std::abs(norm - 1.0) <= kQuaternionNormTolerance &&
-                    std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+    const bool ok = (frame == kFrameNed || frame == kFrameFrd) && std::isfinite(norm) &&
+                    std::abs(norm - 1.0) <= kQuaternionNormTolerance && std::isfinite(p[0]) && std::isfinite(p[1]) &&
+                    std::isfinite(p[2]);
     std::lock_guard lock(mutex_);
     if (ok) s_->odometry_ns = lab_.clock().monotonic_ns();
     else ++s_->report.rejected_odometry;
@@ -146,10 +154,14 @@ void SimulatedPx4::on_command(std::span<const std::uint8_t> b) {
     }
     std::string why;
     const auto result = commander(*v, why);
-    event(log::cat("command ", value(*v, "command"), ": ", px4::ack_result_name(static_cast<std::uint8_t>(result)), why.empty() ? "" : " (" + why + ")"));
-    Values ack{{"timestamp", {static_cast<double>(lab_.clock().now_ns() / 1000)}}, {"command", {value(*v, "command")}},
-               {"result", {static_cast<double>(result)}}, {"target_system", {value(*v, "source_system")}},
-               {"target_component", {value(*v, "source_component")}}, {"from_external", {0}}};
+    event(log::cat("command ", value(*v, "command"), ": ", px4::ack_result_name(static_cast<std::uint8_t>(result)),
+                   why.empty() ? "" : " (" + why + ")"));
+    Values ack{{"timestamp", {static_cast<double>(lab_.clock().now_ns() / 1000)}},
+               {"command", {value(*v, "command")}},
+               {"result", {static_cast<double>(result)}},
+               {"target_system", {value(*v, "source_system")}},
+               {"target_component", {value(*v, "source_component")}},
+               {"from_external", {0}}};
     s_->acks.push_back(encode(msg_def(Msg::vehicle_command_ack, o_.version), ack));
 }
 
@@ -158,16 +170,20 @@ dds::px4::AckResult SimulatedPx4::commander(const Values& cmd, std::string& why)
     const Nanos mono = lab_.clock().monotonic_ns();
     const bool position = s_->odometry_ns != 0 && to_seconds(mono - s_->odometry_ns) <= o_.position_timeout_s;
     const auto now_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
-    const double stream_age_s = (static_cast<double>(now_us) - static_cast<double>(s_->last_mode_us)) * 1e-6;  // signed: a clock step back
+    const double stream_age_s =
+        (static_cast<double>(now_us) - static_cast<double>(s_->last_mode_us)) * 1e-6;  // signed: a clock step back
     const bool fresh = s_->last_mode_us != 0 && stream_age_s < o_.com_of_loss_t_s &&
                        to_seconds(mono - s_->last_mode_ns) < o_.com_of_loss_t_s;
     const auto command = static_cast<std::uint32_t>(value(cmd, "command"));
     const double p1 = value(cmd, "param1");
     if (command == px4::kCmdDoSetMode) {
-        const bool custom = std::isfinite(p1) && p1 >= 0 && p1 < 256 && (static_cast<int>(p1) & 1);  // PX4 reads param1 as uint8 base_mode
-        if (!(custom && value(cmd, "param2") == px4::kCustomMainModeOffboard)) return why = "only OFFBOARD is simulated", R::unsupported;
+        const bool custom = std::isfinite(p1) && p1 >= 0 && p1 < 256 &&
+                            (static_cast<int>(p1) & 1);  // PX4 reads param1 as uint8 base_mode
+        if (!(custom && value(cmd, "param2") == px4::kCustomMainModeOffboard))
+            return why = "only OFFBOARD is simulated", R::unsupported;
         if (!fresh || !s_->mode_flag) return why = "no offboard_control_mode stream", R::temporarily_rejected;
-        if (to_seconds(mono - s_->stream_since_ns) < o_.offboard_warmup_s) return why = "offboard stream shorter than 1 s", R::temporarily_rejected;
+        if (to_seconds(mono - s_->stream_since_ns) < o_.offboard_warmup_s)
+            return why = "offboard stream shorter than 1 s", R::temporarily_rejected;
         if (s_->position_flag && !position) return why = "no local position", R::temporarily_rejected;
         s_->nav = s_->intention = px4::kNavOffboard;
         s_->report.was_offboard = s_->status_changed = true;
@@ -216,17 +232,22 @@ void SimulatedPx4::publish_status() {
         std::lock_guard lock(mutex_);
         const auto& s = *s_;
         const double armed = s.armed ? px4::kArmed : 1.0;  // 1: STANDBY (1.14) or DISARMED (1.15+)
-        Values v{{"timestamp", {static_cast<double>(lab_.clock().now_ns() / 1000)}}, {"arming_state", {armed}},
-                 {"nav_state", {static_cast<double>(s.nav)}}, {"nav_state_user_intention", {static_cast<double>(s.intention)}},
-                 {"failsafe", {s.failsafe ? 1.0 : 0.0}}, {"system_id", {static_cast<double>(o_.system_id)}},
-                 {"component_id", {static_cast<double>(px4::kAutopilotComponent)}}, {"pre_flight_checks_pass", {o_.refuse_arm.empty() ? 1.0 : 0.0}}};
+        Values v{{"timestamp", {static_cast<double>(lab_.clock().now_ns() / 1000)}},
+                 {"arming_state", {armed}},
+                 {"nav_state", {static_cast<double>(s.nav)}},
+                 {"nav_state_user_intention", {static_cast<double>(s.intention)}},
+                 {"failsafe", {s.failsafe ? 1.0 : 0.0}},
+                 {"system_id", {static_cast<double>(o_.system_id)}},
+                 {"component_id", {static_cast<double>(px4::kAutopilotComponent)}},
+                 {"pre_flight_checks_pass", {o_.refuse_arm.empty() ? 1.0 : 0.0}}};
         bytes = encode(msg_def(Msg::vehicle_status, o_.version), v);
         acks.swap(s_->acks);
         s_->status_changed = false;
     }
     const auto& version = dds::px4_version(o_.version);
     px4_.publish(dds::px4_topic(o_.ns, "out", version.status_topic), type_name("VehicleStatus"), bytes);
-    for (const auto& a : acks) px4_.publish(dds::px4_topic(o_.ns, "out", version.ack_topic), type_name("VehicleCommandAck"), a);
+    for (const auto& a : acks)
+        px4_.publish(dds::px4_topic(o_.ns, "out", version.ack_topic), type_name("VehicleCommandAck"), a);
 }
 
 void SimulatedPx4::loop(std::stop_token stop) {
@@ -245,13 +266,15 @@ void SimulatedPx4::loop(std::stop_token stop) {
             st.header().stamp(dds::to_msg(lab_.clock().now_ns()));
             st.vehicle_id(o_.vehicle);
             st.position_m().x(x.x()), st.position_m().y(x.y()), st.position_m().z(x.z());
-            st.velocity_mps().x(v.x() / period.count()), st.velocity_mps().y(v.y() / period.count()), st.velocity_mps().z(v.z() / period.count());
+            st.velocity_mps().x(v.x() / period.count()), st.velocity_mps().y(v.y() / period.count()),
+                st.velocity_mps().z(v.z() / period.count());
             st.orientation().w(1.0);
             st.tracking_valid(true);
             st.armed(s_->armed);
             st.airborne(s_->x.z() < s_->ground_z - kGroundTolerance);
             const Nanos mono = lab_.clock().monotonic_ns();
-            status_due = s_->status_changed || !s_->acks.empty() || to_seconds(mono - last_status) >= o_.status_period_s;
+            status_due =
+                s_->status_changed || !s_->acks.empty() || to_seconds(mono - last_status) >= o_.status_period_s;
             if (status_due) last_status = mono;
         }
         if (states_) states_->write(st);

@@ -29,19 +29,20 @@ namespace dw::px4sim {
 
 struct SimulatedPx4Options {
     dds::Px4Version version = dds::Px4Version::v1_15;
-    std::string ns;                       // its client's -n ("" = rt/fmu/...)
-    int system_id = 1;                    // MAV_SYS_ID
-    std::string vehicle = "v1";           // its name in the lab (vehicles/state)
-    planner::LocalFrame frame;            // where its local frame sits in the lab
+    std::string ns;                                // its client's -n ("" = rt/fmu/...)
+    int system_id = 1;                             // MAV_SYS_ID
+    std::string vehicle = "v1";                    // its name in the lab (vehicles/state)
+    planner::LocalFrame frame;                     // where its local frame sits in the lab
     physics::Vec3 parked = physics::Vec3::Zero();  // lab NED, on the ground
-    double com_of_loss_t_s = 1.0;         // COM_OF_LOSS_T
-    double offboard_warmup_s = 1.0;       // the stream's age before OFFBOARD is accepted
-    double position_timeout_s = 0.5;      // visual odometry older than this: no local position
-    std::string refuse_arm;               // non-empty: a pre-arm check that fails (arming DENIED)
-    std::optional<double> lose_offboard_after_s;  // after arming it hears no more offboard stream
-    double rate_hz = 100;                 // dynamics and vehicles/state
-    double status_period_s = 0.5;         // vehicle_status (also on every change)
-    bool publish_state = true;            // vehicles/state (false: the motion capture is played elsewhere)
+    double com_of_loss_t_s = 1.0;                  // COM_OF_LOSS_T
+    double offboard_warmup_s = 1.0;                // the stream's age before OFFBOARD is accepted
+    double position_timeout_s = 0.5;               // visual odometry older than this: no local position
+    std::string refuse_arm;                        // non-empty: a pre-arm check that fails (arming DENIED)
+    std::optional<double> lose_offboard_after_s;   // after arming it hears no more offboard stream
+    double rate_hz = 100;                          // dynamics and vehicles/state
+    double status_period_s = 0.5;                  // vehicle_status (also on every change)
+    bool publish_state = true;                     // vehicles/state (false: the motion capture is played elsewhere)
+    bool reads_commands = true;  // false: the Agent does not bridge fmu/in/vehicle_command (a misconfigured Agent)
 };
 
 class SimulatedPx4 {
@@ -53,9 +54,9 @@ public:
     SimulatedPx4& operator=(const SimulatedPx4&) = delete;
 
     struct Report {
-        int ignored_commands = 0;       // for another system or component
-        int undecodable = 0;            // payloads shorter than this version's definition
-        int rejected_odometry = 0;      // samples EKF2 would drop
+        int ignored_commands = 0;   // for another system or component
+        int undecodable = 0;        // payloads shorter than this version's definition
+        int rejected_odometry = 0;  // samples EKF2 would drop
         bool was_offboard = false, was_armed = false, armed = false;
         std::uint8_t nav_state = 0;
         std::vector<std::string> events;  // one line each: what it accepted, refused and why
@@ -73,10 +74,10 @@ private:
     void on_command(std::span<const std::uint8_t> b);
     dds::px4::AckResult commander(const Values& cmd, std::string& why);  // under mutex_
     void loop(std::stop_token stop);
-    void step(double dt);                                                // under mutex_
+    void step(double dt);  // under mutex_
     void publish_status();
     std::optional<Values> decode_or_count(Msg m, std::span<const std::uint8_t> b);
-    void event(const std::string& line);                                 // under mutex_
+    void event(const std::string& line);  // under mutex_
 
     // Destroyed in reverse: the thread stops first, then PX4's endpoints (their callbacks use the
     // state), then the state.

@@ -6,81 +6,74 @@
 #include <set>
 
 #include "core/config.hpp"
+#include "core/keys.hpp"
 #include "core/log.hpp"
 
 namespace dw::planner {
 namespace {
 
-const std::set<std::string> kTopKeys{"version", "odometry", "odometry_hz", "position_std_m", "orientation_std_rad",
-                                     "velocity_std_mps", "answer_timeout_s", "attempts", "status_timeout_s", "vehicles"};
-const std::set<std::string> kVehicleKeys{"namespace", "system_id", "origin_m", "heading_deg"};
+constexpr double kDegree = std::numbers::pi / 180.0;
 
-Px4Vehicle read_vehicle(const ConfigFile& c, const std::string& name, std::size_t index) {
-    const std::string at = "vehicles." + name;
-    if (!c.at(at).IsMap()) c.fail(at, "expected a mapping (namespace, system_id, origin_m, heading_deg)");
-    c.require_keys(at, kVehicleKeys);
-    Px4Vehicle v{name, name, static_cast<int>(index + 1)};
-    if (auto ns = c.get_string(at + ".namespace")) v.ns = *ns;
-    if (auto id = c.get_int(at + ".system_id", kSystemIdRange)) v.system_id = static_cast<int>(*id);
-    if (auto h = c.get_double(at + ".heading_deg", kHeadingRange)) v.heading_rad = *h * std::numbers::pi / 180.0;
-    if (auto o = c.get_strings(at + ".origin_m")) {
-        if (o->size() != 3) c.fail(at + ".origin_m", "expected [north, east, down] in metres");
-        for (int k = 0; k < 3; ++k) {
-            try {
-                v.origin[k] = require_in(parse_number((*o)[static_cast<std::size_t>(k)], "origin_m"), kOriginRange, "origin_m");
-            } catch (const InputError& e) {
-                c.fail(at + ".origin_m", e.what());
-            }
-        }
+void version_key(KeyVisitor& k, dds::Px4Version& version) {
+    std::string name(dds::px4_version(version).name);
+    k.text("version", name);
+    std::string problem;
+    try {
+        version = dds::parse_px4_version(name, "");
+    } catch (const InputError& e) {
+        problem = e.what();
     }
-    return v;
+    k.require(problem.empty(), "version", problem);
 }
 
-void read_top(const ConfigFile& c, Px4Options& o) {
-    if (auto v = c.get_string("version")) {
-        try {
-            o.version = dds::parse_px4_version(*v, "");
-        } catch (const InputError& e) {
-            c.fail("version", e.what());
+// One vehicle's keys; `ids` collects the system ids so far (each PX4 needs its own).
+void vehicle_keys(KeyVisitor& k, Px4Vehicle& v, std::set<int>& ids) {
+    k.text("namespace", v.ns);
+    k.integer("system_id", v.system_id, kSystemIdRange);
+    k.numbers("origin_m", std::span<double>(v.origin.data(), 3), kOriginRange,
+              "expected [north, east, down] in metres");
+    double heading_deg = v.heading_rad / kDegree;
+    k.number("heading_deg", heading_deg, kHeadingRange);
+    v.heading_rad = heading_deg * kDegree;
+    k.require(ids.insert(v.system_id).second, "system_id", "used by two vehicles (each PX4 needs its own MAV_SYS_ID)");
+}
+
+// The file's keys; `o.vehicles` holds the plan's vehicles with their defaults.
+void px4_keys(KeyVisitor& k, Px4Options& o) {
+    version_key(k, o.version);
+    k.flag("odometry", o.odometry);
+    k.number("odometry_hz", o.odometry_hz, kOdometryRateRange);
+    k.number("position_std_m", o.position_std_m, kStdRange);
+    k.number("orientation_std_rad", o.orientation_std_rad, kStdRange);
+    k.number("velocity_std_mps", o.velocity_std_mps, kStdRange);
+    k.number("answer_timeout_s", o.answer_timeout_s, kAnswerTimeoutRange);
+    k.integer("attempts", o.attempts, kAttemptsRange);
+    k.number("status_timeout_s", o.status_timeout_s, kStatusTimeoutRange);
+    k.require(k.has("vehicles"), "vehicles", "expected a mapping from each of the plan's vehicles to its PX4 settings");
+    std::vector<std::string> names;
+    for (const auto& v : o.vehicles) names.push_back(v.name);
+    std::set<int> ids;
+    const auto vehicles = [&](KeyVisitor& vs) {
+        for (auto& v : o.vehicles) {
+            vs.require(vs.has(v.name), v.name, "no entry for the plan's vehicle " + v.name);
+            vs.section(v.name, [&](KeyVisitor& s) { vehicle_keys(s, v, ids); });
         }
-    }
-    if (auto v = c.get_bool("odometry")) o.odometry = *v;
-    if (auto v = c.get_double("odometry_hz", kOdometryRateRange)) o.odometry_hz = *v;
-    if (auto v = c.get_double("position_std_m", kStdRange)) o.position_std_m = *v;
-    if (auto v = c.get_double("orientation_std_rad", kStdRange)) o.orientation_std_rad = *v;
-    if (auto v = c.get_double("velocity_std_mps", kStdRange)) o.velocity_std_mps = *v;
-    if (auto v = c.get_double("answer_timeout_s", kAnswerTimeoutRange)) o.answer_timeout_s = *v;
-    if (auto v = c.get_int("attempts", kAttemptsRange)) o.attempts = static_cast<int>(*v);
-    if (auto v = c.get_double("status_timeout_s", kStatusTimeoutRange)) o.status_timeout_s = *v;
+    };
+    k.section("vehicles", vehicles, log::cat(": not a vehicle of this plan (", log::join(names), ")"));
 }
 
 }  // namespace
 
 Px4Options default_px4_options(const std::vector<std::string>& plan_vehicles) {
     Px4Options o;
-    for (std::size_t i = 0; i < plan_vehicles.size(); ++i) o.vehicles.push_back({plan_vehicles[i], plan_vehicles[i], static_cast<int>(i + 1)});
+    for (std::size_t i = 0; i < plan_vehicles.size(); ++i)
+        o.vehicles.push_back({plan_vehicles[i], plan_vehicles[i], static_cast<int>(i + 1)});
     return o;
 }
 
 Px4Options load_px4_options(const std::string& path, const std::vector<std::string>& plan_vehicles) {
-    const ConfigFile c = ConfigFile::load(path);
-    c.require_keys("", kTopKeys);
-    Px4Options o;
-    read_top(c, o);
-    const YAML::Node vehicles = c.at("vehicles");
-    if (!vehicles || !vehicles.IsMap()) c.fail("vehicles", "expected a mapping from each of the plan's vehicles to its PX4 settings");
-    for (const auto& kv : vehicles) {
-        const std::string name = kv.first.Scalar();
-        if (std::find(plan_vehicles.begin(), plan_vehicles.end(), name) == plan_vehicles.end())
-            c.fail("vehicles." + name, "not a vehicle of this plan (" + log::join(plan_vehicles) + ")");
-    }
-    std::set<int> ids;
-    for (std::size_t i = 0; i < plan_vehicles.size(); ++i) {
-        if (!c.at("vehicles." + plan_vehicles[i])) c.fail("vehicles", "no entry for the plan's vehicle " + plan_vehicles[i]);
-        o.vehicles.push_back(read_vehicle(c, plan_vehicles[i], i));
-        if (!ids.insert(o.vehicles.back().system_id).second)
-            c.fail("vehicles." + plan_vehicles[i] + ".system_id", "used by two vehicles (each PX4 needs its own MAV_SYS_ID)");
-    }
+    Px4Options o = default_px4_options(plan_vehicles);
+    read_keys(load_yaml_file(path, "config"), path, [&](KeyVisitor& k) { px4_keys(k, o); });
     return o;
 }
 

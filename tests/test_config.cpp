@@ -29,7 +29,8 @@ constexpr dw::Range kAnyInt{-1000, 1000};
 }  // namespace
 
 TEST(ConfigFile, ReadsTypedValuesAtDottedPaths) {
-    const auto c = ConfigFile::parse("dds:\n  domain: 7\n  transport: udp\n  initial_peers: [127.0.0.1, 10.0.0.2]\n", "t.yaml");
+    const auto c =
+        ConfigFile::parse("dds:\n  domain: 7\n  transport: udp\n  initial_peers: [127.0.0.1, 10.0.0.2]\n", "t.yaml");
     EXPECT_EQ(c.get_int("dds.domain", kAnyInt), 7);
     EXPECT_EQ(c.get_string("dds.transport"), "udp");
     EXPECT_EQ(c.get_strings("dds.initial_peers")->size(), 2u);
@@ -84,11 +85,14 @@ void toy_keys(dw::KeyVisitor& k, Toy& t) {
     k.flag("on", t.on);
     k.enumeration("shade", t.shade, kShades, "shade", "; nothing else");
     k.numbers("xy", t.xy, {-1, 1}, "expected [x, y]");
-    k.section("band", [&](dw::KeyVisitor& b) {
-        b.number("lo", t.lo, {0, 5});
-        b.number("hi", t.hi, {0, 5});
-        b.require(t.hi > t.lo, "hi", "must be greater than lo");
-    }, " (a band has lo and hi)");
+    k.section(
+        "band",
+        [&](dw::KeyVisitor& b) {
+            b.number("lo", t.lo, {0, 5});
+            b.number("hi", t.hi, {0, 5});
+            b.require(t.hi > t.lo, "hi", "must be greater than lo");
+        },
+        " (a band has lo and hi)");
 }
 Toy read_toy(const std::string& yaml) {
     Toy t;
@@ -129,7 +133,8 @@ TEST(DeclaredKeys, EachMistakeIsOneLocatedLine) {
     EXPECT_EQ(error("xy: [1]\n"), "t.yaml:1:5: xy: expected [x, y]");
     EXPECT_EQ(error("band:\n  lo: 2\n  hi: 1\n"), "t.yaml:3:7: band.hi: must be greater than lo");
     EXPECT_EQ(error("band:\n  mid: 2\n"), "t.yaml:2:3: band.mid: unknown key 'mid' (a band has lo and hi)");
-    EXPECT_EQ(error("gian: 2\n"), "t.yaml:1:1: gian: unknown key 'gian'");
+    EXPECT_EQ(error("gian: 2\n"),
+              "t.yaml:1:1: gian: unknown key 'gian' (known: band, count, format, gain, on, shade, xy)");
     EXPECT_EQ(error("band: 3\n"), "t.yaml:1:7: band: expected a mapping of keys");
 }
 
@@ -182,9 +187,11 @@ TEST(DdsConfig, DomainOutOfRange) {
 TEST(DdsConfig, AnUnknownKeyInTheFileIsRefusedWhereItIs) {
     const auto file = ConfigFile::parse("dds:\n  domain: 3\n  domian: 4\n", "lab.yaml");
     const std::string e = error_of([&] { dw::dds::resolve({}, file); });
-    EXPECT_EQ(e.rfind("lab.yaml:3:3: dds.domian: unknown key (known: await_readers, await_timeout_s, ", 0), 0u) << e;
+    EXPECT_EQ(e.rfind("lab.yaml:3:3: dds.domian: unknown key 'domian' (known: await_readers, await_timeout_s, ", 0), 0u)
+        << e;
     EXPECT_NE(e.find("transport"), std::string::npos) << e;
-    EXPECT_EQ(dw::dds::resolve({}, ConfigFile::parse("other:\n  colour: red\n", "lab.yaml")).domain, 0) << "other sections are other readers'";
+    EXPECT_EQ(dw::dds::resolve({}, ConfigFile::parse("other:\n  colour: red\n", "lab.yaml")).domain, 0)
+        << "other sections are other readers'";
 }
 
 TEST(DdsConfig, AddressesAreChecked) {
@@ -252,5 +259,6 @@ TEST(DdsConfig, TheLabProfileWantsAKeystoreFromTheFileOrTheFlags) {
     DdsCliOptions open;
     open.insecure = true;
     EXPECT_TRUE(dw::dds::resolve(open, file).insecure);
-    EXPECT_EQ(dw::dds::resolve({}, ConfigFile::parse("dds:\n  profile: lab\n  security: keys\n", "lab.yaml")).security, "keys");
+    EXPECT_EQ(dw::dds::resolve({}, ConfigFile::parse("dds:\n  profile: lab\n  security: keys\n", "lab.yaml")).security,
+              "keys");
 }

@@ -88,7 +88,7 @@ TEST(Jet, BauersfeldNumbersWithin2Percent) {
     EXPECT_LT(within(j.centreline(1.3), 6.8), 0.02) << j.centreline(1.3);
     EXPECT_LT(within(j.half_width(1.3), 0.21), 0.02) << j.half_width(1.3);
     EXPECT_NEAR(j.axial(j.half_width(1.3), 1.3), 0.5 * j.centreline(1.3), 1e-12);  // half-width means half speed
-    EXPECT_EQ(j.centreline(-0.1), 0.0);  // nothing above the producer
+    EXPECT_EQ(j.centreline(-0.1), 0.0);                                            // nothing above the producer
 }
 
 TEST(Jet, MomentumFluxIsConstantAndNearThrust) {
@@ -132,7 +132,7 @@ TEST(Jet, RadialInflowConservesMass) {
     };
     const double dq = (flow(s + ds) - flow(s - ds)) / (2 * ds);
     EXPECT_NEAR(dq, -2 * M_PI * R * j.radial(R, s), 1e-3 * std::abs(dq) + 1e-6);
-    EXPECT_LT(j.radial(R, s), 0.0);            // entrainment: inward outside the core
+    EXPECT_LT(j.radial(R, s), 0.0);                      // entrainment: inward outside the core
     EXPECT_GT(j.radial(0.3 * j.half_width(s), s), 0.0);  // outward near the axis
 }
 
@@ -268,8 +268,11 @@ TEST(PhysicsConfig, RoundTripsThroughYaml) {
 }
 
 TEST(PhysicsConfig, ErrorsNameFileLineAndKey) {
-    EXPECT_EQ(error("stand:\n  heigth_m: 1.4\n"), "p.yaml:2:3: stand.heigth_m: unknown key 'heigth_m'");
-    EXPECT_EQ(error("jet:\n  model: magic\n"), "p.yaml:2:10: jet.model: unknown jet model 'magic' (expected bauersfeld or jain)");
+    EXPECT_EQ(error("stand:\n  heigth_m: 1.4\n"),
+              "p.yaml:2:3: stand.heigth_m: unknown key 'heigth_m' (known: counts_per_newton, height_m, "
+              "lateral_radius_m, noise_n, offset_sigma_counts, rate_hz, rate_skew, tare_s)");
+    EXPECT_EQ(error("jet:\n  model: magic\n"),
+              "p.yaml:2:10: jet.model: unknown jet model 'magic' (expected bauersfeld or jain)");
     EXPECT_EQ(error("stand:\n  rate_hz: fast\n"), "p.yaml:2:12: stand.rate_hz: expected a number");
     EXPECT_EQ(error("air_density_kg_m3: 40\n"), "p.yaml:1:20: air_density_kg_m3: 40 is not in [0.5, 2]");
     EXPECT_NE(error("effects:\n  cell_crosstalk: {from: f_x}\n").find("unknown axis 'f_x'"), std::string::npos);
@@ -548,7 +551,7 @@ TEST(PhysicsHardening, JainJetsMergeIntoFiniteForcesOfTheRightSize) {
         const double with = peak_fd(simulate_flight(merged, over_the_stand(0.8, formation)).flight);
         EXPECT_GT(with, 0.25 * plain) << formation;  // merging redistributes momentum, it does not erase it
         EXPECT_LT(with, 4.0 * plain) << formation;
-        EXPECT_LT(with, 100.0) << formation;        // nowhere near the HX711's saturation
+        EXPECT_LT(with, 100.0) << formation;  // nowhere near the HX711's saturation
     }
 }
 
@@ -566,7 +569,10 @@ TEST(PhysicsHardening, DivergingDynamicsAreAnErrorNotHugeNumbers) {
 }
 
 TEST(PhysicsHardening, DuplicateKeysAndNonFiniteOffsetsAreRefused) {
-    EXPECT_EQ(error("air_density_kg_m3: 1.2\nair_density_kg_m3: 1.1\n"), "p.yaml:2:1: key 'air_density_kg_m3' appears twice in the same mapping");
-    EXPECT_NE(error("effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n").find("not a finite number"), std::string::npos);
+    EXPECT_EQ(error("air_density_kg_m3: 1.2\nair_density_kg_m3: 1.1\n"),
+              "p.yaml:2:1: key 'air_density_kg_m3' appears twice in the same mapping");
+    EXPECT_NE(
+        error("effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n").find("not a finite number"),
+        std::string::npos);
     EXPECT_NE(error("stand: {noise_n: .inf}\n").find("not a finite number"), std::string::npos);
 }

@@ -81,7 +81,8 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     dw::planner::Px4Options o;
     o.version = version;
     o.odometry_hz = 0;
-    o.vehicles = {{"v1", "uav" + std::to_string(::getpid()), 7, dw::physics::Vec3(1.0, 0.5, 0.0), std::numbers::pi / 2}};
+    o.vehicles = {
+        {"v1", "uav" + std::to_string(::getpid()), 7, dw::physics::Vec3(1.0, 0.5, 0.0), std::numbers::pi / 2}};
     const auto in = [&](const char* t) { return dw::dds::px4_topic(o.vehicles[0].ns, "in", t); };
     capture(px4side, in("trajectory_setpoint"), "TrajectorySetpoint", traj);
     capture(px4side, in("offboard_control_mode"), "OffboardControlMode", mode);
@@ -106,20 +107,22 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
         mocap.write(s);
         std::this_thread::sleep_for(20ms);
         return traj.size() > 0 && mode.size() > 0 && cmd.size() > 0 && odom.size() > 0;
-    })) << "PX4's side heard nothing on " << in("...");
+    })) << "PX4's side heard nothing on "
+        << in("...");
 
     const auto def = [&](Msg m) { return dw::px4sim::msg_def(m, version); };
     const auto t = dw::px4sim::decode(def(Msg::trajectory_setpoint), traj.last());
     EXPECT_EQ(dw::px4sim::value(t, "timestamp"), static_cast<double>(t0 / 1000));  // microseconds
-    EXPECT_NEAR(t.at("position")[0], -0.8, 1e-6);  // lab east offset -0.8 m = PX4 north
-    EXPECT_NEAR(t.at("position")[1], 0.8, 1e-6);   // lab north offset -0.8 m = PX4 east +0.8
+    EXPECT_NEAR(t.at("position")[0], -0.8, 1e-6);                                  // lab east offset -0.8 m = PX4 north
+    EXPECT_NEAR(t.at("position")[1], 0.8, 1e-6);  // lab north offset -0.8 m = PX4 east +0.8
     EXPECT_NEAR(t.at("position")[2], -1.9, 1e-6);
     EXPECT_NEAR(t.at("velocity")[0], 0.5, 1e-6);
     EXPECT_NEAR(dw::px4sim::value(t, "yaw"), 0.25 - std::numbers::pi / 2, 1e-6);
     EXPECT_TRUE(std::isnan(t.at("jerk")[0]));
 
     const auto m = dw::px4sim::decode(def(Msg::offboard_control_mode), mode.last());
-    EXPECT_EQ(mode.last().size() - 4, dw::px4sim::body_size(def(Msg::offboard_control_mode)));  // 14 B in 1.14, 15 B after
+    EXPECT_EQ(mode.last().size() - 4,
+              dw::px4sim::body_size(def(Msg::offboard_control_mode)));  // 14 B in 1.14, 15 B after
     EXPECT_EQ(dw::px4sim::value(m, "position"), 1);
     EXPECT_EQ(dw::px4sim::value(m, "attitude"), 0);
 
@@ -136,9 +139,9 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     bool misread = true;
     try {
         const auto wrong = dw::px4sim::decode(dw::px4sim::msg_def(Msg::vehicle_command, other), bytes);
-        misread = dw::px4sim::value(wrong, "source_component") != px4::kPlannerComponent || dw::px4sim::value(wrong, "from_external") != 1;
-    } catch (const dw::InputError&) {
-    }
+        misread = dw::px4sim::value(wrong, "source_component") != px4::kPlannerComponent ||
+                  dw::px4sim::value(wrong, "from_external") != 1;
+    } catch (const dw::InputError&) {}
     EXPECT_TRUE(misread);
 
     const auto od = dw::px4sim::decode(def(Msg::vehicle_odometry), odom.last());
@@ -153,7 +156,9 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Versions, Px4Wire, ::testing::Values(Px4Version::v1_14, Px4Version::v1_15, Px4Version::v1_16),
-                         [](const auto& info) { return "v" + std::string(dw::dds::px4_version(info.param).name).replace(1, 1, "_"); });
+                         [](const auto& info) {
+                             return "v" + std::string(dw::dds::px4_version(info.param).name).replace(1, 1, "_");
+                         });
 
 namespace {
 
@@ -215,7 +220,8 @@ dw::planner::Plan short_plan(const std::string& formation, double start_hover_s 
 
 // Asks the link to arm until it is ready or refuses; with `stream`, setpoints flow for 1.5 s
 // before (as the planner's calibration streams them) and meanwhile.
-dw::planner::ArmProgress arm(dw::planner::VehicleLink& link, dw::dds::Participant& p, const std::vector<dw::physics::Setpoint>& hold, bool stream) {
+dw::planner::ArmProgress arm(dw::planner::VehicleLink& link, dw::dds::Participant& p,
+                             const std::vector<dw::physics::Setpoint>& hold, bool stream) {
     for (int i = 0; stream && i < 75; ++i) {
         link.send(hold, p.clock().now_ns());
         std::this_thread::sleep_for(20ms);
@@ -252,8 +258,11 @@ TEST_P(Px4Flight, ThePlannerFliesSimulatedPx4sThroughTakeOffLegsAndLanding) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Versions, Px4Flight, ::testing::Values(Px4Version::v1_14, Px4Version::v1_15, Px4Version::v1_16),
-                         [](const auto& info) { return "v" + std::string(dw::dds::px4_version(info.param).name).replace(1, 1, "_"); });
+INSTANTIATE_TEST_SUITE_P(Versions, Px4Flight,
+                         ::testing::Values(Px4Version::v1_14, Px4Version::v1_15, Px4Version::v1_16),
+                         [](const auto& info) {
+                             return "v" + std::string(dw::dds::px4_version(info.param).name).replace(1, 1, "_");
+                         });
 
 // A PX4 whose MAV_SYS_ID is not the one configured ignores every command, as the Commander does.
 TEST(Px4Refusals, CommandsForAnotherSystemGoUnansweredAndArmingIsRefusedInOneLine) {
@@ -281,7 +290,8 @@ TEST(Px4Refusals, OffboardWithoutASetpointStreamIsRefused) {
     auto link = dw::planner::make_px4_link(lab.lab, lab.options);
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, false);
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
-    EXPECT_NE(a.reason.find("refused to switch to OFFBOARD: TEMPORARILY_REJECTED after 1 tries"), std::string::npos) << a.reason;
+    EXPECT_NE(a.reason.find("refused to switch to OFFBOARD: TEMPORARILY_REJECTED after 1 tries"), std::string::npos)
+        << a.reason;
     const auto r = lab.vehicles[0]->report();
     EXPECT_FALSE(r.was_offboard);
     ASSERT_FALSE(r.events.empty());
@@ -303,6 +313,22 @@ TEST(Px4Refusals, OffboardWithoutALocalPositionIsRefused) {
     EXPECT_NE(r.events.back().find("no local position"), std::string::npos) << r.events.back();
 }
 
+// PX4's status arrives but its command topic has no reader (the Agent does not bridge it): the
+// link says so in one line instead of sending commands no one hears.
+TEST(Px4Refusals, StatusWithoutACommandReaderIsRefusedInOneLine) {
+    Px4Lab lab("px4nocmd", Px4Version::v1_15, 1);
+    lab.options.status_timeout_s = 1.0;
+    const auto plan = short_plan("single");
+    lab.start(plan, [](auto& o) { o.reads_commands = false; });
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
+    ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
+    EXPECT_NE(a.reason.find("PX4 publishes vehicle_status but nothing reads"), std::string::npos) << a.reason;
+    EXPECT_NE(a.reason.find("vehicle_command"), std::string::npos) << a.reason;
+    EXPECT_EQ(a.reason.find('\n'), std::string::npos);
+    EXPECT_FALSE(lab.vehicles[0]->report().was_armed);
+}
+
 // A failing pre-arm check: the experiment ends ABORTED on the ground with PX4's answer.
 TEST(Px4Refusals, ARefusedArmAbortsTheExperimentBeforeTakeOff) {
     Px4Lab lab("px4noarm", Px4Version::v1_15, 1);
@@ -310,7 +336,8 @@ TEST(Px4Refusals, ARefusedArmAbortsTheExperimentBeforeTakeOff) {
     lab.start(plan, [](auto& o) { o.refuse_arm = "battery below the arming threshold"; });
     dw::planner::Experiment e(lab.lab, plan, lab.run_options());
     EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
-    EXPECT_NE(e.reason().find("v1: PX4 (system 2) refused to arm: DENIED after 3 tries"), std::string::npos) << e.reason();
+    EXPECT_NE(e.reason().find("v1: PX4 (system 2) refused to arm: DENIED after 3 tries"), std::string::npos)
+        << e.reason();
     EXPECT_EQ(e.legs_flown(), 0);
     EXPECT_FALSE(lab.vehicles[0]->report().armed);
 }
@@ -345,9 +372,22 @@ TEST(Px4Settings, EachMistakeInTheFileIsOneLineWhereItIs) {
     const auto o = dw::planner::load_px4_options(dir.file("px4.yaml"), plan);
     EXPECT_EQ(o.vehicles[1].system_id, 3);
     EXPECT_NEAR(o.vehicles[1].heading_rad, std::numbers::pi / 2, 1e-12);
-    EXPECT_EQ(error_of("verison: \"1.15\"\n" + ok).rfind(dir.file("px4.yaml") + ":1:1: verison: unknown key (known: ", 0), 0u);
-    EXPECT_NE(error_of("vehicles:\n  v1: {system_id: 2, sysid: 4}\n  v2: {}\n").find(":2:22: vehicles.v1.sysid: unknown key"), std::string::npos);
-    EXPECT_NE(error_of(ok + "  v3: {}\n").find("vehicles.v3: not a vehicle of this plan (v1, v2)"), std::string::npos);
-    EXPECT_NE(error_of("vehicles:\n  v1: {system_id: 2}\n  v2: {system_id: 2}\n").find("vehicles.v2.system_id: used by two vehicles"), std::string::npos);
-    EXPECT_NE(error_of("version: \"1.13\"\n" + ok).find("not supported (supported: 1.14, 1.15, 1.16)"), std::string::npos);
+    EXPECT_EQ(error_of("verison: \"1.15\"\n" + ok)
+                  .rfind(dir.file("px4.yaml") + ":1:1: verison: unknown key 'verison' (known: ", 0),
+              0u);
+    EXPECT_NE(
+        error_of("vehicles:\n  v1: {system_id: 2, sysid: 4}\n  v2: {}\n").find(":2:22: vehicles.v1.sysid: unknown key"),
+        std::string::npos);
+    EXPECT_NE(error_of(ok + "  v3: {}\n").find("vehicles.v3: unknown key 'v3': not a vehicle of this plan (v1, v2)"),
+              std::string::npos);
+    EXPECT_NE(error_of("vehicles:\n  v1: {system_id: 2}\n  v2: {system_id: 2}\n")
+                  .find("vehicles.v2.system_id: used by two vehicles"),
+              std::string::npos);
+    EXPECT_EQ(error_of("vehicles:\n  v1: {system_id: 2}\n"),
+              dir.file("px4.yaml") + ":2:3: vehicles.v2: no entry for the plan's vehicle v2");
+    EXPECT_EQ(error_of("odometry: true\n"),
+              dir.file("px4.yaml") +
+                  ":1:1: vehicles: expected a mapping from each of the plan's vehicles to its PX4 settings");
+    EXPECT_NE(error_of("version: \"1.13\"\n" + ok).find("not supported (supported: 1.14, 1.15, 1.16)"),
+              std::string::npos);
 }
