@@ -12,15 +12,21 @@ namespace {
 
 constexpr const char* kHeader = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
 
-// Signed: the whole submessage (header and payload) carries a GMAC, the payload itself is left
-// alone — Fast DDS 2.9.1 cannot decode a payload protected with SIGN (every sample fails with
-// "Error decoding encoded payload"; measured, tests/test_security.cpp), and the submessage's MAC
-// covers the payload anyway. Encrypted: both.
+// Protection is per submessage (metadata_protection_kind), which holds the serialized payload:
+// signed, the submessage carries a GMAC; encrypted, AES-GCM turns the whole submessage, payload
+// included, into ciphertext with its tag. The payload is not protected a second time
+// (data_protection_kind NONE): end-to-end payload protection only matters where samples pass
+// through a relay (a persistence or routing service), which the lab has none of, and it costs a
+// second AES-GCM operation per sample on each side (docs/BENCHMARKS.md, DDS Security). Fast DDS
+// 2.9.1 cannot decode a payload protected with SIGN anyway (every sample fails with "Error
+// decoding encoded payload"; measured, tests/test_security.cpp).
 const char* metadata_kind(dds::Protection p) { return p == dds::Protection::encrypt ? "ENCRYPT" : "SIGN"; }
-const char* data_kind(dds::Protection p) { return p == dds::Protection::encrypt ? "ENCRYPT" : "NONE"; }
+const char* data_kind(dds::Protection) { return "NONE"; }
 
 // Every domain a lab may use (tests pick their own): the keystore is the lab's, not a domain's.
-std::string domains() { return "<domains><id_range><min>0</min><max>" + std::to_string(dds::kMaxDomainId) + "</max></id_range></domains>"; }
+std::string domains() {
+    return "<domains><id_range><min>0</min><max>" + std::to_string(dds::kMaxDomainId) + "</max></id_range></domains>";
+}
 
 std::string utc(std::chrono::system_clock::time_point t) {
     const std::time_t s = std::chrono::system_clock::to_time_t(t);
@@ -38,7 +44,8 @@ std::string topic_expression(std::string_view suffix) { return "rt/*/" + std::st
 std::string governance_xml() {
     std::ostringstream o;
     o << kHeader << "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
-      << "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd\">\n"
+      << "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/"
+         "omg_shared_ca_governance.xsd\">\n"
       << "  <domain_access_rules>\n    <domain_rule>\n      " << domains() << "\n"
       << "      <allow_unauthenticated_participants>false</allow_unauthenticated_participants>\n"
       << "      <enable_join_access_control>true</enable_join_access_control>\n"
@@ -48,13 +55,15 @@ std::string governance_xml() {
       << "      <topic_access_rules>\n";
     dds::topics::for_each([&](const auto& t) {
         o << "        <!-- " << t.suffix << ": " << t.protection_reason << " -->\n"
-          << "        <topic_rule>\n          <topic_expression>" << topic_expression(t.suffix) << "</topic_expression>\n"
+          << "        <topic_rule>\n          <topic_expression>" << topic_expression(t.suffix)
+          << "</topic_expression>\n"
           << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
           << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
           << "          <enable_read_access_control>true</enable_read_access_control>\n"
           << "          <enable_write_access_control>true</enable_write_access_control>\n"
           << "          <metadata_protection_kind>" << metadata_kind(t.protection) << "</metadata_protection_kind>\n"
-          << "          <data_protection_kind>" << data_kind(t.protection) << "</data_protection_kind>\n        </topic_rule>\n";
+          << "          <data_protection_kind>" << data_kind(t.protection)
+          << "</data_protection_kind>\n        </topic_rule>\n";
     });
     o << "        <!-- anything else: access-controlled (the permissions deny it), signed -->\n"
       << "        <topic_rule>\n          <topic_expression>*</topic_expression>\n"
@@ -62,8 +71,10 @@ std::string governance_xml() {
       << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
       << "          <enable_read_access_control>true</enable_read_access_control>\n"
       << "          <enable_write_access_control>true</enable_write_access_control>\n"
-      << "          <metadata_protection_kind>" << metadata_kind(dds::Protection::sign) << "</metadata_protection_kind>\n"
-      << "          <data_protection_kind>" << data_kind(dds::Protection::sign) << "</data_protection_kind>\n        </topic_rule>\n"
+      << "          <metadata_protection_kind>" << metadata_kind(dds::Protection::sign)
+      << "</metadata_protection_kind>\n"
+      << "          <data_protection_kind>" << data_kind(dds::Protection::sign)
+      << "</data_protection_kind>\n        </topic_rule>\n"
       << "      </topic_access_rules>\n    </domain_rule>\n  </domain_access_rules>\n</dds>\n";
     return o.str();
 }
@@ -76,14 +87,18 @@ std::string permissions_xml(const Grant& g) {
     });
     std::ostringstream o;
     o << kHeader << "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
-      << "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd\">\n"
+      << "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/"
+         "omg_shared_ca_permissions.xsd\">\n"
       << "  <permissions>\n    <grant name=\"" << g.identity << "\">\n"
       << "      <subject_name>CN=" << g.identity << "</subject_name>\n"
-      << "      <validity><not_before>" << utc(g.not_before) << "</not_before><not_after>" << utc(g.not_after) << "</not_after></validity>\n"
+      << "      <validity><not_before>" << utc(g.not_before) << "</not_before><not_after>" << utc(g.not_after)
+      << "</not_after></validity>\n"
       << "      <!-- role " << dds::role_name(g.role) << " -->\n"
       << "      <allow_rule>\n        " << domains() << "\n"
-      << "        <publish>\n          <topics>\n" << pub.str() << "          </topics>\n        </publish>\n"
-      << "        <subscribe>\n          <topics>\n" << sub.str() << "          </topics>\n        </subscribe>\n"
+      << "        <publish>\n          <topics>\n"
+      << pub.str() << "          </topics>\n        </publish>\n"
+      << "        <subscribe>\n          <topics>\n"
+      << sub.str() << "          </topics>\n        </subscribe>\n"
       << "      </allow_rule>\n      <default>DENY</default>\n    </grant>\n  </permissions>\n</dds>\n";
     return o.str();
 }
