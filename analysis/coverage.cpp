@@ -80,7 +80,8 @@ Outcome one_flight(const Target& t, const Effect& e, int seed, const CoverageOpt
     out.values = c.values, out.lo = c.lo, out.hi = c.hi;
     out.interval = c.lo != c.hi;  // the explainer makes an interval only for a fit worth the held-out test
     out.accepted = c.accepted;
-    if (t.axes && *t.axes != std::pair{c.effect.from, c.effect.to}) out.hidden.assign(out.hidden.size(), 0.0);  // no leak between the axes it chose
+    if (t.axes && *t.axes != std::pair{c.effect.from, c.effect.to})
+        out.hidden.assign(out.hidden.size(), 0.0);  // no leak between the axes it chose
     return out;
 }
 
@@ -90,7 +91,8 @@ void judge(CoverageRow& r) {
     using V = CoverageRow::Verdict;
     if (r.intervals < kMinIdentified * r.flights) {
         r.verdict = V::not_identifiable;
-        r.why = log::cat("not identifiable from these flights: an interval in only ", r.intervals, " of ", r.flights, " (the explainer claims nothing then)");
+        r.why = log::cat("not identifiable from these flights: an interval in only ", r.intervals, " of ", r.flights,
+                         " (the explainer claims nothing then)");
     } else if (r.coverage() >= kMinCoverage) {
         r.verdict = V::honest;
         r.why = "honest";
@@ -120,16 +122,23 @@ CoverageRow row_of(const Target& t, const Effect& e, std::size_t p, const std::v
 
 std::string table(const std::vector<CoverageRow>& rows, const CoverageOptions& o) {
     std::ostringstream md;
-    md << "| effect | parameter | formation | hidden value drawn from | flights | with an interval | covered | coverage | accepted | mean half-width | verdict |\n"
+    md << "| effect | parameter | formation | hidden value drawn from | flights | with an interval | covered | "
+          "coverage | accepted | mean half-width | verdict |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : rows)
-        md << "| " << r.effect << " | " << r.param << " | " << r.formation << " | " << r.drawn << " | " << r.flights << " | " << r.intervals << " | "
-           << r.covered << " | " << (r.intervals ? fmt(100 * r.coverage(), 0) + " %" : "–") << " | " << r.accepted << " | "
+        md << "| " << r.effect << " | " << r.param << " | " << r.formation << " | " << r.drawn << " | " << r.flights
+           << " | " << r.intervals << " | " << r.covered << " | "
+           << (r.intervals ? fmt(100 * r.coverage(), 0) + " %" : "–") << " | " << r.accepted << " | "
            << fmt(r.mean_half_width, 4) << " | " << r.why << " |\n";
     for (const auto* name : kFlyingOnly)
-        md << "| " << name << " | – | – | – | 0 | – | – | – | – | – | not measured: it acts only on a flying sufferer; dw-sim flies over a fixed stand |\n";
-    md << "\n" << o.seeds << " flights per effect, " << o.legs << " legs each (dw-sim fly, seeds 1000 + k); each explained with the hidden effect as the "
-       << "only candidate. Coverage: the share of the intervals made that hold the hidden value (target " << kMinCoverage * 100 << " %).\n";
+        md << "| " << name
+           << " | – | – | – | 0 | – | – | – | – | – | not measured: it acts only on a flying sufferer; dw-sim flies "
+              "over a fixed stand |\n";
+    md << "\n"
+       << o.seeds << " flights per effect, " << o.legs
+       << " legs each (dw-sim fly, seeds 1000 + k); each explained with the hidden effect as the "
+       << "only candidate. Coverage: the share of the intervals made that hold the hidden value (target "
+       << kMinCoverage * 100 << " %).\n";
     return md.str();
 }
 
@@ -141,8 +150,9 @@ std::string csv(const std::vector<std::pair<Target, Effect>>& chosen, const std:
         for (std::size_t k = 0; k < outs[ti].size(); ++k)
             for (std::size_t p = 0; p < chosen[ti].second.params.size(); ++p) {
                 const auto& x = outs[ti][k];
-                s << chosen[ti].first.effect << "," << chosen[ti].second.params[p].name << "," << k << "," << x.hidden[p] << "," << x.values[p] << ","
-                  << x.lo[p] << "," << x.hi[p] << "," << x.interval << "," << x.accepted << "\n";
+                s << chosen[ti].first.effect << "," << chosen[ti].second.params[p].name << "," << k << ","
+                  << x.hidden[p] << "," << x.values[p] << "," << x.lo[p] << "," << x.hi[p] << "," << x.interval << ","
+                  << x.accepted << "\n";
             }
     return s.str();
 }
@@ -156,7 +166,8 @@ CoverageResult run_coverage(const CoverageOptions& o) {
             chosen.emplace_back(t, effects_named({t.effect}).front());
     for (const auto& n : o.effects)
         if (std::none_of(chosen.begin(), chosen.end(), [&](const auto& c) { return c.first.effect == n; }))
-            throw InputError(log::cat("--effects: '", n, "' has no coverage run (body_drag and ground_effect need a flying sufferer)"));
+            throw InputError(log::cat("--effects: '", n,
+                                      "' has no coverage run (body_drag and ground_effect need a flying sufferer)"));
     if (o.seeds < 1) throw InputError("--seeds: at least 1 flight per effect");
     fs::create_directories(o.out_dir);
     std::vector<std::vector<Outcome>> outs(chosen.size(), std::vector<Outcome>(static_cast<std::size_t>(o.seeds)));
@@ -170,7 +181,10 @@ CoverageResult run_coverage(const CoverageOptions& o) {
             try {
                 outs[ti][s] = one_flight(chosen[ti].first, chosen[ti].second, static_cast<int>(s), o);
                 std::lock_guard lock(m);
-                if (o.progress) o.progress(log::cat(chosen[ti].first.effect, " seed ", s, ": ", outs[ti][s].interval ? "interval" : "no interval", " (", k + 1, " of ", total, ")"));
+                if (o.progress)
+                    o.progress(log::cat(chosen[ti].first.effect, " seed ", s, ": ",
+                                        outs[ti][s].interval ? "interval" : "no interval", " (", k + 1, " of ", total,
+                                        ")"));
             } catch (...) {
                 std::lock_guard lock(m);
                 if (!failed) failed = std::current_exception();
@@ -185,8 +199,10 @@ CoverageResult run_coverage(const CoverageOptions& o) {
     if (failed) std::rethrow_exception(failed);
     CoverageResult R;
     for (std::size_t ti = 0; ti < chosen.size(); ++ti)
-        for (std::size_t p = 0; p < chosen[ti].second.params.size(); ++p) R.rows.push_back(row_of(chosen[ti].first, chosen[ti].second, p, outs[ti]));
-    R.pass = std::none_of(R.rows.begin(), R.rows.end(), [](const CoverageRow& r) { return r.verdict == CoverageRow::Verdict::too_narrow; });
+        for (std::size_t p = 0; p < chosen[ti].second.params.size(); ++p)
+            R.rows.push_back(row_of(chosen[ti].first, chosen[ti].second, p, outs[ti]));
+    R.pass = std::none_of(R.rows.begin(), R.rows.end(),
+                          [](const CoverageRow& r) { return r.verdict == CoverageRow::Verdict::too_narrow; });
     write_file((fs::path(o.out_dir) / "coverage.csv").string(), csv(chosen, outs));
     R.table_path = (fs::path(o.out_dir) / "coverage.md").string();
     write_file(R.table_path, table(R.rows, o));

@@ -27,12 +27,12 @@ struct CoverageOptions {
 struct CoverageRow {
     std::string effect, param, formation, drawn;  // drawn: the range the hidden values come from
     int flights = 0;
-    int intervals = 0;   // flights where the fit was worth an interval (ΔBIC < -10, not pinned)
-    int covered = 0;     // ... and the interval holds the hidden value
-    int accepted = 0;    // flights where the effect was accepted
+    int intervals = 0;  // flights where the fit was worth an interval (ΔBIC < -10, not pinned)
+    int covered = 0;    // ... and the interval holds the hidden value
+    int accepted = 0;   // flights where the effect was accepted
     double mean_half_width = 0;
     enum class Verdict { honest, too_narrow, not_identifiable } verdict = Verdict::honest;
-    std::string why;     // the verdict in words
+    std::string why;  // the verdict in words
     double coverage() const { return intervals > 0 ? static_cast<double>(covered) / intervals : 0.0; }
 };
 

@@ -28,6 +28,8 @@ std::vector<double> Effect::neutral() const {
     return v;
 }
 
-void Effect::apply(physics::PhysicsConfig& c, const std::vector<double>& v) const { type->set(c.effects, v, {from, to}); }
+void Effect::apply(physics::PhysicsConfig& c, const std::vector<double>& v) const {
+    type->set(c.effects, v, {from, to});
+}
 
 }  // namespace dw::analysis

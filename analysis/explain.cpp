@@ -77,15 +77,18 @@ public:
             const std::vector<double> v(x[0], x[0] + params);
             const auto& p = fit->predict(v);
             for (std::size_t a = 0; a < 6; ++a)
-                residual[a] = fit->d_.replay.measured_axes()[a] ? (fit->d_.replay.measured()[row][a] - p[row][a]) / fit->d_.sigma[a] : 0.0;
+                residual[a] = fit->d_.replay.measured_axes()[a]
+                                  ? (fit->d_.replay.measured()[row][a] - p[row][a]) / fit->d_.sigma[a]
+                                  : 0.0;
             return true;
         }
     };
 
     // Fits on rows from `start` (a grid search first when asked); returns the values and the
     // covariance-based standard errors (inflated for autocorrelation by 1/sqrt(neff_factor)).
-    std::pair<std::vector<double>, std::vector<double>> solve(std::vector<double> start, const std::vector<std::size_t>& rows,
-                                                              bool grid, double neff_factor) {
+    std::pair<std::vector<double>, std::vector<double>> solve(std::vector<double> start,
+                                                              const std::vector<std::size_t>& rows, bool grid,
+                                                              double neff_factor) {
         const std::size_t P = e_.params.size();
         if (grid && P == 1 && !e_.params[0].grid.empty()) {
             double best = INFINITY;
@@ -168,7 +171,8 @@ constexpr double kSensitivityStep = 1e-3;
 // scale) inherits it. Its standard deviation in each parameter: the least-squares response
 // (Gauss-Newton, linearised at v) to each measured axis shifted by the tare's standard error
 // sigma / sqrt(n), added in quadrature over the axes.
-std::vector<double> tare_spread(const Data& d, Fit& fit, const Effect& e, const std::vector<double>& v, std::size_t tare_samples) {
+std::vector<double> tare_spread(const Data& d, Fit& fit, const Effect& e, const std::vector<double>& v,
+                                std::size_t tare_samples) {
     const std::size_t P = v.size();
     std::vector<double> out(P, 0.0);
     if (tare_samples == 0) return out;
@@ -184,23 +188,27 @@ std::vector<double> tare_spread(const Data& d, Fit& fit, const Effect& e, const 
         for (std::size_t k = 0; k < rows; ++k)
             for (std::size_t a = 0; a < 6; ++a)
                 if (d.replay.measured_axes()[a])
-                    J(static_cast<Eigen::Index>(k * 6 + a), static_cast<Eigen::Index>(p)) = (ph[d.on_legs[k]][a] - pl[d.on_legs[k]][a]) / (hi[p] - lo[p]) / d.sigma[a];
+                    J(static_cast<Eigen::Index>(k * 6 + a), static_cast<Eigen::Index>(p)) =
+                        (ph[d.on_legs[k]][a] - pl[d.on_legs[k]][a]) / (hi[p] - lo[p]) / d.sigma[a];
     }
     const Eigen::MatrixXd A = J.transpose() * J;
     const auto solver = A.ldlt();
     for (std::size_t a = 0; a < 6; ++a) {
         if (!d.replay.measured_axes()[a]) continue;
-        Eigen::VectorXd b = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(P));  // J' u, u: every row of axis a shifted by 1/sqrt(n) noise floors
+        Eigen::VectorXd b = Eigen::VectorXd::Zero(
+            static_cast<Eigen::Index>(P));  // J' u, u: every row of axis a shifted by 1/sqrt(n) noise floors
         for (std::size_t k = 0; k < rows; ++k) b += J.row(static_cast<Eigen::Index>(k * 6 + a)).transpose();
         b /= std::sqrt(static_cast<double>(tare_samples));
         const Eigen::VectorXd dv = solver.solve(b);
-        for (std::size_t p = 0; p < P; ++p) out[p] += dv(static_cast<Eigen::Index>(p)) * dv(static_cast<Eigen::Index>(p));
+        for (std::size_t p = 0; p < P; ++p)
+            out[p] += dv(static_cast<Eigen::Index>(p)) * dv(static_cast<Eigen::Index>(p));
     }
     for (auto& x : out) x = std::isfinite(x) ? std::sqrt(x) : 0.0;
     return out;
 }
 
-AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred, double tare_s) {
+AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
+                    double tare_s) {
     AxisValues sum{}, sq{};
     double n = 0;
     for (std::size_t i = 0; i < info.size(); ++i) {
@@ -277,18 +285,23 @@ constexpr double kRelativeCell_m = 0.1;
 
 std::optional<Cell> cell_of(const SampleInfo& s, bool flying) {
     if (!s.near) return std::nullopt;
-    if (flying) return Cell{0, 0, static_cast<int>(std::floor(s.offset / kRelativeCell_m)), static_cast<int>(std::floor(s.above / kRelativeCell_m))};
+    if (flying)
+        return Cell{0, 0, static_cast<int>(std::floor(s.offset / kRelativeCell_m)),
+                    static_cast<int>(std::floor(s.above / kRelativeCell_m))};
     if (s.direction == 0) return std::nullopt;
-    return Cell{band_index(s.h), s.direction, static_cast<int>(std::floor(s.n / kArenaCell_m)), static_cast<int>(std::floor(s.e / kArenaCell_m))};
+    return Cell{band_index(s.h), s.direction, static_cast<int>(std::floor(s.n / kArenaCell_m)),
+                static_cast<int>(std::floor(s.e / kArenaCell_m))};
 }
 
 std::string where(const Cell& c, bool flying, const std::string& formation) {
     if (flying)
-        return log::cat("nearest neighbour ", c.u * kRelativeCell_m, "-", (c.u + 1) * kRelativeCell_m, " m off horizontally, ", c.v * kRelativeCell_m, "-",
-                        (c.v + 1) * kRelativeCell_m, " m above the sufferer, ", formation);
+        return log::cat("nearest neighbour ", c.u * kRelativeCell_m, "-", (c.u + 1) * kRelativeCell_m,
+                        " m off horizontally, ", c.v * kRelativeCell_m, "-", (c.v + 1) * kRelativeCell_m,
+                        " m above the sufferer, ", formation);
     const double cell = kArenaCell_m;
-    return log::cat("relative altitude ", kBands[static_cast<std::size_t>(c.band)].name, ", N ", c.u * cell, "..", (c.u + 1) * cell, " m, E ",
-                    c.v * cell, "..", (c.v + 1) * cell, " m, ", formation, ", ", c.direction > 0 ? "+E" : "-E", " legs");
+    return log::cat("relative altitude ", kBands[static_cast<std::size_t>(c.band)].name, ", N ", c.u * cell, "..",
+                    (c.u + 1) * cell, " m, E ", c.v * cell, "..", (c.v + 1) * cell, " m, ", formation, ", ",
+                    c.direction > 0 ? "+E" : "-E", " legs");
 }
 
 // One cell's mean residual on one axis, and its z (the standard error from the cell's own spread,
@@ -324,13 +337,15 @@ std::vector<BinZ> bins_of(const Data& d, const std::vector<Wrench6>& pred, doubl
         if (b.n < kMinBinSamples) continue;
         const auto& [a, c] = key;
         const double mean = b.sum / static_cast<double>(b.n);
-        const double sd = std::max(std::sqrt(std::max(0.0, b.sq / static_cast<double>(b.n) - mean * mean)), d.sigma[static_cast<std::size_t>(a)]);
+        const double sd = std::max(std::sqrt(std::max(0.0, b.sq / static_cast<double>(b.n) - mean * mean)),
+                                   d.sigma[static_cast<std::size_t>(a)]);
         out.push_back({a, c, mean, mean / (sd / std::sqrt(static_cast<double>(b.n) * factor))});
     }
     return out;
 }
 
-std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, double factor, double z_min, const std::string& formation) {
+std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, double factor, double z_min,
+                           const std::string& formation) {
     const bool flying = d.replay.flying();
     std::vector<Region> out;
     for (const auto& b : bins_of(d, pred, factor)) {
@@ -385,7 +400,8 @@ std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
             if (den > 0) best += 0.5 * 0.005 * (v[k - 1] - v[k + 1]) / den;
         }
         const auto& cn = count[key];
-        out.push_back({key.first, kBands[static_cast<std::size_t>(key.second)].name, cn.second / static_cast<double>(cn.first), best, cn.first});
+        out.push_back({key.first, kBands[static_cast<std::size_t>(key.second)].name,
+                       cn.second / static_cast<double>(cn.first), best, cn.first});
     }
     return out;
 }
@@ -397,7 +413,7 @@ bool applies(const Effect& e, const Replay& r) { return e.type->applies(r.neighb
 struct Scores {
     std::map<int, AxisValues> before, after;  // per piece: normalised MSE sums per axis
     std::map<int, std::size_t> n;
-    std::map<int, double> change;             // per piece: how much the candidate changes the prediction (normalised, summed)
+    std::map<int, double> change;  // per piece: how much the candidate changes the prediction (normalised, summed)
 };
 
 // A held-out piece where the candidate predicts what the current model does — its prediction
@@ -456,14 +472,17 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
         c.heldout_after[a] = std::sqrt(f / total_n) * sigma[a];
     }
     double tb = 0, ta = 0;
-    for (std::size_t a = 0; a < 6; ++a) tb += c.heldout_before[a] * c.heldout_before[a] / (sigma[a] * sigma[a]), ta += c.heldout_after[a] * c.heldout_after[a] / (sigma[a] * sigma[a]);
+    for (std::size_t a = 0; a < 6; ++a)
+        tb += c.heldout_before[a] * c.heldout_before[a] / (sigma[a] * sigma[a]),
+            ta += c.heldout_after[a] * c.heldout_after[a] / (sigma[a] * sigma[a]);
     c.t = best_t;
     c.total_ratio = tb > 0 ? ta / tb : 1;
     c.delta_bic = dbic;
     c.accepted = c.t >= o.min_t && c.gain >= o.min_gain && ta < tb && dbic < -10;
-    c.note = log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10, " (signed ranks or sum over pieces of the held-out blocks), ", std::round(c.gain * 1000) / 10,
-                      " % of its error removed; ΔBIC ", std::round(dbic),
-                      c.accepted ? " — accepted" : " — not accepted");
+    c.note =
+        log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10,
+                 " (signed ranks or sum over pieces of the held-out blocks), ", std::round(c.gain * 1000) / 10,
+                 " % of its error removed; ΔBIC ", std::round(dbic), c.accepted ? " — accepted" : " — not accepted");
 }
 
 // An effect of the vocabulary has one value for the whole flight. Fitted separately on the passes
@@ -480,7 +499,8 @@ constexpr int kStandInGroups = 10;
 constexpr double kStandInSeparationRatio = 1.5;  // the highest third's separation at least this times the lowest's
 
 // Whether the effect moves the prediction, on these rows, by at least kEvidenceChange noise floors (RMS).
-bool acts_on(const Data& d, const std::vector<Wrench6>& before, const std::vector<Wrench6>& after, const std::vector<std::size_t>& rows) {
+bool acts_on(const Data& d, const std::vector<Wrench6>& before, const std::vector<Wrench6>& after,
+             const std::vector<std::size_t>& rows) {
     double s = 0, n = 0;
     for (auto i : rows)
         for (std::size_t a = 0; a < 6; ++a)
@@ -488,7 +508,8 @@ bool acts_on(const Data& d, const std::vector<Wrench6>& before, const std::vecto
     return n > 0 && s / n >= kEvidenceChange * kEvidenceChange;
 }
 
-void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsConfig& current, const std::vector<Wrench6>& current_pred, double factor) {
+void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsConfig& current,
+                    const std::vector<Wrench6>& current_pred, double factor) {
     std::vector<std::size_t> near;
     for (auto i : d.on_legs)
         if (d.info[i].near) near.push_back(i);
@@ -536,9 +557,11 @@ void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsCon
         if (!(z > kStandInZ)) continue;
         c.accepted = false;
         c.stand_in = true;
-        c.note += log::cat("; but ", c.effect.params[p].name, " differs by ", all[p], " ± ", sd[p], " between the passes where the neighbours are lowest (< ",
-                           low, " m above) and highest (>= ", high, " m; z = ", std::round(z * 10) / 10,
-                           "): one value does not fit the flight, so the effect stands in for something else — not accepted");
+        c.note +=
+            log::cat("; but ", c.effect.params[p].name, " differs by ", all[p], " ± ", sd[p],
+                     " between the passes where the neighbours are lowest (< ", low, " m above) and highest (>= ", high,
+                     " m; z = ", std::round(z * 10) / 10,
+                     "): one value does not fit the flight, so the effect stands in for something else — not accepted");
         return;
     }
 }
@@ -546,13 +569,15 @@ void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsCon
 // The other accepted candidates of a round that the held-out data cannot tell from the best one:
 // per piece, how much more error the other leaves than the best, not significantly positive.
 // (A first-order lag looks like a clock offset of about tau on forces that change slowly.)
-std::vector<std::string> indistinguishable(const CandidateResult& best, const std::vector<CandidateResult>& round, double min_t) {
+std::vector<std::string> indistinguishable(const CandidateResult& best, const std::vector<CandidateResult>& round,
+                                           double min_t) {
     std::vector<std::string> out;
     for (const auto& c : round) {
         if (!c.accepted || c.effect.name == best.effect.name) continue;
         std::vector<double> d;
         for (const auto& [piece, err] : best.heldout_pieces)
-            if (const auto it = c.heldout_pieces.find(piece); it != c.heldout_pieces.end()) d.push_back(it->second - err);
+            if (const auto it = c.heldout_pieces.find(piece); it != c.heldout_pieces.end())
+                d.push_back(it->second - err);
         if (paired_z(d) < min_t) out.push_back(c.effect.name);
     }
     return out;
@@ -592,9 +617,12 @@ struct Folds {
 };
 
 Folds folds_of(const Data& d, int folds) {
-    Folds f{std::vector<std::vector<std::size_t>>(static_cast<std::size_t>(folds)), std::vector<std::vector<std::size_t>>(static_cast<std::size_t>(folds)), {}};
+    Folds f{std::vector<std::vector<std::size_t>>(static_cast<std::size_t>(folds)),
+            std::vector<std::vector<std::size_t>>(static_cast<std::size_t>(folds)),
+            {}};
     for (auto i : d.on_legs) {
-        for (int k = 0; k < folds; ++k) (d.info[i].leg % folds == k ? f.test : f.train)[static_cast<std::size_t>(k)].push_back(i);
+        for (int k = 0; k < folds; ++k)
+            (d.info[i].leg % folds == k ? f.test : f.train)[static_cast<std::size_t>(k)].push_back(i);
         if (!f.leg_start.count(d.info[i].leg)) f.leg_start[d.info[i].leg] = d.replay.stamps()[i];
     }
     return f;
@@ -618,7 +646,8 @@ Effect with_crosstalk_axes(Effect e, const Data& d, const Baseline& b) {
     const auto& measured = d.replay.measured_axes();
     for (int from = 0; from < 6; ++from)
         for (int to = 0; to < 6; ++to) {
-            if (from == to || !measured[static_cast<std::size_t>(from)] || !measured[static_cast<std::size_t>(to)]) continue;
+            if (from == to || !measured[static_cast<std::size_t>(from)] || !measured[static_cast<std::size_t>(to)])
+                continue;
             const double sigma = d.sigma[static_cast<std::size_t>(to)];
             const double explained = regress_residual(d, b, from, to).second / (sigma * sigma);
             if (explained > best) best = explained, e.from = from, e.to = to;
@@ -640,8 +669,8 @@ double crosstalk_discrepancy(const Data& d, const Baseline& b, const Effect& e) 
 
 // Each fold fitted on its training legs (warm-started at `start`) and scored per piece of its
 // held-out legs; the fold's values are appended to `fold_values` (for the jackknife).
-Scores cross_validate(const Data& d, const Baseline& b, const Effect& e, const std::vector<double>& start, const Folds& folds,
-                      std::vector<std::vector<double>>& fold_values, std::stop_token stop) {
+Scores cross_validate(const Data& d, const Baseline& b, const Effect& e, const std::vector<double>& start,
+                      const Folds& folds, std::vector<std::vector<double>>& fold_values, std::stop_token stop) {
     Scores s;
     for (std::size_t k = 0; k < folds.train.size(); ++k) {
         throw_if_stopped(stop, "the fits");
@@ -651,7 +680,8 @@ Scores cross_validate(const Data& d, const Baseline& b, const Effect& e, const s
         const auto& p = fk.predict(vk);
         for (auto i : folds.test[k]) {
             const int leg = d.info[i].leg;
-            const int piece = leg * 1000 + static_cast<int>(std::floor((d.replay.stamps()[i] - folds.leg_start.at(leg)) / kPiece_s));
+            const int piece =
+                leg * 1000 + static_cast<int>(std::floor((d.replay.stamps()[i] - folds.leg_start.at(leg)) / kPiece_s));
             ++s.n[piece];
             for (std::size_t a = 0; a < 6; ++a) {
                 s.before[piece][a] += norm_sq(d, b.pred, i, a);
@@ -683,7 +713,8 @@ void set_intervals(CandidateResult& c, const Data& d, const Baseline& b, Fit& fi
 }
 
 // One candidate: screened on the whole flight by ΔBIC and identifiability, then cross-validated.
-CandidateResult score(const Data& d, const Baseline& b, const Folds& folds, Effect e, int round, const ExplainOptions& o) {
+CandidateResult score(const Data& d, const Baseline& b, const Folds& folds, Effect e, int round,
+                      const ExplainOptions& o) {
     CandidateResult c;
     c.round = round;
     c.effect = e.type->has_axes() ? with_crosstalk_axes(e, d, b) : e;
@@ -691,7 +722,8 @@ CandidateResult score(const Data& d, const Baseline& b, const Folds& folds, Effe
     Fit fit(d, b.physics, c.effect);
     auto [values, se] = fit.solve(c.effect.neutral(), d.on_legs, true, b.factor);
     c.values = values;
-    const double dbic = b.n_eff * std::log(rss(d, fit.predict(values)) / rss(d, b.pred)) + static_cast<double>(values.size()) * std::log(b.n_eff);
+    const double dbic = b.n_eff * std::log(rss(d, fit.predict(values)) / rss(d, b.pred)) +
+                        static_cast<double>(values.size()) * std::log(b.n_eff);
     c.delta_bic = dbic;
     if (dbic >= o.max_delta_bic) {
         c.note = log::cat("ΔBIC ", std::round(dbic), " on the whole flight: not worth a held-out test");
@@ -699,7 +731,8 @@ CandidateResult score(const Data& d, const Baseline& b, const Folds& folds, Effe
         return c;
     }
     if (pinned(c.effect, values)) {
-        c.note = log::cat("ΔBIC ", std::round(dbic), ", but a parameter is pinned at its bound: not identified (it stands in for something else)");
+        c.note = log::cat("ΔBIC ", std::round(dbic),
+                          ", but a parameter is pinned at its bound: not identified (it stands in for something else)");
         c.lo = c.hi = values;
         return c;
     }
@@ -719,8 +752,8 @@ struct Round {
     bool stand_in = false;            // a mismatch the vocabulary can only stand in for
 };
 
-Round select_round(const Data& d, const Baseline& b, const Folds& folds, const std::vector<Effect>& remaining, int round,
-                   const ExplainOptions& o, const std::function<void(const std::string&)>& say) {
+Round select_round(const Data& d, const Baseline& b, const Folds& folds, const std::vector<Effect>& remaining,
+                   int round, const ExplainOptions& o, const std::function<void(const std::string&)>& say) {
     Round r;
     for (const auto& e : remaining) {
         if (!applies(e, d.replay)) continue;
@@ -731,7 +764,8 @@ Round select_round(const Data& d, const Baseline& b, const Folds& folds, const s
     std::vector<std::size_t> ranked;
     for (std::size_t k = 0; k < r.scored.size(); ++k)
         if (r.scored[k].accepted) ranked.push_back(k);
-    std::sort(ranked.begin(), ranked.end(), [&](std::size_t x, std::size_t y) { return r.scored[x].total_ratio < r.scored[y].total_ratio; });
+    std::sort(ranked.begin(), ranked.end(),
+              [&](std::size_t x, std::size_t y) { return r.scored[x].total_ratio < r.scored[y].total_ratio; });
     for (auto k : ranked) {
         say(log::cat("  is ", r.scored[k].effect.name, " one value for the whole flight?"));
         stand_in_check(r.scored[k], d, b.physics, b.pred, b.factor);
@@ -762,8 +796,8 @@ void refit_together(ExplainResult& R, const Data& d, const Folds& folds, const E
 }
 
 // Forward selection from the base model: rounds until nothing more is accepted; returns the final model.
-Baseline select_effects(ExplainResult& R, const Data& d, const Baseline& base, const Folds& folds, const ExplainOptions& o,
-                        const std::function<void(const std::string&)>& say, bool& stand_in) {
+Baseline select_effects(ExplainResult& R, const Data& d, const Baseline& base, const Folds& folds,
+                        const ExplainOptions& o, const std::function<void(const std::string&)>& say, bool& stand_in) {
     Baseline current = base;
     std::vector<Effect> remaining = o.candidates;
     stand_in = false;
@@ -793,9 +827,11 @@ Baseline select_effects(ExplainResult& R, const Data& d, const Baseline& base, c
 
 // Replay and sample bookkeeping: the data every later stage reads. Throws dw::InputError when
 // the flight has too few blocks for the folds.
-Data prepare(const Replay& replay, const std::vector<SampleInfo>& info, const flight::Blocks& blocks, const ExplainOptions& o,
-             const std::vector<Wrench6>& base_pred) {
-    Data d{replay, info, floor_of(replay, info, base_pred, o.physics.stand.tare_s), {}, replay.buffeting_sigma(o.physics), 0};
+Data prepare(const Replay& replay, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
+             const ExplainOptions& o, const std::vector<Wrench6>& base_pred) {
+    Data d{
+        replay, info, floor_of(replay, info, base_pred, o.physics.stand.tare_s), {}, replay.buffeting_sigma(o.physics),
+        0};
     for (std::size_t i = 0; i < info.size(); ++i)
         if (info[i].leg >= 0) d.on_legs.push_back(i);
     std::set<int> leg_ids;
@@ -804,7 +840,8 @@ Data prepare(const Replay& replay, const std::vector<SampleInfo>& info, const fl
     if (d.legs < static_cast<std::size_t>(o.folds)) {
         throw InputError(log::cat("wrench.csv: ", d.legs, " of ", blocks.blocks.size(), " cross-validation blocks (",
                                   flight::to_string(blocks.kind), ") hold wrench samples (", d.on_legs.size(),
-                                  " samples in blocks); cross-validation needs at least ", o.folds, " — do the wrench and pose clocks overlap?"));
+                                  " samples in blocks); cross-validation needs at least ", o.folds,
+                                  " — do the wrench and pose clocks overlap?"));
     }
     return d;
 }
@@ -817,7 +854,8 @@ void conclude(ExplainResult& R, const Data& d, const Baseline& base, const Basel
         AxisValues rm{};
         for (auto i : d.on_legs)
             for (std::size_t a = 0; a < 6; ++a) rm[a] += norm_sq(d, base_pred, i, a);
-        for (std::size_t a = 0; a < 6; ++a) rm[a] = std::sqrt(rm[a] / static_cast<double>(d.on_legs.size())) * d.sigma[a];
+        for (std::size_t a = 0; a < 6; ++a)
+            rm[a] = std::sqrt(rm[a] / static_cast<double>(d.on_legs.size())) * d.sigma[a];
         R.heldout_before = R.heldout_after = rm;
     }
     R.fitted = final_model.physics;
@@ -828,7 +866,8 @@ void conclude(ExplainResult& R, const Data& d, const Baseline& base, const Basel
     // stand-in, or a residual beyond what noise and turbulence explain (the regions say where; on
     // their own they are many cells tested at once, not evidence).
     const bool excess = largest(R.excess_before) > o.detect_excess;
-    const bool any_stand_in = std::any_of(R.candidates.begin(), R.candidates.end(), [](const CandidateResult& c) { return c.stand_in; });
+    const bool any_stand_in =
+        std::any_of(R.candidates.begin(), R.candidates.end(), [](const CandidateResult& c) { return c.stand_in; });
     R.detected = !R.accepted.empty() || excess || any_stand_in;
     if (R.detected && R.regions.empty())  // found by its size or a stand-in: say where, with the weaker threshold
         R.regions = locate(d, base_pred, base.factor, o.weak_region_z, formation);
@@ -866,11 +905,12 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
     R.blocks = blocks.kind;
     if (blocks.blocks.size() < static_cast<std::size_t>(o.folds))
-        throw InputError(log::cat("poses.csv: ", blocks.blocks.size(), " cross-validation blocks (", flight::to_string(blocks.kind),
-                                  ") in the flight; cross-validation needs at least ", o.folds));
+        throw InputError(log::cat("poses.csv: ", blocks.blocks.size(), " cross-validation blocks (",
+                                  flight::to_string(blocks.kind), ") in the flight; cross-validation needs at least ",
+                                  o.folds));
     const auto info = describe(replay, blocks);
-    say(log::cat("simulating the recorded flight: ", replay.stamps().size(), " wrench samples, ", replay.neighbours(), " neighbours, ",
-                 blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
+    say(log::cat("simulating the recorded flight: ", replay.stamps().size(), " wrench samples, ", replay.neighbours(),
+                 " neighbours, ", blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
     auto base_pred = replay.recorded(o.physics);
     const Data d = prepare(replay, info, blocks, o, base_pred);
     const Baseline base = baseline_of(d, o.physics, std::move(base_pred));
@@ -880,7 +920,8 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     // Locate.
     R.regions = locate(d, base.pred, base.factor, o.region_z, f.meta.formation);
     R.shifts = shifts(d, o.physics);
-    say(log::cat(R.regions.size(), " significant regions; effective samples ", base.factor * 100, " % of the samples (autocorrelation)"));
+    say(log::cat(R.regions.size(), " significant regions; effective samples ", base.factor * 100,
+                 " % of the samples (autocorrelation)"));
     // Screen, cross-validate and select; then the verdict.
     bool stand_in = false;
     const Baseline final_model = select_effects(R, d, base, folds_of(d, o.folds), o, say, stand_in);

@@ -26,22 +26,22 @@ using AxisValues = std::array<double, 6>;
 inline constexpr double kDetectExcess = 1.2;
 
 struct ExplainOptions {
-    physics::PhysicsConfig physics;              // the simulation the recording is compared with
+    physics::PhysicsConfig physics;  // the simulation the recording is compared with
     std::vector<Effect> candidates = all_effects();
-    int folds = 5;                               // blocked cross-validation: leg % folds
-    double max_delta_bic = -10.0;                // a candidate goes to the held-out test only below this ΔBIC (whole flight)
-    double min_t = 3.0;                          // held-out improvement: Wilcoxon z over 1 s blocks of held-out legs, best axis
-    double min_gain = 0.05;                      // ... and at least this fraction of that axis's error
-    double region_z = 5.0;                       // a region is reported above this |z|
+    int folds = 5;                 // blocked cross-validation: leg % folds
+    double max_delta_bic = -10.0;  // a candidate goes to the held-out test only below this ΔBIC (whole flight)
+    double min_t = 3.0;            // held-out improvement: Wilcoxon z over 1 s blocks of held-out legs, best axis
+    double min_gain = 0.05;        // ... and at least this fraction of that axis's error
+    double region_z = 5.0;         // a region is reported above this |z|
     // A mismatch is detected, whatever its shape, when on some axis the residual's RMS over the
     // blocks exceeds this many noise floors (null flights: noise and turbulence alone, see
     // docs/EXPLAINER.md); it is then located with the weaker weak_region_z.
     double detect_excess = kDetectExcess;
     double weak_region_z = 3.0;
     int max_effects = 3;
-    std::uint64_t seed = 1;                      // (the fits are deterministic; kept for the report)
+    std::uint64_t seed = 1;  // (the fits are deterministic; kept for the report)
     std::function<void(const std::string&)> progress;
-    std::stop_token stop;                        // checked between fits: dw::Stopped
+    std::stop_token stop;  // checked between fits: dw::Stopped
 };
 
 // Throws dw::InputError naming the first option outside its range (each range below).
@@ -63,9 +63,9 @@ struct Region {
     int direction = 0;
 };
 
-struct Shift {            // the time shift that best aligns recording and simulation in a group
-    int direction = 0;    // +1: +E legs, -1: -E legs
-    std::string band;     // vertical separation band
+struct Shift {          // the time shift that best aligns recording and simulation in a group
+    int direction = 0;  // +1: +E legs, -1: -E legs
+    std::string band;   // vertical separation band
     double separation_m = 0;
     double shift_s = 0;
     std::size_t samples = 0;
@@ -73,13 +73,13 @@ struct Shift {            // the time shift that best aligns recording and simul
 
 struct CandidateResult {
     Effect effect;
-    std::vector<double> values, lo, hi;          // estimates and 95 % intervals
+    std::vector<double> values, lo, hi;  // estimates and 95 % intervals
     AxisValues heldout_before{}, heldout_after{};
     double delta_bic = 0;
-    double t = 0;                                // Wilcoxon signed-rank z over held-out legs, best axis
+    double t = 0;  // Wilcoxon signed-rank z over held-out legs, best axis
     int best_axis = 2;
-    double gain = 0;                             // fraction of that axis's held-out MSE removed
-    double total_ratio = 1;                      // held-out error after / before, all axes (normalised)
+    double gain = 0;         // fraction of that axis's held-out MSE removed
+    double total_ratio = 1;  // held-out error after / before, all axes (normalised)
     bool accepted = false;
     bool stand_in = false;                       // it passed the held-out test, but its value changes across the flight
     std::string note;                            // why (not) accepted
@@ -91,16 +91,16 @@ struct CandidateResult {
 struct ExplainResult {
     bool detected = false;
     AxisValues noise_floor{};
-    std::vector<Region> regions;                 // strongest first
+    std::vector<Region> regions;  // strongest first
     std::vector<Shift> shifts;
-    std::vector<CandidateResult> candidates;     // every score, every round
-    std::vector<CandidateResult> accepted;       // strongest first, final parameters
+    std::vector<CandidateResult> candidates;  // every score, every round
+    std::vector<CandidateResult> accepted;    // strongest first, final parameters
     bool unexplained = false;
     AxisValues excess_before{}, excess_after{};  // residual RMS over the blocks / noise floor (0: axis not measured)
     AxisValues heldout_before{}, heldout_after{};
     physics::PhysicsConfig fitted;
     std::string formation;
-    std::size_t samples = 0, legs = 0;          // samples in blocks, blocks holding samples
+    std::size_t samples = 0, legs = 0;                   // samples in blocks, blocks holding samples
     flight::BlockKind blocks = flight::BlockKind::legs;  // what the cross-validation blocks are
     double seconds = 0;
 };

@@ -1,6 +1,7 @@
 // dw-explain: when a recording and the simulation of the same flight differ, locate where, name
 // the missing physics, model it and show the fit improve. `dw-explain proof` shows it works.
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <sstream>
 
@@ -26,104 +27,175 @@ std::vector<std::string> split_list(const std::string& text) {
     return out;
 }
 
-int run(int argc, char** argv) {
-    CLI::App app{"dw-explain: locate where a recording departs from the simulation, name the missing physics, fit it, re-simulate"};
-    dw::cli::BaseOptions base;
-    dw::cli::configure(app, base);
-    std::string physics_path, real, out, effects;
-    std::uint64_t seed = 1;
-    bool quiet = false;
-    app.add_option("--physics", physics_path, "the physics configuration to compare with (default: config/physics.example.yaml's defaults)");
-    app.add_option("--real", real, "the recording: a flight folder (downwash-flight/1) or an .mcap file");
-    app.add_option("--out", out, "output folder: report.json, report.md, physics.yaml, figures");
-    app.add_option("--effects", effects, "candidates, comma-separated (default: every effect of the vocabulary)");
-    app.add_option("--seed", seed, "seed (the analysis is deterministic; recorded in the report)")->check(dw::cli::in(dw::kSeedRange));
-    app.add_flag("--quiet", quiet, "no progress");
-    auto* proof = app.add_subcommand("proof", "fly flights with hidden effects (dw-sim fly), explain them, check what was found");
-    dw::analysis::ProofOptions po;
-    std::string cases;
-    proof->add_option("--out", po.out_dir, "output folder (flights, reports, proof.md)")->required();
-    proof->add_option("--null-seeds", po.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
-    proof->add_option("--cases", cases, "clock_offset, wake_transport, sensor_lag, jet_merging, cell_crosstalk, two_effects, null (default: all)");
-    auto* real_proof = app.add_subcommand("real-proof", "conceal known effects in recorded flights and check each is found on top of the flight's own fit");
-    dw::analysis::RealProofOptions rpo;
-    std::string real_cases, real_physics;
-    real_proof->add_option("--flights", rpo.flights, "flight folders (e.g. dw-import's)")->required();
-    real_proof->add_option("--physics", real_physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
-    real_proof->add_option("--out", rpo.out_dir, "output folder (reports, proof.md)")->required();
-    real_proof->add_option("--cases", real_cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
-    auto* coverage = app.add_subcommand("coverage", "measure how often the 95 % intervals hold the hidden value, over many simulated flights per effect");
-    dw::analysis::CoverageOptions co;
-    std::string coverage_effects;
-    coverage->add_option("--out", co.out_dir, "output folder (coverage.md)")->required();
-    coverage->add_option("--seeds", co.seeds, "flights per effect")->check(dw::cli::in({1, 1000}));
-    coverage->add_option("--legs", co.legs, "legs per flight")->check(dw::cli::in({5, 1000}));
-    coverage->add_option("--jobs", co.jobs, "flights at once")->check(dw::cli::in({1, 64}));
-    coverage->add_option("--effects", coverage_effects, "effects, comma-separated (default: every one a flight over the stand can show)");
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
-    auto progress = [quiet](const std::string& s) {
-        if (!quiet) std::cerr << "dw-explain: " << s << "\n";
-    };
-    if (proof->parsed()) dw::require_output_dir(po.out_dir, "--out");
-    if (real_proof->parsed()) {
-        dw::require_output_dir(rpo.out_dir, "--out");
-        rpo.physics = physics_path.empty() && real_physics.empty() ? dw::physics::PhysicsConfig{}
-                                                                     : dw::physics::load_physics(real_physics.empty() ? physics_path : real_physics);
-        rpo.cases = split_list(real_cases);
-        rpo.progress = progress;
-        rpo.stop = dw::Shutdown::instance().token();
-        const auto r = dw::analysis::run_real_proof(rpo);
-        std::cout << dw::read_file(r.table_path, "proof table");
-        std::cout << (r.pass ? "PROOF PASSED" : "PROOF FAILED") << " (" << r.table_path << ")\n";
-        if (!r.pass) throw dw::RuntimeError("PROOF FAILED: see " + r.table_path);
-        return 0;
-    }
-    if (coverage->parsed()) {
-        dw::require_output_dir(co.out_dir, "--out");
-        co.effects = split_list(coverage_effects);
-        co.progress = progress;
-        co.stop = dw::Shutdown::instance().token();
-        const auto r = dw::analysis::run_coverage(co);
-        std::cout << dw::read_file(r.table_path, "coverage table");
-        if (!r.pass) throw dw::RuntimeError("COVERAGE BELOW TARGET: see " + r.table_path);
-        return 0;
-    }
-    if (proof->parsed()) {
-        po.cases = split_list(cases);
-        po.progress = progress;
-        po.stop = dw::Shutdown::instance().token();
-        const auto r = dw::analysis::run_proof(po);
-        std::cout << dw::read_file(r.table_path);
-        std::cout << (r.pass ? "PROOF PASSED" : "PROOF FAILED") << " (" << r.table_path << ")\n";
-        if (!r.pass) throw dw::RuntimeError("PROOF FAILED: see " + r.table_path);
-        return 0;
-    }
-    if (real.empty()) throw dw::InputError("--real: required (a flight folder or an .mcap recording)");
-    if (out.empty()) throw dw::InputError("--out: required (the report's folder)");
-    dw::require_output_dir(out, "--out");
-    dw::analysis::ExplainOptions o;
-    o.physics = physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
-    if (!effects.empty()) {
-        o.candidates = dw::analysis::effects_named(split_list(effects));
-    }
-    o.seed = seed;
+using Progress = std::function<void(const std::string&)>;
+
+// What a study prints after its table: the line when it passes (none: the table alone), the word when it fails.
+struct Verdict {
+    const char* passed;
+    const char* failed;
+};
+constexpr Verdict kProofVerdict{"PROOF PASSED", "PROOF FAILED"};
+constexpr Verdict kCoverageVerdict{nullptr, "COVERAGE BELOW TARGET"};
+
+// Prints a study's table and its verdict; a failed verdict is a runtime failure.
+int finish(const std::string& table_path, bool pass, const Verdict& v) {
+    std::cout << dw::read_file(table_path, "table");
+    if (v.passed) std::cout << (pass ? v.passed : v.failed) << " (" << table_path << ")\n";
+    if (!pass) throw dw::RuntimeError(std::string(v.failed) + ": see " + table_path);
+    return 0;
+}
+
+// What every study shares: its output folder checked first, progress, and the stop on SIGINT.
+template <class Options>
+void prepare(Options& o, const Progress& progress) {
+    dw::require_output_dir(o.out_dir, "--out");
     o.progress = progress;
     o.stop = dw::Shutdown::instance().token();
-    // A recording is explained with its stamps as recorded: the explainer checks the clocks itself,
-    // and the report puts the time service's measurement beside what it fits.
-    dw::recordings::ExportOptions raw;
-    raw.raw_stamps = true;
-    raw.stop = dw::Shutdown::instance().token();
-    const auto f = dw::recordings::read_flight_or_recording(real, raw);
-    const auto r = dw::analysis::explain(f, o);
-    dw::analysis::write_report(f, r, o, out);
-    std::string by;
-    for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
-    std::cout << (r.detected ? (by.empty() ? "mismatch found, not explained" : "explained by: " + by) : "no mismatch")
-              << (r.unexplained && !by.empty() ? " (a residual remains unexplained)" : "") << "; report: " << out << "/report.md ("
-              << r.seconds << " s)\n";
-    return 0;
+}
+
+// `dw-explain proof`: simulated flights with hidden effects.
+struct ProofCommand {
+    CLI::App* sub = nullptr;
+    dw::analysis::ProofOptions options;
+    std::string cases;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand("proof",
+                                 "fly flights with hidden effects (dw-sim fly), explain them, check what was found");
+        sub->add_option("--out", options.out_dir, "output folder (flights, reports, proof.md)")->required();
+        sub->add_option("--null-seeds", options.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
+        sub->add_option(
+            "--cases", cases,
+            "clock_offset, wake_transport, sensor_lag, jet_merging, cell_crosstalk, two_effects, null (default: all)");
+    }
+    int run(const Progress& progress) {
+        prepare(options, progress);
+        options.cases = split_list(cases);
+        const auto r = dw::analysis::run_proof(options);
+        return finish(r.table_path, r.pass, kProofVerdict);
+    }
+};
+
+// `dw-explain real-proof`: effects concealed in recorded flights.
+struct RealProofCommand {
+    CLI::App* sub = nullptr;
+    dw::analysis::RealProofOptions options;
+    std::string cases, physics;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand(
+            "real-proof",
+            "conceal known effects in recorded flights and check each is found on top of the flight's own fit");
+        sub->add_option("--flights", options.flights, "flight folders (e.g. dw-import's)")->required();
+        sub->add_option("--physics", physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
+        sub->add_option("--out", options.out_dir, "output folder (reports, proof.md)")->required();
+        sub->add_option("--cases", cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
+    }
+    int run(const std::string& main_physics, const Progress& progress) {
+        prepare(options, progress);
+        const std::string path = physics.empty() ? main_physics : physics;
+        options.physics = path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
+        options.cases = split_list(cases);
+        const auto r = dw::analysis::run_real_proof(options);
+        return finish(r.table_path, r.pass, kProofVerdict);
+    }
+};
+
+// `dw-explain coverage`: how often the intervals hold the hidden value.
+struct CoverageCommand {
+    CLI::App* sub = nullptr;
+    dw::analysis::CoverageOptions options;
+    std::string effects;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand(
+            "coverage",
+            "measure how often the 95 % intervals hold the hidden value, over many simulated flights per effect");
+        sub->add_option("--out", options.out_dir, "output folder (coverage.md)")->required();
+        sub->add_option("--seeds", options.seeds, "flights per effect")->check(dw::cli::in({1, 1000}));
+        sub->add_option("--legs", options.legs, "legs per flight")->check(dw::cli::in({5, 1000}));
+        sub->add_option("--jobs", options.jobs, "flights at once")->check(dw::cli::in({1, 64}));
+        sub->add_option("--effects", effects,
+                        "effects, comma-separated (default: every one a flight over the stand can show)");
+    }
+    int run(const Progress& progress) {
+        prepare(options, progress);
+        options.effects = split_list(effects);
+        const auto r = dw::analysis::run_coverage(options);
+        return finish(r.table_path, r.pass, kCoverageVerdict);
+    }
+};
+
+// The main command: explain one recording.
+struct ExplainCommand {
+    std::string physics_path, real, out, effects;
+    std::uint64_t seed = 1;
+
+    void add(CLI::App& app) {
+        app.add_option("--physics", physics_path,
+                       "the physics configuration to compare with (default: config/physics.example.yaml's defaults)");
+        app.add_option("--real", real, "the recording: a flight folder (downwash-flight/1) or an .mcap file");
+        app.add_option("--out", out, "output folder: report.json, report.md, physics.yaml, figures");
+        app.add_option("--effects", effects, "candidates, comma-separated (default: every effect of the vocabulary)");
+        app.add_option("--seed", seed, "seed (the analysis is deterministic; recorded in the report)")
+            ->check(dw::cli::in(dw::kSeedRange));
+    }
+    int run(const Progress& progress) const {
+        if (real.empty()) throw dw::InputError("--real: required (a flight folder or an .mcap recording)");
+        if (out.empty()) throw dw::InputError("--out: required (the report's folder)");
+        dw::require_output_dir(out, "--out");
+        dw::analysis::ExplainOptions o;
+        o.physics = physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
+        if (!effects.empty()) o.candidates = dw::analysis::effects_named(split_list(effects));
+        o.seed = seed;
+        o.progress = progress;
+        o.stop = dw::Shutdown::instance().token();
+        // A recording is explained with its stamps as recorded: the explainer checks the clocks itself,
+        // and the report puts the time service's measurement beside what it fits.
+        dw::recordings::ExportOptions raw;
+        raw.raw_stamps = true;
+        raw.stop = dw::Shutdown::instance().token();
+        const auto f = dw::recordings::read_flight_or_recording(real, raw);
+        const auto r = dw::analysis::explain(f, o);
+        dw::analysis::write_report(f, r, o, out);
+        std::cout << verdict(r) << "; report: " << out << "/report.md (" << r.seconds << " s)\n";
+        return 0;
+    }
+    // "explained by: a, b" / "mismatch found, not explained" / "no mismatch"
+    static std::string verdict(const dw::analysis::ExplainResult& r) {
+        std::string by;
+        for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
+        if (!r.detected) return "no mismatch";
+        if (by.empty()) return "mismatch found, not explained";
+        return "explained by: " + by + (r.unexplained ? " (a residual remains unexplained)" : "");
+    }
+};
+
+int run(int argc, char** argv) {
+    CLI::App app{
+        "dw-explain: locate where a recording departs from the simulation, name the missing physics, fit it, "
+        "re-simulate"};
+    dw::cli::BaseOptions base;
+    dw::cli::configure(app, base);
+    bool quiet = false;
+    ExplainCommand explain;
+    explain.add(app);
+    app.add_flag("--quiet", quiet, "no progress");
+    ProofCommand proof;
+    proof.add(app);
+    RealProofCommand real_proof;
+    real_proof.add(app);
+    CoverageCommand coverage;
+    coverage.add(app);
+    dw::cli::parse(app, argc, argv);
+    dw::log::set_level(dw::log::parse_level(base.log_level));
+    const Progress progress = [quiet](const std::string& s) {
+        if (!quiet) std::cerr << "dw-explain: " << s << "\n";
+    };
+    if (real_proof.sub->parsed()) return real_proof.run(explain.physics_path, progress);
+    if (coverage.sub->parsed()) return coverage.run(progress);
+    if (proof.sub->parsed()) return proof.run(progress);
+    return explain.run(progress);
 }
 
 }  // namespace

@@ -37,22 +37,53 @@ std::string fmt(double v, int p = 3) { return fixed(v, p); }
 
 std::vector<Case> cases() {
     return {
-        {"clock_offset", "single", "clock offset 0.1 s (legs both ways; the maps look right)",
-         [](physics::PhysicsConfig& c) { c.effects.clock_offset = {true, 0.1}; }, {{"clock_offset", "offset_s", 0.1}}, 11},
-        {"wake_transport", "leader_follower", "wake transport delay (jet law, scale 1)",
-         [](physics::PhysicsConfig& c) { c.effects.wake_transport = {true, 1.0}; }, {{"wake_transport", "delay_scale", 1.0}}, 12},
-        {"sensor_lag", "single", "stand lag, tau 0.08 s",
-         [](physics::PhysicsConfig& c) { c.effects.sensor_lag = {true, 0.08}; }, {{"sensor_lag", "tau_s", 0.08}}, 13},
-        {"jet_merging", "leader_follower3", "jet merging (only where jets overlap: K = 3, >= 1 m)",
-         [](physics::PhysicsConfig& c) { c.effects.jet_merging.enabled = true; }, {{"jet_merging", "contraction", 0.8}}, 14},
-        {"cell_crosstalk", "single", "crosstalk f_d -> f_e, 4 %",
-         [](physics::PhysicsConfig& c) { c.effects.cell_crosstalk = {true, 2, 1, 0.04}; }, {{"cell_crosstalk", "coefficient", 0.04}}, 15},
-        {"two_effects", "side_by_side", "clock offset 0.08 s and force scale 1.15",
+        {"clock_offset",
+         "single",
+         "clock offset 0.1 s (legs both ways; the maps look right)",
+         [](physics::PhysicsConfig& c) {
+             c.effects.clock_offset = {true, 0.1};
+         },
+         {{"clock_offset", "offset_s", 0.1}},
+         11},
+        {"wake_transport",
+         "leader_follower",
+         "wake transport delay (jet law, scale 1)",
+         [](physics::PhysicsConfig& c) {
+             c.effects.wake_transport = {true, 1.0};
+         },
+         {{"wake_transport", "delay_scale", 1.0}},
+         12},
+        {"sensor_lag",
+         "single",
+         "stand lag, tau 0.08 s",
+         [](physics::PhysicsConfig& c) {
+             c.effects.sensor_lag = {true, 0.08};
+         },
+         {{"sensor_lag", "tau_s", 0.08}},
+         13},
+        {"jet_merging",
+         "leader_follower3",
+         "jet merging (only where jets overlap: K = 3, >= 1 m)",
+         [](physics::PhysicsConfig& c) { c.effects.jet_merging.enabled = true; },
+         {{"jet_merging", "contraction", 0.8}},
+         14},
+        {"cell_crosstalk",
+         "single",
+         "crosstalk f_d -> f_e, 4 %",
+         [](physics::PhysicsConfig& c) {
+             c.effects.cell_crosstalk = {true, 2, 1, 0.04};
+         },
+         {{"cell_crosstalk", "coefficient", 0.04}},
+         15},
+        {"two_effects",
+         "side_by_side",
+         "clock offset 0.08 s and force scale 1.15",
          [](physics::PhysicsConfig& c) {
              c.effects.clock_offset = {true, 0.08};
              c.effects.force_scale = {true, 1.15};
          },
-         {{"clock_offset", "offset_s", 0.08}, {"force_scale", "scale", 1.15}}, 16},
+         {{"clock_offset", "offset_s", 0.08}, {"force_scale", "scale", 1.15}},
+         16},
     };
 }
 
@@ -62,16 +93,19 @@ void check(ProofRow& row, const ExplainResult& r, const std::vector<Truth>& trut
     for (const auto& a : r.accepted) row.found += (row.found.empty() ? "" : ", ") + a.effect.name;
     if (row.found.empty()) row.found = "(none)";
     for (const auto& t : truth) {
-        const auto it = std::find_if(r.accepted.begin(), r.accepted.end(), [&](const CandidateResult& a) { return a.effect.name == t.effect; });
+        const auto it = std::find_if(r.accepted.begin(), r.accepted.end(),
+                                     [&](const CandidateResult& a) { return a.effect.name == t.effect; });
         row.truth += (row.truth.empty() ? "" : "; ") + t.param + " " + fmt(t.value, 3);
         if (it == r.accepted.end()) {
             row.pass = false;
             row.why += t.effect + " not found. ";
             // Its fit all the same: is the parameter recovered, only not accepted?
-            const auto fit = std::find_if(r.candidates.begin(), r.candidates.end(), [&](const CandidateResult& c) { return c.effect.name == t.effect; });
+            const auto fit = std::find_if(r.candidates.begin(), r.candidates.end(),
+                                          [&](const CandidateResult& c) { return c.effect.name == t.effect; });
             if (fit != r.candidates.end() && fit->lo.size() > t.index) {
                 const double v = fit->values[t.index], lo = fit->lo[t.index], hi = fit->hi[t.index];
-                row.fitted += (row.fitted.empty() ? "" : "; ") + fmt(v, 3) + " [" + fmt(lo, 3) + ", " + fmt(hi, 3) + "] (not accepted)";
+                row.fitted += (row.fitted.empty() ? "" : "; ") + fmt(v, 3) + " [" + fmt(lo, 3) + ", " + fmt(hi, 3) +
+                              "] (not accepted)";
                 row.covered = row.covered && t.value >= lo && t.value <= hi;
             } else {
                 row.covered = false;
@@ -86,7 +120,8 @@ void check(ProofRow& row, const ExplainResult& r, const std::vector<Truth>& trut
             row.why += t.param + " outside the interval. ";
         }
         const auto ax = static_cast<std::size_t>(it->best_axis);
-        row.rmse += (row.rmse.empty() ? "" : "; ") + std::string(flight::kAxes[ax]) + " " + fmt(r.heldout_before[ax], 3) + " → " + fmt(r.heldout_after[ax], 3);
+        row.rmse += (row.rmse.empty() ? "" : "; ") + std::string(flight::kAxes[ax]) + " " +
+                    fmt(r.heldout_before[ax], 3) + " → " + fmt(r.heldout_after[ax], 3);
         if (!(r.heldout_after[ax] < r.heldout_before[ax])) {
             row.pass = false;
             row.why += "held-out error not reduced. ";
@@ -99,30 +134,33 @@ void check(ProofRow& row, const ExplainResult& r, const std::vector<Truth>& trut
         }
 }
 
-std::string table(const std::vector<ProofRow>& rows, const std::string& flight, const std::string& hidden, const std::string& truth) {
+std::string table(const std::vector<ProofRow>& rows, const std::string& flight, const std::string& hidden,
+                  const std::string& truth) {
     std::ostringstream md;
     md << "| case | " << flight << " | " << hidden << " | effect found | " << truth
        << " | fitted [95 %] | held-out RMSE before → after | verdict |\n|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : rows)
-        md << "| " << r.name << " | " << r.formation << " | " << r.hidden << " | " << r.found << " | " << r.truth << " | " << r.fitted << " | "
-           << r.rmse << " | " << (r.pass ? "pass" : "FAIL: " + r.why) << " |\n";
+        md << "| " << r.name << " | " << r.formation << " | " << r.hidden << " | " << r.found << " | " << r.truth
+           << " | " << r.fitted << " | " << r.rmse << " | " << (r.pass ? "pass" : "FAIL: " + r.why) << " |\n";
     return md.str();
 }
 
 }  // namespace
 
-void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir,
-                   const std::stop_token& stop, int legs) {
+void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed,
+                   const std::string& dir, const std::stop_token& stop, int legs) {
     fs::create_directories(fs::path(dir).parent_path());
     const std::string yaml = dir + ".physics.yaml";
     write_file(yaml, physics::to_yaml(hidden));
-    run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--legs", std::to_string(legs), "--out",
-                 dir, "--quiet"},
+    run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--legs",
+                 std::to_string(legs), "--out", dir, "--quiet"},
                 dir + ".log", stop);
 }
 
 namespace {
-bool wanted_null(const ProofOptions& o) { return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), "null") != o.cases.end(); }
+bool wanted_null(const ProofOptions& o) {
+    return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), "null") != o.cases.end();
+}
 }  // namespace
 
 ProofResult run_proof(const ProofOptions& o) {
@@ -138,11 +176,14 @@ ProofResult run_proof(const ProofOptions& o) {
             throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", list, ")"));
         }
     }
-    if (wanted_null(o) && o.null_seeds < 1) throw InputError("--null-seeds: the null case needs at least 1 flight (or leave it out with --cases)");
+    if (wanted_null(o) && o.null_seeds < 1)
+        throw InputError("--null-seeds: the null case needs at least 1 flight (or leave it out with --cases)");
     fs::create_directories(o.out_dir);
     ProofResult R;
     const physics::PhysicsConfig plain;  // what the explainer is given: every effect off
-    auto wanted = [&](const std::string& n) { return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), n) != o.cases.end(); };
+    auto wanted = [&](const std::string& n) {
+        return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), n) != o.cases.end();
+    };
     for (const auto& c : cases()) {
         if (!wanted(c.name)) continue;
         const std::string dir = (fs::path(o.out_dir) / c.name).string();
@@ -175,10 +216,20 @@ ProofResult run_proof(const ProofOptions& o) {
             std::string found;
             for (const auto& a : r.accepted) found += (found.empty() ? "" : ", ") + a.effect.name;
             if (!r.detected) ++R.null_clean;  // clean: nothing claimed, nothing detected
-            say(log::cat("null seed ", 100 + k, ": ", found.empty() ? "nothing claimed" : "claimed " + found, " (", r.seconds, " s)"));
+            say(log::cat("null seed ", 100 + k, ": ", found.empty() ? "nothing claimed" : "claimed " + found, " (",
+                         r.seconds, " s)"));
         }
-        ProofRow row{"null", "single", "nothing (noise and turbulence only)", log::cat(R.null_clean, " of ", R.null_total, " seeds claim nothing"),
-                     "–", "–", "–", R.null_clean * 10 >= R.null_total * 9, true, "", 0};
+        ProofRow row{"null",
+                     "single",
+                     "nothing (noise and turbulence only)",
+                     log::cat(R.null_clean, " of ", R.null_total, " seeds claim nothing"),
+                     "–",
+                     "–",
+                     "–",
+                     R.null_clean * 10 >= R.null_total * 9,
+                     true,
+                     "",
+                     0};
         if (!row.pass) row.why = "effects claimed on noise";
         R.rows.push_back(row);
     }
@@ -204,7 +255,8 @@ struct Concealment {
 // The untouched flight's first fit of an effect (on top of its own fit), if it was scored.
 std::optional<double> untouched_value(const ExplainResult& r, const std::string& effect) {
     for (const auto& c : r.candidates)
-        if (c.effect.name == effect && !c.values.empty() && (!c.effect.type->has_axes() || (c.effect.from == 2 && c.effect.to == 0)))
+        if (c.effect.name == effect && !c.values.empty() &&
+            (!c.effect.type->has_axes() || (c.effect.from == 2 && c.effect.to == 0)))
             return c.values.front();
     return std::nullopt;
 }
@@ -230,7 +282,8 @@ std::vector<Concealment> concealments() {
              for (auto& w : f.wrench) w.t += kClock_s;
          },
          [](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"clock_offset", "offset_s", u.value_or(own.clock_offset.enabled ? own.clock_offset.offset_s : 0) + kClock_s};
+             return Truth{"clock_offset", "offset_s",
+                          u.value_or(own.clock_offset.enabled ? own.clock_offset.offset_s : 0) + kClock_s};
          }},
         {"force_scale", log::cat("wrench × ", kScale),
          [](flight::Flight& f) {
@@ -238,11 +291,14 @@ std::vector<Concealment> concealments() {
                  for (auto& v : w.w) v *= kScale;
          },
          [](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"force_scale", "scale", u.value_or(own.force_scale.enabled ? own.force_scale.scale : 1) * kScale};
+             return Truth{"force_scale", "scale",
+                          u.value_or(own.force_scale.enabled ? own.force_scale.scale : 1) * kScale};
          }},
-        {"sensor_lag", log::cat("first-order lag, tau ", kLag_s, " s"), [](flight::Flight& f) { low_pass(f.wrench, kLag_s); },
+        {"sensor_lag", log::cat("first-order lag, tau ", kLag_s, " s"),
+         [](flight::Flight& f) { low_pass(f.wrench, kLag_s); },
          [](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"sensor_lag", "tau_s", u.value_or(own.sensor_lag.enabled ? own.sensor_lag.tau_s : 0) + kLag_s};
+             return Truth{"sensor_lag", "tau_s",
+                          u.value_or(own.sensor_lag.enabled ? own.sensor_lag.tau_s : 0) + kLag_s};
          }},
         {"cell_crosstalk", log::cat("f_n += ", kLeak, " f_d"),
          [](flight::Flight& f) {
@@ -250,7 +306,8 @@ std::vector<Concealment> concealments() {
          },
          [](const physics::Effects& own, std::optional<double> u) {
              const auto& c = own.cell_crosstalk;
-             return Truth{"cell_crosstalk", "coefficient", u.value_or(c.enabled && c.from == 2 && c.to == 0 ? c.coefficient : 0) + kLeak};
+             return Truth{"cell_crosstalk", "coefficient",
+                          u.value_or(c.enabled && c.from == 2 && c.to == 0 ? c.coefficient : 0) + kLeak};
          }},
     };
 }
@@ -264,7 +321,8 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     const auto all = concealments();
     for (const auto& n : o.cases)
         if (std::none_of(all.begin(), all.end(), [&](const Concealment& c) { return c.name == n; }))
-            throw InputError(log::cat("--cases: unknown case '", n, "' (expected clock_offset, force_scale, sensor_lag or cell_crosstalk)"));
+            throw InputError(log::cat("--cases: unknown case '", n,
+                                      "' (expected clock_offset, force_scale, sensor_lag or cell_crosstalk)"));
     if (o.flights.empty()) throw InputError("--flights: no flight to prove on");
     std::vector<flight::Flight> flights;  // every input read before any output is made
     for (const auto& path : o.flights) flights.push_back(flight::read_flight(path));
@@ -285,8 +343,17 @@ ProofResult run_real_proof(const RealProofOptions& o) {
         write_report(f, again, eo, dir + "/untouched_on_own_fit");
         std::string own_found;
         for (const auto& a : own.accepted) own_found += (own_found.empty() ? "" : ", ") + a.effect.name;
-        ProofRow null_row{"untouched", name, log::cat("nothing (its own fit: ", own_found.empty() ? "no effect" : own_found, ")"), "", "–", "–", "–",
-                          true, true, "", again.seconds};
+        ProofRow null_row{"untouched",
+                          name,
+                          log::cat("nothing (its own fit: ", own_found.empty() ? "no effect" : own_found, ")"),
+                          "",
+                          "–",
+                          "–",
+                          "–",
+                          true,
+                          true,
+                          "",
+                          again.seconds};
         check(null_row, again, {});
         R.rows.push_back(null_row);
         ++R.null_total;
@@ -300,13 +367,15 @@ ProofResult run_real_proof(const RealProofOptions& o) {
             write_report(hidden, r, eo, dir + "/" + c.name);
             ProofRow row{c.name, name, c.description, "", "", "", "", true, true, "", r.seconds};
             check(row, r, {c.expect(own.fitted.effects, untouched_value(again, c.name))});
-            say(log::cat("  concealed ", c.name, ": found ", row.found, " (", r.seconds, " s): ", row.pass ? "PASS" : "FAIL " + row.why));
+            say(log::cat("  concealed ", c.name, ": found ", row.found, " (", r.seconds,
+                         " s): ", row.pass ? "PASS" : "FAIL " + row.why));
             R.rows.push_back(row);
         }
     }
     R.pass = !R.rows.empty() && std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass; });
     R.table_path = (fs::path(o.out_dir) / "proof.md").string();
-    write_file(R.table_path, table(R.rows, "flight", "concealed effect", "expected (own fit with the concealed value)"));
+    write_file(R.table_path,
+               table(R.rows, "flight", "concealed effect", "expected (own fit with the concealed value)"));
     return R;
 }
 

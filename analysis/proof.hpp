@@ -16,8 +16,8 @@ namespace dw::analysis {
 struct ProofOptions {
     std::string out_dir;
     int null_seeds = 10;
-    std::vector<std::string> cases;   // empty: all; an unknown name is a dw::InputError
-    std::stop_token stop;             // between flights and fits: dw::Stopped
+    std::vector<std::string> cases;  // empty: all; an unknown name is a dw::InputError
+    std::stop_token stop;            // between flights and fits: dw::Stopped
     std::function<void(const std::string&)> progress;
 };
 
@@ -40,8 +40,8 @@ ProofResult run_proof(const ProofOptions& o);
 
 // `dw-sim fly` (a sibling executable) with this physics hidden in it, into the flight folder dir.
 // A stop request stops it (dw::Stopped).
-void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed, const std::string& dir,
-                   const std::stop_token& stop, int legs = physics::GridOptions{}.legs);
+void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed,
+                   const std::string& dir, const std::stop_token& stop, int legs = physics::GridOptions{}.legs);
 
 // The proof on recorded flights (another lab's: the physics is not the truth there). Each flight
 // is first explained as it is — its own fit, whatever the real data shows. Known effects are then
@@ -50,10 +50,10 @@ void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& form
 // (the own fit's combined with the concealed value) inside the interval, nothing else claimed; and
 // the untouched flight explained on top of its own fit must claim nothing new.
 struct RealProofOptions {
-    std::vector<std::string> flights;   // flight folders
-    physics::PhysicsConfig physics;     // what the untouched flights are first explained with
+    std::vector<std::string> flights;  // flight folders
+    physics::PhysicsConfig physics;    // what the untouched flights are first explained with
     std::string out_dir;
-    std::vector<std::string> cases;     // clock_offset, force_scale, sensor_lag, cell_crosstalk (empty: all)
+    std::vector<std::string> cases;  // clock_offset, force_scale, sensor_lag, cell_crosstalk (empty: all)
     std::stop_token stop;
     std::function<void(const std::string&)> progress;
 };

@@ -50,7 +50,8 @@ Replay::Replay(const flight::Flight& f, const physics::PhysicsConfig& physics, d
             const auto v = velocity(static_cast<int>(j), t);
             const auto& tr = tracks_[static_cast<std::size_t>(neighbours_[j])];
             auto it = std::lower_bound(tr.t.begin(), tr.t.end(), t);
-            const auto k = static_cast<std::size_t>(std::min<std::ptrdiff_t>(it - tr.t.begin(), static_cast<std::ptrdiff_t>(tr.t.size()) - 1));
+            const auto k = static_cast<std::size_t>(
+                std::min<std::ptrdiff_t>(it - tr.t.begin(), static_cast<std::ptrdiff_t>(tr.t.size()) - 1));
             const auto& q = tr.q[k];
             const physics::Vec3 axis = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized() * physics::Vec3::UnitZ();
             g.neighbours.push_back({p[0], p[1], p[2], v[0], v[1], v[2], axis.x(), axis.y(), axis.z()});
@@ -66,7 +67,9 @@ std::array<double, 3> Replay::velocity(int j, double t) const {
     return tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])].velocity_at(t);
 }
 
-std::array<double, 3> Replay::sufferer(double t) const { return tracks_[static_cast<std::size_t>(sufferer_)].position_at(t); }
+std::array<double, 3> Replay::sufferer(double t) const {
+    return tracks_[static_cast<std::size_t>(sufferer_)].position_at(t);
+}
 
 namespace {
 
@@ -101,7 +104,8 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
     const std::vector<physics::Jet> jets = jets_of(flow);
     const auto& fx = flow.effects;
     const physics::Vec3 offset = fx.position_offset.enabled
-                                     ? physics::Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1], fx.position_offset.offset_m[2])
+                                     ? physics::Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1],
+                                                     fx.position_offset.offset_m[2])
                                      : physics::Vec3::Zero();
     const bool far_is_zero = !fx.floor_recirculation.enabled;
     std::vector<Wrench6> out(n_, Wrench6{});
@@ -111,8 +115,9 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
         if (far_is_zero && !near(suf, ps)) continue;
         const physics::Wrench w = model.evaluate(suf, ps);
         if (!w.allFinite())
-            throw InputError(log::cat("the physics gave a non-finite wrench at t = ", t0_ + static_cast<double>(i) * dt_,
-                                      " s of the recorded flight: check meta.json's vehicles and the physics configuration"));
+            throw InputError(
+                log::cat("the physics gave a non-finite wrench at t = ", t0_ + static_cast<double>(i) * dt_,
+                         " s of the recorded flight: check meta.json's vehicles and the physics configuration"));
         for (std::size_t a = 0; a < 6; ++a) out[i][a] = w[static_cast<Eigen::Index>(a)];
     }
     if (cache_order_.size() >= 12) {  // a few flows: the fits revisit the last ones
@@ -123,8 +128,9 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
     return cache_.emplace(key, std::move(out)).first->second;
 }
 
-physics::Vec3 Replay::producers_at(std::size_t i, const physics::WrenchModel& model, const std::vector<physics::Jet>& jets,
-                                   const physics::Vec3& offset, std::vector<physics::Producer>& ps) const {
+physics::Vec3 Replay::producers_at(std::size_t i, const physics::WrenchModel& model,
+                                   const std::vector<physics::Jet>& jets, const physics::Vec3& offset,
+                                   std::vector<physics::Producer>& ps) const {
     const auto& g = grid_[i];
     for (std::size_t j = 0; j < neighbours_.size(); ++j) {
         const auto& x = g.neighbours[j];
@@ -213,7 +219,8 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
         const auto k = static_cast<std::size_t>(g);
         const double f = g - static_cast<double>(k);
         Wrench6 w;
-        for (std::size_t a = 0; a < 6; ++a) w[a] = (1 - f) * (*series)[k][a] + f * (*series)[std::min(k + 1, n_ - 1)][a];
+        for (std::size_t a = 0; a < 6; ++a)
+            w[a] = (1 - f) * (*series)[k][a] + f * (*series)[std::min(k + 1, n_ - 1)][a];
         if (fx.force_scale.enabled)
             for (auto& v : w) v *= fx.force_scale.scale;
         out[i] = w;

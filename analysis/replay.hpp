@@ -67,7 +67,7 @@ private:
     bool near(const physics::Vec3& sufferer, const std::vector<physics::Producer>& ps) const;
     // The flying sufferer's own forces on the grid: body_drag and ground_effect.
     std::vector<Wrench6> own_forces(const physics::PhysicsConfig& c) const;
-    struct GridState {                       // the recorded states at one grid time
+    struct GridState {  // the recorded states at one grid time
         std::array<double, 3> sufferer;
         std::array<double, 3> sufferer_velocity;
         std::vector<std::array<double, 9>> neighbours;  // position, velocity, jet axis
@@ -92,13 +92,13 @@ private:
 
 // Where each wrench sample is, relative to the formation.
 struct SampleInfo {
-    int leg = -1;                 // -1: not in a block (a measurement leg, an encounter, a stretch of time)
-    int direction = 0;            // of travel along E on legs: +1, -1, 0 (below 0.1 m/s; always 0 off legs)
-    double n = 0, e = 0, h = 0;   // the neighbours' centroid N, E; the lowest one's height above the sufferer
-    double offset = 0, above = 0; // the horizontally nearest neighbour: horizontal offset, height above the sufferer
+    int leg = -1;                  // -1: not in a block (a measurement leg, an encounter, a stretch of time)
+    int direction = 0;             // of travel along E on legs: +1, -1, 0 (below 0.1 m/s; always 0 off legs)
+    double n = 0, e = 0, h = 0;    // the neighbours' centroid N, E; the lowest one's height above the sufferer
+    double offset = 0, above = 0;  // the horizontally nearest neighbour: horizontal offset, height above the sufferer
     double speed = 0;
-    double leg_fraction = 0;      // 0..1 through the leg
-    bool near = false;            // a neighbour within its near radius horizontally (physics/bodies.hpp)
+    double leg_fraction = 0;  // 0..1 through the leg
+    bool near = false;        // a neighbour within its near radius horizontally (physics/bodies.hpp)
 };
 std::vector<SampleInfo> describe(const Replay& r, const flight::Blocks& blocks);
 
@@ -107,7 +107,8 @@ struct Band {
     double lo, hi;
     const char* name;
 };
-inline constexpr std::array<Band, 3> kBands{{{0.0, 0.55, "0.0-0.55 m"}, {0.55, 1.05, "0.55-1.05 m"}, {1.05, 1.5, "1.05-1.5 m"}}};
+inline constexpr std::array<Band, 3> kBands{
+    {{0.0, 0.55, "0.0-0.55 m"}, {0.55, 1.05, "0.55-1.05 m"}, {1.05, 1.5, "1.05-1.5 m"}}};
 inline int band_index(double h) { return h < kBands[1].lo ? 0 : (h < kBands[2].lo ? 1 : 2); }
 
 }  // namespace dw::analysis

@@ -54,7 +54,8 @@ std::string params_text(const CandidateResult& c) {
     std::ostringstream s;
     for (std::size_t k = 0; k < c.values.size(); ++k) {
         if (k) s << ", ";
-        s << c.effect.params[k].name << " = " << fmt(c.values[k], 4) << " [" << fmt(c.lo[k], 4) << ", " << fmt(c.hi[k], 4) << "]";
+        s << c.effect.params[k].name << " = " << fmt(c.values[k], 4) << " [" << fmt(c.lo[k], 4) << ", "
+          << fmt(c.hi[k], 4) << "]";
     }
     if (c.effect.type->has_axes()) s << " (" << kAxes[c.effect.from] << " → " << kAxes[c.effect.to] << ")";
     return s.str();
@@ -63,21 +64,26 @@ std::string params_text(const CandidateResult& c) {
 // What the held-out data cannot tell an accepted effect from, said beside it.
 std::string alternatives(const CandidateResult& c) {
     if (c.indistinguishable.empty()) return "";
-    return log::cat(" *Not distinguishable on this flight from ", log::join(c.indistinguishable, " or "), "*: it was accepted too, and on the held-out blocks neither fits ",
-                    "significantly better. ", c.effect.name,
+    return log::cat(" *Not distinguishable on this flight from ", log::join(c.indistinguishable, " or "),
+                    "*: it was accepted too, and on the held-out blocks neither fits ", "significantly better. ",
+                    c.effect.name,
                     " is kept for its lower held-out error; a flight with faster changes would tell them apart.");
 }
 
 // Who measured the force, in the report's words: a load stand, or a flying sufferer's estimate.
 physics::EffectVoice voice_of(const Replay& r) {
-    if (!r.flying()) return {false, "the stand", "the stand's clock", "along each leg — towards the travel on one leg, against it on the next"};
-    return {true, "the sufferer's force estimate", "the sufferer's force log", "along the neighbour's path — towards its travel"};
+    if (!r.flying())
+        return {false, "the stand", "the stand's clock",
+                "along each leg — towards the travel on one leg, against it on the next"};
+    return {true, "the sufferer's force estimate", "the sufferer's force log",
+            "along the neighbour's path — towards its travel"};
 }
 
 std::string paragraph(const CandidateResult& c, const physics::EffectVoice& who) {
     const auto axis = static_cast<std::size_t>(c.best_axis);
-    const std::string err = log::cat("Held-out RMSE on ", kAxes[axis], ": ", fmt(c.heldout_before[axis]), " → ", fmt(c.heldout_after[axis]), " (",
-                                     fmt(c.gain * 100, 0), " % of its squared error removed on blocks the fit never saw).");
+    const std::string err =
+        log::cat("Held-out RMSE on ", kAxes[axis], ": ", fmt(c.heldout_before[axis]), " → ", fmt(c.heldout_after[axis]),
+                 " (", fmt(c.gain * 100, 0), " % of its squared error removed on blocks the fit never saw).");
     return c.effect.type->describe(c.values, {c.effect.from, c.effect.to}, who) + err;
 }
 
@@ -89,8 +95,10 @@ plot::Field binned(const std::vector<double>& value, const std::vector<SampleInf
     std::vector<double> sum(625, 0), n(625, 0);
     for (std::size_t i = 0; i < value.size(); ++i) {
         const auto& w = info[i];
-        if (w.leg < 0 || w.direction == 0 || w.h < band.lo || w.h >= band.hi || (dir != 0 && w.direction != dir)) continue;
-        const int in = static_cast<int>(std::lround((w.n + 1.2) / 0.1)), ie = static_cast<int>(std::lround((w.e + 1.2) / 0.1));
+        if (w.leg < 0 || w.direction == 0 || w.h < band.lo || w.h >= band.hi || (dir != 0 && w.direction != dir))
+            continue;
+        const int in = static_cast<int>(std::lround((w.n + 1.2) / 0.1)),
+                  ie = static_cast<int>(std::lround((w.e + 1.2) / 0.1));
         if (in < 0 || ie < 0 || in >= 25 || ie >= 25) continue;
         sum[static_cast<std::size_t>(in * 25 + ie)] += value[i];
         n[static_cast<std::size_t>(in * 25 + ie)] += 1;
@@ -130,21 +138,29 @@ std::string stand_figures(const Figures& g, const ExplainResult& r) {
         std::vector<plot::Field> fields;
         for (int way : {1, -1})
             for (const auto& band : kBands)
-                fields.push_back(binned(which ? ra : rb, g.info, band, way, log::cat(band.name, way > 0 ? ", +E legs" : ", -E legs")));
-        plot::render_fields(fields, log::cat("residual (recorded - simulated) ", which ? "AFTER" : "BEFORE", " the fit: ", unit,
-                                             " over the neighbours' centre, by altitude band and leg direction"),
+                fields.push_back(binned(which ? ra : rb, g.info, band, way,
+                                        log::cat(band.name, way > 0 ? ", +E legs" : ", -E legs")));
+        plot::render_fields(fields,
+                            log::cat("residual (recorded - simulated) ", which ? "AFTER" : "BEFORE", " the fit: ", unit,
+                                     " over the neighbours' centre, by altitude band and leg direction"),
                             unit, outline, g.path(which ? "residuals_after.png" : "residuals_before.png"));
     }
     // The band of the strongest region (else the top band).
-    const Band& b0 = kBands[static_cast<std::size_t>(r.regions.empty() ? 2 : band_index(r.regions.front().altitude_lo))];
+    const Band& b0 =
+        kBands[static_cast<std::size_t>(r.regions.empty() ? 2 : band_index(r.regions.front().altitude_lo))];
     for (int way : {1, -1}) {
-        std::vector<plot::Field> fields{binned(obs, g.info, b0, way, "recorded"), binned(sb, g.info, b0, way, "simulated before"),
+        std::vector<plot::Field> fields{binned(obs, g.info, b0, way, "recorded"),
+                                        binned(sb, g.info, b0, way, "simulated before"),
                                         binned(sa, g.info, b0, way, "simulated after")};
-        plot::render_fields(fields, log::cat(unit, " at ", b0.name, ", ", way > 0 ? "+E" : "-E", " legs: recorded vs simulated, before and after the fit"),
+        plot::render_fields(fields,
+                            log::cat(unit, " at ", b0.name, ", ", way > 0 ? "+E" : "-E",
+                                     " legs: recorded vs simulated, before and after the fit"),
                             unit, outline, g.path(way > 0 ? "maps_east.png" : "maps_west.png"));
     }
-    return log::cat("Residuals before and after (", unit, "):\n\n![before](residuals_before.png)\n\n![after](residuals_after.png)\n\n",
-                    "Recorded vs simulated at ", b0.name, ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n");
+    return log::cat("Residuals before and after (", unit,
+                    "):\n\n![before](residuals_before.png)\n\n![after](residuals_after.png)\n\n",
+                    "Recorded vs simulated at ", b0.name,
+                    ":\n\n![+E legs](maps_east.png)\n\n![-E legs](maps_west.png)\n\n");
 }
 
 // A flying sufferer: the residual against the nearest neighbour's position relative to it
@@ -164,14 +180,22 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
         off = std::max(off, s.offset), lo = std::min(lo, s.above), hi = std::max(hi, s.above);
     }
     off = std::ceil(off / kCell) * kCell, lo = std::floor(lo / kCell) * kCell, hi = std::ceil(hi / kCell) * kCell;
-    const int nx = std::max(1, static_cast<int>(std::lround(off / kCell))), ny = std::max(1, static_cast<int>(std::lround((hi - lo) / kCell)));
+    const int nx = std::max(1, static_cast<int>(std::lround(off / kCell))),
+              ny = std::max(1, static_cast<int>(std::lround((hi - lo) / kCell)));
     const std::string unit = g.unit();
-    plot::render_heats({plot::bin_heat("before the fit", before, 0, off, lo, hi, nx, ny), plot::bin_heat("after the fit", after, 0, off, lo, hi, nx, ny)},
-                       log::cat("residual (recorded - simulated) ", unit, " by where the nearest neighbour is"), "horizontal offset [m]",
-                       "height above the sufferer [m]", unit, g.path("residual_vs_position.png"));
-    plot::Chart c{log::cat(unit, " of the sufferer: recorded vs simulated; grey lines: cross-validation blocks (", flight::to_string(blocks.kind), ")"),
-                  "time [s]", unit, {}, {}};
-    plot::Series rec{"recorded", g.replay.stamps(), {}, {40, 40, 40}}, sb{"simulated before the fit", g.replay.stamps(), {}, {200, 120, 30}},
+    plot::render_heats({plot::bin_heat("before the fit", before, 0, off, lo, hi, nx, ny),
+                        plot::bin_heat("after the fit", after, 0, off, lo, hi, nx, ny)},
+                       log::cat("residual (recorded - simulated) ", unit, " by where the nearest neighbour is"),
+                       "horizontal offset [m]", "height above the sufferer [m]", unit,
+                       g.path("residual_vs_position.png"));
+    plot::Chart c{log::cat(unit, " of the sufferer: recorded vs simulated; grey lines: cross-validation blocks (",
+                           flight::to_string(blocks.kind), ")"),
+                  "time [s]",
+                  unit,
+                  {},
+                  {}};
+    plot::Series rec{"recorded", g.replay.stamps(), {}, {40, 40, 40}},
+        sb{"simulated before the fit", g.replay.stamps(), {}, {200, 120, 30}},
         sa{"simulated after the fit", g.replay.stamps(), {}, {30, 30, 210}};
     for (std::size_t i = 0; i < g.info.size(); ++i) {
         rec.y.push_back(g.replay.measured()[i][axis]);
@@ -181,9 +205,10 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
     c.series = {rec, sb, sa};
     for (const auto& b : blocks.blocks) c.marks.push_back(b.t_start);
     plot::render_chart(c, g.path("encounters.png"));
-    return log::cat("Residual (", unit, ") against where the nearest neighbour is, before and after the fit:\n\n",
-                    "![residual vs relative position](residual_vs_position.png)\n\n",
-                    "Recorded vs simulated through the flight, each encounter in its block:\n\n![encounters](encounters.png)\n\n");
+    return log::cat(
+        "Residual (", unit, ") against where the nearest neighbour is, before and after the fit:\n\n",
+        "![residual vs relative position](residual_vs_position.png)\n\n",
+        "Recorded vs simulated through the flight, each encounter in its block:\n\n![encounters](encounters.png)\n\n");
 }
 
 // The stand's clock against the mocap's as the lab's time service measured it while recording
@@ -194,10 +219,12 @@ struct MeasuredClock {
 };
 std::optional<MeasuredClock> measured_clock(const flight::Flight& f) {
     const json extra = json::parse(f.meta.extra_json, nullptr, false);
-    if (!extra.is_object() || !extra.contains(flight::kMeasuredClockOffsetKey) || !extra[flight::kMeasuredClockOffsetKey].is_number())
+    if (!extra.is_object() || !extra.contains(flight::kMeasuredClockOffsetKey) ||
+        !extra[flight::kMeasuredClockOffsetKey].is_number())
         return std::nullopt;
     const auto raw = extra.find("raw_stamps");
-    return MeasuredClock{extra[flight::kMeasuredClockOffsetKey].get<double>(), raw == extra.end() || !raw->is_boolean() || raw->get<bool>()};
+    return MeasuredClock{extra[flight::kMeasuredClockOffsetKey].get<double>(),
+                         raw == extra.end() || !raw->is_boolean() || raw->get<bool>()};
 }
 
 // What the report says of an effect: its accepted (final, refitted) result, else its latest score.
@@ -215,110 +242,177 @@ std::string measured_clock_text(const std::optional<MeasuredClock>& measured, co
     if (!measured) return "";
     std::string fitted = "not fitted (not a candidate)";
     if (const auto* c = final_result(r, physics::kClockOffsetEffect))
-        fitted = log::cat(fmt(c->values[0], 4), " s [", fmt(c->lo[0], 4), ", ", fmt(c->hi[0], 4), "], ", c->accepted ? "accepted" : "not accepted");
-    return log::cat("**Clock offset, measured beside fitted.** The lab's time service measured the stand's clock against the mocap's "
-                    "while recording: ", fmt(measured->offset_s, 4), " s",
-                    measured->raw_stamps ? " (these stamps are as recorded)" : " (already taken out of these stamps by the export: expect a fit near 0)",
-                    ". The explainer's clock_offset: ", fitted, ".\n\n");
+        fitted = log::cat(fmt(c->values[0], 4), " s [", fmt(c->lo[0], 4), ", ", fmt(c->hi[0], 4), "], ",
+                          c->accepted ? "accepted" : "not accepted");
+    return log::cat(
+        "**Clock offset, measured beside fitted.** The lab's time service measured the stand's clock against the "
+        "mocap's "
+        "while recording: ",
+        fmt(measured->offset_s, 4), " s",
+        measured->raw_stamps ? " (these stamps are as recorded)"
+                             : " (already taken out of these stamps by the export: expect a fit near 0)",
+        ". The explainer's clock_offset: ", fitted, ".\n\n");
+}
+
+// report.json: the machine-readable contract (FLIGHT_FORMAT.md, explain report).
+json report_json(const ExplainResult& r, const ExplainOptions& o, const std::optional<MeasuredClock>& measured) {
+    json j;
+    j["format"] = "downwash-explain/1";
+    json regions = json::array();
+    for (const auto& g : r.regions)
+        regions.push_back({{"axis", g.axis}, {"where", g.where}, {"mean_residual", g.mean_residual}, {"z", g.z}});
+    j["mismatch"] = {{"detected", r.detected},
+                     {"noise_floor", axes_json(r.noise_floor)},
+                     {"regions", regions},
+                     {"excess",
+                      {{"before", axes_json(r.excess_before)},
+                       {"after", axes_json(r.excess_after)},
+                       {"threshold", o.detect_excess}}}};
+    json cands = json::array();
+    for (const auto& e : o.candidates) {  // each effect once: its accepted (final) or latest score
+        const CandidateResult* final = final_result(r, e.name);
+        if (!final) continue;
+        const auto& c = *final;
+        cands.push_back({{"effect", e.name},
+                         {"params", params_json(c, false)},
+                         {"ci95", params_json(c, true)},
+                         {"heldout_rmse_before", axes_json(c.heldout_before)},
+                         {"heldout_rmse_after", axes_json(c.heldout_after)},
+                         {"delta_bic", c.delta_bic},
+                         {"accepted", c.accepted},
+                         {"heldout_z", c.t},
+                         {"note", c.note}});
+        if (!c.indistinguishable.empty()) cands.back()["indistinguishable_from"] = c.indistinguishable;
+        if (c.stand_in) cands.back()["stands_in"] = true;
+        if (measured && e.name == physics::kClockOffsetEffect)
+            cands.back()["measured"] = {{"offset_s", measured->offset_s}};
+    }
+    j["candidates"] = cands;
+    if (measured)
+        j["clock_offset_measured"] = {{"offset_s", measured->offset_s},
+                                      {"by", "the lab's time service (processes/status clock_offset_s, median)"}};
+    json by = json::array();
+    for (const auto& c : r.accepted) by.push_back(c.effect.name);
+    j["explained_by"] = by;
+    j["unexplained"] = r.unexplained;
+    j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)},
+                {"heldout_rmse_after", axes_json(r.heldout_after)}};
+    j["physics_out"] = "physics.yaml";
+    j["cross_validation"] = {
+        {"blocks", flight::to_string(r.blocks)}, {"count", r.legs}, {"folds", o.folds}, {"samples", r.samples}};
+    return j;
+}
+
+// The report's opening: the flight, and what explains it.
+void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& r, const physics::EffectVoice& who) {
+    md << "# Mismatch report\n\n";
+    md << "Flight: " << f.meta.formation << ", " << f.meta.neighbours.size() << " neighbour(s), "
+       << (who.flying ? log::cat("a flying sufferer (wrench: ", flight::to_string(f.meta.wrench_source), ")")
+                      : std::string("on a load stand"))
+       << ", " << r.legs << " cross-validation blocks by " << flight::to_string(r.blocks) << ", " << r.samples
+       << " wrench samples in them. Simulated with the given physics along the recorded poses, each vehicle with its "
+          "own parameters "
+          "(meta.json); residual = recorded − simulated"
+       << (f.meta.moments_measured ? "" : "; the moments are not measured and take no part") << ". Analysis took "
+       << fmt(r.seconds, 1) << " s.\n\n";
+    if (!r.detected) {
+        md << "**No mismatch**: the recording matches the simulation within its noise. No effect is claimed.\n\n";
+    } else if (r.accepted.empty()) {
+        md << "**A significant mismatch that no candidate explains** (`unexplained`). Where it is is below; no effect "
+              "is claimed.\n\n";
+    } else {
+        md << "**Explained by: ";
+        for (std::size_t k = 0; k < r.accepted.size(); ++k) md << (k ? ", " : "") << r.accepted[k].effect.name;
+        md << "**"
+           << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".")
+           << "\n\n";
+        for (const auto& c : r.accepted) md << paragraph(c, who) << alternatives(c) << "\n\n";
+    }
+}
+
+// Where: the noise floor, the significant regions and the time-shift signatures.
+void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o, const physics::EffectVoice& who) {
+    md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes
+       << " of its own motor distances horizontally): ";
+    for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
+    if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";
+    else {
+        md << "| axis | where | mean residual | z |\n|---|---|---|---|\n";
+        for (const auto& g : r.regions)
+            md << "| " << g.axis << " | " << g.where << " | " << fmt(g.mean_residual) << " | " << fmt(g.z, 1) << " |\n";
+        md << "\nz: the bin's mean residual over its standard error, with the sample count reduced for "
+              "autocorrelation.\n\n";
+    }
+    md << "### Signatures: the time shift that best aligns recording and simulation\n\n"
+          "A clock offset or sensor lag gives the same shift everywhere; a wake transport delay grows with separation; "
+          "a position "
+       << (who.flying ? "offset gives shifts of opposite sign for passes in opposite directions."
+                      : "offset gives shifts of opposite sign on +E and −E legs.")
+       << "\n\n| legs (all: a flight without legs) | separation band | mean separation [m] | samples | best shift [s] "
+          "|\n|---|---|---|---|---|\n";
+    for (const auto& s : r.shifts)
+        md << "| "
+           << (s.direction > 0   ? "+E"
+               : s.direction < 0 ? "−E"
+                                 : "all")
+           << " | " << s.band << " | " << fmt(s.separation_m, 2) << " | " << s.samples << " | " << fmt(s.shift_s, 3)
+           << " |\n";
+}
+
+// The candidates with the rule they were judged by, and the held-out error per axis.
+void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOptions& o) {
+    md << "\n## Candidates\n\nEach fitted with Ceres (Huber loss) on the whole flight, then — if ΔBIC < −10 — in "
+       << o.folds << "-fold blocked cross-validation by " << flight::to_string(r.blocks) << " (folds: block % "
+       << o.folds
+       << "). Accepted when the held-out error falls on some axis — z over 0.25 s pieces of the held-out blocks, the "
+          "larger of the "
+          "Wilcoxon signed-rank z and the self-normalised sum Σd/√Σd² (pieces where the candidate changes the "
+          "prediction by under 0.1 σ left out) ≥ "
+       << o.min_t << ", by ≥ " << o.min_gain * 100
+       << " %, and the total held-out error falls — and when its value fitted on the nearest and the farthest third of "
+          "separations agrees "
+          "(else it stands in for a mismatch that depends on separation). Intervals: the wider of the fold jackknife "
+          "and the "
+          "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model "
+          "shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | "
+          "verdict |\n|---|---|---|---|---|\n";
+    for (const auto& c : r.candidates)
+        md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fmt(c.delta_bic, 1)
+           << " | " << c.note << " |\n";
+    md << "\n## Held-out error per axis\n\n| axis | before | after |\n|---|---|---|\n";
+    for (std::size_t a = 0; a < 6; ++a)
+        md << "| " << kAxes[a] << " | " << fmt(r.heldout_before[a], 4) << " | " << fmt(r.heldout_after[a], 4) << " |\n";
 }
 
 }  // namespace
 
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir) {
     fs::create_directories(dir);
-    // report.json
-    json j;
-    j["format"] = "downwash-explain/1";
-    json regions = json::array();
-    for (const auto& g : r.regions) regions.push_back({{"axis", g.axis}, {"where", g.where}, {"mean_residual", g.mean_residual}, {"z", g.z}});
-    j["mismatch"] = {{"detected", r.detected}, {"noise_floor", axes_json(r.noise_floor)}, {"regions", regions},
-                     {"excess", {{"before", axes_json(r.excess_before)}, {"after", axes_json(r.excess_after)}, {"threshold", o.detect_excess}}}};
-    json cands = json::array();
-    for (const auto& e : o.candidates) {  // each effect once: its accepted (final) or latest score
-        const CandidateResult* final = final_result(r, e.name);
-        if (!final) continue;
-        const auto& c = *final;
-        cands.push_back({{"effect", e.name}, {"params", params_json(c, false)}, {"ci95", params_json(c, true)},
-                         {"heldout_rmse_before", axes_json(c.heldout_before)}, {"heldout_rmse_after", axes_json(c.heldout_after)},
-                         {"delta_bic", c.delta_bic}, {"accepted", c.accepted}, {"heldout_z", c.t}, {"note", c.note}});
-        if (!c.indistinguishable.empty()) cands.back()["indistinguishable_from"] = c.indistinguishable;
-        if (c.stand_in) cands.back()["stands_in"] = true;
-    }
-    j["candidates"] = cands;
     const auto measured = measured_clock(f);
-    if (measured) {
-        j["clock_offset_measured"] = {{"offset_s", measured->offset_s}, {"by", "the lab's time service (processes/status clock_offset_s, median)"}};
-        for (auto& c : j["candidates"])
-            if (c["effect"] == physics::kClockOffsetEffect) c["measured"] = {{"offset_s", measured->offset_s}};
-    }
-    json by = json::array();
-    for (const auto& c : r.accepted) by.push_back(c.effect.name);
-    j["explained_by"] = by;
-    j["unexplained"] = r.unexplained;
-    j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)}, {"heldout_rmse_after", axes_json(r.heldout_after)}};
-    j["physics_out"] = "physics.yaml";
-    j["cross_validation"] = {{"blocks", flight::to_string(r.blocks)}, {"count", r.legs}, {"folds", o.folds}, {"samples", r.samples}};
-    write_file((fs::path(dir) / "report.json").string(), j.dump(2) + "\n");
+    write_file((fs::path(dir) / "report.json").string(), report_json(r, o, measured).dump(2) + "\n");
     write_file((fs::path(dir) / "physics.yaml").string(), physics::to_yaml(r.fitted));
 
     const Replay replay(f, o.physics);
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
-    const Figures figs{replay, describe(replay, blocks), replay.recorded(o.physics), replay.recorded(r.fitted),
-                       r.regions.empty() ? std::size_t{2} : static_cast<std::size_t>(physics::axis_index(r.regions.front().axis)), dir};
+    const Figures figs{
+        replay,
+        describe(replay, blocks),
+        replay.recorded(o.physics),
+        replay.recorded(r.fitted),
+        r.regions.empty() ? std::size_t{2} : static_cast<std::size_t>(physics::axis_index(r.regions.front().axis)),
+        dir};
     const physics::EffectVoice who = voice_of(replay);
     const std::string figures_md = who.flying ? flying_figures(figs, blocks) : stand_figures(figs, r);
 
-    // report.md
     std::ostringstream md;
-    md << "# Mismatch report\n\n";
-    const char* kind = flight::to_string(r.blocks);
-    md << "Flight: " << f.meta.formation << ", " << f.meta.neighbours.size() << " neighbour(s), "
-       << (who.flying ? log::cat("a flying sufferer (wrench: ", flight::to_string(f.meta.wrench_source), ")") : std::string("on a load stand"))
-       << ", " << r.legs << " cross-validation blocks by " << kind << ", " << r.samples
-       << " wrench samples in them. Simulated with the given physics along the recorded poses, each vehicle with its own parameters "
-          "(meta.json); residual = recorded − simulated"
-       << (f.meta.moments_measured ? "" : "; the moments are not measured and take no part") << ". Analysis took " << fmt(r.seconds, 1) << " s.\n\n";
-    if (!r.detected) {
-        md << "**No mismatch**: the recording matches the simulation within its noise. No effect is claimed.\n\n";
-    } else if (r.accepted.empty()) {
-        md << "**A significant mismatch that no candidate explains** (`unexplained`). Where it is is below; no effect is claimed.\n\n";
-    } else {
-        md << "**Explained by: ";
-        for (std::size_t k = 0; k < r.accepted.size(); ++k) md << (k ? ", " : "") << r.accepted[k].effect.name;
-        md << "**" << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".") << "\n\n";
-        for (const auto& c : r.accepted) md << paragraph(c, who) << alternatives(c) << "\n\n";
-    }
+    md_summary(md, f, r, who);
     md << measured_clock_text(measured, r);
-    md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes << " of its own motor distances horizontally): ";
-    for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
-    if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";
-    else {
-        md << "| axis | where | mean residual | z |\n|---|---|---|---|\n";
-        for (const auto& g : r.regions) md << "| " << g.axis << " | " << g.where << " | " << fmt(g.mean_residual) << " | " << fmt(g.z, 1) << " |\n";
-        md << "\nz: the bin's mean residual over its standard error, with the sample count reduced for autocorrelation.\n\n";
-    }
-    md << "### Signatures: the time shift that best aligns recording and simulation\n\n"
-          "A clock offset or sensor lag gives the same shift everywhere; a wake transport delay grows with separation; a position "
-       << (who.flying ? "offset gives shifts of opposite sign for passes in opposite directions."
-                                    : "offset gives shifts of opposite sign on +E and −E legs.")
-       << "\n\n| legs (all: a flight without legs) | separation band | mean separation [m] | samples | best shift [s] |\n|---|---|---|---|---|\n";
-    for (const auto& s : r.shifts)
-        md << "| " << (s.direction > 0 ? "+E" : s.direction < 0 ? "−E" : "all") << " | " << s.band << " | " << fmt(s.separation_m, 2) << " | " << s.samples << " | "
-           << fmt(s.shift_s, 3) << " |\n";
-    md << "\n## Candidates\n\nEach fitted with Ceres (Huber loss) on the whole flight, then — if ΔBIC < −10 — in "
-       << o.folds << "-fold blocked cross-validation by " << kind << " (folds: block % " << o.folds
-       << "). Accepted when the held-out error falls on some axis — z over 0.25 s pieces of the held-out blocks, the larger of the "
-          "Wilcoxon signed-rank z and the self-normalised sum Σd/√Σd² (pieces where the candidate changes the prediction by under 0.1 σ left out) ≥ "
-       << o.min_t << ", by ≥ " << o.min_gain * 100
-       << " %, and the total held-out error falls — and when its value fitted on the nearest and the farthest third of separations agrees "
-          "(else it stands in for a mismatch that depends on separation). Intervals: the wider of the fold jackknife and the "
-          "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | verdict |\n|---|---|---|---|---|\n";
-    for (const auto& c : r.candidates)
-        md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fmt(c.delta_bic, 1) << " | " << c.note << " |\n";
-    md << "\n## Held-out error per axis\n\n| axis | before | after |\n|---|---|---|\n";
-    for (std::size_t a = 0; a < 6; ++a) md << "| " << kAxes[a] << " | " << fmt(r.heldout_before[a], 4) << " | " << fmt(r.heldout_after[a], 4) << " |\n";
-    md << "\n## Figures\n\n" << figures_md
-       << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects on).\n";
+    md_where(md, r, o, who);
+    md_candidates(md, r, o);
+    md << "\n## Figures\n\n"
+       << figures_md
+       << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects "
+          "on).\n";
     write_file((fs::path(dir) / "report.md").string(), md.str());
 }
 

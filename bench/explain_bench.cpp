@@ -46,7 +46,8 @@ int main(int argc, char** argv) {
             const char* what = merging ? "jet merging hidden" : "nothing hidden";
             std::printf("| simulate the flight (dw-sim fly's work), %s | %.2f | (anchor) |\n", what, sim_s);
             std::printf("| one replay of it through the physics | %.2f | (anchor) |\n", replay_s);
-            std::printf("| full analysis + report, %s (found: %s) | **%.1f** | <= 60 |\n", what, by.empty() ? "nothing" : by.c_str(), explain_s);
+            std::printf("| full analysis + report, %s (found: %s) | **%.1f** | <= 60 |\n", what,
+                        by.empty() ? "nothing" : by.c_str(), explain_s);
         }
         std::filesystem::remove_all(dir);
         return 0;

@@ -42,8 +42,10 @@ void run_writer(benchmark::State& state, dw::mcap::Compression c, std::size_t si
         bytes = w.bytes_written();
     }
     std::filesystem::remove(path);
-    state.counters["msgs_per_s"] = benchmark::Counter(static_cast<double>(n * state.iterations()), benchmark::Counter::kIsRate);
-    state.counters["MB_per_s_in"] = benchmark::Counter(static_cast<double>(n * size * state.iterations()) / 1e6, benchmark::Counter::kIsRate);
+    state.counters["msgs_per_s"] =
+        benchmark::Counter(static_cast<double>(n * state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["MB_per_s_in"] =
+        benchmark::Counter(static_cast<double>(n * size * state.iterations()) / 1e6, benchmark::Counter::kIsRate);
     state.counters["file_MB"] = static_cast<double>(bytes) / 1e6;
 }
 
@@ -68,7 +70,8 @@ void BM_Anchor_dd(benchmark::State& state) {
         if (std::system(cmd.c_str()) != 0) state.SkipWithError("dd failed");
     }
     std::filesystem::remove(path);
-    state.counters["MB_per_s_in"] = benchmark::Counter(2000.0 * 1048576 / 1e6 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["MB_per_s_in"] = benchmark::Counter(2000.0 * 1048576 / 1e6 * static_cast<double>(state.iterations()),
+                                                       benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Anchor_dd)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
 

@@ -49,13 +49,17 @@ int main(int argc, char** argv) {
         std::mutex m;
         std::set<std::uint64_t> frames;
         std::vector<double> latency_us;
-        dw::dds::Reader<dw::msg::MocapFrame> reader(p, dw::dds::topics::mocap_frame, [&](const auto& f, const dw::dds::SampleMeta& meta) {
-            std::lock_guard lock(m);
-            frames.insert(f.frame_number());
-            latency_us.push_back(static_cast<double>(meta.reception_time_ns - dw::dds::from_msg(f.receive())) / 1000.0);
-        });
+        dw::dds::Reader<dw::msg::MocapFrame> reader(
+            p, dw::dds::topics::mocap_frame, [&](const auto& f, const dw::dds::SampleMeta& meta) {
+                std::lock_guard lock(m);
+                frames.insert(f.frame_number());
+                latency_us.push_back(static_cast<double>(meta.reception_time_ns - dw::dds::from_msg(f.receive())) /
+                                     1000.0);
+            });
         dw::Subprocess emulator({{dir + "/dw-natnet-emulator", "--port", port, "--rate", "180"},
-                                 "/tmp/dw-bench-mocap-emulator.log", "/tmp/dw-bench-mocap-emulator.log", {}});
+                                 "/tmp/dw-bench-mocap-emulator.log",
+                                 "/tmp/dw-bench-mocap-emulator.log",
+                                 {}});
         std::this_thread::sleep_for(std::chrono::milliseconds(300));
         std::vector<std::string> bridge_args{dir + "/dw-mocap-bridge", "--command-port", port};
         bridge_args.insert(bridge_args.end(), dds.begin(), dds.end());
@@ -71,13 +75,19 @@ int main(int argc, char** argv) {
         const long sent = at == std::string::npos ? -1 : std::stol(log.substr(at + 5));
         std::lock_guard lock(m);
         std::sort(latency_us.begin(), latency_us.end());
-        auto pct = [&](double q) { return latency_us.empty() ? 0.0 : latency_us[static_cast<std::size_t>(q / 100 * static_cast<double>(latency_us.size() - 1))]; };
+        auto pct = [&](double q) {
+            return latency_us.empty()
+                       ? 0.0
+                       : latency_us[static_cast<std::size_t>(q / 100 * static_cast<double>(latency_us.size() - 1))];
+        };
         const std::uint64_t span = frames.empty() ? 0 : *frames.rbegin() - *frames.begin() + 1;
-        std::printf("| seconds | frames sent by the emulator | received by the subscriber | missing between the first and last received | added latency p50 | p99 | max | bridge CPU |\n");
+        std::printf(
+            "| seconds | frames sent by the emulator | received by the subscriber | missing between the first and last "
+            "received | added latency p50 | p99 | max | bridge CPU |\n");
         std::printf("|---|---|---|---|---|---|---|---|\n");
-        std::printf("| %.0f | %ld | %zu | %llu | %.0f µs | %.0f µs | %.0f µs | %.1f %% of a core |\n", seconds, sent, frames.size(),
-                    static_cast<unsigned long long>(span - frames.size()), pct(50), pct(99), latency_us.empty() ? 0.0 : latency_us.back(),
-                    100.0 * cpu / seconds);
+        std::printf("| %.0f | %ld | %zu | %llu | %.0f µs | %.0f µs | %.0f µs | %.1f %% of a core |\n", seconds, sent,
+                    frames.size(), static_cast<unsigned long long>(span - frames.size()), pct(50), pct(99),
+                    latency_us.empty() ? 0.0 : latency_us.back(), 100.0 * cpu / seconds);
         std::printf("\ntargets: no frame lost by the bridge; added latency p99 < 1 ms\n");
         return 0;
     });

@@ -43,7 +43,8 @@ void BM_SingleProducerWrench(benchmark::State& state) {
     for (auto _ : state) {
         benchmark::DoNotOptimize(m.evaluate(suf, std::span<const Producer>(&ps[i++ & 1023], 1)));
     }
-    state.counters["evals_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["evals_per_s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["cells"] = static_cast<double>(m.planform().size());
 }
 BENCHMARK(BM_SingleProducerWrench);
@@ -66,7 +67,8 @@ void BM_AnchorFlops(benchmark::State& state) {
         }
         benchmark::DoNotOptimize(a);
     }
-    state.counters["flops_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()) * 64 * kLanes * 2, benchmark::Counter::kIsRate);
+    state.counters["flops_per_s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()) * 64 * kLanes * 2, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_AnchorFlops);
 
@@ -78,7 +80,8 @@ void BM_AnchorDivisions(benchmark::State& state) {
         }
         benchmark::DoNotOptimize(a);
     }
-    state.counters["divs_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()) * 64 * kLanes, benchmark::Counter::kIsRate);
+    state.counters["divs_per_s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()) * 64 * kLanes, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_AnchorDivisions);
 
@@ -90,7 +93,8 @@ void BM_AnchorSqrt(benchmark::State& state) {
         }
         benchmark::DoNotOptimize(a);
     }
-    state.counters["sqrts_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()) * 64 * kLanes, benchmark::Counter::kIsRate);
+    state.counters["sqrts_per_s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()) * 64 * kLanes, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_AnchorSqrt);
 
@@ -132,14 +136,16 @@ int main(int argc, char** argv) {
     benchmark::RunSpecifiedBenchmarks(&capture);
     benchmark::Shutdown();
     auto& c = capture.counters;
-    if (!c.count("evals_per_s") || !c.count("flops_per_s") || !c.count("divs_per_s") || !c.count("sqrts_per_s")) return 0;
+    if (!c.count("evals_per_s") || !c.count("flops_per_s") || !c.count("divs_per_s") || !c.count("sqrts_per_s"))
+        return 0;
     const double cells = c["cells"];
     const double flops = cells * kFlopsPerCell, divs = cells * kDivsPerCell, roots = cells * kSqrtsPerCell;
     const double roofline = 1.0 / (flops / c["flops_per_s"] + divs / c["divs_per_s"] + roots / c["sqrts_per_s"]);
     std::printf("\nsingle-producer wrench, %g cells: %.0f flops + %.0f divisions + %.0f square roots per evaluation\n",
                 cells, flops, divs, roots);
-    std::printf("measured %.3g evaluations/s per core; roofline estimate %.3g/s (compute-bound, planform in L1); "
-                "%.0f %% of the roofline; target >= 1e6/s\n",
-                c["evals_per_s"], roofline, 100.0 * c["evals_per_s"] / roofline);
+    std::printf(
+        "measured %.3g evaluations/s per core; roofline estimate %.3g/s (compute-bound, planform in L1); "
+        "%.0f %% of the roofline; target >= 1e6/s\n",
+        c["evals_per_s"], roofline, 100.0 * c["evals_per_s"] / roofline);
     return 0;
 }

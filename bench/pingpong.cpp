@@ -27,8 +27,10 @@ using namespace std::chrono_literals;
 
 namespace {
 
-constexpr dw::dds::Topic<Msg> kLayerPing{"bench/layer/ping", dw::dds::QosProfile::command, "dw::msg::WrenchStamped", ""};
-constexpr dw::dds::Topic<Msg> kLayerPong{"bench/layer/pong", dw::dds::QosProfile::command, "dw::msg::WrenchStamped", ""};
+constexpr dw::dds::Topic<Msg> kLayerPing{"bench/layer/ping", dw::dds::QosProfile::command, "dw::msg::WrenchStamped",
+                                         ""};
+constexpr dw::dds::Topic<Msg> kLayerPong{"bench/layer/pong", dw::dds::QosProfile::command, "dw::msg::WrenchStamped",
+                                         ""};
 constexpr dw::dds::Topic<Msg> kRawPing{"bench/raw/ping", dw::dds::QosProfile::command, "dw::msg::WrenchStamped", ""};
 constexpr dw::dds::Topic<Msg> kRawPong{"bench/raw/pong", dw::dds::QosProfile::command, "dw::msg::WrenchStamped", ""};
 
@@ -71,7 +73,8 @@ class LayerEndpoint {
 public:
     LayerEndpoint(const dw::dds::DdsConfig& cfg, const dw::dds::Topic<Msg>& out, const dw::dds::Topic<Msg>& in,
                   std::function<void(const Msg&)> on_sample)
-        : participant_(cfg, "layer"), writer_(participant_, out),
+        : participant_(cfg, "layer"),
+          writer_(participant_, out),
           reader_(participant_, in, [f = std::move(on_sample)](const Msg& m, const dw::dds::SampleMeta&) { f(m); }) {}
     bool write(Msg& m) { return writer_.write(m); }
     bool matched() { return writer_.matched() > 0; }
@@ -129,9 +132,16 @@ int run_pong(const dw::dds::DdsConfig& cfg) {
     Msg reply;
     std::mutex m;
     raw = std::make_unique<RawEndpoint>(cfg, "rt/" + cfg.ns + "/bench/raw/pong", "rt/" + cfg.ns + "/bench/raw/ping",
-                                        [&](const Msg& in) { std::lock_guard l(m); reply = in; raw->write(reply); });
-    layer = std::make_unique<LayerEndpoint>(cfg, kLayerPong, kLayerPing,
-                                            [&](const Msg& in) { std::lock_guard l(m); reply = in; layer->write(reply); });
+                                        [&](const Msg& in) {
+                                            std::lock_guard l(m);
+                                            reply = in;
+                                            raw->write(reply);
+                                        });
+    layer = std::make_unique<LayerEndpoint>(cfg, kLayerPong, kLayerPing, [&](const Msg& in) {
+        std::lock_guard l(m);
+        reply = in;
+        layer->write(reply);
+    });
     while (!dw::Shutdown::instance().wait_for(1s)) {}
     return 0;
 }
@@ -157,11 +167,14 @@ int run(int argc, char** argv) {
     dw::Subprocess ponger({args, "", "", {}});
 
     Pinger<RawEndpoint> raw;
-    raw.endpoint = std::make_unique<RawEndpoint>(cfg, "rt/" + cfg.ns + "/bench/raw/ping", "rt/" + cfg.ns + "/bench/raw/pong",
-                                                 [&](const Msg&) { raw.replies.fetch_add(1); });
+    raw.endpoint =
+        std::make_unique<RawEndpoint>(cfg, "rt/" + cfg.ns + "/bench/raw/ping", "rt/" + cfg.ns + "/bench/raw/pong",
+                                      [&](const Msg&) { raw.replies.fetch_add(1); });
     Pinger<LayerEndpoint> layer;
-    layer.endpoint = std::make_unique<LayerEndpoint>(cfg, kLayerPing, kLayerPong, [&](const Msg&) { layer.replies.fetch_add(1); });
-    if (!wait_matched(*raw.endpoint) || !wait_matched(*layer.endpoint)) throw dw::RuntimeError("the echo process did not match");
+    layer.endpoint =
+        std::make_unique<LayerEndpoint>(cfg, kLayerPing, kLayerPong, [&](const Msg&) { layer.replies.fetch_add(1); });
+    if (!wait_matched(*raw.endpoint) || !wait_matched(*layer.endpoint))
+        throw dw::RuntimeError("the echo process did not match");
     std::this_thread::sleep_for(300ms);
     raw.run(500);  // warm-up: caches, allocations, the ack machinery
     layer.run(500);

@@ -62,7 +62,8 @@ void inference() {
         double sink = 0;
         for (int i = 0; i < 20000; ++i) {
             const double e = -1.0 + 2.0 * (i % 1000) / 1000.0;
-            const std::vector<RelState> x{{0, e + 0.5, -1.3, 0, 0.5, 0}, {0, e, -1.3, 0, 0.5, 0}, {0, e - 0.5, -1.3, 0, 0.5, 0}};
+            const std::vector<RelState> x{
+                {0, e + 0.5, -1.3, 0, 0.5, 0}, {0, e, -1.3, 0, 0.5, 0}, {0, e - 0.5, -1.3, 0, 0.5, 0}};
             const auto t0 = Clock::now();
             sink += m->predict(x)[2];
             us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
@@ -90,7 +91,8 @@ void map() {
             s.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
         }
         std::printf("| %d panel%s (physics%s) | %.3f | %s |\n", panels, panels > 1 ? "s" : "",
-                    panels > 1 ? " + three learnt models" : " only: anchor", percentile(s, 0.5), panels > 1 ? "<= 0.5" : "");
+                    panels > 1 ? " + three learnt models" : " only: anchor", percentile(s, 0.5),
+                    panels > 1 ? "<= 0.5" : "");
     }
     std::filesystem::remove(dir / "dw-bench-map.png");
     std::printf("\n");
@@ -101,7 +103,8 @@ void train() {
     Dataset all;
     std::uint64_t seed = 100;
     const auto tmp = std::filesystem::temp_directory_path() / ("dw-bench-train-" + std::to_string(::getpid()));
-    for (const char* f : {"single", "side_by_side", "leader_follower", "leader_follower3", "stack", "hybrid", "single", "leader_follower3", "stack", "hybrid"}) {
+    for (const char* f : {"single", "side_by_side", "leader_follower", "leader_follower3", "stack", "hybrid", "single",
+                          "leader_follower3", "stack", "hybrid"}) {
         dw::physics::FlyOptions fly;
         fly.formation = f;
         fly.grid.legs = 60;
@@ -112,8 +115,11 @@ void train() {
     std::filesystem::remove_all(tmp);
     Split sp = split_by_leg(all);
     if (sp.train.samples.size() > 100000) sp.train.samples.resize(100000);
-    std::printf("| training (%zu samples, %zu validation, %d thread%s) | epochs (best) | seconds | target |\n|---|---|---|---|\n",
-                sp.train.samples.size(), sp.validation.samples.size(), kDefaultTrainThreads, kDefaultTrainThreads == 1 ? "" : "s");
+    std::printf(
+        "| training (%zu samples, %zu validation, %d thread%s) | epochs (best) | seconds | target "
+        "|\n|---|---|---|---|\n",
+        sp.train.samples.size(), sp.validation.samples.size(), kDefaultTrainThreads,
+        kDefaultTrainThreads == 1 ? "" : "s");
     for (const char* kind : {"deep_sets", "learnt_linear"}) {
         TrainOptions o;
         o.kind = kind;
@@ -125,20 +131,25 @@ void train() {
 }
 
 void e2e(const dw::dds::DdsConfig& cfg, int frames) {
-    const auto model = std::filesystem::temp_directory_path() / ("dw-bench-model-" + std::to_string(::getpid()) + ".json");
+    const auto model =
+        std::filesystem::temp_directory_path() / ("dw-bench-model-" + std::to_string(::getpid()) + ".json");
     sized_model(Structure::deep_sets).save(model.string());
     dw::Subprocess node({{dw::executable_dir() + "/dw-predictor", "run", "--model", model.string(), "--domain",
-                          std::to_string(cfg.domain), "--namespace", cfg.ns}, "/dev/null", "/dev/null", {}});
+                          std::to_string(cfg.domain), "--namespace", cfg.ns},
+                         "/dev/null",
+                         "/dev/null",
+                         {}});
     dw::dds::Participant p(cfg, "bench");
     dw::SystemClock clock;
     std::mutex m;
     std::vector<double> us, age_us;
-    dw::dds::Reader<dw::msg::WrenchPrediction> reader(p, dw::dds::topics::wrench_prediction, [&](const auto& s, const auto&) {
-        const double lat = static_cast<double>(clock.now_ns() - dw::dds::from_msg(s.header().stamp())) * 1e-3;
-        std::lock_guard lock(m);
-        us.push_back(lat);
-        age_us.push_back(s.input_age_s() * 1e6);
-    });
+    dw::dds::Reader<dw::msg::WrenchPrediction> reader(
+        p, dw::dds::topics::wrench_prediction, [&](const auto& s, const auto&) {
+            const double lat = static_cast<double>(clock.now_ns() - dw::dds::from_msg(s.header().stamp())) * 1e-3;
+            std::lock_guard lock(m);
+            us.push_back(lat);
+            age_us.push_back(s.input_age_s() * 1e6);
+        });
     dw::dds::Writer<dw::msg::MocapFrame> writer(p, dw::dds::topics::mocap_frame);
     if (!writer.wait_for_readers(1, std::chrono::seconds(20))) throw dw::RuntimeError("dw-predictor run did not start");
     reader.wait_for_writers(1, std::chrono::seconds(20));
@@ -156,19 +167,24 @@ void e2e(const dw::dds::DdsConfig& cfg, int frames) {
     node.stop();
     std::filesystem::remove(model);
     std::lock_guard lock(m);
-    std::printf("| mocap frame -> prediction (K = 3, Deep Sets, loopback, 180 Hz) | frames | received | p50 µs | p99 µs | target p99 |\n"
-                "|---|---|---|---|---|---|\n");
-    std::printf("| end to end (frame stamped at write -> sample received) | %d | %zu | %.0f | %.0f | <= 1000 |\n", frames, us.size(),
-                percentile(us, 0.5), percentile(us, 0.99));
-    std::printf("| of which to the prediction's write (input_age_s: DDS to the node + features + inference) | | | %.0f | %.0f | |\n\n",
-                percentile(age_us, 0.5), percentile(age_us, 0.99));
+    std::printf(
+        "| mocap frame -> prediction (K = 3, Deep Sets, loopback, 180 Hz) | frames | received | p50 µs | p99 µs | "
+        "target p99 |\n"
+        "|---|---|---|---|---|---|\n");
+    std::printf("| end to end (frame stamped at write -> sample received) | %d | %zu | %.0f | %.0f | <= 1000 |\n",
+                frames, us.size(), percentile(us, 0.5), percentile(us, 0.99));
+    std::printf(
+        "| of which to the prediction's write (input_age_s: DDS to the node + features + inference) | | | %.0f | %.0f "
+        "| |\n\n",
+        percentile(age_us, 0.5), percentile(age_us, 0.99));
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     return dw::cli::run_main("dw-bench-predictor", [&] {
-        dw::dds::ProcessCli cli("dw-bench-predictor: inference, map rendering, training and end-to-end latency of the predictor");
+        dw::dds::ProcessCli cli(
+            "dw-bench-predictor: inference, map rendering, training and end-to-end latency of the predictor");
         std::string parts = "inference,map,train,e2e";
         int frames = 3600;
         cli.app().add_option("--parts", parts, "which parts, comma-separated");

@@ -41,12 +41,14 @@ int main(int argc, char** argv) {
         CLI::App app{"dw-bench-real: import rate beside cat, and explain on the 64 s random walk"};
         dw::cli::BaseOptions base;
         dw::cli::configure(app, base);
-        std::string data = std::string(DW_SOURCE_DIR) + "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020";
+        std::string data =
+            std::string(DW_SOURCE_DIR) + "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020";
         std::string physics = std::string(DW_SOURCE_DIR) + "/config/physics.crazyflie.yaml";
         app.add_option("--data", data, "the Neural-Swarm collection's folder");
         app.add_option("--physics", physics, "physics configuration for the explain");
         dw::cli::parse(app, argc, argv);
-        if (!fs::is_directory(data)) throw dw::InputError("--data " + data + ": not a folder (the shared Neural-Swarm logs)");
+        if (!fs::is_directory(data))
+            throw dw::InputError("--data " + data + ": not a folder (the shared Neural-Swarm logs)");
         std::vector<std::string> csv, binary;
         std::uintmax_t csv_bytes = 0, bin_bytes = 0;
         for (const auto& e : fs::recursive_directory_iterator(data)) {
@@ -56,7 +58,8 @@ int main(int argc, char** argv) {
             (is_csv ? csv_bytes : bin_bytes) += e.file_size();
         }
         std::printf("| step (2 cores) | MB | seconds (median of 5) | MB/s |\n|---|---|---|---|\n");
-        for (const auto& [files, bytes, what] : {std::tuple{&csv, csv_bytes, "CSV logs"}, std::tuple{&binary, bin_bytes, "binary logs"}}) {
+        for (const auto& [files, bytes, what] :
+             {std::tuple{&csv, csv_bytes, "CSV logs"}, std::tuple{&binary, bin_bytes, "binary logs"}}) {
             std::string cat = "cat";
             for (const auto& f : *files) cat += " '" + f + "'";
             cat += " > /dev/null";
@@ -67,13 +70,17 @@ int main(int argc, char** argv) {
                 for (const auto& f : *files) (void)dw::importer::read_neural_swarm_log(f);
             });
             const double mb = static_cast<double>(bytes) / 1e6;
-            std::printf("| `cat` of the %zu %s (anchor) | %.2f | %.4f | %.0f |\n", files->size(), what, mb, t_cat, mb / t_cat);
-            std::printf("| decode the %s (checksums, units, quaternions) | %.2f | %.4f | **%.0f** |\n", what, mb, t_read, mb / t_read);
+            std::printf("| `cat` of the %zu %s (anchor) | %.2f | %.4f | %.0f |\n", files->size(), what, mb, t_cat,
+                        mb / t_cat);
+            std::printf("| decode the %s (checksums, units, quaternions) | %.2f | %.4f | **%.0f** |\n", what, mb,
+                        t_read, mb / t_read);
         }
         const std::vector<std::string> walk{data + "/randomwalk_ss/cf50_02", data + "/randomwalk_ss/cf51_02"};
         const double t_import = median_of(5, [&] { (void)dw::importer::neural_swarm_importer().import(walk, {}); });
         const auto flight = dw::importer::neural_swarm_importer().import(walk, {});
-        std::printf("| import the 64 s random walk (2 binary logs: decode, align, residual force, NED) | – | %.4f | – |\n\n", t_import);
+        std::printf(
+            "| import the 64 s random walk (2 binary logs: decode, align, residual force, NED) | – | %.4f | – |\n\n",
+            t_import);
 
         dw::analysis::ExplainOptions o;
         o.physics = dw::physics::load_physics(physics);
@@ -89,10 +96,11 @@ int main(int argc, char** argv) {
         fs::remove_all(dir);
         std::string by;
         for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
-        std::printf("| step (64 s random walk, %zu wrench samples, 2 cores) | seconds | target |\n|---|---|---|\n", flight.wrench.size());
+        std::printf("| step (64 s random walk, %zu wrench samples, 2 cores) | seconds | target |\n|---|---|---|\n",
+                    flight.wrench.size());
         std::printf("| one replay of it through the physics (anchor) | %.2f | – |\n", replay_s);
-        std::printf("| full dw-explain + report (%zu blocks by %s; found: %s) | **%.1f** | <= 30 |\n", r.legs, dw::flight::to_string(r.blocks),
-                    by.empty() ? "nothing" : by.c_str(), explain_s);
+        std::printf("| full dw-explain + report (%zu blocks by %s; found: %s) | **%.1f** | <= 30 |\n", r.legs,
+                    dw::flight::to_string(r.blocks), by.empty() ? "nothing" : by.c_str(), explain_s);
         return 0;
     });
 }

@@ -28,7 +28,8 @@ public:
     explicit RawCounter(const dw::dds::DdsConfig& cfg) : participant_(cfg, "raw-counter") {
         auto qos = dw::dds::reader_qos(dw::dds::QosProfile::sensor);
         qos.history().depth = 1000;  // a fair reader: it keeps up, so losses are the transport's
-        reader_ = participant_.subscriber()->create_datareader(participant_.topic("rt/" + cfg.ns + "/stand/wrench"), qos, this);
+        reader_ = participant_.subscriber()->create_datareader(participant_.topic("rt/" + cfg.ns + "/stand/wrench"),
+                                                               qos, this);
     }
     ~RawCounter() override { reader_->set_listener(nullptr); }
     void on_data_available(fdds::DataReader* r) override {
@@ -59,7 +60,9 @@ int main(int argc, char** argv) {
         dw::dds::DdsConfig cfg = cli.dds();
         if (cfg.ns == dw::dds::kDefaultNamespace) cfg.ns = "benchrec" + std::to_string(::getpid());
 
-        std::printf("| offered [msg/s] | achieved [msg/s] | raw Fast DDS received | recorder recorded | recorder lost (seq gaps) |\n");
+        std::printf(
+            "| offered [msg/s] | achieved [msg/s] | raw Fast DDS received | recorder recorded | recorder lost (seq "
+            "gaps) |\n");
         std::printf("|---|---|---|---|---|\n");
         std::stringstream list(rates);
         std::string item;
@@ -73,13 +76,26 @@ int main(int argc, char** argv) {
             o.topics = {"stand/wrench"};
             o.writer.fsync = true;
             dw::recorder::Recorder rec(rp, o);
-            std::vector<std::string> args{dw::executable_dir() + "/dw-probe", "pub", "stand/wrench", "--count",
-                                          std::to_string(count), "--rate", item, "--wait-readers", "2", "--quiet"};
+            std::vector<std::string> args{dw::executable_dir() + "/dw-probe",
+                                          "pub",
+                                          "stand/wrench",
+                                          "--count",
+                                          std::to_string(count),
+                                          "--rate",
+                                          item,
+                                          "--wait-readers",
+                                          "2",
+                                          "--quiet"};
             for (const auto& a : dw::dds::to_args(cfg)) args.push_back(a);
             const auto t0 = std::chrono::steady_clock::now();
             dw::Subprocess pub({args, "", "", {}});
             std::atomic<bool> done{false};
-            std::thread ticker([&] { while (!done) { rec.tick(); std::this_thread::sleep_for(std::chrono::milliseconds(50)); } });
+            std::thread ticker([&] {
+                while (!done) {
+                    rec.tick();
+                    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+                }
+            });
             const auto status = pub.wait_for(std::chrono::minutes(10));
             if (status != 0) throw dw::RuntimeError("the publisher failed at rate " + item);
             const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - 0.1;
@@ -88,10 +104,10 @@ int main(int argc, char** argv) {
             ticker.join();
             rec.close();
             const auto s = rec.stats().front();
-            std::printf("| %s | %.0f | %llu / %llu | %llu / %llu | %llu |\n", rate > 0 ? item.c_str() : "unthrottled", static_cast<double>(count) / elapsed,
-                        static_cast<unsigned long long>(raw.count.load()), static_cast<unsigned long long>(count),
-                        static_cast<unsigned long long>(s.recorded), static_cast<unsigned long long>(count),
-                        static_cast<unsigned long long>(s.lost));
+            std::printf("| %s | %.0f | %llu / %llu | %llu / %llu | %llu |\n", rate > 0 ? item.c_str() : "unthrottled",
+                        static_cast<double>(count) / elapsed, static_cast<unsigned long long>(raw.count.load()),
+                        static_cast<unsigned long long>(count), static_cast<unsigned long long>(s.recorded),
+                        static_cast<unsigned long long>(count), static_cast<unsigned long long>(s.lost));
             std::fflush(stdout);
             std::filesystem::remove(o.out);
         }

@@ -32,7 +32,6 @@
 using namespace std::chrono_literals;
 namespace topics = dw::dds::topics;
 
-
 namespace {
 
 dw::dds::DdsConfig with_security(dw::dds::DdsConfig c, const std::string& keys, const std::string& identity) {
@@ -49,7 +48,9 @@ int run_pong(const dw::dds::DdsConfig& open, const std::string& keys) {
         dw::dds::Writer<dw::msg::VehicleState> w;
         dw::dds::Reader<dw::msg::VehicleSetpoint> r;
         explicit Echo(const dw::dds::DdsConfig& c)
-            : p(c, "mocap_bridge"), w(p, topics::vehicle_state), r(p, topics::vehicle_setpoint, [this](const auto& s, const auto&) {
+            : p(c, "mocap_bridge"),
+              w(p, topics::vehicle_state),
+              r(p, topics::vehicle_setpoint, [this](const auto& s, const auto&) {
                   dw::msg::VehicleState st;
                   st.vehicle_id(s.vehicle_id());
                   st.position_m(s.position_m());
@@ -108,8 +109,8 @@ double percentile(std::vector<double> v, double p) {
 
 void row(const char* name, const std::vector<double>& v, std::size_t lost) {
     const double mean = v.empty() ? NAN : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-    std::printf("| %-8s | %7zu | %5zu | %8.1f | %8.1f | %8.1f | %8.1f |\n", name, v.size(), lost, percentile(v, 50), percentile(v, 90),
-                percentile(v, 99), mean);
+    std::printf("| %-8s | %7zu | %5zu | %8.1f | %8.1f | %8.1f | %8.1f |\n", name, v.size(), lost, percentile(v, 50),
+                percentile(v, 90), percentile(v, 99), mean);
 }
 
 int run(int argc, char** argv) {
@@ -122,9 +123,12 @@ int run(int argc, char** argv) {
     std::size_t per_round = 500;
     app.add_option("--pong", pong_keys, "(internal) run the echo side with this keystore");
     app.add_option("--member", member, "(internal) one process of the discovery rounds, as this role");
-    app.add_option("--t0-ms", t0_ms, "(internal) the discovery round's start, CLOCK_MONOTONIC ms")->check(dw::cli::in({0, 1e15}));
-    app.add_option("--stagger", stagger_s, "seconds between the discovery rounds' process starts")->check(dw::cli::in({0, 10}));
-    app.add_option("--discovery-rounds", discovery_rounds, "6-process discovery rounds, open and secure (0: none)")->check(dw::cli::in({0, 100}));
+    app.add_option("--t0-ms", t0_ms, "(internal) the discovery round's start, CLOCK_MONOTONIC ms")
+        ->check(dw::cli::in({0, 1e15}));
+    app.add_option("--stagger", stagger_s, "seconds between the discovery rounds' process starts")
+        ->check(dw::cli::in({0, 10}));
+    app.add_option("--discovery-rounds", discovery_rounds, "6-process discovery rounds, open and secure (0: none)")
+        ->check(dw::cli::in({0, 100}));
     app.add_option("--rounds", rounds, "alternating open/secure rounds")->check(dw::cli::in({1, 1000}));
     app.add_option("--per-round", per_round, "round trips per round")->check(dw::cli::in({10, 1e6}));
     cli.parse(argc, argv);
@@ -132,16 +136,18 @@ int run(int argc, char** argv) {
     if (!pong_keys.empty()) return run_pong(cfg, pong_keys);
     if (!member.empty()) return dw::bench::run_discovery_member(cfg, member, t0_ms);
     if (cfg.ns == dw::dds::kDefaultNamespace) cfg.ns = "bsec" + std::to_string(::getpid());
-    const std::string keys = (std::filesystem::temp_directory_path() / ("dw-bench-keys-" + std::to_string(::getpid()))).string();
+    const std::string keys =
+        (std::filesystem::temp_directory_path() / ("dw-bench-keys-" + std::to_string(::getpid()))).string();
     dw::security::create_keystore({keys, dw::security::role_identities(), 1});
 
     std::vector<std::string> args{dw::executable_dir() + "/dw-bench-security", "--pong", keys};
     for (const auto& a : dw::dds::to_args(cfg)) args.push_back(a);
     dw::Subprocess ponger({args, "", "", {}});
     Pinger open(cfg), secure(with_security(cfg, keys, "planner"));
-    if (!open.w.wait_for_readers(1, 30s) || !secure.w.wait_for_readers(1, 30s)) throw dw::RuntimeError("the echo process did not match");
+    if (!open.w.wait_for_readers(1, 30s) || !secure.w.wait_for_readers(1, 30s))
+        throw dw::RuntimeError("the echo process did not match");
     std::this_thread::sleep_for(1s);  // the secure side's keys follow the match
-    open.run(200), secure.run(200);    // warm-up
+    open.run(200), secure.run(200);   // warm-up
     open.lost = secure.lost = 0;
     std::vector<double> open_all, secure_all;
     for (int r = 0; r < rounds; ++r) {
@@ -159,7 +165,8 @@ int run(int argc, char** argv) {
     std::printf("|----------|---------|-------|----------|----------|----------|----------|\n");
     row("open", open_all, open.lost);
     row("secure", secure_all, secure.lost);
-    std::printf("\nsecure / open at p50: %.2f x (target <= 1.3 x)\n\n", percentile(secure_all, 50) / percentile(open_all, 50));
+    std::printf("\nsecure / open at p50: %.2f x (target <= 1.3 x)\n\n",
+                percentile(secure_all, 50) / percentile(open_all, 50));
 
     if (discovery_rounds > 0) dw::bench::run_discovery(cfg, keys, discovery_rounds, dw::to_millis(stagger_s));
     std::filesystem::remove_all(keys);

@@ -42,7 +42,9 @@ dds::Roles lab_roles() {
 }
 int members_in(dds::Roles set) { return std::popcount(set & lab_roles()); }
 
-double now_ms() { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+double now_ms() {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 
 // One role's endpoints and how many peers each should match.
 struct Expected {
@@ -75,9 +77,11 @@ Endpoints endpoints_of(dds::Participant& p, dds::Role role) {
     dds::topics::for_each([&](const auto& spec) {
         using T = typename std::decay_t<decltype(spec)>::type;
         const std::string topic(spec.suffix);
-        if (dds::has(spec.producers, role)) hold(e, new dds::Writer<T>(p, spec), "writer " + topic, members_in(spec.consumers));
+        if (dds::has(spec.producers, role))
+            hold(e, new dds::Writer<T>(p, spec), "writer " + topic, members_in(spec.consumers));
         if (dds::has(spec.consumers, role))
-            hold(e, new dds::Reader<T>(p, spec, [](const T&, const dds::SampleMeta&) {}), "reader " + topic, members_in(spec.producers));
+            hold(e, new dds::Reader<T>(p, spec, [](const T&, const dds::SampleMeta&) {}), "reader " + topic,
+                 members_in(spec.producers));
     });
     return e;
 }
@@ -117,7 +121,8 @@ double one_round(const std::vector<std::string>& base_args, const std::string& d
     for (const auto& out : outs) {
         std::string text;
         const double deadline = now_ms() + 90'000;
-        while ((text = std::filesystem::exists(out) ? read_file(out) : "").find('\n') == std::string::npos && now_ms() < deadline)
+        while ((text = std::filesystem::exists(out) ? read_file(out) : "").find('\n') == std::string::npos &&
+               now_ms() < deadline)
             std::this_thread::sleep_for(10ms);
         double ms = -1;
         if (text.rfind("matched ", 0) == 0) ms = std::stod(text.substr(8));
@@ -131,7 +136,8 @@ double one_round(const std::vector<std::string>& base_args, const std::string& d
 }  // namespace
 
 void run_discovery(const dds::DdsConfig& cfg, const std::string& keys, int rounds, std::chrono::milliseconds stagger) {
-    const std::string dir = (std::filesystem::temp_directory_path() / ("dw-bench-disc-" + std::to_string(::getpid()))).string();
+    const std::string dir =
+        (std::filesystem::temp_directory_path() / ("dw-bench-disc-" + std::to_string(::getpid()))).string();
     std::filesystem::create_directories(dir);
     std::vector<double> open, secure;
     for (int r = 0; r < rounds; ++r) {
@@ -152,12 +158,15 @@ void run_discovery(const dds::DdsConfig& cfg, const std::string& keys, int round
         v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return x < 0; }), v.end());
         std::sort(v.begin(), v.end());
         const auto at = [&](std::size_t i) { return v.empty() ? NAN : v[i]; };
-        std::printf("| %-8s | %6zu | %6ld | %8.0f | %8.0f | %8.0f |\n", name, v.size(), static_cast<long>(failed), at(0), at(v.size() / 2),
-                    at(v.empty() ? 0 : v.size() - 1));
+        std::printf("| %-8s | %6zu | %6ld | %8.0f | %8.0f | %8.0f |\n", name, v.size(), static_cast<long>(failed),
+                    at(0), at(v.size() / 2), at(v.empty() ? 0 : v.size() - 1));
     };
-    std::printf("6-process lab (stand agent, mocap bridge, planner, predictor, recorder, launcher), every endpoint its role has,\n"
-                "started %lld ms apart; time from the first start until the last process matched every peer endpoint, in ms\n\n",
-                static_cast<long long>(stagger.count()));
+    std::printf(
+        "6-process lab (stand agent, mocap bridge, planner, predictor, recorder, launcher), every endpoint its role "
+        "has,\n"
+        "started %lld ms apart; time from the first start until the last process matched every peer endpoint, in "
+        "ms\n\n",
+        static_cast<long long>(stagger.count()));
     std::printf("| lab      | rounds | failed |   min    |  median  |   max    |\n");
     std::printf("|----------|--------|--------|----------|----------|----------|\n");
     show("open", open);

@@ -45,11 +45,15 @@ int main(int argc, char** argv) {
 
         // (2) latency, in real time: a fast emulated bank (1 kHz) so thousands of samples take seconds
         dw::Subprocess echo({{dw::executable_dir() + "/dw-probe", "echo", "stand/wrench", "--quiet", "--domain",
-                              std::to_string(cfg.domain), "--namespace", cfg.ns}, "/dev/null", "/dev/null", {}});
+                              std::to_string(cfg.domain), "--namespace", cfg.ns},
+                             "/dev/null",
+                             "/dev/null",
+                             {}});
         dw::dds::Participant p(cfg, "stand_agent");
         dw::dds::Writer<dw::msg::LoadCellFrame> frames(p, dw::dds::topics::stand_cells);
         dw::dds::Writer<dw::msg::WrenchStamped> wrench(p, dw::dds::topics::stand_wrench);
-        if (!wrench.wait_for_readers(1, std::chrono::seconds(30))) throw dw::RuntimeError("the subscriber did not match");
+        if (!wrench.wait_for_readers(1, std::chrono::seconds(30)))
+            throw dw::RuntimeError("the subscriber did not match");
         BankOptions b;
         b.rate_hz = 1000;
         b.noise_counts = 500;
@@ -69,8 +73,11 @@ int main(int argc, char** argv) {
         }
         echo.stop();
         std::sort(us.begin(), us.end());
-        auto pct = [&](double q) { return us[static_cast<std::size_t>(q / 100.0 * static_cast<double>(us.size() - 1))]; };
-        std::printf("| sample -> publish (frame + wrench written) | samples | p50 | p99 | max |\n|---|---|---|---|---|\n");
+        auto pct = [&](double q) {
+            return us[static_cast<std::size_t>(q / 100.0 * static_cast<double>(us.size() - 1))];
+        };
+        std::printf(
+            "| sample -> publish (frame + wrench written) | samples | p50 | p99 | max |\n|---|---|---|---|---|\n");
         std::printf("| µs | %zu | %.1f | %.1f | %.1f |\n", us.size(), pct(50), pct(99), us.back());
         std::printf("\ntarget: p99 < 200 µs\n");
         return 0;

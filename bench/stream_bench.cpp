@@ -48,7 +48,8 @@ std::uint64_t write_recording(const std::string& path, std::uint64_t bytes, dw::
         const double s = i / 180.0;
         dw::msg::MocapFrame f;
         f.header().seq(i);
-        for (int b = 0; b < 4; ++b) dw::testkit::add_body(f, names[b], std::sin(s + b), std::cos(s - b), -1.0 - 0.3 * b);
+        for (int b = 0; b < 4; ++b)
+            dw::testkit::add_body(f, names[b], std::sin(s + b), std::cos(s - b), -1.0 - 0.3 * b);
         w.write(cm, i, t, f);
         for (int b = 1; b < 4; ++b) {
             dw::msg::VehicleState v;
@@ -64,7 +65,8 @@ std::uint64_t write_recording(const std::string& path, std::uint64_t bytes, dw::
             w.write(cw, wrench_seq, t, m);
             dw::msg::LoadCellFrame cells;
             cells.header().seq(wrench_seq);
-            for (int k = 0; k < 8; ++k) cells.counts()[static_cast<std::size_t>(k)] = static_cast<std::int32_t>(1000 * std::sin(s + k));
+            for (int k = 0; k < 8; ++k)
+                cells.counts()[static_cast<std::size_t>(k)] = static_cast<std::int32_t>(1000 * std::sin(s + k));
             w.write(cc, wrench_seq++, t, cells);
         }
     }
@@ -92,7 +94,8 @@ Run measure(const std::vector<std::string>& argv) {
     posix_spawn_file_actions_addclose(&fa, fds[0]);
     const auto start = std::chrono::steady_clock::now();
     pid_t pid = 0;
-    if (posix_spawnp(&pid, args[0], &fa, nullptr, args.data(), environ) != 0) throw dw::RuntimeError("cannot start " + argv[0]);
+    if (posix_spawnp(&pid, args[0], &fa, nullptr, args.data(), environ) != 0)
+        throw dw::RuntimeError("cannot start " + argv[0]);
     posix_spawn_file_actions_destroy(&fa);
     ::close(fds[1]);
     std::vector<char> sink(1 << 20);
@@ -147,15 +150,18 @@ int main(int argc, char** argv) try {
         {"dw-recorder info", {recorder, "info", file}},
         {"dw-recorder export --csv", {recorder, "export", file, "--csv", csv}},
     };
-    std::printf("recording: %.0f MB, %.2f M messages (%s), %s\n\n", mb, static_cast<double>(messages) * 1e-6, o.compression == dw::mcap::Compression::none ? "uncompressed" : dw::mcap::to_string(o.compression).c_str(),
-                "mocap 4 bodies + 3 vehicle states at 180 Hz, wrench + cells at 80 Hz");
+    std::printf(
+        "recording: %.0f MB, %.2f M messages (%s), %s\n\n", mb, static_cast<double>(messages) * 1e-6,
+        o.compression == dw::mcap::Compression::none ? "uncompressed" : dw::mcap::to_string(o.compression).c_str(),
+        "mocap 4 bodies + 3 vehicle states at 180 Hz, wrench + cells at 80 Hz");
     std::printf("| reader | status | wall s | MB/s of the file | vs cat | peak RSS MB |\n|---|---|---|---|---|---|\n");
     double cat_rate = 0;
     for (const auto& row : rows) {
         const Run r = measure(row.argv);
         const double rate = mb / r.seconds;
         if (cat_rate == 0) cat_rate = rate;
-        std::printf("| %s | %d | %.2f | %.0f | %.0f %% | %.1f |\n", row.what, r.status, r.seconds, rate, 100.0 * rate / cat_rate, r.peak_rss_mb);
+        std::printf("| %s | %d | %.2f | %.0f | %.0f %% | %.1f |\n", row.what, r.status, r.seconds, rate,
+                    100.0 * rate / cat_rate, r.peak_rss_mb);
         std::fflush(stdout);
     }
     std::uint64_t csv_bytes = 0;

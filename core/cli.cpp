@@ -62,8 +62,7 @@ void configure(CLI::App& app, BaseOptions& base) {
     app.fallthrough();
     app.option_defaults()->always_capture_default();
     app.add_option("--config", base.config_path, "YAML configuration file")->type_name("FILE");
-    app.add_option("--log-level", base.log_level, "trace, debug, info, warn, error or off")
-        ->type_name("LEVEL");
+    app.add_option("--log-level", base.log_level, "trace, debug, info, warn, error or off")->type_name("LEVEL");
 }
 
 void parse(CLI::App& app, int argc, char** argv) {

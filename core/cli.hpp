@@ -10,7 +10,7 @@
 namespace dw::cli {
 
 struct BaseOptions {
-    std::string config_path;   // "" = none
+    std::string config_path;  // "" = none
     std::string log_level = "info";
 };
 

@@ -49,10 +49,13 @@ std::string read_file(const std::string& path) {
 void require_writable_path(const std::string& path, std::string_view what) {
     if (path.empty()) throw InputError(log::cat(what, ": no path given"));
     std::error_code ec;
-    if (fs::is_directory(path, ec)) throw InputError(log::cat(what, " ", path, ": is a directory, expected a file name"));
+    if (fs::is_directory(path, ec))
+        throw InputError(log::cat(what, " ", path, ": is a directory, expected a file name"));
     const fs::path dir = fs::absolute(fs::path(path), ec).parent_path();
-    if (!fs::exists(dir, ec)) throw InputError(log::cat(what, " ", path, ": the folder ", dir.string(), " does not exist"));
-    if (!fs::is_directory(dir, ec)) throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
+    if (!fs::exists(dir, ec))
+        throw InputError(log::cat(what, " ", path, ": the folder ", dir.string(), " does not exist"));
+    if (!fs::is_directory(dir, ec))
+        throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
     if (::access(dir.c_str(), W_OK) != 0) {
         throw InputError(log::cat(what, " ", path, ": cannot write in ", dir.string(), ": ", std::strerror(errno)));
     }
@@ -61,10 +64,12 @@ void require_writable_path(const std::string& path, std::string_view what) {
 void require_output_dir(const std::string& path, std::string_view what) {
     if (path.empty()) throw InputError(log::cat(what, ": no folder given"));
     std::error_code ec;
-    if (fs::exists(path, ec) && !fs::is_directory(path, ec)) throw InputError(log::cat(what, " ", path, ": is a file, expected a folder"));
+    if (fs::exists(path, ec) && !fs::is_directory(path, ec))
+        throw InputError(log::cat(what, " ", path, ": is a file, expected a folder"));
     fs::path dir = fs::absolute(fs::path(path), ec);
     while (!fs::exists(dir, ec) && dir.has_parent_path() && dir != dir.parent_path()) dir = dir.parent_path();
-    if (!fs::is_directory(dir, ec)) throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
+    if (!fs::is_directory(dir, ec))
+        throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
     if (::access(dir.c_str(), W_OK) != 0) {
         throw InputError(log::cat(what, " ", path, ": cannot write in ", dir.string(), ": ", std::strerror(errno)));
     }
@@ -74,7 +79,8 @@ namespace {
 constexpr std::size_t kWriteBuffer = 1 << 20;
 }  // namespace
 
-AtomicFile::AtomicFile(std::string path, unsigned mode) : path_(std::move(path)), tmp_(log::cat(path_, ".tmp-", ::getpid())) {
+AtomicFile::AtomicFile(std::string path, unsigned mode)
+    : path_(std::move(path)), tmp_(log::cat(path_, ".tmp-", ::getpid())) {
     const fs::path parent = fs::path(path_).parent_path();
     std::error_code ec;
     if (!parent.empty() && !fs::exists(parent, ec) && !fs::create_directories(parent, ec)) {
@@ -141,7 +147,9 @@ void write_file(const std::string& path, std::string_view content, unsigned mode
 
 bool is_plain_name(std::string_view name) {
     if (name.empty() || name.front() == '.') return false;
-    return std::all_of(name.begin(), name.end(), [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.'; });
+    return std::all_of(name.begin(), name.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.';
+    });
 }
 
 }  // namespace dw

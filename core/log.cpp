@@ -30,8 +30,8 @@ const std::string& program() { return g_program; }
 void write(Level l, std::string_view message) {
     std::lock_guard lock(g_mutex);
     std::fprintf(stderr, "%s: %s%s%.*s\n", g_program.c_str(),
-                 l == Level::info ? "" : kNames[static_cast<int>(l)].data(),
-                 l == Level::info ? "" : ": ", static_cast<int>(message.size()), message.data());
+                 l == Level::info ? "" : kNames[static_cast<int>(l)].data(), l == Level::info ? "" : ": ",
+                 static_cast<int>(message.size()), message.data());
 }
 
 }  // namespace dw::log

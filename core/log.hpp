@@ -51,10 +51,25 @@ std::string alternatives(const Range& items) {
     return out.str();
 }
 
-template <class... Args> void trace(const Args&... a) { if (level() <= Level::trace) write(Level::trace, cat(a...)); }
-template <class... Args> void debug(const Args&... a) { if (level() <= Level::debug) write(Level::debug, cat(a...)); }
-template <class... Args> void info(const Args&... a) { if (level() <= Level::info) write(Level::info, cat(a...)); }
-template <class... Args> void warn(const Args&... a) { if (level() <= Level::warn) write(Level::warn, cat(a...)); }
-template <class... Args> void error(const Args&... a) { if (level() <= Level::error) write(Level::error, cat(a...)); }
+template <class... Args>
+void trace(const Args&... a) {
+    if (level() <= Level::trace) write(Level::trace, cat(a...));
+}
+template <class... Args>
+void debug(const Args&... a) {
+    if (level() <= Level::debug) write(Level::debug, cat(a...));
+}
+template <class... Args>
+void info(const Args&... a) {
+    if (level() <= Level::info) write(Level::info, cat(a...));
+}
+template <class... Args>
+void warn(const Args&... a) {
+    if (level() <= Level::warn) write(Level::warn, cat(a...));
+}
+template <class... Args>
+void error(const Args&... a) {
+    if (level() <= Level::error) write(Level::error, cat(a...));
+}
 
 }  // namespace dw::log

@@ -70,9 +70,7 @@ Subprocess::Subprocess(const SpawnOptions& options) {
     }
 }
 
-Subprocess::Subprocess(Subprocess&& other) noexcept : pid_(other.pid_), status_(other.status_) {
-    other.pid_ = -1;
-}
+Subprocess::Subprocess(Subprocess&& other) noexcept : pid_(other.pid_), status_(other.status_) { other.pid_ = -1; }
 
 Subprocess::~Subprocess() {
     if (pid_ > 0 && !status_) {

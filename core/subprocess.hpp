@@ -11,10 +11,10 @@
 namespace dw {
 
 struct SpawnOptions {
-    std::vector<std::string> argv;      // argv[0] is the program (a path, or a name on PATH)
-    std::string stdout_path;            // "" = inherit
-    std::string stderr_path;            // "" = inherit; may equal stdout_path
-    std::vector<std::string> env;       // extra NAME=VALUE entries
+    std::vector<std::string> argv;  // argv[0] is the program (a path, or a name on PATH)
+    std::string stdout_path;        // "" = inherit
+    std::string stderr_path;        // "" = inherit; may equal stdout_path
+    std::vector<std::string> env;   // extra NAME=VALUE entries
 };
 
 class Subprocess {

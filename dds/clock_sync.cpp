@@ -21,12 +21,14 @@ void ClockFilter::add(Nanos t1, Nanos t2, Nanos t3, Nanos t4) {
 
 std::optional<ClockEstimate> ClockFilter::estimate() const {
     if (exchanges_.empty()) return std::nullopt;
-    return *std::min_element(exchanges_.begin(), exchanges_.end(),
-                             [](const ClockEstimate& a, const ClockEstimate& b) { return a.uncertainty_s < b.uncertainty_s; });
+    return *std::min_element(exchanges_.begin(), exchanges_.end(), [](const ClockEstimate& a, const ClockEstimate& b) {
+        return a.uncertainty_s < b.uncertainty_s;
+    });
 }
 
 ClockReference::ClockReference(Participant& p)
-    : p_(p), answers_(p, topics::clock_reply),
+    : p_(p),
+      answers_(p, topics::clock_reply),
       requests_(p, topics::clock_request, [this](const msg::ClockProbe& q, const SampleMeta&) {
           const Nanos received = p_.clock().now_ns();
           msg::ClockProbe a;  // the asker's process and probe; a header of the reference's own
@@ -41,7 +43,8 @@ ClockReference::ClockReference(Participant& p)
       }) {}
 
 ClockClient::ClockClient(Participant& p)
-    : p_(p), requests_(p, topics::clock_request),
+    : p_(p),
+      requests_(p, topics::clock_request),
       answers_(p, topics::clock_reply, [this](const msg::ClockProbe& a, const SampleMeta&) {
           const Nanos t4 = p_.clock().now_ns();
           if (a.process() != p_.process()) return;

@@ -16,12 +16,10 @@ namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
 
 namespace {
-constexpr std::uint32_t kSocketBuffer = 4 * 1024 * 1024;  // large samples over UDP need it
+constexpr std::uint32_t kSocketBuffer = 4 * 1024 * 1024;             // large samples over UDP need it
 constexpr std::uint32_t kInitialPeersRange = kMaxParticipantId + 1;  // participants per host reachable
 
-std::string prefix(std::string_view where) {
-    return where.empty() ? std::string() : std::string(where) + ": ";
-}
+std::string prefix(std::string_view where) { return where.empty() ? std::string() : std::string(where) + ": "; }
 
 bool is_ipv4(const std::string& text) {
     in_addr addr{};
@@ -29,8 +27,7 @@ bool is_ipv4(const std::string& text) {
 }
 
 // "ip" or "ip:port" -> (ip, port or 0). Throws InputError.
-std::pair<std::string, std::uint32_t> split_address(const std::string& text, bool need_port,
-                                                    const std::string& field) {
+std::pair<std::string, std::uint32_t> split_address(const std::string& text, bool need_port, const std::string& field) {
     const auto colon = text.find(':');
     std::string ip = text.substr(0, colon);
     std::uint32_t port = 0;
@@ -97,7 +94,9 @@ void validate(const DdsConfig& c, std::string_view where) {
         throw InputError(p + "a discovery server cannot be reached over shared memory only");
     }
     if (c.transport == Transport::shm && !c.security.empty()) {
-        throw InputError(p + "DDS Security over shared memory sometimes never authenticates (Fast DDS 2.9.1); use --transport udp or default");
+        throw InputError(p +
+                         "DDS Security over shared memory sometimes never authenticates (Fast DDS 2.9.1); use "
+                         "--transport udp or default");
     }
     if (c.ns.empty() || c.ns.find_first_of(" \t/") != std::string::npos) {
         throw InputError(log::cat(p, "namespace '", c.ns, "' must be one non-empty word without '/'"));
@@ -117,31 +116,37 @@ namespace {
 // Once the file and the flags are merged (a file may say `profile: lab` and the flags the keystore).
 void require_security_choice(const DdsConfig& c) {
     if (c.profile == Profile::lab && c.security.empty() && !c.insecure)
-        throw InputError("the lab profile needs a keystore (--security DIR, made by dw-lab keys create) or an explicit --insecure");
+        throw InputError(
+            "the lab profile needs a keystore (--security DIR, made by dw-lab keys create) or an explicit --insecure");
 }
 }  // namespace
 
 void add_cli_options(CLI::App& app, DdsCliOptions& o) {
     app.add_option("--domain", o.domain, "DDS domain id (0-232)")->type_name("ID")->check(cli::in(kDomainRange));
-    app.add_option("--profile", o.profile, "local (loopback only, default) or lab (real network)")
+    app.add_option("--profile", o.profile, "local (loopback only, default) or lab (real network)")->type_name("NAME");
+    app.add_option("--transport", o.transport, "default (UDP+SHM; UDP alone under --security), shm or udp")
         ->type_name("NAME");
-    app.add_option("--transport", o.transport, "default (UDP+SHM; UDP alone under --security), shm or udp")->type_name("NAME");
     app.add_option("--peer", o.peers, "initial peer ip[:port] (repeatable)")->type_name("ADDR");
     app.add_option("--discovery-server", o.discovery_server, "discovery server ip:port (lab profile)")
         ->type_name("ADDR");
-    app.add_option("--namespace", o.ns, "topic namespace: topics are rt/<ns>/... (default lab)")
-        ->type_name("NS");
+    app.add_option("--namespace", o.ns, "topic namespace: topics are rt/<ns>/... (default lab)")->type_name("NS");
     app.add_option("--security", o.security, "DDS Security keystore (dw-lab keys create); required by the lab profile")
         ->type_name("DIR");
-    app.add_option("--identity", o.identity, "the keystore identity to join as (default: the process's name)")->type_name("NAME");
-    app.add_flag("--insecure", o.insecure, "the lab profile without DDS Security (anyone on the network can command the vehicles)");
+    app.add_option("--identity", o.identity, "the keystore identity to join as (default: the process's name)")
+        ->type_name("NAME");
+    app.add_flag("--insecure", o.insecure,
+                 "the lab profile without DDS Security (anyone on the network can command the vehicles)");
     app.add_option("--await-readers", o.await_readers,
                    "processes (e.g. recorder) whose readers each sensor topic waits for before its first sample")
-        ->type_name("NAME")->delimiter(',');
+        ->type_name("NAME")
+        ->delimiter(',');
     app.add_option("--await-timeout", o.await_timeout_s, "how long a sensor topic waits for them, s (default 5)")
-        ->type_name("S")->check(cli::in(kAwaitTimeoutRange));
-    app.add_option("--participant-id", o.participant_id, "RTPS participant id (default: the lowest free; dw-lab gives a restarted process a fresh one)")
-        ->type_name("N")->check(cli::in(kParticipantIdRange));
+        ->type_name("S")
+        ->check(cli::in(kAwaitTimeoutRange));
+    app.add_option("--participant-id", o.participant_id,
+                   "RTPS participant id (default: the lowest free; dw-lab gives a restarted process a fresh one)")
+        ->type_name("N")
+        ->check(cli::in(kParticipantIdRange));
 }
 
 namespace {
@@ -152,17 +157,50 @@ struct FileKey {
     void (*read)(const ConfigFile& f, const std::string& at, DdsConfig& c);
 };
 constexpr FileKey kFileKeys[] = {
-    {"domain", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_int(at, kDomainRange)) c.domain = static_cast<int>(*v); }},
-    {"profile", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.profile = parse_profile(*v); }},
-    {"transport", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.transport = parse_transport(*v); }},
-    {"initial_peers", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_strings(at)) c.initial_peers = *v; }},
-    {"discovery_server", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.discovery_server = *v; }},
-    {"interfaces", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_strings(at)) c.interfaces = *v; }},
-    {"namespace", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.ns = *v; }},
-    {"security", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.security = *v; }},
-    {"identity", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_string(at)) c.identity = *v; }},
-    {"await_readers", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_strings(at)) c.await_readers = *v; }},
-    {"await_timeout_s", [](const ConfigFile& f, const std::string& at, DdsConfig& c) { if (auto v = f.get_double(at, kAwaitTimeoutRange)) c.await_timeout_s = *v; }},
+    {"domain",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_int(at, kDomainRange)) c.domain = static_cast<int>(*v);
+     }},
+    {"profile",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_string(at)) c.profile = parse_profile(*v);
+     }},
+    {"transport",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_string(at)) c.transport = parse_transport(*v);
+     }},
+    {"initial_peers",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_strings(at)) c.initial_peers = *v;
+     }},
+    {"discovery_server",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_string(at)) c.discovery_server = *v;
+     }},
+    {"interfaces",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_strings(at)) c.interfaces = *v;
+     }},
+    {"namespace",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_string(at)) c.ns = *v;
+     }},
+    {"security",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_string(at)) c.security = *v;
+     }},
+    {"identity",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_string(at)) c.identity = *v;
+     }},
+    {"await_readers",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_strings(at)) c.await_readers = *v;
+     }},
+    {"await_timeout_s",
+     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
+         if (auto v = f.get_double(at, kAwaitTimeoutRange)) c.await_timeout_s = *v;
+     }},
 };
 constexpr const char* kFileSection = "dds";
 
@@ -209,14 +247,15 @@ DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
 }
 
 std::vector<std::string> to_args(const DdsConfig& c) {
-    std::vector<std::string> a{"--domain", std::to_string(c.domain), "--profile", to_string(c.profile),
-                               "--transport", to_string(c.transport), "--namespace", c.ns};
+    std::vector<std::string> a{"--domain",    std::to_string(c.domain), "--profile",   to_string(c.profile),
+                               "--transport", to_string(c.transport),   "--namespace", c.ns};
     for (const auto& peer : c.initial_peers) a.insert(a.end(), {"--peer", peer});
     if (!c.discovery_server.empty()) a.insert(a.end(), {"--discovery-server", c.discovery_server});
     if (!c.security.empty()) a.insert(a.end(), {"--security", c.security});  // each child joins as its own identity
     if (c.insecure) a.emplace_back("--insecure");
     if (!c.await_readers.empty()) {
-        a.insert(a.end(), {"--await-readers", log::join(c.await_readers, ","), "--await-timeout", log::cat(c.await_timeout_s)});
+        a.insert(a.end(),
+                 {"--await-readers", log::join(c.await_readers, ","), "--await-timeout", log::cat(c.await_timeout_s)});
     }
     return a;
 }

@@ -34,13 +34,13 @@ struct DdsConfig {
     int domain = 0;
     Profile profile = Profile::local;
     Transport transport = Transport::default_;
-    std::vector<std::string> initial_peers;   // "ip" or "ip:port"; local adds 127.0.0.1
-    std::string discovery_server;             // "ip:port" (lab profile); "" = multicast discovery
-    std::vector<std::string> interfaces;      // lab profile: UDP interface whitelist (addresses)
-    std::string ns{kDefaultNamespace};        // topics are rt/<ns>/...
-    std::string security;                     // keystore folder (dds/security.hpp); "" = no DDS Security
-    std::string identity;                     // the keystore identity; "" = the process's name
-    bool insecure = false;                    // the lab profile without a keystore, said explicitly
+    std::vector<std::string> initial_peers;  // "ip" or "ip:port"; local adds 127.0.0.1
+    std::string discovery_server;            // "ip:port" (lab profile); "" = multicast discovery
+    std::vector<std::string> interfaces;     // lab profile: UDP interface whitelist (addresses)
+    std::string ns{kDefaultNamespace};       // topics are rt/<ns>/...
+    std::string security;                    // keystore folder (dds/security.hpp); "" = no DDS Security
+    std::string identity;                    // the keystore identity; "" = the process's name
+    bool insecure = false;                   // the lab profile without a keystore, said explicitly
     // Processes (their participant names: recorder, predictor, ...) whose readers every sensor
     // writer waits for before its first sample, so a recorder already running loses nothing of a
     // process that starts after it. Bounded by await_timeout_s; empty = publish at once.
@@ -85,7 +85,6 @@ std::vector<std::string> to_args(const DdsConfig& config);
 
 // The Fast DDS participant QoS for a configuration (also used by the raw-DDS benchmark, so
 // both sides of a comparison use the same transports).
-eprosima::fastdds::dds::DomainParticipantQos participant_qos(const DdsConfig& config,
-                                                             const std::string& name);
+eprosima::fastdds::dds::DomainParticipantQos participant_qos(const DdsConfig& config, const std::string& name);
 
 }  // namespace dw::dds

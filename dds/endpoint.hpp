@@ -25,8 +25,8 @@ namespace detail {
 // Under DDS Security the likely reason an endpoint is refused: the identity's permissions.
 inline std::string denied_hint(const Participant& p, const char* verb) {
     if (p.config().security.empty()) return "";
-    return " (under DDS Security: identity '" + (p.config().identity.empty() ? p.process() : p.config().identity) + "' may not " + verb +
-           " it — its role's topics in dds/topics.hpp, its permissions in the keystore)";
+    return " (under DDS Security: identity '" + (p.config().identity.empty() ? p.process() : p.config().identity) +
+           "' may not " + verb + " it — its role's topics in dds/topics.hpp, its permissions in the keystore)";
 }
 // Waits until `count()` reaches n, or the timeout passes.
 template <class F>
@@ -57,14 +57,14 @@ template <class T>
 class Writer final : private eprosima::fastdds::dds::DataWriterListener {
 public:
     Writer(Participant& p, const Topic<T>& spec, const QosOverrides& overrides = {})
-        : participant_(p), spec_(spec), name_(p.topic_name(spec.suffix)),
-          stats_(p.add_endpoint(name_, true)) {
+        : participant_(p), spec_(spec), name_(p.topic_name(spec.suffix)), stats_(p.add_endpoint(name_, true)) {
         namespace fdds = eprosima::fastdds::dds;
         qos_ = writer_qos(spec.qos, overrides);
         writer_ = p.publisher().create_datawriter(&p.topic(spec), qos_, this,
-                                                  fdds::StatusMask::publication_matched() <<
-                                                      fdds::StatusMask::offered_incompatible_qos());
-        if (writer_ == nullptr) throw RuntimeError("cannot create a DDS writer on " + name_ + detail::denied_hint(p, "publish"));
+                                                  fdds::StatusMask::publication_matched()
+                                                      << fdds::StatusMask::offered_incompatible_qos());
+        if (writer_ == nullptr)
+            throw RuntimeError("cannot create a DDS writer on " + name_ + detail::denied_hint(p, "publish"));
     }
     ~Writer() override {
         writer_->set_listener(nullptr);
@@ -137,10 +137,13 @@ private:
         if (awaited_) return;
         awaited_ = true;
         if (spec_.qos != QosProfile::sensor) return;
-        readers_arrived_ = await_required_readers(participant_, [this] {
-            std::lock_guard lock(readers_mutex_);
-            return matched_readers_;
-        }, name_);
+        readers_arrived_ = await_required_readers(
+            participant_,
+            [this] {
+                std::lock_guard lock(readers_mutex_);
+                return matched_readers_;
+            },
+            name_);
     }
     void on_publication_matched(eprosima::fastdds::dds::DataWriter*,
                                 const eprosima::fastdds::dds::PublicationMatchedStatus& s) override {
@@ -157,8 +160,8 @@ private:
                                      const eprosima::fastdds::dds::OfferedIncompatibleQosStatus& s) override {
         // One line per policy: Fast DDS may announce the same peer more than once.
         if (!reported_.first(s.last_policy_id)) return;
-        participant_.report_problem(qos_mismatch_line(name_, spec_.type_name, false, describe(qos_),
-                                                      s.last_policy_id, s.total_count));
+        participant_.report_problem(
+            qos_mismatch_line(name_, spec_.type_name, false, describe(qos_), s.last_policy_id, s.total_count));
     }
 
     detail::ReportedPolicies reported_;
@@ -178,8 +181,8 @@ private:
 
 // What a reader knows about a sample besides its content.
 struct SampleMeta {
-    Nanos source_time_ns = 0;       // the writer's DDS source timestamp
-    Nanos reception_time_ns = 0;    // when Fast DDS received it
+    Nanos source_time_ns = 0;                         // the writer's DDS source timestamp
+    Nanos reception_time_ns = 0;                      // when Fast DDS received it
     eprosima::fastdds::dds::InstanceHandle_t writer;  // which writer sent it
     std::uint64_t missing_before = 0;  // header.seq values of this writer skipped just before this sample
 };
@@ -192,16 +195,20 @@ public:
 
     // `on_sample` runs on a Fast DDS thread, one sample at a time.
     Reader(Participant& p, const Topic<T>& spec, Callback on_sample, const QosOverrides& overrides = {})
-        : participant_(p), spec_(spec), name_(p.topic_name(spec.suffix)),
-          stats_(p.add_endpoint(name_, false)), on_sample_(std::move(on_sample)) {
+        : participant_(p),
+          spec_(spec),
+          name_(p.topic_name(spec.suffix)),
+          stats_(p.add_endpoint(name_, false)),
+          on_sample_(std::move(on_sample)) {
         namespace fdds = eprosima::fastdds::dds;
         qos_ = reader_qos(spec.qos, overrides);
         reader_ = p.subscriber().create_datareader(
             &p.topic(spec), qos_, this,
-            fdds::StatusMask::data_available() << fdds::StatusMask::subscription_matched()
-                << fdds::StatusMask::requested_incompatible_qos() << fdds::StatusMask::liveliness_changed()
-                << fdds::StatusMask::sample_lost());
-        if (reader_ == nullptr) throw RuntimeError("cannot create a DDS reader on " + name_ + detail::denied_hint(p, "subscribe to"));
+            fdds::StatusMask::data_available()
+                << fdds::StatusMask::subscription_matched() << fdds::StatusMask::requested_incompatible_qos()
+                << fdds::StatusMask::liveliness_changed() << fdds::StatusMask::sample_lost());
+        if (reader_ == nullptr)
+            throw RuntimeError("cannot create a DDS reader on " + name_ + detail::denied_hint(p, "subscribe to"));
     }
     ~Reader() override {
         reader_->set_listener(nullptr);
@@ -236,7 +243,7 @@ private:
             meta.source_time_ns = info.source_timestamp.to_ns();
             meta.reception_time_ns = info.reception_timestamp.to_ns();
             meta.writer = info.publication_handle;
-            if constexpr (requires(T& s) { s.header().seq(); }) {
+            if constexpr (requires(T & s) { s.header().seq(); }) {
                 meta.missing_before = account(meta.writer, sample_.header().seq());
             } else {  // another system's type (PX4's): no sequence to account
                 stats_->samples.fetch_add(1, std::memory_order_relaxed);
@@ -257,8 +264,8 @@ private:
                                        const eprosima::fastdds::dds::RequestedIncompatibleQosStatus& s) override {
         // One line per policy: Fast DDS may announce the same peer more than once.
         if (!reported_.first(s.last_policy_id)) return;
-        participant_.report_problem(qos_mismatch_line(name_, spec_.type_name, true, describe(qos_),
-                                                      s.last_policy_id, s.total_count));
+        participant_.report_problem(
+            qos_mismatch_line(name_, spec_.type_name, true, describe(qos_), s.last_policy_id, s.total_count));
     }
 
     // Returns how many of the writer's sequence numbers were skipped before this one.

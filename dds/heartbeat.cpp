@@ -76,7 +76,8 @@ msg::ProcessStatus Heartbeat::snapshot() {
     s.clock_uncertainty_s(clock ? clock->uncertainty_s : -1.0);
     for (const auto& ep : participant_.endpoints()) {
         // Not our own heartbeat, nor the clock service's probes: the rates are the process's work.
-        const bool service = (ep->topic == writer_.name() && ep->outgoing) || ep->topic == participant_.topic_name(topics::clock_request.suffix) ||
+        const bool service = (ep->topic == writer_.name() && ep->outgoing) ||
+                             ep->topic == participant_.topic_name(topics::clock_request.suffix) ||
                              ep->topic == participant_.topic_name(topics::clock_reply.suffix);
         if (service) continue;
         msg::TopicRate r;
@@ -108,8 +109,7 @@ void Heartbeat::loop() {
     }
 }
 
-std::optional<PeerEvent> PeerTable::observe(const msg::ProcessStatus& status, std::uint64_t writer_key,
-                                            Nanos now) {
+std::optional<PeerEvent> PeerTable::observe(const msg::ProcessStatus& status, std::uint64_t writer_key, Nanos now) {
     Peer& peer = peers_[status.process()];
     const bool was_alive = peer.alive;
     peer.status = status;
@@ -144,8 +144,8 @@ std::vector<PeerEvent> PeerTable::expire(Nanos now) {
         const Nanos limit = from_seconds(3.0 * peer.status.period_s());
         if (peer.alive && now - peer.last_seen > limit) {
             peer.alive = false;
-            out.push_back({PeerEvent::Kind::lost, name,
-                           log::cat("no heartbeat for ", to_seconds(now - peer.last_seen), " s")});
+            out.push_back(
+                {PeerEvent::Kind::lost, name, log::cat("no heartbeat for ", to_seconds(now - peer.last_seen), " s")});
         }
     }
     return out;
@@ -166,7 +166,8 @@ std::optional<msg::ProcessStatus> PeerTable::last(const std::string& process) co
 }
 
 PeerMonitor::PeerMonitor(Participant& p, Handler on_event)
-    : participant_(p), on_event_(std::move(on_event)),
+    : participant_(p),
+      on_event_(std::move(on_event)),
       reader_(p, topics::process_status, [this](const msg::ProcessStatus& s, const SampleMeta& meta) {
           std::optional<PeerEvent> e;
           {

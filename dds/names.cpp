@@ -33,7 +33,7 @@ const char* command_name(msg::CommandKind k) {
 
 std::optional<msg::CommandKind> command_named(std::string_view name) {
     // CMD_START .. CMD_STOP: the IDL's first and last enumerators.
-    for (int k = msg::CMD_START; k <= msg::CMD_STOP; ++k) {
+    for (int k = static_cast<int>(msg::CMD_START); k <= static_cast<int>(msg::CMD_STOP); ++k) {
         const std::string_view n = command_name(static_cast<msg::CommandKind>(k));
         if (n.size() == name.size() && std::equal(n.begin(), n.end(), name.begin(), [](char a, char b) {
                 return std::toupper(static_cast<unsigned char>(a)) == std::toupper(static_cast<unsigned char>(b));

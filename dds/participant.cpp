@@ -43,13 +43,12 @@ private:
 Participant::Participant(const DdsConfig& config, std::string process, Clock& clock)
     : config_(config), process_(std::move(process)), clock_(clock), discovery_(std::make_unique<Discovery>()) {
     auto* factory = fdds::DomainParticipantFactory::get_instance();
-    participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(config_.domain),
-                                               participant_qos(config_, process_), discovery_.get(),
-                                               fdds::StatusMask::none());
+    participant_ =
+        factory->create_participant(static_cast<fdds::DomainId_t>(config_.domain), participant_qos(config_, process_),
+                                    discovery_.get(), fdds::StatusMask::none());
     if (participant_ == nullptr) {
-        throw RuntimeError(log::cat("cannot create a DDS participant on domain ", config_.domain,
-                                    " (profile ", to_string(config_.profile), ", transport ",
-                                    to_string(config_.transport), ")"));
+        throw RuntimeError(log::cat("cannot create a DDS participant on domain ", config_.domain, " (profile ",
+                                    to_string(config_.profile), ", transport ", to_string(config_.transport), ")"));
     }
     publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
@@ -58,8 +57,8 @@ Participant::Participant(const DdsConfig& config, std::string process, Clock& cl
         factory->delete_participant(participant_);
         throw RuntimeError("cannot create the DDS publisher/subscriber");
     }
-    log::debug("joined domain ", config_.domain, " as ", process_, " (profile ",
-               to_string(config_.profile), ", transport ", to_string(config_.transport), ")");
+    log::debug("joined domain ", config_.domain, " as ", process_, " (profile ", to_string(config_.profile),
+               ", transport ", to_string(config_.transport), ")");
 }
 
 Participant::~Participant() {
@@ -68,7 +67,7 @@ Participant::~Participant() {
 }
 
 std::vector<std::string> Participant::unmatched_readers(const std::vector<fdds::InstanceHandle_t>& matched,
-                                                       const std::vector<std::string>& processes) const {
+                                                        const std::vector<std::string>& processes) const {
     std::vector<std::string> missing = processes;
     for (const auto& h : matched) {
         const std::string name = discovery_->name_of(frtps::iHandle2GUID(h).guidPrefix);
@@ -163,12 +162,11 @@ void Participant::on_problem(std::function<void(const std::string&)> hook) {
 }
 
 std::string qos_mismatch_line(const std::string& topic, std::string_view type, bool reader_side,
-                              const std::string& local_qos, std::uint32_t policy_id,
-                              std::uint32_t total_count) {
+                              const std::string& local_qos, std::uint32_t policy_id, std::uint32_t total_count) {
     return log::cat("QoS mismatch on ", topic, " (", type, "): this ",
                     reader_side ? "reader requests " : "writer offers ", local_qos, " but a ",
-                    reader_side ? "writer offers" : "reader requests", " an incompatible ",
-                    policy_name(policy_id), "; no samples flow between them (", total_count,
+                    reader_side ? "writer offers" : "reader requests", " an incompatible ", policy_name(policy_id),
+                    "; no samples flow between them (", total_count,
                     total_count == 1 ? " incompatible peer so far)" : " incompatible peers so far)");
 }
 

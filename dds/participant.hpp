@@ -91,14 +91,14 @@ private:
 // anyway). Returns at once when there is nothing to await. True: they matched (or none awaited).
 // `matched`: the writer's matched subscriptions now (Fast DDS 2.9.1 leaves
 // DataWriter::get_matched_subscriptions unsupported, so the writer keeps them from its listener).
-bool await_required_readers(Participant& p, const std::function<std::vector<eprosima::fastdds::dds::InstanceHandle_t>()>& matched,
+bool await_required_readers(Participant& p,
+                            const std::function<std::vector<eprosima::fastdds::dds::InstanceHandle_t>()>& matched,
                             const std::string& topic);
 
 // "QoS mismatch on rt/lab/stand/wrench (dw::msg::WrenchStamped): this reader requests
 // RELIABLE VOLATILE KEEP_LAST(16) but a writer offers an incompatible RELIABILITY; no samples
 // will flow between them"
 std::string qos_mismatch_line(const std::string& topic, std::string_view type, bool reader_side,
-                              const std::string& local_qos, std::uint32_t policy_id,
-                              std::uint32_t total_count);
+                              const std::string& local_qos, std::uint32_t policy_id, std::uint32_t total_count);
 
 }  // namespace dw::dds

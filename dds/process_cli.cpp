@@ -7,8 +7,11 @@ namespace dw::dds {
 ProcessCli::ProcessCli(const std::string& description) : app_(description) {
     cli::configure(app_, base_);
     add_cli_options(app_, dds_cli_);
-    app_.add_option("--clock-offset", clock_offset_s_, "simulation: this process's clock runs S seconds ahead of the host's (a hidden clock error, for tests)")
-        ->type_name("S")->check(cli::in(kClockOffsetRange));
+    app_.add_option(
+            "--clock-offset", clock_offset_s_,
+            "simulation: this process's clock runs S seconds ahead of the host's (a hidden clock error, for tests)")
+        ->type_name("S")
+        ->check(cli::in(kClockOffsetRange));
 }
 
 void ProcessCli::parse(int argc, char** argv) {

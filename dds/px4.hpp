@@ -16,7 +16,11 @@
 
 namespace dw::dds {
 
-#define DW_PX4_PUBSUB(T) template <> struct PubSubOf<px4_msgs::msg::dds_::T##_> { using type = px4_msgs::msg::dds_::T##_PubSubType; }
+#define DW_PX4_PUBSUB(T)                                  \
+    template <>                                           \
+    struct PubSubOf<px4_msgs::msg::dds_::T##_> {          \
+        using type = px4_msgs::msg::dds_::T##_PubSubType; \
+    }
 DW_PX4_PUBSUB(TrajectorySetpoint);
 DW_PX4_PUBSUB(OffboardControlMode);
 DW_PX4_PUBSUB(VehicleCommand);
@@ -26,11 +30,14 @@ DW_PX4_PUBSUB(VehicleCommandAck);
 #undef DW_PX4_PUBSUB
 
 // PX4 v1.14's types go on the wire under PX4's one type name per message.
-#define DW_PX4_V114_PUBSUB(T)                                                                \
-    struct T##V114PubSubType : px4_msgs_v114::msg::dds_::T##_PubSubType {                    \
-        T##V114PubSubType() { setName("px4_msgs::msg::dds_::" #T "_"); }                      \
-    };                                                                                       \
-    template <> struct PubSubOf<px4_msgs_v114::msg::dds_::T##_> { using type = T##V114PubSubType; }
+#define DW_PX4_V114_PUBSUB(T)                                             \
+    struct T##V114PubSubType : px4_msgs_v114::msg::dds_::T##_PubSubType { \
+        T##V114PubSubType() { setName("px4_msgs::msg::dds_::" #T "_"); }  \
+    };                                                                    \
+    template <>                                                           \
+    struct PubSubOf<px4_msgs_v114::msg::dds_::T##_> {                     \
+        using type = T##V114PubSubType;                                   \
+    }
 DW_PX4_V114_PUBSUB(OffboardControlMode);
 DW_PX4_V114_PUBSUB(VehicleCommand);
 DW_PX4_V114_PUBSUB(VehicleStatus);
@@ -60,12 +67,14 @@ inline Px4Version parse_px4_version(std::string_view text, std::string_view wher
     for (const auto& i : kPx4Versions)
         if (i.name == text) return i.version;
     const auto names = std::views::transform(kPx4Versions, [](const Px4VersionInfo& i) { return i.name; });
-    throw InputError((where.empty() ? "" : std::string(where) + ": ") + "PX4 version '" + std::string(text) + "' is not supported (supported: " + log::join(names) + ")");
+    throw InputError((where.empty() ? "" : std::string(where) + ": ") + "PX4 version '" + std::string(text) +
+                     "' is not supported (supported: " + log::join(names) + ")");
 }
 
 // rt/[<ns>/]fmu/<in|out>/<name>: PX4's uXRCE-DDS client names (its start line's -n gives ns).
 inline std::string px4_topic(std::string_view ns, std::string_view direction, std::string_view name) {
-    return "rt/" + (ns.empty() ? std::string() : std::string(ns) + "/") + "fmu/" + std::string(direction) + "/" + std::string(name);
+    return "rt/" + (ns.empty() ? std::string() : std::string(ns) + "/") + "fmu/" + std::string(direction) + "/" +
+           std::string(name);
 }
 
 namespace px4 {
@@ -73,7 +82,7 @@ namespace px4 {
 inline constexpr std::uint32_t kCmdNavLand = 21;
 inline constexpr std::uint32_t kCmdDoSetMode = 176;
 inline constexpr std::uint32_t kCmdArmDisarm = 400;
-inline constexpr float kModeFlagCustom = 1.0f;         // DO_SET_MODE param1: custom main mode in param2
+inline constexpr float kModeFlagCustom = 1.0f;          // DO_SET_MODE param1: custom main mode in param2
 inline constexpr float kCustomMainModeOffboard = 6.0f;  // PX4_CUSTOM_MAIN_MODE_OFFBOARD
 // Commander answers commands for its own MAV_SYS_ID / MAV_COMP_ID, or for 0 ("every").
 inline constexpr std::uint8_t kAutopilotComponent = 1;
@@ -87,9 +96,23 @@ inline constexpr std::uint8_t kNavAutoLand = 18;
 inline constexpr std::uint8_t kNavTermination = 13;
 
 inline constexpr std::array<std::pair<std::uint8_t, std::string_view>, 17> kNavStateNames{{
-    {0, "MANUAL"}, {1, "ALTCTL"}, {2, "POSCTL"}, {3, "AUTO_MISSION"}, {4, "AUTO_LOITER"}, {5, "AUTO_RTL"},
-    {6, "POSITION_SLOW"}, {10, "ACRO"}, {12, "DESCEND"}, {13, "TERMINATION"}, {14, "OFFBOARD"}, {15, "STAB"},
-    {17, "AUTO_TAKEOFF"}, {18, "AUTO_LAND"}, {19, "AUTO_FOLLOW_TARGET"}, {20, "AUTO_PRECLAND"}, {21, "ORBIT"},
+    {0, "MANUAL"},
+    {1, "ALTCTL"},
+    {2, "POSCTL"},
+    {3, "AUTO_MISSION"},
+    {4, "AUTO_LOITER"},
+    {5, "AUTO_RTL"},
+    {6, "POSITION_SLOW"},
+    {10, "ACRO"},
+    {12, "DESCEND"},
+    {13, "TERMINATION"},
+    {14, "OFFBOARD"},
+    {15, "STAB"},
+    {17, "AUTO_TAKEOFF"},
+    {18, "AUTO_LAND"},
+    {19, "AUTO_FOLLOW_TARGET"},
+    {20, "AUTO_PRECLAND"},
+    {21, "ORBIT"},
 }};
 inline std::string nav_state_name(std::uint8_t s) {
     for (const auto& [v, n] : kNavStateNames)
@@ -98,9 +121,17 @@ inline std::string nav_state_name(std::uint8_t s) {
 }
 
 // VehicleCommandAck.result
-enum class AckResult : std::uint8_t { accepted = 0, temporarily_rejected = 1, denied = 2, unsupported = 3, failed = 4, in_progress = 5, cancelled = 6 };
-inline constexpr std::array<std::string_view, 7> kAckResultNames{"ACCEPTED", "TEMPORARILY_REJECTED", "DENIED", "UNSUPPORTED",
-                                                                 "FAILED", "IN_PROGRESS", "CANCELLED"};
+enum class AckResult : std::uint8_t {
+    accepted = 0,
+    temporarily_rejected = 1,
+    denied = 2,
+    unsupported = 3,
+    failed = 4,
+    in_progress = 5,
+    cancelled = 6
+};
+inline constexpr std::array<std::string_view, 7> kAckResultNames{
+    "ACCEPTED", "TEMPORARILY_REJECTED", "DENIED", "UNSUPPORTED", "FAILED", "IN_PROGRESS", "CANCELLED"};
 inline std::string ack_result_name(std::uint8_t r) {
     return r < kAckResultNames.size() ? std::string(kAckResultNames[r]) : "result " + std::to_string(r);
 }

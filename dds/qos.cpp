@@ -34,10 +34,10 @@ const eprosima::fastrtps::Duration_t kAnnounce(0, 500'000'000);
 
 template <class Q>
 std::string describe_common(const Q& q) {
-    return log::cat(q.reliability().kind == fdds::RELIABLE_RELIABILITY_QOS ? "RELIABLE" : "BEST_EFFORT",
-                    " ", q.durability().kind == fdds::TRANSIENT_LOCAL_DURABILITY_QOS ? "TRANSIENT_LOCAL" : "VOLATILE",
-                    " ", q.history().kind == fdds::KEEP_LAST_HISTORY_QOS ? "KEEP_LAST(" : "KEEP_ALL(",
-                    q.history().depth, ")");
+    return log::cat(q.reliability().kind == fdds::RELIABLE_RELIABILITY_QOS ? "RELIABLE" : "BEST_EFFORT", " ",
+                    q.durability().kind == fdds::TRANSIENT_LOCAL_DURABILITY_QOS ? "TRANSIENT_LOCAL" : "VOLATILE", " ",
+                    q.history().kind == fdds::KEEP_LAST_HISTORY_QOS ? "KEEP_LAST(" : "KEEP_ALL(", q.history().depth,
+                    ")");
 }
 }  // namespace
 
@@ -82,7 +82,8 @@ fdds::DataReaderQos reader_qos(QosProfile p, const QosOverrides& o) {
     }
     // Another system's messages may be longer than the part the lab reads (PX4's VehicleStatus:
     // the lab's type is its prefix); a preallocated payload pool would drop them.
-    if (p == QosProfile::px4) q.endpoint().history_memory_policy = eprosima::fastrtps::rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+    if (p == QosProfile::px4)
+        q.endpoint().history_memory_policy = eprosima::fastrtps::rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
     return q;
 }
 

@@ -14,8 +14,8 @@ enum class Role : unsigned {
     planner = 1u << 2,
     predictor = 1u << 3,
     recorder = 1u << 4,
-    launcher = 1u << 5,  // dw-lab: starts the processes, shows their status
-    operator_ = 1u << 6, // a person's tools (dw-probe): watch everything, command the experiment
+    launcher = 1u << 5,   // dw-lab: starts the processes, shows their status
+    operator_ = 1u << 6,  // a person's tools (dw-probe): watch everything, command the experiment
 };
 using Roles = unsigned;
 constexpr Roles operator|(Role a, Role b) { return static_cast<Roles>(a) | static_cast<Roles>(b); }

@@ -20,7 +20,9 @@ namespace {
 
 using namespace dw::ssl;
 
-[[noreturn]] void refuse(const std::string& path, const std::string& what) { throw InputError(log::cat("--security: ", path, ": ", what)); }
+[[noreturn]] void refuse(const std::string& path, const std::string& what) {
+    throw InputError(log::cat("--security: ", path, ": ", what));
+}
 
 Bio bio_of(const std::string& text) { return Bio(BIO_new_mem_buf(text.data(), static_cast<int>(text.size()))); }
 
@@ -45,13 +47,17 @@ std::string uri_of(const std::string& path, const std::string& what) {
 void check_identity(const KeystorePaths& k, const std::string& identity) {
     const Cert ca = read_cert(k.ca_cert()), cert = read_cert(k.cert(identity));
     const Key ca_key(X509_get_pubkey(ca.get()));
-    if (X509_verify(cert.get(), ca_key.get()) != 1) refuse(k.cert(identity), "not signed by the keystore's CA (ca.cert.pem)");
-    if (X509_cmp_current_time(X509_get0_notAfter(cert.get())) < 0) refuse(k.cert(identity), "expired (dw-lab keys list; make a new identity)");
+    if (X509_verify(cert.get(), ca_key.get()) != 1)
+        refuse(k.cert(identity), "not signed by the keystore's CA (ca.cert.pem)");
+    if (X509_cmp_current_time(X509_get0_notAfter(cert.get())) < 0)
+        refuse(k.cert(identity), "expired (dw-lab keys list; make a new identity)");
     const std::string key_text = read_file(k.key(identity), "--security");
     const Key key(PEM_read_bio_PrivateKey(bio_of(key_text).get(), nullptr, nullptr, nullptr));
-    if (!key || X509_check_private_key(cert.get(), key.get()) != 1) refuse(k.key(identity), "not the private key of cert.pem");
+    if (!key || X509_check_private_key(cert.get(), key.get()) != 1)
+        refuse(k.key(identity), "not the private key of cert.pem");
     for (const auto& doc : {k.governance(), k.permissions(identity)})
-        if (!verify_signed(doc, k.ca_cert())) refuse(doc, "its signature does not verify against the keystore's CA (tampered, or from another keystore)");
+        if (!verify_signed(doc, k.ca_cert()))
+            refuse(doc, "its signature does not verify against the keystore's CA (tampered, or from another keystore)");
     ERR_clear_error();
 }
 
@@ -79,8 +85,10 @@ bool verify_signed(const std::string& signed_file, const std::string& ca_cert, s
     return ok;
 }
 
-void add_security(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& dir, const std::string& identity) {
-    if (!std::filesystem::is_directory(dir)) throw InputError(log::cat("--security: ", dir, ": no such keystore folder"));
+void add_security(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& dir,
+                  const std::string& identity) {
+    if (!std::filesystem::is_directory(dir))
+        throw InputError(log::cat("--security: ", dir, ": no such keystore folder"));
     const KeystorePaths k{dir};
     if (!std::filesystem::is_directory(k.identity_dir(identity)))
         refuse(k.identity_dir(identity), log::cat("no identity '", identity, "' in the keystore (dw-lab keys list)"));

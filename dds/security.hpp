@@ -33,7 +33,8 @@ struct KeystorePaths {
 // keystore's CA or expired, a key that is not the certificate's, a governance or permissions
 // document whose signature does not verify (tampered, or from another keystore) — and throws
 // dw::InputError naming the file.
-void add_security(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& dir, const std::string& identity);
+void add_security(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& dir,
+                  const std::string& identity);
 
 // Whether `signed_file` (S/MIME) is signed by the CA in `ca_cert`; its content when it is.
 bool verify_signed(const std::string& signed_file, const std::string& ca_cert, std::string* content = nullptr);

@@ -21,8 +21,8 @@ using nlohmann::json;
 
 namespace {
 // The meta.json keys this library reads; every other key is kept as it was (extra_json).
-constexpr std::array<const char*, 8> kMetaKeys = {"format", "sufferer", "neighbours", "formation", "vehicles",
-                                                   "stand", "wrench_source", "moments_measured"};
+constexpr std::array<const char*, 8> kMetaKeys = {"format",   "sufferer", "neighbours",    "formation",
+                                                  "vehicles", "stand",    "wrench_source", "moments_measured"};
 }  // namespace
 
 const char* to_string(WrenchSource s) { return s == WrenchSource::stand ? "stand" : "residual"; }
@@ -79,12 +79,14 @@ public:
             std::size_t start = 0;
             for (;;) {
                 const std::size_t comma = row.find(',', start);
-                fields.push_back(row.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+                fields.push_back(
+                    row.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
                 if (comma == std::string_view::npos) break;
                 start = comma + 1;
             }
             if (!columns_.empty() && fields.size() != columns_.size()) {
-                fail(line_, log::cat(fields.size(), " fields, expected ", columns_.size(), " (", log::join(columns_, ","), ")"));
+                fail(line_, log::cat(fields.size(), " fields, expected ", columns_.size(), " (",
+                                     log::join(columns_, ","), ")"));
             }
             return true;
         }
@@ -127,46 +129,65 @@ std::string json_location(const std::string& text, std::size_t byte) {
     return log::cat(line, ":", col);
 }
 
-Meta read_meta(const fs::path& path) {
-    const std::string text = slurp(path);
-    const std::string file = path.string();
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw InputError(log::cat(file, ":", json_location(text, e.byte), ": not valid JSON"));
-    }
-    auto fail = [&](const std::string& key, const std::string& what) -> void {
-        throw InputError(log::cat(file, ": field '", key, "': ", what));
-    };
-    if (!j.is_object()) fail("(top)", "expected a JSON object");
-    if (!j.contains("format") || j["format"] != kFormat) {
-        fail("format", log::cat("expected \"", kFormat, "\", got ", j.contains("format") ? j["format"].dump() : "nothing"));
-    }
-    Meta m;
-    auto string_of = [&](const std::string& key) {
-        if (!j.contains(key) || !j[key].is_string()) fail(key, "missing or not a string");
-        return j[key].get<std::string>();
-    };
-    m.sufferer = string_of("sufferer");
-    m.formation = string_of("formation");
-    if (std::find_if(kFormations.begin(), kFormations.end(), [&](const char* f) { return m.formation == f; }) ==
-        kFormations.end()) {
-        fail("formation", log::cat("'", m.formation, "' is not one of single, side_by_side, leader_follower, stack, hybrid, free"));
-    }
-    if (!j.contains("neighbours") || !j["neighbours"].is_array()) fail("neighbours", "missing or not a list");
-    for (const auto& n : j["neighbours"]) {
-        if (!n.is_string()) fail("neighbours", "every entry must be a string");
-        const std::string name = n.get<std::string>();
-        if (name == m.sufferer) fail("neighbours", log::cat("'", name, "' is the sufferer"));
-        if (std::find(m.neighbours.begin(), m.neighbours.end(), name) != m.neighbours.end()) {
-            fail("neighbours", log::cat("'", name, "' is listed twice (its force would count twice)"));
+// meta.json's fields, each error naming the file and the field.
+class MetaReader {
+public:
+    explicit MetaReader(const fs::path& path) : file_(path.string()) {
+        const std::string text = slurp(path);
+        try {
+            j_ = json::parse(text);
+        } catch (const json::parse_error& e) {
+            throw InputError(log::cat(file_, ":", json_location(text, e.byte), ": not valid JSON"));
         }
-        m.neighbours.push_back(name);
+        if (!j_.is_object()) fail("(top)", "expected a JSON object");
+        if (!j_.contains("format") || j_["format"] != kFormat) {
+            fail("format",
+                 log::cat("expected \"", kFormat, "\", got ", j_.contains("format") ? j_["format"].dump() : "nothing"));
+        }
     }
-    if (j.contains("vehicles")) {
-        if (!j["vehicles"].is_object()) fail("vehicles", "not an object");
-        for (const auto& [name, v] : j["vehicles"].items()) {
+    Meta read() const {
+        Meta m;
+        m.sufferer = string_of("sufferer");
+        m.formation = string_of("formation");
+        if (std::find_if(kFormations.begin(), kFormations.end(), [&](const char* f) { return m.formation == f; }) ==
+            kFormations.end()) {
+            fail("formation", log::cat("'", m.formation, "' is not one of ", log::join(kFormations)));
+        }
+        read_neighbours(m);
+        read_vehicles(m);
+        read_stand(m);
+        read_wrench_source(m);
+        json extra = json::object();
+        for (const auto& [k, v] : j_.items())
+            if (std::find(kMetaKeys.begin(), kMetaKeys.end(), k) == kMetaKeys.end()) extra[k] = v;
+        m.extra_json = extra.dump();
+        return m;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+        throw InputError(log::cat(file_, ": field '", key, "': ", what));
+    }
+    std::string string_of(const std::string& key) const {
+        if (!j_.contains(key) || !j_[key].is_string()) fail(key, "missing or not a string");
+        return j_[key].get<std::string>();
+    }
+    void read_neighbours(Meta& m) const {
+        if (!j_.contains("neighbours") || !j_["neighbours"].is_array()) fail("neighbours", "missing or not a list");
+        for (const auto& n : j_["neighbours"]) {
+            if (!n.is_string()) fail("neighbours", "every entry must be a string");
+            const std::string name = n.get<std::string>();
+            if (name == m.sufferer) fail("neighbours", log::cat("'", name, "' is the sufferer"));
+            if (std::find(m.neighbours.begin(), m.neighbours.end(), name) != m.neighbours.end()) {
+                fail("neighbours", log::cat("'", name, "' is listed twice (its force would count twice)"));
+            }
+            m.neighbours.push_back(name);
+        }
+    }
+    void read_vehicles(Meta& m) const {
+        if (!j_.contains("vehicles")) return;
+        if (!j_["vehicles"].is_object()) fail("vehicles", "not an object");
+        for (const auto& [name, v] : j_["vehicles"].items()) {
             const std::string key = "vehicles." + name;
             if (!v.is_object()) fail(key, "not an object");
             VehicleInfo info;
@@ -180,14 +201,19 @@ Meta read_meta(const fs::path& path) {
             num("prop_radius_m", info.prop_radius_m);
             num("motor_distance_m", info.motor_distance_m);
             if (v.contains("rotors")) {
-                if (!v["rotors"].is_number_integer() || v["rotors"].get<int>() < 1) fail(key + ".rotors", "not a positive integer");
+                if (!v["rotors"].is_number_integer() || v["rotors"].get<int>() < 1)
+                    fail(key + ".rotors", "not a positive integer");
                 info.rotors = v["rotors"].get<int>();
             }
             m.vehicles[name] = info;
         }
     }
-    if (j.contains("stand")) {
-        const auto& s = j["stand"];
+    void read_stand(Meta& m) const {
+        if (!j_.contains("stand")) {
+            m.stand_height_m.reset();
+            return;
+        }
+        const auto& s = j_["stand"];
         if (!s.is_object()) fail("stand", "not an object");
         if (s.contains("height_m")) {
             if (!s["height_m"].is_number()) fail("stand.height_m", "not a number");
@@ -195,28 +221,25 @@ Meta read_meta(const fs::path& path) {
             if (!kStandHeightRange.contains(h)) fail("stand.height_m", range_problem(h, kStandHeightRange));
             m.stand_height_m = h;
         }
-    } else {
-        m.stand_height_m.reset();
     }
-    if (j.contains("wrench_source")) {
-        const auto& w = j["wrench_source"];
-        if (w == to_string(WrenchSource::stand)) m.wrench_source = WrenchSource::stand;
-        else if (w == to_string(WrenchSource::residual)) m.wrench_source = WrenchSource::residual;
-        else fail("wrench_source", log::cat(w.dump(), " is not \"stand\" or \"residual\""));
-    }
-    if (j.contains("moments_measured")) {
-        if (!j["moments_measured"].is_boolean()) fail("moments_measured", "not true or false");
-        m.moments_measured = j["moments_measured"].get<bool>();
-    }
-    json extra = json::object();
-    for (const auto& [k, v] : j.items()) {
-        if (std::find(kMetaKeys.begin(), kMetaKeys.end(), k) == kMetaKeys.end()) {
-            extra[k] = v;
+    void read_wrench_source(Meta& m) const {
+        if (j_.contains("wrench_source")) {
+            const auto& w = j_["wrench_source"];
+            if (w == to_string(WrenchSource::stand)) m.wrench_source = WrenchSource::stand;
+            else if (w == to_string(WrenchSource::residual)) m.wrench_source = WrenchSource::residual;
+            else fail("wrench_source", log::cat(w.dump(), " is not \"stand\" or \"residual\""));
+        }
+        if (j_.contains("moments_measured")) {
+            if (!j_["moments_measured"].is_boolean()) fail("moments_measured", "not true or false");
+            m.moments_measured = j_["moments_measured"].get<bool>();
         }
     }
-    m.extra_json = extra.dump();
-    return m;
-}
+
+    std::string file_;
+    json j_;
+};
+
+Meta read_meta(const fs::path& path) { return MetaReader(path).read(); }
 
 }  // namespace
 
@@ -235,7 +258,8 @@ Flight read_flight(const std::string& dir) {
             s.t = csv.number(row[0], 0);
             for (std::size_t i = 0; i < 6; ++i) s.w[i] = csv.number(row[i + 1], i + 1);
             if (!f.wrench.empty() && s.t < f.wrench.back().t) {
-                csv.fail(csv.line(), log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
+                csv.fail(csv.line(),
+                         log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
             }
             f.wrench.push_back(s);
         }
@@ -255,7 +279,8 @@ Flight read_flight(const std::string& dir) {
             const double norm = std::sqrt(s.q[0] * s.q[0] + s.q[1] * s.q[1] + s.q[2] * s.q[2] + s.q[3] * s.q[3]);
             if (std::abs(norm - 1.0) > 1e-3) csv.fail(csv.line(), log::cat("quaternion norm ", norm, " is not 1"));
             if (!f.poses.empty() && s.t < f.poses.back().t) {
-                csv.fail(csv.line(), log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
+                csv.fail(csv.line(),
+                         log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
             }
             f.poses.push_back(s);
         }
@@ -275,12 +300,14 @@ Flight read_flight(const std::string& dir) {
         while (csv.next(row)) {
             Leg l;
             const double id = csv.number(row[0], 0);
-            if (id != std::floor(id) || id < 0) csv.fail(csv.line(), log::cat("column leg: '", row[0], "' is not a leg number"));
+            if (id != std::floor(id) || id < 0)
+                csv.fail(csv.line(), log::cat("column leg: '", row[0], "' is not a leg number"));
             l.leg = static_cast<int>(id);
             l.t_start = csv.number(row[1], 1);
             l.t_end = csv.number(row[2], 2);
             if (l.t_end <= l.t_start) csv.fail(csv.line(), "t_end is not after t_start");
-            if (!legs.empty() && l.t_start < legs.back().t_start) csv.fail(csv.line(), "legs must be sorted by t_start");
+            if (!legs.empty() && l.t_start < legs.back().t_start)
+                csv.fail(csv.line(), "legs must be sorted by t_start");
             legs.push_back(l);
         }
         f.legs = std::move(legs);
@@ -325,7 +352,9 @@ std::string meta_text(const Meta& m) {
     meta["formation"] = m.formation;
     json vehicles = json::object();
     for (const auto& [name, v] : m.vehicles) {
-        vehicles[name] = {{"mass_kg", v.mass_kg}, {"rotors", v.rotors}, {"prop_radius_m", v.prop_radius_m},
+        vehicles[name] = {{"mass_kg", v.mass_kg},
+                          {"rotors", v.rotors},
+                          {"prop_radius_m", v.prop_radius_m},
                           {"motor_distance_m", v.motor_distance_m}};
     }
     meta["vehicles"] = vehicles;
@@ -477,7 +506,8 @@ std::vector<double> closest_approaches(const Flight& f, const std::vector<double
     std::vector<std::pair<const Track*, double>> ns;
     for (std::size_t j = 0; j < f.meta.neighbours.size() && j < radius.size(); ++j) {
         const int b = f.find_body(f.meta.neighbours[j]);
-        if (b >= 0 && !trs[static_cast<std::size_t>(b)].t.empty()) ns.emplace_back(&trs[static_cast<std::size_t>(b)], radius[j]);
+        if (b >= 0 && !trs[static_cast<std::size_t>(b)].t.empty())
+            ns.emplace_back(&trs[static_cast<std::size_t>(b)], radius[j]);
     }
     std::vector<double> out;
     constexpr double dt = 0.02;
@@ -527,6 +557,5 @@ Blocks find_blocks(const Flight& f, int min_blocks, const std::vector<double>& e
     for (int k = 0; k < n; ++k) b.blocks.push_back({k, t0 + (t1 - t0) * k / n, t0 + (t1 - t0) * (k + 1) / n});
     return b;
 }
-
 
 }  // namespace dw::flight

@@ -21,7 +21,7 @@ std::string axis_list();
 // wrench.csv's columns: t, then kAxes.
 std::vector<std::string> wrench_columns();
 inline constexpr std::array<const char*, 6> kFormations = {"single", "side_by_side", "leader_follower",
-                                                           "stack", "hybrid", "free"};
+                                                           "stack",  "hybrid",       "free"};
 
 // The wrench the air exerts on the sufferer, tared, on the stand clock. N, N·m, NED axes.
 struct WrenchSample {
@@ -72,7 +72,7 @@ struct Meta {
     std::map<std::string, VehicleInfo> vehicles;
     std::optional<double> stand_height_m = 1.4;  // absent: the sufferer flies (no load stand)
     WrenchSource wrench_source = WrenchSource::stand;
-    bool moments_measured = true;                 // false: the moment columns carry no measurement
+    bool moments_measured = true;   // false: the moment columns carry no measurement
     std::string extra_json = "{}";  // unknown keys, kept as they were (a JSON object)
 };
 

@@ -12,15 +12,15 @@
 namespace dw::importer {
 
 struct ImportOptions {
-    std::string sufferer;                              // "" = the importer's default choice
-    std::function<void(const std::string&)> warn;      // gaps, ground touches, steep tilts, damage
+    std::string sufferer;                          // "" = the importer's default choice
+    std::function<void(const std::string&)> warn;  // gaps, ground touches, steep tilts, damage
     std::stop_token stop;
 };
 
 class Importer {
 public:
     virtual ~Importer() = default;
-    virtual std::string_view name() const = 0;         // the command word: dw-import <name> ...
+    virtual std::string_view name() const = 0;  // the command word: dw-import <name> ...
     virtual std::string_view description() const = 0;
     // Throws dw::InputError naming the file and what is wrong.
     virtual flight::Flight import(const std::vector<std::string>& logs, const ImportOptions& o) const = 0;

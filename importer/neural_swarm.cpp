@@ -19,18 +19,28 @@ namespace dw::importer {
 namespace {
 namespace fs = std::filesystem;
 
-constexpr double kG = 9.81;              // the authors' g for Fa and thrust_des
-constexpr double kThrustLag = 0.84;      // T_lag[i+1] = 0.84 T_lag[i] + 0.16 T[i] (100 Hz)
-constexpr double kTareDistance_m = 0.35; // Fa is tared where every neighbour is farther than this
-constexpr double kGap_s = 0.05;          // a longer pause between samples is reported
+constexpr double kG = 9.81;               // the authors' g for Fa and thrust_des
+constexpr double kThrustLag = 0.84;       // T_lag[i+1] = 0.84 T_lag[i] + 0.16 T[i] (100 Hz)
+constexpr double kTareDistance_m = 0.35;  // Fa is tared where every neighbour is farther than this
+constexpr double kGap_s = 0.05;           // a longer pause between samples is reported
 constexpr double kSteepTilt_rad = 30.0 * M_PI / 180.0;
 
 const std::map<std::string, CrazyflieType>& types() {
     static const std::map<std::string, CrazyflieType> t = {
-        {"small", {"small", 0.032, 0.046, 0.0225, 0.07,
-                   {11.093358483549203, -39.08104165843915, -9.525647087583181, 20.573302305476638, 38.42885066644033}}},
-        {"large", {"large", 0.067, 0.060, 0.033, 0.085,
-                   {44.10386631845999, -122.51151800146272, -36.18484254283743, 53.10772568607133, 107.6819263349139}}},
+        {"small",
+         {"small",
+          0.032,
+          0.046,
+          0.0225,
+          0.07,
+          {11.093358483549203, -39.08104165843915, -9.525647087583181, 20.573302305476638, 38.42885066644033}}},
+        {"large",
+         {"large",
+          0.067,
+          0.060,
+          0.033,
+          0.085,
+          {44.10386631845999, -122.51151800146272, -36.18484254283743, 53.10772568607133, 107.6819263349139}}},
     };
     return t;
 }
@@ -38,9 +48,9 @@ const std::map<std::string, CrazyflieType>& types() {
 // ---- CSV -----------------------------------------------------------------------------------------
 
 // The CSV columns this importer uses, by header text (the time header says ms; the values are µs).
-constexpr std::array<const char*, 18> kCsvColumns = {"time[ms]", "x[m]", "y[m]", "z[m]", "ax[m/s^2]", "ay[m/s^2]", "az[m/s^2]",
-                                                     "qx", "qy", "qz", "qw", "u1[PWM]", "u2[PWM]", "u3[PWM]", "u4[PWM]", "Vbat[V]",
-                                                     "vx[m/s]", "vz[m/s]"};
+constexpr std::array<const char*, 18> kCsvColumns = {
+    "time[ms]", "x[m]", "y[m]",    "z[m]",    "ax[m/s^2]", "ay[m/s^2]", "az[m/s^2]", "qx",      "qy",
+    "qz",       "qw",   "u1[PWM]", "u2[PWM]", "u3[PWM]",   "u4[PWM]",   "Vbat[V]",   "vx[m/s]", "vz[m/s]"};
 
 std::vector<std::string_view> split(std::string_view line) {
     std::vector<std::string_view> out;
@@ -67,7 +77,8 @@ VehicleLog read_csv(const std::string& path, VehicleLog log) {
         return true;
     };
     std::string_view line;
-    if (!next_line(line) || line.rfind("# ", 0) != 0) throw InputError(log::cat(path, ":1: expected a header line starting with '# '"));
+    if (!next_line(line) || line.rfind("# ", 0) != 0)
+        throw InputError(log::cat(path, ":1: expected a header line starting with '# '"));
     const auto header = split(line.substr(2));
     std::array<std::size_t, kCsvColumns.size()> at{};
     for (std::size_t c = 0; c < kCsvColumns.size(); ++c) {
@@ -79,13 +90,15 @@ VehicleLog read_csv(const std::string& path, VehicleLog log) {
     while (next_line(line)) {
         if (line.empty()) continue;
         const auto f = split(line);
-        if (f.size() != header.size()) throw InputError(log::cat(path, ":", line_no, ": ", f.size(), " fields, expected ", header.size()));
+        if (f.size() != header.size())
+            throw InputError(log::cat(path, ":", line_no, ": ", f.size(), " fields, expected ", header.size()));
         std::array<double, kCsvColumns.size()> v{};
         for (std::size_t c = 0; c < kCsvColumns.size(); ++c) {
             const auto field = f[at[c]];
             const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), v[c]);
             if (ec != std::errc() || ptr != field.data() + field.size() || !std::isfinite(v[c])) {
-                throw InputError(log::cat(path, ":", line_no, ": column ", kCsvColumns[c], ": '", field, "' is not a finite number"));
+                throw InputError(log::cat(path, ":", line_no, ": column ", kCsvColumns[c], ": '", field,
+                                          "' is not a finite number"));
             }
         }
         if (std::isnan(first_us)) first_us = v[0];
@@ -111,10 +124,26 @@ std::size_t type_size(char t) { return t == 'h' || t == 'H' ? 2 : 4; }
 
 double read_value(const std::uint8_t* p, char type) {
     switch (type) {
-        case 'I': { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
-        case 'h': { std::int16_t v; std::memcpy(&v, p, 2); return v; }
-        case 'H': { std::uint16_t v; std::memcpy(&v, p, 2); return v; }
-        default: { float v; std::memcpy(&v, p, 4); return v; }
+        case 'I': {
+            std::uint32_t v;
+            std::memcpy(&v, p, 4);
+            return v;
+        }
+        case 'h': {
+            std::int16_t v;
+            std::memcpy(&v, p, 2);
+            return v;
+        }
+        case 'H': {
+            std::uint16_t v;
+            std::memcpy(&v, p, 2);
+            return v;
+        }
+        default: {
+            float v;
+            std::memcpy(&v, p, 4);
+            return v;
+        }
     }
 }
 
@@ -152,17 +181,20 @@ std::vector<Field> binary_header(const std::string& path, const std::string& byt
     pos = 1;
     while (fields.size() < n) {
         const auto comma = bytes.find(',', pos);
-        if (comma == std::string::npos || comma - pos < 4) throw InputError(log::cat(path, ": byte ", pos, ": the header ends early"));
+        if (comma == std::string::npos || comma - pos < 4)
+            throw InputError(log::cat(path, ": byte ", pos, ": the header ends early"));
         const std::string entry = bytes.substr(pos, comma - pos);  // name(T)
         const char type = entry[entry.size() - 2];
-        if (entry[entry.size() - 3] != '(' || entry.back() != ')' || std::string("IhHf").find(type) == std::string::npos) {
+        if (entry[entry.size() - 3] != '(' || entry.back() != ')' ||
+            std::string("IhHf").find(type) == std::string::npos) {
             throw InputError(log::cat(path, ": byte ", pos, ": '", entry, "' is not name(T) with T one of I h H f"));
         }
         fields.push_back({entry.substr(0, entry.size() - 3), type, offset});
         offset += type_size(type);
         pos = comma + 1;
     }
-    if (bytes.size() < pos + 4 || !checksum_ok(b, pos)) throw InputError(log::cat(path, ": byte ", pos, ": header checksum mismatch"));
+    if (bytes.size() < pos + 4 || !checksum_ok(b, pos))
+        throw InputError(log::cat(path, ": byte ", pos, ": header checksum mismatch"));
     pos += 4;
     return fields;
 }
@@ -178,10 +210,11 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
         if (it == fields.end()) throw InputError(log::cat(path, ": variable '", name, "' is not logged"));
         return *it;
     };
-    const Field tick = field("tick"), x = field("stateEstimateZ.x"), y = field("stateEstimateZ.y"), z = field("stateEstimateZ.z"),
-                ax = field("stateEstimateZ.ax"), ay = field("stateEstimateZ.ay"), az = field("stateEstimateZ.az"),
-                quat = field("stateEstimateZ.quat"), vbat = field("pm.vbatMV");
-    const std::array<Field, 4> pwm = {field("pwm.m1_pwm"), field("pwm.m2_pwm"), field("pwm.m3_pwm"), field("pwm.m4_pwm")};
+    const Field tick = field("tick"), x = field("stateEstimateZ.x"), y = field("stateEstimateZ.y"),
+                z = field("stateEstimateZ.z"), ax = field("stateEstimateZ.ax"), ay = field("stateEstimateZ.ay"),
+                az = field("stateEstimateZ.az"), quat = field("stateEstimateZ.quat"), vbat = field("pm.vbatMV");
+    const std::array<Field, 4> pwm = {field("pwm.m1_pwm"), field("pwm.m2_pwm"), field("pwm.m3_pwm"),
+                                      field("pwm.m4_pwm")};
     const auto* b = reinterpret_cast<const std::uint8_t*>(bytes.data());
     double first_us = NAN;
     while (pos < bytes.size()) {
@@ -189,7 +222,9 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
         if (pos + size + 4 > bytes.size() || !checksum_ok(b + pos, size)) {
             ++log.damaged_blocks;  // skip to the next offset where a whole block checks out
             std::size_t next = pos + 1;
-            while (next < bytes.size() && !(next + 1 + b[next] * record + 4 <= bytes.size() && b[next] > 0 && checksum_ok(b + next, 1 + b[next] * record))) ++next;
+            while (next < bytes.size() && !(next + 1 + b[next] * record + 4 <= bytes.size() && b[next] > 0 &&
+                                            checksum_ok(b + next, 1 + b[next] * record)))
+                ++next;
             pos = next;
             continue;
         }
@@ -219,7 +254,8 @@ const CrazyflieType& crazyflie_type(const std::string& vehicle) {
     if (vehicle.rfind("cf", 0) == 0) std::from_chars(vehicle.data() + 2, vehicle.data() + vehicle.size(), id);
     if (id >= 50 && id <= 52) return types().at("small");
     if (id >= 100 && id <= 102) return types().at("large");
-    throw InputError(log::cat("vehicle '", vehicle, "': not one the Neural-Swarm collection describes (cf50-cf52, cf100-cf102)"));
+    throw InputError(
+        log::cat("vehicle '", vehicle, "': not one the Neural-Swarm collection describes (cf50-cf52, cf100-cf102)"));
 }
 
 VehicleLog read_neural_swarm_log(const std::string& path) {
@@ -231,7 +267,8 @@ VehicleLog read_neural_swarm_log(const std::string& path) {
     log = p.extension() == ".csv" ? read_csv(path, std::move(log)) : read_binary(path, std::move(log));
     if (log.t_s.empty()) throw InputError(log::cat(path, ": no samples"));
     for (std::size_t i = 1; i < log.t_s.size(); ++i) {
-        if (!(log.t_s[i] > log.t_s[i - 1])) throw InputError(log::cat(path, ": sample ", i + 1, ": time does not increase"));
+        if (!(log.t_s[i] > log.t_s[i - 1]))
+            throw InputError(log::cat(path, ": sample ", i + 1, ": time does not increase"));
     }
     return log;
 }
@@ -259,7 +296,8 @@ std::array<double, 3> position_at(const VehicleLog& log, double t) {
     const auto i = static_cast<std::size_t>(it - log.t_s.begin());
     const double a = (t - log.t_s[i - 1]) / (log.t_s[i] - log.t_s[i - 1]);
     std::array<double, 3> p{};
-    for (std::size_t k = 0; k < 3; ++k) p[k] = log.position_m[i - 1][k] + a * (log.position_m[i][k] - log.position_m[i - 1][k]);
+    for (std::size_t k = 0; k < 3; ++k)
+        p[k] = log.position_m[i - 1][k] + a * (log.position_m[i][k] - log.position_m[i - 1][k]);
     return p;
 }
 
@@ -274,15 +312,18 @@ void warn_about(const VehicleLog& log, const ImportOptions& o) {
     double worst_gap = 0, lowest = INFINITY, steepest = 0;
     std::size_t gaps = 0, touches = 0;
     for (std::size_t i = 0; i < log.t_s.size(); ++i) {
-        if (i > 0 && log.t_s[i] - log.t_s[i - 1] > kGap_s) ++gaps, worst_gap = std::max(worst_gap, log.t_s[i] - log.t_s[i - 1]);
+        if (i > 0 && log.t_s[i] - log.t_s[i - 1] > kGap_s)
+            ++gaps, worst_gap = std::max(worst_gap, log.t_s[i] - log.t_s[i - 1]);
         if (log.position_m[i][2] < type.ground_z_m) ++touches;
         lowest = std::min(lowest, log.position_m[i][2]);
         steepest = std::max(steepest, std::acos(std::clamp(body_z(log.quat_xyzw[i])[2], -1.0, 1.0)));
     }
     if (gaps) o.warn(log::cat(log.file, ": ", gaps, " gap(s) in the log, the longest ", worst_gap, " s"));
-    if (touches) o.warn(log::cat(log.file, ": ", touches, " sample(s) below z = ", type.ground_z_m, " m: touching the ground"));
+    if (touches)
+        o.warn(log::cat(log.file, ": ", touches, " sample(s) below z = ", type.ground_z_m, " m: touching the ground"));
     if (steepest > kSteepTilt_rad) o.warn(log::cat(log.file, ": tilts up to ", steepest * 180 / M_PI, " degrees"));
-    if (log.damaged_blocks) o.warn(log::cat(log.file, ": ", log.damaged_blocks, " damaged block(s) skipped (checksum)"));
+    if (log.damaged_blocks)
+        o.warn(log::cat(log.file, ": ", log.damaged_blocks, " damaged block(s) skipped (checksum)"));
 }
 
 // Fa = m a_imu − T_lag R e_z (world, z up), tared where no neighbour is near. Returns the tare.
@@ -302,11 +343,14 @@ std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLo
             const auto p = position_at(n, s.t_s[i]);
             alone = alone && std::hypot(p[0] - s.position_m[i][0], p[1] - s.position_m[i][1]) > kTareDistance_m;
         }
-        if (alone) for (std::size_t k = 0; k < 3; ++k) far[k].push_back(f[k]);
+        if (alone)
+            for (std::size_t k = 0; k < 3; ++k) far[k].push_back(f[k]);
     }
     std::array<double, 3> tare{};
     if (far[0].size() < 20) {
-        if (o.warn) o.warn(log::cat(s.file, ": fewer than 20 samples with every neighbour > ", kTareDistance_m, " m away: Fa not tared"));
+        if (o.warn)
+            o.warn(log::cat(s.file, ": fewer than 20 samples with every neighbour > ", kTareDistance_m,
+                            " m away: Fa not tared"));
         return tare;
     }
     for (std::size_t k = 0; k < 3; ++k) tare[k] = median(far[k]);
@@ -331,14 +375,17 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     };
     std::string sufferer = o.sufferer;
     if (sufferer.empty()) {
-        sufferer = std::min_element(logs.begin(), logs.end(), [&](const auto& a, const auto& b) { return lowest(a) < lowest(b); })->name;
+        sufferer = std::min_element(logs.begin(), logs.end(), [&](const auto& a, const auto& b) {
+                       return lowest(a) < lowest(b);
+                   })->name;
     }
     const auto it = std::find_if(logs.begin(), logs.end(), [&](const VehicleLog& l) { return l.name == sufferer; });
     if (it == logs.end()) throw InputError(log::cat("--sufferer: no log of '", sufferer, "' among the inputs"));
     std::vector<VehicleLog> others;
     for (const auto& l : logs)
         if (l.name != sufferer) others.push_back(l);
-    if (others.empty()) throw InputError("a trial needs the logs of at least two vehicles (a sufferer and a neighbour)");
+    if (others.empty())
+        throw InputError("a trial needs the logs of at least two vehicles (a sufferer and a neighbour)");
 
     flight::Flight f;
     f.meta.sufferer = sufferer;
@@ -352,13 +399,19 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
         const auto ned = to_ned(fa[i]);
         f.wrench.push_back({it->t_s[i], {ned[0], ned[1], ned[2], 0, 0, 0}});
     }
-    struct Pose { double t; std::uint16_t body; std::array<double, 3> p; std::array<double, 4> q; };
+    struct Pose {
+        double t;
+        std::uint16_t body;
+        std::array<double, 3> p;
+        std::array<double, 4> q;
+    };
     std::vector<Pose> poses;
     for (const auto& l : logs) {
         const auto& type = crazyflie_type(l.name);
         const std::uint16_t body = f.body_index(l.name);
         if (l.name != sufferer) f.meta.neighbours.push_back(l.name);
-        f.meta.vehicles[l.name] = {type.mass_kg, 4, type.prop_radius_m, 2 * type.arm_m};  // motor_distance_m: diagonal, motor to motor
+        f.meta.vehicles[l.name] = {type.mass_kg, 4, type.prop_radius_m,
+                                   2 * type.arm_m};  // motor_distance_m: diagonal, motor to motor
         for (std::size_t i = 0; i < l.t_s.size(); ++i) {
             throw_if_stopped(o.stop, "the import");
             const auto& q = l.quat_xyzw[i];
@@ -370,14 +423,18 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     for (const auto& p : poses) f.poses.push_back({p.t, p.body, p.p, p.q});
     nlohmann::json sources = nlohmann::json::array();
     for (const auto& l : logs) sources.push_back(fs::path(l.file).filename().string());
-    f.meta.extra_json = nlohmann::json{
-        {"source", {{"collection", "aerorobotics/neural-swarm datacollection21_06_16_2020"}, {"logs", sources}}},
-        {"residual", {{"definition", "Fa = m a_imu - T_lag R e_z (the authors'), NED"},
-                      {"thrust", "per motor c00 + c10 p + c01 v + c20 p^2 + c11 v p gram-force, p = PWM, v = Vbat/4.2"},
-                      {"thrust_lag", kThrustLag},
-                      {"tare_n", {to_ned(tare)[0], to_ned(tare)[1], to_ned(tare)[2]}},
-                      {"tare_rule", "median Fa where every neighbour is > 0.35 m away horizontally"}}},
-        {"clocks", "each log from its own first sample; the logs of a trial taken as simultaneous (the authors' alignment)"}}.dump();
+    f.meta.extra_json =
+        nlohmann::json{
+            {"source", {{"collection", "aerorobotics/neural-swarm datacollection21_06_16_2020"}, {"logs", sources}}},
+            {"residual",
+             {{"definition", "Fa = m a_imu - T_lag R e_z (the authors'), NED"},
+              {"thrust", "per motor c00 + c10 p + c01 v + c20 p^2 + c11 v p gram-force, p = PWM, v = Vbat/4.2"},
+              {"thrust_lag", kThrustLag},
+              {"tare_n", {to_ned(tare)[0], to_ned(tare)[1], to_ned(tare)[2]}},
+              {"tare_rule", "median Fa where every neighbour is > 0.35 m away horizontally"}}},
+            {"clocks",
+             "each log from its own first sample; the logs of a trial taken as simultaneous (the authors' alignment)"}}
+            .dump();
     return f;
 }
 
@@ -385,7 +442,8 @@ class NeuralSwarm final : public Importer {
 public:
     std::string_view name() const override { return "neural-swarm"; }
     std::string_view description() const override {
-        return "Crazyflie logs of aerorobotics/neural-swarm (CSV or binary micro-SD logs), one file per vehicle of a trial";
+        return "Crazyflie logs of aerorobotics/neural-swarm (CSV or binary micro-SD logs), one file per vehicle of a "
+               "trial";
     }
     flight::Flight import(const std::vector<std::string>& files, const ImportOptions& o) const override {
         std::vector<VehicleLog> logs;

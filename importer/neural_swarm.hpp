@@ -15,7 +15,7 @@ namespace dw::importer {
 // One vehicle's log in the source's own frame (world z up, body x forward y left z up) and SI
 // units, time from the log's first sample.
 struct VehicleLog {
-    std::string name;                              // cf50, cf101, ... (from the file name)
+    std::string name;  // cf50, cf101, ... (from the file name)
     std::string file;
     std::vector<double> t_s;
     std::vector<std::array<double, 3>> position_m;
@@ -23,7 +23,7 @@ struct VehicleLog {
     std::vector<std::array<double, 4>> quat_xyzw;   // body -> world, scalar last
     std::vector<std::array<double, 4>> pwm;         // 0..1
     std::vector<double> vbat_v;
-    std::size_t damaged_blocks = 0;                 // binary: blocks whose checksum failed, skipped
+    std::size_t damaged_blocks = 0;  // binary: blocks whose checksum failed, skipped
 };
 
 // Reads a CSV log (`*.csv`) or a binary log (no extension). Throws dw::InputError with the file,
@@ -32,12 +32,12 @@ VehicleLog read_neural_swarm_log(const std::string& path);
 
 // A Crazyflie of the collection: mass, arm, propeller and the PWM/voltage thrust map.
 struct CrazyflieType {
-    std::string kind;                  // small (Crazyflie 2.1) or large (parrot frame)
+    std::string kind;  // small (Crazyflie 2.1) or large (parrot frame)
     double mass_kg;
-    double arm_m;                      // centre to motor (sysId)
-    double prop_radius_m;              // not stated by the authors: see docs/REAL.md
-    double ground_z_m;                 // z below which it touches the ground
-    std::array<double, 5> thrust_g;    // c00 c10 c01 c20 c11: grams-force per motor of (pwm, vbat/4.2)
+    double arm_m;                    // centre to motor (sysId)
+    double prop_radius_m;            // not stated by the authors: see docs/REAL.md
+    double ground_z_m;               // z below which it touches the ground
+    std::array<double, 5> thrust_g;  // c00 c10 c01 c20 c11: grams-force per motor of (pwm, vbat/4.2)
 };
 // Throws dw::InputError for a vehicle name the collection does not describe.
 const CrazyflieType& crazyflie_type(const std::string& vehicle);

@@ -52,18 +52,26 @@ struct DemoFlight {
 constexpr const char* kHiddenStandClockOffsetS = "0.1";
 
 // 1-2. Two experiments, every process separate, over loopback DDS; each recording exported to a flight.
-std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& run, const LabFile& lab, const std::string& physics_path,
-                                          const std::vector<DemoFlight>& flights, const std::function<Step(int)>& step) {
+std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& run, const LabFile& lab,
+                                          const std::string& physics_path, const std::vector<DemoFlight>& flights,
+                                          const std::function<Step(int)>& step) {
     std::vector<LaunchResult> results;
     for (std::size_t k = 0; k < flights.size(); ++k) {
         const auto& f = flights[k];
-        step(static_cast<int>(k) + 1).begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
-                                                     " m over loopback DDS (stand, mocap and vehicles simulated)"));
+        step(static_cast<int>(k) + 1)
+            .begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
+                            " m over loopback DDS (stand, mocap and vehicles simulated)"));
         LaunchOptions lo;
         lo.run_dir = (run / ("lab-" + f.name)).string();
-        lo.vars = {{"formation", f.formation}, {"vehicles", f.vehicles}, {"legs", f.legs}, {"altitudes", f.altitudes},
-                   {"speed", "0.5"}, {"physics", physics_path}, {"model", physics_path},
-                   {"recording", "../recordings/" + f.name + ".mcap"}, {"run_id", "demo-" + f.name},
+        lo.vars = {{"formation", f.formation},
+                   {"vehicles", f.vehicles},
+                   {"legs", f.legs},
+                   {"altitudes", f.altitudes},
+                   {"speed", "0.5"},
+                   {"physics", physics_path},
+                   {"model", physics_path},
+                   {"recording", "../recordings/" + f.name + ".mcap"},
+                   {"run_id", "demo-" + f.name},
                    {"stand_clock_offset", f.stand_clock_offset}};
         fs::create_directories(run / "recordings");
         lo.dds_args = o.dds_args;
@@ -71,11 +79,13 @@ std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& 
         lo.stop = o.stop;
         auto r = launch(lab, lo, o.dds);
         throw_if_stopped(o.stop, "the demo");
-        if (r.experiment_status != 0 || r.phase != "DONE")
-            throw RuntimeError(log::cat("the ", f.formation, " experiment ended ", r.phase.empty() ? "without a state" : r.phase,
-                                        " (status ", r.experiment_status, "; logs in ", lo.run_dir, "/logs)"));
+        if (!r.succeeded())
+            throw RuntimeError(log::cat("the ", f.formation, " experiment ended ",
+                                        r.phase.empty() ? "without a state" : r.phase, " (status ", r.experiment_status,
+                                        "; logs in ", lo.run_dir, "/logs)"));
         results.push_back(r);
-        run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight", (run / "flights" / f.name).string()},
+        run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight",
+                     (run / "flights" / f.name).string()},
                     (run / "logs" / ("export-" + f.name + ".log")).string(), o.stop);
     }
     return results;
@@ -84,15 +94,17 @@ std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& 
 // 4. The study's models on the recorded (DDS) flights, and the recorded map.
 void models_on_recorded(const fs::path& run, const std::string& physics_path, const std::stop_token& stop) {
     const std::string models = (run / "study" / "models").string();
-    std::vector<std::string> model_files{physics_path, models + "/naive_linear.json", models + "/learnt_linear.json", models + "/deep_sets.json"};
+    std::vector<std::string> model_files{physics_path, models + "/naive_linear.json", models + "/learnt_linear.json",
+                                         models + "/deep_sets.json"};
     std::vector<std::string> cmp{"dw-predictor", "compare", "--models"};
     cmp.insert(cmp.end(), model_files.begin(), model_files.end());
-    cmp.insert(cmp.end(), {"--data", (run / "flights" / "single").string(), (run / "flights" / "lf3").string(), "--out", (run / "recorded").string()});
+    cmp.insert(cmp.end(), {"--data", (run / "flights" / "single").string(), (run / "flights" / "lf3").string(), "--out",
+                           (run / "recorded").string()});
     run_sibling(cmp, (run / "logs" / "compare.log").string(), stop);
     std::vector<std::string> map{"dw-predictor", "map", "--models"};
     map.insert(map.end(), model_files.begin(), model_files.end());
-    map.insert(map.end(), {"--formation", "leader_follower3", "--altitude", "1.3", "--data", (run / "flights" / "lf3").string(), "--out",
-                           (run / "recorded" / "lf3_map.png").string()});
+    map.insert(map.end(), {"--formation", "leader_follower3", "--altitude", "1.3", "--data",
+                           (run / "flights" / "lf3").string(), "--out", (run / "recorded" / "lf3_map.png").string()});
     run_sibling(map, (run / "logs" / "map.log").string(), stop);
 }
 
@@ -116,33 +128,46 @@ std::pair<std::string, std::string> found_and_fitted(const nlohmann::json& repor
 }
 
 // 6. index.md: what ran, where its outputs are, and what was found.
-std::string index_markdown(double seconds, const std::vector<DemoFlight>& flights, const std::vector<LaunchResult>& results,
-                           const nlohmann::json& report) {
+std::string index_markdown(double seconds, const std::vector<DemoFlight>& flights,
+                           const std::vector<LaunchResult>& results, const nlohmann::json& report) {
     const auto [found, fitted] = found_and_fitted(report);
-    const double before = report["fit"]["heldout_rmse_before"]["f_d"].get<double>(), after = report["fit"]["heldout_rmse_after"]["f_d"].get<double>();
+    const double before = report["fit"]["heldout_rmse_before"]["f_d"].get<double>(),
+                 after = report["fit"]["heldout_rmse_after"]["f_d"].get<double>();
     std::ostringstream md;
-    md << "# Downwash Lab demo run\n\nEverything here is **simulated** (stand, motion capture, vehicles and the air), made by "
-          "`dw-lab demo` in " << static_cast<int>(seconds) / 60 << " min " << static_cast<int>(seconds) % 60 << " s.\n\n";
-    md << "## 1. Experiments over DDS\n\nEach experiment ran the lab file [lab.yaml](lab.yaml): recorder, stand agent (`--sim`: the "
-          "emulated HX711s driven by the physics), mocap bridge (`--sim`: an emulated NatNet server), online predictor and planner, "
-          "each a separate process on loopback DDS.\n\n| experiment | result | recording | flight folder | logs |\n|---|---|---|---|---|\n";
+    md << "# Downwash Lab demo run\n\nEverything here is **simulated** (stand, motion capture, vehicles and the air), "
+          "made by "
+          "`dw-lab demo` in "
+       << static_cast<int>(seconds) / 60 << " min " << static_cast<int>(seconds) % 60 << " s.\n\n";
+    md << "## 1. Experiments over DDS\n\nEach experiment ran the lab file [lab.yaml](lab.yaml): recorder, stand agent "
+          "(`--sim`: the "
+          "emulated HX711s driven by the physics), mocap bridge (`--sim`: an emulated NatNet server), online predictor "
+          "and planner, "
+          "each a separate process on loopback DDS.\n\n| experiment | result | recording | flight folder | logs "
+          "|\n|---|---|---|---|---|\n";
     for (std::size_t k = 0; k < flights.size(); ++k)
-        md << "| " << flights[k].formation << " | " << results[k].phase << ", " << results[k].legs_flown << " of " << results[k].legs_total
-           << " legs | [recordings/" << flights[k].name << ".mcap](recordings/" << flights[k].name << ".mcap) | [flights/" << flights[k].name
-           << "](flights/" << flights[k].name << ") | [lab-" << flights[k].name << "/logs](lab-" << flights[k].name << "/logs) |\n";
-    md << "\n## 2. Models and the comparison\n\nTrained by `dw-predictor study` on simulated flights of every formation (split by leg): "
-          "[study/table.md](study/table.md) ([csv](study/table.csv)); models in [study/models](study/models). On the recorded "
+        md << "| " << flights[k].formation << " | " << results[k].phase << ", " << results[k].legs_flown << " of "
+           << results[k].legs_total << " legs | [recordings/" << flights[k].name << ".mcap](recordings/"
+           << flights[k].name << ".mcap) | [flights/" << flights[k].name << "](flights/" << flights[k].name
+           << ") | [lab-" << flights[k].name << "/logs](lab-" << flights[k].name << "/logs) |\n";
+    md << "\n## 2. Models and the comparison\n\nTrained by `dw-predictor study` on simulated flights of every "
+          "formation (split by leg): "
+          "[study/table.md](study/table.md) ([csv](study/table.csv)); models in [study/models](study/models). On the "
+          "recorded "
           "DDS flights (held-out legs): [recorded/table.md](recorded/table.md).\n\n";
     md << "![Leader Follower K=3 at 1.3 m: observed, physics and the models](study/maps/leader_follower3.png)\n\n"
        << "![Along E through the stand](study/maps/leader_follower3_line.png)\n\n"
        << "The recorded Leader Follower K=3 experiment against the models:\n\n![recorded](recorded/lf3_map.png)\n\n";
-    const double measured = report.contains("clock_offset_measured") ? report["clock_offset_measured"]["offset_s"].get<double>() : NAN;
-    md << "## 3. The explained mismatch\n\nThe Leader Follower K=3 experiment ran with its stand agent's clock " << kHiddenStandClockOffsetS
-       << " s ahead (`--clock-offset`, a simulated clock error the lab's physics does not know). `dw-explain` read its recording "
+    const double measured =
+        report.contains("clock_offset_measured") ? report["clock_offset_measured"]["offset_s"].get<double>() : NAN;
+    md << "## 3. The explained mismatch\n\nThe Leader Follower K=3 experiment ran with its stand agent's clock "
+       << kHiddenStandClockOffsetS
+       << " s ahead (`--clock-offset`, a simulated clock error the lab's physics does not know). `dw-explain` read its "
+          "recording "
           "([recordings/lf3.mcap](recordings/lf3.mcap), stamps as recorded) with the lab's physics. Found: **"
-       << (found.empty() ? "nothing" : found) << "**.\n\n```\n" << fitted << "```\n\nThe lab's time service measured the same clock live: "
-       << (std::isnan(measured) ? std::string("not measured") : log::cat(std::round(measured * 1e4) / 1e4, " s")) << ".\n\nHeld-out f_d RMSE " << std::round(before * 1000) / 1000 << " N → "
-       << std::round(after * 1000) / 1000
+       << (found.empty() ? "nothing" : found) << "**.\n\n```\n"
+       << fitted << "```\n\nThe lab's time service measured the same clock live: "
+       << (std::isnan(measured) ? std::string("not measured") : log::cat(std::round(measured * 1e4) / 1e4, " s"))
+       << ".\n\nHeld-out f_d RMSE " << std::round(before * 1000) / 1000 << " N → " << std::round(after * 1000) / 1000
        << " N. Report: [explain/report.md](explain/report.md) ([report.json](explain/report.json), fitted physics "
           "[explain/physics.yaml](explain/physics.yaml)).\n\n![residuals before](explain/residuals_before.png)\n\n"
           "![residuals after](explain/residuals_after.png)\n";
@@ -176,7 +201,8 @@ int run_demo(const DemoOptions& o) {
 
     // 3. Train and compare (the study: simulated training flights of every formation).
     step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
-    std::vector<std::string> study{"dw-predictor", "study", "--out", (run / "study").string(), "--physics", physics_path};
+    std::vector<std::string> study{"dw-predictor",           "study",     "--out",
+                                   (run / "study").string(), "--physics", physics_path};
     if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
     run_sibling(study, (run / "logs" / "study.log").string(), o.stop);
 
@@ -184,9 +210,10 @@ int run_demo(const DemoOptions& o) {
     models_on_recorded(run, physics_path, o.stop);
 
     // 5. Explain the recording in which the running lab hid something its physics leaves out.
-    step(5).begin(log::cat("explaining the Leader Follower K=3 recording (its stand agent ran ", kHiddenStandClockOffsetS,
-                           " s ahead) against the lab's physics"));
-    run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "recordings" / "lf3.mcap").string(), "--out", (run / "explain").string()},
+    step(5).begin(log::cat("explaining the Leader Follower K=3 recording (its stand agent ran ",
+                           kHiddenStandClockOffsetS, " s ahead) against the lab's physics"));
+    run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "recordings" / "lf3.mcap").string(), "--out",
+                 (run / "explain").string()},
                 (run / "logs" / "explain.log").string(), o.stop);
 
     step(6).begin("writing index.md");
@@ -195,8 +222,9 @@ int run_demo(const DemoOptions& o) {
     write_file((run / "index.md").string(), index_markdown(seconds, flights, results, report));
     const std::string found = found_and_fitted(report).first;
     std::cout << "demo done in " << static_cast<int>(seconds) << " s: " << (run / "index.md").string() << "\n"
-              << "  experiments: " << results[0].phase << ", " << results[1].phase << "; explained by: " << (found.empty() ? "nothing" : found)
-              << "\n  " << first_line_with(read_file((run / "study" / "table.md").string()), "| leader_follower K=3") << "\n";
+              << "  experiments: " << results[0].phase << ", " << results[1].phase
+              << "; explained by: " << (found.empty() ? "nothing" : found) << "\n  "
+              << first_line_with(read_file((run / "study" / "table.md").string()), "| leader_follower K=3") << "\n";
     return 0;
 }
 

@@ -18,7 +18,9 @@ std::vector<security::IdentityRequest> identities_of(const LabFile& lab) {
     std::vector<security::IdentityRequest> v;
     for (const auto& p : lab.processes) {
         const auto role = dds::role_of_executable(p.run.front());
-        if (!role) throw InputError(log::cat(lab.path, ": process ", p.name, ": '", p.run.front(), "' plays no lab role (expected a lab executable)"));
+        if (!role)
+            throw InputError(log::cat(lab.path, ": process ", p.name, ": '", p.run.front(),
+                                      "' plays no lab role (expected a lab executable)"));
         v.push_back({p.name, *role});
     }
     for (dds::Role r : {dds::Role::launcher, dds::Role::operator_}) v.push_back({std::string(dds::role_name(r)), r});
@@ -37,7 +39,9 @@ int keys_create(const KeysOptions& o, std::ostream& out) {
     k.days = o.days;
     k.identities = o.lab_path.empty() ? security::role_identities() : identities_of(load_lab(o.lab_path));
     const auto r = security::create_keystore(k);
-    if (r.new_ca) out << "created the lab CA in " << o.keystore << "/ca.cert.pem (its key: private/ca.key.pem, keep it off the lab machines)\n";
+    if (r.new_ca)
+        out << "created the lab CA in " << o.keystore
+            << "/ca.cert.pem (its key: private/ca.key.pem, keep it off the lab machines)\n";
     for (const auto& n : r.created) out << "created identity " << n << "\n";
     for (const auto& n : r.kept) out << "kept identity " << n << " (already there)\n";
     return 0;
@@ -50,7 +54,9 @@ int keys_list(const std::string& keystore, std::ostream& out) {
         out << i.name << "  " << i.subject << "  expires in " << days_left(i.not_after) << " days"
             << (i.verifies ? "" : "  NOT SIGNED BY THIS KEYSTORE'S CA") << "\n";
     for (const auto& i : l.identities)
-        if (!i.verifies) throw InputError(log::cat(keystore, "/identities/", i.name, ": certificate or permissions not signed by this keystore's CA"));
+        if (!i.verifies)
+            throw InputError(log::cat(keystore, "/identities/", i.name,
+                                      ": certificate or permissions not signed by this keystore's CA"));
     return 0;
 }
 

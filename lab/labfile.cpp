@@ -19,7 +19,9 @@ namespace {
 
 struct Ctx {
     std::string file;
-    [[noreturn]] void fail(const YAML::Node& n, const std::string& key, const std::string& problem) const { fail_at_node(file, n, key, problem); }
+    [[noreturn]] void fail(const YAML::Node& n, const std::string& key, const std::string& problem) const {
+        fail_at_node(file, n, key, problem);
+    }
     std::string str(const YAML::Node& n, const std::string& key) const {
         if (!n.IsScalar()) fail(n, key, "expected a string");
         return n.as<std::string>();
@@ -48,10 +50,12 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
     lab.path = name;
     if (!root.IsMap()) c.fail(root, "(document)", "expected a mapping with format, hosts and processes");
     c.only(root, "", {"format", "vars", "hosts", "processes"});
-    if (!root["format"] || c.str(root["format"], "format") != "downwash-lab/1") c.fail(root["format"] ? root["format"] : root, "format", "expected downwash-lab/1");
+    if (!root["format"] || c.str(root["format"], "format") != "downwash-lab/1")
+        c.fail(root["format"] ? root["format"] : root, "format", "expected downwash-lab/1");
     if (root["vars"]) {
         if (!root["vars"].IsMap()) c.fail(root["vars"], "vars", "expected a mapping of names to values");
-        for (const auto& kv : root["vars"]) lab.vars[kv.first.as<std::string>()] = c.str(kv.second, "vars." + kv.first.as<std::string>());
+        for (const auto& kv : root["vars"])
+            lab.vars[kv.first.as<std::string>()] = c.str(kv.second, "vars." + kv.first.as<std::string>());
     }
     lab.hosts["local"] = {"local", {}, ""};
     if (root["hosts"]) {
@@ -65,12 +69,14 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
                 if (kv.second["launch"]) spec.launch = c.strs(kv.second["launch"], where + ".launch");
                 if (kv.second["bin"]) spec.bin = c.str(kv.second["bin"], where + ".bin");
             }
-            if (h == "local" && !spec.launch.empty()) c.fail(kv.second, where + ".launch", "the local host needs no launch prefix");
+            if (h == "local" && !spec.launch.empty())
+                c.fail(kv.second, where + ".launch", "the local host needs no launch prefix");
             lab.hosts[h] = spec;
         }
     }
     const auto procs = root["processes"];
-    if (!procs || !procs.IsSequence() || procs.size() == 0) c.fail(procs ? procs : root, "processes", "expected a non-empty list");
+    if (!procs || !procs.IsSequence() || procs.size() == 0)
+        c.fail(procs ? procs : root, "processes", "expected a non-empty list");
     std::set<std::string> names;
     int experiments = 0;
     for (std::size_t i = 0; i < procs.size(); ++i) {
@@ -81,7 +87,8 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
         if (!n["name"]) c.fail(n, where + ".name", "missing");
         p.name = c.str(n["name"], where + ".name");
         if (!is_process_name(p.name)) {
-            c.fail(n["name"], where + ".name", "'" + p.name + "' is not a process name (letters, digits, _ - and ., not starting with .)");
+            c.fail(n["name"], where + ".name",
+                   "'" + p.name + "' is not a process name (letters, digits, _ - and ., not starting with .)");
         }
         if (!names.insert(p.name).second) c.fail(n["name"], where + ".name", "'" + p.name + "' is used twice");
         if (n["host"]) p.host = c.str(n["host"], where + ".host");
@@ -91,7 +98,9 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
         if (p.run.empty()) c.fail(n["run"], where + ".run", "empty");
         if (p.run[0].find('/') != std::string::npos || p.run[0].rfind("dw-", 0) != 0)
             c.fail(n["run"], where + ".run[0]", "'" + p.run[0] + "' is not a lab executable (dw-...)");
-        if (p.run[0] == kLauncher) c.fail(n["run"], where + ".run[0]", "a lab file cannot start the launcher (it would start itself without end)");
+        if (p.run[0] == kLauncher)
+            c.fail(n["run"], where + ".run[0]",
+                   "a lab file cannot start the launcher (it would start itself without end)");
         if (n["restart"]) {
             const auto r = c.str(n["restart"], where + ".restart");
             if (r == "never") p.restart = Restart::never;
@@ -99,7 +108,8 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
             else c.fail(n["restart"], where + ".restart", "expected never or on-failure");
         }
         if (n["experiment"]) {
-            if (!n["experiment"].IsScalar() || (n["experiment"].as<std::string>() != "true" && n["experiment"].as<std::string>() != "false"))
+            if (!n["experiment"].IsScalar() ||
+                (n["experiment"].as<std::string>() != "true" && n["experiment"].as<std::string>() != "false"))
                 c.fail(n["experiment"], where + ".experiment", "expected true or false");
             p.experiment = n["experiment"].as<std::string>() == "true";
             experiments += p.experiment;
@@ -110,9 +120,7 @@ LabFile parse_lab(const std::string& yaml, const std::string& name) {
     return lab;
 }
 
-LabFile load_lab(const std::string& path) {
-    return parse_lab(read_file(path, "lab file"), path);
-}
+LabFile load_lab(const std::string& path) { return parse_lab(read_file(path, "lab file"), path); }
 
 std::vector<std::string> expand(const ProcessSpec& p, const std::map<std::string, std::string>& vars) {
     std::vector<std::string> out;
@@ -121,10 +129,13 @@ std::vector<std::string> expand(const ProcessSpec& p, const std::map<std::string
         for (std::size_t i = 0; i < arg.size();) {
             if (arg[i] == '{') {
                 const auto close = arg.find('}', i);
-                if (close == std::string::npos) throw InputError(log::cat("process ", p.name, ": '", arg, "': unclosed {"));
+                if (close == std::string::npos)
+                    throw InputError(log::cat("process ", p.name, ": '", arg, "': unclosed {"));
                 const auto key = arg.substr(i + 1, close - i - 1);
                 const auto it = vars.find(key);
-                if (it == vars.end()) throw InputError(log::cat("process ", p.name, ": '{", key, "}' is not a variable (vars: or --var)"));
+                if (it == vars.end())
+                    throw InputError(
+                        log::cat("process ", p.name, ": '{", key, "}' is not a variable (vars: or --var)"));
                 r += it->second;
                 i = close + 1;
             } else {

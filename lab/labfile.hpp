@@ -39,7 +39,7 @@ enum class Restart { never, on_failure };
 struct ProcessSpec {
     std::string name;
     std::string host = "local";
-    std::vector<std::string> run;     // program name (a lab executable) and its arguments
+    std::vector<std::string> run;  // program name (a lab executable) and its arguments
     Restart restart = Restart::never;
     bool experiment = false;
 };

@@ -33,8 +33,9 @@ std::string progress_bar(unsigned flown, unsigned total, double progress, double
     const double f = std::clamp(progress, 0.0, 1.0);
     const int fill = static_cast<int>(std::lround(f * width));
     std::ostringstream s;
-    s << "[" << std::string(static_cast<std::size_t>(fill), '#') << std::string(static_cast<std::size_t>(width - fill), '.') << "] " << flown
-      << "/" << total << " legs  " << static_cast<int>(std::lround(f * 100)) << " %";
+    s << "[" << std::string(static_cast<std::size_t>(fill), '#')
+      << std::string(static_cast<std::size_t>(width - fill), '.') << "] " << flown << "/" << total << " legs  "
+      << static_cast<int>(std::lround(f * 100)) << " %";
     if (eta_s >= 0) {
         const int e = static_cast<int>(std::lround(eta_s));
         char buf[32];
@@ -116,8 +117,16 @@ std::deque<Running> build_commands(const LabFile& lab, const LaunchOptions& o) {
         argv.insert(argv.end(), o.dds_args.begin(), o.dds_args.end());
         if (!is_recorder(args)) argv.insert(argv.end(), await.begin(), await.end());
         if (std::find(o.dds_args.begin(), o.dds_args.end(), "--security") != o.dds_args.end())
-            argv.insert(argv.end(), {"--identity", p.name});  // each process its own identity (dw-lab keys create --lab)
-        procs.push_back({p, argv, (fs::path(o.run_dir) / "logs" / (p.name + ".log")).string(), nullptr, std::nullopt, 0, is_recorder(args), {}});
+            argv.insert(argv.end(),
+                        {"--identity", p.name});  // each process its own identity (dw-lab keys create --lab)
+        procs.push_back({p,
+                         argv,
+                         (fs::path(o.run_dir) / "logs" / (p.name + ".log")).string(),
+                         nullptr,
+                         std::nullopt,
+                         0,
+                         is_recorder(args),
+                         {}});
     }
     return procs;
 }
@@ -134,8 +143,8 @@ std::string clock_text(const msg::ProcessStatus& s) {
 // One status line per process (from its heartbeat) and the experiment's progress. `secure`: the
 // launcher itself joined with a keystore, so a heartbeat it hears comes from a participant that
 // authenticated with the lab's CA and may publish heartbeats ("auth"); otherwise "open".
-std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor& peers, const std::optional<msg::ExperimentState>& state,
-                        bool secure) {
+std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor& peers,
+                        const std::optional<msg::ExperimentState>& state, bool secure) {
     std::ostringstream s;
     for (const auto& r : procs) {
         char line[256];
@@ -149,19 +158,23 @@ std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor
                 (t.outgoing() ? out_hz : in_hz) += t.rate_hz();
                 lost += t.lost();
             }
-            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s %-4s out %7.1f Hz  in %7.1f Hz  lost %-6llu clock %s%s%s",
-                          r.spec.name.c_str(), dds::process_state_name(st->state()), where.c_str(), r.spec.host.c_str(), secure ? "auth" : "open",
-                          out_hz, in_hz, lost, clock_text(*st).c_str(), st->message().empty() ? "" : "  ", st->message().c_str());
+            std::snprintf(line, sizeof line,
+                          "  %-14s %-9s %-10s @%-8s %-4s out %7.1f Hz  in %7.1f Hz  lost %-6llu clock %s%s%s",
+                          r.spec.name.c_str(), dds::process_state_name(st->state()), where.c_str(), r.spec.host.c_str(),
+                          secure ? "auth" : "open", out_hz, in_hz, lost, clock_text(*st).c_str(),
+                          st->message().empty() ? "" : "  ", st->message().c_str());
         } else {
-            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-", where.c_str(),
-                          r.spec.host.c_str());
+            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-",
+                          where.c_str(), r.spec.host.c_str());
         }
         s << line << "\n";
     }
     if (state)
         s << "  experiment     " << dds::phase_name(state->phase()) << "  "
-          << progress_bar(state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index())),
-                          state->leg_count(), state->progress(), state->phase() == msg::PHASE_DONE ? -1.0 : state->eta_s())
+          << progress_bar(state->phase() == msg::PHASE_DONE ? state->leg_count()
+                                                            : static_cast<unsigned>(std::max(0, state->leg_index())),
+                          state->leg_count(), state->progress(),
+                          state->phase() == msg::PHASE_DONE ? -1.0 : state->eta_s())
           << "\n";
     return s.str();
 }
@@ -201,7 +214,8 @@ void start_process(Running& r) {
 }
 
 // Each process started here, or its command printed for a host the launcher cannot reach.
-void start_all(std::deque<Running>& procs, const LabFile& lab, bool secure, const std::stop_token& stop, LaunchResult& R, const Say& say) {
+void start_all(std::deque<Running>& procs, const LabFile& lab, bool secure, const std::stop_token& stop,
+               LaunchResult& R, const Say& say) {
     for (auto& r : procs) {
         const HostSpec& host = lab.hosts.at(r.spec.host);
         if (r.spec.host != "local" && host.launch.empty()) {
@@ -211,7 +225,8 @@ void start_all(std::deque<Running>& procs, const LabFile& lab, bool secure, cons
         }
         if (secure && &r != &procs.front()) wait_for(stop, kSecureStartGap);
         start_process(r);
-        say(log::cat("started ", r.spec.name, " on ", r.spec.host, " (pid ", r.proc->pid(), "): ", quoted(r.argv), "  → ", r.log));
+        say(log::cat("started ", r.spec.name, " on ", r.spec.host, " (pid ", r.proc->pid(), "): ", quoted(r.argv),
+                     "  → ", r.log));
     }
 }
 
@@ -221,7 +236,8 @@ void on_exit(Running& r, int status, std::size_t lab_size, int& next_participant
     say(log::cat(r.spec.name, " exited with status ", status, " (log: ", r.log, ")"));
     if (r.spec.restart != Restart::on_failure || status == 0 || r.restarts >= 3) return;
     if (next_participant_id < static_cast<int>(lab_size)) {
-        say(log::cat("not restarting ", r.spec.name, ": no fresh DDS participant id left (ids below ", lab_size, " are the lab's first starts)"));
+        say(log::cat("not restarting ", r.spec.name, ": no fresh DDS participant id left (ids below ", lab_size,
+                     " are the lab's first starts)"));
         return;
     }
     ++r.restarts;
@@ -234,8 +250,37 @@ void on_exit(Running& r, int status, std::size_t lab_size, int& next_participant
 void note_final_state(const std::optional<msg::ExperimentState>& state, LaunchResult& R) {
     if (!state) return;
     R.phase = dds::phase_name(state->phase());
+    R.done = state->phase() == msg::PHASE_DONE;
     R.legs_total = state->leg_count();
-    R.legs_flown = state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index()));
+    R.legs_flown =
+        state->phase() == msg::PHASE_DONE ? state->leg_count() : static_cast<unsigned>(std::max(0, state->leg_index()));
+}
+
+// The status lines on stderr: on a terminal each redraw replaces the last.
+class StatusLines {
+public:
+    explicit StatusLines(bool tty) : tty_(tty) {}
+    void show(const std::string& text) {
+        if (tty_) {
+            for (int i = 0; i < drawn_; ++i) std::fputs("\033[F\033[K", stderr);
+            drawn_ = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+        }
+        std::fputs(text.c_str(), stderr);
+        std::fflush(stderr);
+    }
+    std::chrono::seconds period() const { return tty_ ? std::chrono::seconds(1) : std::chrono::seconds(10); }
+
+private:
+    bool tty_;
+    int drawn_ = 0;
+};
+
+// logs/resources.csv with its header; a folder that cannot take it is said once, and the run goes on.
+std::ofstream open_resources(const std::string& run_dir, const std::function<void(const std::string&)>& say) {
+    std::ofstream resources(std::filesystem::path(run_dir) / "logs" / kResourceFile);
+    if (!(resources << kResourceHeader << "\n"))
+        say(log::cat("cannot write ", run_dir, "/logs/", kResourceFile, ": no resource samples this run"));
+    return resources;
 }
 
 }  // namespace
@@ -249,36 +294,31 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
 
     LaunchResult R;
     dds::DdsConfig self = monitor;
-    if (!self.security.empty() && self.identity.empty()) self.identity = std::string(dds::role_name(dds::Role::launcher));
+    if (!self.security.empty() && self.identity.empty())
+        self.identity = std::string(dds::role_name(dds::Role::launcher));
     dds::Participant participant(self, "lab");
     dds::PeerMonitor peers(participant, [&](const dds::PeerEvent& e) {
         say(log::cat(e.process, e.kind == dds::PeerEvent::Kind::appeared ? " is up" : " is gone: " + e.reason));
     });
     std::mutex m;
     std::optional<msg::ExperimentState> state;
-    dds::Reader<msg::ExperimentState> states(participant, dds::topics::experiment_state, [&](const msg::ExperimentState& s, const dds::SampleMeta&) {
-        std::lock_guard lock(m);
-        state = s;
-    });
+    dds::Reader<msg::ExperimentState> states(participant, dds::topics::experiment_state,
+                                             [&](const msg::ExperimentState& s, const dds::SampleMeta&) {
+                                                 std::lock_guard lock(m);
+                                                 state = s;
+                                             });
 
     int next_participant_id = dds::kMaxParticipantId;
     start_all(procs, lab, !self.security.empty(), o.stop, R, say);
 
-    const bool tty = o.live && ::isatty(STDERR_FILENO);
-    int drawn = 0;
+    StatusLines lines(o.live && ::isatty(STDERR_FILENO));
     auto draw = [&] {
         std::optional<msg::ExperimentState> now_state;
         {
             std::lock_guard lock(m);
             now_state = state;
         }
-        const std::string text = status_text(procs, peers, now_state, !self.security.empty());
-        if (tty) {
-            for (int i = 0; i < drawn; ++i) std::fputs("\033[F\033[K", stderr);
-            drawn = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-        }
-        std::fputs(text.c_str(), stderr);
-        std::fflush(stderr);
+        lines.show(status_text(procs, peers, now_state, !self.security.empty()));
     };
 
     Running* experiment = nullptr;
@@ -287,8 +327,7 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
     auto last_draw = std::chrono::steady_clock::now() - std::chrono::hours(1);
     const auto launched = std::chrono::steady_clock::now();
     auto last_resources = launched - std::chrono::hours(1);
-    std::ofstream resources(std::filesystem::path(o.run_dir) / "logs" / kResourceFile);
-    if (!(resources << kResourceHeader << "\n")) say(log::cat("cannot write ", o.run_dir, "/logs/", kResourceFile, ": no resource samples this run"));
+    std::ofstream resources = open_resources(o.run_dir, say);
     while (!o.stop.stop_requested()) {
         for (auto& r : procs) {
             if (!r.proc || r.ended) continue;
@@ -304,7 +343,7 @@ LaunchResult launch(const LabFile& lab, const LaunchOptions& o, const dds::DdsCo
             log_resources(resources, procs, peers, std::chrono::duration<double>(now - launched).count());
             last_resources = now;
         }
-        if (now - last_draw >= (tty ? std::chrono::seconds(1) : std::chrono::seconds(10))) {
+        if (now - last_draw >= lines.period()) {
             draw();
             last_draw = now;
         }

@@ -26,10 +26,13 @@ struct LaunchOptions {
 };
 
 struct LaunchResult {
-    int experiment_status = -1;                   // the experiment process's exit status
-    std::string phase;                            // its last phase seen (DONE, ABORTED, ...)
+    int experiment_status = -1;  // the experiment process's exit status
+    std::string phase;           // its last phase seen (DONE, ABORTED, ...)
+    bool done = false;           // that phase was DONE
+    // The experiment ended DONE and its process exited 0.
+    bool succeeded() const { return experiment_status == 0 && done; }
     unsigned legs_flown = 0, legs_total = 0;
-    std::vector<std::string> printed;             // commands for hosts the launcher cannot start
+    std::vector<std::string> printed;  // commands for hosts the launcher cannot start
     std::map<std::string, int> restarts;
 };
 

@@ -14,13 +14,33 @@ namespace dw::lab {
 int run_loopback(const LoopbackOptions& o) {
     const std::string summary =
         o.summary_path.empty() ? "/tmp/dw-loopback-" + std::to_string(::getpid()) + ".json" : o.summary_path;
-    std::vector<std::string> echo_args{o.probe_path, "echo", "all", "--name", "loopback-echo",
-                                       "--expect", std::to_string(o.count),
-                                       "--timeout", std::to_string(o.timeout_s), "--summary", summary};
-    std::vector<std::string> pub_args{o.probe_path, "pub", "all", "--name", "loopback-pub",
-                                      "--count", std::to_string(o.count), "--rate", std::to_string(o.rate_hz),
-                                      "--wait-readers", "1", "--wait-timeout", std::to_string(o.timeout_s),
-                                      "--linger", "-1", "--quiet"};
+    std::vector<std::string> echo_args{o.probe_path,
+                                       "echo",
+                                       "all",
+                                       "--name",
+                                       "loopback-echo",
+                                       "--expect",
+                                       std::to_string(o.count),
+                                       "--timeout",
+                                       std::to_string(o.timeout_s),
+                                       "--summary",
+                                       summary};
+    std::vector<std::string> pub_args{o.probe_path,
+                                      "pub",
+                                      "all",
+                                      "--name",
+                                      "loopback-pub",
+                                      "--count",
+                                      std::to_string(o.count),
+                                      "--rate",
+                                      std::to_string(o.rate_hz),
+                                      "--wait-readers",
+                                      "1",
+                                      "--wait-timeout",
+                                      std::to_string(o.timeout_s),
+                                      "--linger",
+                                      "-1",
+                                      "--quiet"};
     if (o.quiet) echo_args.emplace_back("--quiet");
     echo_args.insert(echo_args.end(), o.dds_args.begin(), o.dds_args.end());
     pub_args.insert(pub_args.end(), o.dds_args.begin(), o.dds_args.end());

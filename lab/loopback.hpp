@@ -10,14 +10,14 @@
 namespace dw::lab {
 
 struct LoopbackOptions {
-    std::string probe_path;            // dw-probe executable
-    std::vector<std::string> dds_args; // --domain/--transport/... passed to both children
-    std::uint64_t count = 20;          // samples per topic
+    std::string probe_path;             // dw-probe executable
+    std::vector<std::string> dds_args;  // --domain/--transport/... passed to both children
+    std::uint64_t count = 20;           // samples per topic
     double rate_hz = 20.0;
     double timeout_s = 60.0;
-    bool quiet = false;                // children print only the summary
-    std::string summary_path;          // echo's JSON summary ("" = a temporary file)
-    std::stop_token stop;              // stops both children: exit 130
+    bool quiet = false;        // children print only the summary
+    std::string summary_path;  // echo's JSON summary ("" = a temporary file)
+    std::stop_token stop;      // stops both children: exit 130
 };
 
 // Runs the session; returns the echo's exit status (0 = every topic arrived intact).

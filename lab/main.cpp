@@ -19,6 +19,69 @@
 
 namespace {
 
+// "20261125-081500": the default run folders' names.
+std::string stamp() {
+    char buf[32];
+    const std::time_t t = std::time(nullptr);
+    std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
+    return std::string(buf);
+}
+
+// `dw-lab keys create|list`: the DDS Security keystore.
+struct KeysCommand {
+    dw::lab::KeysOptions options;
+    CLI::App* create = nullptr;
+    CLI::App* list = nullptr;
+
+    void add(CLI::App& app) {
+        auto* keys =
+            app.add_subcommand("keys", "the lab's DDS Security keystore: create (or add missing identities), list");
+        keys->require_subcommand(1);
+        create = keys->add_subcommand(
+            "create", "a CA, one identity per process of --lab (or per role), signed governance and permissions");
+        create->add_option("--keystore", options.keystore, "keystore folder (made if missing)")->required();
+        create->add_option("--lab", options.lab_path,
+                           "lab file: one identity per process, named as the process (default: one per role)");
+        create->add_option("--days", options.days, "certificates and permissions expire after this many days")
+            ->check(dw::cli::in({1, 36500}));
+        list = keys->add_subcommand("list", "each identity, when it expires, and whether the keystore's CA signed it");
+        list->add_option("--keystore", options.keystore, "keystore folder")->required();
+    }
+};
+
+// `dw-lab run`: a lab file's processes, watched until the experiment ends.
+struct RunCommand {
+    CLI::App* sub = nullptr;
+    std::string lab_path, run_dir;
+    std::vector<std::string> var_args;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand("run", "start a lab file's processes, watch them, stop them when the experiment ends");
+        sub->add_option("--lab", lab_path, "lab file (downwash-lab/1), e.g. config/lab.sim.yaml")->required();
+        sub->add_option("--run-dir", run_dir, "folder for logs and {run_dir} (default: runs/<time>)");
+        sub->add_option("--var", var_args, "NAME=VALUE: set a lab-file variable (repeatable)");
+    }
+    int run(dw::dds::ProcessCli& cli) const {
+        const auto lab = dw::lab::load_lab(lab_path);
+        dw::lab::LaunchOptions o;
+        o.run_dir = run_dir.empty() ? "runs/" + stamp() : run_dir;
+        for (const auto& v : var_args) {
+            const auto eq = v.find('=');
+            if (eq == std::string::npos || eq == 0) throw dw::InputError("--var '" + v + "': expected NAME=VALUE");
+            o.vars[v.substr(0, eq)] = v.substr(eq + 1);
+        }
+        o.dds_args = cli.dds_args();
+        o.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
+        o.stop = dw::Shutdown::instance().token();
+        const auto r = dw::lab::launch(lab, o, cli.dds());
+        for (const auto& p : r.printed) std::cout << "started elsewhere: " << p << "\n";
+        std::cout << (r.phase.empty() ? "no experiment state seen" : r.phase) << ": " << r.legs_flown << " of "
+                  << r.legs_total << " legs; logs in " << o.run_dir << "/logs\n";
+        if (dw::Shutdown::instance().requested()) return 0;
+        return r.succeeded() ? 0 : dw::kExitRuntime;
+    }
+};
+
 int run(int argc, char** argv) {
     dw::dds::ProcessCli cli("dw-lab: run the Downwash Lab's processes");
     CLI::App& app = cli.app();
@@ -33,43 +96,30 @@ int run(int argc, char** argv) {
     loopback->add_flag("--quiet", lo.quiet, "show only the summary table");
 
     dw::lab::DemoOptions demo_o;
-    auto* demo = app.add_subcommand("demo", "fly a simulated experiment end to end: recording, models, table, maps, explained mismatch");
+    auto* demo = app.add_subcommand(
+        "demo", "fly a simulated experiment end to end: recording, models, table, maps, explained mismatch");
     demo->add_option("--out", demo_o.out_dir, "run folder (default: runs/demo-<time>)");
     demo->add_flag("--quick", demo_o.quick, "fewer legs and epochs (a smoke test, ~3 min)");
-    std::string lab_path, run_dir;
-    std::vector<std::string> var_args;
-    auto* runc = app.add_subcommand("run", "start a lab file's processes, watch them, stop them when the experiment ends");
-    runc->add_option("--lab", lab_path, "lab file (downwash-lab/1), e.g. config/lab.sim.yaml")->required();
-    runc->add_option("--run-dir", run_dir, "folder for logs and {run_dir} (default: runs/<time>)");
-    runc->add_option("--var", var_args, "NAME=VALUE: set a lab-file variable (repeatable)");
+    RunCommand runc;
+    runc.add(app);
 
-    dw::lab::KeysOptions ko;
     dw::lab::SoakOptions soak_o;
-    auto* soak = app.add_subcommand("soak", "a long simulated lab run with every process's memory, CPU and losses sampled: no growth, no loss");
-    soak->add_option("--minutes", soak_o.minutes, "how long (default 3)")->check(dw::cli::in(dw::lab::kSoakMinutesRange));
-    soak->add_option("--out", soak_o.out_dir, "folder for soak.md, soak.json, the charts and the run (default: runs/soak-<time>)");
-    auto* keys = app.add_subcommand("keys", "the lab's DDS Security keystore: create (or add missing identities), list");
-    keys->require_subcommand(1);
-    auto* keys_create = keys->add_subcommand("create", "a CA, one identity per process of --lab (or per role), signed governance and permissions");
-    keys_create->add_option("--keystore", ko.keystore, "keystore folder (made if missing)")->required();
-    keys_create->add_option("--lab", ko.lab_path, "lab file: one identity per process, named as the process (default: one per role)");
-    keys_create->add_option("--days", ko.days, "certificates and permissions expire after this many days")->check(dw::cli::in({1, 36500}));
-    auto* keys_list = keys->add_subcommand("list", "each identity, when it expires, and whether the keystore's CA signed it");
-    keys_list->add_option("--keystore", ko.keystore, "keystore folder")->required();
+    auto* soak = app.add_subcommand(
+        "soak", "a long simulated lab run with every process's memory, CPU and losses sampled: no growth, no loss");
+    soak->add_option("--minutes", soak_o.minutes, "how long (default 3)")
+        ->check(dw::cli::in(dw::lab::kSoakMinutesRange));
+    soak->add_option("--out", soak_o.out_dir,
+                     "folder for soak.md, soak.json, the charts and the run (default: runs/soak-<time>)");
+    KeysCommand keys;
+    keys.add(app);
 
     cli.parse(argc, argv);  // validates the DDS settings once, before any child starts
-    if (keys_create->parsed()) return dw::lab::keys_create(ko, std::cout);
-    if (keys_list->parsed()) return dw::lab::keys_list(ko.keystore, std::cout);
+    if (keys.create->parsed()) return dw::lab::keys_create(keys.options, std::cout);
+    if (keys.list->parsed()) return dw::lab::keys_list(keys.options.keystore, std::cout);
     if (loopback->count("--summary")) dw::require_writable_path(lo.summary_path, "--summary");
     if (demo->count("--out")) dw::require_output_dir(demo_o.out_dir, "--out");
     if (soak->count("--out")) dw::require_output_dir(soak_o.out_dir, "--out");
-    if (runc->count("--run-dir")) dw::require_output_dir(run_dir, "--run-dir");
-    auto stamp = [] {
-        char buf[32];
-        const std::time_t t = std::time(nullptr);
-        std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
-        return std::string(buf);
-    };
+    if (runc.sub->count("--run-dir")) dw::require_output_dir(runc.run_dir, "--run-dir");
     if (demo->parsed()) {
         if (demo_o.out_dir.empty()) demo_o.out_dir = "runs/demo-" + stamp();
         demo_o.dds_args = cli.dds_args();
@@ -84,25 +134,7 @@ int run(int argc, char** argv) {
         soak_o.stop = dw::Shutdown::instance().token();
         return dw::lab::run_soak(soak_o);
     }
-    if (runc->parsed()) {
-        const auto lab = dw::lab::load_lab(lab_path);
-        dw::lab::LaunchOptions o;
-        o.run_dir = run_dir.empty() ? "runs/" + stamp() : run_dir;
-        for (const auto& v : var_args) {
-            const auto eq = v.find('=');
-            if (eq == std::string::npos || eq == 0) throw dw::InputError("--var '" + v + "': expected NAME=VALUE");
-            o.vars[v.substr(0, eq)] = v.substr(eq + 1);
-        }
-        o.dds_args = cli.dds_args();
-        o.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
-        o.stop = dw::Shutdown::instance().token();
-        const auto r = dw::lab::launch(lab, o, cli.dds());
-        for (const auto& p : r.printed) std::cout << "started elsewhere: " << p << "\n";
-        std::cout << (r.phase.empty() ? "no experiment state seen" : r.phase) << ": " << r.legs_flown << " of " << r.legs_total
-                  << " legs; logs in " << o.run_dir << "/logs\n";
-        if (dw::Shutdown::instance().requested()) return 0;
-        return r.experiment_status == 0 && r.phase == "DONE" ? 0 : dw::kExitRuntime;
-    }
+    if (runc.sub->parsed()) return runc.run(cli);
     lo.probe_path = dw::executable_dir() + "/dw-probe";
     lo.dds_args = cli.dds_args();
     lo.stop = dw::Shutdown::instance().token();

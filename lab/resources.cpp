@@ -47,8 +47,8 @@ std::optional<Usage> usage_of(pid_t pid) {
 
 std::string to_csv_line(const ResourceRow& r) {
     char line[256];
-    std::snprintf(line, sizeof line, "%.1f,%s,%d,%.2f,%.2f,%llu", r.t_s, r.process.c_str(), static_cast<int>(r.pid), r.usage.rss_mb,
-                  r.usage.cpu_s, static_cast<unsigned long long>(r.lost));
+    std::snprintf(line, sizeof line, "%.1f,%s,%d,%.2f,%.2f,%llu", r.t_s, r.process.c_str(), static_cast<int>(r.pid),
+                  r.usage.rss_mb, r.usage.cpu_s, static_cast<unsigned long long>(r.lost));
     return line;
 }
 
@@ -57,16 +57,21 @@ std::vector<ResourceRow> read_resources(const std::string& path) {
     if (!in) throw InputError(log::cat(path, ": cannot read"));
     std::vector<ResourceRow> rows;
     std::string line;
-    if (!std::getline(in, line) || line != kResourceHeader) throw InputError(log::cat(path, ":1: expected the header ", kResourceHeader));
+    if (!std::getline(in, line) || line != kResourceHeader)
+        throw InputError(log::cat(path, ":1: expected the header ", kResourceHeader));
     for (int n = 2; std::getline(in, line); ++n) {
         std::istringstream s(line);
         std::string t, name, pid, rss, cpu, lost;
         ResourceRow r;
         try {
-            if (!(std::getline(s, t, ',') && std::getline(s, name, ',') && std::getline(s, pid, ',') && std::getline(s, rss, ',') &&
-                  std::getline(s, cpu, ',') && std::getline(s, lost)))
+            if (!(std::getline(s, t, ',') && std::getline(s, name, ',') && std::getline(s, pid, ',') &&
+                  std::getline(s, rss, ',') && std::getline(s, cpu, ',') && std::getline(s, lost)))
                 throw std::invalid_argument("fields");
-            r = {std::stod(t), name, static_cast<pid_t>(std::stol(pid)), {std::stod(rss), std::stod(cpu)}, std::stoull(lost)};
+            r = {std::stod(t),
+                 name,
+                 static_cast<pid_t>(std::stol(pid)),
+                 {std::stod(rss), std::stod(cpu)},
+                 std::stoull(lost)};
         } catch (const std::exception&) {
             throw InputError(log::cat(path, ":", n, ": expected ", kResourceHeader, ", got '", line, "'"));
         }

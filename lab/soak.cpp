@@ -49,7 +49,8 @@ int legs_for(double minutes) {
     };
     int lo = static_cast<int>(physics::kLegsRange.lo), hi = static_cast<int>(physics::kLegsRange.hi);
     if (duration(hi) < minutes * 60)
-        throw InputError(log::cat("--minutes ", minutes, ": the longest plan (", hi, " legs) lasts ", std::floor(duration(hi) / 60), " minutes"));
+        throw InputError(log::cat("--minutes ", minutes, ": the longest plan (", hi, " legs) lasts ",
+                                  std::floor(duration(hi) / 60), " minutes"));
     while (lo < hi) {
         const int mid = (lo + hi) / 2;
         if (duration(mid) >= minutes * 60) hi = mid;
@@ -67,7 +68,8 @@ std::uint64_t recorded_losses(const std::string& mcap_path) {
         if (m.name != "loss") return;
         for (const auto& [topic, text] : m.entries) {
             for (const std::string what : {", lost ", ", dropped (disk stalled) "})
-                if (const auto at = text.find(what); at != std::string::npos) lost += std::stoull(text.substr(at + what.size()));
+                if (const auto at = text.find(what); at != std::string::npos)
+                    lost += std::stoull(text.substr(at + what.size()));
         }
     };
     const auto r = mcap::read_file(mcap_path, h);
@@ -102,7 +104,8 @@ std::vector<ProcessTrend> trends(const std::vector<ResourceRow>& rows) {
     std::vector<ProcessTrend> out;
     for (const auto& key : order) {
         const auto& v = by[key];
-        ProcessTrend p{key.first, key.second, v.size(), 0, v.front()->usage.rss_mb, v.back()->usage.rss_mb, 0, 0, 0, v.back()->lost};
+        ProcessTrend p{key.first, key.second, v.size(),      0, v.front()->usage.rss_mb, v.back()->usage.rss_mb, 0,
+                       0,         0,          v.back()->lost};
         std::vector<std::pair<double, double>> late;
         for (const auto* r : v) {
             p.rss_peak_mb = std::max(p.rss_peak_mb, r->usage.rss_mb);
@@ -119,7 +122,8 @@ std::vector<ProcessTrend> trends(const std::vector<ResourceRow>& rows) {
 
 std::string restarts_text(const std::map<std::string, int>& restarts) {
     std::string why;
-    for (const auto& [process, n] : restarts) why += log::cat(why.empty() ? "" : "; ", process, " restarted ", n, " time(s)");
+    for (const auto& [process, n] : restarts)
+        why += log::cat(why.empty() ? "" : "; ", process, " restarted ", n, " time(s)");
     return why;
 }
 
@@ -128,9 +132,11 @@ std::string judge(const std::vector<ProcessTrend>& trends, std::uint64_t recorde
     auto add = [&](const std::string& s) { why += (why.empty() ? "" : "; ") + s; };
     for (const auto& p : trends) {
         if (p.judged < kMinJudgedSamples)
-            add(log::cat(p.process, " (pid ", p.pid, "): ", p.judged, " samples after the warm-up, too few to judge its memory"));
+            add(log::cat(p.process, " (pid ", p.pid, "): ", p.judged,
+                         " samples after the warm-up, too few to judge its memory"));
         else if (!(p.rss_slope_mb_per_min <= kRssSlopeLimitMbPerMin))
-            add(log::cat(p.process, "'s memory grows ", p.rss_slope_mb_per_min, " MB/min (limit ", kRssSlopeLimitMbPerMin, ")"));
+            add(log::cat(p.process, "'s memory grows ", p.rss_slope_mb_per_min, " MB/min (limit ",
+                         kRssSlopeLimitMbPerMin, ")"));
         if (p.lost > 0) add(log::cat(p.process, " lost ", p.lost, " samples"));
     }
     if (recorder_lost > 0) add(log::cat("the recording is missing ", recorder_lost, " samples"));
@@ -141,10 +147,15 @@ std::string judge(const std::vector<ProcessTrend>& trends, std::uint64_t recorde
 namespace {
 
 void write_charts(const std::vector<ResourceRow>& rows, const fs::path& dir) {
-    static const std::array<std::array<unsigned char, 3>, 6> kColours{{{200, 80, 0}, {0, 140, 0}, {0, 0, 200}, {160, 0, 160}, {0, 140, 200}, {90, 90, 90}}};
+    static const std::array<std::array<unsigned char, 3>, 6> kColours{
+        {{200, 80, 0}, {0, 140, 0}, {0, 0, 200}, {160, 0, 160}, {0, 140, 200}, {90, 90, 90}}};
     std::map<std::string, std::size_t> index;
     plot::Chart rss{"Resident memory of each lab process (dw-lab soak)", "time since launch [s]", "RSS [MB]", {}, {}};
-    plot::Chart cpu{"CPU of each lab process, between two samples (dw-lab soak)", "time since launch [s]", "CPU [% of one core]", {}, {}};
+    plot::Chart cpu{"CPU of each lab process, between two samples (dw-lab soak)",
+                    "time since launch [s]",
+                    "CPU [% of one core]",
+                    {},
+                    {}};
     std::map<std::string, const ResourceRow*> previous;
     for (const auto& r : rows) {
         auto [it, fresh] = index.try_emplace(r.process, index.size());
@@ -164,25 +175,41 @@ void write_charts(const std::vector<ResourceRow>& rows, const fs::path& dir) {
     plot::render_chart(cpu, (dir / "soak_cpu.png").string());
 }
 
-void write_reports(const std::vector<ProcessTrend>& t, std::uint64_t recorder_lost, const std::string& verdict, double minutes,
-                   double lasted_s, const LaunchResult& run, const fs::path& dir) {
+void write_reports(const std::vector<ProcessTrend>& t, std::uint64_t recorder_lost, const std::string& verdict,
+                   double minutes, double lasted_s, const LaunchResult& run, const fs::path& dir) {
     std::ostringstream md;
-    md << "# Soak: " << minutes << " minutes of the simulated lab (" << kFormation << ", " << run.legs_flown << " of " << run.legs_total
-       << " legs, " << (run.phase.empty() ? "no state" : run.phase) << "; sampled for " << lasted_s / 60 << " min)\n\n"
-       << "Sampled every " << kResourcePeriodS << " s by dw-lab run (logs/resources.csv); the slope leaves out the first "
-       << kWarmupS << " s or " << kWarmupFraction * 100 << " % of the run, whichever is longer.\n\n"
-       << "| process | samples after warm-up | RSS first MB | RSS last MB | RSS peak MB | RSS slope after warm-up MB/min | CPU % of a core | lost |\n"
+    md << "# Soak: " << minutes << " minutes of the simulated lab (" << kFormation << ", " << run.legs_flown << " of "
+       << run.legs_total << " legs, " << (run.phase.empty() ? "no state" : run.phase) << "; sampled for "
+       << lasted_s / 60 << " min)\n\n"
+       << "Sampled every " << kResourcePeriodS
+       << " s by dw-lab run (logs/resources.csv); the slope leaves out the first " << kWarmupS << " s or "
+       << kWarmupFraction * 100 << " % of the run, whichever is longer.\n\n"
+       << "| process | samples after warm-up | RSS first MB | RSS last MB | RSS peak MB | RSS slope after warm-up "
+          "MB/min | CPU % of a core | lost |\n"
        << "|---|---|---|---|---|---|---|---|\n";
-    nlohmann::json j{{"minutes", minutes}, {"sampled_s", lasted_s}, {"phase", run.phase}, {"legs_flown", run.legs_flown}, {"recorder_lost", recorder_lost},
-                     {"rss_slope_limit_mb_per_min", kRssSlopeLimitMbPerMin}, {"verdict", verdict.empty() ? "pass" : verdict}};
+    nlohmann::json j{{"minutes", minutes},
+                     {"sampled_s", lasted_s},
+                     {"phase", run.phase},
+                     {"legs_flown", run.legs_flown},
+                     {"recorder_lost", recorder_lost},
+                     {"rss_slope_limit_mb_per_min", kRssSlopeLimitMbPerMin},
+                     {"verdict", verdict.empty() ? "pass" : verdict}};
     char line[256];
     for (const auto& p : t) {
-        std::snprintf(line, sizeof line, "| %s | %zu | %.1f | %.1f | %.1f | %+.3f | %.1f | %llu |\n", p.process.c_str(), p.judged, p.rss_first_mb,
-                      p.rss_last_mb, p.rss_peak_mb, p.rss_slope_mb_per_min, p.cpu_percent, static_cast<unsigned long long>(p.lost));
+        std::snprintf(line, sizeof line, "| %s | %zu | %.1f | %.1f | %.1f | %+.3f | %.1f | %llu |\n", p.process.c_str(),
+                      p.judged, p.rss_first_mb, p.rss_last_mb, p.rss_peak_mb, p.rss_slope_mb_per_min, p.cpu_percent,
+                      static_cast<unsigned long long>(p.lost));
         md << line;
-        j["processes"].push_back({{"process", p.process}, {"pid", p.pid}, {"samples", p.samples}, {"judged", p.judged}, {"rss_first_mb", p.rss_first_mb}, {"rss_last_mb", p.rss_last_mb},
-                                  {"rss_peak_mb", p.rss_peak_mb}, {"rss_slope_mb_per_min", p.rss_slope_mb_per_min},
-                                  {"cpu_percent", p.cpu_percent}, {"lost", p.lost}});
+        j["processes"].push_back({{"process", p.process},
+                                  {"pid", p.pid},
+                                  {"samples", p.samples},
+                                  {"judged", p.judged},
+                                  {"rss_first_mb", p.rss_first_mb},
+                                  {"rss_last_mb", p.rss_last_mb},
+                                  {"rss_peak_mb", p.rss_peak_mb},
+                                  {"rss_slope_mb_per_min", p.rss_slope_mb_per_min},
+                                  {"cpu_percent", p.cpu_percent},
+                                  {"lost", p.lost}});
     }
     md << "\nRecording: " << recorder_lost << " samples missing (the recorder's loss metadata).\n\n"
        << "Verdict: " << (verdict.empty() ? "pass (no memory growth, no loss)" : verdict) << "\n\n"
@@ -200,11 +227,19 @@ int run_soak(const SoakOptions& o) {
     write_file(physics_path, physics::to_yaml(physics::PhysicsConfig{}));
     write_file((dir / "lab.yaml").string(), kLabSimYaml);
     const int legs = legs_for(o.minutes);
-    std::cerr << "dw-lab soak: " << o.minutes << " minutes: " << legs << " legs of " << kFormation << " at " << kAltitude_m << " m\n";
+    std::cerr << "dw-lab soak: " << o.minutes << " minutes: " << legs << " legs of " << kFormation << " at "
+              << kAltitude_m << " m\n";
     LaunchOptions lo;
     lo.run_dir = (dir / "lab").string();
-    lo.vars = {{"formation", kFormation}, {"vehicles", kVehicles}, {"legs", std::to_string(legs)}, {"altitudes", log::cat(kAltitude_m)},
-               {"speed", log::cat(kSpeed_mps)}, {"physics", physics_path}, {"model", physics_path}, {"recording", "soak.mcap"}, {"run_id", "soak"}};
+    lo.vars = {{"formation", kFormation},
+               {"vehicles", kVehicles},
+               {"legs", std::to_string(legs)},
+               {"altitudes", log::cat(kAltitude_m)},
+               {"speed", log::cat(kSpeed_mps)},
+               {"physics", physics_path},
+               {"model", physics_path},
+               {"recording", "soak.mcap"},
+               {"run_id", "soak"}};
     lo.dds_args = o.dds_args;
     lo.live = false;
     lo.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
@@ -217,12 +252,13 @@ int run_soak(const SoakOptions& o) {
         rows = read_resources((fs::path(lo.run_dir) / "logs" / kResourceFile).string());
         recorder_lost = recorded_losses((fs::path(lo.run_dir) / "soak.mcap").string());
     } catch (const InputError& e) {
-        throw RuntimeError(log::cat("the soak's run left no usable record: ", e.what(), " (logs in ", lo.run_dir, "/logs)"));
+        throw RuntimeError(
+            log::cat("the soak's run left no usable record: ", e.what(), " (logs in ", lo.run_dir, "/logs)"));
     }
     const auto t = trends(rows);
     std::string verdict = judge(t, recorder_lost);
     if (const auto r = restarts_text(run.restarts); !r.empty()) verdict = r + (verdict.empty() ? "" : "; " + verdict);
-    if (run.experiment_status != 0 || run.phase != "DONE") verdict = log::cat("the experiment ended ", run.phase, "; ", verdict);
+    if (!run.succeeded()) verdict = log::cat("the experiment ended ", run.phase, "; ", verdict);
     write_charts(rows, dir);
     write_reports(t, recorder_lost, verdict, o.minutes, rows.empty() ? 0.0 : rows.back().t_s, run, dir);
     std::cout << read_file((dir / "soak.md").string());

@@ -24,9 +24,21 @@ namespace dw::mcap {
 namespace {
 
 enum Op : std::uint8_t {
-    kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
-    kMessageIndex = 0x07, kChunkIndex = 0x08, kAttachment = 0x09, kAttachmentIndex = 0x0A,
-    kStatistics = 0x0B, kMetadata = 0x0C, kMetadataIndex = 0x0D, kSummaryOffset = 0x0E, kDataEnd = 0x0F,
+    kHeader = 0x01,
+    kFooter = 0x02,
+    kSchema = 0x03,
+    kChannel = 0x04,
+    kMessage = 0x05,
+    kChunk = 0x06,
+    kMessageIndex = 0x07,
+    kChunkIndex = 0x08,
+    kAttachment = 0x09,
+    kAttachmentIndex = 0x0A,
+    kStatistics = 0x0B,
+    kMetadata = 0x0C,
+    kMetadataIndex = 0x0D,
+    kSummaryOffset = 0x0E,
+    kDataEnd = 0x0F,
 };
 
 // Appends little-endian fields (MCAP is little-endian throughout).
@@ -107,7 +119,9 @@ public:
         return m;
     }
     std::uint64_t offset() const { return base_ + pos_; }
-    [[noreturn]] void fail(const std::string& what) const { throw InputError(log::cat("offset ", offset(), ": ", what)); }
+    [[noreturn]] void fail(const std::string& what) const {
+        throw InputError(log::cat("offset ", offset(), ": ", what));
+    }
 
 private:
     template <class T>
@@ -151,7 +165,8 @@ std::string compress(Compression c, const std::string& in) {
 
 std::vector<std::uint8_t> decompress(const std::string& compression, std::span<const std::uint8_t> in,
                                      std::uint64_t size, const In& where) {
-    if (size > kMaxChunk) where.fail(log::cat("chunk claims ", size, " uncompressed bytes (more than the 1 GiB bound)"));
+    if (size > kMaxChunk)
+        where.fail(log::cat("chunk claims ", size, " uncompressed bytes (more than the 1 GiB bound)"));
     std::vector<std::uint8_t> out(static_cast<std::size_t>(size));
     if (compression.empty()) {
         if (in.size() != size) where.fail("uncompressed chunk size does not match its records");
@@ -204,9 +219,7 @@ Compression parse_compression(const std::string& text) {
     throw InputError(log::cat("unknown compression '", text, "' (expected zstd, lz4 or none)"));
 }
 
-std::string to_string(Compression c) {
-    return c == Compression::zstd ? "zstd" : c == Compression::lz4 ? "lz4" : "";
-}
+std::string to_string(Compression c) { return c == Compression::zstd ? "zstd" : c == Compression::lz4 ? "lz4" : ""; }
 
 // ---------------------------------------------------------------------------------------------
 struct Writer::ChunkIndexEntry {
@@ -355,7 +368,8 @@ void Writer::close_chunk() {
         write_out(buffer_.data(), buffer_.size());
         buffer_.clear();
         write_out(body.data(), body.size());
-        if (options_.data_crc) data_crc_ = crc32({reinterpret_cast<const std::uint8_t*>(body.data()), body.size()}, data_crc_);
+        if (options_.data_crc)
+            data_crc_ = crc32({reinterpret_cast<const std::uint8_t*>(body.data()), body.size()}, data_crc_);
         offset_ += body.size();
     } else {
         raw(body.data(), body.size());
@@ -438,41 +452,11 @@ void Writer::close() {
     group(kChannel, [&] {
         for (const auto& c : channels_) record(kChannel, encode(c));
     });
-    group(kStatistics, [&] {
-        Out o;
-        o.u64(message_count_);
-        o.u16(static_cast<std::uint16_t>(schemas_.size()));
-        o.u32(static_cast<std::uint32_t>(channels_.size()));
-        o.u32(static_cast<std::uint32_t>(attachment_index_.size()));
-        o.u32(static_cast<std::uint32_t>(metadata_index_.size()));
-        o.u32(static_cast<std::uint32_t>(chunk_indexes_.size()));
-        o.u64(message_count_ ? first_time_ : 0);
-        o.u64(message_count_ ? last_time_ : 0);
-        Out counts;
-        for (const auto& [ch, n] : channel_counts_) {
-            counts.u16(ch);
-            counts.u64(n);
-        }
-        o.u32(static_cast<std::uint32_t>(counts.s.size()));
-        o.s += counts.s;
-        record(kStatistics, o.s);
-    });
+    group(kStatistics, [&] { record(kStatistics, statistics()); });
     group(kChunkIndex, [&] {
         for (const auto& e : chunk_indexes_) record(kChunkIndex, e.encode());
     });
-    group(kAttachmentIndex, [&] {
-        for (std::size_t i = 0; i < attachment_index_.size(); ++i) {
-            Out o;
-            o.u64(attachment_index_[i].first);
-            o.u64(attachment_index_[i].second);
-            o.u64(attachment_meta_[i].log_time);
-            o.u64(attachment_meta_[i].create_time);
-            o.u64(attachment_sizes_[i]);
-            o.str(attachment_meta_[i].name);
-            o.str(attachment_meta_[i].media_type);
-            record(kAttachmentIndex, o.s);
-        }
-    });
+    group(kAttachmentIndex, [&] { write_attachment_index(); });
     group(kMetadataIndex, [&] {
         for (const auto& [off, len, name] : metadata_index_) {
             Out o;
@@ -490,11 +474,49 @@ void Writer::close() {
         o.u64(len);
         record(kSummaryOffset, o.s);
     }
-    // Footer: the summary CRC runs from the summary start through summary_offset_start.
+    write_footer(summary_start, summary_offset_start, !groups.empty());
+}
+
+std::string Writer::statistics() const {
+    Out o;
+    o.u64(message_count_);
+    o.u16(static_cast<std::uint16_t>(schemas_.size()));
+    o.u32(static_cast<std::uint32_t>(channels_.size()));
+    o.u32(static_cast<std::uint32_t>(attachment_index_.size()));
+    o.u32(static_cast<std::uint32_t>(metadata_index_.size()));
+    o.u32(static_cast<std::uint32_t>(chunk_indexes_.size()));
+    o.u64(message_count_ ? first_time_ : 0);
+    o.u64(message_count_ ? last_time_ : 0);
+    Out counts;
+    for (const auto& [ch, n] : channel_counts_) {
+        counts.u16(ch);
+        counts.u64(n);
+    }
+    o.u32(static_cast<std::uint32_t>(counts.s.size()));
+    o.s += counts.s;
+    return o.s;
+}
+
+void Writer::write_attachment_index() {
+    for (std::size_t i = 0; i < attachment_index_.size(); ++i) {
+        Out o;
+        o.u64(attachment_index_[i].first);
+        o.u64(attachment_index_[i].second);
+        o.u64(attachment_meta_[i].log_time);
+        o.u64(attachment_meta_[i].create_time);
+        o.u64(attachment_sizes_[i]);
+        o.str(attachment_meta_[i].name);
+        o.str(attachment_meta_[i].media_type);
+        record(kAttachmentIndex, o.s);
+    }
+}
+
+// Footer: the summary CRC runs from the summary start through summary_offset_start.
+void Writer::write_footer(std::uint64_t summary_start, std::uint64_t summary_offset_start, bool has_offsets) {
     const bool has_summary = summary_offset_start > summary_start;
     Out f;
     f.u64(has_summary ? summary_start : 0);
-    f.u64(groups.empty() ? 0 : summary_offset_start);
+    f.u64(has_offsets ? summary_offset_start : 0);
     const std::uint8_t op = kFooter;
     const std::uint64_t len = 8 + 8 + 4;
     raw(&op, 1);
@@ -515,7 +537,7 @@ struct Reading {
     const Handlers& h;
     std::set<std::uint16_t> schemas, channels;
     std::uint64_t messages = 0;
-    bool salvage = false;        // a message of an unknown channel (its record lost) is counted, not fatal
+    bool salvage = false;  // a message of an unknown channel (its record lost) is counted, not fatal
     std::uint64_t orphaned = 0;
 
     void inner_record(std::uint8_t op, In& in) {
@@ -628,8 +650,12 @@ public:
     // `consumed(offset)`: nothing before offset will be read again (a mapped file lets it go).
     LinearRead(std::span<const std::uint8_t> file, const Handlers& h, ReadMode mode,
                std::function<void(std::uint64_t)> consumed = {})
-        : file_(file), h_(h), mode_(mode), reading_{h, {}, {}, 0, mode == ReadMode::salvage, 0},
-          consumed_(std::move(consumed)), check_data_crc_(mode == ReadMode::strict && stated_data_crc(file) != 0) {}
+        : file_(file),
+          h_(h),
+          mode_(mode),
+          reading_{h, {}, {}, 0, mode == ReadMode::salvage, 0},
+          consumed_(std::move(consumed)),
+          check_data_crc_(mode == ReadMode::strict && stated_data_crc(file) != 0) {}
 
     ReadResult run() {
         try {
@@ -659,7 +685,8 @@ private:
     // The data section's CRC, carried along as the read goes (the bytes behind may be released).
     void advance_crc(std::uint64_t to) {
         if (!check_data_crc_ || in_summary_ || to <= crc_at_) return;
-        data_crc_ = crc32(file_.subspan(static_cast<std::size_t>(crc_at_), static_cast<std::size_t>(to - crc_at_)), data_crc_);
+        data_crc_ =
+            crc32(file_.subspan(static_cast<std::size_t>(crc_at_), static_cast<std::size_t>(to - crc_at_)), data_crc_);
         crc_at_ = to;
     }
 
@@ -670,15 +697,17 @@ private:
 
     // One record at pos; returns the next record's offset, or kDone.
     std::uint64_t step(std::uint64_t pos) {
-        if (pos == file_.size()) throw InputError(log::cat("offset ", pos, ": the file ends without a footer (truncated)"));
+        if (pos == file_.size())
+            throw InputError(log::cat("offset ", pos, ": the file ends without a footer (truncated)"));
         if (file_.size() - pos < 9) throw InputError(log::cat("offset ", pos, ": truncated record header"));
         const std::uint8_t op = file_[pos];
         std::uint64_t len = 0;
         std::memcpy(&len, file_.data() + pos + 1, 8);
         if (op == 0 || len > file_.size() - pos - 9) {
-            const std::string problem = op == 0 ? log::cat("offset ", pos, ": invalid opcode 0")
-                                                : log::cat("offset ", pos, ": record (opcode 0x", std::hex, static_cast<int>(op), std::dec,
-                                                           ") of ", len, " bytes runs past the end of the file (truncated)");
+            const std::string problem =
+                op == 0 ? log::cat("offset ", pos, ": invalid opcode 0")
+                        : log::cat("offset ", pos, ": record (opcode 0x", std::hex, static_cast<int>(op), std::dec,
+                                   ") of ", len, " bytes runs past the end of the file (truncated)");
             if (mode_ == ReadMode::strict) throw InputError(problem);
             note(problem);
             const std::uint64_t next = next_sound_chunk(file_, pos + 1);
@@ -720,7 +749,9 @@ private:
         }
         if (in_summary_) return;
         switch (op) {
-            case kSchema: case kChannel: case kMessage: reading_.inner_record(op, in); break;
+            case kSchema:
+            case kChannel:
+            case kMessage: reading_.inner_record(op, in); break;
             case kChunk: chunk(in); break;
             case kMetadata: {
                 Metadata m;
@@ -759,7 +790,8 @@ private:
         const auto d = in.bytes(n, "attachment data");
         const std::uint64_t covered = in.offset() - (pos + 9);
         const std::uint32_t crc = in.u32();
-        if (crc != 0 && crc != crc32(file_.subspan(static_cast<std::size_t>(pos + 9), static_cast<std::size_t>(covered)))) {
+        if (crc != 0 &&
+            crc != crc32(file_.subspan(static_cast<std::size_t>(pos + 9), static_cast<std::size_t>(covered)))) {
             in.fail(log::cat("attachment '", a.name, "' CRC mismatch"));
         }
         a.data.assign(reinterpret_cast<const char*>(d.data()), d.size());
@@ -787,8 +819,9 @@ public:
     explicit MappedFile(const std::string& path) {
         require_readable_file(path, "MCAP file");
         fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-        struct stat st{};
-        if (fd_ < 0 || ::fstat(fd_, &st) != 0) throw InputError(log::cat(path, ": cannot read: ", std::strerror(errno)));
+        struct stat st {};
+        if (fd_ < 0 || ::fstat(fd_, &st) != 0)
+            throw InputError(log::cat(path, ": cannot read: ", std::strerror(errno)));
         size_ = static_cast<std::size_t>(st.st_size);
         if (size_ == 0) return;  // nothing to map: the reader reports "not an MCAP file"
         base_ = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
@@ -831,7 +864,8 @@ ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers, Re
 
 ReadResult read_file(const std::string& path, const Handlers& handlers) {
     MappedFile file(path);
-    return LinearRead(file.bytes(), handlers, ReadMode::strict, [&](std::uint64_t at) { file.release_before(at); }).run();
+    return LinearRead(file.bytes(), handlers, ReadMode::strict, [&](std::uint64_t at) { file.release_before(at); })
+        .run();
 }
 
 bool is_closed(const std::string& path) {
@@ -856,7 +890,8 @@ ReadResult recover(const std::string& in_path, const std::string& out_path, cons
         h.on_schema = [&](const Schema& s) { schema_ids[s.id] = out.add_schema(s.name, s.encoding, s.data); };
         h.on_channel = [&](const Channel& c) {
             const auto schema = schema_ids.find(c.schema_id);
-            channel_ids[c.id] = out.add_channel(c.topic, schema == schema_ids.end() ? 0 : schema->second, c.message_encoding, c.metadata);
+            channel_ids[c.id] = out.add_channel(c.topic, schema == schema_ids.end() ? 0 : schema->second,
+                                                c.message_encoding, c.metadata);
         };
         h.on_message = [&](const Message& m) {
             Message copy = m;
@@ -865,9 +900,11 @@ ReadResult recover(const std::string& in_path, const std::string& out_path, cons
         };
         h.on_metadata = [&](const Metadata& m) { out.add_metadata(m); };
         h.on_attachment = [&](const Attachment& a) { out.add_attachment(a); };
-        const ReadResult r = LinearRead(bytes, h, ReadMode::salvage, [&](std::uint64_t at) { mapped.release_before(at); }).run();
+        const ReadResult r =
+            LinearRead(bytes, h, ReadMode::salvage, [&](std::uint64_t at) { mapped.release_before(at); }).run();
         out.close();
-        if (::rename(tmp.c_str(), out_path.c_str()) != 0) throw RuntimeError(log::cat("cannot write ", out_path, ": ", std::strerror(errno)));
+        if (::rename(tmp.c_str(), out_path.c_str()) != 0)
+            throw RuntimeError(log::cat("cannot write ", out_path, ": ", std::strerror(errno)));
         return r;
     } catch (...) {
         ::unlink(tmp.c_str());

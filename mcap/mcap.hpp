@@ -17,7 +17,7 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', 
 
 enum class Compression { none, zstd, lz4 };
 Compression parse_compression(const std::string& text);  // throws dw::InputError
-std::string to_string(Compression c);                       // "", "zstd", "lz4"
+std::string to_string(Compression c);                    // "", "zstd", "lz4"
 
 struct Schema {
     std::uint16_t id = 0;
@@ -53,14 +53,14 @@ struct Attachment {
 
 struct WriterOptions {
     Compression compression = Compression::zstd;
-    std::size_t chunk_size = 1 << 20;        // close a chunk at this many uncompressed bytes...
+    std::size_t chunk_size = 1 << 20;                 // close a chunk at this many uncompressed bytes...
     std::uint64_t flush_interval_ns = 1'000'000'000;  // ...or when its first message is this old
-    bool fsync = true;                       // fdatasync at each timed flush: survive a power cut
-    bool data_crc = false;                   // CRC of the whole data section (0 = not computed, as
-                                             // the reference writer does by default; chunks and
-                                             // attachments always carry theirs)
+    bool fsync = true;                                // fdatasync at each timed flush: survive a power cut
+    bool data_crc = false;                            // CRC of the whole data section (0 = not computed, as
+                                                      // the reference writer does by default; chunks and
+                                                      // attachments always carry theirs)
     std::string library = "downwash-lab";
-    std::string profile;                     // "" (custom); not ros2: schemas are omgidl
+    std::string profile;  // "" (custom); not ros2: schemas are omgidl
 };
 
 // Not thread-safe: callers serialise (the recorder holds one lock).
@@ -95,6 +95,9 @@ private:
     void write_out(const char* data, std::size_t n);
     void record(std::uint8_t opcode, const std::string& content);
     void close_chunk();
+    std::string statistics() const;  // the Statistics record's content
+    void write_attachment_index();
+    void write_footer(std::uint64_t summary_start, std::uint64_t summary_offset_start, bool has_offsets);
 
     std::string path_;
     WriterOptions options_;
@@ -102,17 +105,18 @@ private:
     bool closed_ = false;
     std::uint64_t offset_ = 0;
     std::uint32_t data_crc_ = 0;
-    std::string buffer_;                  // pending file bytes (written in large blocks)
+    std::string buffer_;  // pending file bytes (written in large blocks)
 
     std::vector<Schema> schemas_;
     std::vector<Channel> channels_;
     std::vector<std::pair<std::uint64_t, std::uint64_t>> attachment_index_;  // offset, length (+ below)
-    std::vector<Attachment> attachment_meta_;  // without their data
+    std::vector<Attachment> attachment_meta_;                                // without their data
     std::vector<std::uint64_t> attachment_sizes_;
     std::vector<std::tuple<std::uint64_t, std::uint64_t, std::string>> metadata_index_;
 
-    std::string chunk_;                   // uncompressed records of the open chunk
-    std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_index_;  // channel -> (log_time, offset)
+    std::string chunk_;  // uncompressed records of the open chunk
+    std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>>
+        chunk_index_;  // channel -> (log_time, offset)
     std::uint64_t chunk_start_ = 0, chunk_end_ = 0;
     std::int64_t chunk_opened_ns_ = 0;
     std::vector<ChunkIndexEntry> chunk_indexes_;
@@ -129,17 +133,18 @@ struct Handlers {
     std::function<void(const Message&)> on_message;
     std::function<void(const Metadata&)> on_metadata;
     std::function<void(const Attachment&)> on_attachment;
-    std::function<void(std::uint64_t done, std::uint64_t size)> on_progress;  // after each record: bytes read of the file's
+    std::function<void(std::uint64_t done, std::uint64_t size)>
+        on_progress;  // after each record: bytes read of the file's
 };
 
 struct ReadResult {
-    bool complete = false;           // reached a footer and the closing magic
+    bool complete = false;             // reached a footer and the closing magic
     std::optional<std::string> error;  // the first problem ("offset N: ..."), if any
     std::vector<std::string> damage;   // every problem met (salvage: each one skipped)
     std::uint64_t messages = 0;
     std::uint64_t skipped_regions = 0;    // salvage: damaged records (chunks) skipped
     std::uint64_t orphaned_messages = 0;  // salvage: messages whose channel record was lost
-    std::uint64_t valid_until = 0;   // file offset up to which every record was whole and sound
+    std::uint64_t valid_until = 0;        // file offset up to which every record was whole and sound
 };
 
 // strict: stop at the first problem. salvage (recovery): skip a damaged record whose length is

@@ -1,6 +1,8 @@
 #include "mocap_bridge/bridge.hpp"
 
+#include <array>
 #include <cmath>
+#include <optional>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
@@ -12,7 +14,8 @@ NatNetClient::NatNetClient(const ClientOptions& o)
     : options_(o), socket_(o.local_ip, 0), server_endpoint_(Endpoint::make(o.server_ip, o.command_port)) {}
 
 ServerInfo NatNetClient::connect() {
-    const Nanos deadline = SystemClock::instance().monotonic_ns() + static_cast<Nanos>(options_.connect_timeout_ms) * 1'000'000;
+    const Nanos deadline =
+        SystemClock::instance().monotonic_ns() + static_cast<Nanos>(options_.connect_timeout_ms) * 1'000'000;
     while (SystemClock::instance().monotonic_ns() < deadline) {
         socket_.send_to(server_endpoint_, build_connect());
         for (int i = 0; i < 5; ++i) {
@@ -75,7 +78,8 @@ AxisMap AxisMap::parse(const std::string& text) {
     std::array<bool, 3> used{};
     std::size_t start = 0;
     for (int i = 0; i < 3; ++i) {
-        if (start > text.size()) throw InputError(log::cat("--axes '", text, "': expected three axes, e.g. x,z,-y (N, E, D)"));
+        if (start > text.size())
+            throw InputError(log::cat("--axes '", text, "': expected three axes, e.g. x,z,-y (N, E, D)"));
         const std::size_t comma = text.find(',', start);
         std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
         start = comma == std::string::npos ? text.size() + 1 : comma + 1;
@@ -85,7 +89,8 @@ AxisMap AxisMap::parse(const std::string& text) {
             item = item.substr(1);
         }
         if (item.size() != 1 || item[0] < 'x' || item[0] > 'z' || used[static_cast<std::size_t>(item[0] - 'x')]) {
-            throw InputError(log::cat("--axes '", text, "': expected three of x, y, z with signs, e.g. x,z,-y (N, E, D)"));
+            throw InputError(
+                log::cat("--axes '", text, "': expected three of x, y, z with signs, e.g. x,z,-y (N, E, D)"));
         }
         used[static_cast<std::size_t>(item[0] - 'x')] = true;
         m.source[static_cast<std::size_t>(i)] = item[0] - 'x';
@@ -99,7 +104,8 @@ int AxisMap::det() const {
     // The sign of the permutation times the product of the signs.
     int inversions = 0;
     for (int i = 0; i < 3; ++i) {
-        for (int j = i + 1; j < 3; ++j) inversions += source[static_cast<std::size_t>(i)] > source[static_cast<std::size_t>(j)];
+        for (int j = i + 1; j < 3; ++j)
+            inversions += source[static_cast<std::size_t>(i)] > source[static_cast<std::size_t>(j)];
     }
     return (inversions % 2 ? -1 : 1) * sign[0] * sign[1] * sign[2];
 }
@@ -115,8 +121,7 @@ double FrameConverter::camera_time_s(const FrameOfData& f, Nanos receive_wall_ns
     const double freq = static_cast<double>(server_.clock_frequency);
     switch (options_.mode) {
         case msg::MOCAP_STAMP_RECEIVE: return receive;
-        case msg::MOCAP_STAMP_COMPENSATED:
-            return receive - static_cast<double>(f.transmit - f.mid_exposure) / freq;
+        case msg::MOCAP_STAMP_COMPENSATED: return receive - static_cast<double>(f.transmit - f.mid_exposure) / freq;
         case msg::MOCAP_STAMP_CLOCK_SYNC: {
             // The smallest (receive - transmit) seen so far: the clocks' offset plus the network's
             // least delay; mid-exposure is mapped through it.
@@ -131,7 +136,8 @@ double FrameConverter::camera_time_s(const FrameOfData& f, Nanos receive_wall_ns
 
 FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos receive_wall_ns) {
     Output out;
-    if (last_frame_ >= 0 && f.frame_number > last_frame_ + 1) dropped_ += static_cast<std::uint64_t>(f.frame_number - last_frame_ - 1);
+    if (last_frame_ >= 0 && f.frame_number > last_frame_ + 1)
+        dropped_ += static_cast<std::uint64_t>(f.frame_number - last_frame_ - 1);
     last_frame_ = f.frame_number;
     const double t = camera_time_s(f, receive_wall_ns);
     // Velocities and staleness run on Motive's own frame clock: exact spacing, whatever the
@@ -148,73 +154,91 @@ FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos recei
     m.receive(dds::to_msg(receive_wall_ns));
     m.timestamp_mode(options_.mode);
     m.dropped_frames(static_cast<std::uint32_t>(dropped_));
-    const auto& ax = options_.axes;
     for (const auto& b : f.bodies) {
-        msg::RigidBody r;
-        auto it = names_.find(b.id);
-        const std::string motive_name = it == names_.end() ? "body" + std::to_string(b.id) : it->second;
-        auto mapped = options_.names.find(motive_name);
-        r.name(mapped == options_.names.end() ? motive_name : mapped->second);
-        r.id(b.id);
-        std::array<double, 3> p{};
-        std::array<double, 3> qv{};
-        for (std::size_t i = 0; i < 3; ++i) {
-            p[i] = ax.sign[i] * static_cast<double>(b.position[static_cast<std::size_t>(ax.source[i])]);
-            // The quaternion's vector part is an axial vector: a reflection flips it once more.
-            qv[i] = ax.det() * ax.sign[i] * static_cast<double>(b.orientation[static_cast<std::size_t>(ax.source[i])]);
-        }
-        r.position_m().x(p[0]);
-        r.position_m().y(p[1]);
-        r.position_m().z(p[2]);
-        r.orientation().w(b.orientation[3]);
-        r.orientation().x(qv[0]);
-        r.orientation().y(qv[1]);
-        r.orientation().z(qv[2]);
-        r.tracking_valid(b.tracking_valid);
-        r.residual_m(b.mean_error);
-        m.bodies().push_back(r);
-
-        Track& tr = tracks_[b.id];
-        msg::VehicleState s;
-        s.header().stamp(m.header().stamp());
-        s.vehicle_id(r.name());
-        s.tracking_valid(b.tracking_valid);
-        if (b.tracking_valid) {
-            if (tr.last_valid_s >= 0 && tc - tr.last_valid_s > options_.reset_gap_s) tr.recent.clear();  // back after a loss
-            tr.recent.emplace_back(tc, p);
-            while (tr.recent.size() > 2 && tc - tr.recent.front().first > options_.velocity_window_s) tr.recent.erase(tr.recent.begin());
-            tr.last_valid_s = tc;
-            s.position_m(r.position_m());
-            s.orientation(r.orientation());
-        } else if (!tr.recent.empty()) {
-            const auto& last = tr.recent.back().second;  // hold the last known pose
-            s.position_m().x(last[0]);
-            s.position_m().y(last[1]);
-            s.position_m().z(last[2]);
-        }
-        // Least-squares slope over the recent samples, on their own time stamps: a dropped
-        // frame only widens the spacing.
-        if (b.tracking_valid && tr.recent.size() >= 2) {
-            double mt = 0;
-            for (const auto& [ti, pi] : tr.recent) mt += ti;
-            mt /= static_cast<double>(tr.recent.size());
-            double den = 0;
-            std::array<double, 3> num{};
-            for (const auto& [ti, pi] : tr.recent) {
-                den += (ti - mt) * (ti - mt);
-                for (std::size_t k = 0; k < 3; ++k) num[k] += (ti - mt) * pi[k];
-            }
-            if (den > 0) {
-                s.velocity_mps().x(num[0] / den);
-                s.velocity_mps().y(num[1] / den);
-                s.velocity_mps().z(num[2] / den);
-            }
-        }
-        s.staleness_s(tr.last_valid_s < 0 ? -1.0 : tc - tr.last_valid_s);
-        s.airborne(true);
-        out.states.push_back(s);
+        m.bodies().push_back(lab_body(b));
+        out.states.push_back(vehicle_state(m.bodies().back(), m.header().stamp(), tc));
     }
     return out;
+}
+
+namespace {
+
+// Least-squares slope over the recent samples, on their own time stamps: a dropped frame only
+// widens the spacing. Nothing with fewer than two samples or no spread in time.
+std::optional<std::array<double, 3>> slope(const std::vector<std::pair<double, std::array<double, 3>>>& recent) {
+    if (recent.size() < 2) return std::nullopt;
+    double mt = 0;
+    for (const auto& [ti, pi] : recent) mt += ti;
+    mt /= static_cast<double>(recent.size());
+    double den = 0;
+    std::array<double, 3> num{};
+    for (const auto& [ti, pi] : recent) {
+        den += (ti - mt) * (ti - mt);
+        for (std::size_t k = 0; k < 3; ++k) num[k] += (ti - mt) * pi[k];
+    }
+    if (den <= 0) return std::nullopt;
+    return std::array<double, 3>{num[0] / den, num[1] / den, num[2] / den};
+}
+
+}  // namespace
+
+msg::RigidBody FrameConverter::lab_body(const RigidBody& b) const {
+    const auto& ax = options_.axes;
+    msg::RigidBody r;
+    auto it = names_.find(b.id);
+    const std::string motive_name = it == names_.end() ? "body" + std::to_string(b.id) : it->second;
+    auto mapped = options_.names.find(motive_name);
+    r.name(mapped == options_.names.end() ? motive_name : mapped->second);
+    r.id(b.id);
+    std::array<double, 3> p{};
+    std::array<double, 3> qv{};
+    for (std::size_t i = 0; i < 3; ++i) {
+        p[i] = ax.sign[i] * static_cast<double>(b.position[static_cast<std::size_t>(ax.source[i])]);
+        // The quaternion's vector part is an axial vector: a reflection flips it once more.
+        qv[i] = ax.det() * ax.sign[i] * static_cast<double>(b.orientation[static_cast<std::size_t>(ax.source[i])]);
+    }
+    r.position_m().x(p[0]);
+    r.position_m().y(p[1]);
+    r.position_m().z(p[2]);
+    r.orientation().w(b.orientation[3]);
+    r.orientation().x(qv[0]);
+    r.orientation().y(qv[1]);
+    r.orientation().z(qv[2]);
+    r.tracking_valid(b.tracking_valid);
+    r.residual_m(b.mean_error);
+    return r;
+}
+
+msg::VehicleState FrameConverter::vehicle_state(const msg::RigidBody& r, const msg::Time& stamp, double tc) {
+    Track& tr = tracks_[r.id()];
+    msg::VehicleState s;
+    s.header().stamp(stamp);
+    s.vehicle_id(r.name());
+    s.tracking_valid(r.tracking_valid());
+    if (r.tracking_valid()) {
+        if (tr.last_valid_s >= 0 && tc - tr.last_valid_s > options_.reset_gap_s)
+            tr.recent.clear();  // back after a loss
+        tr.recent.emplace_back(tc, std::array<double, 3>{r.position_m().x(), r.position_m().y(), r.position_m().z()});
+        while (tr.recent.size() > 2 && tc - tr.recent.front().first > options_.velocity_window_s)
+            tr.recent.erase(tr.recent.begin());
+        tr.last_valid_s = tc;
+        s.position_m(r.position_m());
+        s.orientation(r.orientation());
+    } else if (!tr.recent.empty()) {
+        const auto& last = tr.recent.back().second;  // hold the last known pose
+        s.position_m().x(last[0]);
+        s.position_m().y(last[1]);
+        s.position_m().z(last[2]);
+    }
+    const auto v = r.tracking_valid() ? slope(tr.recent) : std::nullopt;
+    if (v) {
+        s.velocity_mps().x((*v)[0]);
+        s.velocity_mps().y((*v)[1]);
+        s.velocity_mps().z((*v)[2]);
+    }
+    s.staleness_s(tr.last_valid_s < 0 ? -1.0 : tc - tr.last_valid_s);
+    s.airborne(true);
+    return s;
 }
 
 }  // namespace dw::natnet

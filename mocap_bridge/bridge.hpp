@@ -53,15 +53,15 @@ struct AxisMap {
     std::array<int, 3> source{0, 2, 1};
     std::array<int, 3> sign{1, 1, -1};
     static AxisMap parse(const std::string& text);  // "x,z,-y"; throws dw::InputError
-    int det() const;  // +1 for a rotation, -1 for a reflection of the axes
+    int det() const;                                // +1 for a rotation, -1 for a reflection of the axes
 };
 
 struct BridgeOptions {
     AxisMap axes;
-    std::map<std::string, std::string> names;        // rigid-body name -> vehicle name
+    std::map<std::string, std::string> names;  // rigid-body name -> vehicle name
     msg::MocapTimestampMode mode = msg::MOCAP_STAMP_COMPENSATED;
-    double velocity_window_s = 0.03;                 // least-squares velocity over this span
-    double reset_gap_s = 0.05;                       // a longer gap restarts a body's estimator
+    double velocity_window_s = 0.03;  // least-squares velocity over this span
+    double reset_gap_s = 0.05;        // a longer gap restarts a body's estimator
 };
 
 class FrameConverter {
@@ -80,6 +80,10 @@ private:
         double last_valid_s = -1;
     };
     double camera_time_s(const FrameOfData& f, Nanos receive_wall_ns);
+    // A body in the lab's names and NED axes.
+    msg::RigidBody lab_body(const RigidBody& b) const;
+    // Its vehicle state at camera time tc: the pose (held through a loss) and the velocity over the recent samples.
+    msg::VehicleState vehicle_state(const msg::RigidBody& r, const msg::Time& stamp, double tc);
 
     BridgeOptions options_;
     ServerInfo server_;

@@ -95,7 +95,8 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
         b.id = static_cast<std::int32_t>(i + 1);
         b.tracking_valid = true;
         for (const auto& l : options_.losses) {
-            if (l.body == static_cast<int>(i) && t >= l.start_s && t < l.start_s + l.duration_s) b.tracking_valid = false;
+            if (l.body == static_cast<int>(i) && t >= l.start_s && t < l.start_s + l.duration_s)
+                b.tracking_valid = false;
         }
         if (b.tracking_valid) {
             b.position = ned_to_motive(p.ned);
@@ -105,9 +106,11 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
         f.bodies.push_back(b);
     }
     const Nanos now = SystemClock::instance().monotonic_ns();
-    const auto ticks = static_cast<std::uint64_t>(static_cast<double>(now) * 1e-9 * static_cast<double>(options_.clock_frequency));
+    const auto ticks =
+        static_cast<std::uint64_t>(static_cast<double>(now) * 1e-9 * static_cast<double>(options_.clock_frequency));
     f.transmit = ticks;
-    f.mid_exposure = ticks - static_cast<std::uint64_t>(options_.latency_s * static_cast<double>(options_.clock_frequency));
+    f.mid_exposure =
+        ticks - static_cast<std::uint64_t>(options_.latency_s * static_cast<double>(options_.clock_frequency));
     f.data_received = f.mid_exposure + options_.clock_frequency / 500;
     f.timestamp_s = t;
     return build_frame(f, options_.version, options_.other_sections);
@@ -128,7 +131,7 @@ void NatNetEmulator::loop() {
             continue;
         }
         const Nanos left = next - SystemClock::instance().monotonic_ns();
-        if (left > 1'000'000) continue;  // keep listening until the last millisecond
+        if (left > 1'000'000) continue;                           // keep listening until the last millisecond
         while (SystemClock::instance().monotonic_ns() < next) {}  // then spin, for an even rate
         const double t = static_cast<double>(next - start_ns_) * 1e-9;
         next += static_cast<Nanos>(period_ns);

@@ -16,8 +16,8 @@
 namespace dw::natnet {
 
 struct BodyPose {
-    std::array<double, 3> ned{};                   // world NED [m]
-    std::array<double, 4> q_ned{1, 0, 0, 0};       // w, x, y, z body -> NED
+    std::array<double, 3> ned{};              // world NED [m]
+    std::array<double, 4> q_ned{1, 0, 0, 0};  // w, x, y, z body -> NED
 };
 
 struct TrackingLoss {
@@ -27,15 +27,15 @@ struct TrackingLoss {
 
 struct EmulatorOptions {
     std::string ip = "127.0.0.1";
-    std::uint16_t port = 1510;                    // command port; 0 = any free port
+    std::uint16_t port = 1510;  // command port; 0 = any free port
     Version version{4, 1};
     double rate_hz = 180.0;
-    std::uint64_t clock_frequency = 10'000'000;   // host ticks per second
-    double latency_s = 0.004;                     // mid-exposure to transmit
-    double drop_probability = 0.0;                // frames not sent (the bridge must see the gap)
+    std::uint64_t clock_frequency = 10'000'000;  // host ticks per second
+    double latency_s = 0.004;                    // mid-exposure to transmit
+    double drop_probability = 0.0;               // frames not sent (the bridge must see the gap)
     std::vector<TrackingLoss> losses;
     std::vector<std::string> names{flight::kSufferer, "v1", "v2", "v3"};
-    bool other_sections = true;                   // marker sets, skeletons, assets, ... to skip
+    bool other_sections = true;  // marker sets, skeletons, assets, ... to skip
     std::uint64_t seed = 1;
     // Where body i is at time t (seconds since start); default: the sufferer on the stand and
     // the others circling above it.

@@ -16,11 +16,14 @@ int main(int argc, char** argv) {
         std::string version = "4.1";
         double lose_body = -1, lose_at = 0, lose_for = 0;
         app.add_option("--ip", o.ip, "address to listen on (tests: 127.0.0.1)");
-        app.add_option("--port", o.port, "command port (default 1510; 0 = any)")->check(dw::cli::in(dw::natnet::kPortRange));
+        app.add_option("--port", o.port, "command port (default 1510; 0 = any)")
+            ->check(dw::cli::in(dw::natnet::kPortRange));
         app.add_option("--version", version, "NatNet bitstream: 3.0, 3.1, 4.0 or 4.1");
         app.add_option("--rate", o.rate_hz, "frames per second")->check(dw::cli::in({1, 2000, "Hz"}));
-        app.add_option("--drop", o.drop_probability, "probability that a frame is not sent")->check(dw::cli::in({0, 1}));
-        app.add_option("--lose-body", lose_body, "index of a body that loses tracking (-1 = none)")->check(dw::cli::in({-1, 1000}));
+        app.add_option("--drop", o.drop_probability, "probability that a frame is not sent")
+            ->check(dw::cli::in({0, 1}));
+        app.add_option("--lose-body", lose_body, "index of a body that loses tracking (-1 = none)")
+            ->check(dw::cli::in({-1, 1000}));
         app.add_option("--lose-at", lose_at, "... at this time [s]")->check(dw::cli::in(dw::kTimeoutRange));
         app.add_option("--lose-for", lose_for, "... for this long [s]")->check(dw::cli::in(dw::kTimeoutRange));
         app.add_option("--seed", o.seed, "random seed (drops)")->check(dw::cli::in(dw::kSeedRange));

@@ -20,22 +20,26 @@ int run(int argc, char** argv) {
     dw::natnet::ClientOptions client;
     bool sim = false;
     double sim_rate = 180.0;
-    app.add_option("--source", source, "natnet (Motive), or sim (simulated vehicles through an emulated NatNet server)");
+    app.add_option("--source", source,
+                   "natnet (Motive), or sim (simulated vehicles through an emulated NatNet server)");
     app.add_flag("--sim", sim, "same as --source sim");
     app.add_option("--server", client.server_ip, "Motive host (natnet)");
-    app.add_option("--command-port", client.command_port, "NatNet command port (default 1510)")->check(dw::cli::in(dw::natnet::kPortRange));
+    app.add_option("--command-port", client.command_port, "NatNet command port (default 1510)")
+        ->check(dw::cli::in(dw::natnet::kPortRange));
     app.add_option("--local-ip", client.local_ip, "this host's address towards Motive");
     app.add_option("--axes", axes, "NED axes as Motive axes: default x,z,-y (Y up)");
     app.add_option("--name", name_map, "RIGIDBODY=VEHICLE (repeatable)");
     app.add_option("--timestamps", mode, "receive, compensated (default) or clock_sync");
     app.add_option("--sim-vehicles", sim_vehicles, "sim: the neighbours' names (they follow vehicles/setpoint)");
     std::string sim_fault;
-    app.add_option("--sim-fault", sim_fault, "sim: KIND:VEHICLE:AFTER_S — the vehicle stops following its setpoints (stuck) or mocap "
-                                             "reports it 10 m away (jump), AFTER_S after its first setpoint (fault tests)");
+    app.add_option("--sim-fault", sim_fault,
+                   "sim: KIND:VEHICLE:AFTER_S — the vehicle stops following its setpoints (stuck) or mocap "
+                   "reports it 10 m away (jump), AFTER_S after its first setpoint (fault tests)");
     app.add_option("--sim-rate", sim_rate, "sim: camera rate [Hz]")->check(dw::cli::in({1, 1000, "Hz"}));
     cli.parse(argc, argv);
     if (sim) source = "sim";
-    if (source != "natnet" && source != "sim") throw dw::InputError("--source: '" + source + "' (expected natnet or sim; replay: dw-recorder replay)");
+    if (source != "natnet" && source != "sim")
+        throw dw::InputError("--source: '" + source + "' (expected natnet or sim; replay: dw-recorder replay)");
 
     dw::natnet::BridgeOptions bo;
     bo.axes = dw::natnet::AxisMap::parse(axes);
@@ -45,7 +49,8 @@ int run(int argc, char** argv) {
     else throw dw::InputError("--timestamps: '" + mode + "' (expected receive, compensated or clock_sync)");
     for (const auto& n : name_map) {
         const auto eq = n.find('=');
-        if (eq == std::string::npos || eq == 0 || eq + 1 == n.size()) throw dw::InputError("--name '" + n + "': expected RIGIDBODY=VEHICLE");
+        if (eq == std::string::npos || eq == 0 || eq + 1 == n.size())
+            throw dw::InputError("--name '" + n + "': expected RIGIDBODY=VEHICLE");
         bo.names[n.substr(0, eq)] = n.substr(eq + 1);
     }
 

@@ -125,7 +125,8 @@ void skip_channels(In& in) {  // force plates and devices
 }  // namespace
 
 std::uint16_t message_id(std::span<const std::uint8_t> packet) {
-    if (packet.size() < 4) throw InputError(log::cat("NatNet packet of ", packet.size(), " bytes: shorter than its header"));
+    if (packet.size() < 4)
+        throw InputError(log::cat("NatNet packet of ", packet.size(), " bytes: shorter than its header"));
     std::uint16_t id = 0;
     std::memcpy(&id, packet.data(), 2);
     return id;
@@ -135,7 +136,8 @@ std::span<const std::uint8_t> payload(std::span<const std::uint8_t> packet) {
     message_id(packet);
     std::uint16_t n = 0;
     std::memcpy(&n, packet.data() + 2, 2);
-    if (n > packet.size() - 4) throw InputError(log::cat("NatNet packet says ", n, " payload bytes, carries ", packet.size() - 4));
+    if (n > packet.size() - 4)
+        throw InputError(log::cat("NatNet packet says ", n, " payload bytes, carries ", packet.size() - 4));
     return packet.subspan(4, n);
 }
 
@@ -186,81 +188,98 @@ FrameOfData parse_frame(std::span<const std::uint8_t> data, Version v) {
     return f;
 }
 
+namespace {
+
+RigidBodyDescription read_rigid_description(In& s, Version v) {
+    RigidBodyDescription d;
+    d.name = s.cstr("rigid body name");
+    d.id = s.get<std::int32_t>("rigid body id");
+    d.parent = s.get<std::int32_t>("rigid body parent");
+    for (auto& x : d.offset) x = s.get<float>("rigid body offset");
+    if (v.at_least(4, 2)) s.skip(16, "rigid body offset rotation");
+    if (v.at_least(3, 0)) {
+        const auto markers = s.count("rigid body markers", 16);
+        for (std::int32_t k = 0; k < markers; ++k) {
+            std::array<float, 3> p{};
+            for (auto& x : p) x = s.get<float>("marker position");
+            d.markers.push_back(p);
+        }
+        s.skip(static_cast<std::size_t>(markers) * 4, "marker labels");
+        if (v.at_least(4, 0)) {
+            for (std::int32_t k = 0; k < markers; ++k) d.marker_names.push_back(s.cstr("marker name"));
+        }
+    }
+    return d;
+}
+
+// A dataset of a description before NatNet 4.1 (no size): rigid bodies are kept, the rest
+// skipped by their structure.
+void read_unsized_dataset(In& in, std::int32_t type, Version v, ModelDef& m) {
+    auto rigid = [&](In& s) { return read_rigid_description(s, v); };
+    switch (type) {
+        case 0: {
+            m.marker_sets.push_back(in.cstr("marker set name"));
+            const auto k = in.count("marker names", 1);
+            for (std::int32_t j = 0; j < k; ++j) in.cstr("marker name");
+            break;
+        }
+        case 1: m.rigid_bodies.push_back(rigid(in)); break;
+        case 2: {
+            in.cstr("skeleton name");
+            in.get<std::int32_t>("skeleton id");
+            const auto k = in.count("skeleton bodies", 20);
+            for (std::int32_t j = 0; j < k; ++j) rigid(in);
+            ++m.skipped;
+            break;
+        }
+        case 3: {  // force plate
+            in.get<std::int32_t>("force plate id");
+            in.cstr("force plate serial");
+            in.skip(4 + 4 + 12 + 12 * 12 * 4 + 4 * 3 * 4 + 4 + 4, "force plate geometry");
+            const auto k = in.count("force plate channels", 1);
+            for (std::int32_t j = 0; j < k; ++j) in.cstr("channel name");
+            ++m.skipped;
+            break;
+        }
+        case 4: {  // device
+            in.get<std::int32_t>("device id");
+            in.cstr("device name");
+            in.cstr("device serial");
+            in.skip(8, "device type");
+            const auto k = in.count("device channels", 1);
+            for (std::int32_t j = 0; j < k; ++j) in.cstr("channel name");
+            ++m.skipped;
+            break;
+        }
+        case 5:
+            in.cstr("camera name");
+            in.skip(28, "camera pose");
+            ++m.skipped;
+            break;
+        default: in.fail(log::cat("dataset type ", type, " cannot be skipped without its size (NatNet < 4.1)"));
+    }
+}
+
+}  // namespace
+
 ModelDef parse_modeldef(std::span<const std::uint8_t> data, Version v) {
     In in(data);
     ModelDef m;
     const auto n = in.count("datasets", 4);
-    auto rigid = [&](In& s) {
-        RigidBodyDescription d;
-        d.name = s.cstr("rigid body name");
-        d.id = s.get<std::int32_t>("rigid body id");
-        d.parent = s.get<std::int32_t>("rigid body parent");
-        for (auto& x : d.offset) x = s.get<float>("rigid body offset");
-        if (v.at_least(4, 2)) s.skip(16, "rigid body offset rotation");
-        if (v.at_least(3, 0)) {
-            const auto markers = s.count("rigid body markers", 16);
-            for (std::int32_t k = 0; k < markers; ++k) {
-                std::array<float, 3> p{};
-                for (auto& x : p) x = s.get<float>("marker position");
-                d.markers.push_back(p);
-            }
-            s.skip(static_cast<std::size_t>(markers) * 4, "marker labels");
-            if (v.at_least(4, 0)) {
-                for (std::int32_t k = 0; k < markers; ++k) d.marker_names.push_back(s.cstr("marker name"));
-            }
-        }
-        return d;
-    };
     for (std::int32_t i = 0; i < n; ++i) {
         const auto type = in.get<std::int32_t>("dataset type");
         if (v.at_least(4, 1)) {
             const auto size = in.get<std::int32_t>("dataset size");
-            if (size < 0 || static_cast<std::size_t>(size) > in.remaining()) in.fail("dataset size runs past the packet");
+            if (size < 0 || static_cast<std::size_t>(size) > in.remaining())
+                in.fail("dataset size runs past the packet");
             In s(data.subspan(in.pos(), static_cast<std::size_t>(size)));
-            if (type == 1) m.rigid_bodies.push_back(rigid(s));
+            if (type == 1) m.rigid_bodies.push_back(read_rigid_description(s, v));
             else if (type == 0) m.marker_sets.push_back(s.cstr("marker set name"));
             else ++m.skipped;
             in.skip(static_cast<std::size_t>(size), "dataset");
             continue;
         }
-        switch (type) {
-            case 0: {
-                m.marker_sets.push_back(in.cstr("marker set name"));
-                const auto k = in.count("marker names", 1);
-                for (std::int32_t j = 0; j < k; ++j) in.cstr("marker name");
-                break;
-            }
-            case 1: m.rigid_bodies.push_back(rigid(in)); break;
-            case 2: {
-                in.cstr("skeleton name");
-                in.get<std::int32_t>("skeleton id");
-                const auto k = in.count("skeleton bodies", 20);
-                for (std::int32_t j = 0; j < k; ++j) rigid(in);
-                ++m.skipped;
-                break;
-            }
-            case 3: {  // force plate
-                in.get<std::int32_t>("force plate id");
-                in.cstr("force plate serial");
-                in.skip(4 + 4 + 12 + 12 * 12 * 4 + 4 * 3 * 4 + 4 + 4, "force plate geometry");
-                const auto k = in.count("force plate channels", 1);
-                for (std::int32_t j = 0; j < k; ++j) in.cstr("channel name");
-                ++m.skipped;
-                break;
-            }
-            case 4: {  // device
-                in.get<std::int32_t>("device id");
-                in.cstr("device name");
-                in.cstr("device serial");
-                in.skip(8, "device type");
-                const auto k = in.count("device channels", 1);
-                for (std::int32_t j = 0; j < k; ++j) in.cstr("channel name");
-                ++m.skipped;
-                break;
-            }
-            case 5: in.cstr("camera name"); in.skip(28, "camera pose"); ++m.skipped; break;
-            default: in.fail(log::cat("dataset type ", type, " cannot be skipped without its size (NatNet < 4.1)"));
-        }
+        read_unsized_dataset(in, type, v, m);
     }
     return m;
 }
@@ -293,30 +312,13 @@ std::vector<std::uint8_t> packet(MessageId id, const std::vector<std::uint8_t>& 
     o.b.insert(o.b.end(), body.begin(), body.end());
     return o.b;
 }
-}  // namespace
 
-std::vector<std::uint8_t> build_frame(const FrameOfData& f, Version v, bool other) {
-    const bool sized = v.at_least(4, 1);
-    Out o;
-    o.put(f.frame_number);
-    // Marker sets: one set of two markers.
-    o.put<std::int32_t>(other ? 1 : 0);
-    std::size_t mark = sized ? o.reserve_size() : 0;
-    if (other) {
-        o.cstr("all");
-        o.put<std::int32_t>(2);
-        for (int k = 0; k < 6; ++k) o.put<float>(0.1f * static_cast<float>(k));
-    }
-    if (sized) o.fill_size(mark);
-    o.put<std::int32_t>(0);  // legacy unlabeled markers
-    if (sized) o.fill_size(o.reserve_size());
-    o.put(static_cast<std::int32_t>(f.bodies.size()));
-    mark = sized ? o.reserve_size() : 0;
-    for (const auto& b : f.bodies) write_body(o, b);
-    if (sized) o.fill_size(mark);
+// The sections after the rigid bodies that the bridge skips: skeletons, assets (4.1+), labeled
+// markers, force plates and devices; empty, or one of each (`other`) to prove they are skipped.
+void write_other_sections(Out& o, bool sized, bool other) {
     // Skeletons: one with one bone.
     o.put<std::int32_t>(other ? 1 : 0);
-    mark = sized ? o.reserve_size() : 0;
+    std::size_t mark = sized ? o.reserve_size() : 0;
     if (other) {
         o.put<std::int32_t>(7);
         o.put<std::int32_t>(1);
@@ -362,6 +364,29 @@ std::vector<std::uint8_t> build_frame(const FrameOfData& f, Version v, bool othe
         }
         if (sized) o.fill_size(mark);
     }
+}
+}  // namespace
+
+std::vector<std::uint8_t> build_frame(const FrameOfData& f, Version v, bool other) {
+    const bool sized = v.at_least(4, 1);
+    Out o;
+    o.put(f.frame_number);
+    // Marker sets: one set of two markers.
+    o.put<std::int32_t>(other ? 1 : 0);
+    std::size_t mark = sized ? o.reserve_size() : 0;
+    if (other) {
+        o.cstr("all");
+        o.put<std::int32_t>(2);
+        for (int k = 0; k < 6; ++k) o.put<float>(0.1f * static_cast<float>(k));
+    }
+    if (sized) o.fill_size(mark);
+    o.put<std::int32_t>(0);  // legacy unlabeled markers
+    if (sized) o.fill_size(o.reserve_size());
+    o.put(static_cast<std::int32_t>(f.bodies.size()));
+    mark = sized ? o.reserve_size() : 0;
+    for (const auto& b : f.bodies) write_body(o, b);
+    if (sized) o.fill_size(mark);
+    write_other_sections(o, sized, other);
     o.put(f.timecode);
     o.put(f.timecode_sub);
     o.put(f.timestamp_s);
@@ -396,11 +421,14 @@ std::vector<std::uint8_t> build_modeldef(const ModelDef& m, Version v) {
         o.put(d.id);
         o.put(d.parent);
         for (float x : d.offset) o.put(x);
-        if (v.at_least(4, 2)) for (int k = 0; k < 4; ++k) o.put<float>(k == 3 ? 1.f : 0.f);
+        if (v.at_least(4, 2))
+            for (int k = 0; k < 4; ++k) o.put<float>(k == 3 ? 1.f : 0.f);
         o.put(static_cast<std::int32_t>(d.markers.size()));
-        for (const auto& p : d.markers) for (float x : p) o.put(x);
+        for (const auto& p : d.markers)
+            for (float x : p) o.put(x);
         for (std::size_t k = 0; k < d.markers.size(); ++k) o.put(static_cast<std::int32_t>(k));
-        if (v.at_least(4, 0)) for (std::size_t k = 0; k < d.markers.size(); ++k) o.cstr(d.name + "_m" + std::to_string(k));
+        if (v.at_least(4, 0))
+            for (std::size_t k = 0; k < d.markers.size(); ++k) o.cstr(d.name + "_m" + std::to_string(k));
         if (sized) o.fill_size(mark);
     }
     return packet(kModelDef, o.b);

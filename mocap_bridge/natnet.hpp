@@ -13,8 +13,17 @@
 namespace dw::natnet {
 
 enum MessageId : std::uint16_t {
-    kConnect = 0, kServerInfo = 1, kRequest = 2, kResponse = 3, kRequestModelDef = 4, kModelDef = 5,
-    kRequestFrameOfData = 6, kFrameOfData = 7, kMessageString = 8, kDisconnect = 9, kKeepAlive = 10,
+    kConnect = 0,
+    kServerInfo = 1,
+    kRequest = 2,
+    kResponse = 3,
+    kRequestModelDef = 4,
+    kModelDef = 5,
+    kRequestFrameOfData = 6,
+    kFrameOfData = 7,
+    kMessageString = 8,
+    kDisconnect = 9,
+    kKeepAlive = 10,
     kUnrecognizedRequest = 100,
 };
 
@@ -25,19 +34,19 @@ struct Version {
 
 struct RigidBody {
     std::int32_t id = 0;
-    std::array<float, 3> position{};        // Motive frame (Y up), metres
+    std::array<float, 3> position{};               // Motive frame (Y up), metres
     std::array<float, 4> orientation{0, 0, 0, 1};  // qx, qy, qz, qw as on the wire
     float mean_error = 0;
-    bool tracking_valid = false;            // params bit 0
+    bool tracking_valid = false;  // params bit 0
 };
 
 struct FrameOfData {
     std::int32_t frame_number = 0;
-    std::vector<RigidBody> bodies;           // top-level rigid bodies
+    std::vector<RigidBody> bodies;  // top-level rigid bodies
     std::uint32_t timecode = 0, timecode_sub = 0;
-    double timestamp_s = 0;                  // seconds since the software started
+    double timestamp_s = 0;                                           // seconds since the software started
     std::uint64_t mid_exposure = 0, data_received = 0, transmit = 0;  // host ticks (3.0+)
-    std::uint32_t precision_s = 0, precision_frac = 0;               // 4.1+
+    std::uint32_t precision_s = 0, precision_frac = 0;                // 4.1+
     std::int16_t params = 0;
 };
 
@@ -45,7 +54,7 @@ struct ServerInfo {
     std::string app_name;
     std::array<std::uint8_t, 4> app_version{};
     Version natnet;
-    std::uint64_t clock_frequency = 0;       // high-resolution ticks per second
+    std::uint64_t clock_frequency = 0;  // high-resolution ticks per second
     std::uint16_t data_port = 1511;
     bool multicast = false;
     std::array<std::uint8_t, 4> multicast_group{239, 255, 42, 99};
@@ -56,17 +65,17 @@ struct RigidBodyDescription {
     std::int32_t id = 0, parent = -1;
     std::array<float, 3> offset{};
     std::vector<std::array<float, 3>> markers;
-    std::vector<std::string> marker_names;   // 4.0+
+    std::vector<std::string> marker_names;  // 4.0+
 };
 
 struct ModelDef {
     std::vector<RigidBodyDescription> rigid_bodies;  // top-level ones
     std::vector<std::string> marker_sets;
-    int skipped = 0;                                  // datasets of other kinds
+    int skipped = 0;  // datasets of other kinds
 };
 
 // Packet = header (message id u16, payload bytes u16) + payload.
-std::uint16_t message_id(std::span<const std::uint8_t> packet);  // throws on a short packet
+std::uint16_t message_id(std::span<const std::uint8_t> packet);               // throws on a short packet
 std::span<const std::uint8_t> payload(std::span<const std::uint8_t> packet);  // checks the length
 
 FrameOfData parse_frame(std::span<const std::uint8_t> payload, Version v);

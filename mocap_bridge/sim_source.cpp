@@ -10,7 +10,8 @@ namespace dw::natnet {
 SimFault parse_sim_fault(const std::string& text) {
     const auto a = text.find(':'), b = text.rfind(':');
     const std::string what = "--sim-fault '" + text + "'";
-    if (a == std::string::npos || a == b || a == 0 || b == a + 1) throw InputError(what + ": expected KIND:VEHICLE:AFTER_S (stuck:v1:8)");
+    if (a == std::string::npos || a == b || a == 0 || b == a + 1)
+        throw InputError(what + ": expected KIND:VEHICLE:AFTER_S (stuck:v1:8)");
     SimFault f;
     const std::string kind = text.substr(0, a);
     if (kind == "stuck") f.kind = SimFault::Kind::stuck;
@@ -21,13 +22,16 @@ SimFault parse_sim_fault(const std::string& text) {
     return f;
 }
 
-SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz, std::optional<SimFault> fault)
-    : names_(names), fault_(std::move(fault)),
+SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz,
+                     std::optional<SimFault> fault)
+    : names_(names),
+      fault_(std::move(fault)),
       reader_(p, dds::topics::vehicle_setpoint, [this](const msg::VehicleSetpoint& s, const dds::SampleMeta&) {
           physics::Setpoint sp;
           sp.position = physics::Vec3(s.position_m().x(), s.position_m().y(), s.position_m().z());
           sp.velocity = physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z());
-          sp.acceleration = physics::Vec3(s.acceleration_mps2().x(), s.acceleration_mps2().y(), s.acceleration_mps2().z());
+          sp.acceleration =
+              physics::Vec3(s.acceleration_mps2().x(), s.acceleration_mps2().y(), s.acceleration_mps2().z());
           sp.yaw_rad = s.yaw_rad();
           // A simulated vehicle, like a real one, must never be driven by a non-finite setpoint.
           if (!physics::is_finite(sp)) return;
@@ -54,7 +58,8 @@ SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names,
 }
 
 bool SimSource::fault_active(const std::string& vehicle, SimFault::Kind kind) const {
-    return fault_ && fault_->kind == kind && fault_->vehicle == vehicle && fault_clock_start_ && t_ >= *fault_clock_start_ + fault_->after_s;
+    return fault_ && fault_->kind == kind && fault_->vehicle == vehicle && fault_clock_start_ &&
+           t_ >= *fault_clock_start_ + fault_->after_s;
 }
 
 BodyPose SimSource::pose(int body, double t) {

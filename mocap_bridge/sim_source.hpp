@@ -31,7 +31,8 @@ SimFault parse_sim_fault(const std::string& text);
 
 class SimSource {
 public:
-    SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz, std::optional<SimFault> fault = {});
+    SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz,
+              std::optional<SimFault> fault = {});
     std::uint16_t port() const { return emulator_->port(); }
 
 private:

@@ -17,7 +17,8 @@ Endpoint Endpoint::make(const std::string& ip, std::uint16_t port) {
     Endpoint e;
     e.addr.sin_family = AF_INET;
     e.addr.sin_port = htons(port);
-    if (inet_pton(AF_INET, ip.c_str(), &e.addr.sin_addr) != 1) throw InputError(log::cat("'", ip, "' is not an IPv4 address"));
+    if (inet_pton(AF_INET, ip.c_str(), &e.addr.sin_addr) != 1)
+        throw InputError(log::cat("'", ip, "' is not an IPv4 address"));
     return e;
 }
 

@@ -13,9 +13,9 @@ void require_usable(const VehicleParams& v, const std::string& body) {
     const bool ok = std::isfinite(v.mass_kg) && v.mass_kg > 0 && v.rotors >= 1 && std::isfinite(v.prop_radius_m) &&
                     v.prop_radius_m > 0 && std::isfinite(v.motor_distance_m) && v.motor_distance_m > 0;
     if (!ok)
-        throw InputError(log::cat("meta.json: vehicles.", body, ": mass ", v.mass_kg, " kg, ", v.rotors, " rotors, propeller radius ",
-                                  v.prop_radius_m, " m, motor distance ", v.motor_distance_m,
-                                  " m: every one must be positive and finite for the physics"));
+        throw InputError(log::cat("meta.json: vehicles.", body, ": mass ", v.mass_kg, " kg, ", v.rotors,
+                                  " rotors, propeller radius ", v.prop_radius_m, " m, motor distance ",
+                                  v.motor_distance_m, " m: every one must be positive and finite for the physics"));
 }
 
 }  // namespace

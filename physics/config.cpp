@@ -44,7 +44,8 @@ void jet_keys(KeyVisitor& k, PhysicsConfig& c) {
             j.number("diameter_m", c.jain.diameter_m, {0.01, 5});
         });
     });
-    k.enumeration("aggregation", c.aggregation, kAggregationNames, "aggregation", "; momentum merging is the jet_merging effect");
+    k.enumeration("aggregation", c.aggregation, kAggregationNames, "aggregation",
+                  "; momentum merging is the jet_merging effect");
 }
 
 void body_keys(KeyVisitor& k, PhysicsConfig& c) {

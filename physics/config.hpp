@@ -18,7 +18,8 @@ inline constexpr Range kCellNoiseRange{0, 10, "N"};  // load-cell noise, 1 sigma
 enum class JetModelKind { bauersfeld, jain };
 inline constexpr std::array<const char*, 2> kJetModelNames = {"bauersfeld", "jain"};  // JetModelKind's order
 enum class Aggregation { force_sum, velocity_superposition };
-inline constexpr std::array<const char*, 2> kAggregationNames = {"force_sum", "velocity_superposition"};  // Aggregation's order
+inline constexpr std::array<const char*, 2> kAggregationNames = {"force_sum",
+                                                                 "velocity_superposition"};  // Aggregation's order
 
 // One definition with the flight format's (meta.json's vehicles).
 using VehicleParams = flight::VehicleInfo;
@@ -32,14 +33,14 @@ struct JainParams {  // Jain et al., ICUAS 2019; published constants disagree: f
 
 struct SuffererParams {
     VehicleParams vehicle;
-    double drag_coefficient = 1.18;          // flat plate, vertical flow
-    double lateral_drag_coefficient = 0.3;   // edge-on, horizontal flow
+    double drag_coefficient = 1.18;         // flat plate, vertical flow
+    double lateral_drag_coefficient = 0.3;  // edge-on, horizontal flow
     double arm_width_m = 0.02;
     double body_size_m = 0.08;
-    int disc_rings = 2;                      // planform resolution per rotor disc
+    int disc_rings = 2;  // planform resolution per rotor disc
     int disc_sectors = 6;
-    bool thrust_loss = true;                 // rotors lose thrust in oncoming flow
-    double kv_omega_n_per_mps = 0.1;         // per rotor
+    bool thrust_loss = true;          // rotors lose thrust in oncoming flow
+    double kv_omega_n_per_mps = 0.1;  // per rotor
     // In-plane rotor drag (H-force): per rotor, newtons per m/s of lateral air through its disc.
     // Only the jets' turbulent lateral velocity drives it (lateral buffeting); the mean flow's
     // lateral push is the bluff-body term above.
@@ -47,22 +48,22 @@ struct SuffererParams {
 };
 
 struct StandParams {
-    double height_m = 1.4;                   // sufferer above the floor
-    double lateral_radius_m = 0.1;           // lateral cells' distance from the centre
-    double counts_per_newton = 21400.0;      // 10 kg cell, 1 mV/V, HX711 gain 128
-    double offset_sigma_counts = 50000.0;    // per-chip zero offsets (removed by the tare)
+    double height_m = 1.4;                 // sufferer above the floor
+    double lateral_radius_m = 0.1;         // lateral cells' distance from the centre
+    double counts_per_newton = 21400.0;    // 10 kg cell, 1 mV/V, HX711 gain 128
+    double offset_sigma_counts = 50000.0;  // per-chip zero offsets (removed by the tare)
     double rate_hz = 80.0;
-    double rate_skew = 0.01;                 // each chip's rate within ±1 %
-    double noise_n = 0.025;                  // per cell, 1 sigma
-    double tare_s = 1.0;                     // averaging time of the tare at the start
+    double rate_skew = 0.01;  // each chip's rate within ±1 %
+    double noise_n = 0.025;   // per cell, 1 sigma
+    double tare_s = 1.0;      // averaging time of the tare at the start
 };
 
 inline constexpr double kLateralIntensity = 0.2;  // v'/U of a round jet (Pope, Turbulent Flows)
 
 struct TurbulenceParams {
     bool enabled = true;
-    double intensity = 0.1;                  // u'/U of the jet speed (Ornstein-Uhlenbeck)
-    double time_scale_s = 0.025;             // ≈ r_half / U_c
+    double intensity = 0.1;       // u'/U of the jet speed (Ornstein-Uhlenbeck)
+    double time_scale_s = 0.025;  // ≈ r_half / U_c
     // Lateral buffeting: each jet's lateral velocity fluctuation, v'/U of its local axial speed,
     // per horizontal axis, with its own correlation time (Ornstein-Uhlenbeck). Off by default:
     // kLateralIntensity is the physical value (README: why it is not the default yet).
@@ -75,7 +76,7 @@ struct DynamicsParams {  // simulated vehicles
     double damping = 0.6;
     double hover_noise_m = 0.02;
     double hover_noise_time_s = 1.0;
-    double rate_hz = 360.0;                  // integration rate (also the wrench model's rate)
+    double rate_hz = 360.0;  // integration rate (also the wrench model's rate)
 };
 
 struct MocapParams {
@@ -84,16 +85,52 @@ struct MocapParams {
 };
 
 struct Effects {
-    struct { bool enabled = false; double offset_s = 0.0; } clock_offset;
-    struct { bool enabled = false; double tau_s = 0.0; } sensor_lag;
-    struct { bool enabled = false; double delay_scale = 1.0; } wake_transport;
-    struct { bool enabled = false; std::array<double, 3> offset_m{0, 0, 0}; } position_offset;
-    struct { bool enabled = false; double scale = 1.0; } force_scale;
-    struct { bool enabled = false; int from = 2; int to = 0; double coefficient = 0.0; } cell_crosstalk;  // axes 0-5
-    struct { bool enabled = false; double contraction = 0.8; double onset = 0.6; double full = 1.0; } jet_merging;
-    struct { bool enabled = false; double coefficient = 0.02; double length_m = 1.0; } floor_recirculation;
-    struct { bool enabled = false; double cda_h_m2 = 0.0; double cda_v_m2 = 0.0; } body_drag;  // a flying sufferer's own drag
-    struct { bool enabled = false; double coefficient = 0.0; } ground_effect;  // extra lift near the floor
+    struct {
+        bool enabled = false;
+        double offset_s = 0.0;
+    } clock_offset;
+    struct {
+        bool enabled = false;
+        double tau_s = 0.0;
+    } sensor_lag;
+    struct {
+        bool enabled = false;
+        double delay_scale = 1.0;
+    } wake_transport;
+    struct {
+        bool enabled = false;
+        std::array<double, 3> offset_m{0, 0, 0};
+    } position_offset;
+    struct {
+        bool enabled = false;
+        double scale = 1.0;
+    } force_scale;
+    struct {
+        bool enabled = false;
+        int from = 2;
+        int to = 0;
+        double coefficient = 0.0;
+    } cell_crosstalk;  // axes 0-5
+    struct {
+        bool enabled = false;
+        double contraction = 0.8;
+        double onset = 0.6;
+        double full = 1.0;
+    } jet_merging;
+    struct {
+        bool enabled = false;
+        double coefficient = 0.02;
+        double length_m = 1.0;
+    } floor_recirculation;
+    struct {
+        bool enabled = false;
+        double cda_h_m2 = 0.0;
+        double cda_v_m2 = 0.0;
+    } body_drag;  // a flying sufferer's own drag
+    struct {
+        bool enabled = false;
+        double coefficient = 0.0;
+    } ground_effect;  // extra lift near the floor
     // Effects registered beyond these (physics/effect_types.hpp): those switched on, with their values.
     std::map<std::string, std::vector<double>> extra;
 };
@@ -102,11 +139,11 @@ struct PhysicsConfig {
     double air_density_kg_m3 = 1.225;
     double gravity_m_s2 = 9.81;
     JetModelKind jet_model = JetModelKind::bauersfeld;
-    bool radial_inflow = true;               // entrainment flow from continuity
+    bool radial_inflow = true;  // entrainment flow from continuity
     JainParams jain;
     Aggregation aggregation = Aggregation::force_sum;
     SuffererParams sufferer;
-    VehicleParams neighbour;                 // neighbours' parameters
+    VehicleParams neighbour;  // neighbours' parameters
     StandParams stand;
     TurbulenceParams turbulence;
     DynamicsParams dynamics;

@@ -69,7 +69,9 @@ std::vector<double> EffectType::neutral() const {
     return v;
 }
 
-void EffectType::set(Effects& e, const std::vector<double>& values, AxisPair axes) const { store(e, true, values, axes); }
+void EffectType::set(Effects& e, const std::vector<double>& values, AxisPair axes) const {
+    store(e, true, values, axes);
+}
 void EffectType::store(Effects& e, bool on, const std::vector<double>& values, AxisPair) const {
     if (on) e.extra[name()] = values;
     else e.extra.erase(name());
@@ -86,7 +88,8 @@ void EffectType::keys(KeyVisitor& k, Effects& e) const {
     k.flag("enabled", on);
     std::vector<double> v = values(e);
     const auto params = parameters();
-    for (std::size_t i = 0; i < params.size(); ++i) k.number(params[i].name, v[i], {params[i].config_min, params[i].config_max});
+    for (std::size_t i = 0; i < params.size(); ++i)
+        k.number(params[i].name, v[i], {params[i].config_min, params[i].config_max});
     store(e, on, v, {});
 }
 

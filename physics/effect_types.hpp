@@ -24,7 +24,6 @@ namespace dw::physics {
 // The effect the lab's time service measures live (dds/clock_sync.hpp): its name is the contract's.
 inline constexpr const char* kClockOffsetEffect = "clock_offset";
 
-
 struct EffectParameter {
     std::string name, unit;
     double config_min = 0, config_max = 0;  // what a configuration may say
@@ -74,7 +73,8 @@ public:
 
     // The change to the recorded wrench (stamps in s) of an effect the engine does not know by
     // name; the built-ins act in the simulator and the replay themselves.
-    virtual void on_recording(const std::vector<double>& values, const std::vector<double>& stamps, RecordedWrench& w) const;
+    virtual void on_recording(const std::vector<double>& values, const std::vector<double>& stamps,
+                              RecordedWrench& w) const;
     // Its paragraph in the report (without the held-out numbers, which the report adds).
     virtual std::string describe(const std::vector<double>& values, AxisPair axes, const EffectVoice& who) const = 0;
 

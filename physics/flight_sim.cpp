@@ -23,9 +23,12 @@ constexpr std::uint64_t kBuffetSeed = 0x9E3779B97F4A7C15ull;  // golden-ratio st
 class Turbulence {
 public:
     Turbulence(const TurbulenceParams& t, Rng gust_rng, Rng buffet_rng)
-        : gust_(t.intensity, t.time_scale_s), lateral_{OrnsteinUhlenbeck(t.lateral_intensity, t.lateral_time_scale_s),
-                                                         OrnsteinUhlenbeck(t.lateral_intensity, t.lateral_time_scale_s)},
-          gust_rng_(gust_rng), buffet_rng_(buffet_rng), buffeting_(t.lateral_intensity > 0) {}
+        : gust_(t.intensity, t.time_scale_s),
+          lateral_{OrnsteinUhlenbeck(t.lateral_intensity, t.lateral_time_scale_s),
+                   OrnsteinUhlenbeck(t.lateral_intensity, t.lateral_time_scale_s)},
+          gust_rng_(gust_rng),
+          buffet_rng_(buffet_rng),
+          buffeting_(t.lateral_intensity > 0) {}
     void step(double dt, Producer& p) {
         p.gust = std::max(0.0, 1.0 + gust_.step(dt, gust_rng_));
         if (!buffeting_) return;  // off: the gust stays zero, without drawing numbers every step
@@ -67,8 +70,8 @@ struct StandFrames {  // what the agent publishes: every chip's latest counts wh
 };
 
 // 3. Eight HX711s on their own oscillators, each converting its cell's force.
-StandFrames convert_on_chips(const PhysicsConfig& c, const StandModel& stand, const std::vector<Wrench>& felt, double dt, double end,
-                             Rng& stand_rng) {
+StandFrames convert_on_chips(const PhysicsConfig& c, const StandModel& stand, const std::vector<Wrench>& felt,
+                             double dt, double end, Rng& stand_rng) {
     struct Chip {
         double period, phase, offset;
         std::vector<double> t;
@@ -121,13 +124,15 @@ void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandF
     const auto& fx = c.effects;
     Counts zero = Counts::Zero();
     int tare_n = 0;
-    for (std::size_t i = 0; i < frames.t.size() && frames.t[i] < frames.t.front() + c.stand.tare_s; ++i, ++tare_n) zero += frames.counts[i];
+    for (std::size_t i = 0; i < frames.t.size() && frames.t[i] < frames.t.front() + c.stand.tare_s; ++i, ++tare_n)
+        zero += frames.counts[i];
     zero /= std::max(tare_n, 1);
     const double clock = fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0;
     for (std::size_t i = 0; i < frames.t.size(); ++i) {
         Wrench w = stand.cells_to_wrench() * ((frames.counts[i] - zero) / c.stand.counts_per_newton);
         if (fx.force_scale.enabled) w *= fx.force_scale.scale;
-        if (fx.cell_crosstalk.enabled) w[fx.cell_crosstalk.to] += fx.cell_crosstalk.coefficient * w[fx.cell_crosstalk.from];
+        if (fx.cell_crosstalk.enabled)
+            w[fx.cell_crosstalk.to] += fx.cell_crosstalk.coefficient * w[fx.cell_crosstalk.from];
         flight::WrenchSample s;
         s.t = frames.t[i] + clock;
         for (int a = 0; a < 6; ++a) s.w[static_cast<std::size_t>(a)] = w[a];
@@ -154,6 +159,38 @@ std::vector<std::uint16_t> describe_bodies(flight::Flight& f, const PhysicsConfi
     return bodies;
 }
 
+// Where the motion capture puts the neighbours relative to their true positions.
+Vec3 mocap_offset(const Effects& fx) {
+    const auto& o = fx.position_offset;
+    return o.enabled ? Vec3(o.offset_m[0], o.offset_m[1], o.offset_m[2]) : Vec3::Zero();
+}
+
+// The flying vehicles and their jets' turbulence.
+struct Fleet {
+    std::vector<SimVehicle> vehicles;
+    std::vector<Turbulence> turbulence;
+    std::vector<Producer> producers;  // their jets at the current step
+
+    // Steps every vehicle towards the reference plus its formation offset (not at step 0) and
+    // evaluates its jet; a vehicle that diverges is an error in the configuration.
+    void step(const Formation& formation, const Setpoint& ref, std::size_t n, double t, double dt,
+              const PhysicsConfig& c, const WrenchModel& model) {
+        for (std::size_t j = 0; j < vehicles.size(); ++j) {
+            Setpoint sp = ref;
+            sp.position += formation.offsets[j];
+            if (n > 0) vehicles[j].step(sp, dt);
+            const VehicleState& s = vehicles[j].state();
+            if (!((s.position - sp.position).norm() <= kDivergence_m)) {
+                throw InputError(log::cat("physics: simulated vehicle v", j + 1, " diverged at t = ", t,
+                                          " s (dynamics too stiff for dynamics.rate_hz ", c.dynamics.rate_hz, " Hz?)"));
+            }
+            producers[j] = model.producer(s.position, s.velocity);
+            producers[j].axis = vehicles[j].jet_axis();
+            if (c.turbulence.enabled) turbulence[j].step(dt, producers[j]);
+        }
+    }
+};
+
 }  // namespace
 
 SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
@@ -167,11 +204,12 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
 
     Rng master(o.seed);
     const std::size_t k = formation.offsets.size();
-    std::vector<SimVehicle> vehicles;
-    std::vector<Turbulence> turbulence;
+    Fleet fleet;
+    fleet.producers.resize(k);
     for (std::size_t j = 0; j < k; ++j) {
-        vehicles.emplace_back(c.dynamics, c.gravity_m_s2, reference.at(0).position + formation.offsets[j], master.split());
-        turbulence.emplace_back(c.turbulence, master.split(), Rng(o.seed ^ (kBuffetSeed * (j + 1))));
+        fleet.vehicles.emplace_back(c.dynamics, c.gravity_m_s2, reference.at(0).position + formation.offsets[j],
+                                    master.split());
+        fleet.turbulence.emplace_back(c.turbulence, master.split(), Rng(o.seed ^ (kBuffetSeed * (j + 1))));
     }
     Rng mocap_rng = master.split();
     Rng stand_rng = master.split();
@@ -187,38 +225,23 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     const auto steps = static_cast<std::size_t>(std::ceil(reference.duration() / dt)) + 1;
     const double mocap_dt = 1.0 / c.mocap.rate_hz;
     double next_mocap = 0;
-    std::vector<Producer> producers(k);
     out.truth_t.reserve(steps);
     out.truth.reserve(steps);
     auto add_pose = [&](double t, std::uint16_t body, const Vec3& p, const Eigen::Quaterniond& q, const Vec3& offset) {
         flight::PoseSample s;
         s.t = t;
         s.body = body;
-        for (int i = 0; i < 3; ++i) s.p[static_cast<std::size_t>(i)] = p[i] + offset[i] + c.mocap.noise_m * mocap_rng.normal();
+        for (int i = 0; i < 3; ++i)
+            s.p[static_cast<std::size_t>(i)] = p[i] + offset[i] + c.mocap.noise_m * mocap_rng.normal();
         s.q = {q.w(), q.x(), q.y(), q.z()};
         f.poses.push_back(s);
     };
-    const Vec3 pos_offset = fx.position_offset.enabled
-                                ? Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1], fx.position_offset.offset_m[2])
-                                : Vec3::Zero();
+    const Vec3 pos_offset = mocap_offset(fx);
     for (std::size_t n = 0; n < steps; ++n) {
         const double t = static_cast<double>(n) * dt;
-        const Setpoint ref = reference.at(t);
-        for (std::size_t j = 0; j < k; ++j) {
-            Setpoint sp = ref;
-            sp.position += formation.offsets[j];
-            if (n > 0) vehicles[j].step(sp, dt);
-            const VehicleState& s = vehicles[j].state();
-            if (!((s.position - sp.position).norm() <= kDivergence_m)) {
-                throw InputError(log::cat("physics: simulated vehicle v", j + 1, " diverged at t = ", t,
-                                          " s (dynamics too stiff for dynamics.rate_hz ", c.dynamics.rate_hz, " Hz?)"));
-            }
-            producers[j] = model.producer(s.position, s.velocity);
-            producers[j].axis = vehicles[j].jet_axis();
-            if (c.turbulence.enabled) turbulence[j].step(dt, producers[j]);
-        }
+        fleet.step(formation, reference.at(t), n, t, dt, c, model);
         out.truth_t.push_back(t);
-        out.truth.push_back(model.evaluate(sufferer, producers));
+        out.truth.push_back(model.evaluate(sufferer, fleet.producers));
         if (!out.truth.back().allFinite()) {
             throw InputError(log::cat("physics: the configuration gives a non-finite wrench at t = ", t,
                                       " s (jet model, aggregation and effects together are not usable)"));
@@ -226,7 +249,8 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
         if (t + 1e-9 >= next_mocap) {
             add_pose(t, sufferer_body, sufferer, Eigen::Quaterniond::Identity(), Vec3::Zero());
             for (std::size_t j = 0; j < k; ++j) {
-                add_pose(t, bodies[j], vehicles[j].state().position, vehicles[j].state().orientation, pos_offset);
+                const VehicleState& s = fleet.vehicles[j].state();
+                add_pose(t, bodies[j], s.position, s.orientation, pos_offset);
             }
             next_mocap += mocap_dt;
         }

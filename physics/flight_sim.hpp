@@ -21,7 +21,7 @@ struct FlyOptions {
     GridOptions grid;
     std::uint64_t seed = 1;
     std::function<void(double)> progress;  // fraction done, 0..1 (may be empty)
-    std::stop_token stop;                   // a stop request ends the simulation with dw::Stopped
+    std::stop_token stop;                  // a stop request ends the simulation with dw::Stopped
 };
 
 // A simulated vehicle this far from its setpoint has diverged (dynamics too stiff for rate_hz).
@@ -29,8 +29,8 @@ inline constexpr double kDivergence_m = 100.0;
 
 struct SimResult {
     flight::Flight flight;
-    std::vector<double> truth_t;   // simulation time (= mocap clock) [s]
-    std::vector<Wrench> truth;     // the true wrench on the sufferer, before the stand
+    std::vector<double> truth_t;  // simulation time (= mocap clock) [s]
+    std::vector<Wrench> truth;    // the true wrench on the sufferer, before the stand
 };
 
 // Throws dw::InputError when the configuration makes the physics produce a non-finite wrench or

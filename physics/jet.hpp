@@ -29,21 +29,21 @@ inline constexpr double kMomentumIntegral = 2.528;        // ∫U² dA = 2.528 U
 // Per-producer constants of its jet, computed once.
 struct Jet {
     JetModelKind model = JetModelKind::bauersfeld;
-    double u_hover = 0;        // U_H [m/s]
-    double thrust_n = 0;       // m g
-    double inv_l = 0;          // 1 / l
+    double u_hover = 0;   // U_H [m/s]
+    double thrust_n = 0;  // m g
+    double inv_l = 0;     // 1 / l
     double l = 0;
-    double k_centre = 0;       // Bauersfeld: U_H * 10.11; Jain: v_i * C_ax * D
-    double c_half = 0;         // Bauersfeld: 0.07668 * l
+    double k_centre = 0;  // Bauersfeld: U_H * 10.11; Jain: v_i * C_ax * D
+    double c_half = 0;    // Bauersfeld: 0.07668 * l
     double jain_z0 = 0;
     double jain_c_rad = 0;
 
     static Jet make(const VehicleParams& v, const PhysicsConfig& c);
 
-    double centreline(double s) const;                 // U_c(s) [m/s], 0 above the producer
-    double half_width(double s) const;                 // r_half(s) [m]
-    double axial(double r, double s) const;            // U(r, s) [m/s]
-    double radial(double r, double s) const;           // V(r, s) [m/s], outward positive
+    double centreline(double s) const;        // U_c(s) [m/s], 0 above the producer
+    double half_width(double s) const;        // r_half(s) [m]
+    double axial(double r, double s) const;   // U(r, s) [m/s]
+    double radial(double r, double s) const;  // V(r, s) [m/s], outward positive
     // ρ ∫U² dA from the closed form [N]; independent of s for the Bauersfeld jet.
     double momentum_flux(double rho) const;
     // Time for the wake to descend s: ∫0^s dz / U_c(z) = (s²/(2l) + 5.817 s) / (10.11 U_H) [s].

@@ -24,11 +24,15 @@ int run(int argc, char** argv) {
     dw::physics::FlyOptions fly;
     std::string physics_path, out_dir, altitudes = "0.3,0.8,1.3";
     bool quiet = false;
-    auto* cmd = app.add_subcommand("fly", "simulate a formation flying grid legs over the stand; write a flight folder");
-    cmd->add_option("--formation", fly.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid")
+    auto* cmd =
+        app.add_subcommand("fly", "simulate a formation flying grid legs over the stand; write a flight folder");
+    cmd->add_option("--formation", fly.formation,
+                    "single, side_by_side, leader_follower, leader_follower3, stack or hybrid")
         ->required();
-    cmd->add_option("--physics", physics_path, "physics configuration (default: the documented defaults, config/physics.example.yaml)");
-    cmd->add_option("--seed", fly.seed, "random seed: the same inputs and seed give the same bytes")->check(dw::cli::in(dw::kSeedRange));
+    cmd->add_option("--physics", physics_path,
+                    "physics configuration (default: the documented defaults, config/physics.example.yaml)");
+    cmd->add_option("--seed", fly.seed, "random seed: the same inputs and seed give the same bytes")
+        ->check(dw::cli::in(dw::kSeedRange));
     cmd->add_option("--out", out_dir, "flight folder to write")->required();
     cmd->add_option("--altitudes", altitudes, "relative altitudes above the sufferer [m], comma-separated");
     cmd->add_option("--legs", fly.grid.legs, "number of legs")->check(dw::cli::in(dw::physics::kLegsRange));
@@ -54,10 +58,10 @@ int run(int argc, char** argv) {
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     double peak = 0;
     for (const auto& s : result.flight.wrench) peak = std::max(peak, std::abs(s.w[2]));
-    std::cout << "wrote " << out_dir << ": " << result.flight.meta.formation << " K=" << result.flight.meta.neighbours.size()
-              << ", " << result.flight.legs->size() << " legs, " << result.truth_t.back() << " s of flight, "
-              << result.flight.wrench.size() << " wrench samples, " << result.flight.poses.size()
-              << " poses, peak |f_d| " << peak << " N (" << secs << " s)\n";
+    std::cout << "wrote " << out_dir << ": " << result.flight.meta.formation
+              << " K=" << result.flight.meta.neighbours.size() << ", " << result.flight.legs->size() << " legs, "
+              << result.truth_t.back() << " s of flight, " << result.flight.wrench.size() << " wrench samples, "
+              << result.flight.poses.size() << " poses, peak |f_d| " << peak << " N (" << secs << " s)\n";
     return 0;
 }
 

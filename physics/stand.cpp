@@ -37,7 +37,8 @@ StandModel::StandModel(const StandParams& params) {
 
 std::int32_t StandModel::to_counts(double force_n, double offset_counts, double counts_per_newton) {
     const double v = std::round(offset_counts + counts_per_newton * force_n);
-    if (!std::isfinite(v)) throw RuntimeError(log::cat("stand model: a non-finite force (", force_n, " N) reached the HX711"));
+    if (!std::isfinite(v))
+        throw RuntimeError(log::cat("stand model: a non-finite force (", force_n, " N) reached the HX711"));
     if (v >= kCountsMax) return kCountsMax;
     if (v <= kCountsMin) return kCountsMin;
     return static_cast<std::int32_t>(v);

@@ -11,7 +11,7 @@
 namespace dw::physics {
 
 inline constexpr int kCells = 8;
-inline constexpr std::int32_t kCountsMax = 0x7FFFFF;   // HX711 saturation codes
+inline constexpr std::int32_t kCountsMax = 0x7FFFFF;  // HX711 saturation codes
 inline constexpr std::int32_t kCountsMin = -0x800000;
 
 struct StandCell {

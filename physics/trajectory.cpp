@@ -9,8 +9,8 @@
 namespace dw::physics {
 
 const std::vector<std::string>& formation_names() {
-    static const std::vector<std::string> names{"single", "side_by_side", "leader_follower",
-                                                "leader_follower3", "stack", "hybrid"};
+    static const std::vector<std::string> names{"single",           "side_by_side", "leader_follower",
+                                                "leader_follower3", "stack",        "hybrid"};
     return names;
 }
 
@@ -20,12 +20,15 @@ Formation make_formation(const std::string& name) {
     if (name == "side_by_side") return {name, "side_by_side", {Vec3(-0.25, 0, 0), Vec3(0.25, 0, 0)}};
     if (name == "leader_follower") return {name, "leader_follower", {Vec3(0, 0.25, 0), Vec3(0, -0.25, 0)}};
     // K = 3 in line with 0.5 m offsets from the centroid (PHYSICS.md).
-    if (name == "leader_follower3") return {name, "leader_follower", {Vec3(0, 0.5, 0), Vec3(0, 0, 0), Vec3(0, -0.5, 0)}};
+    if (name == "leader_follower3")
+        return {name, "leader_follower", {Vec3(0, 0.5, 0), Vec3(0, 0, 0), Vec3(0, -0.5, 0)}};
     // The lower vehicle at the reference altitude flies in the upper one's downwash.
     if (name == "stack") return {name, "stack", {Vec3(0, 0.1, -0.5), Vec3(0, 0, 0)}};
     if (name == "hybrid") {  // equilateral triangle, 0.6 m sides, in one horizontal plane
         const double R = 0.6 / std::sqrt(3.0);
-        return {name, "hybrid", {Vec3(R, 0, 0), Vec3(-R / 2, R * std::sqrt(3.0) / 2, 0), Vec3(-R / 2, -R * std::sqrt(3.0) / 2, 0)}};
+        return {name,
+                "hybrid",
+                {Vec3(R, 0, 0), Vec3(-R / 2, R * std::sqrt(3.0) / 2, 0), Vec3(-R / 2, -R * std::sqrt(3.0) / 2, 0)}};
     }
     throw InputError(log::cat("unknown formation '", name,
                               "' (expected single, side_by_side, leader_follower, leader_follower3, stack or hybrid)"));
@@ -46,9 +49,9 @@ ReferenceTrajectory::ReferenceTrajectory(const GridOptions& o) {
     const double hw = o.half_width_m;
     const double ramp_m = 0.5 * o.speed_mps * o.ramp_s;  // distance of a cosine speed ramp
     const double far = hw + ramp_m;
-    const int per_alt = o.lines_n_m.empty()
-                            ? (o.legs + static_cast<int>(o.altitudes_m.size()) - 1) / static_cast<int>(o.altitudes_m.size())
-                            : static_cast<int>(o.lines_n_m.size());
+    const int per_alt = o.lines_n_m.empty() ? (o.legs + static_cast<int>(o.altitudes_m.size()) - 1) /
+                                                  static_cast<int>(o.altitudes_m.size())
+                                            : static_cast<int>(o.lines_n_m.size());
 
     std::vector<LegInfo> plan;
     int direction = 1;
@@ -94,7 +97,8 @@ ReferenceTrajectory::ReferenceTrajectory(const GridOptions& o) {
 
 Setpoint ReferenceTrajectory::at(double t) const {
     t = std::clamp(t, 0.0, duration_);
-    auto it = std::upper_bound(segments_.begin(), segments_.end(), t, [](double v, const Segment& s) { return v < s.t0; });
+    auto it =
+        std::upper_bound(segments_.begin(), segments_.end(), t, [](double v, const Segment& s) { return v < s.t0; });
     const Segment& s = *(it == segments_.begin() ? it : std::prev(it));
     const double T = s.length_s;
     const double tl = std::clamp(t - s.t0, 0.0, T);

@@ -28,8 +28,11 @@ double OrnsteinUhlenbeck::step(double dt, Rng& rng) {
 }
 
 SimVehicle::SimVehicle(const DynamicsParams& p, double gravity, const Vec3& start, Rng rng)
-    : p_(p), g_(gravity), rng_(rng),
-      wander_{OrnsteinUhlenbeck(p.hover_noise_m, p.hover_noise_time_s), OrnsteinUhlenbeck(p.hover_noise_m, p.hover_noise_time_s),
+    : p_(p),
+      g_(gravity),
+      rng_(rng),
+      wander_{OrnsteinUhlenbeck(p.hover_noise_m, p.hover_noise_time_s),
+              OrnsteinUhlenbeck(p.hover_noise_m, p.hover_noise_time_s),
               OrnsteinUhlenbeck(p.hover_noise_m, p.hover_noise_time_s)} {
     state_.position = start;
 }

@@ -47,7 +47,8 @@ struct Setpoint {
 
 // Every component finite: what may drive a vehicle, simulated or real.
 inline bool is_finite(const Setpoint& sp) {
-    return sp.position.allFinite() && sp.velocity.allFinite() && sp.acceleration.allFinite() && std::isfinite(sp.yaw_rad);
+    return sp.position.allFinite() && sp.velocity.allFinite() && sp.acceleration.allFinite() &&
+           std::isfinite(sp.yaw_rad);
 }
 
 struct VehicleState {

@@ -62,8 +62,7 @@ Planform Planform::make(const SuffererParams& s) {
 }
 
 WrenchModel::WrenchModel(const PhysicsConfig& config)
-    : config_(config), planform_(Planform::make(config.sufferer)),
-      neighbour_jet_(Jet::make(config.neighbour, config)) {
+    : config_(config), planform_(Planform::make(config.sufferer)), neighbour_jet_(Jet::make(config.neighbour, config)) {
     half_rho_cd_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.drag_coefficient;
     half_rho_clat_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.lateral_drag_coefficient;
 }
@@ -77,17 +76,18 @@ Producer WrenchModel::producer(const Vec3& position, const Vec3& velocity) const
 }
 
 void WrenchModel::add_velocity(const Vec3& suf, const Producer& p, double weight, Scratch& sc) const {
-    add_velocity(suf, planform_.x.data(), planform_.y.data(), planform_.size(), p, weight, sc.ux.data(),
-                 sc.uy.data(), sc.uz.data());
+    add_velocity(suf, planform_.x.data(), planform_.y.data(), planform_.size(), p, weight, sc.ux.data(), sc.uy.data(),
+                 sc.uz.data());
 }
 
-void WrenchModel::add_velocity(const Vec3& suf, const double* cx, const double* cy, std::size_t n,
-                               const Producer& p, double weight, double* ux, double* uy, double* uz) const {
+void WrenchModel::add_velocity(const Vec3& suf, const double* cx, const double* cy, std::size_t n, const Producer& p,
+                               double weight, double* ux, double* uy, double* uz) const {
     const Jet& jet = p.jet;
     const double ax = p.axis.x(), ay = p.axis.y(), az = p.axis.z();
     const double ox = suf.x() - p.position.x(), oy = suf.y() - p.position.y(), oz = suf.z() - p.position.z();
     const double gain = weight * p.gust;
-    const double delay_scale = config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
+    const double delay_scale =
+        config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
     const bool radial = config_.radial_inflow;
     for (std::size_t i = 0; i < n; ++i) {
         double dx = ox + cx[i], dy = oy + cy[i], dz = oz;
@@ -251,6 +251,51 @@ Producer WrenchModel::merged(std::span<const Producer> producers, const std::vec
     return m;
 }
 
+namespace {
+
+// Which producers' jets merge at the sufferer's depth: pairs whose half-widths overlap, joined
+// transitively. Each producer's group (its lowest member) and its merging weight (0-1).
+struct MergeGroups {
+    std::vector<int> group;
+    std::vector<double> weight;
+};
+
+MergeGroups merge_groups(const Vec3& suf, std::span<const Producer> producers, double onset, double full) {
+    const std::size_t k = producers.size();
+    std::vector<int> group(k);
+    std::iota(group.begin(), group.end(), 0);
+    std::vector<double> weight(k, 0.0);
+    auto root = [&](int i) {
+        while (group[static_cast<std::size_t>(i)] != i) i = group[static_cast<std::size_t>(i)];
+        return i;
+    };
+    std::vector<Vec3> centre(k);
+    std::vector<double> half(k), depth(k);
+    for (std::size_t j = 0; j < k; ++j) {
+        depth[j] = (suf - producers[j].position).dot(producers[j].axis);
+        centre[j] = producers[j].position + depth[j] * producers[j].axis;
+        half[j] = producers[j].jet.half_width(depth[j]);
+    }
+    for (std::size_t a = 0; a < k; ++a) {
+        for (std::size_t b = a + 1; b < k; ++b) {
+            if (depth[a] <= 0 || depth[b] <= 0) continue;
+            const double d = std::max((centre[a] - centre[b]).norm(), 1e-6);
+            const double o = (half[a] + half[b]) / d;
+            double w = std::clamp((o - onset) / (full - onset), 0.0, 1.0);
+            w = w * w * (3 - 2 * w);  // smoothstep: no kink where merging begins
+            if (w <= 0) continue;
+            const int ra = root(static_cast<int>(a)), rb = root(static_cast<int>(b));
+            group[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+            weight[a] = std::max(weight[a], w);
+            weight[b] = std::max(weight[b], w);
+        }
+    }
+    for (std::size_t j = 0; j < k; ++j) group[j] = root(static_cast<int>(j));
+    return {group, weight};
+}
+
+}  // namespace
+
 Wrench WrenchModel::evaluate(const Vec3& suf, std::span<const Producer> producers) const {
     thread_local Scratch sc;
     const std::size_t k = producers.size();
@@ -270,36 +315,7 @@ Wrench WrenchModel::evaluate(const Vec3& suf, std::span<const Producer> producer
         return total;
     }
 
-    // Merging groups: pairs whose half-widths overlap at the sufferer's depth.
-    std::vector<int> group(k);
-    std::iota(group.begin(), group.end(), 0);
-    std::vector<double> weight(k, 0.0);
-    {
-        auto root = [&](int i) { while (group[static_cast<std::size_t>(i)] != i) i = group[static_cast<std::size_t>(i)]; return i; };
-        std::vector<Vec3> centre(k);
-        std::vector<double> half(k), depth(k);
-        for (std::size_t j = 0; j < k; ++j) {
-            depth[j] = (suf - producers[j].position).dot(producers[j].axis);
-            centre[j] = producers[j].position + depth[j] * producers[j].axis;
-            half[j] = producers[j].jet.half_width(depth[j]);
-        }
-        for (std::size_t a = 0; a < k; ++a) {
-            for (std::size_t b = a + 1; b < k; ++b) {
-                if (depth[a] <= 0 || depth[b] <= 0) continue;
-                const double d = std::max((centre[a] - centre[b]).norm(), 1e-6);
-                const double o = (half[a] + half[b]) / d;
-                double w = std::clamp((o - jm.onset) / (jm.full - jm.onset), 0.0, 1.0);
-                w = w * w * (3 - 2 * w);  // smoothstep: no kink where merging begins
-                if (w <= 0) continue;
-                const int ra = root(static_cast<int>(a)), rb = root(static_cast<int>(b));
-                group[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
-                weight[a] = std::max(weight[a], w);
-                weight[b] = std::max(weight[b], w);
-            }
-        }
-        for (std::size_t j = 0; j < k; ++j) group[j] = root(static_cast<int>(j));
-    }
-
+    const auto [group, weight] = merge_groups(suf, producers, jm.onset, jm.full);
     if (!sum) sc.reset(n);
     for (std::size_t g = 0; g < k; ++g) {
         std::vector<int> members;

@@ -22,18 +22,18 @@ using Vec3 = Eigen::Vector3d;
 using Wrench = Eigen::Matrix<double, 6, 1>;
 
 struct Producer {
-    Vec3 position = Vec3::Zero();   // world NED [m]
-    Vec3 axis{0, 0, 1};             // unit vector along which its air goes (world NED; down when level)
-    Vec3 velocity = Vec3::Zero();   // world NED [m/s]
+    Vec3 position = Vec3::Zero();  // world NED [m]
+    Vec3 axis{0, 0, 1};            // unit vector along which its air goes (world NED; down when level)
+    Vec3 velocity = Vec3::Zero();  // world NED [m/s]
     Jet jet;
-    double gust = 1.0;              // turbulence: multiplier on the jet speed
+    double gust = 1.0;                 // turbulence: multiplier on the jet speed
     Vec3 lateral_gust = Vec3::Zero();  // lateral buffeting: velocity across the axis / axial speed
 };
 
 // The sufferer's planform cells, in its own level frame centred on it (x north, y east).
 struct Planform {
     std::vector<double> x, y, area;
-    std::vector<int> rotor;             // rotor index of a disc cell, -1 for arms and body
+    std::vector<int> rotor;  // rotor index of a disc cell, -1 for arms and body
     std::vector<std::array<double, 2>> rotor_centre;
     std::vector<double> rotor_area;
     std::size_t size() const { return x.size(); }

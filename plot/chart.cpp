@@ -74,12 +74,13 @@ void render_chart(const Chart& c, const std::string& png, int width, int height)
     write_png(img, png);
 }
 
-Heat bin_heat(const std::string& title, const std::vector<std::array<double, 3>>& samples, double x0, double x1, double y0, double y1,
-              int nx, int ny, int min_count) {
+Heat bin_heat(const std::string& title, const std::vector<std::array<double, 3>>& samples, double x0, double x1,
+              double y0, double y1, int nx, int ny, int min_count) {
     Heat h{title, x0, x1, y0, y1, nx, ny, {}};
     std::vector<double> sum(static_cast<std::size_t>(nx * ny), 0), n(sum.size(), 0);
     for (const auto& [x, y, v] : samples) {
-        const int ix = static_cast<int>(std::floor((x - x0) / (x1 - x0) * nx)), iy = static_cast<int>(std::floor((y - y0) / (y1 - y0) * ny));
+        const int ix = static_cast<int>(std::floor((x - x0) / (x1 - x0) * nx)),
+                  iy = static_cast<int>(std::floor((y - y0) / (y1 - y0) * ny));
         if (ix < 0 || iy < 0 || ix >= nx || iy >= ny || !std::isfinite(v)) continue;
         sum[static_cast<std::size_t>(iy * nx + ix)] += v;
         n[static_cast<std::size_t>(iy * nx + ix)] += 1;
@@ -89,8 +90,8 @@ Heat bin_heat(const std::string& title, const std::vector<std::array<double, 3>>
     return h;
 }
 
-void render_heats(const std::vector<Heat>& heats, const std::string& title, const std::string& x_label, const std::string& y_label,
-                  const std::string& unit, const std::string& png) {
+void render_heats(const std::vector<Heat>& heats, const std::string& title, const std::string& x_label,
+                  const std::string& y_label, const std::string& unit, const std::string& png) {
     constexpr int panel = 380, gap = 90, top = 60, bar = 90;
     const int width = gap + static_cast<int>(heats.size()) * (panel + gap) + bar, height = top + panel + 70;
     cv::Mat img(height, width, CV_8UC3, cv::Scalar(255, 255, 255));

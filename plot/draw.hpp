@@ -17,11 +17,12 @@ inline std::string num(double v, int precision) {
 }
 
 // Dark text at `at`; align 0 left, 1 centred, 2 right.
-inline void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.45, int align = 0, int thickness = 1) {
+inline void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.45, int align = 0,
+                 int thickness = 1) {
     int base = 0;
     const auto size = cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &base);
-    if (align == 1) at.x -= size.width / 2;   // centred
-    if (align == 2) at.x -= size.width;       // right-aligned
+    if (align == 1) at.x -= size.width / 2;  // centred
+    if (align == 2) at.x -= size.width;      // right-aligned
     cv::putText(img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(20, 20, 20), thickness, cv::LINE_AA);
 }
 
@@ -35,6 +36,5 @@ inline double nice_step(double range) {
         if (m * p >= raw) return m * p;
     return 10 * p;
 }
-
 
 }  // namespace dw::plot

@@ -14,7 +14,6 @@
 
 namespace dw::plot {
 
-
 std::array<unsigned char, 3> colour_of(double v, double vmin, double vmax) {
     if (std::isnan(v)) return {200, 200, 200};
     const double mid = 0.5 * (vmin + vmax), half = 0.5 * (vmax - vmin);
@@ -29,7 +28,8 @@ std::array<unsigned char, 3> colour_of(double v, double vmin, double vmax) {
 std::array<int, 2> MapLayout::pixel(int p, double n, double e) const {
     const auto& q = panels[static_cast<std::size_t>(p)];
     const double s = q.size / (2 * half_width_m);
-    return {q.x + static_cast<int>(std::lround((e + half_width_m) * s)), q.y + static_cast<int>(std::lround((half_width_m - n) * s))};
+    return {q.x + static_cast<int>(std::lround((e + half_width_m) * s)),
+            q.y + static_cast<int>(std::lround((half_width_m - n) * s))};
 }
 
 MapLayout render_fields(const std::vector<Field>& fields, const std::string& title, const std::string& unit,
@@ -75,7 +75,8 @@ MapLayout render_fields(const std::vector<Field>& fields, const std::string& tit
         for (const auto& o : outlines) {
             const auto c = L.pixel(static_cast<int>(p), o.n, o.e);
             const int r = static_cast<int>(std::lround(o.radius_m * size / (2 * L.half_width_m)));
-            cv::circle(img, {c[0], c[1]}, r, o.sufferer ? cv::Scalar(0, 0, 0) : cv::Scalar(0, 140, 0), o.sufferer ? 2 : 1, cv::LINE_AA);
+            cv::circle(img, {c[0], c[1]}, r, o.sufferer ? cv::Scalar(0, 0, 0) : cv::Scalar(0, 140, 0),
+                       o.sufferer ? 2 : 1, cv::LINE_AA);
         }
         cv::rectangle(img, {q.x - 1, q.y - 1}, {q.x + size, q.y + size}, cv::Scalar(40, 40, 40), 1);
         text(img, f.title, {q.x + size / 2, q.y - 10}, 0.5, 1);
@@ -109,6 +110,5 @@ MapLayout render_fields(const std::vector<Field>& fields, const std::string& tit
     write_png(img, png);
     return L;
 }
-
 
 }  // namespace dw::plot

@@ -12,8 +12,8 @@ namespace dw::plot {
 struct Field {
     std::string title;
     double half_width_m = 1.2;
-    int cells = 61;                  // per side; cell i at -half_width + i * step
-    std::vector<double> v;           // row-major: index = i_n * cells + i_e
+    int cells = 61;         // per side; cell i at -half_width + i * step
+    std::vector<double> v;  // row-major: index = i_n * cells + i_e
     double step() const { return 2 * half_width_m / (cells - 1); }
     double at(int i_n, int i_e) const { return v[static_cast<std::size_t>(i_n * cells + i_e)]; }
 };
@@ -24,10 +24,12 @@ struct Outline {
 };
 
 struct MapLayout {
-    double vmin = 0, vmax = 0;       // the colour scale
+    double vmin = 0, vmax = 0;  // the colour scale
     int width = 0, height = 0;
-    struct Panel { int x = 0, y = 0, size = 0; } ;
-    std::vector<Panel> panels;       // one square per field
+    struct Panel {
+        int x = 0, y = 0, size = 0;
+    };
+    std::vector<Panel> panels;  // one square per field
     double half_width_m = 1.2;
     // The pixel of a point (N, E) in panel p.
     std::array<int, 2> pixel(int p, double n, double e) const;

@@ -73,7 +73,6 @@ Split split_by_leg(const Dataset& d, int period, int test_phase, int val_phase) 
     return s;
 }
 
-
 Dataset from_flight(const flight::Flight& f, const std::string& name, const DatasetOptions& o) {
     const int sufferer = f.find_body(f.meta.sufferer);
     if (sufferer < 0) throw InputError(log::cat(name, "/poses.csv: the sufferer '", f.meta.sufferer, "' has no poses"));
@@ -85,7 +84,8 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
         ns.push_back(&trs[static_cast<std::size_t>(b)]);
     }
     if (ns.size() > static_cast<std::size_t>(kMaxNeighbours))
-        throw InputError(log::cat(name, "/meta.json: neighbours: ", ns.size(), " (the models take at most ", kMaxNeighbours, ")"));
+        throw InputError(
+            log::cat(name, "/meta.json: neighbours: ", ns.size(), " (the models take at most ", kMaxNeighbours, ")"));
     const auto& st = trs[static_cast<std::size_t>(sufferer)];
     const auto blocks = flight::find_blocks(f, kSplitPeriod, physics::encounter_radii(f.meta, o.physics));
     const auto& legs = blocks.blocks;

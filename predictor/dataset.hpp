@@ -24,15 +24,15 @@ using RelState = std::array<double, kStateSize>;
 using Wrench6 = std::array<double, 6>;  // f_n f_e f_d m_roll m_pitch m_yaw
 
 struct Sample {
-    double t = 0;                                     // stand clock [s]
-    int k = 0;                                        // neighbours present
-    std::array<RelState, kMaxNeighbours> x{};         // the first k are valid
-    Wrench6 y{};                                      // recorded wrench
-    int leg = -1;                                     // the block (leg, encounter, time); -1: none
-    int leg_direction = 0;                            // +1 towards +E, -1 towards -E, 0 unknown (or not on legs)
-    int source = 0;                                   // index into Dataset::sources
-    std::array<std::uint8_t, kMaxNeighbours> who{};   // which of the source's neighbours x[j] is
-    double height = 0;                                // the sufferer above the floor [m]
+    double t = 0;                                    // stand clock [s]
+    int k = 0;                                       // neighbours present
+    std::array<RelState, kMaxNeighbours> x{};        // the first k are valid
+    Wrench6 y{};                                     // recorded wrench
+    int leg = -1;                                    // the block (leg, encounter, time); -1: none
+    int leg_direction = 0;                           // +1 towards +E, -1 towards -E, 0 unknown (or not on legs)
+    int source = 0;                                  // index into Dataset::sources
+    std::array<std::uint8_t, kMaxNeighbours> who{};  // which of the source's neighbours x[j] is
+    double height = 0;                               // the sufferer above the floor [m]
     std::span<const RelState> neighbours() const { return {x.data(), static_cast<std::size_t>(k)}; }
     // Where the formation is relative to the sufferer: N and E of the neighbours' centroid, and
     // the height of the lowest neighbour above the sufferer (the formation's reference altitude:
@@ -41,12 +41,12 @@ struct Sample {
 };
 
 struct Source {
-    std::string name;        // the flight folder or recording
-    std::string formation;   // meta.json formation (leader_follower3 when leader_follower has K = 3)
+    std::string name;       // the flight folder or recording
+    std::string formation;  // meta.json formation (leader_follower3 when leader_follower has K = 3)
     // Each body's parameters as the flight gives them (meta.json), for the physics per body.
     physics::VehicleParams sufferer;
-    std::vector<physics::VehicleParams> neighbours;  // meta.json's neighbours, in order
-    bool flying = false;                             // no load stand: the sufferer's height varies
+    std::vector<physics::VehicleParams> neighbours;                    // meta.json's neighbours, in order
+    bool flying = false;                                               // no load stand: the sufferer's height varies
     std::array<bool, 6> measured{true, true, true, true, true, true};  // columns carrying a measurement
     flight::BlockKind blocks = flight::BlockKind::legs;
 };
@@ -56,7 +56,8 @@ struct Dataset {
     std::vector<Sample> samples;
     void append(const Dataset& other);
     // Samples whose leg satisfies pred(leg) (samples off legs are dropped).
-    template <class Pred> Dataset legs_where(Pred pred) const {
+    template <class Pred>
+    Dataset legs_where(Pred pred) const {
         Dataset d;
         d.sources = sources;
         for (const auto& s : samples)
@@ -79,7 +80,7 @@ inline constexpr int kSplitPeriod = 5;  // block % 5 == 0: held out for testing,
 Split split_by_leg(const Dataset& d, int period = kSplitPeriod, int test_phase = 0, int val_phase = 1);
 
 struct DatasetOptions {
-    double max_distance_m = 3.0;  // neighbours farther than this from the sufferer are left out
+    double max_distance_m = 3.0;     // neighbours farther than this from the sufferer are left out
     physics::PhysicsConfig physics;  // a body meta.json does not describe takes these parameters
 };
 

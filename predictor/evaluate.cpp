@@ -66,7 +66,8 @@ std::vector<AxisValues> cell_errors(const ForceModel& model, const Dataset& data
         const auto c = s.reference();
         if (std::abs(c[2] - o.altitude_m) > o.band_m) continue;
         if (std::abs(c[0]) > o.half_width_m || std::abs(c[1]) > o.half_width_m) continue;
-        auto& cell = cells[{static_cast<int>(std::floor(c[0] / o.cell_m)), static_cast<int>(std::floor(c[1] / o.cell_m))}];
+        auto& cell =
+            cells[{static_cast<int>(std::floor(c[0] / o.cell_m)), static_cast<int>(std::floor(c[1] / o.cell_m))}];
         const auto p = predict(model, data, s);
         for (std::size_t a = 0; a < 6; ++a) {
             cell.pred[a] += p[a];
@@ -116,8 +117,8 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
         if (d.samples.empty()) continue;
         for (const auto* m : models) {
             const auto peak = peak_error(*m, d);
-            rows.push_back({f, m->name(), d.samples.size(), arena_error(*m, d, o), arena_integral(*m, d, o), rmse(*m, d), peak.mean_abs,
-                            peak.blocks});
+            rows.push_back({f, m->name(), d.samples.size(), arena_error(*m, d, o), arena_integral(*m, d, o),
+                            rmse(*m, d), peak.mean_abs, peak.blocks});
         }
     }
     return rows;
@@ -126,9 +127,7 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
 namespace {
 const char* const kAxisTitles[6] = {"N", "E", "D", "roll", "pitch", "yaw"};
 
-std::string fmt(double v, int precision = 3) {
-    return std::isnan(v) ? "–" : fixed(v, precision);
-}
+std::string fmt(double v, int precision = 3) { return std::isnan(v) ? "–" : fixed(v, precision); }
 
 void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, AxisValues ComparisonRow::*metric) {
     std::vector<std::string> order;  // formations in first-seen order, models in order
@@ -166,7 +165,8 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
     for (const auto& r : rows)
         if (std::find(models.begin(), models.end(), r.model) == models.end()) models.push_back(r.model);
     std::ostringstream out;
-    out << "Held-out blocks (legs, or encounters in flights without legs). Each cell: " << log::join(models, " / ") << ".\n\n";
+    out << "Held-out blocks (legs, or encounters in flights without legs). Each cell: " << log::join(models, " / ")
+        << ".\n\n";
     const bool any_arena = std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) {
         return std::any_of(r.arena.begin(), r.arena.end(), [](double v) { return std::isfinite(v); });
     });
@@ -175,7 +175,8 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
             << " m relative altitude (the study's Table 1 metric; N, N·m)\n\n";
         table(out, rows, &ComparisonRow::arena);
         out << "\n### The same |prediction − truth| integrated over the occupied cells (N·m², N·m³)\n\n"
-               "A formation that occupies more of the arena weighs more here; the mean above does not depend on the coverage.\n\n";
+               "A formation that occupies more of the arena weighs more here; the mean above does not depend on the "
+               "coverage.\n\n";
         table(out, rows, &ComparisonRow::arena_integral);
         out << "\n";
     }
@@ -208,8 +209,9 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
         out << "\n";
     }
     for (const auto& r : rows)
-        for (const auto& [name, metric] : {std::pair{"arena_mean_abs", &ComparisonRow::arena}, std::pair{"arena_integral", &ComparisonRow::arena_integral},
-                                           std::pair{"rmse", &ComparisonRow::rmse}}) {
+        for (const auto& [name, metric] :
+             {std::pair{"arena_mean_abs", &ComparisonRow::arena},
+              std::pair{"arena_integral", &ComparisonRow::arena_integral}, std::pair{"rmse", &ComparisonRow::rmse}}) {
             out << r.formation << "," << r.model << "," << name << "," << r.samples;
             for (std::size_t a = 0; a < 6; ++a) {
                 const double v = (r.*metric)[a];
@@ -218,8 +220,8 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
             out << "\n";
         }
     for (const auto& r : rows)  // the peak error is of f_d only
-        out << r.formation << "," << r.model << ",peak_f_d_mean_abs," << r.blocks << ",,," << (std::isnan(r.peak_error) ? "" : fmt(r.peak_error, 5))
-            << ",,,\n";
+        out << r.formation << "," << r.model << ",peak_f_d_mean_abs," << r.blocks << ",,,"
+            << (std::isnan(r.peak_error) ? "" : fmt(r.peak_error, 5)) << ",,,\n";
     return out.str();
 }
 
@@ -228,11 +230,12 @@ void require_samples(const Dataset& all, const Dataset& part, const std::string&
     if (std::any_of(part.samples.begin(), part.samples.end(), with_neighbour)) return;
     std::size_t in_blocks = 0, near = 0;
     for (const auto& s : all.samples) in_blocks += s.leg >= 0 ? 1 : 0, near += s.k > 0 ? 1 : 0;
-    throw InputError(log::cat("--data: no ", what, " samples with a neighbour: ", all.sources.size(), " flight(s) gave ", all.samples.size(),
-                              " samples, ", in_blocks, " of them in cross-validation blocks, ", near,
+    throw InputError(log::cat("--data: no ", what, " samples with a neighbour: ", all.sources.size(),
+                              " flight(s) gave ", all.samples.size(), " samples, ", in_blocks,
+                              " of them in cross-validation blocks, ", near,
                               " with a neighbour; the split holds out blocks with block % ", kSplitPeriod,
-                              " == 0, so a flight needs a neighbour within 3 m of the sufferer and at least ", kSplitPeriod,
-                              " blocks (legs, encounters or stretches of time)"));
+                              " == 0, so a flight needs a neighbour within 3 m of the sufferer and at least ",
+                              kSplitPeriod, " blocks (legs, encounters or stretches of time)"));
 }
 
 }  // namespace dw::predictor

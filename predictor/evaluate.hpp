@@ -16,9 +16,9 @@
 namespace dw::predictor {
 
 struct ArenaOptions {
-    double altitude_m = 1.3;     // neighbours' centroid above the sufferer
-    double band_m = 0.15;        // ± around it
-    double half_width_m = 1.0;   // the arena: |N|, |E| <= this
+    double altitude_m = 1.3;    // neighbours' centroid above the sufferer
+    double band_m = 0.15;       // ± around it
+    double half_width_m = 1.0;  // the arena: |N|, |E| <= this
     double cell_m = 0.1;
 };
 
@@ -45,7 +45,7 @@ struct ComparisonRow {
     std::string formation;
     std::string model;
     std::size_t samples = 0;
-    AxisValues arena{};   // Table 1 metric: mean over the occupied cells [N, N·m]
+    AxisValues arena{};           // Table 1 metric: mean over the occupied cells [N, N·m]
     AxisValues arena_integral{};  // the same |Δ| integrated over the occupied cells [N·m², N·m³]
     AxisValues rmse{};
     double peak_error = NAN;  // f_d, mean over blocks

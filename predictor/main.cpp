@@ -26,7 +26,8 @@ namespace {
 
 using namespace dw::predictor;
 
-constexpr const char* kThreadsHelp = "libtorch threads per training (default 1: more spin against each other and any other busy process)";
+constexpr const char* kThreadsHelp =
+    "libtorch threads per training (default 1: more spin against each other and any other busy process)";
 
 dw::physics::PhysicsConfig physics_from(const std::string& path) {
     return path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
@@ -64,13 +65,18 @@ struct StudyCommand {
     bool jet_merging = false, no_generalisation = false, no_maps = false;
 
     void add(CLI::App& app) {
-        cmd = app.add_subcommand("study", "simulate flights, train every model, compare on held-out legs, draw maps (one command for the table)");
+        cmd = app.add_subcommand(
+            "study",
+            "simulate flights, train every model, compare on held-out legs, draw maps (one command for the table)");
         cmd->add_option("--out", so.out_dir, "output folder (flights, models, table.md, table.csv, maps)")->required();
-        cmd->add_option("--physics", physics_path, "physics configuration (default: config/physics.example.yaml's defaults)");
+        cmd->add_option("--physics", physics_path,
+                        "physics configuration (default: config/physics.example.yaml's defaults)");
         cmd->add_flag("--jet-merging", jet_merging, "switch the jet_merging effect on (the aggregate is not a sum)");
-        cmd->add_option("--legs", so.legs, "legs per flight")->check(dw::cli::in(dw::Range{5, dw::physics::kLegsRange.hi}));
+        cmd->add_option("--legs", so.legs, "legs per flight")
+            ->check(dw::cli::in(dw::Range{5, dw::physics::kLegsRange.hi}));
         cmd->add_option("--seed", so.seed, "seed of the flights and the training")->check(dw::cli::in(dw::kSeedRange));
-        cmd->add_option("--epochs", so.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+        cmd->add_option("--epochs", so.max_epochs, "at most this many epochs per model")
+            ->check(dw::cli::in(kEpochsRange));
         cmd->add_option("--threads", so.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
         cmd->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]")
             ->check(dw::cli::in(dw::physics::kAltitudeRange));
@@ -97,17 +103,23 @@ struct RegimesCommand {
     RegimeOptions o;
 
     void add(CLI::App& app) {
-        cmd = app.add_subcommand("regimes", "the regime map of a study's folder: each formation x altitude band chaotic, linear or "
-                                            "non-linear on held-out legs (regimes.md, .csv, .png)");
+        cmd =
+            app.add_subcommand("regimes",
+                               "the regime map of a study's folder: each formation x altitude band chaotic, linear or "
+                               "non-linear on held-out legs (regimes.md, .csv, .png)");
         cmd->add_option("--study", dir, "a dw-predictor study --out folder (its flights and models)")->required();
-        cmd->add_option("--min-z", o.min_z, "paired z Deep Sets must reach over the sum to call a band non-linear")->check(dw::cli::in(kMinZRange));
-        cmd->add_option("--min-gain", o.min_gain, "fraction of the sum's squared error Deep Sets must remove")->check(dw::cli::in(kFractionRange));
-        cmd->add_option("--min-explained", o.min_explained, "below this fraction of f_d's mean square explained, a band is chaotic")
+        cmd->add_option("--min-z", o.min_z, "paired z Deep Sets must reach over the sum to call a band non-linear")
+            ->check(dw::cli::in(kMinZRange));
+        cmd->add_option("--min-gain", o.min_gain, "fraction of the sum's squared error Deep Sets must remove")
+            ->check(dw::cli::in(kFractionRange));
+        cmd->add_option("--min-explained", o.min_explained,
+                        "below this fraction of f_d's mean square explained, a band is chaotic")
             ->check(dw::cli::in(kFractionRange));
     }
     int run() {
         const auto r = regimes_of_study(dir, o, dw::Shutdown::instance().token());
-        std::cout << dw::read_file(r.markdown_path, "regimes") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.png_path << "\n";
+        std::cout << dw::read_file(r.markdown_path, "regimes") << "wrote " << r.markdown_path << ", " << r.csv_path
+                  << " and " << r.png_path << "\n";
         return 0;
     }
 };
@@ -127,8 +139,11 @@ struct TrainCommand {
         cmd->add_option("--threads", to.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
         cmd->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
         cmd->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
-        cmd->add_option("--patience", to.patience, "epochs without a better validation loss before stopping")->check(dw::cli::in(kPatienceRange));
-        cmd->add_option("--baseline", baseline_path, "deep_sets only: a saved sum model (learnt_linear) to learn the residual on, as the study does");
+        cmd->add_option("--patience", to.patience, "epochs without a better validation loss before stopping")
+            ->check(dw::cli::in(kPatienceRange));
+        cmd->add_option(
+            "--baseline", baseline_path,
+            "deep_sets only: a saved sum model (learnt_linear) to learn the residual on, as the study does");
     }
     int run() {
         dw::require_writable_path(model_out, "--out");
@@ -147,8 +162,8 @@ struct TrainCommand {
         const auto r = train_model(s.train, s.validation, to, baseline ? &*baseline : nullptr);
         std::fprintf(stderr, "\n");
         r.model.save(model_out);
-        std::cout << to.kind << ": " << r.epochs << " epochs (best " << r.best_epoch << ", validation " << r.best_validation_loss << "), "
-                  << r.seconds << " s; wrote " << model_out << "\n";
+        std::cout << to.kind << ": " << r.epochs << " epochs (best " << r.best_epoch << ", validation "
+                  << r.best_validation_loss << "), " << r.seconds << " s; wrote " << model_out << "\n";
         return 0;
     }
 };
@@ -160,11 +175,14 @@ struct CompareCommand {
     ArenaOptions arena;
 
     void add(CLI::App& app) {
-        cmd = app.add_subcommand("compare", "compare models on the held-out legs (leg % 5 == 0) of flights: Table 1 metric and RMSE");
-        cmd->add_option("--models", models, "model files (.json), or a physics configuration (.yaml) for the simulator")->required();
+        cmd = app.add_subcommand(
+            "compare", "compare models on the held-out legs (leg % 5 == 0) of flights: Table 1 metric and RMSE");
+        cmd->add_option("--models", models, "model files (.json), or a physics configuration (.yaml) for the simulator")
+            ->required();
         cmd->add_option("--data", data, "flight folders or .mcap recordings")->required();
         cmd->add_option("--out", out_dir, "folder for table.md and table.csv")->required();
-        cmd->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
+        cmd->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]")
+            ->check(dw::cli::in(dw::physics::kAltitudeRange));
     }
     int run() {
         dw::require_output_dir(out_dir, "--out");
@@ -186,12 +204,16 @@ struct RealCommand {
     std::string physics_path;
 
     void add(CLI::App& app) {
-        cmd = app.add_subcommand("real", "recorded flights without legs (e.g. dw-import's): train every model, compare with the physics "
-                                         "on held-out encounters, draw f_d by relative position");
+        cmd = app.add_subcommand(
+            "real",
+            "recorded flights without legs (e.g. dw-import's): train every model, compare with the physics "
+            "on held-out encounters, draw f_d by relative position");
         cmd->add_option("--data", ro.data, "flight folders or .mcap recordings")->required();
-        cmd->add_option("--physics", physics_path, "physics configuration (e.g. config/physics.crazyflie.yaml); vehicles come from each flight");
+        cmd->add_option("--physics", physics_path,
+                        "physics configuration (e.g. config/physics.crazyflie.yaml); vehicles come from each flight");
         cmd->add_option("--out", ro.out_dir, "output folder (models, table.md, table.csv, map_f_d.png)")->required();
-        cmd->add_option("--epochs", ro.max_epochs, "at most this many epochs per model")->check(dw::cli::in(kEpochsRange));
+        cmd->add_option("--epochs", ro.max_epochs, "at most this many epochs per model")
+            ->check(dw::cli::in(kEpochsRange));
         cmd->add_option("--threads", ro.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
         cmd->add_option("--seed", ro.seed, "seed of the training")->check(dw::cli::in(dw::kSeedRange));
     }
@@ -201,7 +223,8 @@ struct RealCommand {
         ro.progress = say;
         ro.stop = dw::Shutdown::instance().token();
         const auto r = run_real(ro);
-        std::cout << dw::read_file(r.markdown_path, "table") << "wrote " << r.markdown_path << ", " << r.csv_path << " and " << r.map_path << "\n";
+        std::cout << dw::read_file(r.markdown_path, "table") << "wrote " << r.markdown_path << ", " << r.csv_path
+                  << " and " << r.map_path << "\n";
         return 0;
     }
 };
@@ -213,10 +236,13 @@ struct MapCommand {
     std::string axis = "f_d", png = "map.png", line;
 
     void add(CLI::App& app) {
-        cmd = app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
+        cmd =
+            app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
         cmd->add_option("--models", models, "model files (.json) or physics configurations (.yaml)")->required();
-        cmd->add_option("--formation", mr.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid");
-        cmd->add_option("--altitude", mr.altitude_m, "the formation's height above the sufferer [m]")->check(dw::cli::in(dw::physics::kAltitudeRange));
+        cmd->add_option("--formation", mr.formation,
+                        "single, side_by_side, leader_follower, leader_follower3, stack or hybrid");
+        cmd->add_option("--altitude", mr.altitude_m, "the formation's height above the sufferer [m]")
+            ->check(dw::cli::in(dw::physics::kAltitudeRange));
         cmd->add_option("--axis", axis, dw::flight::axis_list());
         cmd->add_option("--data", data, "recorded flight of this formation: drawn as 'observed'");
         cmd->add_option("--out", png, "the map (PNG)");
@@ -244,7 +270,9 @@ struct OnlineCommand {
 
     void add(CLI::App& app) {
         cmd = app.add_subcommand("run", "online: mocap/frame in, predictor/wrench out at the mocap rate");
-        cmd->add_option("--model", no.model_path, "model file (.json) or physics configuration (.yaml); swapped in when it changes")->required();
+        cmd->add_option("--model", no.model_path,
+                        "model file (.json) or physics configuration (.yaml); swapped in when it changes")
+            ->required();
         cmd->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
     }
     int run(const dw::dds::ProcessCli& cli) {

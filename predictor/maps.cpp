@@ -77,8 +77,9 @@ MapLayout draw_force_map(const std::vector<const ForceModel*>& models, const Map
     std::vector<Field> fields;
     if (r.observed) fields.push_back(observed_field(*r.observed, r));
     for (const auto* m : models) fields.push_back(model_field(*m, r));
-    const std::string title = log::cat(kAxisLabel[r.axis], " on the sufferer: ", r.formation, " at ", num(r.altitude_m, 1),
-                                       " m above it, flying +E at ", num(r.speed_mps, 1), " m/s (position of the formation's centre)");
+    const std::string title =
+        log::cat(kAxisLabel[r.axis], " on the sufferer: ", r.formation, " at ", num(r.altitude_m, 1),
+                 " m above it, flying +E at ", num(r.speed_mps, 1), " m/s (position of the formation's centre)");
     return render_fields(fields, title, kAxisLabel[r.axis], outlines_for(r.formation), png);
 }
 
@@ -104,7 +105,8 @@ void draw_force_line(const std::vector<const ForceModel*>& models, const MapRequ
         for (const auto& s : r.observed->samples) {
             if (s.k == 0 || s.leg < 0) continue;
             const auto c = s.reference();
-            if (std::abs(c[2] - r.altitude_m) > r.band_m || std::abs(c[0]) > 0.1 || std::abs(c[1]) > r.half_width_m) continue;
+            if (std::abs(c[2] - r.altitude_m) > r.band_m || std::abs(c[0]) > 0.1 || std::abs(c[1]) > r.half_width_m)
+                continue;
             const auto b = static_cast<std::size_t>(std::lround((c[1] + r.half_width_m) / (2 * r.half_width_m) * 48));
             sum[b] += s.y[static_cast<std::size_t>(r.axis)];
             cnt[b] += 1;
@@ -120,31 +122,40 @@ void draw_force_line(const std::vector<const ForceModel*>& models, const MapRequ
     lo -= pad;
     hi += pad;
     cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
-    auto X = [&](double e) { return left + static_cast<int>(std::lround((e + r.half_width_m) / (2 * r.half_width_m) * pw)); };
+    auto X = [&](double e) {
+        return left + static_cast<int>(std::lround((e + r.half_width_m) / (2 * r.half_width_m) * pw));
+    };
     auto Y = [&](double v) { return top + static_cast<int>(std::lround((hi - v) / (hi - lo) * ph)); };
     cv::rectangle(img, {left, top}, {left + pw, top + ph}, cv::Scalar(40, 40, 40));
     const double step = nice_step(hi - lo);
     for (double v = std::ceil(lo / step) * step; v <= hi; v += step) {
         cv::line(img, {left, Y(v)}, {left + pw, Y(v)}, cv::Scalar(225, 225, 225));
-        text(img, num(std::abs(v) < 1e-12 ? 0.0 : v, step >= 1 ? 0 : (step >= 0.1 ? 1 : 2)), {left - 6, Y(v) + 4}, 0.4, 2);
+        text(img, num(std::abs(v) < 1e-12 ? 0.0 : v, step >= 1 ? 0 : (step >= 0.1 ? 1 : 2)), {left - 6, Y(v) + 4}, 0.4,
+             2);
     }
     for (double e = -1.0; e <= 1.0 + 1e-9; e += 0.5) {
         cv::line(img, {X(e), top + ph}, {X(e), top + ph + 4}, cv::Scalar(40, 40, 40));
         text(img, num(e, 1), {X(e), top + ph + 18}, 0.4, 1);
     }
     text(img, "E of the formation's centre [m] (N = 0, through the stand)", {left + pw / 2, H - 18}, 0.45, 1);
-    text(img, log::cat(kAxisLabel[r.axis], " along E: ", r.formation, " at ", num(r.altitude_m, 1), " m, +E at ",
-                       num(r.speed_mps, 1), " m/s"), {W / 2, 28}, 0.55, 1);
+    text(img,
+         log::cat(kAxisLabel[r.axis], " along E: ", r.formation, " at ", num(r.altitude_m, 1), " m, +E at ",
+                  num(r.speed_mps, 1), " m/s"),
+         {W / 2, 28}, 0.55, 1);
     const cv::Scalar palette[] = {{0, 0, 0}, {200, 120, 0}, {0, 140, 0}, {40, 40, 220}, {160, 0, 160}, {0, 160, 200}};
     for (std::size_t k = 0; k < curves.size(); ++k) {
         std::vector<cv::Point> pts;
-        for (int i = 0; i < n; ++i) pts.push_back({X(-r.half_width_m + 2 * r.half_width_m * i / (n - 1)), Y(curves[k][static_cast<std::size_t>(i)])});
+        for (int i = 0; i < n; ++i)
+            pts.push_back(
+                {X(-r.half_width_m + 2 * r.half_width_m * i / (n - 1)), Y(curves[k][static_cast<std::size_t>(i)])});
         cv::polylines(img, pts, false, palette[k % 6], 2, cv::LINE_AA);
-        cv::line(img, {left + pw + 15, top + 20 + 22 * static_cast<int>(k)}, {left + pw + 40, top + 20 + 22 * static_cast<int>(k)}, palette[k % 6], 2);
+        cv::line(img, {left + pw + 15, top + 20 + 22 * static_cast<int>(k)},
+                 {left + pw + 40, top + 20 + 22 * static_cast<int>(k)}, palette[k % 6], 2);
         text(img, models[k]->name(), {left + pw + 46, top + 25 + 22 * static_cast<int>(k)}, 0.45);
     }
     if (!points.empty()) {
-        for (const auto& p : points) cv::circle(img, {X(p[0]), Y(p[1])}, 3, cv::Scalar(80, 80, 80), cv::FILLED, cv::LINE_AA);
+        for (const auto& p : points)
+            cv::circle(img, {X(p[0]), Y(p[1])}, 3, cv::Scalar(80, 80, 80), cv::FILLED, cv::LINE_AA);
         const int ky = top + 25 + 22 * static_cast<int>(curves.size());
         cv::circle(img, {left + pw + 27, ky - 5}, 3, cv::Scalar(80, 80, 80), cv::FILLED);
         text(img, "observed (legs both ways)", {left + pw + 46, ky}, 0.45);

@@ -27,7 +27,7 @@ struct MapRequest {
     int axis = 2;                                // f_d
     double half_width_m = 1.2;
     int cells = 61;
-    std::optional<Dataset> observed;             // recorded samples of this formation (binned, legs both ways)
+    std::optional<Dataset> observed;  // recorded samples of this formation (binned, legs both ways)
     double band_m = 0.15;
 };
 

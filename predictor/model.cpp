@@ -75,7 +75,8 @@ struct Reader {
         if (!j.is_object() || !j.contains(key)) fail(where + key, "missing");
         return j.at(key);
     }
-    template <std::size_t N> std::array<float, N> floats(const json& j, const std::string& field) const {
+    template <std::size_t N>
+    std::array<float, N> floats(const json& j, const std::string& field) const {
         if (!j.is_array() || j.size() != N) fail(field, log::cat("expected ", N, " numbers"));
         std::array<float, N> a{};
         for (std::size_t i = 0; i < N; ++i) {
@@ -100,7 +101,8 @@ struct Reader {
             l.w.resize(static_cast<Eigen::Index>(w.size()), static_cast<Eigen::Index>(w[0].size()));
             l.b.resize(static_cast<Eigen::Index>(w.size()));
             for (std::size_t r = 0; r < w.size(); ++r) {
-                if (!w[r].is_array() || w[r].size() != w[0].size()) fail(log::cat(f, "weight[", r, "]"), "rows differ in length");
+                if (!w[r].is_array() || w[r].size() != w[0].size())
+                    fail(log::cat(f, "weight[", r, "]"), "rows differ in length");
                 for (std::size_t c = 0; c < w[r].size(); ++c) {
                     if (!w[r][c].is_number()) fail(log::cat(f, "weight[", r, "][", c, "]"), "not a number");
                     l.w(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = w[r][c].get<float>();
@@ -109,7 +111,8 @@ struct Reader {
                 l.b[static_cast<Eigen::Index>(r)] = b[r].get<float>();
             }
             if (!m.layers.empty() && m.layers.back().w.rows() != l.w.cols())
-                fail(f + "weight", log::cat("takes ", l.w.cols(), " inputs but the layer before gives ", m.layers.back().w.rows()));
+                fail(f + "weight",
+                     log::cat("takes ", l.w.cols(), " inputs but the layer before gives ", m.layers.back().w.rows()));
             m.layers.push_back(std::move(l));
         }
         return m;
@@ -142,7 +145,8 @@ LearntModel LearntModel::load(const std::string& path) {
     }
     Reader r{path};
     if (r.at(j, "format", "") != kModelFormat)
-        r.fail("format", log::cat("expected ", kModelFormat, " (models saved before the jet features, downwash-model/1, must be trained again)"));
+        r.fail("format", log::cat("expected ", kModelFormat,
+                                  " (models saved before the jet features, downwash-model/1, must be trained again)"));
     LearntModel m;
     const auto& kind = r.at(j, "kind", "");
     if (!kind.is_string()) r.fail("kind", "not a string");
@@ -158,7 +162,8 @@ LearntModel LearntModel::load(const std::string& path) {
         if (!(m.input_std[i] > 0)) r.fail(log::cat("input.std[", i, "]"), "must be > 0");
     m.output_scale = r.floats<6>(r.at(r.at(j, "output", ""), "scale", "output."), "output.scale");
     m.phi = r.mlp(r.at(j, "phi", ""), "phi");
-    if (m.phi.inputs() != kFeatureSize) r.fail("phi[0].weight", log::cat("takes ", m.phi.inputs(), " inputs, expected ", kFeatureSize));
+    if (m.phi.inputs() != kFeatureSize)
+        r.fail("phi[0].weight", log::cat("takes ", m.phi.inputs(), " inputs, expected ", kFeatureSize));
     if (m.structure == Structure::deep_sets) {
         m.rho = r.mlp(r.at(j, "rho", ""), "rho");
         if (m.rho.inputs() != m.phi.outputs()) r.fail("rho[0].weight", "does not take phi's output");
@@ -177,7 +182,10 @@ LearntModel LearntModel::load(const std::string& path) {
 }
 
 PhysicsModel::PhysicsModel(const physics::PhysicsConfig& config, std::string name)
-    : name_(std::move(name)), config_(config), model_(std::make_unique<physics::WrenchModel>(config)), stand_height_(config.stand.height_m) {}
+    : name_(std::move(name)),
+      config_(config),
+      model_(std::make_unique<physics::WrenchModel>(config)),
+      stand_height_(config.stand.height_m) {}
 PhysicsModel::~PhysicsModel() = default;
 
 Wrench6 PhysicsModel::predict(std::span<const RelState> neighbours) const {
@@ -193,7 +201,8 @@ Wrench6 PhysicsModel::predict(std::span<const RelState> neighbours) const {
 const physics::WrenchModel& PhysicsModel::model_for(const physics::VehicleParams& v) const {
     const std::lock_guard lock(mutex_);
     auto same = [&](const physics::VehicleParams& a) {
-        return a.mass_kg == v.mass_kg && a.rotors == v.rotors && a.prop_radius_m == v.prop_radius_m && a.motor_distance_m == v.motor_distance_m;
+        return a.mass_kg == v.mass_kg && a.rotors == v.rotors && a.prop_radius_m == v.prop_radius_m &&
+               a.motor_distance_m == v.motor_distance_m;
     };
     for (const auto& [params, model] : by_sufferer_)
         if (same(params)) return *model;
@@ -210,10 +219,12 @@ Wrench6 PhysicsModel::predict(const Sample& s, const Source& source) const {
     for (std::size_t j = 0; j < static_cast<std::size_t>(s.k); ++j) {
         const auto& x = s.x[j];
         ps.push_back(model.producer(sufferer + physics::Vec3(x[0], x[1], x[2]), physics::Vec3(x[3], x[4], x[5])));
-        if (s.who[j] < source.neighbours.size()) ps.back().jet = physics::Jet::make(source.neighbours[s.who[j]], config_);
+        if (s.who[j] < source.neighbours.size())
+            ps.back().jet = physics::Jet::make(source.neighbours[s.who[j]], config_);
     }
     const physics::Wrench w = model.evaluate(sufferer, ps);
-    if (!w.allFinite()) throw InputError(log::cat(source.name, ": the physics gave a non-finite wrench at t = ", s.t, " s"));
+    if (!w.allFinite())
+        throw InputError(log::cat(source.name, ": the physics gave a non-finite wrench at t = ", s.t, " s"));
     return {w[0], w[1], w[2], w[3], w[4], w[5]};
 }
 

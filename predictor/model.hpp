@@ -24,7 +24,9 @@
 #include "physics/config.hpp"
 #include "predictor/dataset.hpp"
 
-namespace dw::physics { class WrenchModel; }
+namespace dw::physics {
+class WrenchModel;
+}
 
 namespace dw::predictor {
 
@@ -69,7 +71,7 @@ inline constexpr const char* kModelFormat = "downwash-model/2";
 
 class LearntModel final : public ForceModel {
 public:
-    std::string kind;                  // naive_linear, learnt_linear, deep_sets (the model's name)
+    std::string kind;  // naive_linear, learnt_linear, deep_sets (the model's name)
     Structure structure = Structure::sum;
     std::array<float, kFeatureSize> input_mean{}, input_std{};
     std::array<float, 6> output_scale{};

@@ -11,7 +11,8 @@
 namespace dw::predictor {
 
 std::array<double, 3> FrameFeatures::velocity(History& h, double t, const std::array<double, 3>& p) {
-    while (!h.p.empty() && (h.p.back().first >= t || t - h.p.back().first > 0.1)) h.p.clear();  // gap or reorder: restart
+    while (!h.p.empty() && (h.p.back().first >= t || t - h.p.back().first > 0.1))
+        h.p.clear();  // gap or reorder: restart
     h.p.emplace_back(t, p);
     while (h.p.size() > 2 && t - h.p[1].first >= 0.02) h.p.pop_front();  // keep ~20 ms of history
     if (h.p.size() < 2) return {0, 0, 0};
@@ -49,11 +50,15 @@ std::optional<std::vector<RelState>> FrameFeatures::update(const msg::MocapFrame
 }
 
 PredictorNode::PredictorNode(dds::Participant& p, const NodeOptions& o, const Clock& clock)
-    : options_(o), clock_(clock), model_(load_model(o.model_path)), features_(o.sufferer),
+    : options_(o),
+      clock_(clock),
+      model_(load_model(o.model_path)),
+      features_(o.sufferer),
       writer_(p, dds::topics::wrench_prediction) {
     // Predictions are written from the reader's callback: wait for the required readers first.
     writer_.await_readers();
-    reader_.emplace(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) { on_frame(f); });
+    reader_.emplace(p, dds::topics::mocap_frame,
+                    [this](const msg::MocapFrame& f, const dds::SampleMeta&) { on_frame(f); });
     log::info("predicting with ", model_->name(), " (", o.model_path, ") for '", o.sufferer, "'");
     watcher_ = std::thread([this] { watch(); });
 }

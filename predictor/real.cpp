@@ -39,8 +39,10 @@ void draw_maps(const std::vector<const ForceModel*>& models, const Dataset& test
         const auto [h, a] = nearest(s);
         off = std::max(off, h), lo = std::min(lo, a), hi = std::max(hi, a);
     }
-    off = std::ceil(off / kMapCell_m) * kMapCell_m, lo = std::floor(lo / kMapCell_m) * kMapCell_m, hi = std::ceil(hi / kMapCell_m) * kMapCell_m;
-    const int nx = static_cast<int>(std::lround(off / kMapCell_m)), ny = static_cast<int>(std::lround((hi - lo) / kMapCell_m));
+    off = std::ceil(off / kMapCell_m) * kMapCell_m, lo = std::floor(lo / kMapCell_m) * kMapCell_m,
+    hi = std::ceil(hi / kMapCell_m) * kMapCell_m;
+    const int nx = static_cast<int>(std::lround(off / kMapCell_m)),
+              ny = static_cast<int>(std::lround((hi - lo) / kMapCell_m));
     auto field = [&](const std::string& title, const ForceModel* m) {
         std::vector<std::array<double, 3>> xs;
         for (const auto& s : test.samples) {
@@ -52,14 +54,15 @@ void draw_maps(const std::vector<const ForceModel*>& models, const Dataset& test
     };
     std::vector<plot::Heat> heats{field("recorded", nullptr)};
     for (const auto* m : models) heats.push_back(field(m->name(), m));
-    plot::render_heats(heats, "f_d [N] on held-out blocks by where the nearest neighbour is (mean per 5 cm cell)", "horizontal offset [m]",
-                       "height above the sufferer [m]", "f_d [N]", png);
+    plot::render_heats(heats, "f_d [N] on held-out blocks by where the nearest neighbour is (mean per 5 cm cell)",
+                       "horizontal offset [m]", "height above the sufferer [m]", "f_d [N]", png);
 }
 
 std::string describe_split(const Dataset& all) {
     std::size_t by[3] = {0, 0, 0};
     for (const auto& s : all.sources) ++by[static_cast<int>(s.blocks)];
-    return log::cat("blocks by block % ", kSplitPeriod, " (== 0 held out, == 1 validation, else training); flights split by legs: ", by[0],
+    return log::cat("blocks by block % ", kSplitPeriod,
+                    " (== 0 held out, == 1 validation, else training); flights split by legs: ", by[0],
                     ", by encounters: ", by[1], ", by time: ", by[2]);
 }
 
@@ -82,12 +85,14 @@ RealResult run_real(const RealOptions& o) {
     require_samples(all, split.train, "training");
     require_samples(all, split.validation, "validation");
     RealResult r;
-    r.train = split.train.samples.size(), r.validation = split.validation.samples.size(), r.test = split.test.samples.size();
-    say(log::cat(all.samples.size(), " samples from ", all.sources.size(), " flight(s): ", r.train, " training, ", r.validation,
-                 " validation, ", r.test, " held out"));
+    r.train = split.train.samples.size(), r.validation = split.validation.samples.size(),
+    r.test = split.test.samples.size();
+    say(log::cat(all.samples.size(), " samples from ", all.sources.size(), " flight(s): ", r.train, " training, ",
+                 r.validation, " validation, ", r.test, " held out"));
     fs::create_directories(out / "models");
     const TrainPlan plan{o.seed, o.max_epochs, o.threads, describe_split(all), o.progress, o.stop};
-    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const LearntModel* baseline = nullptr) {
+    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va,
+                     const LearntModel* baseline = nullptr) {
         return train_and_save(kind, tr, va, plan, (out / "models" / (kind + ".json")).string(), baseline);
     };
     const PhysicsModel physics(o.physics);
@@ -112,11 +117,13 @@ RealResult run_real(const RealOptions& o) {
     r.map_path = (out / "map_f_d.png").string();
     draw_maps(models, split.test, r.map_path);
     std::string md = "# Force models on recorded flights\n\n";
-    for (const auto& s : all.sources) md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
-                                                     flight::to_string(s.blocks), ")\n");
-    md += log::cat("\nSplit: ", describe_split(all), ". Training ", r.train, ", validation ", r.validation, ", held out ", r.test,
-                   " samples. The naive linear model is trained on two-vehicle flights only",
-                   r.naive ? "" : " (none here: not trained)", "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters.\n\n");
+    for (const auto& s : all.sources)
+        md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
+                       flight::to_string(s.blocks), ")\n");
+    md += log::cat("\nSplit: ", describe_split(all), ". Training ", r.train, ", validation ", r.validation,
+                   ", held out ", r.test, " samples. The naive linear model is trained on two-vehicle flights only",
+                   r.naive ? "" : " (none here: not trained)",
+                   "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters.\n\n");
     md += to_markdown(r.table, {});
     md += "\n![f_d by relative position](map_f_d.png)\n";
     r.markdown_path = (out / "table.md").string();

@@ -18,8 +18,8 @@
 namespace dw::predictor {
 
 struct RealOptions {
-    std::vector<std::string> data;       // flight folders or .mcap recordings
-    physics::PhysicsConfig physics;      // the physics model, and parameters for bodies a flight does not describe
+    std::vector<std::string> data;   // flight folders or .mcap recordings
+    physics::PhysicsConfig physics;  // the physics model, and parameters for bodies a flight does not describe
     std::string out_dir;
     std::uint64_t seed = 1;
     int max_epochs = 150;

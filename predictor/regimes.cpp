@@ -30,7 +30,8 @@ struct PieceErrors {
 };
 using PieceKey = std::tuple<int, int, long>;  // source, leg, piece of the leg
 
-RegimeRow judge(const std::string& formation, double altitude, const std::map<PieceKey, PieceErrors>& pieces, const RegimeOptions& o) {
+RegimeRow judge(const std::string& formation, double altitude, const std::map<PieceKey, PieceErrors>& pieces,
+                const RegimeOptions& o) {
     RegimeRow r;
     r.formation = formation;
     r.altitude_m = altitude;
@@ -69,7 +70,8 @@ const char* regime_name(Regime r) {
 }
 
 std::vector<RegimeRow> classify_regimes(const ForceModel& sum, const ForceModel& deep, const Dataset& test,
-                                        const std::vector<double>& altitudes_m, const RegimeOptions& o, std::stop_token stop) {
+                                        const std::vector<double>& altitudes_m, const RegimeOptions& o,
+                                        std::stop_token stop) {
     std::vector<RegimeRow> rows;
     for (const double altitude : altitudes_m) {
         throw_if_stopped(stop, "the regimes");
@@ -94,15 +96,18 @@ std::vector<RegimeRow> classify_regimes(const ForceModel& sum, const ForceModel&
 
 std::string regimes_markdown(const std::vector<RegimeRow>& rows, const RegimeOptions& o) {
     std::ostringstream out;
-    out << "Held-out legs, f_d, in pieces of " << o.piece_s << " s. **chaotic**: neither model explains " << o.min_explained * 100
-        << " % of the measured mean square; **non-linear**: Deep Sets better than the sum (learnt linear) with paired z ≥ " << o.min_z
-        << " and ≥ " << o.min_gain * 100 << " % less squared error; **linear**: otherwise.\n\n"
-        << "| formation | altitude | regime | held-out legs | f_d RMS [N] | explained | Deep Sets' gain over the sum | z |\n"
+    out << "Held-out legs, f_d, in pieces of " << o.piece_s << " s. **chaotic**: neither model explains "
+        << o.min_explained * 100
+        << " % of the measured mean square; **non-linear**: Deep Sets better than the sum (learnt linear) with paired "
+           "z ≥ "
+        << o.min_z << " and ≥ " << o.min_gain * 100 << " % less squared error; **linear**: otherwise.\n\n"
+        << "| formation | altitude | regime | held-out legs | f_d RMS [N] | explained | Deep Sets' gain over the sum | "
+           "z |\n"
         << "|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : rows)
-        out << "| " << r.formation << " | " << r.altitude_m << " m | " << regime_name(r.regime) << " | " << r.legs << " | "
-            << plot::num(r.signal_rms, 3) << " | " << plot::num(r.explained * 100, 0) << " % | " << plot::num(r.gain * 100, 0) << " % | "
-            << plot::num(r.z, 1) << " |\n";
+        out << "| " << r.formation << " | " << r.altitude_m << " m | " << regime_name(r.regime) << " | " << r.legs
+            << " | " << plot::num(r.signal_rms, 3) << " | " << plot::num(r.explained * 100, 0) << " % | "
+            << plot::num(r.gain * 100, 0) << " % | " << plot::num(r.z, 1) << " |\n";
     return out.str();
 }
 
@@ -110,8 +115,9 @@ std::string regimes_csv(const std::vector<RegimeRow>& rows) {
     std::ostringstream out;
     out << "formation,altitude_m,regime,legs,f_d_rms,explained,gain,z\n";
     for (const auto& r : rows)
-        out << r.formation << "," << r.altitude_m << "," << regime_name(r.regime) << "," << r.legs << "," << plot::num(r.signal_rms, 5)
-            << "," << plot::num(r.explained, 4) << "," << plot::num(r.gain, 4) << "," << plot::num(r.z, 3) << "\n";
+        out << r.formation << "," << r.altitude_m << "," << regime_name(r.regime) << "," << r.legs << ","
+            << plot::num(r.signal_rms, 5) << "," << plot::num(r.explained, 4) << "," << plot::num(r.gain, 4) << ","
+            << plot::num(r.z, 3) << "\n";
     return out.str();
 }
 
@@ -119,8 +125,10 @@ void draw_regime_map(const std::vector<RegimeRow>& rows, const std::string& png)
     std::vector<std::string> formations;
     std::vector<double> altitudes;
     for (const auto& r : rows) {
-        if (std::find(formations.begin(), formations.end(), r.formation) == formations.end()) formations.push_back(r.formation);
-        if (std::find(altitudes.begin(), altitudes.end(), r.altitude_m) == altitudes.end()) altitudes.push_back(r.altitude_m);
+        if (std::find(formations.begin(), formations.end(), r.formation) == formations.end())
+            formations.push_back(r.formation);
+        if (std::find(altitudes.begin(), altitudes.end(), r.altitude_m) == altitudes.end())
+            altitudes.push_back(r.altitude_m);
     }
     std::sort(altitudes.begin(), altitudes.end());
     const int left = 200, top = 70, cw = 200, ch = 60;
@@ -136,15 +144,19 @@ void draw_regime_map(const std::vector<RegimeRow>& rows, const std::string& png)
         return cv::Scalar(255, 255, 255);
     };
     for (int c = 0; c < cols; ++c)
-        plot::text(img, log::cat(altitudes[static_cast<std::size_t>(c)], " m above"), {left + c * cw + cw / 2, top - 10}, 0.5, 1);
-    for (int i = 0; i < rows_n; ++i) plot::text(img, formations[static_cast<std::size_t>(i)], {10, top + i * ch + ch / 2 + 5}, 0.5);
+        plot::text(img, log::cat(altitudes[static_cast<std::size_t>(c)], " m above"),
+                   {left + c * cw + cw / 2, top - 10}, 0.5, 1);
+    for (int i = 0; i < rows_n; ++i)
+        plot::text(img, formations[static_cast<std::size_t>(i)], {10, top + i * ch + ch / 2 + 5}, 0.5);
     for (const auto& r : rows) {
-        const int i = static_cast<int>(std::find(formations.begin(), formations.end(), r.formation) - formations.begin());
+        const int i =
+            static_cast<int>(std::find(formations.begin(), formations.end(), r.formation) - formations.begin());
         const int c = static_cast<int>(std::find(altitudes.begin(), altitudes.end(), r.altitude_m) - altitudes.begin());
         const cv::Rect cell(left + c * cw + 2, top + i * ch + 2, cw - 4, ch - 4);
         cv::rectangle(img, cell, colour(r.regime), cv::FILLED);
         plot::text(img, regime_name(r.regime), {cell.x + cell.width / 2, cell.y + 24}, 0.55, 1);
-        plot::text(img, log::cat("gain ", plot::num(r.gain * 100, 0), " %, z ", plot::num(r.z, 1)), {cell.x + cell.width / 2, cell.y + 46}, 0.42, 1);
+        plot::text(img, log::cat("gain ", plot::num(r.gain * 100, 0), " %, z ", plot::num(r.z, 1)),
+                   {cell.x + cell.width / 2, cell.y + 46}, 0.42, 1);
     }
     int x = left;
     for (const Regime g : {Regime::chaotic, Regime::linear, Regime::non_linear}) {

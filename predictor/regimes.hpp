@@ -30,7 +30,8 @@ struct RegimeOptions {
     double min_explained = 0.25;  // of the mean square of f_d, by the better model (below: chaotic)
     double min_z = 3.0;           // Deep Sets better than the sum over held-out legs
     double min_gain = 0.10;       // and by at least this fraction of the sum's squared error
-    double piece_s = 0.25;        // held-out legs are compared in pieces of this length (the noise decorrelates within ~0.1 s)
+    double piece_s =
+        0.25;  // held-out legs are compared in pieces of this length (the noise decorrelates within ~0.1 s)
 };
 
 struct RegimeRow {
@@ -38,10 +39,10 @@ struct RegimeRow {
     double altitude_m = 0;
     Regime regime = Regime::chaotic;
     std::size_t legs = 0;
-    double signal_rms = 0;   // measured f_d [N]
-    double explained = 0;    // 1 − best squared error / mean square of f_d
-    double gain = 0;         // 1 − Deep Sets' squared error / the sum's
-    double z = 0;            // paired z over pieces of held-out legs (the sum's minus Deep Sets' mean squared error)
+    double signal_rms = 0;  // measured f_d [N]
+    double explained = 0;   // 1 − best squared error / mean square of f_d
+    double gain = 0;        // 1 − Deep Sets' squared error / the sum's
+    double z = 0;           // paired z over pieces of held-out legs (the sum's minus Deep Sets' mean squared error)
 };
 
 // Every formation of `test` (held-out legs) at each altitude; bands with too few pieces of legs are

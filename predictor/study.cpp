@@ -28,8 +28,9 @@ double table_value(const std::vector<ComparisonRow>& rows, const std::string& fo
     return NAN;
 }
 
-std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Dataset& tr, const Dataset& va, const TrainPlan& plan,
-                                            const std::string& path, const LearntModel* baseline) {
+std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Dataset& tr, const Dataset& va,
+                                            const TrainPlan& plan, const std::string& path,
+                                            const LearntModel* baseline) {
     auto say = [&](const std::string& line) {
         if (plan.progress) plan.progress(line);
     };
@@ -43,7 +44,8 @@ std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Datas
     t.progress = [&](int epoch, double tl, double vl) {
         if (epoch % 10 == 0) say(log::cat("  ", kind, " epoch ", epoch, ": training ", tl, ", validation ", vl));
     };
-    say(log::cat("training ", kind, " on ", tr.samples.size(), " samples", baseline ? log::cat(" (on ", baseline->kind, ")") : ""));
+    say(log::cat("training ", kind, " on ", tr.samples.size(), " samples",
+                 baseline ? log::cat(" (on ", baseline->kind, ")") : ""));
     auto r = train_model(tr, va, t, baseline);
     say(log::cat("  ", kind, ": ", r.epochs, " epochs (best ", r.best_epoch, "), ", r.seconds, " s"));
     r.model.save(path);
@@ -58,7 +60,8 @@ using Say = std::function<void(const std::string&)>;
 
 // 1. Fly: one flight folder per formation, read back through the contract. `label` maps each
 // physics formation name to its dataset label.
-Dataset fly_flights(const StudyOptions& o, const fs::path& out, std::map<std::string, std::string>& label, const Say& say) {
+Dataset fly_flights(const StudyOptions& o, const fs::path& out, std::map<std::string, std::string>& label,
+                    const Say& say) {
     Dataset all;
     std::uint64_t seed = o.seed;
     for (const auto& f : o.formations) {
@@ -94,11 +97,13 @@ Dataset without(const Dataset& d, const std::string& f1, const std::string& f2) 
     return x;
 }
 
-using Trainer = std::function<std::unique_ptr<LearntModel>(const std::string& kind, const Dataset& tr, const Dataset& va,
-                                                           const std::string& file, const LearntModel* baseline)>;
+using Trainer =
+    std::function<std::unique_ptr<LearntModel>(const std::string& kind, const Dataset& tr, const Dataset& va,
+                                               const std::string& file, const LearntModel* baseline)>;
 
 // 4. Generalisation: K <= 2 -> K = 3, and a formation left out.
-std::vector<ComparisonRow> generalisation(const Split& split, const ForceModel& naive, const Trainer& train, const ArenaOptions& arena) {
+std::vector<ComparisonRow> generalisation(const Split& split, const ForceModel& naive, const Trainer& train,
+                                          const ArenaOptions& arena) {
     std::vector<ComparisonRow> out;
     auto k2_tr = without(split.train.with_k(0, 2), "leader_follower K=3", "hybrid K=3");
     auto k2_va = without(split.validation.with_k(0, 2), "leader_follower K=3", "hybrid K=3");
@@ -118,15 +123,16 @@ std::vector<ComparisonRow> generalisation(const Split& split, const ForceModel& 
     return out;
 }
 
-ArenaOptions arena_at(const ArenaOptions& arena, double altitude) {  // the study's arena, at one of the flights' altitudes
+ArenaOptions arena_at(const ArenaOptions& arena,
+                      double altitude) {  // the study's arena, at one of the flights' altitudes
     ArenaOptions at = arena;
     at.altitude_m = altitude;
     return at;
 }
 
 // The maps of every multi-vehicle formation; returns their Markdown.
-std::string draw_maps(const StudyOptions& o, const fs::path& out, const std::vector<const ForceModel*>& models, const Dataset& all,
-                      const std::map<std::string, std::string>& label) {
+std::string draw_maps(const StudyOptions& o, const fs::path& out, const std::vector<const ForceModel*>& models,
+                      const Dataset& all, const std::map<std::string, std::string>& label) {
     fs::create_directories(out / "maps");
     std::string md = "\n## Maps\n\n";
     for (const auto& f : o.formations) {
@@ -185,9 +191,12 @@ StudyResult run_study(const StudyOptions& o) {
                  split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
 
     // 2. Train.
-    const TrainPlan plan{o.seed, o.max_epochs, o.threads, "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
-                         o.progress, o.stop};
-    const Trainer train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file, const LearntModel* baseline) {
+    const TrainPlan plan{
+        o.seed,     o.max_epochs,
+        o.threads,  "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
+        o.progress, o.stop};
+    const Trainer train = [&](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file,
+                              const LearntModel* baseline) {
         return train_and_save(kind, tr, va, plan, (out / "models" / file).string(), baseline);
     };
     auto singles = [](const Dataset& d) { return d.from_two_vehicle_flights().with_k(1, 1); };
@@ -202,9 +211,11 @@ StudyResult run_study(const StudyOptions& o) {
     const std::vector<const ForceModel*> models{&physics, naive.get(), linear.get(), deep.get()};
     r.table = compare(models, split.test, o.arena);
     for (const double altitude : physics::GridOptions{}.altitudes_m)
-        r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, o.arena.band_m), arena_at(o.arena, altitude)));
+        r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, o.arena.band_m),
+                                                     arena_at(o.arena, altitude)));
     say("classifying the regimes");
-    r.regimes = classify_regimes(*linear, *deep, split.test, physics::GridOptions{}.altitudes_m, RegimeOptions{}, o.stop);
+    r.regimes =
+        classify_regimes(*linear, *deep, split.test, physics::GridOptions{}.altitudes_m, RegimeOptions{}, o.stop);
     write_regimes(r.regimes, out.string());
 
     if (o.generalisation) r.generalisation = generalisation(split, *naive, train, o.arena);
@@ -234,7 +245,8 @@ RegimesFiles write_regimes(const std::vector<RegimeRow>& rows, const std::string
 
 RegimesFiles regimes_of_study(const std::string& study_dir, const RegimeOptions& o, std::stop_token stop) {
     const fs::path dir(study_dir), flights = dir / "flights", models = dir / "models";
-    if (!fs::is_directory(flights)) throw InputError(log::cat(study_dir, ": no flights/ folder (not a dw-predictor study's output)"));
+    if (!fs::is_directory(flights))
+        throw InputError(log::cat(study_dir, ": no flights/ folder (not a dw-predictor study's output)"));
     Dataset all;
     std::vector<fs::path> folders;
     for (const auto& e : fs::directory_iterator(flights))
@@ -246,7 +258,9 @@ RegimesFiles regimes_of_study(const std::string& study_dir, const RegimeOptions&
     }
     const LearntModel linear = LearntModel::load((models / "learnt_linear.json").string());
     const LearntModel deep = LearntModel::load((models / "deep_sets.json").string());
-    return write_regimes(classify_regimes(linear, deep, split_by_leg(all).test, physics::GridOptions{}.altitudes_m, o, stop), dir.string(), o);
+    return write_regimes(
+        classify_regimes(linear, deep, split_by_leg(all).test, physics::GridOptions{}.altitudes_m, o, stop),
+        dir.string(), o);
 }
 
 }  // namespace dw::predictor

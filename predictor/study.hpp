@@ -20,9 +20,10 @@ namespace dw::predictor {
 struct StudyOptions {
     physics::PhysicsConfig physics;
     std::string out_dir;
-    std::vector<std::string> formations{"single", "side_by_side", "leader_follower", "leader_follower3", "stack", "hybrid"};
-    int legs = 60;                       // per flight
-    double single_half_width_m = 1.6;    // the single-neighbour flights' square (others: 1 m)
+    std::vector<std::string> formations{"single",           "side_by_side", "leader_follower",
+                                        "leader_follower3", "stack",        "hybrid"};
+    int legs = 60;                     // per flight
+    double single_half_width_m = 1.6;  // the single-neighbour flights' square (others: 1 m)
     std::uint64_t seed = 1;
     int max_epochs = 150;
     int threads = kDefaultTrainThreads;  // libtorch's threads per training
@@ -30,7 +31,7 @@ struct StudyOptions {
     bool maps = true;
     ArenaOptions arena;
     std::function<void(const std::string&)> progress;  // one line per step
-    std::stop_token stop;  // flying, training and drawing stop with dw::Stopped
+    std::stop_token stop;                              // flying, training and drawing stop with dw::Stopped
 };
 
 struct StudyResult {
@@ -39,7 +40,7 @@ struct StudyResult {
     // The same comparison at each altitude band the flights fly (0.3, 0.8, 1.3 m): the arena metric
     // at that altitude, RMSE over the held-out samples in the band.
     std::vector<std::pair<double, std::vector<ComparisonRow>>> by_altitude;
-    std::vector<RegimeRow> regimes;             // each formation x altitude band: chaotic, linear or non-linear
+    std::vector<RegimeRow> regimes;  // each formation x altitude band: chaotic, linear or non-linear
     std::string markdown_path, csv_path;
 };
 
@@ -66,7 +67,8 @@ struct TrainPlan {
 };
 // A deep_sets model is trained on `baseline` (a sum model; see train_model) when one is given.
 std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Dataset& train, const Dataset& validation,
-                                            const TrainPlan& plan, const std::string& path, const LearntModel* baseline = nullptr);
+                                            const TrainPlan& plan, const std::string& path,
+                                            const LearntModel* baseline = nullptr);
 
 // The arena-metric value of `model` on `formation` and `axis` in a table (NaN if absent).
 double table_value(const std::vector<ComparisonRow>& rows, const std::string& formation, const std::string& model,

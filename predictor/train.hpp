@@ -22,17 +22,17 @@ inline constexpr Range kThreadsRange{1, 64};
 inline constexpr int kDefaultTrainThreads = 1;
 
 struct TrainOptions {
-    std::string kind = "deep_sets";     // naive_linear, learnt_linear or deep_sets
-    int hidden = 64;                    // width of the hidden layers
-    int latent = 32;                    // deep sets: width of phi's output
+    std::string kind = "deep_sets";  // naive_linear, learnt_linear or deep_sets
+    int hidden = 64;                 // width of the hidden layers
+    int latent = 32;                 // deep sets: width of phi's output
     int max_epochs = 150;
-    int patience = 15;                  // epochs without a better validation loss before stopping
-                                        // (the step is halved after every patience/3 of them)
+    int patience = 15;  // epochs without a better validation loss before stopping
+                        // (the step is halved after every patience/3 of them)
     double learning_rate = 2e-3;
     int batch = 256;
     std::uint64_t seed = 1;
     int threads = kDefaultTrainThreads;
-    std::string split = "by leg";        // how the training and validation legs were chosen (metadata)
+    std::string split = "by leg";  // how the training and validation legs were chosen (metadata)
     // Called after every epoch: epoch, training loss, validation loss (normalised MSE).
     std::function<void(int, double, double)> progress;
     std::stop_token stop;  // checked every mini-batch: dw::Stopped, and nothing is returned

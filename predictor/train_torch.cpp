@@ -124,8 +124,9 @@ void prepare(LearntModel& m, const Dataset& train, const TrainOptions& o, const 
         return;
     }
     if (m.structure != Structure::deep_sets || baseline->structure != Structure::sum)
-        throw InputError(log::cat("training: a baseline is a sum model (naive_linear or learnt_linear) under a deep_sets model, not ",
-                                  baseline->kind, " under ", o.kind));
+        throw InputError(log::cat(
+            "training: a baseline is a sum model (naive_linear or learnt_linear) under a deep_sets model, not ",
+            baseline->kind, " under ", o.kind));
     m.input_mean = baseline->input_mean;
     m.input_std = baseline->input_std;
     m.output_scale = baseline->output_scale;
@@ -133,8 +134,8 @@ void prepare(LearntModel& m, const Dataset& train, const TrainOptions& o, const 
 }
 
 // What the model file records about its training.
-std::string training_metadata(const Dataset& train, const Dataset& validation, const TrainOptions& o, const TrainResult& r,
-                              const LearntModel* baseline) {
+std::string training_metadata(const Dataset& train, const Dataset& validation, const TrainOptions& o,
+                              const TrainResult& r, const LearntModel* baseline) {
     nlohmann::json sources = nlohmann::json::array();
     for (const auto& s : train.sources) sources.push_back({{"name", s.name}, {"formation", s.formation}});
     return nlohmann::json{{"trained_on", sources},
@@ -154,9 +155,52 @@ std::string training_metadata(const Dataset& train, const Dataset& validation, c
         .dump();
 }
 
+// The networks and how their outputs combine: a sum model pools phi's six outputs over the
+// neighbours; Deep Sets feeds the pooled latent through rho. The baseline's prediction is added.
+struct Net {
+    torch::nn::Sequential phi, rho;
+    bool deep_sets;
+
+    torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& mask, const torch::Tensor& base) {
+        auto pooled = (phi->forward(x) * mask).sum(1);
+        return (deep_sets ? rho->forward(pooled) : pooled) + base;
+    }
+    torch::Tensor loss(const Tensors& t) { return torch::mse_loss(forward(t.x, t.mask, t.base), t.y); }
+};
+
+// One pass over the training samples in shuffled minibatches; the mean batch loss.
+double train_epoch(Net& net, torch::optim::Adam& adam, const Tensors& tr, const TrainOptions& o,
+                   const torch::Generator& gen) {
+    const int64_t n = tr.x.size(0);
+    const auto perm = torch::randperm(n, gen, torch::kLong);
+    double total = 0;
+    int64_t batches = 0;
+    for (int64_t b = 0; b < n; b += o.batch) {
+        throw_if_stopped(o.stop, "training");
+        const auto idx = perm.slice(0, b, std::min(n, b + o.batch));
+        adam.zero_grad();
+        auto loss = torch::mse_loss(
+            net.forward(tr.x.index_select(0, idx), tr.mask.index_select(0, idx), tr.base.index_select(0, idx)),
+            tr.y.index_select(0, idx));
+        loss.backward();
+        adam.step();
+        total += loss.item<double>();
+        ++batches;
+    }
+    return total / static_cast<double>(batches);
+}
+
+void halve_learning_rate(torch::optim::Adam& adam) {
+    for (auto& g : adam.param_groups()) {
+        auto& options = static_cast<torch::optim::AdamOptions&>(g.options());
+        options.lr(options.lr() * 0.5);
+    }
+}
+
 }  // namespace
 
-TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o, const LearntModel* baseline) {
+TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o,
+                        const LearntModel* baseline) {
     const auto started = std::chrono::steady_clock::now();
     if (train.samples.empty()) throw InputError("training: no samples on the training legs");
     if (validation.samples.empty()) throw InputError("training: no samples on the validation legs");
@@ -169,8 +213,9 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
 
     const Tensors tr = tensors(train, m), va = tensors(validation, m);
     const int width = m.structure == Structure::deep_sets ? o.latent : 6;
-    auto phi = mlp(kFeatureSize, o.hidden, width);
-    auto rho = mlp(o.latent, o.hidden, 6);
+    Net net{mlp(kFeatureSize, o.hidden, width), mlp(o.latent, o.hidden, 6), m.structure == Structure::deep_sets};
+    auto& phi = net.phi;
+    auto& rho = net.rho;
     if (baseline) {  // the residual starts at zero: before any step the model is its baseline
         torch::NoGradGuard no_grad;
         auto last = rho[rho->size() - 1]->as<torch::nn::Linear>();
@@ -178,14 +223,10 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
         last->bias.zero_();
     }
     std::vector<torch::Tensor> params = phi->parameters();
-    if (m.structure == Structure::deep_sets)
+    if (net.deep_sets)
         for (auto& p : rho->parameters()) params.push_back(p);
     torch::optim::Adam adam(params, torch::optim::AdamOptions(o.learning_rate));
 
-    auto forward = [&](const torch::Tensor& x, const torch::Tensor& mask, const torch::Tensor& base) {
-        auto pooled = (phi->forward(x) * mask).sum(1);
-        return (m.structure == Structure::deep_sets ? rho->forward(pooled) : pooled) + base;
-    };
     auto snapshot = [&] {
         std::vector<torch::Tensor> s;
         for (auto& p : params) s.push_back(p.detach().clone());
@@ -195,33 +236,19 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
     r.best_validation_loss = INFINITY;
     if (baseline) {  // the baseline alone is the score to beat
         torch::NoGradGuard no_grad;
-        r.best_validation_loss = torch::mse_loss(forward(va.x, va.mask, va.base), va.y).item<double>();
+        r.best_validation_loss = net.loss(va).item<double>();
     }
-    const int64_t n = tr.x.size(0);
     auto gen = torch::make_generator<torch::CPUGeneratorImpl>(o.seed);
     int since_best = 0;
     for (int epoch = 1; epoch <= o.max_epochs; ++epoch) {
-        const auto perm = torch::randperm(n, gen, torch::kLong);
-        double total = 0;
-        int64_t batches = 0;
-        for (int64_t b = 0; b < n; b += o.batch) {
-            throw_if_stopped(o.stop, "training");
-            const auto idx = perm.slice(0, b, std::min(n, b + o.batch));
-            adam.zero_grad();
-            auto loss = torch::mse_loss(forward(tr.x.index_select(0, idx), tr.mask.index_select(0, idx), tr.base.index_select(0, idx)),
-                                        tr.y.index_select(0, idx));
-            loss.backward();
-            adam.step();
-            total += loss.item<double>();
-            ++batches;
-        }
+        const double train_loss = train_epoch(net, adam, tr, o, gen);
         double val = 0;
         {
             torch::NoGradGuard no_grad;
-            val = torch::mse_loss(forward(va.x, va.mask, va.base), va.y).item<double>();
+            val = net.loss(va).item<double>();
         }
         r.epochs = epoch;
-        if (o.progress) o.progress(epoch, total / static_cast<double>(batches), val);
+        if (o.progress) o.progress(epoch, train_loss, val);
         if (val < r.best_validation_loss - 1e-5) {
             r.best_validation_loss = val;
             r.best_epoch = epoch;
@@ -230,8 +257,7 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
         } else if (++since_best >= o.patience) {
             break;
         } else if (since_best % std::max(1, o.patience / 3) == 0) {  // plateau: halve the step
-            for (auto& g : adam.param_groups())
-                static_cast<torch::optim::AdamOptions&>(g.options()).lr(static_cast<torch::optim::AdamOptions&>(g.options()).lr() * 0.5);
+            halve_learning_rate(adam);
         }
     }
     {

@@ -67,10 +67,13 @@ public:
 template <class T>
 class TypedEcho final : public EchoChannel {
 public:
-    TypedEcho(dds::Participant& p, const dds::Topic<T>& spec, const dds::QosOverrides& q,
-              std::uint64_t expect, bool quiet, std::ostream& out)
-        : expect_(expect), quiet_(quiet), out_(out),
-          reader_(p, spec, [this](const T& m, const dds::SampleMeta&) { on_sample(m); }, q) {
+    TypedEcho(dds::Participant& p, const dds::Topic<T>& spec, const dds::QosOverrides& q, std::uint64_t expect,
+              bool quiet, std::ostream& out)
+        : expect_(expect),
+          quiet_(quiet),
+          out_(out),
+          reader_(
+              p, spec, [this](const T& m, const dds::SampleMeta&) { on_sample(m); }, q) {
         result_.topic = reader_.name();
         result_.type = std::string(spec.type_name);
         result_.qos = reader_.qos_text();
@@ -143,15 +146,18 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
     if (o.wait_readers > 0) {
         const auto deadline = std::chrono::steady_clock::now() + o.wait_timeout;
         for (const auto& c : channels) {
-            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+            const auto left =
+                std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
             if (!c->wait_for_readers(o.wait_readers, std::max(left, std::chrono::milliseconds(0)))) {
-                log::error("no reader on ", c->name(), " after ", std::chrono::duration<double>(o.wait_timeout).count(), " s");
+                log::error("no reader on ", c->name(), " after ", std::chrono::duration<double>(o.wait_timeout).count(),
+                           " s");
                 return false;
             }
         }
     }
     if (o.rate_hz > 0 && o.rate_hz < kMinRate_hz) {
-        throw InputError(log::cat("--rate: ", o.rate_hz, " Hz is below ", kMinRate_hz, " Hz (0 means as fast as possible)"));
+        throw InputError(
+            log::cat("--rate: ", o.rate_hz, " Hz is below ", kMinRate_hz, " Hz (0 means as fast as possible)"));
     }
     const auto period = std::chrono::duration<double>(o.rate_hz > 0 ? 1.0 / o.rate_hz : 0.0);
     auto next = std::chrono::steady_clock::now();
@@ -165,7 +171,8 @@ bool run_pub(dds::Participant& p, const PubOptions& o, std::ostream& out) {
     }
     out.flush();
     for (const auto& c : channels) {
-        if (!c->wait_for_acknowledgments(std::chrono::seconds(5))) log::warn("not every reader acknowledged ", c->name());
+        if (!c->wait_for_acknowledgments(std::chrono::seconds(5)))
+            log::warn("not every reader acknowledged ", c->name());
     }
     if (o.linger.count() < 0) {
         while (!wait_for(o.stop, std::chrono::seconds(1))) {}
@@ -186,10 +193,18 @@ std::string EchoReport::to_json() const {
     j["timed_out"] = timed_out;
     j["topics"] = nlohmann::json::array();
     for (const auto& t : topics) {
-        j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"qos", t.qos},
-                               {"received", t.received}, {"other", t.other}, {"intact", t.intact}, {"corrupt", t.corrupt},
-                               {"lost", t.lost}, {"first_seq", t.first_seq}, {"last_seq", t.last_seq},
-                               {"in_order", t.in_order}, {"met", t.met}});
+        j["topics"].push_back({{"topic", t.topic},
+                               {"type", t.type},
+                               {"qos", t.qos},
+                               {"received", t.received},
+                               {"other", t.other},
+                               {"intact", t.intact},
+                               {"corrupt", t.corrupt},
+                               {"lost", t.lost},
+                               {"first_seq", t.first_seq},
+                               {"last_seq", t.last_seq},
+                               {"in_order", t.in_order},
+                               {"met", t.met}});
     }
     return j.dump(2);
 }
@@ -208,7 +223,8 @@ EchoReport run_echo(dds::Participant& p, const EchoOptions& o, std::ostream& out
     const bool bounded = o.expect > 0 || o.expect_latched > 0;
     for (;;) {
         if (wait_for(o.stop, std::chrono::milliseconds(20))) break;
-        if (bounded && std::all_of(channels.begin(), channels.end(), [](const auto& c) { return c->result().met; })) break;
+        if (bounded && std::all_of(channels.begin(), channels.end(), [](const auto& c) { return c->result().met; }))
+            break;
         if (o.timeout.count() > 0 && std::chrono::steady_clock::now() - start >= o.timeout) {
             report.timed_out = true;
             break;
@@ -219,15 +235,17 @@ EchoReport run_echo(dds::Participant& p, const EchoOptions& o, std::ostream& out
 }
 
 void print_table(const EchoReport& report, std::ostream& out) {
-    out << std::left << std::setw(30) << "topic" << std::setw(28) << "type" << std::right
-        << std::setw(9) << "received" << std::setw(8) << "intact" << std::setw(8) << "corrupt"
-        << std::setw(6) << "lost" << std::setw(7) << "other" << "  qos\n";
+    out << std::left << std::setw(30) << "topic" << std::setw(28) << "type" << std::right << std::setw(9) << "received"
+        << std::setw(8) << "intact" << std::setw(8) << "corrupt" << std::setw(6) << "lost" << std::setw(7) << "other"
+        << "  qos\n";
     for (const auto& t : report.topics) {
-        out << std::left << std::setw(30) << t.topic << std::setw(28) << t.type << std::right
-            << std::setw(9) << t.received << std::setw(8) << t.intact << std::setw(8) << t.corrupt
-            << std::setw(6) << t.lost << std::setw(7) << t.other << "  " << t.qos << (t.met ? "" : "  (expected more)") << "\n";
+        out << std::left << std::setw(30) << t.topic << std::setw(28) << t.type << std::right << std::setw(9)
+            << t.received << std::setw(8) << t.intact << std::setw(8) << t.corrupt << std::setw(6) << t.lost
+            << std::setw(7) << t.other << "  " << t.qos << (t.met ? "" : "  (expected more)") << "\n";
     }
-    out << (report.ok() ? "all topics arrived intact" : report.timed_out ? "timed out before every topic arrived" : "FAILED")
+    out << (report.ok()        ? "all topics arrived intact"
+            : report.timed_out ? "timed out before every topic arrived"
+                               : "FAILED")
         << "\n";
 }
 
@@ -236,7 +254,8 @@ void send_command(dds::Participant& p, const CommandOptions& o, std::ostream& ou
     const auto until = std::chrono::steady_clock::now() + o.wait;
     while (!p.unmatched_readers(w.matched_readers(), {o.to}).empty()) {
         if (std::chrono::steady_clock::now() >= until)
-            throw RuntimeError(log::cat("no reader of ", w.name(), " from ", o.to, " within ", o.wait.count() / 1000.0, " s: is it running?"));
+            throw RuntimeError(log::cat("no reader of ", w.name(), " from ", o.to, " within ", o.wait.count() / 1000.0,
+                                        " s: is it running?"));
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     msg::ExperimentCommand c;

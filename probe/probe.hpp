@@ -14,10 +14,10 @@
 namespace dw::probe {
 
 struct PubOptions {
-    std::vector<std::string> topics;           // suffixes
-    std::uint64_t count = 10;                  // samples per topic
-    double rate_hz = 50.0;                     // rounds per second (one sample per topic a round)
-    int wait_readers = 0;                      // wait until each writer has this many readers
+    std::vector<std::string> topics;  // suffixes
+    std::uint64_t count = 10;         // samples per topic
+    double rate_hz = 50.0;            // rounds per second (one sample per topic a round)
+    int wait_readers = 0;             // wait until each writer has this many readers
     std::chrono::milliseconds wait_timeout{10000};
     dds::QosOverrides qos;
     bool quiet = false;
@@ -34,21 +34,21 @@ struct TopicResult {
     std::string topic;
     std::string type;
     std::string qos;
-    std::uint64_t received = 0;      // probe samples (run id "probe")
-    std::uint64_t other = 0;         // real lab traffic on the topic (not checked)
+    std::uint64_t received = 0;  // probe samples (run id "probe")
+    std::uint64_t other = 0;     // real lab traffic on the topic (not checked)
     std::uint64_t intact = 0;
     std::uint64_t corrupt = 0;
-    std::uint64_t lost = 0;          // gaps in header.seq
+    std::uint64_t lost = 0;  // gaps in header.seq
     std::uint64_t first_seq = 0;
     std::uint64_t last_seq = 0;
     bool in_order = true;
-    bool met = false;                // expectation reached
+    bool met = false;  // expectation reached
 };
 
 struct EchoOptions {
     std::vector<std::string> topics;
-    std::uint64_t expect = 0;            // samples per topic before the echo ends (0 = run until stopped)
-    std::int64_t expect_latched = -1;    // for latched (state) topics; -1 = same as expect
+    std::uint64_t expect = 0;              // samples per topic before the echo ends (0 = run until stopped)
+    std::int64_t expect_latched = -1;      // for latched (state) topics; -1 = same as expect
     std::chrono::milliseconds timeout{0};  // 0 = none
     dds::QosOverrides qos;
     bool quiet = false;
@@ -58,7 +58,7 @@ struct EchoOptions {
 struct EchoReport {
     std::vector<TopicResult> topics;
     bool timed_out = false;
-    bool ok() const;                 // every expectation met and nothing corrupt
+    bool ok() const;  // every expectation met and nothing corrupt
     std::string to_json() const;
 };
 

@@ -75,7 +75,8 @@ void fill(msg::StandStatus& m, std::uint64_t i) {
     m.samples_published(i * 80);
     m.samples_discarded(i / 3);
     m.spikes_rejected(i / 7);
-    for (std::size_t c = 0; c < 8; ++c) m.tare_offset_counts()[c] = 1000.5 * static_cast<double>(c) - static_cast<double>(i);
+    for (std::size_t c = 0; c < 8; ++c)
+        m.tare_offset_counts()[c] = 1000.5 * static_cast<double>(c) - static_cast<double>(i);
     m.last_tare(time_of(i, -1'000'000'000));
 }
 
@@ -227,8 +228,8 @@ std::string summary(const msg::VehicleSetpoint& m) {
     return log::cat(m.vehicle_id(), "  pos ", fmt3(m.position_m()), " m  yaw ", m.yaw_rad(), " rad");
 }
 std::string summary(const msg::ExperimentPlan& m) {
-    return log::cat("'", m.name(), "'  ", m.formation(), "  ", m.vehicles().size(), " vehicles  ",
-                    m.legs().size(), " legs");
+    return log::cat("'", m.name(), "'  ", m.formation(), "  ", m.vehicles().size(), " vehicles  ", m.legs().size(),
+                    " legs");
 }
 std::string summary(const msg::ExperimentCommand& m) {
     return log::cat(dds::command_name(m.kind()), " from ", m.issuer(), "  '", m.reason(), "'");

@@ -15,19 +15,22 @@
 namespace {
 
 constexpr dw::Range kLoseAfterRange{0, 3600, "s"};
-constexpr double kParkedNorth_m = -1.5, kParkedEast0_m = -2.0, kParkedSpacing_m = 1.0;  // in a row at the fence's south side
+constexpr double kParkedNorth_m = -1.5, kParkedEast0_m = -2.0,
+                 kParkedSpacing_m = 1.0;  // in a row at the fence's south side
 
 // The vehicles' motion capture as an emulated Motive (NatNet) on 127.0.0.1:port: the sufferer on
 // the stand and each simulated PX4 where it is, for the real dw-mocap-bridge to read.
-std::unique_ptr<dw::natnet::NatNetEmulator> motion_capture(std::uint16_t port, double stand_height_m, const std::vector<std::string>& names,
-                                                           const std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>>& sims) {
+std::unique_ptr<dw::natnet::NatNetEmulator> motion_capture(
+    std::uint16_t port, double stand_height_m, const std::vector<std::string>& names,
+    const std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>>& sims) {
     dw::natnet::EmulatorOptions o;
     o.port = port;
     o.names = {dw::flight::kSufferer};
     o.names.insert(o.names.end(), names.begin(), names.end());
     o.motion = [stand_height_m, &sims](int body, double) {
         dw::natnet::BodyPose p;
-        const dw::physics::Vec3 x = body == 0 ? dw::physics::Vec3(0, 0, -stand_height_m) : sims.at(static_cast<std::size_t>(body - 1))->lab_position();
+        const dw::physics::Vec3 x = body == 0 ? dw::physics::Vec3(0, 0, -stand_height_m)
+                                              : sims.at(static_cast<std::size_t>(body - 1))->lab_position();
         p.ned = {x.x(), x.y(), x.z()};
         return p;
     };
@@ -35,7 +38,8 @@ std::unique_ptr<dw::natnet::NatNetEmulator> motion_capture(std::uint16_t port, d
 }
 
 int run(int argc, char** argv) {
-    dw::dds::ProcessCli cli("dw-px4-sim: simulated PX4 vehicles (uXRCE-DDS topics, Commander rules) for dw-planner --vehicles px4");
+    dw::dds::ProcessCli cli(
+        "dw-px4-sim: simulated PX4 vehicles (uXRCE-DDS topics, Commander rules) for dw-planner --vehicles px4");
     CLI::App& app = cli.app();
     std::vector<std::string> names{"v1"};
     std::string px4_file, refuse_arm;
@@ -45,15 +49,20 @@ int run(int argc, char** argv) {
     app.add_option("--vehicles", names, "the plan's vehicles, comma-separated (each a PX4)")->delimiter(',');
     app.add_option("--px4", px4_file, "the planner's PX4 settings file (version, namespaces, MAV_SYS_IDs, frames)");
     app.add_option("--refuse-arm", refuse_arm, "a pre-arm check that fails: every ARM is DENIED with this reason");
-    app.add_option("--lose-offboard-after", lose_after, "seconds after arming when the offboard stream stops reaching them (0 = never)")
+    app.add_option("--lose-offboard-after", lose_after,
+                   "seconds after arming when the offboard stream stops reaching them (0 = never)")
         ->check(dw::cli::in(kLoseAfterRange));
-    app.add_option("--natnet-port", natnet_port, "play the motion capture as an emulated NatNet server on 127.0.0.1:PORT for dw-mocap-bridge "
-                                                 "(0 = publish vehicles/state directly)")
+    app.add_option("--natnet-port", natnet_port,
+                   "play the motion capture as an emulated NatNet server on 127.0.0.1:PORT for dw-mocap-bridge "
+                   "(0 = publish vehicles/state directly)")
         ->check(dw::cli::in(dw::natnet::kPortRange));
-    app.add_option("--physics", physics_file, "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
+    app.add_option("--physics", physics_file,
+                   "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
     cli.parse(argc, argv);
-    const double stand_height_m = (physics_file.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_file)).stand.height_m;
-    const auto options = app.count("--px4") == 0 ? dw::planner::default_px4_options(names) : dw::planner::load_px4_options(px4_file, names);
+    const double stand_height_m =
+        (physics_file.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_file)).stand.height_m;
+    const auto options = app.count("--px4") == 0 ? dw::planner::default_px4_options(names)
+                                                 : dw::planner::load_px4_options(px4_file, names);
     dw::dds::Participant lab(cli.dds(), "px4_sim", cli.clock());
     dw::dds::Heartbeat heartbeat(lab);  // the planner and dw-lab wait for it (--wait-for px4_sim)
     std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> sims;
@@ -70,8 +79,8 @@ int run(int argc, char** argv) {
         o.publish_state = natnet_port == 0;
         if (lose_after > 0) o.lose_offboard_after_s = lose_after;
         sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));
-        std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID " << v.system_id << ", topics "
-                  << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;
+        std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID "
+                  << v.system_id << ", topics " << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;
     }
     const auto mocap = natnet_port == 0 ? nullptr : motion_capture(natnet_port, stand_height_m, names, sims);
     if (mocap) std::cout << "motion capture: emulated NatNet server on 127.0.0.1:" << mocap->port() << std::endl;
@@ -79,8 +88,9 @@ int run(int argc, char** argv) {
     while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
     for (std::size_t i = 0; i < sims.size(); ++i) {
         const auto r = sims[i]->report();
-        std::cout << options.vehicles[i].name << ": " << (r.was_armed ? "armed" : "never armed") << ", " << r.ignored_commands
-                  << " commands ignored (another system), " << r.undecodable << " payloads undecodable\n";
+        std::cout << options.vehicles[i].name << ": " << (r.was_armed ? "armed" : "never armed") << ", "
+                  << r.ignored_commands << " commands ignored (another system), " << r.undecodable
+                  << " payloads undecodable\n";
     }
     return 0;
 }

@@ -85,7 +85,8 @@ RawParticipant::~RawParticipant() {
 
 fdds::Topic* RawParticipant::topic(const std::string& name, const std::string& type_name) {
     if (auto* t = participant_->find_topic(name, {0, 0})) return t;
-    if (participant_->find_type(type_name).empty()) fdds::TypeSupport(new RawType(type_name)).register_type(participant_);
+    if (participant_->find_type(type_name).empty())
+        fdds::TypeSupport(new RawType(type_name)).register_type(participant_);
     auto* t = participant_->create_topic(name, type_name, fdds::TOPIC_QOS_DEFAULT);
     if (t == nullptr) throw RuntimeError("cannot create topic " + name);
     return t;
@@ -104,7 +105,8 @@ void RawParticipant::subscribe(const std::string& name, const std::string& type_
     listeners_.push_back(std::move(l));
 }
 
-bool RawParticipant::publish(const std::string& name, const std::string& type_name, const std::vector<std::uint8_t>& payload) {
+bool RawParticipant::publish(const std::string& name, const std::string& type_name,
+                             const std::vector<std::uint8_t>& payload) {
     fdds::DataWriter* w = nullptr;
     {
         std::lock_guard lock(mutex_);

@@ -27,7 +27,14 @@ struct MsgDef {
     std::vector<Field> fields;
 };
 
-enum class Msg { trajectory_setpoint, offboard_control_mode, vehicle_command, vehicle_odometry, vehicle_status, vehicle_command_ack };
+enum class Msg {
+    trajectory_setpoint,
+    offboard_control_mode,
+    vehicle_command,
+    vehicle_odometry,
+    vehicle_status,
+    vehicle_command_ack
+};
 // The definition of that message in that PX4 version.
 const MsgDef& msg_def(Msg msg, dds::Px4Version version);
 // Bytes of the CDR body (without the encapsulation).

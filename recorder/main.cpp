@@ -30,19 +30,24 @@ struct RecordCommand {
         cmd->add_option("topics", rec.topics, "topic suffixes (stand/wrench) or full names; default all");
         cmd->add_option("-o,--out", rec.out, "output file (with splitting: <stem>_NNNN.mcap)");
         cmd->add_option("--compression", compression, "zstd (default), lz4 or none");
-        cmd->add_option("--flush-interval", flush_s, "seconds: at most this much is lost on a crash")->check(dw::cli::in({0.05, 60, "s"}));
-        cmd->add_option("--chunk-size", rec.writer.chunk_size, "bytes of messages per chunk at most")->check(dw::cli::in({1024, 1 << 30, "bytes"}));
-        cmd->add_option("--split-size", split_mb, "start a new file after this many MB (0 = never)")->check(dw::cli::in({0, 1e6, "MB"}));
+        cmd->add_option("--flush-interval", flush_s, "seconds: at most this much is lost on a crash")
+            ->check(dw::cli::in({0.05, 60, "s"}));
+        cmd->add_option("--chunk-size", rec.writer.chunk_size, "bytes of messages per chunk at most")
+            ->check(dw::cli::in({1024, 1 << 30, "bytes"}));
+        cmd->add_option("--split-size", split_mb, "start a new file after this many MB (0 = never)")
+            ->check(dw::cli::in({0, 1e6, "MB"}));
         cmd->add_option("--split-duration", rec.split_seconds, "start a new file after this many seconds (0 = never)")
             ->check(dw::cli::in(dw::kTimeoutRange));
         cmd->add_option("--attach", attach, "NAME=PATH: store a file (stand calibration, physics config)");
         cmd->add_flag("--paused", rec.start_paused, "start paused (resume: RESUME command or SIGUSR1)");
         cmd->add_flag("--no-command-control", no_commands, "record PAUSE/RESUME commands but do not obey them");
-        cmd->add_option("--duration", duration_s, "stop after this many seconds (0, the default: until Ctrl-C)")->check(dw::cli::in(dw::kTimeoutRange));
+        cmd->add_option("--duration", duration_s, "stop after this many seconds (0, the default: until Ctrl-C)")
+            ->check(dw::cli::in(dw::kTimeoutRange));
         cmd->add_flag("--no-fsync", no_fsync, "do not fdatasync each chunk (faster, loses more on a power cut)");
         cmd->add_flag("--quiet", quiet, "no live status line");
         cmd->add_flag("--keep-existing", rec.keep_existing,
-                      "never overwrite: write the next free <stem>_NNNN.mcap, and recover in place a file a killed recorder left unfinished "
+                      "never overwrite: write the next free <stem>_NNNN.mcap, and recover in place a file a killed "
+                      "recorder left unfinished "
                       "(dw-lab run adds it when it restarts a recorder)");
     }
     // The options as the Recorder takes them; throws dw::InputError on a bad --attach or compression.
@@ -52,7 +57,8 @@ struct RecordCommand {
         rec.command_control = !no_commands;
         // Ticks every 50 ms, so a chunk is written out no later than the interval.
         rec.writer.flush_interval_ns = static_cast<std::uint64_t>(std::max(0.0, flush_s - 0.05) * 1e9);
-        rec.split_bytes = static_cast<std::uint64_t>(std::ceil(split_mb * 1e6));  // a positive size is never 0 ("never")
+        rec.split_bytes =
+            static_cast<std::uint64_t>(std::ceil(split_mb * 1e6));  // a positive size is never 0 ("never")
         rec.topics = dw::dds::select_topics(rec.topics, dds.ns);
         for (const auto& a : attach) {
             const auto eq = a.find('=');
@@ -78,9 +84,11 @@ struct RecordCommand {
         if (!quiet) std::fprintf(stderr, "\n");
         recorder.close();
         if (const auto d = recorder.dropped())
-            dw::log::warn(d, " messages dropped: more than ", dw::recorder::kMaxPendingBytes >> 20, " MB were waiting for a stalled disk");
+            dw::log::warn(d, " messages dropped: more than ", dw::recorder::kMaxPendingBytes >> 20,
+                          " MB were waiting for a stalled disk");
         for (const auto& s : recorder.stats()) {
-            if (s.lost > 0) dw::log::warn(s.topic, ": ", s.lost, " samples lost (gaps in the writers' sequence numbers)");
+            if (s.lost > 0)
+                dw::log::warn(s.topic, ": ", s.lost, " samples lost (gaps in the writers' sequence numbers)");
         }
         for (const auto& f : recorder.files()) std::cout << "wrote " << f << "\n";
         return 0;
@@ -138,7 +146,8 @@ struct ExportCommand {
         cmd->add_option("--csv", csv_dir, "directory for one CSV per topic");
         cmd->add_option("--sufferer", ex.sufferer, "rigid body on the stand (default sufferer)");
         cmd->add_flag("--raw-stamps", ex.raw_stamps,
-                      "flight: keep each topic's stamps as recorded (default: moved onto the recorder's clock by the measured clock offsets)");
+                      "flight: keep each topic's stamps as recorded (default: moved onto the recorder's clock by the "
+                      "measured clock offsets)");
     }
     int run() {
         // Both outputs are checked before either is written.
@@ -168,10 +177,13 @@ struct ReplayCommand {
         cmd->add_option("file", file, "MCAP file")->required();
         cmd->add_option("topics", rp.topics, "topic suffixes to replay; default all");
         cmd->add_option("--speed", rp.speed, "x N of the original rate")->check(dw::cli::in({0.01, 1000}));
-        cmd->add_option("--wait-readers", rp.wait_readers, "wait for this many readers per topic first")->check(dw::cli::in(dw::dds::kReadersRange));
+        cmd->add_option("--wait-readers", rp.wait_readers, "wait for this many readers per topic first")
+            ->check(dw::cli::in(dw::dds::kReadersRange));
     }
     int run(dw::dds::Participant& participant) {
-        rp.progress = [](double done) { std::fprintf(stderr, "\rdw-recorder: replaying %3d %%", static_cast<int>(done * 100)); };
+        rp.progress = [](double done) {
+            std::fprintf(stderr, "\rdw-recorder: replaying %3d %%", static_cast<int>(done * 100));
+        };
         rp.stop = dw::Shutdown::instance().token();
         const auto n = dw::recorder::replay(file, participant, rp);
         std::fprintf(stderr, "\n");
@@ -181,7 +193,8 @@ struct ReplayCommand {
 };
 
 int run(int argc, char** argv) {
-    dw::dds::ProcessCli cli("dw-recorder: record every lab topic to MCAP; inspect, recover, export and replay recordings");
+    dw::dds::ProcessCli cli(
+        "dw-recorder: record every lab topic to MCAP; inspect, recover, export and replay recordings");
     CLI::App& app = cli.app();
     app.require_subcommand(1);
     RecordCommand record;

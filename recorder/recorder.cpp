@@ -31,7 +31,9 @@ public:
         for (const auto& g : gaps_) {
             if (s.tellp() > 0) s << "; ";
             s.precision(3);
-            if (g.after_ns > 0) s << to_seconds(g.after_ns) << "-" << to_seconds(g.before_ns) << " (" << to_seconds(g.before_ns - g.after_ns) << " s)";
+            if (g.after_ns > 0)
+                s << to_seconds(g.after_ns) << "-" << to_seconds(g.before_ns) << " ("
+                  << to_seconds(g.before_ns - g.after_ns) << " s)";
             else s << "before " << to_seconds(g.before_ns);
             s << ": " << g.missing << " missing";
         }
@@ -60,10 +62,13 @@ namespace {
 template <class T>
 class TypedChannel final : public Recorder::Channel {
 public:
-    TypedChannel(dds::Participant& p, const dds::Topic<T>& spec, std::uint16_t index,
-                 std::function<void(const T&)> observe, std::function<void(std::uint16_t, std::span<const std::uint8_t>,
-                                                                           std::uint64_t, std::uint64_t, std::uint32_t)> sink)
-        : observe_(std::move(observe)), sink_(std::move(sink)), index_(index),
+    TypedChannel(
+        dds::Participant& p, const dds::Topic<T>& spec, std::uint16_t index, std::function<void(const T&)> observe,
+        std::function<void(std::uint16_t, std::span<const std::uint8_t>, std::uint64_t, std::uint64_t, std::uint32_t)>
+            sink)
+        : observe_(std::move(observe)),
+          sink_(std::move(sink)),
+          index_(index),
           reader_(p, spec, [this](const T& m, const dds::SampleMeta& meta) { on_sample(m, meta); }) {}
     TopicStats stats() const override {
         return {reader_.name(), recorded.load(), reader_.lost(), skipped.load(), dropped.load()};
@@ -84,7 +89,8 @@ private:
     }
 
     std::function<void(const T&)> observe_;
-    std::function<void(std::uint16_t, std::span<const std::uint8_t>, std::uint64_t, std::uint64_t, std::uint32_t)> sink_;
+    std::function<void(std::uint16_t, std::span<const std::uint8_t>, std::uint64_t, std::uint64_t, std::uint32_t)>
+        sink_;
     std::uint16_t index_;
     std::map<eprosima::fastdds::dds::InstanceHandle_t, Nanos> last_received_ns_;  // per writer; listener thread only
     typename dds::PubSubOf<T>::type support_;
@@ -107,9 +113,8 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
     for (const auto& [name, path] : options_.attachments) attachment_data_.emplace_back(name, read_attachment(path));
     paused_ = options_.start_paused;
     const auto& wanted = options_.topics;
-    auto sink = [this](std::uint16_t i, std::span<const std::uint8_t> d, std::uint64_t lt, std::uint64_t pt, std::uint32_t seq) {
-        on_message(i, d, lt, pt, seq);
-    };
+    auto sink = [this](std::uint16_t i, std::span<const std::uint8_t> d, std::uint64_t lt, std::uint64_t pt,
+                       std::uint32_t seq) { on_message(i, d, lt, pt, seq); };
     {
         std::lock_guard lock(mutex_);
         open_file();  // before the readers: a latched sample may arrive at once
@@ -119,7 +124,8 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
     channel_ids_.reserve(dds::topics::kTopicCount);
     dds::topics::for_each([&](const auto& spec) {
         using T = typename std::decay_t<decltype(spec)>::type;
-        const bool take = wanted.empty() || std::find(wanted.begin(), wanted.end(), std::string(spec.suffix)) != wanted.end();
+        const bool take =
+            wanted.empty() || std::find(wanted.begin(), wanted.end(), std::string(spec.suffix)) != wanted.end();
         if (!take) return;
         std::function<void(const T&)> observe;
         if constexpr (std::is_same_v<T, msg::ExperimentState>) {
@@ -139,7 +145,8 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
             // Announced before the reader exists, so the first sample always has its channel.
             std::lock_guard lock(mutex_);
             infos_.push_back({participant_.topic_name(spec.suffix), std::string(spec.type_name),
-                              dds::describe(dds::reader_qos(spec.qos)), dds::to_string(spec.qos), std::string(spec.idl)});
+                              dds::describe(dds::reader_qos(spec.qos)), dds::to_string(spec.qos),
+                              std::string(spec.idl)});
             channel_ids_.push_back(announce(infos_.back()));
         }
         // No lock is held while the reader is created: its listener may already be running
@@ -172,7 +179,8 @@ void Recorder::repair(std::vector<std::string> unfinished) {
     for (const auto& path : unfinished) {
         try {
             const auto r = mcap::recover(path, path, options_.writer);
-            log::info("recovered ", path, " (left unfinished by a recorder before this one): ", r.messages, " messages");
+            log::info("recovered ", path, " (left unfinished by a recorder before this one): ", r.messages,
+                      " messages");
         } catch (const std::exception& e) {
             log::warn("cannot recover ", path, ": ", e.what(), " (left as it is)");
         }
@@ -182,23 +190,27 @@ void Recorder::repair(std::vector<std::string> unfinished) {
 void Recorder::open_file() {
     std::string path = path_for(next_index_++);
     while (options_.keep_existing && std::filesystem::exists(path)) {
-        if (files_.empty() && !mcap::is_closed(path)) unfinished_.push_back(path);  // the first file only: its predecessors'
+        if (files_.empty() && !mcap::is_closed(path))
+            unfinished_.push_back(path);  // the first file only: its predecessors'
         path = path_for(next_index_++);
     }
     writer_ = std::make_unique<mcap::Writer>(path, options_.writer);
     files_.push_back(path);
     file_opened_ns_ = participant_.clock().monotonic_ns();
     const auto& dds = participant_.config();
-    writer_->add_metadata({"recording", {{"host", hostname()},
-                                         {"started_unix_ns", std::to_string(participant_.clock().now_ns())},
-                                         {"recorder", "dw-recorder 0.1 (downwash-lab)"},
-                                         {"fast_dds", "2.9 (Debian bookworm)"},
-                                         {"dds_domain", std::to_string(dds.domain)},
-                                         {"namespace", dds.ns},
-                                         // Who recorded: the DDS Security identity (what it may read is its permissions).
-                                         {"dds_security", dds.security.empty() ? std::string("none")
-                                                                               : "identity " + (dds.identity.empty() ? participant_.process() : dds.identity)},
-                                         {"file_index", std::to_string(next_index_ - 1)}}});
+    writer_->add_metadata(
+        {"recording",
+         {{"host", hostname()},
+          {"started_unix_ns", std::to_string(participant_.clock().now_ns())},
+          {"recorder", "dw-recorder 0.1 (downwash-lab)"},
+          {"fast_dds", "2.9 (Debian bookworm)"},
+          {"dds_domain", std::to_string(dds.domain)},
+          {"namespace", dds.ns},
+          // Who recorded: the DDS Security identity (what it may read is its permissions).
+          {"dds_security", dds.security.empty()
+                               ? std::string("none")
+                               : "identity " + (dds.identity.empty() ? participant_.process() : dds.identity)},
+          {"file_index", std::to_string(next_index_ - 1)}}});
     for (const auto& [name, data] : attachment_data_) {
         const auto now = static_cast<std::uint64_t>(participant_.clock().now_ns());
         const std::string ext = std::filesystem::path(name).extension().string();
@@ -217,7 +229,8 @@ void Recorder::open_file() {
 
 std::uint16_t Recorder::announce(const ChannelInfo& c) {
     const auto schema = writer_->add_schema(c.type, "omgidl", idl::resolved(c.idl));
-    return writer_->add_channel(c.topic, schema, "cdr", {{"qos", c.qos}, {"qos_profile", c.qos_profile}, {"dds_type", c.type}});
+    return writer_->add_channel(c.topic, schema, "cdr",
+                                {{"qos", c.qos}, {"qos_profile", c.qos_profile}, {"dds_type", c.type}});
 }
 
 void Recorder::close_file() {
@@ -225,7 +238,8 @@ void Recorder::close_file() {
     std::map<std::string, std::string> loss;
     for (const auto& c : channels_) {
         const TopicStats s = c->stats();
-        loss[s.topic] = log::cat("recorded ", s.recorded, ", lost ", s.lost, ", skipped while paused ", s.skipped, ", dropped (disk stalled) ", s.dropped);
+        loss[s.topic] = log::cat("recorded ", s.recorded, ", lost ", s.lost, ", skipped while paused ", s.skipped,
+                                 ", dropped (disk stalled) ", s.dropped);
     }
     writer_->add_metadata({"loss", loss});
     std::map<std::string, std::string> gaps;
@@ -268,7 +282,8 @@ void Recorder::drain_pending() {
     const std::int64_t now = participant_.clock().monotonic_ns();
     const auto bytes = std::span(reinterpret_cast<const std::uint8_t*>(data.data()), data.size());
     for (const auto& m : messages) {
-        writer_->write({channel_ids_[m.index], m.sequence, m.log_time, m.publish_time, bytes.subspan(m.offset, m.size)}, now);
+        writer_->write({channel_ids_[m.index], m.sequence, m.log_time, m.publish_time, bytes.subspan(m.offset, m.size)},
+                       now);
         if (m.index < channels_.size()) ++channels_[m.index]->recorded;
     }
 }
@@ -277,7 +292,8 @@ void Recorder::note_run(const std::string& run_id) {
     std::lock_guard lock(pending_mutex_);
     if (run_id.empty() || run_id == run_id_) return;
     run_id_ = run_id;
-    pending_metadata_.push_back({"run", {{"run_id", run_id}, {"since_unix_ns", std::to_string(participant_.clock().now_ns())}}});
+    pending_metadata_.push_back(
+        {"run", {{"run_id", run_id}, {"since_unix_ns", std::to_string(participant_.clock().now_ns())}}});
     log::info("run id ", run_id);
 }
 
@@ -286,7 +302,8 @@ void Recorder::note_plan(const std::string& name, const std::string& formation, 
     const std::string key = name + '\n' + formation + '\n' + document;
     if (key == last_plan_) return;  // latched plans are re-sent: store each plan once
     last_plan_ = key;
-    pending_metadata_.push_back({"experiment_plan", {{"name", name}, {"formation", formation}, {"document", document}}});
+    pending_metadata_.push_back(
+        {"experiment_plan", {{"name", name}, {"formation", formation}, {"document", document}}});
 }
 
 void Recorder::pause(const std::string& why) {

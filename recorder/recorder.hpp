@@ -18,14 +18,14 @@
 namespace dw::recorder {
 
 struct RecordOptions {
-    std::string out = "recording.mcap";          // file; with splitting, <stem>_NNNN.mcap
-    std::vector<std::string> topics;             // suffixes; empty = all
+    std::string out = "recording.mcap";  // file; with splitting, <stem>_NNNN.mcap
+    std::vector<std::string> topics;     // suffixes; empty = all
     mcap::WriterOptions writer;
-    std::uint64_t split_bytes = 0;               // 0 = no split by size
-    double split_seconds = 0;                    // 0 = no split by duration
+    std::uint64_t split_bytes = 0;                                 // 0 = no split by size
+    double split_seconds = 0;                                      // 0 = no split by duration
     std::vector<std::pair<std::string, std::string>> attachments;  // name, path (read at start)
     bool start_paused = false;
-    bool command_control = true;                 // PAUSE/RESUME experiment commands pause/resume
+    bool command_control = true;  // PAUSE/RESUME experiment commands pause/resume
     // Never overwrite: a file name already taken is skipped (the next <stem>_NNNN.mcap is used), and
     // a taken file left unfinished (its recorder was killed) is recovered in place, in the background.
     bool keep_existing = false;
@@ -46,9 +46,9 @@ inline constexpr std::size_t kMaxPendingBytes = 256u << 20;
 struct TopicStats {
     std::string topic;
     std::uint64_t recorded = 0;
-    std::uint64_t lost = 0;       // gaps in the writers' header.seq
-    std::uint64_t skipped = 0;    // arrived while paused
-    std::uint64_t dropped = 0;    // arrived while kMaxPendingBytes waited for a stalled disk
+    std::uint64_t lost = 0;     // gaps in the writers' header.seq
+    std::uint64_t skipped = 0;  // arrived while paused
+    std::uint64_t dropped = 0;  // arrived while kMaxPendingBytes waited for a stalled disk
 };
 
 class Recorder {
@@ -116,18 +116,18 @@ private:
     std::unique_ptr<mcap::Writer> writer_;
     std::vector<std::string> files_;
     std::vector<std::pair<std::string, std::string>> attachment_data_;  // name, bytes
-    std::vector<ChannelInfo> infos_;          // by channel index
-    std::vector<std::uint16_t> channel_ids_;  // in the current file, by channel index
+    std::vector<ChannelInfo> infos_;                                    // by channel index
+    std::vector<std::uint16_t> channel_ids_;                            // in the current file, by channel index
     std::int64_t file_opened_ns_ = 0;
-    std::size_t next_index_ = 0;              // of the next file name to try
-    std::vector<std::string> unfinished_;     // found by open_file, handed to repair
+    std::size_t next_index_ = 0;           // of the next file name to try
+    std::vector<std::string> unfinished_;  // found by open_file, handed to repair
     std::atomic<bool> paused_{false};
-    std::string run_id_;                      // pending_mutex_
-    std::string last_plan_;                   // pending_mutex_
+    std::string run_id_;     // pending_mutex_
+    std::string last_plan_;  // pending_mutex_
     std::vector<std::unique_ptr<Channel>> channels_;
     std::uint64_t last_total_ = 0;
     std::int64_t last_status_ns_ = 0;
-    std::jthread repairing_;                  // last member: joined first
+    std::jthread repairing_;  // last member: joined first
 };
 
 }  // namespace dw::recorder

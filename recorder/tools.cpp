@@ -32,7 +32,9 @@ public:
         if (!recordings::deserialize(cdr, sample_)) return false;
         return writer_.write_as_is(sample_);
     }
-    bool wait_for_readers(int n, std::chrono::milliseconds timeout) const override { return writer_.wait_for_readers(n, timeout); }
+    bool wait_for_readers(int n, std::chrono::milliseconds timeout) const override {
+        return writer_.wait_for_readers(n, timeout);
+    }
     void wait_for_acknowledgments() override { writer_.wait_for_acknowledgments(std::chrono::seconds(5)); }
 
 private:
@@ -56,7 +58,8 @@ struct Pending {
 };
 
 // The writer replaying one recorded channel, or null when it is not replayed.
-std::unique_ptr<ReplayChannel> writer_for(const mcap::Channel& c, const std::string& type, dds::Participant& p, const ReplayOptions& o) {
+std::unique_ptr<ReplayChannel> writer_for(const mcap::Channel& c, const std::string& type, dds::Participant& p,
+                                          const ReplayOptions& o) {
     const std::string suffix = recordings::topic_suffix(c.topic);
     if (!o.topics.empty() && std::find(o.topics.begin(), o.topics.end(), suffix) == o.topics.end()) return nullptr;
     std::unique_ptr<ReplayChannel> w;
@@ -79,7 +82,8 @@ std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayO
     auto publish = [&](const Pending& it) {
         if (!start) start = std::chrono::steady_clock::now(), t0 = it.log_time;
         const auto offset = it.log_time > t0 ? it.log_time - t0 : 0;
-        std::this_thread::sleep_until(*start + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(offset) / o.speed)));
+        std::this_thread::sleep_until(
+            *start + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(offset) / o.speed)));
         if (writers.at(it.channel)->publish(it.data)) ++sent;
     };
     mcap::Handlers h;
@@ -105,8 +109,7 @@ std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayO
     try {
         recordings::require_sound(mcap::read_file(path, h), path);
         for (; !pending.empty() && !o.stop.stop_requested(); pending.pop()) publish(pending.top());
-    } catch (const Stopped&) {
-    }
+    } catch (const Stopped&) {}
     if (std::none_of(writers.begin(), writers.end(), [](const auto& w) { return w.second != nullptr; }))
         throw InputError(log::cat(path, ": no recorded topic to replay"));
     for (const auto& [id, w] : writers)

@@ -12,11 +12,11 @@
 namespace dw::recorder {
 
 struct ReplayOptions {
-    double speed = 1.0;                  // x N
-    std::vector<std::string> topics;     // suffixes; empty = all
-    int wait_readers = 0;                // wait for this many readers per topic first
+    double speed = 1.0;               // x N
+    std::vector<std::string> topics;  // suffixes; empty = all
+    int wait_readers = 0;             // wait for this many readers per topic first
     std::function<void(double)> progress;
-    std::stop_token stop;                // ends the replay (and the wait for readers)
+    std::stop_token stop;  // ends the replay (and the wait for readers)
 };
 // Publishes the recorded samples back on DDS with their original timing. Returns how many.
 std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayOptions& o);

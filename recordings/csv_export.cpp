@@ -59,8 +59,12 @@ void append_value(std::string& line, const T& v) {
 struct Cells {
     std::string& line;
     std::vector<std::uint32_t>& shape;
-    template <class T> void operator()(const char*, const T& v) { add(v); }
-    template <class T> void add(const T& v) {
+    template <class T>
+    void operator()(const char*, const T& v) {
+        add(v);
+    }
+    template <class T>
+    void add(const T& v) {
         if constexpr (dds::IsMessage<T>) {
             dds::fields(v, *this);
         } else if constexpr (dds::IsSequence<T>) {
@@ -78,8 +82,12 @@ struct Columns {
     std::vector<std::string>& names;
     std::vector<std::string>& values;
     std::string prefix;
-    template <class T> void operator()(const char* name, const T& v) { add(prefix.empty() ? std::string(name) : prefix + "." + name, v); }
-    template <class T> void add(const std::string& column, const T& v) {
+    template <class T>
+    void operator()(const char* name, const T& v) {
+        add(prefix.empty() ? std::string(name) : prefix + "." + name, v);
+    }
+    template <class T>
+    void add(const std::string& column, const T& v) {
         if constexpr (dds::IsMessage<T>) {
             Columns nested{names, values, column};
             dds::fields(v, nested);
@@ -109,7 +117,8 @@ class TypedCodec final : public RowCodec {
 public:
     bool cells(std::span<const std::uint8_t> cdr, std::string& line, std::vector<std::uint32_t>& shape) override {
         // Read in place, as the type's PubSubType does with a payload (no copy: the reader only reads).
-        eprosima::fastcdr::FastBuffer buffer(reinterpret_cast<char*>(const_cast<std::uint8_t*>(cdr.data())), cdr.size());
+        eprosima::fastcdr::FastBuffer buffer(reinterpret_cast<char*>(const_cast<std::uint8_t*>(cdr.data())),
+                                             cdr.size());
         eprosima::fastcdr::Cdr in(buffer, eprosima::fastcdr::Cdr::DEFAULT_ENDIAN, eprosima::fastcdr::Cdr::DDS_CDR);
         try {
             in.read_encapsulation();
@@ -131,7 +140,9 @@ private:
 
 std::unique_ptr<RowCodec> codec_for(const std::string& type_name) {
     std::unique_ptr<RowCodec> codec;
-    with_type(type_name, [&](const auto& spec) { codec = std::make_unique<TypedCodec<typename std::decay_t<decltype(spec)>::type>>(); });
+    with_type(type_name, [&](const auto& spec) {
+        codec = std::make_unique<TypedCodec<typename std::decay_t<decltype(spec)>::type>>();
+    });
     return codec;
 }
 
@@ -144,13 +155,13 @@ constexpr std::string_view kTimeColumns[] = {"log_time", "publish_time"};
 struct CsvTable {
     std::unique_ptr<RowCodec> codec;
     std::unique_ptr<AtomicFile> out;
-    std::string where;                                // "<recording>: <topic>", for errors
+    std::string where;  // "<recording>: <topic>", for errors
     std::vector<std::string> columns;
     std::map<std::string, std::size_t> index;         // built at the first row of another shape
     std::optional<std::vector<std::uint32_t>> shape;  // rows of this shape are written as they come
     std::uint64_t rows = 0;
     bool grew = false;
-    std::string line;                                 // scratch, reused
+    std::string line;  // scratch, reused
     std::vector<std::uint32_t> row_shape;
 
     void write_header() {
@@ -173,7 +184,8 @@ struct CsvTable {
             row[it->second] = std::move(values[i]);
         }
         std::string text;
-        for (std::size_t i = 0; i < columns.size(); ++i) (text += i ? "," : "") += i < row.size() ? row[i] : std::string();
+        for (std::size_t i = 0; i < columns.size(); ++i)
+            (text += i ? "," : "") += i < row.size() ? row[i] : std::string();
         return text + "\n";
     }
     void add(const mcap::Message& m) {
@@ -289,8 +301,8 @@ private:
 // One read of the recording: rows of the tables `wanted` says to write (all on the first read,
 // the grown ones on the second). The reader thread reads and checks the file, makes each table
 // on its channel's first message, and hands copies of the messages to the table's worker.
-void csv_pass(const std::string& path, const std::string& dir, const std::stop_token& stop, std::map<std::uint16_t, CsvTable>& tables,
-              const std::function<bool(std::uint16_t)>& wanted) {
+void csv_pass(const std::string& path, const std::string& dir, const std::stop_token& stop,
+              std::map<std::uint16_t, CsvTable>& tables, const std::function<bool(std::uint16_t)>& wanted) {
     Catalogue l;
     mcap::Handlers h;
     l.watch(h);
@@ -319,8 +331,7 @@ void csv_pass(const std::string& path, const std::string& dir, const std::stop_t
     mcap::ReadResult result;
     try {
         result = mcap::read_file(path, h);
-    } catch (const WorkerFailed&) {
-    }
+    } catch (const WorkerFailed&) {}
     for (std::size_t w = 0; w < workers.size(); ++w) hand_over(w);
     for (auto& w : workers) w.finish();
     require_sound(result, path);
@@ -334,7 +345,7 @@ void export_csv(const std::string& path, const std::string& dir, const std::stop
     std::map<std::uint16_t, CsvTable> grown;
     for (auto& [id, t] : tables) {
         if (!t.grew) continue;
-        t.out.reset();  // its first version had too few columns: dropped, written again below
+        t.out.reset();                  // its first version had too few columns: dropped, written again below
         grown[id].columns = t.columns;  // every column known: each row placed by name
     }
     if (!grown.empty()) csv_pass(path, dir, stop, grown, [&](std::uint16_t id) { return grown.count(id) > 0; });

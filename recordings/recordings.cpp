@@ -23,9 +23,11 @@ constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks
 
 // A recorded value the flight cannot carry (NaN, inf) is the recording's fault: named there.
 template <std::size_t N>
-void require_finite(const std::array<double, N>& v, const std::string& path, std::string_view topic, std::uint64_t message) {
+void require_finite(const std::array<double, N>& v, const std::string& path, std::string_view topic,
+                    std::uint64_t message) {
     for (double x : v) {
-        if (!std::isfinite(x)) throw InputError(log::cat(path, ": ", topic, " message ", message, " carries a non-finite value"));
+        if (!std::isfinite(x))
+            throw InputError(log::cat(path, ": ", topic, " message ", message, " carries a non-finite value"));
     }
 }
 
@@ -50,8 +52,8 @@ std::optional<double> median_offset(const Offsets& offsets, const std::string& p
 // What the lab's time service measured, for meta.json's extra: each producer's median offset and,
 // when both clocks were measured, the stand's against the mocap's (the explainer's clock_offset:
 // a force at mocap time t is stamped t + offset by the stand).
-nlohmann::json measured_clocks(const std::optional<double>& stand, const std::optional<double>& mocap, const std::string& stand_name,
-                               const std::string& mocap_name) {
+nlohmann::json measured_clocks(const std::optional<double>& stand, const std::optional<double>& mocap,
+                               const std::string& stand_name, const std::string& mocap_name) {
     nlohmann::json j{{"clock_offsets_measured_s", nlohmann::json::object()}};
     if (stand) j["clock_offsets_measured_s"][stand_name] = *stand;
     if (mocap) j["clock_offsets_measured_s"][mocap_name] = *mocap;
@@ -87,7 +89,8 @@ std::optional<nlohmann::json> decode(const std::string& type_name, std::span<con
     std::optional<nlohmann::json> out;
     with_type(type_name, [&](const auto& spec) {
         typename std::decay_t<decltype(spec)>::type m;
-        if (!deserialize(cdr, m)) throw InputError(log::cat("a ", type_name, " message of ", cdr.size(), " bytes does not decode"));
+        if (!deserialize(cdr, m))
+            throw InputError(log::cat("a ", type_name, " message of ", cdr.size(), " bytes does not decode"));
         out = dds::to_json(m);
     });
     return out;
@@ -137,7 +140,8 @@ bool print_info(const std::string& path, std::ostream& out) {
     }
     const auto tw = static_cast<int>(topic_w), yw = static_cast<int>(type_w);
     out << std::left << std::setw(tw) << "topic" << std::setw(yw) << "type" << std::right << std::setw(9) << "count"
-        << std::setw(10) << "rate_hz" << std::setw(12) << "bytes" << "  losses\n";
+        << std::setw(10) << "rate_hz" << std::setw(12) << "bytes"
+        << "  losses\n";
     for (const auto& [id, c] : l.channels) {
         const PerChannel p = per.count(id) ? per.at(id) : PerChannel{};
         const double span = p.count > 1 ? static_cast<double>(p.last - p.first) * 1e-9 : 0.0;
@@ -161,82 +165,125 @@ bool print_info(const std::string& path, std::ostream& out) {
     return !r.error.has_value();
 }
 
-flight::Flight flight_from_recording(const std::string& path, const ExportOptions& o) {
-    namespace topics = dds::topics;
-    Catalogue l;
-    flight::Flight f;
-    f.meta.sufferer = o.sufferer;
+namespace {
+
+// What a flight is made from, as the recording holds it (stamps on their producers' clocks).
+struct Collected {
+    struct WrenchRow {
+        double t;
+        std::array<double, 6> w;
+    };
+    struct PoseRow {
+        double t;
+        std::string body;
+        std::array<double, 3> p;
+        std::array<double, 4> q;  // w x y z, not yet normalised
+    };
+    std::vector<WrenchRow> wrench;
+    std::vector<PoseRow> poses;
+    Offsets offsets;  // per process: the time service's measured clock offsets
     std::string formation = "free";
-    double epoch = -1;
-    struct Row { double t; std::array<double, 6> w; };
-    std::vector<Row> wrench;
-    std::vector<std::tuple<double, std::string, std::array<double, 3>, std::array<double, 4>>> poses;
+};
+
+// One recorded message into what the flight is made from; other topics are passed over.
+void collect_message(Collected& c, const std::string& suffix, const mcap::Message& m, const std::string& path,
+                     std::uint64_t read) {
+    namespace topics = dds::topics;
+    auto undecodable = [&] { return InputError(log::cat(path, ": a ", suffix, " message does not decode")); };
+    if (suffix == topics::stand_wrench.suffix) {
+        msg::WrenchStamped w;
+        if (!deserialize(m.data, w)) throw undecodable();
+        const double t = static_cast<double>(dds::from_msg(w.header().stamp())) * 1e-9;
+        c.wrench.push_back({t,
+                            {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
+                             w.torque_nm().z()}});
+        require_finite(c.wrench.back().w, path, suffix, read);
+    } else if (suffix == topics::mocap_frame.suffix) {
+        msg::MocapFrame fr;
+        if (!deserialize(m.data, fr)) throw undecodable();
+        const double t = static_cast<double>(dds::from_msg(fr.header().stamp())) * 1e-9;
+        for (const auto& b : fr.bodies()) {
+            c.poses.push_back({t,
+                               b.name(),
+                               {b.position_m().x(), b.position_m().y(), b.position_m().z()},
+                               {b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z()}});
+            require_finite(c.poses.back().p, path, suffix, read);
+            require_finite(c.poses.back().q, path, suffix, read);
+        }
+    } else if (suffix == topics::experiment_plan.suffix) {
+        msg::ExperimentPlan p;
+        if (deserialize(m.data, p)) c.formation = p.formation();
+    } else if (suffix == topics::process_status.suffix) {
+        msg::ProcessStatus st;
+        if (deserialize(m.data, st) && st.clock_uncertainty_s() >= 0 && std::isfinite(st.clock_offset_s()))
+            c.offsets[st.process()].push_back(st.clock_offset_s());
+    }
+}
+
+// Reads the recording's wrench, poses, plan and clock measurements; a recording without a wrench or poses is refused.
+Collected collect(const std::string& path, const ExportOptions& o) {
+    Catalogue l;
+    Collected c;
     mcap::Handlers h;
     l.watch(h);
     std::uint64_t read = 0;
-    Offsets offsets;
     h.on_message = [&](const mcap::Message& m) {
         if (++read % kStopCheckEvery == 0) throw_if_stopped(o.stop, "the export");
-        const auto& c = l.channels.at(m.channel_id);
-        const std::string suffix = topic_suffix(c.topic);
-        if (suffix == topics::stand_wrench.suffix) {
-            msg::WrenchStamped w;
-            if (!deserialize(m.data, w)) throw InputError(log::cat(path, ": a ", suffix, " message does not decode"));
-            const double t = static_cast<double>(dds::from_msg(w.header().stamp())) * 1e-9;
-            wrench.push_back({t, {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(), w.torque_nm().z()}});
-            require_finite(wrench.back().w, path, suffix, read);
-        } else if (suffix == topics::mocap_frame.suffix) {
-            msg::MocapFrame fr;
-            if (!deserialize(m.data, fr)) throw InputError(log::cat(path, ": a ", suffix, " message does not decode"));
-            const double t = static_cast<double>(dds::from_msg(fr.header().stamp())) * 1e-9;
-            for (const auto& b : fr.bodies()) {
-                poses.emplace_back(t, b.name(), std::array<double, 3>{b.position_m().x(), b.position_m().y(), b.position_m().z()},
-                                   std::array<double, 4>{b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z()});
-                require_finite(std::get<2>(poses.back()), path, suffix, read);
-                require_finite(std::get<3>(poses.back()), path, suffix, read);
-            }
-        } else if (suffix == topics::experiment_plan.suffix) {
-            msg::ExperimentPlan p;
-            if (deserialize(m.data, p)) formation = p.formation();
-        } else if (suffix == topics::process_status.suffix) {
-            msg::ProcessStatus s;
-            if (deserialize(m.data, s) && s.clock_uncertainty_s() >= 0 && std::isfinite(s.clock_offset_s()))
-                offsets[s.process()].push_back(s.clock_offset_s());
-        }
+        collect_message(c, topic_suffix(l.channels.at(m.channel_id).topic), m, path, read);
     };
     require_sound(mcap::read_file(path, h), path);
-    if (wrench.empty()) throw InputError(log::cat(path, ": no ", topics::stand_wrench.suffix, " messages: nothing to export as a flight"));
-    if (poses.empty()) throw InputError(log::cat(path, ": no ", topics::mocap_frame.suffix, " messages: nothing to export as a flight"));
-    // Onto the recorder's clock: each topic less its producer's offset.
-    const std::string stand = producer_of(topics::stand_wrench), mocap = producer_of(topics::mocap_frame);
-    const auto stand_measured = median_offset(offsets, stand), mocap_measured = median_offset(offsets, mocap);
-    const double stand_offset = o.raw_stamps ? 0.0 : stand_measured.value_or(0.0);
-    const double mocap_offset = o.raw_stamps ? 0.0 : mocap_measured.value_or(0.0);
-    for (auto& r : wrench) r.t -= stand_offset;
-    for (auto& p : poses) std::get<0>(p) -= mocap_offset;
-    // Both clocks are written relative to one epoch (whole seconds), kept in meta.json.
-    epoch = std::floor(std::min(wrench.front().t, std::get<0>(poses.front())));
-    std::sort(wrench.begin(), wrench.end(), [](const Row& a, const Row& b) { return a.t < b.t; });
-    std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return std::get<0>(a) < std::get<0>(b); });
-    for (const auto& r : wrench) f.wrench.push_back({r.t - epoch, r.w});
-    for (const auto& [t, name, p, q] : poses) {
+    auto require_some = [&](bool empty, const auto& suffix) {
+        if (empty) throw InputError(log::cat(path, ": no ", suffix, " messages: nothing to export as a flight"));
+    };
+    require_some(c.wrench.empty(), dds::topics::stand_wrench.suffix);
+    require_some(c.poses.empty(), dds::topics::mocap_frame.suffix);
+    return c;
+}
+
+// The samples, sorted, relative to the epoch; quaternions normalised.
+void fill_samples(flight::Flight& f, Collected& c, double epoch) {
+    std::sort(c.wrench.begin(), c.wrench.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+    std::stable_sort(c.poses.begin(), c.poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+    for (const auto& r : c.wrench) f.wrench.push_back({r.t - epoch, r.w});
+    for (const auto& [t, name, p, q] : c.poses) {
         const std::uint16_t body = f.body_index(name);
         double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
         if (norm == 0) norm = 1;
         f.poses.push_back({t - epoch, body, p, {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm}});
     }
-    if (f.find_body(o.sufferer) < 0) throw InputError(log::cat(path, ": no rigid body named '", o.sufferer, "' (use --sufferer)"));
+}
+
+}  // namespace
+
+flight::Flight flight_from_recording(const std::string& path, const ExportOptions& o) {
+    namespace topics = dds::topics;
+    Collected c = collect(path, o);
+    flight::Flight f;
+    f.meta.sufferer = o.sufferer;
+    // Onto the recorder's clock: each topic less its producer's offset.
+    const std::string stand = producer_of(topics::stand_wrench), mocap = producer_of(topics::mocap_frame);
+    const auto stand_measured = median_offset(c.offsets, stand), mocap_measured = median_offset(c.offsets, mocap);
+    const double stand_offset = o.raw_stamps ? 0.0 : stand_measured.value_or(0.0);
+    const double mocap_offset = o.raw_stamps ? 0.0 : mocap_measured.value_or(0.0);
+    for (auto& r : c.wrench) r.t -= stand_offset;
+    for (auto& p : c.poses) p.t -= mocap_offset;
+    // Both clocks are written relative to one epoch (whole seconds), kept in meta.json.
+    const double epoch = std::floor(std::min(c.wrench.front().t, c.poses.front().t));
+    fill_samples(f, c, epoch);
+    if (f.find_body(o.sufferer) < 0)
+        throw InputError(log::cat(path, ": no rigid body named '", o.sufferer, "' (use --sufferer)"));
     for (const auto& b : f.bodies) {
         if (b == o.sufferer) continue;
         f.meta.neighbours.push_back(b);
         f.meta.vehicles[b] = flight::VehicleInfo{};
     }
     const bool known = std::find_if(flight::kFormations.begin(), flight::kFormations.end(),
-                                    [&](const char* k) { return formation == k; }) != flight::kFormations.end();
-    f.meta.formation = known ? formation : "free";
+                                    [&](const char* k) { return c.formation == k; }) != flight::kFormations.end();
+    f.meta.formation = known ? c.formation : "free";
     nlohmann::json clocks = nlohmann::json::object();
     if (!o.raw_stamps) clocks = {{stand, stand_offset}, {mocap, mocap_offset}};
-    nlohmann::json extra{{"source", path}, {"epoch_unix_s", epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
+    nlohmann::json extra{
+        {"source", path}, {"epoch_unix_s", epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
     extra.update(measured_clocks(stand_measured, mocap_measured, stand, mocap));
     f.meta.extra_json = extra.dump();
     return f;
@@ -250,7 +297,8 @@ flight::Flight read_flight_or_recording(const std::string& path, const ExportOpt
     namespace fs = std::filesystem;
     if (fs::is_directory(path)) return flight::read_flight(path);
     if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
-    if (fs::path(path).extension() != ".mcap") throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
+    if (fs::path(path).extension() != ".mcap")
+        throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
     return flight_from_recording(path, o);
 }
 

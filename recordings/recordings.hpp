@@ -33,7 +33,7 @@ struct ExportOptions {
     // false: each topic's stamps are moved onto the recorder's clock by its producer's measured
     // clock offset (the median of its heartbeats' clock_offset_s); true: as recorded.
     bool raw_stamps = false;
-    std::stop_token stop;               // checked while reading: dw::Stopped, nothing written
+    std::stop_token stop;  // checked while reading: dw::Stopped, nothing written
 };
 // The flight a recording holds, in memory: stand/wrench and mocap/frame (+ the plan's formation),
 // the topics named by the registry, on the recorder's clock unless raw_stamps (meta.json's extra

@@ -13,7 +13,7 @@ packages=(
   libzstd-dev liblz4-dev zlib1g-dev libgpiod-dev libopencv-dev libssl-dev
   libtorch-dev libceres-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  iproute2 procps python3
+  iproute2 procps python3 clang-format
 )
 
 sudo_cmd=()

@@ -63,7 +63,8 @@ Cert make_cert(const std::string& cn, EVP_PKEY* key, X509* issuer, EVP_PKEY* iss
     if (!x) fail("cannot make a certificate");
     X509_set_version(x.get(), 2);
     BIGNUM* serial = BN_new();
-    if (!serial || !BN_rand(serial, 159, BN_RAND_TOP_ANY, BN_RAND_BOTTOM_ANY) || !BN_to_ASN1_INTEGER(serial, X509_get_serialNumber(x.get())))
+    if (!serial || !BN_rand(serial, 159, BN_RAND_TOP_ANY, BN_RAND_BOTTOM_ANY) ||
+        !BN_to_ASN1_INTEGER(serial, X509_get_serialNumber(x.get())))
         fail("cannot draw a serial number");
     BN_free(serial);
     X509_gmtime_adj(X509_getm_notBefore(x.get()), 0);
@@ -75,7 +76,8 @@ Cert make_cert(const std::string& cn, EVP_PKEY* key, X509* issuer, EVP_PKEY* iss
     X509_set_issuer_name(x.get(), ca ? name : X509_get_subject_name(issuer));
     X509* by = ca ? x.get() : issuer;
     add_ext(x.get(), by, NID_basic_constraints, ca ? "critical,CA:TRUE" : "critical,CA:FALSE");
-    add_ext(x.get(), by, NID_key_usage, ca ? "critical,keyCertSign,cRLSign,digitalSignature" : "critical,digitalSignature,keyAgreement");
+    add_ext(x.get(), by, NID_key_usage,
+            ca ? "critical,keyCertSign,cRLSign,digitalSignature" : "critical,digitalSignature,keyAgreement");
     if (!X509_sign(x.get(), ca ? key : issuer_key, EVP_sha256())) fail("cannot sign the certificate of " + cn);
     return x;
 }
@@ -88,7 +90,8 @@ std::string pem(X509* x) {
 
 std::string pem(EVP_PKEY* k) {
     Bio b(BIO_new(BIO_s_mem()));
-    if (!PEM_write_bio_PrivateKey(b.get(), k, nullptr, nullptr, 0, nullptr, nullptr)) fail("cannot write a private key");
+    if (!PEM_write_bio_PrivateKey(b.get(), k, nullptr, nullptr, 0, nullptr, nullptr))
+        fail("cannot write a private key");
     return bio_text(b.get());
 }
 
@@ -154,9 +157,11 @@ void make_identity(const dds::KeystorePaths& k, const Ca& ca, const IdentityRequ
 
 void check(const KeystoreOptions& o) {
     if (o.dir.empty()) throw InputError("--keystore: empty path");
-    if (o.days < 1 || o.days > kMaxDays) throw InputError(log::cat("--days: ", o.days, " is not in [1, ", kMaxDays, "]"));
+    if (o.days < 1 || o.days > kMaxDays)
+        throw InputError(log::cat("--days: ", o.days, " is not in [1, ", kMaxDays, "]"));
     for (const auto& id : o.identities)
-        if (!is_plain_name(id.name)) throw InputError(log::cat("identity '", id.name, "': letters, digits, '_', '-' and '.' only"));
+        if (!is_plain_name(id.name))
+            throw InputError(log::cat("identity '", id.name, "': letters, digits, '_', '-' and '.' only"));
 }
 
 }  // namespace
@@ -204,7 +209,8 @@ KeystoreListing list_keystore(const std::string& dir) {
         const Key ca_pub(X509_get_pubkey(ca.get()));
         const bool cert_ok = X509_verify(c.get(), ca_pub.get()) == 1;
         ERR_clear_error();
-        l.identities.push_back({name, subject, not_after(c.get()), cert_ok && dds::verify_signed(k.permissions(name), k.ca_cert())});
+        l.identities.push_back(
+            {name, subject, not_after(c.get()), cert_ok && dds::verify_signed(k.permissions(name), k.ca_cert())});
     }
     std::sort(l.identities.begin(), l.identities.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
     return l;

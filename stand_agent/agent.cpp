@@ -35,7 +35,8 @@ std::int32_t StandAgent::filter(int cell, std::int32_t raw, msg::CellStatus& sta
         std::deque<std::int32_t> dev;
         for (auto x : h) dev.push_back(std::abs(x - med));
         const double mad = 1.4826 * median_of(dev);
-        const double floor = options_.spike_min_n * options_.calibration.counts_per_newton[static_cast<std::size_t>(cell)];
+        const double floor =
+            options_.spike_min_n * options_.calibration.counts_per_newton[static_cast<std::size_t>(cell)];
         const double limit = std::max(options_.hampel_k * mad, std::abs(floor));
         if (saturated || std::abs(static_cast<double>(raw) - med) > limit) {
             status = saturated ? msg::CELL_SATURATED : msg::CELL_SPIKE;
@@ -64,9 +65,11 @@ StandAgent::Output StandAgent::process(const Hx711Sample& s) {
             if (bad & (1u << c)) cells.push_back(c);
         }
         ++discarded_;
-        set_state(msg::STAND_FAULT, log::cat("cell", cells.size() > 1 ? "s " : " ", log::join(cells),
-                                             s.not_ready ? " not ready within the timeout: unplugged, unpowered or broken?"
-                                                         : " DOUT stuck low: shorted line or dead chip?"), cells);
+        set_state(msg::STAND_FAULT,
+                  log::cat("cell", cells.size() > 1 ? "s " : " ", log::join(cells),
+                           s.not_ready ? " not ready within the timeout: unplugged, unpowered or broken?"
+                                       : " DOUT stuck low: shorted line or dead chip?"),
+                  cells);
         out.status_changed = state_ != before || message_ != before_msg;
         return out;
     }

@@ -18,10 +18,10 @@ namespace dw::stand {
 
 struct AgentOptions {
     Calibration calibration;
-    int tare_samples = 80;              // 1 s at 80 Hz
+    int tare_samples = 80;  // 1 s at 80 Hz
     int hampel_window = 7;
     double hampel_k = 3.0;
-    double spike_min_n = 5.0;           // never call a change below this a spike [N]
+    double spike_min_n = 5.0;  // never call a change below this a spike [N]
 };
 
 class StandAgent {
@@ -29,13 +29,13 @@ public:
     StandAgent(const AgentOptions& options, Clock& clock);
 
     struct Output {
-        bool publish = false;               // frame and wrench are valid
+        bool publish = false;  // frame and wrench are valid
         msg::LoadCellFrame frame;
         msg::WrenchStamped wrench;
         bool status_changed = false;
     };
     Output process(const Hx711Sample& sample);
-    void request_tare();                    // CALIBRATE: the next tare_samples become the zero
+    void request_tare();  // CALIBRATE: the next tare_samples become the zero
     msg::StandStatus status() const;
     bool tared() const { return tared_; }
     const CellVector& zero() const { return zero_; }

@@ -30,7 +30,9 @@ physics::Wrench Calibration::wrench(const CellVector& tared) const {
 
 Calibration Calibration::load(const std::string& path) {
     const YAML::Node root = load_yaml_file(path, "calibration file");
-    auto fail = [&](const YAML::Node& n, const std::string& key, const std::string& what) { fail_at_node(path, n, key, what); };
+    auto fail = [&](const YAML::Node& n, const std::string& key, const std::string& what) {
+        fail_at_node(path, n, key, what);
+    };
     if (!root.IsMap() || !root["format"] || root["format"].Scalar() != "downwash-stand-calibration/1") {
         fail(root["format"], "format", "expected downwash-stand-calibration/1");
     }
@@ -45,12 +47,15 @@ Calibration Calibration::load(const std::string& path) {
         c.counts_per_newton[i] = v;
     }
     const YAML::Node m = root["cell_to_wrench"];
-    if (!m || !m.IsSequence() || m.size() != 6) fail(m, "cell_to_wrench", "expected 6 rows (f_n, f_e, f_d, m_roll, m_pitch, m_yaw) of 8 numbers");
+    if (!m || !m.IsSequence() || m.size() != 6)
+        fail(m, "cell_to_wrench", "expected 6 rows (f_n, f_e, f_d, m_roll, m_pitch, m_yaw) of 8 numbers");
     for (std::size_t r = 0; r < 6; ++r) {
-        if (!m[r].IsSequence() || m[r].size() != kChips) fail(m[r], log::cat("cell_to_wrench[", r, "]"), "expected 8 numbers");
+        if (!m[r].IsSequence() || m[r].size() != kChips)
+            fail(m[r], log::cat("cell_to_wrench[", r, "]"), "expected 8 numbers");
         for (std::size_t k = 0; k < kChips; ++k) {
             double v = 0;
-            if (!YAML::convert<double>::decode(m[r][k], v) || !std::isfinite(v)) fail(m[r][k], log::cat("cell_to_wrench[", r, "][", k, "]"), "expected a number");
+            if (!YAML::convert<double>::decode(m[r][k], v) || !std::isfinite(v))
+                fail(m[r][k], log::cat("cell_to_wrench[", r, "][", k, "]"), "expected a number");
             c.cell_to_wrench(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = v;
         }
     }
@@ -71,17 +76,20 @@ void Calibration::save(const std::string& path) const {
         o << YAML::EndSeq;
     }
     o << YAML::EndSeq << YAML::EndMap;
-    write_file(path, std::string("# Stand calibration: per-cell gain and the cell-to-wrench matrix (rows f_n, f_e, f_d,\n"
-                                 "# m_roll, m_pitch, m_yaw; columns cells 0-7: 4 vertical, 2 along N, 2 along E).\n") +
-                         o.c_str() + "\n");
+    write_file(path,
+               std::string("# Stand calibration: per-cell gain and the cell-to-wrench matrix (rows f_n, f_e, f_d,\n"
+                           "# m_roll, m_pitch, m_yaw; columns cells 0-7: 4 vertical, 2 along N, 2 along E).\n") +
+                   o.c_str() + "\n");
 }
 
 CalibrationFit fit_calibration(const std::vector<KnownLoad>& loads, const std::array<double, kChips>& cpn) {
-    if (loads.size() < 6) throw InputError(log::cat("calibrate: ", loads.size(), " known loads; at least 6 are needed"));
+    if (loads.size() < 6)
+        throw InputError(log::cat("calibrate: ", loads.size(), " known loads; at least 6 are needed"));
     const auto n = static_cast<Eigen::Index>(loads.size());
     Eigen::MatrixXd F(kChips, n), W(6, n);
     for (Eigen::Index j = 0; j < n; ++j) {
-        for (int i = 0; i < kChips; ++i) F(i, j) = loads[static_cast<std::size_t>(j)].tared_counts[i] / cpn[static_cast<std::size_t>(i)];
+        for (int i = 0; i < kChips; ++i)
+            F(i, j) = loads[static_cast<std::size_t>(j)].tared_counts[i] / cpn[static_cast<std::size_t>(i)];
         W.col(j) = loads[static_cast<std::size_t>(j)].wrench;
     }
     // The loads excite six directions of the eight cell forces (the stand is statically
@@ -118,7 +126,8 @@ std::vector<KnownLoad> read_known_loads(const std::string& path) {
             char* end = nullptr;
             const double x = std::strtod(cell.c_str(), &end);
             if (cell.empty() || *end != '\0' || !std::isfinite(x)) {
-                throw InputError(log::cat(path, ":", lineno, ": column ", v.size() + 1, ": '", cell, "' is not a number"));
+                throw InputError(
+                    log::cat(path, ":", lineno, ": column ", v.size() + 1, ": '", cell, "' is not a number"));
             }
             v.push_back(x);
         }

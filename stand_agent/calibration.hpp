@@ -36,13 +36,14 @@ struct KnownLoad {
 
 struct CalibrationFit {
     Calibration calibration;
-    double residual_rms = 0;   // over all axes of all loads [N or N·m]
-    double condition = 0;      // of the cell forces the loads produced (6 excited directions)
+    double residual_rms = 0;  // over all axes of all loads [N or N·m]
+    double condition = 0;     // of the cell forces the loads produced (6 excited directions)
 };
 
 // Least squares: the matrix that best maps the cells' forces to the applied wrenches.
 // Throws dw::InputError when the loads do not excite all six axes.
-CalibrationFit fit_calibration(const std::vector<KnownLoad>& loads, const std::array<double, kChips>& counts_per_newton);
+CalibrationFit fit_calibration(const std::vector<KnownLoad>& loads,
+                               const std::array<double, kChips>& counts_per_newton);
 // Reads known loads from CSV: c0..c7 (tared counts), f_n, f_e, f_d, m_roll, m_pitch, m_yaw.
 std::vector<KnownLoad> read_known_loads(const std::string& path);
 

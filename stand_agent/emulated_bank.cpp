@@ -6,7 +6,10 @@
 namespace dw::stand {
 
 EmulatedBank::EmulatedBank(Clock& clock, const BankOptions& options, Source force)
-    : clock_(clock), manual_(dynamic_cast<ManualClock*>(&clock)), options_(options), force_(std::move(force)),
+    : clock_(clock),
+      manual_(dynamic_cast<ManualClock*>(&clock)),
+      options_(options),
+      force_(std::move(force)),
       rng_(options.seed) {
     const Nanos now = clock_.monotonic_ns();
     for (auto& c : chips_) {
@@ -61,9 +64,16 @@ void EmulatedBank::advance(Nanos now) {
                 continue;
             }
             // The pulse count of the read just finished sets this conversion's channel and gain.
-            if (c.pulses == 25) { c.gain = 128; c.channel_b = false; }
-            else if (c.pulses == 26) { c.gain = 32; c.channel_b = true; }
-            else if (c.pulses == 27) { c.gain = 64; c.channel_b = false; }
+            if (c.pulses == 25) {
+                c.gain = 128;
+                c.channel_b = false;
+            } else if (c.pulses == 26) {
+                c.gain = 32;
+                c.channel_b = true;
+            } else if (c.pulses == 27) {
+                c.gain = 64;
+                c.channel_b = false;
+            }
             c.pulses = 0;
             c.word = static_cast<std::uint32_t>(convert(i, c.next_ns)) & 0xFFFFFF;
             c.ready = true;
@@ -87,7 +97,7 @@ void EmulatedBank::do_set_clocks(std::uint8_t mask, bool high) {
             if (c.pulses == 0 && !c.ready) continue;  // no conversion waiting: nothing to shift
             if (c.pulses == 0) c.shifting = c.word;   // the first edge latches the data register
             ++c.pulses;
-            if (c.pulses == 25) c.ready = false;     // the 25th edge pulls DOUT high
+            if (c.pulses == 25) c.ready = false;  // the 25th edge pulls DOUT high
         } else if (!high && c.clock_high) {
             c.clock_high = false;
             if (c.down) {

@@ -16,12 +16,12 @@ namespace dw::stand {
 
 struct BankOptions {
     double rate_hz = 80.0;
-    double rate_skew = 0.01;                 // each chip's rate within ±1 %
-    double counts_per_newton = 21400.0;      // at gain 128
+    double rate_skew = 0.01;             // each chip's rate within ±1 %
+    double counts_per_newton = 21400.0;  // at gain 128
     double offset_sigma_counts = 50000.0;
-    double noise_counts = 0.0;               // 1 sigma, per conversion
-    bool shared_clock = true;                // false: one clock line per chip (read one by one)
-    Nanos op_cost_ns = 1000;                 // virtual time per line operation (manual clock only)
+    double noise_counts = 0.0;  // 1 sigma, per conversion
+    bool shared_clock = true;   // false: one clock line per chip (read one by one)
+    Nanos op_cost_ns = 1000;    // virtual time per line operation (manual clock only)
     std::uint64_t seed = 1;
 };
 
@@ -38,10 +38,10 @@ public:
     bool shared_clock() const override { return options_.shared_clock; }
 
     // Faults.
-    void unplug(int chip, bool unplugged = true);      // DOUT floats high: never ready
-    void stick_low(int chip, bool stuck = true);       // DOUT stuck low
-    void stretch_next_pulse(Nanos extra_high_ns);      // the next clock-high lasts this much longer
-    void spike_next(int chip, bool high);              // next conversion reads 0x7FFFFF / 0x800000
+    void unplug(int chip, bool unplugged = true);  // DOUT floats high: never ready
+    void stick_low(int chip, bool stuck = true);   // DOUT stuck low
+    void stretch_next_pulse(Nanos extra_high_ns);  // the next clock-high lasts this much longer
+    void spike_next(int chip, bool high);          // next conversion reads 0x7FFFFF / 0x800000
     void set_noise(double counts_sigma) { options_.noise_counts = counts_sigma; }
 
     int gain(int chip) const { return chips_[static_cast<std::size_t>(chip)].gain; }
@@ -56,13 +56,13 @@ protected:
 private:
     struct Chip {
         double period_ns = 0;
-        Nanos next_ns = 0;            // next conversion completes
+        Nanos next_ns = 0;  // next conversion completes
         double offset = 0;
         int gain = 128;
         bool channel_b = false;
         bool ready = false;
-        std::uint32_t word = 0;       // the converted value, 24 bits
-        std::uint32_t shifting = 0;   // the word being shifted out
+        std::uint32_t word = 0;      // the converted value, 24 bits
+        std::uint32_t shifting = 0;  // the word being shifted out
         int pulses = 0;
         bool clock_high = false;
         Nanos high_since = 0;

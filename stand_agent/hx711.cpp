@@ -30,7 +30,9 @@ void Hx711Driver::pulses(std::uint8_t mask, std::array<std::uint32_t, kChips>* w
         if (lines_.now_ns() - high > options_.max_high_ns) s.timing_violation = true;
         if (p < 24) {
             for (int c = 0; c < kChips; ++c) {
-                if (mask & (1u << c)) (*words)[static_cast<std::size_t>(c)] = ((*words)[static_cast<std::size_t>(c)] << 1) | ((bits >> c) & 1u);
+                if (mask & (1u << c))
+                    (*words)[static_cast<std::size_t>(c)] =
+                        ((*words)[static_cast<std::size_t>(c)] << 1) | ((bits >> c) & 1u);
             }
         }
     }
@@ -45,7 +47,8 @@ Hx711Sample Hx711Driver::read_parallel() {
         pulses(0xFF, &words, s);
         s.stuck = static_cast<std::uint8_t>(~lines_.read_data());  // the 25th pulse pulls DOUT high
         s.finished_ns = lines_.now_ns();
-        for (int c = 0; c < kChips; ++c) s.counts[static_cast<std::size_t>(c)] = sign_extend_24(words[static_cast<std::size_t>(c)]);
+        for (int c = 0; c < kChips; ++c)
+            s.counts[static_cast<std::size_t>(c)] = sign_extend_24(words[static_cast<std::size_t>(c)]);
     }
     s.ops = lines_.ops() - ops0;
     return s;
@@ -64,7 +67,8 @@ Hx711Sample Hx711Driver::read_one_by_one() {
         }
     }
     s.finished_ns = lines_.now_ns();
-    for (int c = 0; c < kChips; ++c) s.counts[static_cast<std::size_t>(c)] = sign_extend_24(words[static_cast<std::size_t>(c)]);
+    for (int c = 0; c < kChips; ++c)
+        s.counts[static_cast<std::size_t>(c)] = sign_extend_24(words[static_cast<std::size_t>(c)]);
     s.ops = lines_.ops() - ops0;
     return s;
 }

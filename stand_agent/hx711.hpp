@@ -4,20 +4,24 @@
 // (a pre-empted thread) may have powered chips down mid-word: that sample is discarded.
 #include <array>
 #include <cstdint>
+#include <utility>
 
 #include "stand_agent/lines.hpp"
 
 namespace dw::stand {
 
 enum class Gain { a128 = 25, b32 = 26, a64 = 27 };  // value = clock pulses per read
+// Each gain with its name (channel and gain, as the datasheet says them).
+inline constexpr std::array<std::pair<const char*, Gain>, 3> kGains{
+    {{"a128", Gain::a128}, {"a64", Gain::a64}, {"b32", Gain::b32}}};
 
 struct Hx711Sample {
     std::array<std::int32_t, kChips> counts{};  // sign-extended 24-bit values
-    std::uint8_t not_ready = 0;                  // chips not ready before the timeout
-    std::uint8_t stuck = 0;                      // DOUT still low after the 25th pulse: stuck line
-    bool timing_violation = false;               // a clock-high phase exceeded 50 µs
-    Nanos started_ns = 0, finished_ns = 0;       // monotonic, around the bit-banging
-    std::uint64_t ops = 0;                       // line operations this read took
+    std::uint8_t not_ready = 0;                 // chips not ready before the timeout
+    std::uint8_t stuck = 0;                     // DOUT still low after the 25th pulse: stuck line
+    bool timing_violation = false;              // a clock-high phase exceeded 50 µs
+    Nanos started_ns = 0, finished_ns = 0;      // monotonic, around the bit-banging
+    std::uint64_t ops = 0;                      // line operations this read took
     bool ok() const { return not_ready == 0 && stuck == 0 && !timing_violation; }
 };
 

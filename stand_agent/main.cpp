@@ -23,12 +23,37 @@ std::vector<unsigned> parse_lines(const std::string& text) {
         char* end = nullptr;
         const long v = std::strtol(item.c_str(), &end, 10);
         if (item.empty() || *end != '\0' || !dw::stand::kLineOffsetRange.contains(static_cast<double>(v))) {
-            throw dw::InputError("--data-lines: '" + item + "' is not a line number " + dw::stand::kLineOffsetRange.describe());
+            throw dw::InputError("--data-lines: '" + item + "' is not a line number " +
+                                 dw::stand::kLineOffsetRange.describe());
         }
         out.push_back(static_cast<unsigned>(v));
     }
-    if (out.size() != dw::stand::kChips) throw dw::InputError("--data-lines: expected 8 line numbers, got " + std::to_string(out.size()));
+    if (out.size() != dw::stand::kChips)
+        throw dw::InputError("--data-lines: expected 8 line numbers, got " + std::to_string(out.size()));
     return out;
+}
+
+dw::stand::Gain parse_gain(const std::string& text) {
+    std::vector<const char*> names;
+    for (const auto& [name, gain] : dw::stand::kGains) {
+        if (text == name) return gain;
+        names.push_back(name);
+    }
+    throw dw::InputError("--gain: '" + text + "' (expected " + dw::log::alternatives(names) + ")");
+}
+
+// The emulated HX711 bank, driven by the physics and the mocap topic.
+std::unique_ptr<dw::stand::Hx711Lines> emulated_lines(dw::stand::PhysicsSource& source,
+                                                      const dw::physics::PhysicsConfig& physics, double noise_n) {
+    dw::stand::BankOptions bopt;
+    bopt.rate_hz = physics.stand.rate_hz;
+    bopt.rate_skew = physics.stand.rate_skew;
+    bopt.counts_per_newton = physics.stand.counts_per_newton;
+    bopt.offset_sigma_counts = physics.stand.offset_sigma_counts;
+    bopt.noise_counts = noise_n * physics.stand.counts_per_newton;
+    auto* src = &source;
+    return std::make_unique<dw::stand::EmulatedBank>(dw::SystemClock::instance(), bopt,
+                                                     [src](int chip, dw::Nanos t) { return src->force(chip, t); });
 }
 
 int run(int argc, char** argv) {
@@ -37,30 +62,36 @@ int run(int argc, char** argv) {
     app.require_subcommand(1);
 
     bool sim = false, realtime = false;
-    std::string calibration_path, physics_path, gpio_chip = "gpiochip0", data_lines = "5,6,13,19,26,16,20,21", gain = "a128";
+    std::string calibration_path, physics_path, gpio_chip = "gpiochip0", data_lines = "5,6,13,19,26,16,20,21",
+                                                gain = "a128";
     unsigned clock_line = 17;
     double noise_n = 0.025;
     auto* runc = app.add_subcommand("run", "sample the cells and publish the wrench");
     runc->add_flag("--sim", sim, "emulated HX711 bank driven by the physics and the mocap topic (no hardware)");
-    runc->add_option("--calibration", calibration_path, "calibration YAML (default: nominal gains and the stand's geometry)");
+    runc->add_option("--calibration", calibration_path,
+                     "calibration YAML (default: nominal gains and the stand's geometry)");
     runc->add_option("--physics", physics_path, "physics configuration for --sim (default: the documented defaults)");
-    runc->add_option("--noise", noise_n, "--sim: load-cell noise, 1 sigma [N]")->check(dw::cli::in(dw::physics::kCellNoiseRange));
+    runc->add_option("--noise", noise_n, "--sim: load-cell noise, 1 sigma [N]")
+        ->check(dw::cli::in(dw::physics::kCellNoiseRange));
     runc->add_option("--gpio-chip", gpio_chip, "GPIO chip (real hardware)");
-    runc->add_option("--clock-line", clock_line, "PD_SCK line offset, shared by the 8 chips")->check(dw::cli::in(dw::stand::kLineOffsetRange));
+    runc->add_option("--clock-line", clock_line, "PD_SCK line offset, shared by the 8 chips")
+        ->check(dw::cli::in(dw::stand::kLineOffsetRange));
     runc->add_option("--data-lines", data_lines, "DOUT line offsets of cells 0-7, comma-separated");
-    runc->add_option("--gain", gain, "a128 (default), a64 or b32");
+    runc->add_option("--gain", gain, "the chips' channel and gain: a128 (default), a64 or b32");
     runc->add_flag("--realtime", realtime, "SCHED_FIFO and mlockall for the sampling thread");
 
     std::string loads_path, out_path = "stand-calibration.yaml";
     auto* calc = app.add_subcommand("calibrate", "fit the cell-to-wrench matrix by least squares from known loads");
-    calc->add_option("--loads", loads_path, "CSV: c0..c7 (tared counts), f_n, f_e, f_d, m_roll, m_pitch, m_yaw")->required();
+    calc->add_option("--loads", loads_path, "CSV: c0..c7 (tared counts), f_n, f_e, f_d, m_roll, m_pitch, m_yaw")
+        ->required();
     calc->add_option("--out", out_path, "calibration YAML to write");
     calc->add_option("--calibration", calibration_path, "take the per-cell gains from this file");
 
     cli.parse(argc, argv);
-    const dw::physics::PhysicsConfig physics = physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
+    const dw::physics::PhysicsConfig physics =
+        physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
     const dw::stand::Calibration cal = calibration_path.empty() ? dw::stand::Calibration::nominal(physics.stand)
-                                                                 : dw::stand::Calibration::load(calibration_path);
+                                                                : dw::stand::Calibration::load(calibration_path);
     if (calc->parsed()) {
         dw::require_writable_path(out_path, "--out");
         const auto fit = dw::stand::fit_calibration(dw::stand::read_known_loads(loads_path), cal.counts_per_newton);
@@ -71,10 +102,7 @@ int run(int argc, char** argv) {
     }
 
     dw::stand::DriverOptions dopt;
-    if (gain == "a128") dopt.gain = dw::stand::Gain::a128;
-    else if (gain == "a64") dopt.gain = dw::stand::Gain::a64;
-    else if (gain == "b32") dopt.gain = dw::stand::Gain::b32;
-    else throw dw::InputError("--gain: '" + gain + "' (expected a128, a64 or b32)");
+    dopt.gain = parse_gain(gain);
     dw::dds::Participant participant(cli.dds(), "stand_agent", cli.clock());
     dw::dds::Heartbeat heartbeat(participant);
     dw::stand::AgentOptions aopt;
@@ -85,16 +113,9 @@ int run(int argc, char** argv) {
     std::unique_ptr<dw::stand::PhysicsSource> source;
     if (sim) {
         source = std::make_unique<dw::stand::PhysicsSource>(participant, physics);
-        dw::stand::BankOptions bopt;
-        bopt.rate_hz = physics.stand.rate_hz;
-        bopt.rate_skew = physics.stand.rate_skew;
-        bopt.counts_per_newton = physics.stand.counts_per_newton;
-        bopt.offset_sigma_counts = physics.stand.offset_sigma_counts;
-        bopt.noise_counts = noise_n * physics.stand.counts_per_newton;
-        auto* src = source.get();
-        lines = std::make_unique<dw::stand::EmulatedBank>(dw::SystemClock::instance(), bopt,
-                                                          [src](int chip, dw::Nanos t) { return src->force(chip, t); });
-        dw::log::info("simulated stand: emulated HX711 bank driven by the physics and rt/", cli.dds().ns, "/mocap/frame");
+        lines = emulated_lines(*source, physics, noise_n);
+        dw::log::info("simulated stand: emulated HX711 bank driven by the physics and rt/", cli.dds().ns,
+                      "/mocap/frame");
     } else {
         dw::stand::GpioPins pins;
         pins.chip = gpio_chip;

@@ -12,7 +12,9 @@
 namespace dw::stand {
 
 PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, std::string sufferer)
-    : model_(physics), stand_(physics.stand), sufferer_name_(std::move(sufferer)),
+    : model_(physics),
+      stand_(physics.stand),
+      sufferer_name_(std::move(sufferer)),
       sufferer_(0, 0, -physics.stand.height_m),
       reader_(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) {
           std::vector<physics::Producer> ps;
@@ -25,7 +27,8 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
               }
               if (!b.tracking_valid()) continue;
               physics::Producer pr = model_.producer(pos);
-              const Eigen::Quaterniond q(b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z());
+              const Eigen::Quaterniond q(b.orientation().w(), b.orientation().x(), b.orientation().y(),
+                                         b.orientation().z());
               if (q.norm() > 0.5) pr.axis = q.normalized() * physics::Vec3::UnitZ();
               ps.push_back(pr);
           }
@@ -52,9 +55,9 @@ std::uint64_t run_agent(dds::Participant& p, Hx711Driver& driver, StandAgent& ag
     dds::Writer<msg::StandStatus> status(p, dds::topics::stand_status);
     std::atomic<bool> tare{false};
     dds::Reader<msg::ExperimentCommand> commands(p, dds::topics::experiment_command,
-        [&](const msg::ExperimentCommand& c, const dds::SampleMeta&) {
-            if (c.kind() == msg::CMD_CALIBRATE) tare = true;
-        });
+                                                 [&](const msg::ExperimentCommand& c, const dds::SampleMeta&) {
+                                                     if (c.kind() == msg::CMD_CALIBRATE) tare = true;
+                                                 });
     std::uint64_t published = 0;
     Nanos last_status = 0;
     while (!o.stop.stop_requested()) {

@@ -32,8 +32,8 @@ private:
 };
 
 struct RunOptions {
-    bool realtime = false;            // SCHED_FIFO + mlockall for the sampling thread
-    std::stop_token stop;             // sampling ends when it is requested
+    bool realtime = false;  // SCHED_FIFO + mlockall for the sampling thread
+    std::stop_token stop;   // sampling ends when it is requested
 };
 
 // Samples until o.stop is requested. Returns the number of wrench samples published.

@@ -29,15 +29,21 @@ msg::ExperimentPlan plan_message(const Plan& plan, const std::string& run_id) {
     pm.vehicles(plan.vehicles);
     for (const auto& off : plan.formation.offsets) {
         msg::Vector3 v;
-        v.x(off.x()); v.y(off.y()); v.z(off.z());
+        v.x(off.x());
+        v.y(off.y());
+        v.z(off.z());
         pm.offsets_m().push_back(v);
     }
     for (const auto& l : plan.reference.legs()) {
         msg::Leg leg;
         leg.index(static_cast<std::uint32_t>(l.index));
         const auto a = plan.reference.at(l.t_start).position, b = plan.reference.at(l.t_end).position;
-        leg.start_m().x(a.x()); leg.start_m().y(a.y()); leg.start_m().z(a.z());
-        leg.end_m().x(b.x()); leg.end_m().y(b.y()); leg.end_m().z(b.z());
+        leg.start_m().x(a.x());
+        leg.start_m().y(a.y());
+        leg.start_m().z(a.z());
+        leg.end_m().x(b.x());
+        leg.end_m().y(b.y());
+        leg.end_m().z(b.z());
         leg.speed_mps(plan.options.grid.speed_mps);
         leg.relative_altitude_m(l.altitude_m);
         pm.legs().push_back(leg);
@@ -50,7 +56,8 @@ msg::ExperimentPlan plan_message(const Plan& plan, const std::string& run_id) {
 class Ticker {
 public:
     explicit Ticker(double hz)
-        : period_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(1.0 / hz))),
+        : period_(
+              std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(1.0 / hz))),
           next_(std::chrono::steady_clock::now()) {}
     void wait() {
         next_ += period_;
@@ -65,32 +72,40 @@ private:
 }  // namespace
 
 Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& o)
-    : p_(p), plan_(plan), o_(o), state_(p, dds::topics::experiment_state), plan_writer_(p, dds::topics::experiment_plan),
+    : p_(p),
+      plan_(plan),
+      o_(o),
+      state_(p, dds::topics::experiment_state),
+      plan_writer_(p, dds::topics::experiment_plan),
       commands_(p, dds::topics::experiment_command),
-      states_(p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) {
-          std::lock_guard lock(mutex_);
-          auto& v = seen_[s.vehicle_id()];
-          const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
-          v.tracking = s.tracking_valid() && x.allFinite();  // a NaN pose is no pose
-          if (v.tracking) {
-              v.position = x;
-              v.seen_ns = p_.clock().monotonic_ns();
-          }
-      }),
-      operator_(p, dds::topics::experiment_command, [this](const msg::ExperimentCommand& c, const dds::SampleMeta&) {
-          if (c.kind() == msg::CMD_ABORT || c.kind() == msg::CMD_STOP) {
-              std::lock_guard lock(mutex_);
-              abort_reason_ = log::cat("operator ", dds::command_name(c.kind()), " from ", c.issuer(),
-                                       c.reason().empty() ? "" : ": " + c.reason());
-              abort_requested_ = true;
-          }
-      }),
+      states_(p, dds::topics::vehicle_state,
+              [this](const msg::VehicleState& s, const dds::SampleMeta&) {
+                  std::lock_guard lock(mutex_);
+                  auto& v = seen_[s.vehicle_id()];
+                  const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
+                  v.tracking = s.tracking_valid() && x.allFinite();  // a NaN pose is no pose
+                  if (v.tracking) {
+                      v.position = x;
+                      v.seen_ns = p_.clock().monotonic_ns();
+                  }
+              }),
+      operator_(p, dds::topics::experiment_command,
+                [this](const msg::ExperimentCommand& c, const dds::SampleMeta&) {
+                    if (c.kind() == msg::CMD_ABORT || c.kind() == msg::CMD_STOP) {
+                        std::lock_guard lock(mutex_);
+                        abort_reason_ = log::cat("operator ", dds::command_name(c.kind()), " from ", c.issuer(),
+                                                 c.reason().empty() ? "" : ": " + c.reason());
+                        abort_requested_ = true;
+                    }
+                }),
       peers_(p, [this](const dds::PeerEvent& e) {
           if (std::find(o_.wait_for.begin(), o_.wait_for.end(), e.process) == o_.wait_for.end()) return;
           std::lock_guard lock(mutex_);
           if (e.kind == dds::PeerEvent::Kind::lost) {
               lost_.try_emplace(e.process, Lost{p_.clock().monotonic_ns(), e.reason});
-              if (o_.rejoin_grace_s > 0) log::warn("lost ", e.process, " (", e.reason, "): aborting unless it is back within ", o_.rejoin_grace_s, " s");
+              if (o_.rejoin_grace_s > 0)
+                  log::warn("lost ", e.process, " (", e.reason, "): aborting unless it is back within ",
+                            o_.rejoin_grace_s, " s");
           } else if (lost_.erase(e.process) > 0) {
               log::info(e.process, " is back");
           }
@@ -129,23 +144,27 @@ std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint
     if (auto f = link_->failsafe()) return f;
     const Nanos now = p_.clock().monotonic_ns();
     for (const auto& [process, lost] : lost_)
-        if (!(to_seconds(now - lost.since) < o_.rejoin_grace_s)) return log::cat("lost participant ", process, " (", lost.reason, ")");
+        if (!(to_seconds(now - lost.since) < o_.rejoin_grace_s))
+            return log::cat("lost participant ", process, " (", lost.reason, ")");
     // Each check passes only when positively satisfied: a NaN anywhere is a fault.
     for (std::size_t i = 0; i < sps.size(); ++i) {
         const auto it = seen_.find(plan_.vehicles[i]);
         const double age = it == seen_.end() ? 1e9 : to_seconds(now - it->second.seen_ns);
-        if (!(age <= o_.mocap_timeout_s)) return log::cat("mocap lost: no pose of ", plan_.vehicles[i], " for ", age > 1e8 ? 0.0 : age, " s");
+        if (!(age <= o_.mocap_timeout_s))
+            return log::cat("mocap lost: no pose of ", plan_.vehicles[i], " for ", age > 1e8 ? 0.0 : age, " s");
         const auto& x = it->second.position;
         if (!plan_.options.fence.contains(x, kFenceTolerance_m)) {
             return log::cat("geofence breach by ", plan_.vehicles[i], " at (", x.x(), ", ", x.y(), ", ", x.z(), ")");
         }
         const double err = (x - sps[i].position).norm();
-        if (!(err <= o_.tracking_error_m)) return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
+        if (!(err <= o_.tracking_error_m))
+            return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
     }
     return std::nullopt;
 }
 
-std::optional<std::string> Experiment::fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,
+std::optional<std::string> Experiment::fly(double duration,
+                                           const std::function<std::vector<physics::Setpoint>(double)>& target,
                                            msg::ExperimentPhase phase, bool supervise) {
     const auto start = std::chrono::steady_clock::now();
     Ticker ticker(o_.setpoint_hz);
@@ -172,7 +191,8 @@ std::optional<std::string> Experiment::fly(double duration, const std::function<
         }
         const int report = static_cast<int>(t * 2);  // the latched state twice a second
         if (report != last_report) {
-            publish_state(phase, leg_, phase == msg::PHASE_FLYING ? t / plan_.duration_s() : 0.0, dds::phase_name(phase));
+            publish_state(phase, leg_, phase == msg::PHASE_FLYING ? t / plan_.duration_s() : 0.0,
+                          dds::phase_name(phase));
             last_report = report;
         }
         ticker.wait();
@@ -185,17 +205,21 @@ void Experiment::land_safely(const std::string& why) {
     reason_ = why;
     publish_state(msg::PHASE_LANDING, leg_, 0, "aborting: " + why + " — holding, then landing");
     const auto hold = last_;
-    fly(o_.hold_s, [&](double) { return hold; }, msg::PHASE_LANDING, false);
+    fly(
+        o_.hold_s, [&](double) { return hold; }, msg::PHASE_LANDING, false);
     std::vector<physics::Vec3> from, to;
     for (const auto& s : hold) {
         from.push_back(s.position);
         to.push_back(physics::Vec3(s.position.x(), s.position.y(), 0.0));  // straight down to the floor
     }
-    fly(o_.land_s, [&](double t) {
-        std::vector<physics::Setpoint> sps;
-        for (std::size_t i = 0; i < from.size(); ++i) sps.push_back(min_jerk(from[i], to[i], t, o_.land_s));
-        return sps;
-    }, msg::PHASE_LANDING, false);
+    fly(
+        o_.land_s,
+        [&](double t) {
+            std::vector<physics::Setpoint> sps;
+            for (std::size_t i = 0; i < from.size(); ++i) sps.push_back(min_jerk(from[i], to[i], t, o_.land_s));
+            return sps;
+        },
+        msg::PHASE_LANDING, false);
     link_->land();
     publish_state(msg::PHASE_ABORTED, leg_, 0, "ABORTED: " + why + "; every vehicle landed");
 }
@@ -219,19 +243,9 @@ msg::ExperimentPhase Experiment::abort_on_ground(const std::string& why) {
     return msg::PHASE_ABORTED;
 }
 
-msg::ExperimentPhase Experiment::run() {
+std::optional<std::string> Experiment::find_parked(std::vector<physics::Vec3>& parked) {
     const std::size_t k = plan_.vehicles.size();
-    // The plan, latched, for the recorder and everyone else.
-    msg::ExperimentPlan pm = plan_message(plan_, o_.run_id);
-    plan_writer_.write(pm);
-
-    publish_state(msg::PHASE_WAITING, -1, 0, "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");
-    log::info("waiting for ", o_.wait_for.size(), " processes and ", k, " vehicles");
-    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s), o_.stop))
-        return abort_on_ground(o_.stop.stop_requested() ? "interrupted (SIGINT/SIGTERM) while waiting"
-                                                        : "not every participant came up within the wait timeout");
-    std::vector<physics::Vec3> parked(k);
-    // The vehicles' parked poses, from the motion capture, within the same wait timeout.
+    // The vehicles' parked poses, from the motion capture, within the wait timeout.
     const auto deadline = std::chrono::steady_clock::now() + to_millis(o_.wait_timeout_s);
     while (!o_.stop.stop_requested()) {
         std::size_t n = 0;
@@ -248,28 +262,49 @@ msg::ExperimentPhase Experiment::run() {
         if (n == k || std::chrono::steady_clock::now() >= deadline) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    if (o_.stop.stop_requested()) return abort_on_ground("interrupted (SIGINT/SIGTERM) while waiting");  // before anything is armed
-    {
-        std::lock_guard lock(mutex_);
-        for (std::size_t v = 0; v < k; ++v) {
-            const auto it = seen_.find(plan_.vehicles[v]);
-            if (it == seen_.end() || !it->second.tracking)  // never take off from an unknown pose
-                return abort_on_ground("vehicle " + plan_.vehicles[v] + " is not seen by the motion capture");
-        }
+    if (o_.stop.stop_requested()) return std::string("interrupted (SIGINT/SIGTERM) while waiting");
+    std::lock_guard lock(mutex_);
+    for (std::size_t v = 0; v < k; ++v) {
+        const auto it = seen_.find(plan_.vehicles[v]);
+        if (it == seen_.end() || !it->second.tracking)  // never take off from an unknown pose
+            return "vehicle " + plan_.vehicles[v] + " is not seen by the motion capture";
     }
-    std::vector<physics::Setpoint> hold(k);
-    for (std::size_t v = 0; v < k; ++v) hold[v].position = parked[v];
+    return std::nullopt;
+}
+
+void Experiment::calibrate(const std::vector<physics::Setpoint>& hold) {
     publish_state(msg::PHASE_CALIBRATING, -1, 0, "CALIBRATE: stand tare at hover thrust");
     msg::ExperimentCommand c;
     c.kind(msg::CMD_CALIBRATE);
     c.issuer("planner");
     c.header().run_id(o_.run_id);
     commands_.write(c);
-    fly(o_.calibrate_s, [&](double) { return hold; }, msg::PHASE_CALIBRATING, false);
+    fly(
+        o_.calibrate_s, [&](double) { return hold; }, msg::PHASE_CALIBRATING, false);
+}
+
+msg::ExperimentPhase Experiment::run() {
+    const std::size_t k = plan_.vehicles.size();
+    // The plan, latched, for the recorder and everyone else.
+    msg::ExperimentPlan pm = plan_message(plan_, o_.run_id);
+    plan_writer_.write(pm);
+
+    publish_state(msg::PHASE_WAITING, -1, 0,
+                  "waiting for the stand agent, the mocap bridge, the recorder and the vehicles");
+    log::info("waiting for ", o_.wait_for.size(), " processes and ", k, " vehicles");
+    if (!peers_.wait_for(o_.wait_for, to_millis(o_.wait_timeout_s), o_.stop))
+        return abort_on_ground(o_.stop.stop_requested() ? "interrupted (SIGINT/SIGTERM) while waiting"
+                                                        : "not every participant came up within the wait timeout");
+    std::vector<physics::Vec3> parked(k);
+    if (auto why = find_parked(parked)) return abort_on_ground(*why);
+    std::vector<physics::Setpoint> hold(k);
+    for (std::size_t v = 0; v < k; ++v) hold[v].position = parked[v];
+    calibrate(hold);
 
     auto takeoff = [&](double t) {
         std::vector<physics::Setpoint> sps;
-        for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(parked[v], plan_.setpoint(v, 0).position, t, o_.takeoff_s));
+        for (std::size_t v = 0; v < k; ++v)
+            sps.push_back(min_jerk(parked[v], plan_.setpoint(v, 0).position, t, o_.takeoff_s));
         return sps;
     };
     if (auto refused = arm_vehicles(hold)) {
@@ -293,11 +328,14 @@ msg::ExperimentPhase Experiment::run() {
     legs_flown_ = static_cast<int>(plan_.reference.legs().size());
     std::vector<physics::Vec3> from(k);
     for (std::size_t v = 0; v < k; ++v) from[v] = plan_.setpoint(v, plan_.duration_s()).position;
-    fly(o_.land_s, [&](double t) {
-        std::vector<physics::Setpoint> sps;
-        for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(from[v], parked[v], t, o_.land_s));
-        return sps;
-    }, msg::PHASE_LANDING, false);
+    fly(
+        o_.land_s,
+        [&](double t) {
+            std::vector<physics::Setpoint> sps;
+            for (std::size_t v = 0; v < k; ++v) sps.push_back(min_jerk(from[v], parked[v], t, o_.land_s));
+            return sps;
+        },
+        msg::PHASE_LANDING, false);
     link_->land();
     publish_state(msg::PHASE_DONE, leg_, 1.0, log::cat("DONE: ", legs_flown_, " legs flown"));
     return msg::PHASE_DONE;

@@ -30,11 +30,11 @@ struct RunOptions {
     double hold_s = 1;
     double mocap_timeout_s = 0.2;
     double tracking_error_m = 0.3;
-    double rejoin_grace_s = 0;                // a required process lost aborts unless it is back within this
+    double rejoin_grace_s = 0;  // a required process lost aborts unless it is back within this
     std::string run_id;
     LinkKind link = LinkKind::sim;
-    Px4Options px4;                           // --vehicles px4: per-vehicle settings (none: the defaults)
-    std::stop_token stop;                     // a stop request: ABORTED, every vehicle landed
+    Px4Options px4;        // --vehicles px4: per-vehicle settings (none: the defaults)
+    std::stop_token stop;  // a stop request: ABORTED, every vehicle landed
 };
 
 class Experiment {
@@ -63,6 +63,11 @@ private:
     std::optional<std::string> arm_vehicles(const std::vector<physics::Setpoint>& hold);
     // ABORTED before take-off, with the reason (published and kept).
     msg::ExperimentPhase abort_on_ground(const std::string& why);
+    // Waits (the wait timeout) until the motion capture tracks every vehicle and fills `parked`
+    // with their poses; else why not.
+    std::optional<std::string> find_parked(std::vector<physics::Vec3>& parked);
+    // Tares the stand at hover thrust while the vehicles hold.
+    void calibrate(const std::vector<physics::Setpoint>& hold);
 
     dds::Participant& p_;
     Plan plan_;

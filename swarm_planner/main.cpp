@@ -17,6 +17,28 @@
 
 namespace {
 
+// `dw-planner run`: the supervised experiment. DONE exits 0; ABORTED is a runtime failure.
+int fly(dw::dds::ProcessCli& cli, const dw::planner::Plan& p, dw::planner::RunOptions ro, const std::string& wait) {
+    dw::dds::Participant participant(cli.dds(), "planner", cli.clock());
+    dw::dds::Heartbeat heartbeat(participant);
+    heartbeat.set_state(dw::msg::PROC_RUNNING);
+    ro.wait_for.clear();
+    std::stringstream w(wait);
+    for (std::string item; std::getline(w, item, ',');) {
+        if (!item.empty()) ro.wait_for.push_back(item);
+    }
+    dw::planner::Experiment experiment(participant, p, ro);
+    const auto phase = experiment.run();
+    if (phase == dw::msg::PHASE_DONE) {
+        std::cout << "DONE: " << experiment.legs_flown() << " of " << p.reference.legs().size() << " legs flown\n";
+        return 0;
+    }
+    std::cout << "ABORTED: " << experiment.reason() << "\n";
+    if (dw::Shutdown::instance().requested())
+        throw dw::Stopped("stopped: the experiment was aborted and the vehicles landed");
+    throw dw::RuntimeError("ABORTED: " + experiment.reason());
+}
+
 int run(int argc, char** argv) {
     dw::dds::ProcessCli cli("dw-planner: plan formation flights over the load stand, and fly them");
     CLI::App& app = cli.app();
@@ -28,22 +50,32 @@ int run(int argc, char** argv) {
     dw::planner::RunOptions ro;
     std::string wait = "stand_agent,mocap_bridge,recorder";
     for (auto* sub : {plan, runc}) {
-        sub->add_option("--formation", o.formation, "single, side_by_side, leader_follower, leader_follower3, stack or hybrid")->required();
-        sub->add_option("--altitudes", altitudes, "relative altitudes above the sufferer [m], comma-separated (<= 1.4)");
-        sub->add_option("--legs", o.grid.legs, "number of legs (30-40 in the study)")->check(dw::cli::in(dw::physics::kLegsRange));
+        sub->add_option("--formation", o.formation,
+                        "single, side_by_side, leader_follower, leader_follower3, stack or hybrid")
+            ->required();
+        sub->add_option("--altitudes", altitudes,
+                        "relative altitudes above the sufferer [m], comma-separated (<= 1.4)");
+        sub->add_option("--legs", o.grid.legs, "number of legs (30-40 in the study)")
+            ->check(dw::cli::in(dw::physics::kLegsRange));
         sub->add_option("--speed", o.grid.speed_mps, "leg speed [m/s]")->check(dw::cli::in(dw::physics::kSpeedRange));
-        sub->add_option("--min-separation", o.min_separation_m, "between vehicles and from the sufferer [m]")->check(dw::cli::in(dw::planner::kSeparationRange));
+        sub->add_option("--min-separation", o.min_separation_m, "between vehicles and from the sufferer [m]")
+            ->check(dw::cli::in(dw::planner::kSeparationRange));
     }
     plan->add_option("--out", out, "plan file (.yaml or .json)");
     plan->add_option("--picture", picture, "PNG picture (default: the plan file with .png)");
     runc->add_option("--wait-for", wait, "processes to wait for (heartbeats), comma-separated; '' = none");
     runc->add_option("--run-id", ro.run_id, "experiment run id (default: run-<unix time>)");
-    runc->add_option("--wait-timeout", ro.wait_timeout_s, "seconds to wait for the participants")->check(dw::cli::in(dw::kTimeoutRange));
-    runc->add_option("--rejoin-grace", ro.rejoin_grace_s, "seconds a lost required process may take to come back (a restarted recorder) before the experiment aborts; 0 = abort at once")
+    runc->add_option("--wait-timeout", ro.wait_timeout_s, "seconds to wait for the participants")
+        ->check(dw::cli::in(dw::kTimeoutRange));
+    runc->add_option("--rejoin-grace", ro.rejoin_grace_s,
+                     "seconds a lost required process may take to come back (a restarted recorder) before the "
+                     "experiment aborts; 0 = abort at once")
         ->check(dw::cli::in(dw::planner::kRejoinGraceRange));
     std::string link = "sim", px4_file;
     runc->add_option("--vehicles", link, "sim (vehicles/setpoint) or px4 (PX4's uXRCE-DDS topics)");
-    runc->add_option("--px4", px4_file, "with --vehicles px4: the PX4 settings file (version, each vehicle's namespace, MAV_SYS_ID, origin, heading; docs/OPERATOR.md)");
+    runc->add_option("--px4", px4_file,
+                     "with --vehicles px4: the PX4 settings file (version, each vehicle's namespace, MAV_SYS_ID, "
+                     "origin, heading; docs/OPERATOR.md)");
     cli.parse(argc, argv);
     o.grid.altitudes_m = dw::parse_number_list(altitudes, dw::planner::kPlanAltitudeRange, "--altitudes");
     const bool json = std::filesystem::path(out).extension() == ".json";
@@ -62,30 +94,14 @@ int run(int argc, char** argv) {
             if (ro.link != dw::planner::LinkKind::px4) throw dw::InputError("--px4: only with --vehicles px4");
             ro.px4 = dw::planner::load_px4_options(px4_file, p.vehicles);
         }
-        ro.wait_for.clear();
-        std::stringstream w(wait);
-        for (std::string item; std::getline(w, item, ',');) {
-            if (!item.empty()) ro.wait_for.push_back(item);
-        }
-        dw::dds::Participant participant(cli.dds(), "planner", cli.clock());
-        dw::dds::Heartbeat heartbeat(participant);
-        heartbeat.set_state(dw::msg::PROC_RUNNING);
-        dw::planner::Experiment experiment(participant, p, ro);
-        const auto phase = experiment.run();
-        if (phase == dw::msg::PHASE_DONE) {
-            std::cout << "DONE: " << experiment.legs_flown() << " of " << p.reference.legs().size() << " legs flown\n";
-            return 0;
-        }
-        std::cout << "ABORTED: " << experiment.reason() << "\n";
-        if (dw::Shutdown::instance().requested()) throw dw::Stopped("stopped: the experiment was aborted and the vehicles landed");
-        throw dw::RuntimeError("ABORTED: " + experiment.reason());
+        return fly(cli, p, ro, wait);
     }
     const double covered = dw::planner::coverage(p, stop);  // before any file: a stop leaves none
     dw::write_file(out, dw::planner::to_document(p, json));
     dw::planner::draw_plan(p, picture);
     std::cout << p.reference.legs().size() << " legs, " << p.duration_s() << " s, coverage "
-              << static_cast<int>(covered * 100 + 0.5) << " % of the square; every pair >= "
-              << o.min_separation_m << " m apart and inside the geofence; wrote " << out << " and " << picture << "\n";
+              << static_cast<int>(covered * 100 + 0.5) << " % of the square; every pair >= " << o.min_separation_m
+              << " m apart and inside the geofence; wrote " << out << " and " << picture << "\n";
     return 0;
 }
 

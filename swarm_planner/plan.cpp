@@ -49,7 +49,8 @@ std::optional<Violation> check(const Plan& p, const std::stop_token& stop) {
     const physics::Vec3 sufferer(0, 0, -p.options.grid.stand_height_m);
     const std::size_t k = p.vehicles.size();
     const double duration = p.duration_s();
-    if (!(std::isfinite(duration) && duration > 0)) return Violation{0, log::cat("the plan's duration is ", duration, " s")};
+    if (!(std::isfinite(duration) && duration > 0))
+        return Violation{0, log::cat("the plan's duration is ", duration, " s")};
     const auto steps = static_cast<long long>(std::ceil(duration / p.options.check_dt_s));
     std::vector<physics::Vec3> pos(k);
     for (long long step = 0; step <= steps; ++step) {
@@ -57,26 +58,28 @@ std::optional<Violation> check(const Plan& p, const std::stop_token& stop) {
         const double t = std::min(duration, static_cast<double>(step) * p.options.check_dt_s);
         for (std::size_t i = 0; i < k; ++i) {
             const physics::Setpoint sp = p.setpoint(i, t);
-            if (!is_finite(sp)) return Violation{t, log::cat(p.vehicles[i], "'s setpoint is not finite at t = ", t, " s")};
+            if (!is_finite(sp))
+                return Violation{t, log::cat(p.vehicles[i], "'s setpoint is not finite at t = ", t, " s")};
             pos[i] = sp.position;
             const auto& x = pos[i];
             if (!f.contains(x, -f.margin_m)) {
                 return Violation{t, log::cat(p.vehicles[i], " leaves the geofence at ", fmt(x), " m at t = ", t, " s (",
-                                             where(p, t), "; fence N ", f.n_min, "..", f.n_max, ", E ", f.e_min, "..", f.e_max,
-                                             ", D ", f.d_min, "..", f.d_max, " minus ", f.margin_m, " m)")};
+                                             where(p, t), "; fence N ", f.n_min, "..", f.n_max, ", E ", f.e_min, "..",
+                                             f.e_max, ", D ", f.d_min, "..", f.d_max, " minus ", f.margin_m, " m)")};
             }
             const double to_stand = (x - sufferer).norm();
             if (!(to_stand >= p.options.min_separation_m)) {
-                return Violation{t, log::cat(p.vehicles[i], " comes ", to_stand, " m from the sufferer at t = ", t, " s (",
-                                             where(p, t), "); minimum ", p.options.min_separation_m, " m")};
+                return Violation{t, log::cat(p.vehicles[i], " comes ", to_stand, " m from the sufferer at t = ", t,
+                                             " s (", where(p, t), "); minimum ", p.options.min_separation_m, " m")};
             }
         }
         for (std::size_t a = 0; a < k; ++a) {
             for (std::size_t b = a + 1; b < k; ++b) {
                 const double d = (pos[a] - pos[b]).norm();
                 if (!(d >= p.options.min_separation_m)) {
-                    return Violation{t, log::cat(p.vehicles[a], " and ", p.vehicles[b], " come ", d, " m apart at t = ", t,
-                                                 " s (", where(p, t), "); minimum ", p.options.min_separation_m, " m")};
+                    return Violation{
+                        t, log::cat(p.vehicles[a], " and ", p.vehicles[b], " come ", d, " m apart at t = ", t, " s (",
+                                    where(p, t), "); minimum ", p.options.min_separation_m, " m")};
                 }
             }
         }
@@ -98,7 +101,8 @@ double coverage(const Plan& p, const std::stop_token& stop) {
                     if (std::abs(cn - x.x()) > cell) continue;
                     for (int j = 0; j < n; ++j) {
                         const double ce = -hw + (j + 0.5) * cell;
-                        if (std::hypot(cn - x.x(), ce - x.y()) <= cell) covered[static_cast<std::size_t>(i * n + j)] = true;
+                        if (std::hypot(cn - x.x(), ce - x.y()) <= cell)
+                            covered[static_cast<std::size_t>(i * n + j)] = true;
                     }
                 }
             }
@@ -123,9 +127,13 @@ std::string to_document(const Plan& p, bool json) {
     j["legs"] = nlohmann::json::array();
     for (const auto& leg : p.reference.legs()) {
         const auto a = p.reference.at(leg.t_start).position, b = p.reference.at(leg.t_end).position;
-        j["legs"].push_back({{"index", leg.index}, {"relative_altitude_m", leg.altitude_m}, {"direction", leg.direction > 0 ? "+E" : "-E"},
-                             {"start_m", {a.x(), a.y(), a.z()}}, {"end_m", {b.x(), b.y(), b.z()}},
-                             {"t_start_s", leg.t_start}, {"t_end_s", leg.t_end}});
+        j["legs"].push_back({{"index", leg.index},
+                             {"relative_altitude_m", leg.altitude_m},
+                             {"direction", leg.direction > 0 ? "+E" : "-E"},
+                             {"start_m", {a.x(), a.y(), a.z()}},
+                             {"end_m", {b.x(), b.y(), b.z()}},
+                             {"t_start_s", leg.t_start},
+                             {"t_end_s", leg.t_end}});
     }
     if (json) return j.dump(2) + "\n";
     YAML::Emitter out;

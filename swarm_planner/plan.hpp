@@ -19,10 +19,10 @@ inline constexpr Range kSeparationRange{0.05, 5, "m"};
 using physics::is_finite;  // what the planner sends to a vehicle must pass it
 
 struct Geofence {
-    double n_min = -2.0, n_max = 2.0;   // a 4 m x 6 m x 4 m room (96 m³) around the stand
+    double n_min = -2.0, n_max = 2.0;  // a 4 m x 6 m x 4 m room (96 m³) around the stand
     double e_min = -3.0, e_max = 3.0;
-    double d_min = -4.0, d_max = 0.0;   // ceiling 4 m above the floor (D = 0): a Stack at 1.3 m
-                                        // puts its upper vehicle 3.2 m up
+    double d_min = -4.0, d_max = 0.0;  // ceiling 4 m above the floor (D = 0): a Stack at 1.3 m
+                                       // puts its upper vehicle 3.2 m up
     double margin_m = 0.2;
     // True only when x is finite and inside the fence grown by `grow_m` (negative: shrunk).
     bool contains(const physics::Vec3& x, double grow_m) const;
@@ -38,14 +38,14 @@ struct PlanOptions {
 
 struct Violation {
     double t_s = 0;
-    std::string what;   // one line: what, who, where, when
+    std::string what;  // one line: what, who, where, when
 };
 
 struct Plan {
     PlanOptions options;
     physics::Formation formation;
     physics::ReferenceTrajectory reference;
-    std::vector<std::string> vehicles;   // v1..vK
+    std::vector<std::string> vehicles;  // v1..vK
     double duration_s() const { return reference.duration(); }
     // Vehicle i's setpoint at t.
     physics::Setpoint setpoint(std::size_t vehicle, double t) const;

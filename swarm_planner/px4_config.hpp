@@ -32,21 +32,21 @@ inline constexpr Range kOriginRange{-100, 100, "m"};
 inline constexpr Range kStdRange{1e-6, 10};
 
 struct Px4Vehicle {
-    std::string name;                  // the plan's vehicle (v1, v2, ...)
-    std::string ns;                    // its client's -n; "" = rt/fmu/...
-    int system_id = 1;                 // MAV_SYS_ID
+    std::string name;                              // the plan's vehicle (v1, v2, ...)
+    std::string ns;                                // its client's -n; "" = rt/fmu/...
+    int system_id = 1;                             // MAV_SYS_ID
     physics::Vec3 origin = physics::Vec3::Zero();  // PX4's local origin in lab NED [m]
-    double heading_rad = 0;            // PX4's local north, from the lab's north towards east
+    double heading_rad = 0;                        // PX4's local north, from the lab's north towards east
 };
 
 struct Px4Options {
     dds::Px4Version version = dds::Px4Version::v1_15;
-    bool odometry = true;              // publish vehicle_visual_odometry from vehicles/state
-    double odometry_hz = 50;           // 0 = every mocap frame
-    double position_std_m = 0.005;     // the variances sent with the odometry
+    bool odometry = true;           // publish vehicle_visual_odometry from vehicles/state
+    double odometry_hz = 50;        // 0 = every mocap frame
+    double position_std_m = 0.005;  // the variances sent with the odometry
     double orientation_std_rad = 0.01;
     double velocity_std_mps = 0.05;
-    double answer_timeout_s = 1.0;     // per command attempt, waiting for vehicle_status to show it
+    double answer_timeout_s = 1.0;  // per command attempt, waiting for vehicle_status to show it
     int attempts = 3;
     double status_timeout_s = 3.0;     // the first vehicle_status within this; in flight, one older is a lost link
     std::vector<Px4Vehicle> vehicles;  // in the plan's order
@@ -57,7 +57,9 @@ struct LocalFrame {
     physics::Vec3 origin = physics::Vec3::Zero();
     double heading_rad = 0;
 
-    Eigen::Matrix3d lab_to_local() const { return Eigen::AngleAxisd(-heading_rad, physics::Vec3::UnitZ()).toRotationMatrix(); }
+    Eigen::Matrix3d lab_to_local() const {
+        return Eigen::AngleAxisd(-heading_rad, physics::Vec3::UnitZ()).toRotationMatrix();
+    }
     physics::Vec3 point(const physics::Vec3& lab) const { return lab_to_local() * (lab - origin); }
     physics::Vec3 vector(const physics::Vec3& lab) const { return lab_to_local() * lab; }
     physics::Vec3 lab_point(const physics::Vec3& local) const { return origin + lab_to_local().transpose() * local; }

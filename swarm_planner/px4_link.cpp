@@ -16,8 +16,8 @@ namespace px4 = dds::px4;
 using px4_msgs::msg::dds_::TrajectorySetpoint_;
 using px4_msgs::msg::dds_::VehicleOdometry_;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr std::uint8_t kFrameNed = 1;       // VehicleOdometry pose_frame / velocity_frame
-constexpr std::int8_t kQualityBest = 100;   // VehicleOdometry quality
+constexpr std::uint8_t kFrameNed = 1;      // VehicleOdometry pose_frame / velocity_frame
+constexpr std::int8_t kQualityBest = 100;  // VehicleOdometry quality
 
 // The message types of one PX4 version (the others are the same in every supported version).
 struct Types115 {
@@ -57,10 +57,11 @@ class Px4Link final : public VehicleLink {
 public:
     Px4Link(dds::Participant& p, const Px4Options& o) : p_(p), o_(o) {
         for (std::size_t i = 0; i < o.vehicles.size(); ++i) add_vehicle(o.vehicles[i]);
-        states_ = std::make_unique<dds::Reader<msg::VehicleState>>(p, dds::topics::vehicle_state,
-            [this](const msg::VehicleState& s, const dds::SampleMeta&) { on_state(s); });
+        states_ = std::make_unique<dds::Reader<msg::VehicleState>>(
+            p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) { on_state(s); });
         log::info("PX4 link (", dds::px4_version(o.version).name, "): ", o.vehicles.size(), " vehicles, odometry ",
-                  o.odometry ? log::cat(o.odometry_hz > 0 ? o.odometry_hz : 0.0, " Hz (0 = every mocap frame)") : std::string("off"));
+                  o.odometry ? log::cat(o.odometry_hz > 0 ? o.odometry_hz : 0.0, " Hz (0 = every mocap frame)")
+                             : std::string("off"));
     }
 
     void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) override {
@@ -95,10 +96,12 @@ public:
             const StatusSeen s = status_of(v);
             const double age = to_seconds(now - s.seen_ns);
             if (!(age <= o_.status_timeout_s))
-                return log::cat(v.cfg.name, ": no vehicle_status from PX4 for ", age, " s (its link or the Agent lost)");
+                return log::cat(v.cfg.name, ": no vehicle_status from PX4 for ", age,
+                                " s (its link or the Agent lost)");
             const std::string why = s.failsafe ? " (PX4 failsafe: offboard lost, battery, or another check)" : "";
             if (s.arming != px4::kArmed) return log::cat(v.cfg.name, ": PX4 disarmed in flight", why);
-            if (s.nav != px4::kNavOffboard) return log::cat(v.cfg.name, ": PX4 left OFFBOARD for ", px4::nav_state_name(s.nav), why);
+            if (s.nav != px4::kNavOffboard)
+                return log::cat(v.cfg.name, ": PX4 left OFFBOARD for ", px4::nav_state_name(s.nav), why);
         }
         return std::nullopt;
     }
@@ -118,8 +121,8 @@ private:
         std::unique_ptr<dds::Writer<VehicleOdometry_>> odom;
         std::unique_ptr<dds::Reader<typename Types::Status>> status;
         std::unique_ptr<dds::Reader<typename Types::Ack>> ack;
-        StatusSeen st;      // under mutex_
-        AckSeen last_ack;   // under mutex_
+        StatusSeen st;     // under mutex_
+        AckSeen last_ack;  // under mutex_
         Nanos odom_sent_ns = 0;
         bool tracking = false;
         std::uint8_t reset_counter = 0;
@@ -140,27 +143,36 @@ private:
         v.odom_name = dds::px4_topic(cfg.ns, "in", "vehicle_visual_odometry");
         v.status_name = dds::px4_topic(cfg.ns, "out", version.status_topic);
         v.ack_name = dds::px4_topic(cfg.ns, "out", version.ack_topic);
-        v.traj = std::make_unique<dds::Writer<TrajectorySetpoint_>>(p_, px4_spec<TrajectorySetpoint_>(v.traj_name, "px4_msgs::msg::dds_::TrajectorySetpoint_"));
-        v.mode = std::make_unique<dds::Writer<typename Types::Mode>>(p_, px4_spec<typename Types::Mode>(v.mode_name, "px4_msgs::msg::dds_::OffboardControlMode_"));
-        v.cmd = std::make_unique<dds::Writer<typename Types::Command>>(p_, px4_spec<typename Types::Command>(v.cmd_name, "px4_msgs::msg::dds_::VehicleCommand_"));
-        v.odom = std::make_unique<dds::Writer<VehicleOdometry_>>(p_, px4_spec<VehicleOdometry_>(v.odom_name, "px4_msgs::msg::dds_::VehicleOdometry_"));
+        v.traj = std::make_unique<dds::Writer<TrajectorySetpoint_>>(
+            p_, px4_spec<TrajectorySetpoint_>(v.traj_name, "px4_msgs::msg::dds_::TrajectorySetpoint_"));
+        v.mode = std::make_unique<dds::Writer<typename Types::Mode>>(
+            p_, px4_spec<typename Types::Mode>(v.mode_name, "px4_msgs::msg::dds_::OffboardControlMode_"));
+        v.cmd = std::make_unique<dds::Writer<typename Types::Command>>(
+            p_, px4_spec<typename Types::Command>(v.cmd_name, "px4_msgs::msg::dds_::VehicleCommand_"));
+        v.odom = std::make_unique<dds::Writer<VehicleOdometry_>>(
+            p_, px4_spec<VehicleOdometry_>(v.odom_name, "px4_msgs::msg::dds_::VehicleOdometry_"));
         Vehicle* vp = &v;
         // PX4's fmu/out writers are TRANSIENT_LOCAL, and the ack's appears with its first answer:
         // a transient-local reader still gets that answer once it has matched the new writer.
         dds::QosOverrides latest;
         latest.transient_local = true;
-        v.status = std::make_unique<dds::Reader<typename Types::Status>>(p_, px4_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
+        v.status = std::make_unique<dds::Reader<typename Types::Status>>(
+            p_, px4_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
             [this, vp](const typename Types::Status& s, const dds::SampleMeta&) {
                 std::lock_guard lock(mutex_);
-                vp->st = {s.arming_state(), s.nav_state(), s.nav_state_user_intention(), s.failsafe(), p_.clock().monotonic_ns()};
-            }, latest);
-        v.ack = std::make_unique<dds::Reader<typename Types::Ack>>(p_, px4_spec<typename Types::Ack>(v.ack_name, "px4_msgs::msg::dds_::VehicleCommandAck_"),
+                vp->st = {s.arming_state(), s.nav_state(), s.nav_state_user_intention(), s.failsafe(),
+                          p_.clock().monotonic_ns()};
+            },
+            latest);
+        v.ack = std::make_unique<dds::Reader<typename Types::Ack>>(
+            p_, px4_spec<typename Types::Ack>(v.ack_name, "px4_msgs::msg::dds_::VehicleCommandAck_"),
             [this, vp](const typename Types::Ack& a, const dds::SampleMeta&) {
                 // An answer to someone else (a ground station is system 255 too) is not ours.
                 if (a.target_system() != px4::kPlannerSystem || a.target_component() != px4::kPlannerComponent) return;
                 std::lock_guard lock(mutex_);
                 vp->last_ack = {a.command(), a.result(), p_.clock().monotonic_ns()};
-            }, latest);
+            },
+            latest);
         by_name_[cfg.name] = &v;
     }
 
@@ -196,19 +208,22 @@ private:
         if (!v.tracking) ++v.reset_counter;  // tracking came back: the estimator may see a jump
         v.tracking = true;
         const Nanos now = p_.clock().monotonic_ns();
-        if (o_.odometry_hz > 0 && v.odom_sent_ns != 0 && to_seconds(now - v.odom_sent_ns) < 1.0 / o_.odometry_hz) return;
+        if (o_.odometry_hz > 0 && v.odom_sent_ns != 0 && to_seconds(now - v.odom_sent_ns) < 1.0 / o_.odometry_hz)
+            return;
         v.odom_sent_ns = now;
         v.odom->write_as_is(odometry(v, s, x, q));
     }
 
-    VehicleOdometry_ odometry(const Vehicle& v, const msg::VehicleState& s, const physics::Vec3& x, const Eigen::Quaterniond& q) const {
+    VehicleOdometry_ odometry(const Vehicle& v, const msg::VehicleState& s, const physics::Vec3& x,
+                              const Eigen::Quaterniond& q) const {
         VehicleOdometry_ m;
         m.timestamp(static_cast<std::uint64_t>(p_.clock().now_ns() / 1000));
         m.timestamp_sample(static_cast<std::uint64_t>(dds::from_msg(s.header().stamp()) / 1000));  // the capture time
         m.pose_frame(kFrameNed);
         m.velocity_frame(kFrameNed);
         const physics::Vec3 p = v.frame.point(x);
-        const physics::Vec3 vel = v.frame.vector(physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z()));
+        const physics::Vec3 vel =
+            v.frame.vector(physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z()));
         // Normalised in float, as EKF2 checks it (|‖q‖ - 1| <= 1e-5), w first (Hamilton, FRD -> NED).
         const Eigen::Quaterniond qd = v.frame.attitude(q.normalized());
         Eigen::Quaternionf ql = qd.cast<float>();
@@ -265,25 +280,30 @@ private:
                     refuse(v, log::cat("PX4 publishes vehicle_status but nothing reads ", v.cmd_name, " after ", waited,
                                        " s (is vehicle_command among the Agent's bridged topics?)"));
                 else if (waited > o_.status_timeout_s)
-                    refuse(v, log::cat("no vehicle_status from PX4 on ", v.status_name, " in ", waited, " s (is the Agent running on domain ",
-                                       p_.config().domain, ", and the vehicle's uXRCE-DDS client started with -n ", v.cfg.ns, "?)"));
+                    refuse(v, log::cat("no vehicle_status from PX4 on ", v.status_name, " in ", waited,
+                                       " s (is the Agent running on domain ", p_.config().domain,
+                                       ", and the vehicle's uXRCE-DDS client started with -n ", v.cfg.ns, "?)"));
                 return;
             case Step::offboard:
                 if (s.nav == px4::kNavOffboard) return ask(v, Step::arm, now, true);
-                if (waited > o_.answer_timeout_s) retry_or_refuse(v, now, "switch to OFFBOARD", px4::kCmdDoSetMode,
-                    "PX4 needs a valid local position (vehicle_visual_odometry into its estimator) and a setpoint stream of more than 1 s");
+                if (waited > o_.answer_timeout_s)
+                    retry_or_refuse(v, now, "switch to OFFBOARD", px4::kCmdDoSetMode,
+                                    "PX4 needs a valid local position (vehicle_visual_odometry into its estimator) and "
+                                    "a setpoint stream of more than 1 s");
                 return;
             case Step::arm:
                 if (s.arming == px4::kArmed && s.nav != px4::kNavOffboard)
-                    return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") armed but left OFFBOARD for ", px4::nav_state_name(s.nav),
-                                              s.failsafe ? " (failsafe)" : ""));
+                    return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") armed but left OFFBOARD for ",
+                                              px4::nav_state_name(s.nav), s.failsafe ? " (failsafe)" : ""));
                 if (s.arming == px4::kArmed) {
                     v.step = Step::ready;
                     log::info(v.cfg.name, ": PX4 system ", v.cfg.system_id, " armed in OFFBOARD");
                     return;
                 }
-                if (waited > o_.answer_timeout_s) retry_or_refuse(v, now, "arm", px4::kCmdArmDisarm,
-                    "its pre-arm checks failed (see QGroundControl or `commander check` on the PX4 console)");
+                if (waited > o_.answer_timeout_s)
+                    retry_or_refuse(
+                        v, now, "arm", px4::kCmdArmDisarm,
+                        "its pre-arm checks failed (see QGroundControl or `commander check` on the PX4 console)");
                 return;
             case Step::ready:
             case Step::refused: return;
@@ -302,7 +322,8 @@ private:
 
     void retry_or_refuse(Vehicle& v, Nanos now, const std::string& what, std::uint32_t cmd, const std::string& hint) {
         if (v.tries < o_.attempts) {
-            log::warn(v.cfg.name, ": PX4 did not ", what, " within ", o_.answer_timeout_s, " s; asking again (", v.tries + 1, " of ", o_.attempts, ")");
+            log::warn(v.cfg.name, ": PX4 did not ", what, " within ", o_.answer_timeout_s, " s; asking again (",
+                      v.tries + 1, " of ", o_.attempts, ")");
             return ask(v, v.step, now, false);
         }
         AckSeen a;
@@ -311,15 +332,17 @@ private:
             a = v.last_ack;
         }
         const bool answered = a.command == cmd && a.seen_ns >= v.first_sent_ns;  // an answer to this step
-        const auto accepted = static_cast<std::uint8_t>(px4::AckResult::accepted), in_progress = static_cast<std::uint8_t>(px4::AckResult::in_progress);
+        const auto accepted = static_cast<std::uint8_t>(px4::AckResult::accepted),
+                   in_progress = static_cast<std::uint8_t>(px4::AckResult::in_progress);
         if (answered && a.result != accepted && a.result != in_progress)
-            return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") refused to ", what, ": ", px4::ack_result_name(a.result), " after ",
-                                      v.tries, " tries; ", hint));
+            return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") refused to ", what, ": ",
+                                      px4::ack_result_name(a.result), " after ", v.tries, " tries; ", hint));
         if (answered)
-            return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") answered ", px4::ack_result_name(a.result), " to ", what,
-                                      " but vehicle_status never showed it after ", v.tries, " tries"));
-        refuse(v, log::cat("no answer from PX4 system ", v.cfg.system_id, " to ", what, " after ", v.tries, " tries (is its MAV_SYS_ID ",
-                           v.cfg.system_id, "? PX4 ignores commands for another system", v.ack->matched() == 0 ? "; or its vehicle_command_ack is not bridged" : "", ")"));
+            return refuse(v, log::cat("PX4 (system ", v.cfg.system_id, ") answered ", px4::ack_result_name(a.result),
+                                      " to ", what, " but vehicle_status never showed it after ", v.tries, " tries"));
+        refuse(v, log::cat("no answer from PX4 system ", v.cfg.system_id, " to ", what, " after ", v.tries,
+                           " tries (is its MAV_SYS_ID ", v.cfg.system_id, "? PX4 ignores commands for another system",
+                           v.ack->matched() == 0 ? "; or its vehicle_command_ack is not bridged" : "", ")"));
     }
 
     void refuse(Vehicle& v, const std::string& why) {

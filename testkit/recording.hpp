@@ -24,7 +24,8 @@ public:
         writer_.write({channel, seq, log_time_ns, log_time_ns, cdr_of(message)}, 0);
     }
     // Bytes as they are (a damaged message, say).
-    void write_bytes(std::uint16_t channel, std::uint32_t seq, std::uint64_t log_time_ns, std::span<const std::uint8_t> bytes) {
+    void write_bytes(std::uint16_t channel, std::uint32_t seq, std::uint64_t log_time_ns,
+                     std::span<const std::uint8_t> bytes) {
         writer_.write({channel, seq, log_time_ns, log_time_ns, bytes}, 0);
     }
     void close() { writer_.close(); }

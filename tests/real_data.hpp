@@ -12,8 +12,9 @@ namespace dw::test {
 inline const std::string kNeuralSwarm =
     std::string(DW_SOURCE_DIR) + "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020/";
 
-#define REQUIRE_SHARED_DATA() \
-    if (!std::filesystem::exists(dw::test::kNeuralSwarm)) GTEST_SKIP() << "the shared Neural-Swarm logs are not at " << dw::test::kNeuralSwarm
+#define REQUIRE_SHARED_DATA()                             \
+    if (!std::filesystem::exists(dw::test::kNeuralSwarm)) \
+    GTEST_SKIP() << "the shared Neural-Swarm logs are not at " << dw::test::kNeuralSwarm
 
 // One trial: its logs (the sufferer first) and a name.
 struct Trial {

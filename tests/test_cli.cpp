@@ -54,9 +54,12 @@ TEST(Cli, UsageErrors) {
     expect_one_line_exit_2(run({bin("dw-probe"), "echo", "stand/nothing"}, d), "unknown topic 'stand/nothing'");
     expect_one_line_exit_2(run({bin("dw-probe"), "--log-level", "loud", "list"}, d), "unknown log level 'loud'");
     expect_one_line_exit_2(run({bin("dw-probe"), "pub", "--reliability", "mostly"}, d), "--reliability");
-    expect_one_line_exit_2(run({bin("dw-probe"), "command", "explode"}, d), "command: unknown kind 'explode' (expected abort, stop");
-    expect_one_line_exit_2(run({bin("dw-mocap-bridge"), "--sim", "--sim-fault", "melt:v1:3"}, d), "unknown fault 'melt' (expected stuck or jump)");
-    expect_one_line_exit_2(run({bin("dw-mocap-bridge"), "--sim", "--sim-fault", "stuck:v1:nan"}, d), "--sim-fault 'stuck:v1:nan'");
+    expect_one_line_exit_2(run({bin("dw-probe"), "command", "explode"}, d),
+                           "command: unknown kind 'explode' (expected abort, stop");
+    expect_one_line_exit_2(run({bin("dw-mocap-bridge"), "--sim", "--sim-fault", "melt:v1:3"}, d),
+                           "unknown fault 'melt' (expected stuck or jump)");
+    expect_one_line_exit_2(run({bin("dw-mocap-bridge"), "--sim", "--sim-fault", "stuck:v1:nan"}, d),
+                           "--sim-fault 'stuck:v1:nan'");
 }
 
 TEST(Cli, HelpExitsZeroAndListsTheCommonOptions) {
@@ -75,13 +78,16 @@ TEST(SimCli, BadInputIsOneLineAndExit2) {
     TempDir d;
     expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "triangle", "--out", d.file("f")}, d),
                            "unknown formation 'triangle'");
-    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--physics",
-                                d.file("none.yaml")}, d), "none.yaml: no such file");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--physics", d.file("none.yaml")}, d),
+        "none.yaml: no such file");
     write(d.file("p.yaml"), "effects:\n  clock_ofset: {enabled: true}\n");
-    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--physics",
-                                d.file("p.yaml")}, d), "p.yaml:2:3: effects.clock_ofset: unknown key 'clock_ofset'");
-    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--altitudes",
-                                "0.3,high"}, d), "--altitudes: 'high' is not a number");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--physics", d.file("p.yaml")}, d),
+        "p.yaml:2:3: effects.clock_ofset: unknown key 'clock_ofset'");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--out", d.file("f"), "--altitudes", "0.3,high"}, d),
+        "--altitudes: 'high' is not a number");
     expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single"}, d), "--out is required");
 }
 
@@ -89,15 +95,18 @@ TEST(SimCli, SameInputsAndSeedGiveTheSameBytes) {
     TempDir d;
     for (const char* out : {"a", "b"}) {
         const auto r = run({bin("dw-sim"), "fly", "--formation", "stack", "--legs", "4", "--seed", "5", "--quiet",
-                            "--out", d.file(out)}, d);
+                            "--out", d.file(out)},
+                           d);
         ASSERT_EQ(r.status, 0) << r.err;
         EXPECT_NE(r.out.find("4 legs"), std::string::npos) << r.out;
     }
     for (const char* name : {"meta.json", "wrench.csv", "poses.csv", "legs.csv"}) {
-        EXPECT_EQ(dw::read_file(d.file(std::string("a/") + name)), dw::read_file(d.file(std::string("b/") + name))) << name;
+        EXPECT_EQ(dw::read_file(d.file(std::string("a/") + name)), dw::read_file(d.file(std::string("b/") + name)))
+            << name;
     }
-    const auto r = run({bin("dw-sim"), "fly", "--formation", "stack", "--legs", "4", "--seed", "6", "--quiet",
-                        "--out", d.file("c")}, d);
+    const auto r = run(
+        {bin("dw-sim"), "fly", "--formation", "stack", "--legs", "4", "--seed", "6", "--quiet", "--out", d.file("c")},
+        d);
     ASSERT_EQ(r.status, 0);
     EXPECT_NE(dw::read_file(d.file("a/wrench.csv")), dw::read_file(d.file("c/wrench.csv")));
 }
@@ -108,7 +117,8 @@ TEST(StandCli, CalibrateFitsKnownLoadsAndRejectsBadFilesClearly) {
     std::string csv = "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
     const double r = 0.1;
     for (int i = 0; i < 12; ++i) {
-        const double fz = 1.0 + i, fn = (i % 3) - 1.0, fe = (i % 4) - 1.5, mr = 0.01 * (i % 5), mp = -0.01 * (i % 3), my = 0.005 * (i % 2);
+        const double fz = 1.0 + i, fn = (i % 3) - 1.0, fe = (i % 4) - 1.5, mr = 0.01 * (i % 5), mp = -0.01 * (i % 3),
+                     my = 0.005 * (i % 2);
         // Minimum-norm cell forces of the nominal geometry (vertical cells at 45° + k 90°).
         double v[4];
         for (int k = 0; k < 4; ++k) {
@@ -118,17 +128,20 @@ TEST(StandCli, CalibrateFitsKnownLoadsAndRejectsBadFilesClearly) {
         const double n4 = fn / 2 + my / (4 * r) * -1, n5 = fn / 2 - my / (4 * r) * -1;
         const double e6 = fe / 2 - my / (4 * r), e7 = fe / 2 + my / (4 * r);
         char line[512];
-        std::snprintf(line, sizeof(line), "%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f\n", v[0] * 21400, v[1] * 21400, v[2] * 21400,
-                      v[3] * 21400, n4 * 21400, n5 * 21400, e6 * 21400, e7 * 21400, fn, fe, fz, mr, mp, my);
+        std::snprintf(line, sizeof(line), "%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f\n", v[0] * 21400, v[1] * 21400,
+                      v[2] * 21400, v[3] * 21400, n4 * 21400, n5 * 21400, e6 * 21400, e7 * 21400, fn, fe, fz, mr, mp,
+                      my);
         csv += line;
     }
     write(d.file("loads.csv"), csv);
-    const auto ok = run({bin("dw-stand-agent"), "calibrate", "--loads", d.file("loads.csv"), "--out", d.file("cal.yaml")}, d);
+    const auto ok =
+        run({bin("dw-stand-agent"), "calibrate", "--loads", d.file("loads.csv"), "--out", d.file("cal.yaml")}, d);
     ASSERT_EQ(ok.status, 0) << ok.err;
     EXPECT_NE(ok.out.find("residual"), std::string::npos) << ok.out;
     EXPECT_NE(ok.out.find("condition number"), std::string::npos) << ok.out;
     EXPECT_NE(dw::read_file(d.file("cal.yaml")).find("downwash-stand-calibration/1"), std::string::npos);
-    write(d.file("bad.csv"), "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n1,2,3,4,5,6,7,8,9,10,11,12,13,x\n");
+    write(d.file("bad.csv"),
+          "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n1,2,3,4,5,6,7,8,9,10,11,12,13,x\n");
     expect_one_line_exit_2(run({bin("dw-stand-agent"), "calibrate", "--loads", d.file("bad.csv")}, d),
                            "bad.csv:2: column 14: 'x' is not a number");
     const auto nogpio = run({bin("dw-stand-agent"), "run", "--domain", "9"}, d);
@@ -145,7 +158,9 @@ TEST(PlannerCli, PlanPrintsItsFiguresAndRejectsInfeasiblePlansInOneLine) {
     EXPECT_NE(dw::read_file(d.file("p.json")).find("downwash-plan/1"), std::string::npos);
     EXPECT_GT(dw::read_file(d.file("p.png")).size(), 1000u);
     expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "leader_follower3", "--min-separation", "0.6",
-                                "--out", d.file("q.yaml")}, d), "infeasible plan: v1 and v2 come 0.5 m apart");
+                                "--out", d.file("q.yaml")},
+                               d),
+                           "infeasible plan: v1 and v2 come 0.5 m apart");
     expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--altitudes", "2.0"}, d),
                            "--altitudes: 2 is not in [0.05, 1.4] m");
 }

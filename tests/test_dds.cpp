@@ -65,10 +65,11 @@ TEST(Qos, ProfilesHaveTheDocumentedShape) {
 
 TEST(Qos, MismatchLineIsOneClearLine) {
     const std::string line = dw::dds::qos_mismatch_line("rt/lab/stand/wrench", "dw::msg::WrenchStamped", true,
-                                                         "RELIABLE VOLATILE KEEP_LAST(16)", 11, 1);
-    EXPECT_EQ(line, "QoS mismatch on rt/lab/stand/wrench (dw::msg::WrenchStamped): this reader requests "
-                    "RELIABLE VOLATILE KEEP_LAST(16) but a writer offers an incompatible RELIABILITY; no "
-                    "samples flow between them (1 incompatible peer so far)");
+                                                        "RELIABLE VOLATILE KEEP_LAST(16)", 11, 1);
+    EXPECT_EQ(line,
+              "QoS mismatch on rt/lab/stand/wrench (dw::msg::WrenchStamped): this reader requests "
+              "RELIABLE VOLATILE KEEP_LAST(16) but a writer offers an incompatible RELIABILITY; no "
+              "samples flow between them (1 incompatible peer so far)");
     EXPECT_EQ(line.find('\n'), std::string::npos);
     EXPECT_EQ(dw::dds::policy_name(2), "DURABILITY");
 }
@@ -91,11 +92,11 @@ TEST(Endpoints, WriterToReaderDeliversIntactSamplesWithMeta) {
     std::vector<dw::msg::MocapFrame> got;
     std::vector<dw::dds::SampleMeta> metas;
     dw::dds::Reader<dw::msg::MocapFrame> reader(b, topics::mocap_frame,
-        [&](const dw::msg::MocapFrame& f, const dw::dds::SampleMeta& meta) {
-            std::lock_guard lock(m);
-            got.push_back(f);
-            metas.push_back(meta);
-        });
+                                                [&](const dw::msg::MocapFrame& f, const dw::dds::SampleMeta& meta) {
+                                                    std::lock_guard lock(m);
+                                                    got.push_back(f);
+                                                    metas.push_back(meta);
+                                                });
     dw::dds::Writer<dw::msg::MocapFrame> writer(a, topics::mocap_frame);
     ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
     ASSERT_TRUE(reader.wait_for_writers(1, 20000ms));
@@ -104,7 +105,10 @@ TEST(Endpoints, WriterToReaderDeliversIntactSamplesWithMeta) {
         ASSERT_TRUE(writer.write(f));
         std::this_thread::sleep_for(2ms);
     }
-    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return got.size() == 20; }));
+    ASSERT_TRUE(eventually([&] {
+        std::lock_guard lock(m);
+        return got.size() == 20;
+    }));
     std::lock_guard lock(m);
     for (std::uint64_t i = 0; i < 20; ++i) {
         EXPECT_EQ(got[i], dw::probe::make_sample<dw::msg::MocapFrame>(i));
@@ -119,8 +123,8 @@ TEST(Endpoints, WriterNumbersSamplesAndReaderCountsGaps) {
     Participant a(test_config(), "writer");
     Participant b(test_config(), "reader");
     std::atomic<int> n{0};
-    dw::dds::Reader<dw::msg::ExperimentCommand> reader(b, topics::experiment_command,
-        [&](const dw::msg::ExperimentCommand&, const dw::dds::SampleMeta&) { ++n; });
+    dw::dds::Reader<dw::msg::ExperimentCommand> reader(
+        b, topics::experiment_command, [&](const dw::msg::ExperimentCommand&, const dw::dds::SampleMeta&) { ++n; });
     dw::dds::Writer<dw::msg::ExperimentCommand> writer(a, topics::experiment_command);
     ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
     dw::msg::ExperimentCommand c;
@@ -141,16 +145,26 @@ TEST(Endpoints, QosMismatchIsReportedOnBothSidesInOneLine) {
     Participant b(test_config(), "reader");
     std::mutex m;
     std::vector<std::string> problems_a, problems_b;
-    a.on_problem([&](const std::string& l) { std::lock_guard lock(m); problems_a.push_back(l); });
-    b.on_problem([&](const std::string& l) { std::lock_guard lock(m); problems_b.push_back(l); });
+    a.on_problem([&](const std::string& l) {
+        std::lock_guard lock(m);
+        problems_a.push_back(l);
+    });
+    b.on_problem([&](const std::string& l) {
+        std::lock_guard lock(m);
+        problems_b.push_back(l);
+    });
     dw::dds::QosOverrides best_effort;
     best_effort.reliable = false;
     dw::dds::Writer<dw::msg::StandStatus> writer(a, topics::stand_status, best_effort);
     dw::dds::Reader<dw::msg::StandStatus> reader(b, topics::stand_status,
-        [](const dw::msg::StandStatus&, const dw::dds::SampleMeta&) {});
-    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return !problems_a.empty() && !problems_b.empty(); }));
+                                                 [](const dw::msg::StandStatus&, const dw::dds::SampleMeta&) {});
+    ASSERT_TRUE(eventually([&] {
+        std::lock_guard lock(m);
+        return !problems_a.empty() && !problems_b.empty();
+    }));
     std::lock_guard lock(m);
-    EXPECT_NE(problems_b[0].find("QoS mismatch on " + b.topic_name("stand/status")), std::string::npos) << problems_b[0];
+    EXPECT_NE(problems_b[0].find("QoS mismatch on " + b.topic_name("stand/status")), std::string::npos)
+        << problems_b[0];
     EXPECT_NE(problems_b[0].find("this reader requests RELIABLE"), std::string::npos) << problems_b[0];
     EXPECT_NE(problems_b[0].find("RELIABILITY"), std::string::npos);
     EXPECT_NE(problems_a[0].find("this writer offers BEST_EFFORT"), std::string::npos) << problems_a[0];
@@ -168,9 +182,15 @@ TEST(Endpoints, LatchedStateReachesALateReader) {
     Participant b(test_config(), "late");
     std::mutex m;
     std::vector<dw::msg::ExperimentState> got;
-    dw::dds::Reader<dw::msg::ExperimentState> reader(b, topics::experiment_state,
-        [&](const dw::msg::ExperimentState& s, const dw::dds::SampleMeta&) { std::lock_guard lock(m); got.push_back(s); });
-    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return !got.empty(); }));
+    dw::dds::Reader<dw::msg::ExperimentState> reader(
+        b, topics::experiment_state, [&](const dw::msg::ExperimentState& s, const dw::dds::SampleMeta&) {
+            std::lock_guard lock(m);
+            got.push_back(s);
+        });
+    ASSERT_TRUE(eventually([&] {
+        std::lock_guard lock(m);
+        return !got.empty();
+    }));
     std::this_thread::sleep_for(200ms);  // anything older would have arrived with the last one
     std::lock_guard lock(m);
     ASSERT_EQ(got.size(), 1u);
@@ -207,12 +227,17 @@ TEST(Endpoints, ASensorWritersFirstSampleWaitsForTheAwaitedReader) {
     Participant rec(test_config(), "recorder");
     std::mutex m;
     std::vector<std::uint64_t> seqs;
-    dw::dds::Reader<dw::msg::WrenchStamped> reader(rec, topics::stand_wrench, [&](const dw::msg::WrenchStamped& s, const dw::dds::SampleMeta&) {
-        std::lock_guard lock(m);
-        seqs.push_back(s.header().seq());
-    });
+    dw::dds::Reader<dw::msg::WrenchStamped> reader(rec, topics::stand_wrench,
+                                                   [&](const dw::msg::WrenchStamped& s, const dw::dds::SampleMeta&) {
+                                                       std::lock_guard lock(m);
+                                                       seqs.push_back(s.header().seq());
+                                                   });
     publisher.join();
-    ASSERT_TRUE(eventually([&] { std::lock_guard lock(m); return seqs.size() == 50; })) << seqs.size() << " of 50 received";
+    ASSERT_TRUE(eventually([&] {
+        std::lock_guard lock(m);
+        return seqs.size() == 50;
+    })) << seqs.size()
+        << " of 50 received";
     std::lock_guard lock(m);
     EXPECT_EQ(seqs.front(), 0u);
     EXPECT_TRUE(writer.awaited_readers_arrived()) << "released by the timeout, not by the recorder's reader";
@@ -288,7 +313,7 @@ TEST(PeerTable, AppearsThenExpiresAfterThreePeriods) {
     auto e = t.observe(s, 42, t0);
     ASSERT_TRUE(e);
     EXPECT_EQ(e->kind, dw::dds::PeerEvent::Kind::appeared);
-    EXPECT_FALSE(t.observe(s, 42, t0 + 400'000'000));  // still alive: no new event
+    EXPECT_FALSE(t.observe(s, 42, t0 + 400'000'000));   // still alive: no new event
     EXPECT_TRUE(t.expire(t0 + 1'800'000'000).empty());  // 1.4 s silent < 1.5 s
     auto lost = t.expire(t0 + 2'000'000'000);           // 1.6 s silent > 3 periods
     ASSERT_EQ(lost.size(), 1u);
@@ -322,7 +347,10 @@ TEST(Heartbeat, MonitorSeesAPeerComeAndGo) {
     Participant watcher(test_config(), "watcher");
     std::mutex m;
     std::vector<dw::dds::PeerEvent> events;
-    dw::dds::PeerMonitor monitor(watcher, [&](const dw::dds::PeerEvent& e) { std::lock_guard lock(m); events.push_back(e); });
+    dw::dds::PeerMonitor monitor(watcher, [&](const dw::dds::PeerEvent& e) {
+        std::lock_guard lock(m);
+        events.push_back(e);
+    });
     {
         Participant peer(test_config(), "stand_agent");
         dw::dds::Heartbeat hb(peer, 100ms);

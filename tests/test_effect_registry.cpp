@@ -28,7 +28,8 @@ public:
         for (auto& s : w) s[1] += v[0];
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
-        return dw::log::cat("**toy_lateral_bias** — ", who.sensor, " reads a steady ", dw::fixed(v[0], 3), " N on f_e that the physics does not make. ");
+        return dw::log::cat("**toy_lateral_bias** — ", who.sensor, " reads a steady ", dw::fixed(v[0], 3),
+                            " N on f_e that the physics does not make. ");
     }
 };
 const EffectRegistration<ToyLateralBias> registered;
@@ -36,7 +37,10 @@ const EffectRegistration<ToyLateralBias> registered;
 constexpr double kBias = 0.137;
 
 PhysicsConfig with_toy() {
-    return parse_physics(dw::log::cat("format: downwash-physics/1\neffects:\n  toy_lateral_bias:\n    enabled: true\n    bias_n: ", kBias, "\n"), "toy.yaml");
+    return parse_physics(
+        dw::log::cat(
+            "format: downwash-physics/1\neffects:\n  toy_lateral_bias:\n    enabled: true\n    bias_n: ", kBias, "\n"),
+        "toy.yaml");
 }
 
 dw::flight::Flight fly(const PhysicsConfig& c) {
@@ -54,7 +58,8 @@ TEST(EffectRegistry, AToyEffectIsConfiguredLikeTheVocabulary) {
     ASSERT_EQ(c.effects.extra.count("toy_lateral_bias"), 1u);
     EXPECT_DOUBLE_EQ(c.effects.extra.at("toy_lateral_bias").at(0), kBias);
     EXPECT_EQ(parse_physics(to_yaml(c), "back.yaml").effects.extra, c.effects.extra) << to_yaml(c);
-    EXPECT_NE(to_yaml(PhysicsConfig{}).find("toy_lateral_bias"), std::string::npos) << "written, switched off, like every effect";
+    EXPECT_NE(to_yaml(PhysicsConfig{}).find("toy_lateral_bias"), std::string::npos)
+        << "written, switched off, like every effect";
     try {
         parse_physics("format: downwash-physics/1\neffects:\n  toy_lateral_bia:\n    enabled: true\n", "typo.yaml");
         ADD_FAILURE() << "an unknown effect was accepted";
@@ -64,7 +69,8 @@ TEST(EffectRegistry, AToyEffectIsConfiguredLikeTheVocabulary) {
         EXPECT_NE(what.find("unknown key 'toy_lateral_bia': no such effect"), std::string::npos) << what;
         EXPECT_NE(what.find("toy_lateral_bias"), std::string::npos) << "the known ones are listed: " << what;
     }
-    EXPECT_THROW(parse_physics("effects:\n  toy_lateral_bias:\n    bias_n: 3\n", "big.yaml"), dw::InputError) << "its bounds are checked";
+    EXPECT_THROW(parse_physics("effects:\n  toy_lateral_bias:\n    bias_n: 3\n", "big.yaml"), dw::InputError)
+        << "its bounds are checked";
 }
 
 TEST(EffectRegistry, AToyEffectIsSimulatedExplainedAndReported) {
@@ -96,6 +102,7 @@ TEST(EffectRegistry, AToyEffectIsSimulatedExplainedAndReported) {
     const auto j = nlohmann::json::parse(dw::read_file(dir.file("out/report.json")));
     EXPECT_EQ(j["explained_by"][0], "toy_lateral_bias");
     bool listed = false;
-    for (const auto& cand : j["candidates"]) listed = listed || (cand["effect"] == "toy_lateral_bias" && cand["params"].contains("bias_n"));
+    for (const auto& cand : j["candidates"])
+        listed = listed || (cand["effect"] == "toy_lateral_bias" && cand["params"].contains("bias_n"));
     EXPECT_TRUE(listed) << j["candidates"].dump();
 }

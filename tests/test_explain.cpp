@@ -20,7 +20,8 @@ using namespace dw::analysis;
 
 namespace {
 
-dw::flight::Flight fly(const dw::physics::PhysicsConfig& c, const std::string& formation, int legs, std::uint64_t seed = 3) {
+dw::flight::Flight fly(const dw::physics::PhysicsConfig& c, const std::string& formation, int legs,
+                       std::uint64_t seed = 3) {
     dw::physics::FlyOptions o;
     o.formation = formation;
     o.grid.legs = legs;
@@ -66,7 +67,8 @@ TEST(ExplainReplay, ClockOffsetAndScaleActOnTheRecordingOnly) {
     int checked = 0;
     for (std::size_t i = 20; i + 20 < a.size(); ++i) {
         const double t = r.stamps()[i] - 0.1;
-        const auto j = static_cast<std::size_t>(std::lower_bound(r.stamps().begin(), r.stamps().end(), t) - r.stamps().begin());
+        const auto j =
+            static_cast<std::size_t>(std::lower_bound(r.stamps().begin(), r.stamps().end(), t) - r.stamps().begin());
         if (j == 0 || j >= a.size()) continue;
         const double w = (t - r.stamps()[j - 1]) / (r.stamps()[j] - r.stamps()[j - 1]);
         const double aj = (1 - w) * a[j - 1][2] + w * a[j][2];
@@ -80,8 +82,9 @@ TEST(ExplainReplay, ClockOffsetAndScaleActOnTheRecordingOnly) {
 TEST(ExplainEffects, NamesAreTheContractsAndUnknownOnesAreRefused) {
     std::vector<std::string> names;
     for (const auto& e : all_effects()) names.push_back(e.name);
-    EXPECT_EQ(names, (std::vector<std::string>{"clock_offset", "sensor_lag", "wake_transport", "position_offset", "force_scale",
-                                               "cell_crosstalk", "jet_merging", "floor_recirculation", "body_drag", "ground_effect"}));
+    EXPECT_EQ(names, (std::vector<std::string>{"clock_offset", "sensor_lag", "wake_transport", "position_offset",
+                                               "force_scale", "cell_crosstalk", "jet_merging", "floor_recirculation",
+                                               "body_drag", "ground_effect"}));
     EXPECT_THROW(effects_named({"clock_offset", "gremlins"}), dw::InputError);
     // The refusal lists every known name (from the one list, not a copy of it).
     try {
@@ -122,7 +125,8 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
         EXPECT_TRUE(j["fit"]["heldout_rmse_before"][a].is_number()) << a;
         EXPECT_TRUE(j["fit"]["heldout_rmse_after"][a].is_number()) << a;
     }
-    EXPECT_LT(j["fit"]["heldout_rmse_after"]["f_d"].get<double>(), j["fit"]["heldout_rmse_before"]["f_d"].get<double>());
+    EXPECT_LT(j["fit"]["heldout_rmse_after"]["f_d"].get<double>(),
+              j["fit"]["heldout_rmse_before"]["f_d"].get<double>());
     EXPECT_FALSE(j["mismatch"]["regions"].empty());
     for (const auto& g : j["mismatch"]["regions"]) {
         EXPECT_TRUE(g["axis"].is_string());
@@ -147,7 +151,8 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
     const auto fitted = dw::physics::load_physics(dir.file("out/physics.yaml"));
     EXPECT_TRUE(fitted.effects.clock_offset.enabled);
     EXPECT_NEAR(fitted.effects.clock_offset.offset_s, 0.12, 0.02);
-    for (const char* png : {"residuals_before.png", "residuals_after.png", "maps_east.png", "maps_west.png", "report.md"})
+    for (const char* png :
+         {"residuals_before.png", "residuals_after.png", "maps_east.png", "maps_west.png", "report.md"})
         EXPECT_TRUE(std::filesystem::exists(dir.file(std::string("out/") + png))) << png;
 }
 
@@ -162,7 +167,8 @@ TEST(ExplainCli, BadInputIsOneLineAndExit2) {
     r = dw::test::run({dw::test::bin("dw-explain"), "--real", dir.file("f"), "--out", dir.file("o")}, dir);
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
-    r = dw::test::run({dw::test::bin("dw-explain"), "--real", dir.file("f"), "--out", dir.file("o"), "--effects", "gremlins"}, dir);
+    r = dw::test::run(
+        {dw::test::bin("dw-explain"), "--real", dir.file("f"), "--out", dir.file("o"), "--effects", "gremlins"}, dir);
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("gremlins"), std::string::npos) << r.err;
 }
@@ -174,7 +180,8 @@ TEST(ExplainProof, FindsEveryHiddenEffectAndNothingInNoise) {
     o.out_dir = dir.file("proof");
     o.null_seeds = 10;
     const auto r = run_proof(o);
-    for (const auto& row : r.rows) EXPECT_TRUE(row.pass) << row.name << ": " << row.why << " (found " << row.found << ")";
+    for (const auto& row : r.rows)
+        EXPECT_TRUE(row.pass) << row.name << ": " << row.why << " (found " << row.found << ")";
     EXPECT_EQ(r.null_clean, 10) << r.null_clean << " of " << r.null_total << " null flights claim and detect nothing";
     EXPECT_TRUE(r.pass) << dw::read_file(r.table_path);
 }
@@ -199,7 +206,8 @@ TEST(ExplainCoverage, IntervalsHoldTheHiddenValues) {
     }
     const auto csv = dw::read_file(dir.file("coverage/coverage.csv"));
     EXPECT_EQ(dw::test::lines(csv).size(), 1u + 3 * 5);  // header, one row per flight and parameter
-    EXPECT_NE(dw::read_file(r.table_path).find("not measured"), std::string::npos) << "body_drag and ground_effect are said to be not measured";
+    EXPECT_NE(dw::read_file(r.table_path).find("not measured"), std::string::npos)
+        << "body_drag and ground_effect are said to be not measured";
     EXPECT_THROW(run_coverage(CoverageOptions{.out_dir = dir.file("c2"), .effects = {"gremlins"}}), dw::InputError);
 }
 
@@ -217,10 +225,13 @@ TEST(ExplainOutOfVocabulary, DifferencesNoEffectNamesAreDetected) {
         bool soaked_up;  // true: still blamed on vocabulary effects (docs/EXPLAINER.md says which and why)
     };
     const Case cases[] = {
-        {"Jain jet instead of Bauersfeld", "single", [](dw::physics::PhysicsConfig& c) { c.jet_model = dw::physics::JetModelKind::jain; }, false},
+        {"Jain jet instead of Bauersfeld", "single",
+         [](dw::physics::PhysicsConfig& c) { c.jet_model = dw::physics::JetModelKind::jain; }, false},
         {"velocity superposition instead of a force sum", "leader_follower",
-         [](dw::physics::PhysicsConfig& c) { c.aggregation = dw::physics::Aggregation::velocity_superposition; }, false},
-        {"no thrust loss on the sufferer's rotors", "single", [](dw::physics::PhysicsConfig& c) { c.sufferer.thrust_loss = false; }, true},
+         [](dw::physics::PhysicsConfig& c) { c.aggregation = dw::physics::Aggregation::velocity_superposition; },
+         false},
+        {"no thrust loss on the sufferer's rotors", "single",
+         [](dw::physics::PhysicsConfig& c) { c.sufferer.thrust_loss = false; }, true},
     };
     std::uint64_t seed = 21;
     for (const auto& k : cases) {

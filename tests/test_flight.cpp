@@ -63,7 +63,8 @@ TEST(FlightFolder, RoundTripsAndKeepsUnknownMetaKeys) {
     // Writing what was read gives the same bytes.
     write_flight(g, d.file("g"));
     for (const char* name : {"meta.json", "wrench.csv", "poses.csv", "legs.csv"}) {
-        EXPECT_EQ(dw::read_file(d.file(std::string("f/") + name)), dw::read_file(d.file(std::string("g/") + name))) << name;
+        EXPECT_EQ(dw::read_file(d.file(std::string("f/") + name)), dw::read_file(d.file(std::string("g/") + name)))
+            << name;
     }
 }
 
@@ -85,24 +86,45 @@ TEST(FlightFolder, EveryRuleIsEnforcedWithFileAndLine) {
         std::string expect;
     };
     const std::vector<Case> cases = {
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch\n0,1,2,3,4,5\n", "wrench.csv:1: header is 't,f_n,f_e,f_d,m_roll,m_pitch'"},
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5\n", "wrench.csv:3: 6 fields, expected 7"},
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,abc,6\n", "wrench.csv:3: column m_pitch: 'abc' is not a number"},
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,nan\n", "wrench.csv:3: column m_yaw: 'nan' is not finite"},
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0.2,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n", "wrench.csv:3: t = 0.1 is earlier"},
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3;1;2;3;4;5;6\n", "wrench.csv:5: 1 fields, expected 7"},
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3,1,2,3,4,5,6,7\n", "wrench.csv:5: 8 fields"},
-        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3,1,2,3,4,5,6\n0.4,1,2,3,,5,6\n", "wrench.csv:6: column m_roll: '' is not a number"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch\n0,1,2,3,4,5\n",
+         "wrench.csv:1: header is 't,f_n,f_e,f_d,m_roll,m_pitch'"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5\n",
+         "wrench.csv:3: 6 fields, expected 7"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,abc,6\n",
+         "wrench.csv:3: column m_pitch: 'abc' is not a number"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,nan\n",
+         "wrench.csv:3: column m_yaw: 'nan' is not finite"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0.2,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n",
+         "wrench.csv:3: t = 0.1 is earlier"},
+        {"wrench.csv",
+         "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3;1;2;3;4;5;6\n",
+         "wrench.csv:5: 1 fields, expected 7"},
+        {"wrench.csv",
+         "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3,1,2,3,4,5,6,7\n",
+         "wrench.csv:5: 8 fields"},
+        {"wrench.csv",
+         "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n0.2,1,2,3,4,5,6\n0.3,1,2,3,4,5,6\n0.4,1,"
+         "2,3,,5,6\n",
+         "wrench.csv:6: column m_roll: '' is not a number"},
         {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n", "wrench.csv:1: no samples"},
-        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n0,v1,0,0,-1.7,0.5,0,0,0\n", "poses.csv:3: quaternion norm 0.5 is not 1"},
-        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n", "poses.csv:1: neighbour 'v1' named in meta.json has no pose"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n0,v1,0,0,-1.7,0.5,0,0,0\n",
+         "poses.csv:3: quaternion norm 0.5 is not 1"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n",
+         "poses.csv:1: neighbour 'v1' named in meta.json has no pose"},
         {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,,0,0,-1.4,1,0,0,0\n", "poses.csv:2: column body: empty"},
         {"legs.csv", "leg,t_start,t_end\n0,0.5,0.2\n", "legs.csv:2: t_end is not after t_start"},
         {"legs.csv", "leg,t_start,t_end\n0.5,0.1,0.2\n", "legs.csv:2: column leg: '0.5' is not a leg number"},
-        {"meta.json", "{\"format\": \"downwash-flight/2\"}", "meta.json: field 'format': expected \"downwash-flight/1\""},
-        {"meta.json", "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": \"triangle\"}", "meta.json: field 'formation': 'triangle' is not one of"},
+        {"meta.json", "{\"format\": \"downwash-flight/2\"}",
+         "meta.json: field 'format': expected \"downwash-flight/1\""},
+        {"meta.json",
+         "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": "
+         "\"triangle\"}",
+         "meta.json: field 'formation': 'triangle' is not one of"},
         {"meta.json", "{\"format\": \"downwash-flight/1\",\n \"sufferer\": }", "meta.json:2:14: not valid JSON"},
-        {"meta.json", "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": \"single\", \"vehicles\": {\"v1\": {\"mass_kg\": -1}}}", "meta.json: field 'vehicles.v1.mass_kg': must be a positive finite number"},
+        {"meta.json",
+         "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": "
+         "\"single\", \"vehicles\": {\"v1\": {\"mass_kg\": -1}}}",
+         "meta.json: field 'vehicles.v1.mass_kg': must be a positive finite number"},
         {"wrench.csv", many_rows(120) + "1e400,1,2,3,4,5,6\n", "wrench.csv:122: column t: '1e400' is not a number"},
         {"wrench.csv", many_rows(14) + "0.5,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n", "wrench.csv:17: t = 0.1 is earlier"},
     };
@@ -110,7 +132,8 @@ TEST(FlightFolder, EveryRuleIsEnforcedWithFileAndLine) {
         fresh();
         write(dir + "/" + c.file, c.text);
         const std::string e = error_reading(dir);
-        EXPECT_NE(e.find(c.expect), std::string::npos) << c.file << ": got '" << e << "', expected '" << c.expect << "'";
+        EXPECT_NE(e.find(c.expect), std::string::npos)
+            << c.file << ": got '" << e << "', expected '" << c.expect << "'";
         EXPECT_EQ(e.find('\n'), std::string::npos) << e;
     }
     fresh();

@@ -77,7 +77,7 @@ struct PathOption {
     // exactly as it appears in the base argv ("{mcap}", "{out}/recovered.mcap").
     std::string target;
     Role role;
-    std::string ext;          // the extension hostile names get (".yaml"), so extension checks pass
+    std::string ext;  // the extension hostile names get (".yaml"), so extension checks pass
     // "" means "not given" (the option is optional or has a default). Otherwise an empty path is
     // bad input and must be refused with 2.
     bool empty_means_default = false;
@@ -88,7 +88,7 @@ struct PathOption {
 struct Row {
     std::string name;  // test name
     std::string tool;
-    std::string sub;   // subcommand whose --help lists the numeric options ("" = the tool's own help)
+    std::string sub;  // subcommand whose --help lists the numeric options ("" = the tool's own help)
     // A minimal valid command line. Placeholders: {out} (the run's work folder, also its working
     // directory), {domain} (this process's private DDS domain), {flight} {mcap} {model} {loads}
     // {labfile} {ns_log} {ns_log2} {study} (fixtures, made once per test process).
@@ -101,9 +101,9 @@ struct Row {
     // participant, so "--domain 0" puts no traffic on the default domain; the options are shared
     // (dw::dds::ProcessCli, dw::cli::configure), so one row per tool covers them.
     bool root_options = false;
-    std::vector<std::string> skip;             // numeric options not to attack
-    std::vector<PathOption> paths;             // path options to attack (listed by hand)
-    std::vector<std::string> outputs;          // what a failed run must not leave (placeholders)
+    std::vector<std::string> skip;     // numeric options not to attack
+    std::vector<PathOption> paths;     // path options to attack (listed by hand)
+    std::vector<std::string> outputs;  // what a failed run must not leave (placeholders)
 };
 
 // gtest prints parameters in test listings and failures: the row's name, not its bytes.
@@ -117,97 +117,296 @@ std::vector<Row> table() {
     return {
         // ---- dw-probe
         {"probe_list", "dw-probe", "list", {"list", "--domain", "{domain}"}, quick, false, true, {}, {kConfig}, {}},
-        {"probe_pub", "dw-probe", "pub", {"pub", "--domain", "{domain}", "--count", "5", "--rate", "100", "--quiet"},
-         std::chrono::milliseconds(5000), /*--linger -1: until stopped*/ true, false, {}, {}, {}},
-        {"probe_echo", "dw-probe", "echo", {"echo", "--domain", "{domain}", "--quiet"}, daemon, true, false, {},
-         {{"--summary", Role::out, ".json", true}}, {}},
+        {"probe_pub",
+         "dw-probe",
+         "pub",
+         {"pub", "--domain", "{domain}", "--count", "5", "--rate", "100", "--quiet"},
+         std::chrono::milliseconds(5000),
+         /*--linger -1: until stopped*/ true,
+         false,
+         {},
+         {},
+         {}},
+        {"probe_echo",
+         "dw-probe",
+         "echo",
+         {"echo", "--domain", "{domain}", "--quiet"},
+         daemon,
+         true,
+         false,
+         {},
+         {{"--summary", Role::out, ".json", true}},
+         {}},
         // ---- dw-lab
-        {"lab_loopback", "dw-lab", "loopback",
-         {"loopback", "--domain", "{domain}", "--count", "3", "--quiet", "--summary", "{out}/summary.json"}, quick, false,
-         false, {}, {{"--summary", Role::out, ".json", true}}, {"{out}/summary.json"}},
-        {"lab_run", "dw-lab", "run", {"run", "--lab", "{labfile}", "--run-dir", "{out}/run", "--domain", "{domain}"},
-         std::chrono::milliseconds(3000), true, false, {},
-         {{"--lab", Role::in, ".yaml"}, {"--run-dir", Role::outdir, "", true}}, {"{out}/run"}},
+        {"lab_loopback",
+         "dw-lab",
+         "loopback",
+         {"loopback", "--domain", "{domain}", "--count", "3", "--quiet", "--summary", "{out}/summary.json"},
+         quick,
+         false,
+         false,
+         {},
+         {{"--summary", Role::out, ".json", true}},
+         {"{out}/summary.json"}},
+        {"lab_run",
+         "dw-lab",
+         "run",
+         {"run", "--lab", "{labfile}", "--run-dir", "{out}/run", "--domain", "{domain}"},
+         std::chrono::milliseconds(3000),
+         true,
+         false,
+         {},
+         {{"--lab", Role::in, ".yaml"}, {"--run-dir", Role::outdir, "", true}},
+         {"{out}/run"}},
         // A whole simulated lab: stopped after 4 s, which also checks that a stop reaches every child.
-        {"lab_demo", "dw-lab", "demo", {"demo", "--quick", "--out", "{out}/demo", "--domain", "{domain}"},
-         std::chrono::milliseconds(4000), false, false, {}, {{"--out", Role::outdir, "", true}}, {"{out}/demo"}},
+        {"lab_demo",
+         "dw-lab",
+         "demo",
+         {"demo", "--quick", "--out", "{out}/demo", "--domain", "{domain}"},
+         std::chrono::milliseconds(4000),
+         false,
+         false,
+         {},
+         {{"--out", Role::outdir, "", true}},
+         {"{out}/demo"}},
         // ---- dw-sim
-        {"sim_fly", "dw-sim", "fly", {"fly", "--formation", "single", "--legs", "1", "--quiet", "--out", "{out}/flight"},
-         quick, false, true, {}, {{"--physics", Role::in, ".yaml", true}, {"--out", Role::outdir, ""}, kConfig},
+        {"sim_fly",
+         "dw-sim",
+         "fly",
+         {"fly", "--formation", "single", "--legs", "1", "--quiet", "--out", "{out}/flight"},
+         quick,
+         false,
+         true,
+         {},
+         {{"--physics", Role::in, ".yaml", true}, {"--out", Role::outdir, ""}, kConfig},
          {"{out}/flight"}},
         // ---- dw-recorder
-        {"recorder_record", "dw-recorder", "record",
+        {"recorder_record",
+         "dw-recorder",
+         "record",
          {"record", "--domain", "{domain}", "--quiet", "--duration", "1", "-o", "{out}/rec.mcap"},
          std::chrono::milliseconds(5000),
-         /*--duration 0: until Ctrl-C*/ true, false, {},
-         {{"-o", Role::out, ".mcap"}, {"--attach", Role::in, ".yaml", false, "note="}}, {"{out}/rec.mcap"}},
-        {"recorder_info", "dw-recorder", "info", {"info", "{mcap}"}, quick, false, true, {},
-         {{"{mcap}", Role::in, ".mcap"}, kConfig}, {}},
-        {"recorder_recover", "dw-recorder", "recover", {"recover", "{mcap}", "{out}/recovered.mcap"}, quick, false, false,
-         {}, {{"{mcap}", Role::in, ".mcap"}, {"{out}/recovered.mcap", Role::out, ".mcap"}}, {"{out}/recovered.mcap"}},
-        {"recorder_export", "dw-recorder", "export", {"export", "{mcap}", "--flight", "{out}/flight", "--csv", "{out}/csv"},
-         quick, false, false, {},
+         /*--duration 0: until Ctrl-C*/ true,
+         false,
+         {},
+         {{"-o", Role::out, ".mcap"}, {"--attach", Role::in, ".yaml", false, "note="}},
+         {"{out}/rec.mcap"}},
+        {"recorder_info",
+         "dw-recorder",
+         "info",
+         {"info", "{mcap}"},
+         quick,
+         false,
+         true,
+         {},
+         {{"{mcap}", Role::in, ".mcap"}, kConfig},
+         {}},
+        {"recorder_recover",
+         "dw-recorder",
+         "recover",
+         {"recover", "{mcap}", "{out}/recovered.mcap"},
+         quick,
+         false,
+         false,
+         {},
+         {{"{mcap}", Role::in, ".mcap"}, {"{out}/recovered.mcap", Role::out, ".mcap"}},
+         {"{out}/recovered.mcap"}},
+        {"recorder_export",
+         "dw-recorder",
+         "export",
+         {"export", "{mcap}", "--flight", "{out}/flight", "--csv", "{out}/csv"},
+         quick,
+         false,
+         false,
+         {},
          {{"{mcap}", Role::in, ".mcap"}, {"--flight", Role::outdir, "", true}, {"--csv", Role::outdir, "", true}},
          {"{out}/flight", "{out}/csv"}},
-        {"recorder_replay", "dw-recorder", "replay", {"replay", "{mcap}", "--domain", "{domain}", "--speed", "10"}, quick,
-         false, false, {}, {{"{mcap}", Role::in, ".mcap"}}, {}},
+        {"recorder_replay",
+         "dw-recorder",
+         "replay",
+         {"replay", "{mcap}", "--domain", "{domain}", "--speed", "10"},
+         quick,
+         false,
+         false,
+         {},
+         {{"{mcap}", Role::in, ".mcap"}},
+         {}},
         // ---- dw-stand-agent
-        {"stand_run", "dw-stand-agent", "run", {"run", "--sim", "--domain", "{domain}"}, daemon, true, false, {},
-         {{"--calibration", Role::in, ".yaml", true}, {"--physics", Role::in, ".yaml", true}}, {}},
-        {"stand_calibrate", "dw-stand-agent", "calibrate", {"calibrate", "--loads", "{loads}", "--out", "{out}/cal.yaml"},
-         quick, false, true, {},
-         {{"--loads", Role::in, ".csv"}, {"--out", Role::out, ".yaml"}, {"--calibration", Role::in, ".yaml", true}, kConfig},
+        {"stand_run",
+         "dw-stand-agent",
+         "run",
+         {"run", "--sim", "--domain", "{domain}"},
+         daemon,
+         true,
+         false,
+         {},
+         {{"--calibration", Role::in, ".yaml", true}, {"--physics", Role::in, ".yaml", true}},
+         {}},
+        {"stand_calibrate",
+         "dw-stand-agent",
+         "calibrate",
+         {"calibrate", "--loads", "{loads}", "--out", "{out}/cal.yaml"},
+         quick,
+         false,
+         true,
+         {},
+         {{"--loads", Role::in, ".csv"},
+          {"--out", Role::out, ".yaml"},
+          {"--calibration", Role::in, ".yaml", true},
+          kConfig},
          {"{out}/cal.yaml"}},
         // ---- dw-mocap-bridge, dw-natnet-emulator (no subcommands: their options are the root's)
-        {"mocap_bridge", "dw-mocap-bridge", "", {"--sim", "--domain", "{domain}"}, daemon, true, false, {"--domain"},
-         {kConfig}, {}},
+        {"mocap_bridge",
+         "dw-mocap-bridge",
+         "",
+         {"--sim", "--domain", "{domain}"},
+         daemon,
+         true,
+         false,
+         {"--domain"},
+         {kConfig},
+         {}},
         {"natnet_emulator", "dw-natnet-emulator", "", {"--port", "0"}, daemon, true, false, {}, {kConfig}, {}},
         // ---- dw-px4-sim (issue 20)
-        {"px4_sim", "dw-px4-sim", "", {"--vehicles", "v1", "--domain", "{domain}"}, daemon, true, false, {"--domain"},
-         {{"--px4", Role::in, ".yaml"}, kConfig}, {}},
+        {"px4_sim",
+         "dw-px4-sim",
+         "",
+         {"--vehicles", "v1", "--domain", "{domain}"},
+         daemon,
+         true,
+         false,
+         {"--domain"},
+         {{"--px4", Role::in, ".yaml"}, kConfig},
+         {}},
         // ---- dw-planner
-        {"planner_plan", "dw-planner", "plan", {"plan", "--formation", "single", "--legs", "2", "--out", "{out}/plan.yaml"},
-         quick, false, true, {},
-         {{"--out", Role::out, ".yaml"}, {"--picture", Role::png, ".png", true}, kConfig}, {"{out}/plan.yaml", "{out}/plan.png"}},
+        {"planner_plan",
+         "dw-planner",
+         "plan",
+         {"plan", "--formation", "single", "--legs", "2", "--out", "{out}/plan.yaml"},
+         quick,
+         false,
+         true,
+         {},
+         {{"--out", Role::out, ".yaml"}, {"--picture", Role::png, ".png", true}, kConfig},
+         {"{out}/plan.yaml", "{out}/plan.png"}},
         // --wait-for '': no process to wait for; it then waits up to 30 s for the vehicle's pose (no
         // vehicle here): stopped after 3 s.
-        {"planner_run", "dw-planner", "run", {"run", "--formation", "single", "--legs", "2", "--domain", "{domain}", "--wait-for", "",
-                                              "--vehicles", "px4"},
-         std::chrono::milliseconds(3000), false, false, {}, {{"--px4", Role::in, ".yaml"}}, {}},
+        {"planner_run",
+         "dw-planner",
+         "run",
+         {"run", "--formation", "single", "--legs", "2", "--domain", "{domain}", "--wait-for", "", "--vehicles", "px4"},
+         std::chrono::milliseconds(3000),
+         false,
+         false,
+         {},
+         {{"--px4", Role::in, ".yaml"}},
+         {}},
         // ---- dw-predictor
-        {"predictor_study", "dw-predictor", "study",
+        {"predictor_study",
+         "dw-predictor",
+         "study",
          {"study", "--out", "{out}/study", "--legs", "5", "--epochs", "1", "--no-generalisation", "--no-maps"},
-         std::chrono::milliseconds(40000), false, false, {}, {{"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}},
+         std::chrono::milliseconds(40000),
+         false,
+         false,
+         {},
+         {{"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}},
          {"{out}/study"}},
-        {"predictor_train", "dw-predictor", "train",
-         {"train", "--kind", "learnt_linear", "--epochs", "1", "--data", "{flight}", "--out", "{out}/model.json"}, quick,
-         false, true, {}, {{"--data", Role::in, ".mcap"}, {"--out", Role::out, ".json"}, kConfig}, {"{out}/model.json"}},
-        {"predictor_compare", "dw-predictor", "compare",
-         {"compare", "--models", "{model}", "--data", "{flight}", "--out", "{out}/cmp"}, quick, false, false, {},
-         {{"--models", Role::in, ".json"}, {"--data", Role::in, ".mcap"}, {"--out", Role::outdir, ""}}, {"{out}/cmp"}},
-        {"predictor_real", "dw-predictor", "real", {"real", "--data", "{flight}", "--out", "{out}/real", "--epochs", "1"},
-         std::chrono::milliseconds(40000), false, false, {},
-         {{"--data", Role::in, ".mcap"}, {"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}}, {"{out}/real"}},
-        {"predictor_regimes", "dw-predictor", "regimes", {"regimes", "--study", "{study}"}, quick, false, false, {},
-         {{"--study", Role::in, ""}}, {}},
-        {"predictor_map", "dw-predictor", "map",
-         {"map", "--models", "{model}", "--formation", "single", "--out", "{out}/map.png"}, quick, false, false, {},
-         {{"--models", Role::in, ".json"}, {"--data", Role::in, ".mcap"}, {"--out", Role::png, ".png"},
+        {"predictor_train",
+         "dw-predictor",
+         "train",
+         {"train", "--kind", "learnt_linear", "--epochs", "1", "--data", "{flight}", "--out", "{out}/model.json"},
+         quick,
+         false,
+         true,
+         {},
+         {{"--data", Role::in, ".mcap"}, {"--out", Role::out, ".json"}, kConfig},
+         {"{out}/model.json"}},
+        {"predictor_compare",
+         "dw-predictor",
+         "compare",
+         {"compare", "--models", "{model}", "--data", "{flight}", "--out", "{out}/cmp"},
+         quick,
+         false,
+         false,
+         {},
+         {{"--models", Role::in, ".json"}, {"--data", Role::in, ".mcap"}, {"--out", Role::outdir, ""}},
+         {"{out}/cmp"}},
+        {"predictor_real",
+         "dw-predictor",
+         "real",
+         {"real", "--data", "{flight}", "--out", "{out}/real", "--epochs", "1"},
+         std::chrono::milliseconds(40000),
+         false,
+         false,
+         {},
+         {{"--data", Role::in, ".mcap"}, {"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}},
+         {"{out}/real"}},
+        {"predictor_regimes",
+         "dw-predictor",
+         "regimes",
+         {"regimes", "--study", "{study}"},
+         quick,
+         false,
+         false,
+         {},
+         {{"--study", Role::in, ""}},
+         {}},
+        {"predictor_map",
+         "dw-predictor",
+         "map",
+         {"map", "--models", "{model}", "--formation", "single", "--out", "{out}/map.png"},
+         quick,
+         false,
+         false,
+         {},
+         {{"--models", Role::in, ".json"},
+          {"--data", Role::in, ".mcap"},
+          {"--out", Role::png, ".png"},
           {"--line", Role::png, ".png", true}},
          {"{out}/map.png", "{out}/map_line.png"}},
-        {"predictor_run", "dw-predictor", "run", {"run", "--model", "{model}", "--domain", "{domain}"}, daemon, true, false,
-         {}, {{"--model", Role::in, ".json"}}, {}},
+        {"predictor_run",
+         "dw-predictor",
+         "run",
+         {"run", "--model", "{model}", "--domain", "{domain}"},
+         daemon,
+         true,
+         false,
+         {},
+         {{"--model", Role::in, ".json"}},
+         {}},
         // ---- dw-explain
-        {"explain", "dw-explain", "", {"--real", "{flight}", "--out", "{out}/explain", "--quiet"}, quick, false, true, {},
+        {"explain",
+         "dw-explain",
+         "",
+         {"--real", "{flight}", "--out", "{out}/explain", "--quiet"},
+         quick,
+         false,
+         true,
+         {},
          {{"--real", Role::in, ".mcap"}, {"--out", Role::outdir, ""}, {"--physics", Role::in, ".yaml", true}, kConfig},
          {"{out}/explain"}},
-        {"explain_proof", "dw-explain", "proof",
+        {"explain_proof",
+         "dw-explain",
+         "proof",
          {"proof", "--out", "{out}/proof", "--null-seeds", "1", "--cases", "null", "--quiet"},
-         std::chrono::milliseconds(40000), false, false, {}, {{"--out", Role::outdir, ""}}, {"{out}/proof"}},
+         std::chrono::milliseconds(40000),
+         false,
+         false,
+         {},
+         {{"--out", Role::outdir, ""}},
+         {"{out}/proof"}},
         // ---- dw-import (its logs: the shared Neural-Swarm collection; the row is skipped without it)
-        {"import_neural_swarm", "dw-import", "neural-swarm", {"neural-swarm", "{ns_log}", "{ns_log2}", "--out", "{out}/flight"},
-         quick, false, true, {},
-         {{"{ns_log}", Role::in, ".csv", false, "", "cf50_"}, {"--out", Role::outdir, ""}, kConfig}, {"{out}/flight"}},
+        {"import_neural_swarm",
+         "dw-import",
+         "neural-swarm",
+         {"neural-swarm", "{ns_log}", "{ns_log2}", "--out", "{out}/flight"},
+         quick,
+         false,
+         true,
+         {},
+         {{"{ns_log}", Role::in, ".csv", false, "", "cf50_"}, {"--out", Role::outdir, ""}, kConfig},
+         {"{out}/flight"}},
     };
 }
 
@@ -268,7 +467,8 @@ std::string known_loads_csv() {  // the nominal stand under 12 known loads (as t
         const double e6 = fe / 2 - my / (4 * r), e7 = fe / 2 + my / (4 * r);
         char line[512];
         std::snprintf(line, sizeof(line), "%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f\n", v[0] * 21400, v[1] * 21400,
-                      v[2] * 21400, v[3] * 21400, n4 * 21400, n5 * 21400, e6 * 21400, e7 * 21400, fn, fe, fz, mr, mp, my);
+                      v[2] * 21400, v[3] * 21400, n4 * 21400, n5 * 21400, e6 * 21400, e7 * 21400, fn, fe, fz, mr, mp,
+                      my);
         csv += line;
     }
     return csv;
@@ -307,7 +507,8 @@ private:
     static const std::array<Maker, 8> kMakers;
 
     // The path when the helper succeeded; else "" and *problem = what: its output.
-    std::string made_by(const std::vector<std::string>& argv, const std::string& path, const char* what, std::string* problem) {
+    std::string made_by(const std::vector<std::string>& argv, const std::string& path, const char* what,
+                        std::string* problem) {
         std::string err;
         if (run_helper(argv, dir_, &err) == 0) return path;
         *problem = std::string(what) + ": " + err;
@@ -315,18 +516,22 @@ private:
     }
     std::string flight(const std::string&, std::string* problem) {
         const std::string path = dir_ + "/flight";
-        return made_by({bin("dw-sim"), "fly", "--formation", "single", "--legs", "5", "--quiet", "--out", path}, path, "dw-sim fly", problem);
+        return made_by({bin("dw-sim"), "fly", "--formation", "single", "--legs", "5", "--quiet", "--out", path}, path,
+                       "dw-sim fly", problem);
     }
     std::string model(const std::string&, std::string* problem) {
         const std::string flight = get("flight", problem);
         if (flight.empty()) return "";
         const std::string path = dir_ + "/model.json";
-        return made_by({bin("dw-predictor"), "train", "--kind", "learnt_linear", "--epochs", "1", "--data", flight, "--out", path},
-                       path, "dw-predictor train", problem);
+        return made_by(
+            {bin("dw-predictor"), "train", "--kind", "learnt_linear", "--epochs", "1", "--data", flight, "--out", path},
+            path, "dw-predictor train", problem);
     }
     std::string study(const std::string&, std::string* problem) {
-        const std::string path = dir_ + "/study";  // the smallest study: its flights and models are what `regimes` reads
-        return made_by({bin("dw-predictor"), "study", "--out", path, "--legs", "15", "--epochs", "1", "--no-generalisation", "--no-maps"},
+        const std::string path =
+            dir_ + "/study";  // the smallest study: its flights and models are what `regimes` reads
+        return made_by({bin("dw-predictor"), "study", "--out", path, "--legs", "15", "--epochs", "1",
+                        "--no-generalisation", "--no-maps"},
                        path, "dw-predictor study", problem);
     }
     // A short recording of dw-probe's deterministic samples on this process's own domain. If the
@@ -334,11 +539,15 @@ private:
     // file, good enough for info/recover/export/replay.
     std::string mcap(const std::string&, std::string* problem) {
         const std::string path = dir_ + "/recording.mcap", domain = std::to_string(dw::test::test_domain());
-        dw::Subprocess rec({{bin("dw-recorder"), "record", "--domain", domain, "--duration", "3", "--quiet", "--no-command-control", "-o", path},
-                            dir_ + "/rec.out", dir_ + "/rec.err", {}});
+        dw::Subprocess rec({{bin("dw-recorder"), "record", "--domain", domain, "--duration", "3", "--quiet",
+                             "--no-command-control", "-o", path},
+                            dir_ + "/rec.out",
+                            dir_ + "/rec.err",
+                            {}});
         std::this_thread::sleep_for(300ms);
-        run_helper({bin("dw-probe"), "pub", "--domain", domain, "--count", "50", "--rate", "100", "--wait-readers", "1", "--wait-timeout",
-                    "5", "--quiet"}, dir_);
+        run_helper({bin("dw-probe"), "pub", "--domain", domain, "--count", "50", "--rate", "100", "--wait-readers", "1",
+                    "--wait-timeout", "5", "--quiet"},
+                   dir_);
         const auto st = rec.wait_for(30s);
         if (st && *st == 0 && fs::exists(path)) return path;
         *problem = "dw-recorder record: " + slurp(dir_ + "/rec.err");
@@ -351,7 +560,8 @@ private:
     }
     // Two vehicles of one Neural-Swarm trial, read in place (as tests/test_import.cpp).
     std::string ns_log(const std::string& name, std::string* problem) {
-        const std::string data = std::string(DW_SOURCE_DIR) + "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020/swap_ss/";
+        const std::string data = std::string(DW_SOURCE_DIR) +
+                                 "/../shared/data/neural-swarm/data/training/datacollection21_06_16_2020/swap_ss/";
         const std::string path = data + (name == "ns_log" ? "cf50_01.csv" : "cf51_01.csv");
         if (fs::exists(path)) return path;
         *problem = "skip: the shared Neural-Swarm logs are not at " + data;
@@ -360,7 +570,8 @@ private:
     // One process that runs until stopped: dw-lab run then runs until stopped too.
     std::string labfile(const std::string&, std::string*) {
         const std::string path = dir_ + "/lab.yaml";
-        std::ofstream(path) << "format: downwash-lab/1\nprocesses:\n  - name: echo\n    run: [dw-probe, echo, --quiet]\n";
+        std::ofstream(path)
+            << "format: downwash-lab/1\nprocesses:\n  - name: echo\n    run: [dw-probe, echo, --quiet]\n";
         return path;
     }
 
@@ -382,13 +593,15 @@ const std::array<Fixtures::Maker, 8> Fixtures::kMakers{{{"flight", &Fixtures::fl
 // ----------------------------------------------------------------------------------------------
 
 std::string replace_all(std::string s, const std::string& from, const std::string& to) {
-    for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+    for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+        s.replace(at, from.size(), to);
     return s;
 }
 
 // Replaces the value of `target` in argv (an option: the word after it, appended when absent; a
 // positional placeholder: that word).
-std::vector<std::string> with_value(std::vector<std::string> argv, const std::string& target, const std::string& value) {
+std::vector<std::string> with_value(std::vector<std::string> argv, const std::string& target,
+                                    const std::string& value) {
     const auto it = std::find(argv.begin(), argv.end(), target);
     if (target.rfind('-', 0) != 0) {
         if (it != argv.end()) *it = value;
@@ -422,7 +635,8 @@ std::vector<std::string> numeric_options(const std::string& help) {
 std::optional<std::string> nan_line(const std::string& text) {
     static const std::regex re(R"((^|[,:\s\[="'(])(-?\.?nan|-?\.?inf)([,\s\]"')]|$))", std::regex::icase);
     std::string lower(text.size(), ' ');
-    std::transform(text.begin(), text.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    std::transform(text.begin(), text.end(), lower.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     for (const char* word : {"nan", "inf"}) {
         for (std::size_t at = lower.find(word); at != std::string::npos; at = lower.find(word, at + 1)) {
             const std::size_t b = lower.rfind('\n', at), e = lower.find('\n', at);
@@ -452,11 +666,11 @@ std::string state_of(const std::string& path) {
 }
 
 struct Case {
-    std::string label;                       // "--speed nan", "--out=directory"
-    std::vector<std::string> argv;           // with placeholders
+    std::string label;              // "--speed nan", "--out=directory"
+    std::vector<std::string> argv;  // with placeholders
     bool never_a_number = false;
-    bool base = false;                       // the unchanged base command: it must succeed
-    const PathOption* path = nullptr;        // the attacked path option, if any
+    bool base = false;                 // the unchanged base command: it must succeed
+    const PathOption* path = nullptr;  // the attacked path option, if any
     HostilePath hostile{};
 };
 
@@ -485,7 +699,8 @@ public:
                 break;
             case HostilePath::missing:
                 // An input that is not there; an output in folders that are not there yet.
-                p = o.role == Role::in ? d + "/" + o.stem + "missing" + o.ext : d + "/no/such/folder/" + o.stem + "out" + o.ext;
+                p = o.role == Role::in ? d + "/" + o.stem + "missing" + o.ext
+                                       : d + "/no/such/folder/" + o.stem + "out" + o.ext;
                 break;
             case HostilePath::empty_file:
                 p = d + "/" + o.stem + "empty" + o.ext;
@@ -550,13 +765,15 @@ public:
             if (ec) break;
             const fs::path p = it->path();
             const std::string name = p.filename().string();
-            if (name.find(".tmp-") != std::string::npos) problems.push_back("temporary file left: " + shorten(p.string()));
+            if (name.find(".tmp-") != std::string::npos)
+                problems.push_back("temporary file left: " + shorten(p.string()));
             if (!it->is_regular_file(ec) || p == fs::path(out_file()) || p == fs::path(err_file())) continue;
             const std::string ext = p.extension().string();
             if (ext == ".png" || ext == ".mcap") continue;  // binary
             const std::string text = slurp(p.string());
             if (text.find('\0') != std::string::npos) continue;  // binary
-            if (const auto line = nan_line(text)) problems.push_back("NaN/inf in " + shorten(p.string()) + ": " + *line);
+            if (const auto line = nan_line(text))
+                problems.push_back("NaN/inf in " + shorten(p.string()) + ": " + *line);
         }
     }
 
@@ -599,9 +816,7 @@ public:
 std::unique_ptr<TempDir> Tool::fixture_dir_;
 std::unique_ptr<Fixtures> Tool::fixtures_;
 
-std::string shorten_fixtures(const std::string& s) {
-    return replace_all(s, Tool::fixture_dir(), "$F/");
-}
+std::string shorten_fixtures(const std::string& s) { return replace_all(s, Tool::fixture_dir(), "$F/"); }
 
 std::string help_of(const std::string& tool, const std::string& sub) {
     TempDir d;
@@ -629,8 +844,8 @@ std::vector<Case> cases_of(const Row& row) {
         }
     }
     for (const auto& p : row.paths) {
-        for (HostilePath h : {HostilePath::directory, HostilePath::missing, HostilePath::empty_file, HostilePath::unreadable,
-                              HostilePath::empty_string, HostilePath::not_png}) {
+        for (HostilePath h : {HostilePath::directory, HostilePath::missing, HostilePath::empty_file,
+                              HostilePath::unreadable, HostilePath::empty_string, HostilePath::not_png}) {
             if (h == HostilePath::not_png && p.role != Role::png) continue;
             // As root every file is readable: the unreadable value would test nothing (CI runs as root).
             if (h == HostilePath::unreadable && ::geteuid() == 0) continue;
@@ -711,7 +926,8 @@ void attempt(const Row& row, const Case& c, const std::map<std::string, std::str
     const auto& counted = r.status == 2 ? err_lines : error_lines;
     if (r.status == 1 || r.status == 2) {
         if (counted.size() != 1) {
-            problems.push_back(std::to_string(counted.size()) + (r.status == 2 ? " lines" : " error lines") + " on stderr (expected one)");
+            problems.push_back(std::to_string(counted.size()) + (r.status == 2 ? " lines" : " error lines") +
+                               " on stderr (expected one)");
         } else if (counted[0].rfind(row.tool + ": error: ", 0) != 0) {
             problems.push_back("the stderr line is not '" + row.tool + ": error: ...'");
         }
@@ -753,7 +969,8 @@ TEST_P(Tool, HostileValues) {
     if (problem.rfind("skip: ", 0) == 0) GTEST_SKIP() << problem.substr(6);
     ASSERT_TRUE(problem.empty()) << "fixture: " << problem;
     const auto cases = cases_of(row);
-    ASSERT_FALSE(cases.empty()) << row.tool << " " << row.sub << ": no numeric option found in --help and no path option listed";
+    ASSERT_FALSE(cases.empty()) << row.tool << " " << row.sub
+                                << ": no numeric option found in --help and no path option listed";
     for (const auto& c : cases) attempt(row, c, fixture, row.bound);
 }
 

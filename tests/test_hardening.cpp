@@ -53,8 +53,13 @@ TEST(Range, NaNAndInfinityAreNeverInside) {
 }
 
 TEST(Range, ErrorNamesTheOptionAndTheRange) {
-    EXPECT_EQ(error_of([] { dw::require_in(7, Range{0, 1.4, "m"}, "--altitudes"); }), "--altitudes: 7 is not in [0, 1.4] m");
-    EXPECT_EQ(error_of([] { dw::require_in(kNaN, Range{0.05, 3, "m/s"}, "--speed"); }),
+    EXPECT_EQ(error_of([] {
+                  dw::require_in(7, Range{0, 1.4, "m"}, "--altitudes");
+              }),
+              "--altitudes: 7 is not in [0, 1.4] m");
+    EXPECT_EQ(error_of([] {
+                  dw::require_in(kNaN, Range{0.05, 3, "m/s"}, "--speed");
+              }),
               "--speed: nan is not a finite number (expected [0.05, 3] m/s)");
 }
 
@@ -111,7 +116,8 @@ TEST(Files, DirectoriesAndMissingFilesAreOneClearLine) {
     TempDir dir;
     EXPECT_EQ(error_of([&] { dw::read_file(dir.file(""), "--physics"); }),
               "--physics " + dir.file("") + ": is a directory, expected a file");
-    EXPECT_EQ(error_of([&] { dw::read_file(dir.file("nope"), "--physics"); }), "--physics " + dir.file("nope") + ": no such file");
+    EXPECT_EQ(error_of([&] { dw::read_file(dir.file("nope"), "--physics"); }),
+              "--physics " + dir.file("nope") + ": no such file");
 }
 
 TEST(Files, AFailedWriteLeavesNothingBehind) {
@@ -127,7 +133,8 @@ TEST(Files, AFailedWriteLeavesNothingBehind) {
     dw::write_file(dir.file("new/ok.txt"), "hello");
     EXPECT_EQ(slurp(dir.file("new/ok.txt")), "hello");
     EXPECT_EQ(std::distance(fs::directory_iterator(dir.file("")), fs::directory_iterator()), 3);  // ro/, plain, new/
-    EXPECT_EQ(std::distance(fs::directory_iterator(dir.file("new")), fs::directory_iterator()), 1);  // no temporary left
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir.file("new")), fs::directory_iterator()),
+              1);  // no temporary left
 }
 
 TEST(Files, WritablePathCheckRefusesDirectoriesAndFilesAsFolders) {
@@ -205,5 +212,6 @@ TEST(FlightReader, ADuplicatedNeighbourIsRefused) {
     std::string meta = slurp(dir.file("f/meta.json"));
     meta.replace(meta.find("\"v1\""), 4, "\"v1\", \"v1\"");
     std::ofstream(dir.file("f/meta.json")) << meta;
-    EXPECT_NE(error_of([&] { dw::flight::read_flight(dir.file("f")); }).find("'v1' is listed twice"), std::string::npos);
+    EXPECT_NE(error_of([&] { dw::flight::read_flight(dir.file("f")); }).find("'v1' is listed twice"),
+              std::string::npos);
 }

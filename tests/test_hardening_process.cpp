@@ -48,14 +48,22 @@ std::string temporaries(const std::string& dir) {
 TEST(Finding2, NaNOptionsAreRefusedByEveryTool) {
     TempDir d;
     for (const char* option : {"--altitudes", "--speed", "--min-separation"}) {
-        expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", option, "nan", "--out", d.file("p.yaml")}, d), option);
-        expect_one_line_exit_2(run({bin("dw-planner"), "run", "--formation", "single", option, "nan", "--domain", domain()}, d), option);
+        expect_one_line_exit_2(
+            run({bin("dw-planner"), "plan", "--formation", "single", option, "nan", "--out", d.file("p.yaml")}, d),
+            option);
+        expect_one_line_exit_2(
+            run({bin("dw-planner"), "run", "--formation", "single", option, "nan", "--domain", domain()}, d), option);
     }
-    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--altitudes", "nan", "--out", d.file("f")}, d), "--altitudes");
-    expect_one_line_exit_2(run({bin("dw-stand-agent"), "run", "--sim", "--noise", "nan", "--domain", domain()}, d), "--noise");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--altitudes", "nan", "--out", d.file("f")}, d),
+        "--altitudes");
+    expect_one_line_exit_2(run({bin("dw-stand-agent"), "run", "--sim", "--noise", "nan", "--domain", domain()}, d),
+                           "--noise");
     std::ofstream(d.file("offset.yaml")) << "effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n";
-    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", d.file("offset.yaml"), "--out", d.file("f")}, d),
-                   "offset_m");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--physics", d.file("offset.yaml"), "--out", d.file("f")},
+            d),
+        "offset_m");
     EXPECT_FALSE(fs::exists(d.file("f")));
     EXPECT_FALSE(fs::exists(d.file("p.yaml")));
 }
@@ -63,43 +71,59 @@ TEST(Finding2, NaNOptionsAreRefusedByEveryTool) {
 // 3. Tools that do not stop.
 TEST(Finding3, LongWorkStopsOnSigintWith130) {
     TempDir d;
-    EXPECT_EQ(interrupted({bin("dw-planner"), "plan", "--formation", "leader_follower3", "--legs", "1000", "--speed", "0.05",
-                           "--out", d.file("plan.yaml")}, d, 1500ms), 130);
+    EXPECT_EQ(interrupted({bin("dw-planner"), "plan", "--formation", "leader_follower3", "--legs", "1000", "--speed",
+                           "0.05", "--out", d.file("plan.yaml")},
+                          d, 1500ms),
+              130);
     EXPECT_FALSE(fs::exists(d.file("plan.yaml")));
-    EXPECT_EQ(interrupted({bin("dw-sim"), "fly", "--formation", "hybrid", "--legs", "1000", "--speed", "0.05", "--quiet",
-                           "--out", d.file("flight")}, d, 1500ms), 130);
+    EXPECT_EQ(interrupted({bin("dw-sim"), "fly", "--formation", "hybrid", "--legs", "1000", "--speed", "0.05",
+                           "--quiet", "--out", d.file("flight")},
+                          d, 1500ms),
+              130);
     EXPECT_FALSE(fs::exists(d.file("flight")));
     EXPECT_EQ(temporaries(d.file("")), "");
 }
 
 TEST(Finding3, TrainingStopsOnSigintWith130) {
     TempDir d;
-    ASSERT_EQ(run({bin("dw-sim"), "fly", "--formation", "hybrid", "--legs", "36", "--quiet", "--out", d.file("f")}, d).status, 0);
+    ASSERT_EQ(
+        run({bin("dw-sim"), "fly", "--formation", "hybrid", "--legs", "36", "--quiet", "--out", d.file("f")}, d).status,
+        0);
     // Whether the signal lands while the data loads or mid-epoch, the next mini-batch stops. The
     // patience is the epochs' own, so early stopping cannot end the training before the signal
     // (on a fast machine it did, in 1.5 s).
-    EXPECT_EQ(interrupted({bin("dw-predictor"), "train", "--kind", "deep_sets", "--epochs", "100000", "--patience", "100000", "--data",
-                           d.file("f"), "--out", d.file("m.json")}, d, 1500ms), 130);
+    EXPECT_EQ(interrupted({bin("dw-predictor"), "train", "--kind", "deep_sets", "--epochs", "100000", "--patience",
+                           "100000", "--data", d.file("f"), "--out", d.file("m.json")},
+                          d, 1500ms),
+              130);
     EXPECT_FALSE(fs::exists(d.file("m.json")));
 }
 
 TEST(Finding3, NumbersThatMeantForeverAreRefused) {
     TempDir d;
     expect_one_line_exit_2(run({bin("dw-probe"), "echo", "--timeout", "-1", "--domain", domain()}, d), "--timeout");
-    expect_one_line_exit_2(run({bin("dw-recorder"), "record", "--duration", "nan", "--out", d.file("r.mcap"), "--domain", domain()}, d), "--duration");
-    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--speed", "1e-9", "--out", d.file("p.yaml")}, d), "--speed");
-    std::ofstream(d.file("self.yaml")) << "format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, "
-                                       << d.file("self.yaml") << "], experiment: true}\n";
-    expect_one_line_exit_2(run({bin("dw-lab"), "run", "--lab", d.file("self.yaml"), "--run-dir", d.file("run"), "--domain", domain()}, d),
-                   "cannot start the launcher");
+    expect_one_line_exit_2(
+        run({bin("dw-recorder"), "record", "--duration", "nan", "--out", d.file("r.mcap"), "--domain", domain()}, d),
+        "--duration");
+    expect_one_line_exit_2(
+        run({bin("dw-planner"), "plan", "--formation", "single", "--speed", "1e-9", "--out", d.file("p.yaml")}, d),
+        "--speed");
+    std::ofstream(d.file("self.yaml"))
+        << "format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, " << d.file("self.yaml")
+        << "], experiment: true}\n";
+    expect_one_line_exit_2(
+        run({bin("dw-lab"), "run", "--lab", d.file("self.yaml"), "--run-dir", d.file("run"), "--domain", domain()}, d),
+        "cannot start the launcher");
 }
 
 // 4. Data given up too early (the salvage itself: tests/test_mcap.cpp).
 TEST(Finding4, RecoverChecksItsInputFirst) {
     TempDir d;
     std::ofstream(d.file("notes.txt")) << "not an MCAP file\n";
-    expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file("notes.txt"), d.file("out.mcap")}, d), "not an MCAP file");
-    expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file("nope.mcap"), d.file("out.mcap")}, d), "no such file");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file("notes.txt"), d.file("out.mcap")}, d),
+                           "not an MCAP file");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file("nope.mcap"), d.file("out.mcap")}, d),
+                           "no such file");
     expect_one_line_exit_2(run({bin("dw-recorder"), "recover", d.file(""), d.file("out.mcap")}, d), "is a directory");
     EXPECT_FALSE(fs::exists(d.file("out.mcap")));
 }
@@ -109,29 +133,44 @@ TEST(Finding6, DirectoriesAndMissingFilesAreOneLine) {
     TempDir d;
     const std::string dir = d.file("");
     expect_one_line_exit_2(run({bin("dw-probe"), "list", "--config", dir}, d), "is a directory");
-    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--config", d.file("missing.yaml"), "--out", d.file("f")}, d),
-                   "no such file");
-    expect_one_line_exit_2(run({bin("dw-explain"), "--config", d.file("missing.yaml"), "--real", dir, "--out", d.file("e")}, d), "no such file");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--config", d.file("missing.yaml"), "--out", d.file("f")},
+            d),
+        "no such file");
+    expect_one_line_exit_2(
+        run({bin("dw-explain"), "--config", d.file("missing.yaml"), "--real", dir, "--out", d.file("e")}, d),
+        "no such file");
     expect_one_line_exit_2(run({bin("dw-natnet-emulator"), "--config", d.file("missing.yaml")}, d), "no such file");
-    expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single", "--physics", dir, "--out", d.file("f")}, d), "is a directory");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--physics", dir, "--out", d.file("f")}, d),
+        "is a directory");
     expect_one_line_exit_2(run({bin("dw-recorder"), "info", dir}, d), "is a directory");
-    expect_one_line_exit_2(run({bin("dw-predictor"), "compare", "--models", dir, "--data", dir, "--out", d.file("c")}, d), "is a directory");
+    expect_one_line_exit_2(
+        run({bin("dw-predictor"), "compare", "--models", dir, "--data", dir, "--out", d.file("c")}, d),
+        "is a directory");
     EXPECT_FALSE(fs::exists(d.file("f")));
 }
 
 TEST(Finding6, OutputsAreCheckedBeforeWork) {
     TempDir d;
     std::ofstream(d.file("plain")) << "a file, not a folder";
-    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("plain/plan.yaml")}, d), "not a directory");
-    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("p.yaml"), "--picture", d.file("p.txt")}, d),
-                   "must end in .png");
+    expect_one_line_exit_2(
+        run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("plain/plan.yaml")}, d),
+        "not a directory");
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--out", d.file("p.yaml"),
+                                "--picture", d.file("p.txt")},
+                               d),
+                           "must end in .png");
     EXPECT_FALSE(fs::exists(d.file("p.yaml")));
 }
 
 TEST(Finding6, ProofOfUnknownCasesAndExplainWithoutWrenchOnLegs) {
     TempDir d;
-    expect_one_line_exit_2(run({bin("dw-explain"), "proof", "--cases", "nope", "--out", d.file("proof")}, d), "unknown case 'nope'");
-    ASSERT_EQ(run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status, 0);
+    expect_one_line_exit_2(run({bin("dw-explain"), "proof", "--cases", "nope", "--out", d.file("proof")}, d),
+                           "unknown case 'nope'");
+    ASSERT_EQ(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status,
+        0);
     // Every leg moved 1000 s past the recording: no wrench sample lies on a leg.
     std::ifstream in(d.file("f/legs.csv"));
     std::string header, line, moved;
@@ -142,7 +181,8 @@ TEST(Finding6, ProofOfUnknownCasesAndExplainWithoutWrenchOnLegs) {
                  std::to_string(std::stod(line.substr(b + 1)) + 1000) + "\n";
     }
     std::ofstream(d.file("f/legs.csv")) << header << "\n" << moved;
-    expect_one_line_exit_2(run({bin("dw-explain"), "--real", d.file("f"), "--out", d.file("e"), "--quiet"}, d), "hold wrench samples");
+    expect_one_line_exit_2(run({bin("dw-explain"), "--real", d.file("f"), "--out", d.file("e"), "--quiet"}, d),
+                           "hold wrench samples");
 }
 
 // Issue 17: a full disk ends a tool with one line and exit 1 (a runtime failure), and leaves no
@@ -159,8 +199,8 @@ struct Confined {
 Confined confined(const std::vector<std::string>& argv, const std::string& mount_options, const TempDir& d) {
     const std::string dir = d.file("confined"), listing = d.file("left.txt");
     fs::create_directories(dir);
-    std::string command = "mount -t tmpfs -o " + mount_options + " none " + dir + " && cd / && \"$@\"; rc=$?; (cd " + dir +
-                          " && find . -type f) > " + listing + "; exit $rc";
+    std::string command = "mount -t tmpfs -o " + mount_options + " none " + dir + " && cd / && \"$@\"; rc=$?; (cd " +
+                          dir + " && find . -type f) > " + listing + "; exit $rc";
     std::vector<std::string> full{"unshare", "-m", "sh", "-c", command, "sh"};
     for (const auto& a : argv) full.push_back(a == "@" ? dir : a.starts_with("@/") ? dir + a.substr(1) : a);
     Confined c{run(full, d), {}};
@@ -171,10 +211,13 @@ Confined confined(const std::vector<std::string>& argv, const std::string& mount
 
 bool can_confine() {
     TempDir d;
-    return ::geteuid() == 0 && run({"unshare", "-m", "sh", "-c", "mount -t tmpfs -o size=16k none " + d.file("") + " && true"}, d).status == 0;
+    return ::geteuid() == 0 &&
+           run({"unshare", "-m", "sh", "-c", "mount -t tmpfs -o size=16k none " + d.file("") + " && true"}, d).status ==
+               0;
 }
 
-void expect_one_line_nothing_partial(const Confined& c, int status, const std::string& needle, const std::set<std::string>& whole) {
+void expect_one_line_nothing_partial(const Confined& c, int status, const std::string& needle,
+                                     const std::set<std::string>& whole) {
     EXPECT_EQ(c.run.status, status) << c.run.err;
     const auto l = lines(c.run.err);
     ASSERT_EQ(l.size(), 1u) << c.run.err;
@@ -187,13 +230,17 @@ TEST(Issue17, AFullDiskIsOneLineExit1AndNoPartialFile) {
     if (!can_confine()) GTEST_SKIP() << "needs root and mount namespaces (unshare -m) for a tiny tmpfs; CI has both";
     TempDir d;
     // A flight much larger than 16 KiB: its small meta.json fits whole, wrench.csv does not.
-    auto full = confined({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", "@/flight"}, "size=16k", d);
+    auto full = confined({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", "@/flight"},
+                         "size=16k", d);
     expect_one_line_nothing_partial(full, 1, "No space left on device", {"./flight/meta.json"});
-    auto ro = confined({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", "@/flight"}, "ro,size=16k", d);
+    auto ro = confined({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", "@/flight"},
+                       "ro,size=16k", d);
     expect_one_line_nothing_partial(ro, 2, "Read-only file system", {});
 
     // The explainer's report and figures into a full folder.
-    ASSERT_EQ(run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status, 0);
+    ASSERT_EQ(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status,
+        0);
     auto report = confined({bin("dw-explain"), "--real", d.file("f"), "--quiet", "--out", "@/explain"}, "size=16k", d);
     EXPECT_EQ(report.run.status, 1) << report.run.err;
     const auto l = lines(report.run.err);

@@ -51,7 +51,8 @@ TEST(Import, CsvAndBinaryOfOneFlightAgree) {
     }
     for (std::size_t i = 0; i < a.poses.size(); ++i) {
         for (std::size_t k = 0; k < 3; ++k) ASSERT_NEAR(a.poses[i].p[k], b.poses[i].p[k], 1e-6) << i;
-        for (std::size_t k = 0; k < 4; ++k) ASSERT_NEAR(a.poses[i].q[k], b.poses[i].q[k], 2e-3) << i;  // the CSV's quaternion is the decompressed one
+        for (std::size_t k = 0; k < 4; ++k)
+            ASSERT_NEAR(a.poses[i].q[k], b.poses[i].q[k], 2e-3) << i;  // the CSV's quaternion is the decompressed one
     }
 }
 
@@ -109,8 +110,10 @@ TEST(Import, BadColumnsAndValuesAreOneLocatedLine) {
     const auto line3 = bad.find('\n', bad.find('\n') + 1) + 1;
     bad.replace(line3, bad.find(',', line3) - line3, "oops");
     std::ofstream(d.file("cf50_01.csv")) << bad;
-    EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("cf50_01.csv:3: column time[ms]: 'oops' is not a finite number"), std::string::npos)
+    EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("cf50_01.csv:3: column time[ms]: 'oops' is not a finite number"),
+              std::string::npos)
         << error_of({d.file("cf50_01.csv")});
     EXPECT_NE(error_of({kData + "swap_ss/cf50_01.csv"}).find("at least two vehicles"), std::string::npos);
-    EXPECT_NE(error_of({d.file("cf99_01.csv")}).find("not one the Neural-Swarm collection describes"), std::string::npos);
+    EXPECT_NE(error_of({d.file("cf99_01.csv")}).find("not one the Neural-Swarm collection describes"),
+              std::string::npos);
 }

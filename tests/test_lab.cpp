@@ -74,12 +74,14 @@ std::string lab_text(const std::string& b_host, const std::string& planner_host)
 std::map<std::string, std::uint64_t> first_recorded_seq(const std::string& file) {
     std::map<std::uint16_t, std::string> topics;
     std::map<std::string, std::uint64_t> first;
-    const auto r = dw::mcap::read_file(file, {
-        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic.substr(c.topic.find('/', 3) + 1); },
-        .on_message = [&](const dw::mcap::Message& m) {
-            auto [it, fresh] = first.try_emplace(topics[m.channel_id], m.sequence);
-            if (!fresh) it->second = std::min<std::uint64_t>(it->second, m.sequence);
-        }});
+    const auto r = dw::mcap::read_file(
+        file,
+        {.on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic.substr(c.topic.find('/', 3) + 1); },
+         .on_message =
+             [&](const dw::mcap::Message& m) {
+                 auto [it, fresh] = first.try_emplace(topics[m.channel_id], m.sequence);
+                 if (!fresh) it->second = std::min<std::uint64_t>(it->second, m.sequence);
+             }});
     EXPECT_FALSE(r.error) << *r.error;
     return first;
 }
@@ -92,15 +94,24 @@ TEST(LabFile, ReadsTheSimulatedLabAndNamesWhereItIsWrong) {
     EXPECT_TRUE(lab.processes.back().experiment);
     EXPECT_EQ(dw::lab::expand(lab.processes.back(), lab.vars)[3], "leader_follower3");
     EXPECT_NE(error_of("format: downwash-lab/2\nprocesses: []\n").find("lab.yaml:1:9: format"), std::string::npos);
-    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    run: [dw-probe]\n    restart: sometimes\n").find("lab.yaml:5:14: processes[0].restart"),
+    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    run: [dw-probe]\n    restart: sometimes\n")
+                  .find("lab.yaml:5:14: processes[0].restart"),
               std::string::npos);
-    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    run: [rm, -rf]\n").find("not a lab executable"), std::string::npos);
-    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    host: mars\n    run: [dw-probe]\n").find("'mars' is not under hosts"),
+    EXPECT_NE(
+        error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    run: [rm, -rf]\n").find("not a lab executable"),
+        std::string::npos);
+    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    host: mars\n    run: [dw-probe]\n")
+                  .find("'mars' is not under hosts"),
               std::string::npos);
-    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe]}\n  - {name: a, run: [dw-probe]}\n").find("used twice"),
-              std::string::npos);
-    EXPECT_NE(error_of("format: downwash-lab/1\ncolour: red\nprocesses: []\n").find("lab.yaml:2:1: colour: unknown key"), std::string::npos);
-    const auto lab2 = dw::lab::parse_lab("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe, \"{what}\"]}\n", "x");
+    EXPECT_NE(
+        error_of("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe]}\n  - {name: a, run: [dw-probe]}\n")
+            .find("used twice"),
+        std::string::npos);
+    EXPECT_NE(
+        error_of("format: downwash-lab/1\ncolour: red\nprocesses: []\n").find("lab.yaml:2:1: colour: unknown key"),
+        std::string::npos);
+    const auto lab2 =
+        dw::lab::parse_lab("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe, \"{what}\"]}\n", "x");
     EXPECT_THROW(dw::lab::expand(lab2.processes[0], {}), dw::InputError);
 }
 
@@ -112,9 +123,10 @@ TEST(LabFile, ProgressBar) {
 TEST(LabRun, FliesALabFileRestartsAFailingProcessAndPrintsOtherHostsCommands) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("lab.yaml")) << lab_text("", "local");
-    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--domain",
-                                  std::to_string(dw::test::test_domain()), "--namespace", "labrun" + std::to_string(::getpid())},
-                                 dir, 300000ms);
+    const auto r =
+        dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--domain",
+                       std::to_string(dw::test::test_domain()), "--namespace", "labrun" + std::to_string(::getpid())},
+                      dir, 300000ms);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("started elsewhere: elsewhere: "), std::string::npos) << r.out;
@@ -142,28 +154,34 @@ TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
     const auto flaky = lab.find("  - name: flaky");
     lab.erase(flaky, lab.find("  - name: planner") - flaky);
     lab.replace(lab.find("    host: elsewhere\n"), std::string("    host: elsewhere\n").size(), "");
-    lab.replace(lab.find("physics.yaml]"), std::string("physics.yaml").size(), dir.file("physics.yaml"));  // here, not elsewhere
+    lab.replace(lab.find("physics.yaml]"), std::string("physics.yaml").size(),
+                dir.file("physics.yaml"));  // here, not elsewhere
     std::ofstream(dir.file("lab.yaml")) << lab;
     std::ofstream(dir.file("physics.yaml")) << "format: downwash-physics/1\n";  // the predictor's model: the physics
-    const auto keys = dw::test::run({bin("dw-lab"), "keys", "create", "--keystore", dir.file("keys"), "--lab", dir.file("lab.yaml")}, dir);
+    const auto keys = dw::test::run(
+        {bin("dw-lab"), "keys", "create", "--keystore", dir.file("keys"), "--lab", dir.file("lab.yaml")}, dir);
     ASSERT_EQ(keys.status, 0) << keys.err;
     EXPECT_NE(keys.out.find("created identity planner"), std::string::npos) << keys.out;
-    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--security", dir.file("keys"),
-                                  "--domain", std::to_string(dw::test::test_domain()), "--namespace", "labsec" + std::to_string(::getpid())},
+    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
+                                  "--security", dir.file("keys"), "--domain", std::to_string(dw::test::test_domain()),
+                                  "--namespace", "labsec" + std::to_string(::getpid())},
                                  dir, 300000ms);
     ASSERT_EQ(r.status, 0) << r.err << "\nplanner log:\n" << dw::read_file(dir.file("run/logs/planner.log"));
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
-    EXPECT_NE(r.err.find("@local    auth"), std::string::npos) << "the status line says each process authenticated\n" << r.err;
+    EXPECT_NE(r.err.find("@local    auth"), std::string::npos) << "the status line says each process authenticated\n"
+                                                               << r.err;
     const auto info = dw::test::run({bin("dw-recorder"), "info", dir.file("run/exp.mcap")}, dir);
     ASSERT_EQ(info.status, 0) << info.err;
-    for (const char* topic : {"stand/wrench", "mocap/frame", "vehicles/setpoint", "experiment/command", "predictor/wrench"}) {
+    for (const char* topic :
+         {"stand/wrench", "mocap/frame", "vehicles/setpoint", "experiment/command", "predictor/wrench"}) {
         const auto at = info.out.find(std::string("/") + topic + " ");
         ASSERT_NE(at, std::string::npos) << topic << "\n" << info.out;
         EXPECT_EQ(info.out.find("lost 0", at), info.out.find("lost ", at)) << topic << ": no sample lost\n" << info.out;
     }
     EXPECT_NE(info.out.find("dds_security=identity recorder"), std::string::npos) << info.out;
     for (const char* log : {"planner", "stand_agent", "recorder", "predictor", "mocap_bridge"})
-        EXPECT_EQ(dw::read_file(dir.file(std::string("run/logs/") + log + ".log")).find("SECURITY"), std::string::npos) << log;
+        EXPECT_EQ(dw::read_file(dir.file(std::string("run/logs/") + log + ".log")).find("SECURITY"), std::string::npos)
+            << log;
 }
 
 namespace {
@@ -188,18 +206,21 @@ TEST(LabRun, FliesThePx4LabFileWithSimulatedPx4sAndTheirMotionCapture) {
     const std::string physics = std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml";
     const std::uint16_t port = free_udp_port();
     ASSERT_NE(port, 0);
-    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", std::string(DW_SOURCE_DIR) + "/config/lab.px4sim.yaml", "--run-dir",
-                                  dir.file("run"), "--var", "legs=2", "--var", "physics=" + physics, "--var", "model=" + physics, "--var",
-                                  "natnet_port=" + std::to_string(port), "--domain", std::to_string(dw::test::test_domain()), "--namespace",
-                                  "labpx4" + std::to_string(::getpid())},
-                                 dir, 300000ms);
+    const auto r =
+        dw::test::run({bin("dw-lab"), "run", "--lab", std::string(DW_SOURCE_DIR) + "/config/lab.px4sim.yaml",
+                       "--run-dir", dir.file("run"), "--var", "legs=2", "--var", "physics=" + physics, "--var",
+                       "model=" + physics, "--var", "natnet_port=" + std::to_string(port), "--domain",
+                       std::to_string(dw::test::test_domain()), "--namespace", "labpx4" + std::to_string(::getpid())},
+                      dir, 300000ms);
     ASSERT_EQ(r.status, 0) << r.err << "\nplanner log:\n" << dw::read_file(dir.file("run/logs/planner.log"));
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
     const std::string planner = dw::read_file(dir.file("run/logs/planner.log"));
     const std::string px4 = dw::read_file(dir.file("run/logs/px4_sim.log"));
     for (const char* v : {"v1", "v2"}) {
         EXPECT_NE(planner.find(std::string(v) + ": PX4 system"), std::string::npos) << planner;
-        EXPECT_NE(px4.find(std::string(v) + ": armed, 0 commands ignored (another system), 0 payloads undecodable"), std::string::npos) << px4;
+        EXPECT_NE(px4.find(std::string(v) + ": armed, 0 commands ignored (another system), 0 payloads undecodable"),
+                  std::string::npos)
+            << px4;
     }
     const auto info = dw::test::run({bin("dw-recorder"), "info", dir.file("run/recording.mcap")}, dir);
     ASSERT_EQ(info.status, 0) << info.err;
@@ -220,19 +241,22 @@ TEST(LabRun, FliesThePx4LabFileWithSimulatedPx4sAndTheirMotionCapture) {
 TEST(LabRun, TheLabProfileWantsAKeystoreOrAnExplicitInsecure) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("lab.yaml")) << lab_text("", "local");
-    const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--profile", "lab"}, dir);
+    const auto r = dw::test::run(
+        {bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--profile", "lab"}, dir);
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
     EXPECT_NE(r.err.find("--insecure"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir.file("run"))) << "refused before anything started";
-    const auto bad = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--security", dir.file("no-keys")}, dir);
+    const auto bad =
+        dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--security", dir.file("no-keys")}, dir);
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.err.find("no-keys"), std::string::npos) << bad.err;
 }
 
 TEST(LabRun, BadLabFileIsOneLineAndExit2) {
     dw::test::TempDir dir;
-    std::ofstream(dir.file("lab.yaml")) << "format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe], restart: sometimes}\n";
+    std::ofstream(dir.file("lab.yaml"))
+        << "format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe], restart: sometimes}\n";
     const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml")}, dir);
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
@@ -252,10 +276,12 @@ struct TwoHosts {
     std::string net = "10.232." + std::to_string(::getpid() % 250);
     bool up() const {
         for (const auto& s : std::vector<std::string>{
-                 "ip netns add " + a, "ip netns add " + b, "ip link add " + a + " type veth peer name " + b, "ip link set " + a + " netns " + a,
-                 "ip link set " + b + " netns " + b, "ip -n " + a + " addr add " + net + ".1/24 dev " + a,
-                 "ip -n " + b + " addr add " + net + ".2/24 dev " + b, "ip -n " + a + " link set " + a + " up", "ip -n " + b + " link set " + b + " up",
-                 "ip -n " + a + " link set lo up", "ip -n " + b + " link set lo up", "ip -n " + a + " route add 224.0.0.0/4 dev " + a,
+                 "ip netns add " + a, "ip netns add " + b, "ip link add " + a + " type veth peer name " + b,
+                 "ip link set " + a + " netns " + a, "ip link set " + b + " netns " + b,
+                 "ip -n " + a + " addr add " + net + ".1/24 dev " + a,
+                 "ip -n " + b + " addr add " + net + ".2/24 dev " + b, "ip -n " + a + " link set " + a + " up",
+                 "ip -n " + b + " link set " + b + " up", "ip -n " + a + " link set lo up",
+                 "ip -n " + b + " link set lo up", "ip -n " + a + " route add 224.0.0.0/4 dev " + a,
                  "ip -n " + b + " route add 224.0.0.0/4 dev " + b}) {
             if (sh(s) != 0) {
                 ADD_FAILURE() << s;
@@ -270,8 +296,9 @@ struct TwoHosts {
     }
     std::string host_b() const { return "hostb: {launch: [ip, netns, exec, " + b + "]}"; }
     dw::test::RunResult run_lab(const dw::test::TempDir& dir) const {
-        return dw::test::run({"ip", "netns", "exec", a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
-                              "--profile", "lab", "--insecure", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
+        return dw::test::run({"ip", "netns", "exec", a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"),
+                              "--run-dir", dir.file("run"), "--profile", "lab", "--insecure", "--transport", "udp",
+                              "--domain", std::to_string(dw::test::test_domain())},
                              dir, 300000ms);
     }
 };
@@ -305,22 +332,26 @@ TEST(LabRun, MeasuresAClockErrorHiddenOnAnotherHost) {
     const auto flaky = lab.find("  - name: flaky");
     lab.erase(flaky, lab.find("  - name: planner") - flaky);
     const std::string stand = "    run: [dw-stand-agent, run, --sim]\n";
-    lab.replace(lab.find(stand), stand.size(), "    host: hostb\n    run: [dw-stand-agent, run, --sim, --clock-offset, \"0.05\"]\n");
+    lab.replace(lab.find(stand), stand.size(),
+                "    host: hostb\n    run: [dw-stand-agent, run, --sim, --clock-offset, \"0.05\"]\n");
     std::ofstream(dir.file("lab.yaml")) << lab;
     const auto r = hosts.run_lab(dir);
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_NE(r.err.find("clock   +50."), std::string::npos) << "the status line shows the stand agent's offset\n" << r.err;
+    EXPECT_NE(r.err.find("clock   +50."), std::string::npos) << "the status line shows the stand agent's offset\n"
+                                                             << r.err;
 
     std::map<std::uint16_t, std::string> topics;
     std::vector<double> measured;
-    dw::mcap::read_file(dir.file("run/exp.mcap"), {
-        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
-        .on_message = [&](const dw::mcap::Message& m) {
-            if (!topics[m.channel_id].ends_with("/processes/status")) return;
-            dw::msg::ProcessStatus s;
-            ASSERT_TRUE(dw::recordings::deserialize(m.data, s));
-            if (s.process() == "stand_agent" && s.clock_uncertainty_s() >= 0) measured.push_back(s.clock_offset_s());
-        }});
+    dw::mcap::read_file(dir.file("run/exp.mcap"),
+                        {.on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+                         .on_message =
+                             [&](const dw::mcap::Message& m) {
+                                 if (!topics[m.channel_id].ends_with("/processes/status")) return;
+                                 dw::msg::ProcessStatus s;
+                                 ASSERT_TRUE(dw::recordings::deserialize(m.data, s));
+                                 if (s.process() == "stand_agent" && s.clock_uncertainty_s() >= 0)
+                                     measured.push_back(s.clock_offset_s());
+                             }});
     ASSERT_GT(measured.size(), 10u) << "the recording holds the stand agent's measured offsets";
     EXPECT_NEAR(measured.back(), 0.05, 0.002);
 
@@ -330,8 +361,9 @@ TEST(LabRun, MeasuresAClockErrorHiddenOnAnotherHost) {
     EXPECT_NEAR(applied["stand_agent"].get<double>(), 0.05, 0.002) << applied;
     EXPECT_TRUE(nlohmann::json::parse(raw.meta.extra_json)["clock_offsets_applied_s"].empty());
     ASSERT_EQ(corrected.wrench.size(), raw.wrench.size());
-    const double shift = (raw.wrench.front().t + nlohmann::json::parse(raw.meta.extra_json)["epoch_unix_s"].get<double>()) -
-                         (corrected.wrench.front().t + nlohmann::json::parse(corrected.meta.extra_json)["epoch_unix_s"].get<double>());
+    const double shift =
+        (raw.wrench.front().t + nlohmann::json::parse(raw.meta.extra_json)["epoch_unix_s"].get<double>()) -
+        (corrected.wrench.front().t + nlohmann::json::parse(corrected.meta.extra_json)["epoch_unix_s"].get<double>());
     EXPECT_NEAR(shift, 0.05, 0.002) << "the wrench stamps moved onto the recorder's clock";
 }
 
@@ -354,11 +386,13 @@ std::vector<std::uint64_t> recorded_seqs(const std::vector<std::string>& files, 
     std::vector<std::uint64_t> seqs;
     for (const auto& file : files) {
         std::map<std::uint16_t, std::string> topics;
-        const auto r = dw::mcap::read_file(file, {
-            .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
-            .on_message = [&](const dw::mcap::Message& m) {
-                if (topics[m.channel_id].ends_with("/" + suffix)) seqs.push_back(m.sequence);
-            }});
+        const auto r =
+            dw::mcap::read_file(file, {.on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+                                       .on_message =
+                                           [&](const dw::mcap::Message& m) {
+                                               if (topics[m.channel_id].ends_with("/" + suffix))
+                                                   seqs.push_back(m.sequence);
+                                           }});
         EXPECT_FALSE(r.error) << file << ": " << *r.error;
         EXPECT_TRUE(r.complete) << file << " does not read whole";
     }
@@ -387,9 +421,12 @@ processes:
     run: [dw-planner, run, --formation, single, --legs, "4", --altitudes, "0.5", --speed, "1.0", --rejoin-grace, "10"]
     experiment: true
 )";
-    dw::Subprocess lab({{bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--domain",
-                         std::to_string(dw::test::test_domain()), "--namespace", "labkill" + std::to_string(::getpid())},
-                        dir.file("lab.out"), dir.file("lab.err"), {}});
+    dw::Subprocess lab(
+        {{bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--domain",
+          std::to_string(dw::test::test_domain()), "--namespace", "labkill" + std::to_string(::getpid())},
+         dir.file("lab.out"),
+         dir.file("lab.err"),
+         {}});
     const std::string started = await_text(dir.file("lab.err"), "started recorder on local (pid ");
     await_text(dir.file("run/logs/planner.log"), "flying 4 legs");
     std::this_thread::sleep_for(3s);
@@ -402,15 +439,16 @@ processes:
     ASSERT_EQ(*status, 0) << err;
     EXPECT_NE(out.find("DONE: 4 of 4 legs"), std::string::npos) << out << err;
     EXPECT_NE(err.find("restarting recorder (1 of 3)"), std::string::npos) << err;
-    EXPECT_NE(dw::read_file(dir.file("run/logs/recorder.log")).find("recovered " + dir.file("run/exp.mcap")), std::string::npos)
+    EXPECT_NE(dw::read_file(dir.file("run/logs/recorder.log")).find("recovered " + dir.file("run/exp.mcap")),
+              std::string::npos)
         << dw::read_file(dir.file("run/logs/recorder.log"));
     const auto seqs = recorded_seqs({dir.file("run/exp.mcap"), dir.file("run/exp_0001.mcap")}, "stand/wrench");
     ASSERT_GT(seqs.size(), 100u);
     std::uint64_t gap = 0;
     for (std::size_t i = 1; i < seqs.size(); ++i) gap = std::max(gap, seqs[i] - seqs[i - 1] - 1);
     const double gap_s = static_cast<double>(gap) / 80.0;  // the simulated stand publishes at 80 Hz
-    std::printf("stand/wrench: %zu samples recorded in two files, the longest run missing %llu samples (%.2f s)\n", seqs.size(),
-                static_cast<unsigned long long>(gap), gap_s);
+    std::printf("stand/wrench: %zu samples recorded in two files, the longest run missing %llu samples (%.2f s)\n",
+                seqs.size(), static_cast<unsigned long long>(gap), gap_s);
     EXPECT_LE(gap_s, 1.0) << "more than a second of the stand's wrench lost";
 }
 
@@ -436,9 +474,12 @@ processes:
     run: [dw-planner, run, --formation, single, --legs, "4", --altitudes, "0.5", --speed, "1.0", --rejoin-grace, "10"]
     experiment: true
 )";
-    dw::Subprocess lab({{"ip", "netns", "exec", hosts.a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
-                         "--profile", "lab", "--insecure", "--transport", "udp", "--domain", std::to_string(dw::test::test_domain())},
-                        dir.file("lab.out"), dir.file("lab.err"), {}});
+    dw::Subprocess lab({{"ip", "netns", "exec", hosts.a, bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"),
+                         "--run-dir", dir.file("run"), "--profile", "lab", "--insecure", "--transport", "udp",
+                         "--domain", std::to_string(dw::test::test_domain())},
+                        dir.file("lab.out"),
+                        dir.file("lab.err"),
+                        {}});
     await_text(dir.file("run/logs/planner.log"), "flying 4 legs");
     std::this_thread::sleep_for(2s);
     ASSERT_EQ(sh("ip -n " + hosts.b + " link set " + hosts.b + " down"), 0);
@@ -456,8 +497,8 @@ processes:
 
     std::map<std::string, std::string> gaps;
     dw::mcap::read_file(dir.file("run/exp.mcap"), {.on_metadata = [&](const dw::mcap::Metadata& m) {
-                                                       if (m.name == "gaps") gaps = m.entries;
-                                                   }});
+                            if (m.name == "gaps") gaps = m.entries;
+                        }});
     std::string wrench;
     for (const auto& [topic, text] : gaps)
         if (topic.ends_with("/stand/wrench")) wrench = text;
@@ -472,14 +513,16 @@ processes:
 
 TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
     dw::test::TempDir dir;
-    const auto r = dw::test::run({bin("dw-lab"), "demo", "--quick", "--out", dir.file("demo"), "--domain",
-                                  std::to_string(dw::test::test_domain()), "--namespace", "demo" + std::to_string(::getpid())},
-                                 dir, 900000ms);
+    const auto r =
+        dw::test::run({bin("dw-lab"), "demo", "--quick", "--out", dir.file("demo"), "--domain",
+                       std::to_string(dw::test::test_domain()), "--namespace", "demo" + std::to_string(::getpid())},
+                      dir, 900000ms);
     ASSERT_EQ(r.status, 0) << r.err;
     const std::string index = dw::read_file(dir.file("demo/index.md"));
-    for (const char* f : {"recordings/single.mcap", "recordings/lf3.mcap", "flights/lf3", "study/table.md", "study/models", "recorded/table.md",
-                          "study/maps/leader_follower3.png", "recorded/lf3_map.png", "explain/report.md", "explain/report.json",
-                          "explain/residuals_before.png"}) {
+    for (const char* f :
+         {"recordings/single.mcap", "recordings/lf3.mcap", "flights/lf3", "study/table.md", "study/models",
+          "recorded/table.md", "study/maps/leader_follower3.png", "recorded/lf3_map.png", "explain/report.md",
+          "explain/report.json", "explain/residuals_before.png"}) {
         EXPECT_NE(index.find(f), std::string::npos) << f;
         EXPECT_TRUE(std::filesystem::exists(dir.file(std::string("demo/") + f))) << f;
     }
@@ -507,7 +550,8 @@ TEST(LabFile, ProcessNamesAreNotPathsAndTheLauncherIsNotAProcess) {
                                        "\", run: [dw-probe, list], experiment: true}\n");
         EXPECT_NE(e.find("is not a process name"), std::string::npos) << name << ": " << e;
     }
-    const std::string e = error_of("format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, lab.yaml]}\n");
+    const std::string e =
+        error_of("format: downwash-lab/1\nprocesses:\n  - {name: again, run: [dw-lab, run, --lab, lab.yaml]}\n");
     EXPECT_NE(e.find("cannot start the launcher"), std::string::npos) << e;
     EXPECT_EQ(error_of("format: downwash-lab/1\nprocesses:\n  - {name: probe-1.a_b, run: [dw-probe, list]}\n"), "");
 }
@@ -518,8 +562,9 @@ TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
     std::vector<dw::lab::ResourceRow> rows;
     for (int i = 0; i <= 36; ++i) {
         const double t = 5.0 * i;
-        rows.push_back({t, "flat", 10, {i == 0 ? 2.0 : 30.0 + 0.01 * (i % 2), 0.1 * t}, 0});  // start-up jump, then flat
-        rows.push_back({t, "leaky", 11, {20.0 + 0.02 * t, 0.05 * t}, i >= 30 ? 3u : 0u});     // 1.2 MB/min, loses 3 late
+        rows.push_back(
+            {t, "flat", 10, {i == 0 ? 2.0 : 30.0 + 0.01 * (i % 2), 0.1 * t}, 0});          // start-up jump, then flat
+        rows.push_back({t, "leaky", 11, {20.0 + 0.02 * t, 0.05 * t}, i >= 30 ? 3u : 0u});  // 1.2 MB/min, loses 3 late
     }
     const auto t = dw::lab::trends(rows);
     ASSERT_EQ(t.size(), 2u);
@@ -552,9 +597,10 @@ TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
 // sampled through the run, memory flat after the warm-up, nothing lost, the charts drawn.
 TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
     dw::test::TempDir dir;
-    const auto r = dw::test::run({bin("dw-lab"), "soak", "--minutes", "3", "--out", dir.file("soak"), "--domain",
-                                  std::to_string(dw::test::test_domain()), "--namespace", "soak" + std::to_string(::getpid())},
-                                 dir, 900000ms);
+    const auto r =
+        dw::test::run({bin("dw-lab"), "soak", "--minutes", "3", "--out", dir.file("soak"), "--domain",
+                       std::to_string(dw::test::test_domain()), "--namespace", "soak" + std::to_string(::getpid())},
+                      dir, 900000ms);
     std::printf("%s\n", r.out.c_str());
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     const auto j = nlohmann::json::parse(dw::read_file(dir.file("soak/soak.json")));
@@ -568,5 +614,6 @@ TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
         EXPECT_LE(p["rss_slope_mb_per_min"].get<double>(), dw::lab::kRssSlopeLimitMbPerMin) << p;
     }
     EXPECT_EQ(j["recorder_lost"].get<std::uint64_t>(), 0u);
-    for (const char* png : {"soak/soak_rss.png", "soak/soak_cpu.png"}) EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
+    for (const char* png : {"soak/soak_rss.png", "soak/soak_cpu.png"})
+        EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
 }

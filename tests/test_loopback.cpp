@@ -33,15 +33,18 @@ struct Lab {
     std::string text(const std::string& name) const { return dw::read_file(dir.file(name)); }
 };
 
-bool is_latched(const nlohmann::json& t) { return t["qos"].get<std::string>().find("TRANSIENT_LOCAL") != std::string::npos; }
+bool is_latched(const nlohmann::json& t) {
+    return t["qos"].get<std::string>().find("TRANSIENT_LOCAL") != std::string::npos;
+}
 }  // namespace
 
 TEST(Loopback, EveryTopicTypeArrivesIntactUnderItsQos) {
     Lab lab;
-    auto echo = lab.start({"echo", "all", "--expect", "25", "--timeout", "120", "--summary",
-                           lab.dir.file("summary.json"), "--quiet"}, "echo");
-    auto pub = lab.start({"pub", "all", "--count", "25", "--rate", "100", "--wait-readers", "1",
-                          "--linger", "-1", "--quiet"}, "pub");
+    auto echo = lab.start(
+        {"echo", "all", "--expect", "25", "--timeout", "120", "--summary", lab.dir.file("summary.json"), "--quiet"},
+        "echo");
+    auto pub = lab.start(
+        {"pub", "all", "--count", "25", "--rate", "100", "--wait-readers", "1", "--linger", "-1", "--quiet"}, "pub");
     const auto status = echo.wait_for(180000ms);
     pub.stop();
     ASSERT_TRUE(status.has_value());
@@ -80,8 +83,9 @@ TEST(Loopback, ALateReaderGetsOnlyTheLatestLatchedState) {
         std::this_thread::sleep_for(20ms);
     }
     ASSERT_NE(lab.text("pub.out").find(last), std::string::npos);
-    auto echo = lab.start({"echo", "all", "--expect", "0", "--expect-latched", "1", "--timeout", "120",
-                           "--summary", lab.dir.file("late.json"), "--quiet"}, "echo");
+    auto echo = lab.start({"echo", "all", "--expect", "0", "--expect-latched", "1", "--timeout", "120", "--summary",
+                           lab.dir.file("late.json"), "--quiet"},
+                          "echo");
     const auto status = echo.wait_for(180000ms);
     pub.stop();
     ASSERT_TRUE(status.has_value());
@@ -105,8 +109,8 @@ TEST(Loopback, ALateReaderGetsOnlyTheLatestLatchedState) {
 TEST(Loopback, QosMismatchBetweenProcessesIsReportedInOneLine) {
     Lab lab;
     auto pub = lab.start({"pub", "stand/wrench", "--count", "100000", "--rate", "50", "--quiet"}, "pub");
-    auto echo = lab.start({"echo", "stand/wrench", "--reliability", "reliable", "--expect", "1",
-                           "--timeout", "5", "--quiet"}, "echo");
+    auto echo = lab.start(
+        {"echo", "stand/wrench", "--reliability", "reliable", "--expect", "1", "--timeout", "5", "--quiet"}, "echo");
     const auto status = echo.wait_for(120000ms);
     pub.stop();
     ASSERT_TRUE(status.has_value());
@@ -116,8 +120,11 @@ TEST(Loopback, QosMismatchBetweenProcessesIsReportedInOneLine) {
         if (l.find("QoS mismatch") != std::string::npos) mismatch.push_back(l);
     }
     ASSERT_EQ(mismatch.size(), 1u) << lab.text("echo.err");
-    EXPECT_NE(mismatch[0].find("QoS mismatch on rt/" + lab.ns + "/stand/wrench (dw::msg::WrenchStamped): "
-                               "this reader requests RELIABLE"), std::string::npos) << mismatch[0];
+    EXPECT_NE(mismatch[0].find("QoS mismatch on rt/" + lab.ns +
+                               "/stand/wrench (dw::msg::WrenchStamped): "
+                               "this reader requests RELIABLE"),
+              std::string::npos)
+        << mismatch[0];
     EXPECT_NE(mismatch[0].find("incompatible RELIABILITY"), std::string::npos) << mismatch[0];
     // The publisher saw it too, from its side.
     EXPECT_NE(lab.text("pub.err").find("this writer offers BEST_EFFORT"), std::string::npos) << lab.text("pub.err");
@@ -125,9 +132,9 @@ TEST(Loopback, QosMismatchBetweenProcessesIsReportedInOneLine) {
 
 TEST(Loopback, LabLoopbackSessionSucceeds) {
     Lab lab;
-    const auto r = dw::test::run({bin("dw-lab"), "loopback", "--count", "10", "--rate", "50", "--quiet",
-                                  "--domain", lab.domain, "--namespace", lab.ns,
-                                  "--summary", lab.dir.file("lab.json")}, lab.dir);
+    const auto r = dw::test::run({bin("dw-lab"), "loopback", "--count", "10", "--rate", "50", "--quiet", "--domain",
+                                  lab.domain, "--namespace", lab.ns, "--summary", lab.dir.file("lab.json")},
+                                 lab.dir);
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_NE(r.out.find("all topics arrived intact"), std::string::npos) << r.out;
     EXPECT_TRUE(lab.summary("lab.json")["ok"].get<bool>());

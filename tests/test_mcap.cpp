@@ -108,7 +108,8 @@ TEST(Mcap, TruncatedFileIsReportedAndRecovered) {
     write_sample(d.file("full.mcap"), Compression::zstd, 3000, 2048);
     auto bytes = bytes_of(d.file("full.mcap"));
     bytes.resize(bytes.size() * 2 / 3);  // as if the power went out
-    std::ofstream(d.file("cut.mcap"), std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    std::ofstream(d.file("cut.mcap"), std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
     std::uint64_t n = 0;
     const ReadResult cut = read_file(d.file("cut.mcap"), {.on_message = [&](const Message&) { ++n; }});
     ASSERT_TRUE(cut.error);
@@ -121,7 +122,8 @@ TEST(Mcap, TruncatedFileIsReportedAndRecovered) {
     const ReadResult rec = recover(d.file("cut.mcap"), d.file("fixed.mcap"), o);
     EXPECT_EQ(rec.messages, n);
     std::vector<std::uint32_t> seqs;
-    const ReadResult fixed = read_file(d.file("fixed.mcap"), {.on_message = [&](const Message& m) { seqs.push_back(m.sequence); }});
+    const ReadResult fixed =
+        read_file(d.file("fixed.mcap"), {.on_message = [&](const Message& m) { seqs.push_back(m.sequence); }});
     EXPECT_FALSE(fixed.error);
     EXPECT_TRUE(fixed.complete);
     ASSERT_EQ(seqs.size(), n);
@@ -134,10 +136,13 @@ TEST(Mcap, CrcMismatchesAreCaught) {
     auto bytes = bytes_of(d.file("none.mcap"));
     // Flip a byte inside the (uncompressed) chunk: the chunk CRC must catch it.
     std::size_t at = 0;
-    for (std::size_t i = 8; i + 9 < bytes.size(); ) {
+    for (std::size_t i = 8; i + 9 < bytes.size();) {
         std::uint64_t len = 0;
         std::memcpy(&len, bytes.data() + i + 1, 8);
-        if (bytes[i] == 0x06) { at = i + 9 + len - 100; break; }
+        if (bytes[i] == 0x06) {
+            at = i + 9 + len - 100;
+            break;
+        }
         i += 9 + len;
     }
     ASSERT_GT(at, 0u);
@@ -182,7 +187,8 @@ TEST(Mcap, StreamedReadEqualsTheInMemoryReadAndChecksTheDataCrc) {
 // Issue 19: memory stays bounded whatever the file's size (the file is not held in memory).
 TEST(Mcap, StreamedReadOfALargeFileKeepsMemoryBounded) {
 #if defined(__SANITIZE_ADDRESS__)
-    GTEST_SKIP() << "AddressSanitizer keeps freed memory in quarantine (256 MB by default): peak RSS measures that, not the reader";
+    GTEST_SKIP() << "AddressSanitizer keeps freed memory in quarantine (256 MB by default): peak RSS measures that, "
+                    "not the reader";
 #endif
     dw::test::TempDir d;
     const std::string path = d.file("large.mcap");
@@ -204,9 +210,10 @@ TEST(Mcap, StreamedReadOfALargeFileKeepsMemoryBounded) {
     const long before_kb = peak_rss_kb();
     std::uint64_t sum = 0, n = 0;
     const ReadResult r = read_file(path, {.on_message = [&](const Message& m) {
-        ++n;
-        for (std::size_t k = 0; k < m.data.size(); k += 4096) sum += m.data[k];  // touch every page
-    }});
+                                       ++n;
+                                       for (std::size_t k = 0; k < m.data.size(); k += 4096)
+                                           sum += m.data[k];  // touch every page
+                                   }});
     ASSERT_FALSE(r.error) << *r.error;
     EXPECT_EQ(n, 320u);
     EXPECT_GT(sum, 0u);
@@ -229,7 +236,8 @@ TEST(Mcap, SurvivesThousandsOfCorruptedAndTruncatedFiles) {
         if (kind == 0) {
             bytes.resize(rng() % bytes.size());  // truncation
         } else if (kind == 1) {
-            for (int k = 0; k < 1 + static_cast<int>(rng() % 8); ++k) bytes[rng() % bytes.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+            for (int k = 0; k < 1 + static_cast<int>(rng() % 8); ++k)
+                bytes[rng() % bytes.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
         } else if (kind == 2) {
             // A huge length in a record header: must not allocate or read past the end.
             const std::size_t at = 8 + rng() % (bytes.size() - 17);
@@ -237,10 +245,12 @@ TEST(Mcap, SurvivesThousandsOfCorruptedAndTruncatedFiles) {
             std::memcpy(bytes.data() + at + 1, &big, 8);
         } else if (kind == 3) {
             const std::size_t at = rng() % bytes.size();
-            bytes.insert(bytes.begin() + static_cast<std::ptrdiff_t>(at), static_cast<std::size_t>(1 + rng() % 64), static_cast<std::uint8_t>(rng()));
+            bytes.insert(bytes.begin() + static_cast<std::ptrdiff_t>(at), static_cast<std::size_t>(1 + rng() % 64),
+                         static_cast<std::uint8_t>(rng()));
         } else {
             const std::size_t a = rng() % bytes.size(), n = rng() % 200;
-            bytes.erase(bytes.begin() + static_cast<std::ptrdiff_t>(a), bytes.begin() + static_cast<std::ptrdiff_t>(std::min(bytes.size(), a + n)));
+            bytes.erase(bytes.begin() + static_cast<std::ptrdiff_t>(a),
+                        bytes.begin() + static_cast<std::ptrdiff_t>(std::min(bytes.size(), a + n)));
         }
         std::uint64_t seen = 0;
         const ReadResult r = read(bytes, {.on_message = [&](const Message& m) { seen += m.data.size(); }});
@@ -281,7 +291,8 @@ std::vector<std::size_t> chunk_offsets(const std::vector<std::uint8_t>& bytes) {
 }
 
 void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
-    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
 std::vector<std::uint32_t> sequences(const std::string& path) {
@@ -310,7 +321,7 @@ TEST(McapRecover, KeepsEveryIntactChunkAfterADamagedOne) {
     EXPECT_NE(r.damage[0].find("chunk CRC mismatch"), std::string::npos) << r.damage[0];
     const auto seqs = sequences(d.file("fixed.mcap"));
     EXPECT_EQ(seqs.size(), r.messages);
-    EXPECT_GT(seqs.size(), 400u);   // every chunk but the first (a few dozen messages) is kept
+    EXPECT_GT(seqs.size(), 400u);  // every chunk but the first (a few dozen messages) is kept
     EXPECT_LT(seqs.size(), 499u);
     EXPECT_EQ(seqs.back(), 498u);
 }

@@ -20,16 +20,22 @@ dw::dds::DdsConfig config(const std::string& tag) {
     c.ns = tag + std::to_string(::getpid());
     return c;
 }
-std::vector<std::string> dds_args(const dw::dds::DdsConfig& c) { return {"--domain", std::to_string(c.domain), "--namespace", c.ns}; }
+std::vector<std::string> dds_args(const dw::dds::DdsConfig& c) {
+    return {"--domain", std::to_string(c.domain), "--namespace", c.ns};
+}
 }  // namespace
 
 TEST(MocapProcess, BridgesAnEmulatedNatNet31Server) {
     dw::test::TempDir dir;
     const auto cfg = config("mocap");
     const std::string port = std::to_string(21000 + ::getpid() % 20000);
-    dw::Subprocess emulator({{dw::test::bin("dw-natnet-emulator"), "--port", port, "--version", "3.1"}, dir.file("emu.out"), dir.file("emu.err"), {}});
+    dw::Subprocess emulator({{dw::test::bin("dw-natnet-emulator"), "--port", port, "--version", "3.1"},
+                             dir.file("emu.out"),
+                             dir.file("emu.err"),
+                             {}});
     std::this_thread::sleep_for(200ms);
-    auto args = std::vector<std::string>{dw::test::bin("dw-mocap-bridge"), "--command-port", port, "--name", "v1=leader"};
+    auto args =
+        std::vector<std::string>{dw::test::bin("dw-mocap-bridge"), "--command-port", port, "--name", "v1=leader"};
     for (const auto& a : dds_args(cfg)) args.push_back(a);
     dw::Subprocess bridge({args, dir.file("br.out"), dir.file("br.err"), {}});
     dw::dds::Participant p(cfg, "test");
@@ -57,7 +63,8 @@ TEST(MocapProcess, BridgesAnEmulatedNatNet31Server) {
     EXPECT_EQ(frames.back().bodies().size(), 4u);
     EXPECT_EQ(frames.back().bodies()[1].name(), "leader");
     EXPECT_EQ(frames.back().timestamp_mode(), dw::msg::MOCAP_STAMP_COMPENSATED);
-    for (std::size_t i = 1; i < frames.size(); ++i) EXPECT_EQ(frames[i].frame_number(), frames[i - 1].frame_number() + 1);
+    for (std::size_t i = 1; i < frames.size(); ++i)
+        EXPECT_EQ(frames[i].frame_number(), frames[i - 1].frame_number() + 1);
     EXPECT_TRUE(vehicles.count("leader") && vehicles.count("sufferer") && vehicles.count("v2"));
     EXPECT_NE(dw::read_file(dir.file("br.err")).find("NatNet 3.1"), std::string::npos);
 }
@@ -90,7 +97,8 @@ TEST(MocapProcess, SimSourceVehiclesFollowSetpoints) {
         there = std::abs(last.position_m().x() - 0.5) < 0.1 && std::abs(last.position_m().y() + 0.5) < 0.1 &&
                 std::abs(last.position_m().z() + 2.0) < 0.1;
     }
-    EXPECT_TRUE(there) << "v1 at " << last.position_m().x() << " " << last.position_m().y() << " " << last.position_m().z();
+    EXPECT_TRUE(there) << "v1 at " << last.position_m().x() << " " << last.position_m().y() << " "
+                       << last.position_m().z();
     bridge.signal(SIGINT);
     EXPECT_EQ(bridge.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("br.err"));
 }

@@ -27,13 +27,17 @@ protected:
         addr_a_ = net + ".1";
         addr_b_ = net + ".2";
         const std::vector<std::string> steps = {
-            "ip netns add " + a_, "ip netns add " + b_,
+            "ip netns add " + a_,
+            "ip netns add " + b_,
             "ip link add " + a_ + " type veth peer name " + b_,
-            "ip link set " + a_ + " netns " + a_, "ip link set " + b_ + " netns " + b_,
+            "ip link set " + a_ + " netns " + a_,
+            "ip link set " + b_ + " netns " + b_,
             "ip -n " + a_ + " addr add " + addr_a_ + "/24 dev " + a_,
             "ip -n " + b_ + " addr add " + addr_b_ + "/24 dev " + b_,
-            "ip -n " + a_ + " link set " + a_ + " up", "ip -n " + b_ + " link set " + b_ + " up",
-            "ip -n " + a_ + " link set lo up", "ip -n " + b_ + " link set lo up",
+            "ip -n " + a_ + " link set " + a_ + " up",
+            "ip -n " + b_ + " link set " + b_ + " up",
+            "ip -n " + a_ + " link set lo up",
+            "ip -n " + b_ + " link set lo up",
             // Multicast discovery leaves by the veth, the only way out of each namespace.
             "ip -n " + a_ + " route add 224.0.0.0/4 dev " + a_,
             "ip -n " + b_ + " route add 224.0.0.0/4 dev " + b_,
@@ -55,11 +59,12 @@ protected:
     // Echo in host A, publisher in host B, over UDP (shared memory cannot cross hosts).
     void expect_delivery(const std::vector<std::string>& dds_args) {
         const std::string domain = std::to_string(dw::test::test_domain());
-        std::vector<std::string> echo_args{bin("dw-probe"), "echo", "all", "--expect", "10", "--timeout", "120",
-                                           "--summary", dir_.file("summary.json"), "--quiet", "--domain", domain};
-        std::vector<std::string> pub_args{bin("dw-probe"), "pub", "all", "--count", "10", "--rate", "50",
-                                          "--wait-readers", "1", "--wait-timeout", "120", "--linger", "-1",
-                                          "--quiet", "--domain", domain};
+        std::vector<std::string> echo_args{
+            bin("dw-probe"),           "echo",    "all",      "--expect", "10", "--timeout", "120", "--summary",
+            dir_.file("summary.json"), "--quiet", "--domain", domain};
+        std::vector<std::string> pub_args{
+            bin("dw-probe"),  "pub", "all",      "--count", "10",      "--rate",   "50",  "--wait-readers", "1",
+            "--wait-timeout", "120", "--linger", "-1",      "--quiet", "--domain", domain};
         echo_args.insert(echo_args.end(), dds_args.begin(), dds_args.end());
         pub_args.insert(pub_args.end(), dds_args.begin(), dds_args.end());
         dw::Subprocess echo({in(a_, echo_args), dir_.file("echo.out"), dir_.file("echo.err"), {}});
@@ -96,7 +101,9 @@ TEST_F(TwoHosts, UnicastInitialPeerOnly) {
 
 TEST_F(TwoHosts, DiscoveryServerOnHostA) {
     dw::Subprocess server({in(a_, {"fast-discovery-server", "-i", "0", "-l", addr_a_, "-p", "11811"}),
-                           dir_.file("server.out"), dir_.file("server.err"), {}});
+                           dir_.file("server.out"),
+                           dir_.file("server.err"),
+                           {}});
     expect_delivery({"--profile", "lab", "--insecure", "--transport", "udp", "--discovery-server", addr_a_ + ":11811"});
     server.stop();
 }

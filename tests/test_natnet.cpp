@@ -20,7 +20,8 @@ namespace {
 // A little-endian byte writer, separate from the library's, to state the layout independently.
 struct Bytes {
     std::vector<std::uint8_t> b;
-    template <class T> Bytes& put(T v) {
+    template <class T>
+    Bytes& put(T v) {
         const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
         b.insert(b.end(), p, p + sizeof(T));
         return *this;
@@ -31,7 +32,10 @@ struct Bytes {
         b.insert(b.end(), s, s + std::strlen(s) + 1);
         return *this;
     }
-    std::size_t mark() { i32(0); return b.size(); }  // a 4.1 section size, filled by size_from()
+    std::size_t mark() {
+        i32(0);
+        return b.size();
+    }  // a 4.1 section size, filled by size_from()
     void size_from(std::size_t m) {
         const auto n = static_cast<std::int32_t>(b.size() - m);
         std::memcpy(b.data() + m - 4, &n, 4);
@@ -44,49 +48,56 @@ struct Bytes {
 std::vector<std::uint8_t> hand_frame(Version v) {
     const bool sized = v.at_least(4, 1);
     Bytes p;
-    p.i32(1234);                                             // frameNumber
-    p.i32(1);                                                // marker sets: count
-    std::size_t m = sized ? p.mark() : 0;                    //   [4.1: bytes of the section]
-    p.str("m").i32(1).f32(1).f32(2).f32(3);                  //   name, nMarkers, xyz
+    p.i32(1234);                             // frameNumber
+    p.i32(1);                                // marker sets: count
+    std::size_t m = sized ? p.mark() : 0;    //   [4.1: bytes of the section]
+    p.str("m").i32(1).f32(1).f32(2).f32(3);  //   name, nMarkers, xyz
     if (sized) p.size_from(m);
-    p.i32(0);                                                // legacy unlabeled markers: none
+    p.i32(0);  // legacy unlabeled markers: none
     if (sized) p.size_from(p.mark());
-    p.i32(2);                                                // rigid bodies: count
+    p.i32(2);  // rigid bodies: count
     m = sized ? p.mark() : 0;
-    p.i32(1).f32(0.5f).f32(1.5f).f32(-0.25f)                 //   id, x, y, z
-        .f32(0).f32(0).f32(0.38268343f).f32(0.92387953f)     //   qx, qy, qz, qw
-        .f32(0.0004f).put<std::int16_t>(1);                  //   meanError, params (bit 0: tracked)
+    p.i32(1)
+        .f32(0.5f)
+        .f32(1.5f)
+        .f32(-0.25f)  //   id, x, y, z
+        .f32(0)
+        .f32(0)
+        .f32(0.38268343f)
+        .f32(0.92387953f)  //   qx, qy, qz, qw
+        .f32(0.0004f)
+        .put<std::int16_t>(1);  //   meanError, params (bit 0: tracked)
     p.i32(2).f32(0).f32(0).f32(0).f32(0).f32(0).f32(0).f32(1).f32(0).put<std::int16_t>(0);  // lost
     if (sized) p.size_from(m);
-    p.i32(1);                                                // skeletons: count
+    p.i32(1);  // skeletons: count
     m = sized ? p.mark() : 0;
-    p.i32(9).i32(1);                                         //   skeleton id, nBones
+    p.i32(9).i32(1);  //   skeleton id, nBones
     p.i32((9 << 16) | 1).f32(1).f32(1).f32(1).f32(0).f32(0).f32(0).f32(1).f32(0).put<std::int16_t>(1);
     if (sized) p.size_from(m);
-    if (sized) {                                             // assets (4.1+): count, size
+    if (sized) {  // assets (4.1+): count, size
         p.i32(1);
         m = p.mark();
-        p.i32(77).i32(1);                                    //   asset id, nRigidBodies
+        p.i32(77).i32(1);  //   asset id, nRigidBodies
         p.i32(78).f32(0).f32(0).f32(0).f32(0).f32(0).f32(0).f32(1).f32(0).put<std::int16_t>(1);
         p.i32(1).i32(79).f32(1).f32(2).f32(3).f32(0.01f).put<std::int16_t>(0).f32(0.0001f);  // nMarkers, marker
         p.size_from(m);
     }
-    p.i32(1);                                                // labeled markers: count
+    p.i32(1);  // labeled markers: count
     m = sized ? p.mark() : 0;
     p.i32(5).f32(1).f32(2).f32(3).f32(0.014f).put<std::int16_t>(0x04).f32(0.0002f);  // id xyz size params residual
     if (sized) p.size_from(m);
-    p.i32(1);                                                // force plates: count
+    p.i32(1);  // force plates: count
     m = sized ? p.mark() : 0;
-    p.i32(1).i32(2).i32(1).f32(10).i32(1).f32(20);           //   id, nChannels, (nFrames, values)...
+    p.i32(1).i32(2).i32(1).f32(10).i32(1).f32(20);  //   id, nChannels, (nFrames, values)...
     if (sized) p.size_from(m);
-    p.i32(0);                                                // devices: none
+    p.i32(0);  // devices: none
     if (sized) p.size_from(p.mark());
-    p.put<std::uint32_t>(0x01020304).put<std::uint32_t>(7);  // timecode, timecodeSub
-    p.put<double>(12.5);                                     // timestamp [s]
+    p.put<std::uint32_t>(0x01020304).put<std::uint32_t>(7);                        // timecode, timecodeSub
+    p.put<double>(12.5);                                                           // timestamp [s]
     p.put<std::uint64_t>(1000).put<std::uint64_t>(1100).put<std::uint64_t>(1200);  // mid-exposure, received, transmit
-    if (sized) p.put<std::uint32_t>(1700000000).put<std::uint32_t>(42);  // precision timestamp
-    p.put<std::int16_t>(0x01);                               // params: recording
-    p.i32(0);                                                // end of data
+    if (sized) p.put<std::uint32_t>(1700000000).put<std::uint32_t>(42);            // precision timestamp
+    p.put<std::int16_t>(0x01);                                                     // params: recording
+    p.i32(0);                                                                      // end of data
     return p.b;
 }
 }  // namespace
@@ -129,19 +140,19 @@ TEST(NatNet, ParsesByteExactModelDefinitions) {
         SCOPED_TRACE(std::to_string(v.major) + "." + std::to_string(v.minor));
         const bool sized = v.at_least(4, 1);
         Bytes p;
-        p.i32(3);                                                   // datasets
-        p.i32(0);                                                   // marker set
+        p.i32(3);  // datasets
+        p.i32(0);  // marker set
         std::size_t m = sized ? p.mark() : 0;
         p.str("all").i32(2).str("a1").str("a2");
         if (sized) p.size_from(m);
-        p.i32(1);                                                   // rigid body
+        p.i32(1);  // rigid body
         m = sized ? p.mark() : 0;
-        p.str("v1").i32(3).i32(-1).f32(0).f32(0.01f).f32(0);        // name, id, parent, offset
+        p.str("v1").i32(3).i32(-1).f32(0).f32(0.01f).f32(0);          // name, id, parent, offset
         p.i32(2).f32(0.05f).f32(0).f32(0).f32(-0.05f).f32(0).f32(0);  // markers
-        p.i32(0).i32(0);                                            // active labels
-        if (v.at_least(4, 0)) p.str("v1_a").str("v1_b");            // marker names (4.0+)
+        p.i32(0).i32(0);                                              // active labels
+        if (v.at_least(4, 0)) p.str("v1_a").str("v1_b");              // marker names (4.0+)
         if (sized) p.size_from(m);
-        p.i32(5);                                                   // camera
+        p.i32(5);  // camera
         m = sized ? p.mark() : 0;
         p.str("cam1").f32(1).f32(2).f32(3).f32(0).f32(0).f32(0).f32(1);
         if (sized) p.size_from(m);
@@ -185,14 +196,19 @@ TEST(NatNet, MalformedTruncatedAndOversizedPacketsNeverCrash) {
         auto bytes = hand_frame(v);
         switch (rng() % 4) {
             case 0: bytes.resize(rng() % bytes.size()); break;
-            case 1: for (int k = 0; k < 4; ++k) bytes[rng() % bytes.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255); break;
+            case 1:
+                for (int k = 0; k < 4; ++k) bytes[rng() % bytes.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+                break;
             case 2: {  // an oversized count or size where a count lives
                 const std::size_t at = 4 * (rng() % (bytes.size() / 4));
                 const std::int32_t huge = static_cast<std::int32_t>(rng() % 2 ? 0x7FFFFFFF : 0x80000000u);
                 std::memcpy(bytes.data() + at, &huge, 4);
                 break;
             }
-            default: bytes.insert(bytes.begin() + static_cast<std::ptrdiff_t>(rng() % bytes.size()), static_cast<std::uint8_t>(rng())); break;
+            default:
+                bytes.insert(bytes.begin() + static_cast<std::ptrdiff_t>(rng() % bytes.size()),
+                             static_cast<std::uint8_t>(rng()));
+                break;
         }
         try {
             parse_frame(bytes, v);
@@ -202,8 +218,7 @@ TEST(NatNet, MalformedTruncatedAndOversizedPacketsNeverCrash) {
         }
         try {
             parse_modeldef(bytes, v);
-        } catch (const dw::InputError&) {
-        }
+        } catch (const dw::InputError&) {}
     }
     EXPECT_GT(errors, 4000);
 }
@@ -251,7 +266,8 @@ TEST(Bridge, EmulatorToNedWithHonestTimestampsAndDroppedFrames) {
         EXPECT_NEAR(std::hypot(v2.x(), v2.y()), 1.0, 1e-5);
         EXPECT_NEAR(v2.z(), -2.2, 1e-5);
         // Compensated: the receive time minus the 4 ms between mid-exposure and transmit.
-        const double stamp = static_cast<double>(out.frame.header().stamp().sec()) + out.frame.header().stamp().nanosec() * 1e-9;
+        const double stamp =
+            static_cast<double>(out.frame.header().stamp().sec()) + out.frame.header().stamp().nanosec() * 1e-9;
         EXPECT_NEAR(static_cast<double>(r->receive_wall_ns) * 1e-9 - stamp, 0.004, 1e-5);
     }
     EXPECT_EQ(conv.dropped(), static_cast<std::uint64_t>(last - first + 1 - frames));

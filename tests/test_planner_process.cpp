@@ -30,7 +30,8 @@ struct Lab {
     }
     dw::Subprocess& start(const std::string& exe, std::vector<std::string> args, const std::string& log) {
         args.insert(args.begin(), dw::test::bin(exe));
-        for (const auto& a : std::vector<std::string>{"--domain", std::to_string(cfg.domain), "--namespace", cfg.ns}) args.push_back(a);
+        for (const auto& a : std::vector<std::string>{"--domain", std::to_string(cfg.domain), "--namespace", cfg.ns})
+            args.push_back(a);
         procs.emplace_back(dw::SpawnOptions{args, dir.file(log), dir.file(log), {}});
         return procs.back();
     }
@@ -46,8 +47,9 @@ TEST(Experiment, ShortExperimentEndsInDoneWithEveryLegFlown) {
     lab.start("dw-stand-agent", {"run", "--sim"}, "stand.log");
     lab.start("dw-mocap-bridge", {"--sim", "--sim-vehicles", "v1,v2"}, "mocap.log");
     lab.start("dw-recorder", {"record", "--out", lab.dir.file("exp.mcap"), "--quiet", "--no-fsync"}, "rec.log");
-    auto& planner = lab.start("dw-planner", {"run", "--formation", "side_by_side", "--legs", "2", "--altitudes", "0.5",
-                                            "--speed", "1.0"}, "planner.log");
+    auto& planner = lab.start(
+        "dw-planner", {"run", "--formation", "side_by_side", "--legs", "2", "--altitudes", "0.5", "--speed", "1.0"},
+        "planner.log");
     const auto status = planner.wait_for(180000ms);
     ASSERT_EQ(status, std::optional<int>(0)) << lab.log("planner.log") << lab.log("mocap.log");
     EXPECT_NE(lab.log("planner.log").find("DONE: 2 of 2 legs flown"), std::string::npos) << lab.log("planner.log");
@@ -56,9 +58,9 @@ TEST(Experiment, ShortExperimentEndsInDoneWithEveryLegFlown) {
     lab.procs[2].wait_for(30000ms);
     std::map<std::string, int> counts;
     std::map<std::uint16_t, std::string> topics;
-    dw::mcap::read_file(lab.dir.file("exp.mcap"), {
-        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
-        .on_message = [&](const dw::mcap::Message& m) { ++counts[topics[m.channel_id]]; }});
+    dw::mcap::read_file(lab.dir.file("exp.mcap"),
+                        {.on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+                         .on_message = [&](const dw::mcap::Message& m) { ++counts[topics[m.channel_id]]; }});
     const std::string p = "rt/" + lab.cfg.ns + "/";
     EXPECT_EQ(counts[p + "experiment/plan"], 1);
     EXPECT_GT(counts[p + "experiment/state"], 10);
@@ -95,17 +97,21 @@ Outcome fly_with_fault(Lab& lab, const std::vector<std::string>& mocap_extra,
         std::lock_guard lock(m);
         out.state = s;
     });
-    dw::dds::Reader<dw::msg::VehicleSetpoint> spr(p, dw::dds::topics::vehicle_setpoint, [&](const auto& s, const auto&) {
-        std::lock_guard lock(m);
-        out.last_setpoint[s.vehicle_id()] = s;
-    });
-    auto& planner = lab.start("dw-planner", {"run", "--formation", "side_by_side", "--legs", "4", "--altitudes", "0.5",
-                                            "--speed", "1.0"}, "planner.log");
+    dw::dds::Reader<dw::msg::VehicleSetpoint> spr(p, dw::dds::topics::vehicle_setpoint,
+                                                  [&](const auto& s, const auto&) {
+                                                      std::lock_guard lock(m);
+                                                      out.last_setpoint[s.vehicle_id()] = s;
+                                                  });
+    auto& planner = lab.start(
+        "dw-planner", {"run", "--formation", "side_by_side", "--legs", "4", "--altitudes", "0.5", "--speed", "1.0"},
+        "planner.log");
     for (int i = 0; i < 9000; ++i) {
         std::this_thread::sleep_for(10ms);
         std::lock_guard lock(m);
         const auto ph = out.state.phase();
-        if ((ph == dw::msg::PHASE_FLYING && out.state.leg_index() >= 1) || ph == dw::msg::PHASE_LANDING || ph >= dw::msg::PHASE_DONE) break;
+        if ((ph == dw::msg::PHASE_FLYING && out.state.leg_index() >= 1) || ph == dw::msg::PHASE_LANDING ||
+            ph >= dw::msg::PHASE_DONE)
+            break;
     }
     inject(lab, p);
     out.status = planner.wait_for(120000ms);
@@ -123,7 +129,8 @@ void expect_aborted_and_landed(const Outcome& o, const std::string& reason) {
     EXPECT_NE(o.state.message().find(reason), std::string::npos) << o.state.message();
     EXPECT_NE(o.state.message().find("every vehicle landed"), std::string::npos) << o.state.message();
     ASSERT_EQ(o.last_setpoint.size(), 2u);
-    for (const auto& [v, sp] : o.last_setpoint) EXPECT_NEAR(sp.position_m().z(), 0.0, 1e-6) << v << ": its last setpoint is not on the floor";
+    for (const auto& [v, sp] : o.last_setpoint)
+        EXPECT_NEAR(sp.position_m().z(), 0.0, 1e-6) << v << ": its last setpoint is not on the floor";
 }
 
 const auto kNoFault = [](Lab&, dw::dds::Participant&) {};
@@ -155,8 +162,9 @@ TEST(Experiment, AnOperatorAbortAbortsAndLandsEveryVehicle) {
     Lab lab("expop");
     const auto o = fly_with_fault(lab, {}, [](Lab& l, dw::dds::Participant&) {
         // What the operator types: dw-probe command abort.
-        const auto r = dw::test::run({dw::test::bin("dw-probe"), "--name", "fault-test", "command", "abort", "--reason", "wind gust",
-                                      "--domain", std::to_string(l.cfg.domain), "--namespace", l.cfg.ns}, l.dir);
+        const auto r = dw::test::run({dw::test::bin("dw-probe"), "--name", "fault-test", "command", "abort", "--reason",
+                                      "wind gust", "--domain", std::to_string(l.cfg.domain), "--namespace", l.cfg.ns},
+                                     l.dir);
         EXPECT_EQ(r.status, 0) << r.err;
         EXPECT_NE(r.out.find("sent ABORT to"), std::string::npos) << r.out;
     });
@@ -178,21 +186,28 @@ TEST(Experiment, ThePlannerFliesPx4VehiclesFromItsSettingsFileAndReportsARefusal
     Lab lab("exppx4");
     const std::string settings = lab.dir.file("px4.yaml");
     std::ofstream(settings) << "version: \"1.14\"\nvehicles:\n  v1: {namespace: " << lab.cfg.ns << "_a, system_id: 3}\n"
-                            << "  v2: {namespace: " << lab.cfg.ns << "_b, system_id: 4, origin_m: [0.5, 0, 0], heading_deg: 30}\n";
+                            << "  v2: {namespace: " << lab.cfg.ns
+                            << "_b, system_id: 4, origin_m: [0.5, 0, 0], heading_deg: 30}\n";
     auto& sim = lab.start("dw-px4-sim", {"--vehicles", "v1,v2", "--px4", settings}, "sim.log");
-    auto& planner = lab.start("dw-planner", {"run", "--formation", "side_by_side", "--legs", "1", "--altitudes", "1.3", "--speed", "1.0",
-                                             "--wait-for", "", "--vehicles", "px4", "--px4", settings}, "planner.log");
+    auto& planner = lab.start("dw-planner",
+                              {"run", "--formation", "side_by_side", "--legs", "1", "--altitudes", "1.3", "--speed",
+                               "1.0", "--wait-for", "", "--vehicles", "px4", "--px4", settings},
+                              "planner.log");
     ASSERT_EQ(planner.wait_for(120000ms), std::optional<int>(0)) << lab.log("planner.log") << lab.log("sim.log");
     EXPECT_NE(lab.log("planner.log").find("DONE: 1 of 1 legs flown"), std::string::npos) << lab.log("planner.log");
     sim.signal(SIGINT);
     ASSERT_EQ(sim.wait_for(20000ms), std::optional<int>(0)) << lab.log("sim.log");
     EXPECT_NE(lab.log("sim.log").find("v2: armed, 0 commands ignored"), std::string::npos) << lab.log("sim.log");
 
-    auto& refusing = lab.start("dw-px4-sim", {"--vehicles", "v1", "--refuse-arm", "battery below BAT_LOW_THR"}, "sim2.log");
-    auto& planner2 = lab.start("dw-planner", {"run", "--formation", "single", "--legs", "1", "--altitudes", "1.3", "--wait-for", "",
-                                              "--vehicles", "px4"}, "planner2.log");
+    auto& refusing =
+        lab.start("dw-px4-sim", {"--vehicles", "v1", "--refuse-arm", "battery below BAT_LOW_THR"}, "sim2.log");
+    auto& planner2 = lab.start(
+        "dw-planner",
+        {"run", "--formation", "single", "--legs", "1", "--altitudes", "1.3", "--wait-for", "", "--vehicles", "px4"},
+        "planner2.log");
     ASSERT_EQ(planner2.wait_for(120000ms), std::optional<int>(1)) << lab.log("planner2.log");
     const auto out = lab.log("planner2.log");
-    EXPECT_NE(out.find("error: ABORTED: v1: PX4 (system 1) refused to arm: DENIED after 3 tries"), std::string::npos) << out;
+    EXPECT_NE(out.find("error: ABORTED: v1: PX4 (system 1) refused to arm: DENIED after 3 tries"), std::string::npos)
+        << out;
     refusing.signal(SIGINT);
 }

@@ -30,7 +30,8 @@ using namespace dw::predictor;
 namespace {
 
 // A small simulated flight folder (2 neighbours, few legs).
-std::string small_flight(const dw::test::TempDir& dir, const std::string& formation = "leader_follower", int legs = 10) {
+std::string small_flight(const dw::test::TempDir& dir, const std::string& formation = "leader_follower",
+                         int legs = 10) {
     dw::physics::FlyOptions fly;
     fly.formation = formation;
     fly.grid.legs = legs;
@@ -88,7 +89,8 @@ TEST(PredictorDataset, AlignsPosesWithTheWrenchAndSplitsByLeg) {
     for (const auto& x : sp.test.samples) te_legs.insert(x.leg);
     EXPECT_EQ(te_legs, (std::set<int>{0, 5}));
     for (int l : te_legs) EXPECT_EQ(tr_legs.count(l), 0u);
-    EXPECT_EQ(sp.train.samples.size() + sp.validation.samples.size() + sp.test.samples.size(), static_cast<std::size_t>(on_leg));
+    EXPECT_EQ(sp.train.samples.size() + sp.validation.samples.size() + sp.test.samples.size(),
+              static_cast<std::size_t>(on_leg));
 }
 
 TEST(PredictorDataset, FindsLegsWithoutLegsCsv) {
@@ -128,7 +130,8 @@ TEST(PredictorModel, SavesAndLoadsExactlyAndIsPermutationInvariant) {
         const LearntModel m = random_model(s, 7);
         m.save(dir.file("m.json"));
         const LearntModel back = LearntModel::load(dir.file("m.json"));
-        const std::vector<RelState> x{{0.1, 0.5, -1.2, 0, 0.5, 0}, {0.0, -0.5, -1.3, 0, 0.5, 0}, {0.3, 0, -1.25, 0.1, 0.4, 0}};
+        const std::vector<RelState> x{
+            {0.1, 0.5, -1.2, 0, 0.5, 0}, {0.0, -0.5, -1.3, 0, 0.5, 0}, {0.3, 0, -1.25, 0.1, 0.4, 0}};
         const std::vector<RelState> y{x[2], x[0], x[1]};
         const auto a = m.predict(x), b = back.predict(x), c = m.predict(y);
         for (std::size_t i = 0; i < 6; ++i) {
@@ -149,10 +152,11 @@ TEST(PredictorModel, SavesAndLoadsExactlyAndIsPermutationInvariant) {
 TEST(PredictorModel, FeaturesCarryTheJetsInvariantsAndStayFinite) {
     const Features f = features_of({0.3, 0.4, -1.2, 0.1, 0.5, 0});
     for (std::size_t a = 0; a < 6; ++a) EXPECT_EQ(f[a], (RelState{0.3, 0.4, -1.2, 0.1, 0.5, 0})[a]);
-    EXPECT_NEAR(f[6], 0.5, 1e-12);                                  // horizontal distance
+    EXPECT_NEAR(f[6], 0.5, 1e-12);                                      // horizontal distance
     EXPECT_NEAR(f[7], 0.5 / (1.2 + kFeatureSeparationOffsetM), 1e-12);  // distance over separation
     EXPECT_NEAR(f[8], 1 / (1.2 + kFeatureSeparationOffsetM), 1e-12);
-    for (double v : features_of({0.2, 0, 0, 0, 0, 0})) EXPECT_TRUE(std::isfinite(v)) << "a neighbour level with the sufferer";
+    for (double v : features_of({0.2, 0, 0, 0, 0, 0}))
+        EXPECT_TRUE(std::isfinite(v)) << "a neighbour level with the sufferer";
     // Mirror images across the sufferer's vertical axis share the invariant features.
     const Features g = features_of({-0.3, -0.4, -1.2, 0.1, 0.5, 0});
     for (std::size_t a = 6; a < f.size(); ++a) EXPECT_EQ(f[a], g[a]);
@@ -216,7 +220,8 @@ TEST(PredictorTraining, DeepSetsOnTheSumModelIsNeverWorseOnValidationAndLearnsTh
         const auto p = deep.model.predict(v.neighbours());
         for (std::size_t a = 0; a < 6; ++a) se += std::pow((p[a] - v.y[a]) / deep.model.output_scale[a], 2);
     }
-    EXPECT_NEAR(se / (6.0 * static_cast<double>(s.validation.samples.size())), deep.best_validation_loss, 1e-3 * deep.best_validation_loss);
+    EXPECT_NEAR(se / (6.0 * static_cast<double>(s.validation.samples.size())), deep.best_validation_loss,
+                1e-3 * deep.best_validation_loss);
     // On its validation legs the result is never worse than the baseline it started from.
     o.max_epochs = 1;
     const TrainResult one = train_model(s.train, s.validation, o, &sum.model);
@@ -321,7 +326,8 @@ TEST(PredictorMaps, ASyntheticFieldDrawsItsPeakWhereItIsOnTheRightScale) {
 // f_d as a function of the neighbours: known fields for the regime rule.
 class FieldModel final : public ForceModel {
 public:
-    FieldModel(std::string name, std::function<double(std::span<const RelState>)> f) : name_(std::move(name)), f_(std::move(f)) {}
+    FieldModel(std::string name, std::function<double(std::span<const RelState>)> f)
+        : name_(std::move(name)), f_(std::move(f)) {}
     const std::string& name() const override { return name_; }
     Wrench6 predict(std::span<const RelState> x) const override { return {0, 0, f_(x), 0, 0, 0}; }
 
@@ -358,7 +364,9 @@ Dataset legs_of(int k, const std::function<double(std::span<const RelState>)>& t
 
 TEST(PredictorRegimes, TheRuleSeparatesNoiseSumsAndMergingJets) {
     const FieldModel sum("sum", jets);
-    auto merged = [](std::span<const RelState> x) { return jets(x) + 0.8 * jets(x) * jets(x); };  // the square: jets that merge
+    auto merged = [](std::span<const RelState> x) {
+        return jets(x) + 0.8 * jets(x) * jets(x);
+    };  // the square: jets that merge
     const FieldModel deep("deep", merged);
     auto regime = [](const Dataset& d, const ForceModel& s, const ForceModel& m) {
         const auto rows = classify_regimes(s, m, d, {1.3});
@@ -373,7 +381,9 @@ TEST(PredictorRegimes, TheRuleSeparatesNoiseSumsAndMergingJets) {
     // A plain sum: Deep Sets has nothing to add.
     EXPECT_EQ(regime(legs_of(2, jets, 0.02), sum, FieldModel("deep", jets)).regime, Regime::linear);
     // Noise and nothing else, which neither model explains: chaotic.
-    const RegimeRow c = regime(legs_of(2, [](auto) { return 0.0; }, 0.3), sum, deep);
+    const RegimeRow c = regime(legs_of(
+                                   2, [](auto) { return 0.0; }, 0.3),
+                               sum, deep);
     EXPECT_EQ(c.regime, Regime::chaotic) << c.explained;
     EXPECT_NEAR(c.signal_rms, 0.3, 0.02);
     // One neighbour has no aggregate: never non-linear, however much better the second model is.
@@ -425,7 +435,8 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     EXPECT_LE(deep, 0.7 * lin) << "jet merging: Deep Sets " << deep << " vs learnt linear " << lin;
     for (const auto& row : merging.table)  // where jets merge, Deep Sets is closer than the sum it is built on
         if (row.model == "deep_sets")
-            EXPECT_LT(row.rmse[2], table_value(merging.table, row.formation, "learnt_linear", 2, false)) << row.formation;
+            EXPECT_LT(row.rmse[2], table_value(merging.table, row.formation, "learnt_linear", 2, false))
+                << row.formation;
 
     o.out_dir = dir.file("sum");
     o.physics.effects.jet_merging.enabled = false;
@@ -437,15 +448,18 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
         // sum model is as good as Deep Sets: the lab does not invent nonlinearity.
         const double floor = table_value(sum.table, row.formation, "physics", 2, false);
         EXPECT_LE(row.rmse[2], 1.5 * floor) << "Deep Sets vs the physics floor";
-        EXPECT_LE(table_value(sum.table, row.formation, "learnt_linear", 2, false), 1.5 * floor) << "learnt linear vs the floor";
-        EXPECT_LE(table_value(sum.table, row.formation, "learnt_linear", 2), 1.1 * row.arena[2]) << "learnt linear vs Deep Sets";
+        EXPECT_LE(table_value(sum.table, row.formation, "learnt_linear", 2, false), 1.5 * floor)
+            << "learnt linear vs the floor";
+        EXPECT_LE(table_value(sum.table, row.formation, "learnt_linear", 2), 1.1 * row.arena[2])
+            << "learnt linear vs Deep Sets";
     }
     // In every formation and altitude band of either study, Deep Sets is not worse than learnt linear by more than 10 %.
     for (const auto* study : {&merging, &sum})
         for (const auto& [altitude, rows] : study->by_altitude)
             for (const auto& row : rows)
                 if (row.model == "deep_sets")
-                    EXPECT_LE(row.arena[2], 1.1 * table_value(rows, row.formation, "learnt_linear", 2)) << row.formation << " at " << altitude << " m";
+                    EXPECT_LE(row.arena[2], 1.1 * table_value(rows, row.formation, "learnt_linear", 2))
+                        << row.formation << " at " << altitude << " m";
     EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));
     // The regime map: merging jets high up are non-linear; where the physics is a sum nothing is.
     auto regime_of = [](const StudyResult& r, const std::string& formation, double altitude) {
@@ -457,7 +471,8 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     EXPECT_EQ(regime_of(merging, "leader_follower K=3", 1.3), Regime::non_linear);
     EXPECT_EQ(regime_of(merging, "leader_follower K=3", 0.3), Regime::linear);
     EXPECT_EQ(sum.regimes.size(), 18u);  // six formations at three altitudes
-    for (const auto& row : sum.regimes) EXPECT_NE(row.regime, Regime::non_linear) << row.formation << " at " << row.altitude_m << " m";
+    for (const auto& row : sum.regimes)
+        EXPECT_NE(row.regime, Regime::non_linear) << row.formation << " at " << row.altitude_m << " m";
     EXPECT_TRUE(std::filesystem::exists(dir.file("sum/regimes.png")));
     // Every altitude band the flights fly has its own table, with the arena metric at that band.
     ASSERT_EQ(sum.by_altitude.size(), 3u);
@@ -466,8 +481,10 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
         const double v = table_value(rows, "leader_follower K=3", "deep_sets", 2);
         EXPECT_TRUE(std::isfinite(v) && v > 0);
         for (const auto& row : rows)  // a stand measures every axis: every RMSE is a number
-            for (std::size_t a = 0; a < 6; ++a) EXPECT_TRUE(std::isfinite(row.rmse[a])) << row.formation << " " << row.model << " axis " << a;
+            for (std::size_t a = 0; a < 6; ++a)
+                EXPECT_TRUE(std::isfinite(row.rmse[a])) << row.formation << " " << row.model << " axis " << a;
     }
     const std::string md = dw::read_file(sum.markdown_path, "table");
-    for (const char* h : {"### 0.3 m", "### 0.8 m", "### 1.3 m", "integrated over the occupied cells"}) EXPECT_NE(md.find(h), std::string::npos) << h;
+    for (const char* h : {"### 0.3 m", "### 0.8 m", "### 1.3 m", "integrated over the occupied cells"})
+        EXPECT_NE(md.find(h), std::string::npos) << h;
 }

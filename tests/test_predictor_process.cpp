@@ -58,8 +58,8 @@ dw::dds::DdsConfig node_config(const std::string& ns) {
 // `dw-predictor run` on the model file, in cfg's namespace; output in dir/node.out and node.err.
 dw::Subprocess start_node(dw::test::TempDir& dir, const std::string& model, const dw::dds::DdsConfig& cfg,
                           std::vector<std::string> extra = {}) {
-    std::vector<std::string> args{dw::test::bin("dw-predictor"), "run", "--model", model, "--domain", std::to_string(cfg.domain),
-                                  "--namespace", cfg.ns};
+    std::vector<std::string> args{dw::test::bin("dw-predictor"), "run",         "--model", model, "--domain",
+                                  std::to_string(cfg.domain),    "--namespace", cfg.ns};
     args.insert(args.end(), extra.begin(), extra.end());
     return dw::Subprocess({args, dir.file("node.out"), dir.file("node.err"), {}});
 }
@@ -75,10 +75,11 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     dw::dds::Participant p(cfg, "test");
     std::mutex m;
     std::vector<dw::msg::WrenchPrediction> got;
-    dw::dds::Reader<dw::msg::WrenchPrediction> reader(p, dw::dds::topics::wrench_prediction, [&](const auto& s, const auto&) {
-        std::lock_guard lock(m);
-        got.push_back(s);
-    });
+    dw::dds::Reader<dw::msg::WrenchPrediction> reader(p, dw::dds::topics::wrench_prediction,
+                                                      [&](const auto& s, const auto&) {
+                                                          std::lock_guard lock(m);
+                                                          got.push_back(s);
+                                                      });
     dw::dds::Writer<dw::msg::MocapFrame> writer(p, dw::dds::topics::mocap_frame);
     ASSERT_TRUE(writer.wait_for_readers(1, 20000ms)) << dw::read_file(dir.file("node.err"));
     ASSERT_TRUE(reader.wait_for_writers(1, 20000ms));
@@ -100,9 +101,9 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
         const double t = dw::dds::from_msg(last.header().stamp()) * 1e-9;
         const int i = static_cast<int>(std::lround((t - 1000.0) * 180.0));
         const double e = -1.0 + 0.5 * i / 180.0;
-        EXPECT_NEAR(last.force_n().x(), 0.2 - 0.1, 1e-5);          // Σ dn
-        EXPECT_NEAR(last.force_n().y(), e + e + 0.5, 1e-4);        // Σ de
-        EXPECT_NEAR(last.force_n().z(), 2 * (-2.7 + 1.4), 1e-5);   // Σ dd
+        EXPECT_NEAR(last.force_n().x(), 0.2 - 0.1, 1e-5);         // Σ dn
+        EXPECT_NEAR(last.force_n().y(), e + e + 0.5, 1e-4);       // Σ de
+        EXPECT_NEAR(last.force_n().z(), 2 * (-2.7 + 1.4), 1e-5);  // Σ dd
         // The age is publish time - frame stamp; the frames were stamped in 1970 + 1000 s.
         EXPECT_GT(last.input_age_s(), 1e9);
     }

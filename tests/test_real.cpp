@@ -99,7 +99,8 @@ TEST(RealBlocks, FlightsWithoutLegsAreSplitByEncounterElseByTime) {
     ASSERT_EQ(six.blocks.size(), 6u);
     EXPECT_DOUBLE_EQ(six.blocks.front().t_start, 0.0);
     EXPECT_DOUBLE_EQ(six.blocks.back().t_end, 20.0);
-    for (std::size_t k = 1; k < six.blocks.size(); ++k) EXPECT_DOUBLE_EQ(six.blocks[k].t_start, six.blocks[k - 1].t_end);
+    for (std::size_t k = 1; k < six.blocks.size(); ++k)
+        EXPECT_DOUBLE_EQ(six.blocks[k].t_start, six.blocks[k - 1].t_end);
     const auto one = dw::flight::find_blocks(crossing(1), 5, radius);
     EXPECT_EQ(one.kind, dw::flight::BlockKind::time);
     EXPECT_GE(one.blocks.size(), 10u);
@@ -163,10 +164,12 @@ TEST(RealFlights, TheExplainerSaysWhatEachSharedFlightShows) {
         // What the physics gets wrong about these small vehicles: it over-predicts their
         // downwash — fitted alone, the force scale is well below 1 wherever it was tried.
         for (const auto& c : r.candidates)
-            if (c.effect.name == "force_scale" && c.round == 1 && t.name != "swap_sl_large_under_small") EXPECT_LT(c.values[0], 0.8);
+            if (c.effect.name == "force_scale" && c.round == 1 && t.name != "swap_sl_large_under_small")
+                EXPECT_LT(c.values[0], 0.8);
         const std::string out = d.file(t.name + "_report");
         dw::analysis::write_report(f, r, o, out);
-        for (const char* file : {"report.json", "report.md", "physics.yaml", "residual_vs_position.png", "encounters.png"})
+        for (const char* file :
+             {"report.json", "report.md", "physics.yaml", "residual_vs_position.png", "encounters.png"})
             EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
         const auto j = nlohmann::json::parse(dw::read_file(out + "/report.json", "report"));
         EXPECT_EQ(j["cross_validation"]["blocks"], "encounters");

@@ -70,12 +70,15 @@ std::string node_modules() { return std::string(DW_SOURCE_DIR) + "/tests/js/node
 
 // Records `count` probe samples of every topic with the recorder as a separate process.
 void record_probe_samples(const Lab& lab, const std::string& file, const std::string& compression, int count) {
-    auto rec = lab.start("dw-recorder", {"record", "--out", file, "--compression", compression, "--quiet",
-                                         "--no-command-control", "--no-fsync", "--attach",
-                                         "physics.yaml=" + std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml"}, "rec-" + compression);
+    auto rec = lab.start(
+        "dw-recorder",
+        {"record", "--out", file, "--compression", compression, "--quiet", "--no-command-control", "--no-fsync",
+         "--attach", "physics.yaml=" + std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml"},
+        "rec-" + compression);
     wait_for_line(lab, rec, "rec-" + compression, "recording to");
     const auto pub = dw::test::run({bin("dw-probe"), "pub", "all", "--count", std::to_string(count), "--rate", "100",
-                                    "--wait-readers", "1", "--quiet", "--domain", lab.domain, "--namespace", lab.ns}, lab.dir);
+                                    "--wait-readers", "1", "--quiet", "--domain", lab.domain, "--namespace", lab.ns},
+                                   lab.dir);
     ASSERT_EQ(pub.status, 0) << pub.err;
     std::this_thread::sleep_for(300ms);  // the last best-effort samples are in flight
     rec.signal(SIGINT);
@@ -121,11 +124,12 @@ TEST(Recorder, IndependentReadersDecodeExactlyWhatWasPublished) {
 std::vector<std::uint32_t> recorded_seqs(const std::string& file, const std::string& suffix) {
     std::map<std::uint16_t, std::string> topics;
     std::vector<std::uint32_t> seqs;
-    const auto r = dw::mcap::read_file(file, {
-        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
-        .on_message = [&](const dw::mcap::Message& m) {
-            if (topics[m.channel_id].ends_with(suffix)) seqs.push_back(m.sequence);
-        }});
+    const auto r = dw::mcap::read_file(file, {.on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+                                              .on_message =
+                                                  [&](const dw::mcap::Message& m) {
+                                                      if (topics[m.channel_id].ends_with(suffix))
+                                                          seqs.push_back(m.sequence);
+                                                  }});
     EXPECT_FALSE(r.error) << *r.error;
     return seqs;
 }
@@ -139,8 +143,8 @@ TEST(Recorder, ALatePublishersFirstSampleIsRecordedWhenItAwaitsTheRecorder) {
         const std::string file = lab.dir.file("late.mcap");
         auto rec = lab.start("dw-recorder", {"record", "mocap/frame", "--out", file, "--quiet", "--no-fsync"}, "rec");
         wait_for_line(lab, rec, "rec", "recording to");
-        std::vector<std::string> pub{bin("dw-probe"), "pub", "mocap/frame", "--count", "400", "--rate", "200", "--quiet",
-                                     "--domain", lab.domain, "--namespace", lab.ns};
+        std::vector<std::string> pub{bin("dw-probe"), "pub",     "mocap/frame", "--count",  "400",         "--rate",
+                                     "200",           "--quiet", "--domain",    lab.domain, "--namespace", lab.ns};
         if (await) pub.insert(pub.end(), {"--await-readers", "recorder", "--await-timeout", "60"});
         const auto p = dw::test::run(pub, lab.dir);
         ASSERT_EQ(p.status, 0) << p.err;
@@ -150,8 +154,9 @@ TEST(Recorder, ALatePublishersFirstSampleIsRecordedWhenItAwaitsTheRecorder) {
         const auto seqs = recorded_seqs(file, "/mocap/frame");
         if (!await) {
             // Not asserted (discovery time varies); printed to show what awaiting changes.
-            std::cout << "without awaiting: first recorded seq " << (seqs.empty() ? -1 : static_cast<long>(seqs.front())) << ", "
-                      << seqs.size() << " of 400 recorded\n";
+            std::cout << "without awaiting: first recorded seq "
+                      << (seqs.empty() ? -1 : static_cast<long>(seqs.front())) << ", " << seqs.size()
+                      << " of 400 recorded\n";
             continue;
         }
         EXPECT_EQ(p.err.find("no reader from recorder"), std::string::npos) << p.err;
@@ -164,11 +169,16 @@ TEST(Recorder, ALatePublishersFirstSampleIsRecordedWhenItAwaitsTheRecorder) {
 TEST(Recorder, KillNineLosesAtMostTheFlushIntervalAndRecoverRebuildsTheFile) {
     Lab lab;
     const std::string file = lab.dir.file("crash.mcap");
-    auto rec = lab.start("dw-recorder", {"record", "stand/wrench", "mocap/frame", "--out", file, "--flush-interval", "1",
-                                         "--quiet"}, "rec");
+    auto rec =
+        lab.start("dw-recorder",
+                  {"record", "stand/wrench", "mocap/frame", "--out", file, "--flush-interval", "1", "--quiet"}, "rec");
     wait_for_line(lab, rec, "rec", "recording to");
-    auto mocap = lab.start("dw-probe", {"pub", "mocap/frame", "--count", "100000", "--rate", "180", "--wait-readers", "1", "--quiet"}, "mocap");
-    auto stand = lab.start("dw-probe", {"pub", "stand/wrench", "--count", "100000", "--rate", "80", "--wait-readers", "1", "--quiet"}, "stand");
+    auto mocap = lab.start(
+        "dw-probe", {"pub", "mocap/frame", "--count", "100000", "--rate", "180", "--wait-readers", "1", "--quiet"},
+        "mocap");
+    auto stand = lab.start(
+        "dw-probe", {"pub", "stand/wrench", "--count", "100000", "--rate", "80", "--wait-readers", "1", "--quiet"},
+        "stand");
     std::this_thread::sleep_for(10s);
     const dw::Nanos killed_at = dw::SystemClock::instance().now_ns();
     rec.signal(SIGKILL);
@@ -185,12 +195,13 @@ TEST(Recorder, KillNineLosesAtMostTheFlushIntervalAndRecoverRebuildsTheFile) {
     std::map<std::uint16_t, std::vector<std::uint32_t>> seqs;
     std::map<std::uint16_t, std::uint64_t> last_log;
     std::map<std::uint16_t, std::string> topics;
-    const auto fixed = dw::mcap::read_file(lab.dir.file("fixed.mcap"), {
-        .on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
-        .on_message = [&](const dw::mcap::Message& m) {
-            seqs[m.channel_id].push_back(m.sequence);
-            last_log[m.channel_id] = std::max(last_log[m.channel_id], m.log_time);
-        }});
+    const auto fixed = dw::mcap::read_file(
+        lab.dir.file("fixed.mcap"), {.on_channel = [&](const dw::mcap::Channel& c) { topics[c.id] = c.topic; },
+                                     .on_message =
+                                         [&](const dw::mcap::Message& m) {
+                                             seqs[m.channel_id].push_back(m.sequence);
+                                             last_log[m.channel_id] = std::max(last_log[m.channel_id], m.log_time);
+                                         }});
     ASSERT_FALSE(fixed.error) << *fixed.error;
     EXPECT_TRUE(fixed.complete);
     ASSERT_EQ(seqs.size(), 2u);
@@ -201,7 +212,8 @@ TEST(Recorder, KillNineLosesAtMostTheFlushIntervalAndRecoverRebuildsTheFile) {
         EXPECT_EQ(s.front(), 0u);
         for (std::size_t i = 1; i < s.size(); ++i) ASSERT_EQ(s[i], s[i - 1] + 1) << "gap at " << i;
         // ... up to at most the flush interval before the kill.
-        EXPECT_GE(static_cast<dw::Nanos>(last_log[ch]), killed_at - 1'000'000'000) << (killed_at - static_cast<dw::Nanos>(last_log[ch])) * 1e-9 << " s before the kill";
+        EXPECT_GE(static_cast<dw::Nanos>(last_log[ch]), killed_at - 1'000'000'000)
+            << (killed_at - static_cast<dw::Nanos>(last_log[ch])) * 1e-9 << " s before the kill";
         EXPECT_GT(s.size(), topics[ch].find("mocap") != std::string::npos ? 1000u : 450u);
     }
     EXPECT_EQ(fixed.messages, raw);
@@ -240,10 +252,14 @@ TEST(Recorder, PausesAndResumesOnExperimentCommands) {
 
 TEST(Recorder, Sigusr1TogglesPauseAndSplitsAreEachComplete) {
     Lab lab;
-    auto rec = lab.start("dw-recorder", {"record", "stand/wrench", "--out", lab.dir.file("s.mcap"), "--split-duration", "1",
-                                         "--quiet", "--no-fsync"}, "rec");
+    auto rec = lab.start(
+        "dw-recorder",
+        {"record", "stand/wrench", "--out", lab.dir.file("s.mcap"), "--split-duration", "1", "--quiet", "--no-fsync"},
+        "rec");
     wait_for_line(lab, rec, "rec", "recording to");
-    auto pub = lab.start("dw-probe", {"pub", "stand/wrench", "--count", "100000", "--rate", "100", "--wait-readers", "1", "--quiet"}, "pub");
+    auto pub = lab.start(
+        "dw-probe", {"pub", "stand/wrench", "--count", "100000", "--rate", "100", "--wait-readers", "1", "--quiet"},
+        "pub");
     std::this_thread::sleep_for(2500ms);
     rec.signal(SIGUSR1);
     wait_for_line(lab, rec, "rec", "paused (SIGUSR1)");
@@ -259,7 +275,8 @@ TEST(Recorder, Sigusr1TogglesPauseAndSplitsAreEachComplete) {
     std::vector<std::uint32_t> seqs;
     for (const auto& line : files) {
         const std::string path = line.substr(line.find(' ') + 1);
-        const auto r = dw::mcap::read_file(path, {.on_message = [&](const dw::mcap::Message& m) { seqs.push_back(m.sequence); }});
+        const auto r =
+            dw::mcap::read_file(path, {.on_message = [&](const dw::mcap::Message& m) { seqs.push_back(m.sequence); }});
         EXPECT_TRUE(r.complete) << path;
         EXPECT_FALSE(r.error) << path;
     }
@@ -280,10 +297,14 @@ TEST(Recorder, ReplayRepublishesRecordedSamplesIntact) {
     record_probe_samples(lab, file, "zstd", 15);
     // Sensor streams and a reliable stream (a latched topic keeps only its latest sample, so
     // replaying it fast delivers fewer: that is its QoS, not a loss).
-    auto echo = lab.start("dw-probe", {"echo", "stand/wrench", "mocap/frame", "experiment/command", "--expect", "15", "--timeout", "120",
-                                       "--quiet", "--summary", lab.dir.file("echo.json")}, "echo");
-    const auto r = dw::test::run({bin("dw-recorder"), "replay", file, "stand/wrench", "mocap/frame", "experiment/command",
-                                  "--speed", "4", "--wait-readers", "1", "--domain", lab.domain, "--namespace", lab.ns}, lab.dir);
+    auto echo = lab.start("dw-probe",
+                          {"echo", "stand/wrench", "mocap/frame", "experiment/command", "--expect", "15", "--timeout",
+                           "120", "--quiet", "--summary", lab.dir.file("echo.json")},
+                          "echo");
+    const auto r =
+        dw::test::run({bin("dw-recorder"), "replay", file, "stand/wrench", "mocap/frame", "experiment/command",
+                       "--speed", "4", "--wait-readers", "1", "--domain", lab.domain, "--namespace", lab.ns},
+                      lab.dir);
     ASSERT_EQ(r.status, 0) << r.err;
     ASSERT_EQ(echo.wait_for(120000ms), std::optional<int>(0)) << lab.text("echo.out");
     const json s = json::parse(lab.text("echo.json"));
@@ -309,7 +330,8 @@ TEST(Recorder, InfoShowsTopicsAndRefusesDamagedFilesClearly) {
     const auto bad = dw::test::run({bin("dw-recorder"), "info", lab.dir.file("half.mcap")}, lab.dir);
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.out.find("DAMAGED: offset "), std::string::npos) << bad.out;
-    const auto exp = dw::test::run({bin("dw-recorder"), "export", lab.dir.file("half.mcap"), "--csv", lab.dir.file("csv")}, lab.dir);
+    const auto exp =
+        dw::test::run({bin("dw-recorder"), "export", lab.dir.file("half.mcap"), "--csv", lab.dir.file("csv")}, lab.dir);
     EXPECT_EQ(exp.status, 2);
     EXPECT_EQ(dw::test::lines(exp.err).size(), 1u) << exp.err;
     EXPECT_NE(exp.err.find("recover"), std::string::npos) << exp.err;
@@ -354,8 +376,12 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
         for (const auto& s : sim.wrench) {
             dw::msg::WrenchStamped m;
             m.header().stamp(dw::dds::to_msg(epoch + static_cast<dw::Nanos>(std::llround(s.t * 1e9))));
-            m.force_n().x(s.w[0]); m.force_n().y(s.w[1]); m.force_n().z(s.w[2]);
-            m.torque_nm().x(s.w[3]); m.torque_nm().y(s.w[4]); m.torque_nm().z(s.w[5]);
+            m.force_n().x(s.w[0]);
+            m.force_n().y(s.w[1]);
+            m.force_n().z(s.w[2]);
+            m.torque_nm().x(s.w[3]);
+            m.torque_nm().y(s.w[4]);
+            m.torque_nm().z(s.w[5]);
             put(cw, m, dw::msg::WrenchStampedPubSubType());
         }
         for (std::size_t i = 0; i < sim.poses.size(); i += sim.bodies.size()) {
@@ -365,8 +391,13 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
                 const auto& p = sim.poses[i + b];
                 dw::msg::RigidBody body;
                 body.name(sim.bodies[p.body]);
-                body.position_m().x(p.p[0]); body.position_m().y(p.p[1]); body.position_m().z(p.p[2]);
-                body.orientation().w(p.q[0]); body.orientation().x(p.q[1]); body.orientation().y(p.q[2]); body.orientation().z(p.q[3]);
+                body.position_m().x(p.p[0]);
+                body.position_m().y(p.p[1]);
+                body.position_m().z(p.p[2]);
+                body.orientation().w(p.q[0]);
+                body.orientation().x(p.q[1]);
+                body.orientation().y(p.q[2]);
+                body.orientation().z(p.q[3]);
                 f.bodies().push_back(body);
             }
             put(cm, f, dw::msg::MocapFramePubSubType());
@@ -426,16 +457,20 @@ TEST(Recorder, CsvExportOnTwoThreadsKeepsEveryRowInOrderAndStopsOnAnUndecodableM
     for (const char* csv : {"ok/stand_wrench.csv", "ok/vehicles_state.csv"}) {
         const auto rows = dw::test::lines(dw::read_file(dir.file(csv)));
         ASSERT_EQ(rows.size(), 10001u) << csv;
-        for (std::size_t i = 1; i < rows.size(); ++i) ASSERT_EQ(rows[i].substr(0, rows[i].find(',')), std::to_string(999 + i)) << csv;
+        for (std::size_t i = 1; i < rows.size(); ++i)
+            ASSERT_EQ(rows[i].substr(0, rows[i].find(',')), std::to_string(999 + i)) << csv;
     }
     record(dir.file("bad.mcap"), true);
     try {
         dw::recordings::export_csv(dir.file("bad.mcap"), dir.file("bad"));
         ADD_FAILURE() << "an undecodable message was exported";
     } catch (const dw::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("vehicles/state: message 7000 (5 bytes) does not decode"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("vehicles/state: message 7000 (5 bytes) does not decode"),
+                  std::string::npos)
+            << e.what();
     }
-    EXPECT_TRUE(!std::filesystem::exists(dir.file("bad")) || std::filesystem::is_empty(dir.file("bad"))) << "a CSV was left";
+    EXPECT_TRUE(!std::filesystem::exists(dir.file("bad")) || std::filesystem::is_empty(dir.file("bad")))
+        << "a CSV was left";
 }
 
 // Issue 19: the CSV export streams; a topic whose later messages have more columns (a longer
@@ -449,7 +484,8 @@ TEST(Recorder, CsvExportOfATopicThatGrowsColumnsIsWrittenWithEveryColumn) {
         const auto cw = w.channel(dw::dds::topics::stand_wrench);
         for (std::uint32_t i = 0; i < 6; ++i) {
             dw::msg::MocapFrame f;
-            for (std::uint32_t b = 0; b <= i / 2; ++b) dw::testkit::add_body(f, "b" + std::to_string(b), 0.1 * i, 0, -1);
+            for (std::uint32_t b = 0; b <= i / 2; ++b)
+                dw::testkit::add_body(f, "b" + std::to_string(b), 0.1 * i, 0, -1);
             w.write(cm, i, 10 + i, f);
             dw::msg::WrenchStamped m;
             m.header().seq(i);
@@ -484,6 +520,8 @@ TEST(Recorder, ARecordedNonFiniteValueIsOneLineNamingTheRecording) {
         dw::recordings::read_flight_or_recording(file);
         ADD_FAILURE() << "a NaN force was read as a flight";
     } catch (const dw::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find(file + ": stand/wrench message 1 carries a non-finite value"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(file + ": stand/wrench message 1 carries a non-finite value"),
+                  std::string::npos)
+            << e.what();
     }
 }

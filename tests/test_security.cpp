@@ -72,7 +72,9 @@ TEST(Keystore, MakesACaAndOneSignedIdentityPerRoleWithPrivateKeys) {
         EXPECT_TRUE(i.verifies);
         EXPECT_EQ(mode_of(k.key(i.name)), 0600u);
         EXPECT_EQ(i.subject, "/CN=" + i.name);
-        const auto days = std::chrono::duration_cast<std::chrono::hours>(i.not_after - std::chrono::system_clock::now()).count() / 24.0;
+        const auto days =
+            std::chrono::duration_cast<std::chrono::hours>(i.not_after - std::chrono::system_clock::now()).count() /
+            24.0;
         EXPECT_NEAR(days, 30, 1);
     }
     std::string governance;
@@ -130,8 +132,10 @@ TEST(SecureDds, PermittedIdentitiesTalkAndAnOpenParticipantSeesNothing) {
     open_config.security.clear();
     Participant stranger(open_config, "stranger");
     std::atomic<int> recorded{0}, overheard{0};
-    dw::dds::Reader<dw::msg::WrenchStamped> r(recorder, topics::stand_wrench, [&](const auto&, const auto&) { ++recorded; });
-    dw::dds::Reader<dw::msg::WrenchStamped> eavesdrop(stranger, topics::stand_wrench, [&](const auto&, const auto&) { ++overheard; });
+    dw::dds::Reader<dw::msg::WrenchStamped> r(recorder, topics::stand_wrench,
+                                              [&](const auto&, const auto&) { ++recorded; });
+    dw::dds::Reader<dw::msg::WrenchStamped> eavesdrop(stranger, topics::stand_wrench,
+                                                      [&](const auto&, const auto&) { ++overheard; });
     dw::dds::Writer<dw::msg::WrenchStamped> w(stand, topics::stand_wrench);
     ASSERT_TRUE(w.wait_for_readers(1, 30000ms)) << "the recorder never matched the stand agent";
     // The crypto keys follow the match: a best-effort stream flows once they have arrived.
@@ -159,7 +163,8 @@ TEST(SecureDds, AnIdentityMayNotPublishWhatItsRoleDoesNotProduce) {
 TEST(SecureDds, TheDefaultTransportIsUdpAloneAndSharedMemoryIsRefused) {
     const auto qos = dw::dds::participant_qos(secure("planner"), "planner");
     ASSERT_EQ(qos.transport().user_transports.size(), 1u);
-    EXPECT_TRUE(std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(qos.transport().user_transports[0]));
+    EXPECT_TRUE(std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(
+        qos.transport().user_transports[0]));
     auto c = secure("planner");
     c.transport = dw::dds::Transport::shm;
     try {
@@ -204,7 +209,8 @@ TEST(SecureDds, ATamperedOrMismatchedKeystoreIsRefusedNamingTheFile) {
     text[at + 5] = 'n';  // one byte: subscribe to nocap/frame instead
     dw::write_file(k.permissions("predictor"), text);
     refused(k.permissions("predictor"));
-    std::filesystem::copy_file(k.permissions("planner"), k.permissions("predictor"), std::filesystem::copy_options::overwrite_existing);
+    std::filesystem::copy_file(k.permissions("planner"), k.permissions("predictor"),
+                               std::filesystem::copy_options::overwrite_existing);
     std::filesystem::copy_file(k.key("planner"), k.key("predictor"), std::filesystem::copy_options::overwrite_existing);
     refused(k.key("predictor"));  // another identity's key
 }
@@ -294,12 +300,14 @@ TEST(SecureDds, EncryptedTopicsAreNotReadableOnTheWire) {
     LoopbackCapture capture;
     if (!capture.ok()) GTEST_SKIP() << "no packet capture here (needs root or CAP_NET_RAW)";
     const double secret = 12345.678901, open = 8765.4321012;
-    const int setpoints = deliver<dw::msg::VehicleSetpoint>("planner", "mocap_bridge", topics::vehicle_setpoint, [&](auto& s) {
-        s.vehicle_id("needle-vehicle");
-        s.position_m().x(secret);
-    });
+    const int setpoints =
+        deliver<dw::msg::VehicleSetpoint>("planner", "mocap_bridge", topics::vehicle_setpoint, [&](auto& s) {
+            s.vehicle_id("needle-vehicle");
+            s.position_m().x(secret);
+        });
     ASSERT_EQ(setpoints, 20) << "the setpoints did not flow";
-    const int wrenches = deliver<dw::msg::WrenchStamped>("stand_agent", "recorder", topics::stand_wrench, [&](auto& s) { s.force_n().x(open); });
+    const int wrenches = deliver<dw::msg::WrenchStamped>("stand_agent", "recorder", topics::stand_wrench,
+                                                         [&](auto& s) { s.force_n().x(open); });
     ASSERT_EQ(wrenches, 20);
     std::this_thread::sleep_for(200ms);
     ASSERT_GT(capture.size(), 10000u);

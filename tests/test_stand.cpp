@@ -83,7 +83,8 @@ TEST(Hx711, ReadsEveryChipsConversionMsbFirstTwosComplement) {
 }
 
 TEST(Hx711, PulseCountChoosesChannelAndGainOfTheNextConversion) {
-    for (auto [gain, expect_gain, scale] : {std::tuple{Gain::a64, 64, 0.5}, std::tuple{Gain::b32, 32, 0.0}, std::tuple{Gain::a128, 128, 1.0}}) {
+    for (auto [gain, expect_gain, scale] :
+         {std::tuple{Gain::a64, 64, 0.5}, std::tuple{Gain::b32, 32, 0.0}, std::tuple{Gain::a128, 128, 1.0}}) {
         DriverOptions d;
         d.gain = gain;
         Rig rig(0.0, d);
@@ -182,7 +183,8 @@ TEST(Faults, AStuckLowLineIsNotMistakenForData) {
     const auto out = rig.agent->process(s);
     EXPECT_FALSE(out.publish);
     EXPECT_EQ(rig.agent->status().state(), dw::msg::STAND_FAULT);
-    EXPECT_NE(rig.agent->status().message().find("cell 1 DOUT stuck low"), std::string::npos) << rig.agent->status().message();
+    EXPECT_NE(rig.agent->status().message().find("cell 1 DOUT stuck low"), std::string::npos)
+        << rig.agent->status().message();
 }
 
 TEST(Tare, WithNoNeighboursTheTaredWrenchIsZeroWithinNoise) {
@@ -231,7 +233,8 @@ TEST(Calibration, FitRecoversTheStandFromKnownLoadsAndRoundTrips) {
         for (int a = 0; a < 6; ++a) w[a] = (a < 3 ? 5.0 : 0.2) * (2 * rng.uniform() - 1);
         const auto cells = geometry.wrench_to_cells(w);
         KnownLoad k;
-        for (int c = 0; c < kChips; ++c) k.tared_counts[c] = cells[c] * 21400.0 * true_gain[static_cast<std::size_t>(c)];
+        for (int c = 0; c < kChips; ++c)
+            k.tared_counts[c] = cells[c] * 21400.0 * true_gain[static_cast<std::size_t>(c)];
         k.wrench = w;
         loads.push_back(k);
     }
@@ -280,7 +283,9 @@ TEST(Calibration, TooFewOrDegenerateLoadsAreRefusedClearly) {
         Calibration::load(d.file("bad.yaml"));
         FAIL();
     } catch (const dw::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("bad.yaml:2:20: counts_per_newton: expected a list of 8 numbers"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("bad.yaml:2:20: counts_per_newton: expected a list of 8 numbers"),
+                  std::string::npos)
+            << e.what();
     }
 }
 

@@ -20,7 +20,10 @@ TEST(StandAgentProcess, SimulatedStandFeelsTheNeighbourOnTheMocapTopic) {
     cfg.domain = dw::test::test_domain();
     cfg.ns = "stand" + std::to_string(::getpid());
     dw::Subprocess agent({{dw::test::bin("dw-stand-agent"), "run", "--sim", "--domain", std::to_string(cfg.domain),
-                           "--namespace", cfg.ns}, dir.file("agent.out"), dir.file("agent.err"), {}});
+                           "--namespace", cfg.ns},
+                          dir.file("agent.out"),
+                          dir.file("agent.err"),
+                          {}});
     dw::dds::Participant p(cfg, "test");
     std::mutex m;
     std::vector<dw::msg::WrenchStamped> wrenches;

@@ -12,9 +12,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     static const dw::natnet::Version versions[] = {{3, 0}, {3, 1}, {4, 0}, {4, 1}, {4, 2}, {2, 9}};
     const dw::natnet::Version v = versions[data[0] % 6];
     const std::span<const std::uint8_t> payload(data + 1, size - 1);
-    try { dw::natnet::parse_frame(payload, v); } catch (const dw::InputError&) {}
-    try { dw::natnet::parse_modeldef(payload, v); } catch (const dw::InputError&) {}
-    try { dw::natnet::parse_server_info(payload); } catch (const dw::InputError&) {}
-    try { dw::natnet::payload(payload); } catch (const dw::InputError&) {}
+    try {
+        dw::natnet::parse_frame(payload, v);
+    } catch (const dw::InputError&) {}
+    try {
+        dw::natnet::parse_modeldef(payload, v);
+    } catch (const dw::InputError&) {}
+    try {
+        dw::natnet::parse_server_info(payload);
+    } catch (const dw::InputError&) {}
+    try {
+        dw::natnet::payload(payload);
+    } catch (const dw::InputError&) {}
     return 0;
 }
