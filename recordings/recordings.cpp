@@ -7,7 +7,6 @@
 #include <memory>
 #include <iomanip>
 #include <ostream>
-#include <tuple>
 
 #include "core/errors.hpp"
 #include "core/files.hpp"

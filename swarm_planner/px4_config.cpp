@@ -1,7 +1,5 @@
 #include "swarm_planner/px4_config.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <numbers>
 #include <set>
 
