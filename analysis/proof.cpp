@@ -11,6 +11,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "core/numbers.hpp"
 #include "core/subprocess.hpp"
 
@@ -169,13 +170,8 @@ ProofResult run_proof(const ProofOptions& o) {
     };
     std::vector<std::string> known{"null"};
     for (const auto& c : cases()) known.push_back(c.name);
-    for (const auto& n : o.cases) {
-        if (std::find(known.begin(), known.end(), n) == known.end()) {
-            std::string list;
-            for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-            throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", list, ")"));
-        }
-    }
+    for (const auto& n : o.cases)
+        if (!find_name(known, n)) throw InputError("--cases: " + unknown_name_problem("case", n, known));
     if (wanted_null(o) && o.null_seeds < 1)
         throw InputError("--null-seeds: the null case needs at least 1 flight (or leave it out with --cases)");
     fs::create_directories(o.out_dir);

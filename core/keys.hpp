@@ -9,6 +9,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "core/numbers.hpp"
 
@@ -24,6 +25,8 @@ public:
     virtual void flag(const std::string& key, bool& v) = 0;
     // Free text: a name, a namespace.
     virtual void text(const std::string& key, std::string& v) = 0;
+    // A list of free-text words: addresses, names.
+    virtual void texts(const std::string& key, std::vector<std::string>& v) = 0;
     // Whether the mapping holds `key` (always, when writing): for keys that must be given.
     virtual bool has(const std::string& key) = 0;
     // One of `names` (v is its index): "unknown <what> 'x' (expected a, b or c<note>)".
@@ -31,10 +34,21 @@ public:
                         const std::string& note = "") = 0;
     // A fixed-length list of numbers, each in r; `shape` is the message when it is not ("expected [n, e, d] in metres").
     virtual void numbers(const std::string& key, std::span<double> v, const Range& r, const std::string& shape) = 0;
+    // A table of numbers (row-major in `v`, `cols` per row), each in r; `shape` is the message when
+    // it is not that shape ("expected 6 rows of 8 numbers").
+    virtual void table(const std::string& key, std::span<double> v, std::size_t cols, const Range& r,
+                       const std::string& shape) = 0;
     // A key that, when given, must say exactly `value` (a format tag); always written.
     virtual void constant(const std::string& key, const std::string& value) = 0;
     // The mapping under `key`; a key in it that `body` does not visit is "unknown key 'x'" + unknown_hint.
     virtual void section(const std::string& key, const Body& body, const std::string& unknown_hint = "") = 0;
+    // The keys of this mapping when they are names the user chose (hosts, variables): when reading,
+    // `v` becomes the file's keys in order (each must then be visited); when writing, `v` is kept.
+    virtual void names(std::vector<std::string>& v) = 0;
+    // A list of mappings under `key`, `count` long (when reading: the file's), each item visited by
+    // `item` with its index (errors say key[i].field).
+    using Item = std::function<void(KeyVisitor&, std::size_t)>;
+    virtual void list(const std::string& key, std::size_t& count, const Item& item) = 0;
     // A rule between values already visited: when reading, !ok is an error at `key`.
     virtual void require(bool ok, const std::string& key, const std::string& problem) = 0;
 
@@ -51,6 +65,10 @@ public:
 // Reads the mapping `root` (or an empty document) of `file` through `body`; throws dw::InputError
 // at the first problem.
 void read_keys(const YAML::Node& root, const std::string& file, const KeyVisitor::Body& body);
+// Reads only the mapping under `key` of the document `root` through `body` (strictly), leaving
+// the document's other keys to other readers; nothing when `key` is absent.
+void read_section(const YAML::Node& root, const std::string& file, const std::string& key,
+                  const KeyVisitor::Body& body);
 // Writes what `body` visits as one YAML mapping.
 void write_keys(YAML::Emitter& out, const KeyVisitor::Body& body);
 

@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "core/errors.hpp"
+#include "core/names.hpp"
 
 namespace dw::log {
 namespace {
@@ -15,12 +16,7 @@ std::mutex g_mutex;
 constexpr std::string_view kNames[] = {"trace", "debug", "info", "warn", "error", "off"};
 }  // namespace
 
-Level parse_level(std::string_view text) {
-    for (std::size_t i = 0; i < std::size(kNames); ++i) {
-        if (text == kNames[i]) return static_cast<Level>(i);
-    }
-    throw InputError(cat("unknown log level '", text, "' (expected trace, debug, info, warn, error or off)"));
-}
+Level parse_level(std::string_view text) { return parse_name<Level>(kNames, text, "log level"); }
 
 void set_level(Level l) { g_level = l; }
 Level level() { return g_level; }

@@ -8,7 +8,9 @@
 #include <fastrtps/utils/IPLocator.h>
 
 #include "core/cli.hpp"
+#include "core/keys.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "dds/security.hpp"
 
 namespace dw::dds {
@@ -18,6 +20,9 @@ namespace frtps = eprosima::fastrtps::rtps;
 namespace {
 constexpr std::uint32_t kSocketBuffer = 4 * 1024 * 1024;             // large samples over UDP need it
 constexpr std::uint32_t kInitialPeersRange = kMaxParticipantId + 1;  // participants per host reachable
+
+constexpr const char* kProfileWhat = "DDS profile";
+constexpr const char* kTransportWhat = "transport";
 
 std::string prefix(std::string_view where) { return where.empty() ? std::string() : std::string(where) + ": "; }
 
@@ -49,28 +54,12 @@ std::pair<std::string, std::uint32_t> split_address(const std::string& text, boo
 }
 }  // namespace
 
-Profile parse_profile(std::string_view text) {
-    if (text == "local") return Profile::local;
-    if (text == "lab") return Profile::lab;
-    throw InputError(log::cat("unknown DDS profile '", text, "' (expected local or lab)"));
-}
-
+Profile parse_profile(std::string_view text) { return parse_name<Profile>(kProfileNames, text, kProfileWhat); }
 Transport parse_transport(std::string_view text) {
-    if (text == "default") return Transport::default_;
-    if (text == "shm") return Transport::shm;
-    if (text == "udp") return Transport::udp;
-    throw InputError(log::cat("unknown transport '", text, "' (expected default, shm or udp)"));
+    return parse_name<Transport>(kTransportNames, text, kTransportWhat);
 }
-
-std::string to_string(Profile p) { return p == Profile::local ? "local" : "lab"; }
-std::string to_string(Transport t) {
-    switch (t) {
-        case Transport::default_: return "default";
-        case Transport::shm: return "shm";
-        case Transport::udp: return "udp";
-    }
-    return "?";
-}
+std::string to_string(Profile p) { return name_of(kProfileNames, p); }
+std::string to_string(Transport t) { return name_of(kTransportNames, t); }
 
 void validate(const DdsConfig& c, std::string_view where) {
     const std::string p = prefix(where);
@@ -151,74 +140,21 @@ void add_cli_options(CLI::App& app, DdsCliOptions& o) {
 
 namespace {
 
-// The `dds:` section of a configuration file: each key once, with how it is read.
-struct FileKey {
-    const char* name;
-    void (*read)(const ConfigFile& f, const std::string& at, DdsConfig& c);
-};
-constexpr FileKey kFileKeys[] = {
-    {"domain",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_int(at, kDomainRange)) c.domain = static_cast<int>(*v);
-     }},
-    {"profile",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_string(at)) c.profile = parse_profile(*v);
-     }},
-    {"transport",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_string(at)) c.transport = parse_transport(*v);
-     }},
-    {"initial_peers",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_strings(at)) c.initial_peers = *v;
-     }},
-    {"discovery_server",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_string(at)) c.discovery_server = *v;
-     }},
-    {"interfaces",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_strings(at)) c.interfaces = *v;
-     }},
-    {"namespace",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_string(at)) c.ns = *v;
-     }},
-    {"security",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_string(at)) c.security = *v;
-     }},
-    {"identity",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_string(at)) c.identity = *v;
-     }},
-    {"await_readers",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_strings(at)) c.await_readers = *v;
-     }},
-    {"await_timeout_s",
-     [](const ConfigFile& f, const std::string& at, DdsConfig& c) {
-         if (auto v = f.get_double(at, kAwaitTimeoutRange)) c.await_timeout_s = *v;
-     }},
-};
+// The `dds:` section of a configuration file: each key once (core/keys.hpp).
 constexpr const char* kFileSection = "dds";
 
-// The file's values, each error naming file, line and key; an unknown key is refused.
-void read_file_section(const ConfigFile& file, DdsConfig& c) {
-    std::set<std::string> known;
-    for (const auto& k : kFileKeys) known.insert(k.name);
-    file.require_keys(kFileSection, known);
-    for (const auto& k : kFileKeys) {
-        const std::string at = std::string(kFileSection) + "." + k.name;
-        try {
-            k.read(file, at, c);
-        } catch (const InputError& e) {
-            const std::string msg = e.what();
-            if (msg.rfind(file.path(), 0) == 0) throw;  // already located
-            file.fail(at, msg);
-        }
-    }
+void file_keys(KeyVisitor& k, DdsConfig& c) {
+    k.integer("domain", c.domain, kDomainRange);
+    k.enumeration("profile", c.profile, kProfileNames, kProfileWhat);
+    k.enumeration("transport", c.transport, kTransportNames, kTransportWhat);
+    k.texts("initial_peers", c.initial_peers);
+    k.text("discovery_server", c.discovery_server);
+    k.texts("interfaces", c.interfaces);
+    k.text("namespace", c.ns);
+    k.text("security", c.security);
+    k.text("identity", c.identity);
+    k.texts("await_readers", c.await_readers);
+    k.number("await_timeout_s", c.await_timeout_s, kAwaitTimeoutRange);
 }
 
 }  // namespace
@@ -226,7 +162,7 @@ void read_file_section(const ConfigFile& file, DdsConfig& c) {
 DdsConfig resolve(const DdsCliOptions& cli, const ConfigFile& file) {
     DdsConfig c;
     if (!file.empty()) {
-        read_file_section(file, c);
+        read_section(file.root(), file.path(), kFileSection, [&](KeyVisitor& k) { file_keys(k, c); });
         validate(c, file.path());
     }
     if (cli.domain) c.domain = *cli.domain;

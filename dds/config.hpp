@@ -17,6 +17,8 @@ namespace dw::dds {
 enum class Profile { local, lab };
 // default: UDP + shared memory; shm: shared memory only (one host); udp: UDP only.
 enum class Transport { default_, shm, udp };
+inline constexpr const char* kProfileNames[] = {"local", "lab"};             // Profile's values in order
+inline constexpr const char* kTransportNames[] = {"default", "shm", "udp"};  // Transport's values in order
 
 inline constexpr int kMaxDomainId = 232;  // RTPS port mapping: 7400 + 250 * domain must fit
 inline constexpr Range kDomainRange{0, kMaxDomainId};

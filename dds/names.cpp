@@ -31,6 +31,16 @@ const char* command_name(msg::CommandKind k) {
     return "?";
 }
 
+std::vector<std::string> command_names() {
+    std::vector<std::string> out;
+    for (int k = static_cast<int>(msg::CMD_START); k <= static_cast<int>(msg::CMD_STOP); ++k) {
+        std::string n = command_name(static_cast<msg::CommandKind>(k));
+        for (char& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        out.push_back(n);
+    }
+    return out;
+}
+
 std::optional<msg::CommandKind> command_named(std::string_view name) {
     // CMD_START .. CMD_STOP: the IDL's first and last enumerators.
     for (int k = static_cast<int>(msg::CMD_START); k <= static_cast<int>(msg::CMD_STOP); ++k) {

@@ -1,122 +1,101 @@
 #include "lab/labfile.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
-#include <cctype>
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include "core/config.hpp"
+#include "core/keys.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
 
 namespace dw::lab {
 
-namespace {
-
-struct Ctx {
-    std::string file;
-    [[noreturn]] void fail(const YAML::Node& n, const std::string& key, const std::string& problem) const {
-        fail_at_node(file, n, key, problem);
-    }
-    std::string str(const YAML::Node& n, const std::string& key) const {
-        if (!n.IsScalar()) fail(n, key, "expected a string");
-        return n.as<std::string>();
-    }
-    std::vector<std::string> strs(const YAML::Node& n, const std::string& key) const {
-        if (!n.IsSequence()) fail(n, key, "expected a list of strings");
-        std::vector<std::string> out;
-        for (std::size_t i = 0; i < n.size(); ++i) out.push_back(str(n[i], log::cat(key, "[", i, "]")));
-        return out;
-    }
-    void only(const YAML::Node& n, const std::string& where, const std::set<std::string>& keys) const {
-        if (!n.IsMap()) fail(n, where, "expected a mapping");
-        require_known_keys(file, n, where, keys);
-    }
-};
-
-}  // namespace
-
 // The name becomes a log file under the run folder and a heartbeat name: no paths.
 bool is_process_name(const std::string& name) { return is_plain_name(name); }
 
+namespace {
+
+constexpr const char* kFormat = "downwash-lab/1";
+
+// Why `run` cannot start a process ("" when it can).
+std::string run_problem(const std::vector<std::string>& run) {
+    if (run.empty()) return "empty";
+    if (run[0].find('/') != std::string::npos || run[0].rfind("dw-", 0) != 0)
+        return "'" + run[0] + "' is not a lab executable (dw-...)";
+    if (run[0] == kLauncher) return "a lab file cannot start the launcher (it would start itself without end)";
+    return "";
+}
+
+template <class Map>
+std::vector<std::string> keys_of(const Map& m) {
+    std::vector<std::string> out;
+    for (const auto& [name, value] : m) out.push_back(name);
+    return out;
+}
+
+void var_keys(KeyVisitor& k, std::map<std::string, std::string>& vars) {
+    auto names = keys_of(vars);
+    k.names(names);
+    for (const auto& n : names) k.text(n, vars[n]);
+}
+
+void host_keys(KeyVisitor& k, std::map<std::string, HostSpec>& hosts) {
+    auto names = keys_of(hosts);
+    k.names(names);
+    for (const auto& n : names) {
+        HostSpec& h = hosts[n];
+        h.name = n;
+        k.section(n, [&](KeyVisitor& s) {
+            s.texts("launch", h.launch);
+            s.text("bin", h.bin);
+            s.require(n != "local" || h.launch.empty(), "launch", "the local host needs no launch prefix");
+        });
+    }
+}
+
+void process_keys(KeyVisitor& k, ProcessSpec& p, const LabFile& lab) {
+    k.require(k.has("name"), "name", "missing");
+    k.text("name", p.name);
+    k.require(is_process_name(p.name), "name",
+              "'" + p.name + "' is not a process name (letters, digits, _ - and ., not starting with .)");
+    k.text("host", p.host);
+    k.require(lab.hosts.count(p.host) > 0, "host", "'" + p.host + "' is not under hosts");
+    k.require(k.has("run"), "run", "missing");
+    k.texts("run", p.run);
+    const std::string problem = run_problem(p.run);
+    k.require(problem.empty(), "run", problem);
+    k.enumeration("restart", p.restart, kRestartNames, "restart policy");
+    k.flag("experiment", p.experiment);
+}
+
+// Every key of a lab file, declared once (core/keys.hpp).
+void lab_keys(KeyVisitor& k, LabFile& lab) {
+    k.require(k.has("format"), "format", std::string("expected ") + kFormat);
+    k.constant("format", kFormat);
+    k.section("vars", [&](KeyVisitor& v) { var_keys(v, lab.vars); });
+    k.section("hosts", [&](KeyVisitor& h) { host_keys(h, lab.hosts); });
+    k.require(k.has("processes"), "processes", "expected a non-empty list");
+    std::size_t count = lab.processes.size();
+    std::set<std::string> names;
+    k.list("processes", count, [&](KeyVisitor& item, std::size_t i) {
+        if (lab.processes.size() <= i) lab.processes.resize(i + 1);
+        ProcessSpec& p = lab.processes[i];
+        process_keys(item, p, lab);
+        item.require(names.insert(p.name).second, "name", "'" + p.name + "' is used twice");
+    });
+    k.require(count > 0, "processes", "expected a non-empty list");
+    const auto experiments = std::ranges::count_if(lab.processes, [](const ProcessSpec& p) { return p.experiment; });
+    k.require(experiments <= 1, "processes", "more than one process has experiment: true");
+}
+
+}  // namespace
+
 LabFile parse_lab(const std::string& yaml, const std::string& name) {
-    Ctx c{name};
-    const YAML::Node root = load_yaml(yaml, name);
     LabFile lab;
     lab.path = name;
-    if (!root.IsMap()) c.fail(root, "(document)", "expected a mapping with format, hosts and processes");
-    c.only(root, "", {"format", "vars", "hosts", "processes"});
-    if (!root["format"] || c.str(root["format"], "format") != "downwash-lab/1")
-        c.fail(root["format"] ? root["format"] : root, "format", "expected downwash-lab/1");
-    if (root["vars"]) {
-        if (!root["vars"].IsMap()) c.fail(root["vars"], "vars", "expected a mapping of names to values");
-        for (const auto& kv : root["vars"])
-            lab.vars[kv.first.as<std::string>()] = c.str(kv.second, "vars." + kv.first.as<std::string>());
-    }
     lab.hosts["local"] = {"local", {}, ""};
-    if (root["hosts"]) {
-        if (!root["hosts"].IsMap()) c.fail(root["hosts"], "hosts", "expected a mapping of host names");
-        for (const auto& kv : root["hosts"]) {
-            const auto h = kv.first.as<std::string>();
-            const std::string where = "hosts." + h;
-            HostSpec spec{h, {}, ""};
-            if (!kv.second.IsNull()) {
-                c.only(kv.second, where, {"launch", "bin"});
-                if (kv.second["launch"]) spec.launch = c.strs(kv.second["launch"], where + ".launch");
-                if (kv.second["bin"]) spec.bin = c.str(kv.second["bin"], where + ".bin");
-            }
-            if (h == "local" && !spec.launch.empty())
-                c.fail(kv.second, where + ".launch", "the local host needs no launch prefix");
-            lab.hosts[h] = spec;
-        }
-    }
-    const auto procs = root["processes"];
-    if (!procs || !procs.IsSequence() || procs.size() == 0)
-        c.fail(procs ? procs : root, "processes", "expected a non-empty list");
-    std::set<std::string> names;
-    int experiments = 0;
-    for (std::size_t i = 0; i < procs.size(); ++i) {
-        const auto& n = procs[i];
-        const std::string where = log::cat("processes[", i, "]");
-        c.only(n, where, {"name", "host", "run", "restart", "experiment"});
-        ProcessSpec p;
-        if (!n["name"]) c.fail(n, where + ".name", "missing");
-        p.name = c.str(n["name"], where + ".name");
-        if (!is_process_name(p.name)) {
-            c.fail(n["name"], where + ".name",
-                   "'" + p.name + "' is not a process name (letters, digits, _ - and ., not starting with .)");
-        }
-        if (!names.insert(p.name).second) c.fail(n["name"], where + ".name", "'" + p.name + "' is used twice");
-        if (n["host"]) p.host = c.str(n["host"], where + ".host");
-        if (!lab.hosts.count(p.host)) c.fail(n["host"], where + ".host", "'" + p.host + "' is not under hosts");
-        if (!n["run"]) c.fail(n, where + ".run", "missing");
-        p.run = c.strs(n["run"], where + ".run");
-        if (p.run.empty()) c.fail(n["run"], where + ".run", "empty");
-        if (p.run[0].find('/') != std::string::npos || p.run[0].rfind("dw-", 0) != 0)
-            c.fail(n["run"], where + ".run[0]", "'" + p.run[0] + "' is not a lab executable (dw-...)");
-        if (p.run[0] == kLauncher)
-            c.fail(n["run"], where + ".run[0]",
-                   "a lab file cannot start the launcher (it would start itself without end)");
-        if (n["restart"]) {
-            const auto r = c.str(n["restart"], where + ".restart");
-            if (r == "never") p.restart = Restart::never;
-            else if (r == "on-failure") p.restart = Restart::on_failure;
-            else c.fail(n["restart"], where + ".restart", "expected never or on-failure");
-        }
-        if (n["experiment"]) {
-            if (!n["experiment"].IsScalar() ||
-                (n["experiment"].as<std::string>() != "true" && n["experiment"].as<std::string>() != "false"))
-                c.fail(n["experiment"], where + ".experiment", "expected true or false");
-            p.experiment = n["experiment"].as<std::string>() == "true";
-            experiments += p.experiment;
-        }
-        lab.processes.push_back(p);
-    }
-    if (experiments > 1) c.fail(procs, "processes", "more than one process has experiment: true");
+    read_keys(load_yaml(yaml, name), name, [&](KeyVisitor& k) { lab_keys(k, lab); });
     return lab;
 }
 

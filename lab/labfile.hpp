@@ -35,6 +35,7 @@ struct HostSpec {
 };
 
 enum class Restart { never, on_failure };
+inline constexpr const char* kRestartNames[] = {"never", "on-failure"};  // Restart's values in order
 
 struct ProcessSpec {
     std::string name;

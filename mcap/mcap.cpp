@@ -18,6 +18,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 
 namespace dw::mcap {
 
@@ -213,13 +214,11 @@ std::uint32_t crc32(std::span<const std::uint8_t> data, std::uint32_t crc) {
 }
 
 Compression parse_compression(const std::string& text) {
-    if (text == "zstd") return Compression::zstd;
-    if (text == "lz4") return Compression::lz4;
-    if (text == "none" || text.empty()) return Compression::none;
-    throw InputError(log::cat("unknown compression '", text, "' (expected zstd, lz4 or none)"));
+    if (text.empty()) return Compression::none;  // a chunk record's way of saying none
+    return parse_name<Compression>(kCompressionNames, text, "compression");
 }
 
-std::string to_string(Compression c) { return c == Compression::zstd ? "zstd" : c == Compression::lz4 ? "lz4" : ""; }
+std::string to_string(Compression c) { return c == Compression::none ? "" : name_of(kCompressionNames, c); }
 
 // ---------------------------------------------------------------------------------------------
 struct Writer::ChunkIndexEntry {

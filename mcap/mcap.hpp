@@ -16,8 +16,9 @@ namespace dw::mcap {
 inline constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 
 enum class Compression { none, zstd, lz4 };
-Compression parse_compression(const std::string& text);  // throws dw::InputError
-std::string to_string(Compression c);                    // "", "zstd", "lz4"
+inline constexpr const char* kCompressionNames[] = {"none", "zstd", "lz4"};  // Compression's values in order
+Compression parse_compression(const std::string& text);                      // throws dw::InputError
+std::string to_string(Compression c);                                        // "", "zstd", "lz4"
 
 struct Schema {
     std::uint16_t id = 0;

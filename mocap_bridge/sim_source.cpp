@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/errors.hpp"
+#include "core/names.hpp"
 
 namespace dw::natnet {
 
@@ -14,9 +15,9 @@ SimFault parse_sim_fault(const std::string& text) {
         throw InputError(what + ": expected KIND:VEHICLE:AFTER_S (stuck:v1:8)");
     SimFault f;
     const std::string kind = text.substr(0, a);
-    if (kind == "stuck") f.kind = SimFault::Kind::stuck;
-    else if (kind == "jump") f.kind = SimFault::Kind::jump;
-    else throw InputError(what + ": unknown fault '" + kind + "' (expected stuck or jump)");
+    const auto k = find_name(SimFault::kKindNames, kind);
+    if (!k) throw InputError(what + ": " + unknown_name_problem("fault", kind, SimFault::kKindNames));
+    f.kind = static_cast<SimFault::Kind>(*k);
     f.vehicle = text.substr(a + 1, b - a - 1);
     f.after_s = require_in(parse_number(text.substr(b + 1), what), kFaultAfterRange, what);
     return f;

@@ -20,6 +20,7 @@ namespace dw::natnet {
 // motion capture reports it kJumpDistance_m north of where it is (a geofence breach).
 struct SimFault {
     enum class Kind { stuck, jump };
+    static constexpr const char* kKindNames[] = {"stuck", "jump"};  // Kind's values in order
     Kind kind = Kind::stuck;
     std::string vehicle;
     double after_s = 0;

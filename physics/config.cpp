@@ -7,6 +7,7 @@
 #include "core/keys.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "core/numbers.hpp"
 #include "flight/flight.hpp"
 #include "physics/effect_types.hpp"
@@ -14,10 +15,8 @@
 namespace dw::physics {
 
 int axis_index(const std::string& name) {
-    for (std::size_t i = 0; i < flight::kAxes.size(); ++i) {
-        if (name == flight::kAxes[i]) return static_cast<int>(i);
-    }
-    return -1;
+    const auto i = find_name(flight::kAxes, name);
+    return i ? static_cast<int>(*i) : -1;
 }
 
 // Every key of the physics configuration, declared once: parse_physics reads and to_yaml writes
@@ -105,7 +104,7 @@ void effect_keys(KeyVisitor& k, Effects& e) {
     const auto each = [&](KeyVisitor& s) {
         for (const auto* t : effect_types()) s.section(t->name(), [&](KeyVisitor& one) { t->keys(one, e); });
     };
-    k.section("effects", each, log::cat(": no such effect (expected one of ", effect_names(), ")"));
+    k.section("effects", each, log::cat(": no such effect (expected ", effect_names(), ")"));
 }
 
 void physics_keys(KeyVisitor& k, PhysicsConfig& c) {

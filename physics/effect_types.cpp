@@ -4,6 +4,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 
 namespace dw::physics {
 
@@ -32,16 +33,21 @@ Registry& registry() {
 
 const std::vector<const EffectType*>& effect_types() { return registry().views; }
 
-std::string effect_names() {
-    std::string known;
-    for (const auto* t : effect_types()) known += (known.empty() ? "" : ", ") + t->name();
-    return known;
+namespace {
+std::vector<std::string> names() {
+    std::vector<std::string> out;
+    for (const auto* t : effect_types()) out.push_back(t->name());
+    return out;
 }
+}  // namespace
+
+std::string effect_names() { return log::alternatives(names()); }
 
 const EffectType& effect_type(const std::string& name, const std::string& what) {
-    for (const auto* t : effect_types())
-        if (t->name() == name) return *t;
-    throw InputError(log::cat(what, ": unknown effect '", name, "' (expected one of ", effect_names(), ")"));
+    const auto known = names();
+    const auto i = find_name(known, name);
+    if (!i) throw InputError(log::cat(what, ": ", unknown_name_problem("effect", name, known)));
+    return *effect_types()[*i];
 }
 
 void register_effect(std::unique_ptr<EffectType> type) {

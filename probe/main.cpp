@@ -7,6 +7,7 @@
 #include "dds/process_cli.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "core/numbers.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
@@ -111,20 +112,20 @@ struct EchoCommand {
 };
 
 struct CommandCommand {
-    static constexpr const char* kKinds = "abort, stop, pause, resume, calibrate or start";
     CLI::App* sub = nullptr;
     dw::probe::CommandOptions options;
     std::string kind;
 
     void add(CLI::App& app) {
-        sub = app.add_subcommand("command", std::string("send the experiment a command as the operator: ") + kKinds);
-        sub->add_option("kind", kind, kKinds)->required();
+        const std::string kinds = dw::log::alternatives(dw::dds::command_names());
+        sub = app.add_subcommand("command", "send the experiment a command as the operator: " + kinds);
+        sub->add_option("kind", kind, kinds)->required();
         sub->add_option("--reason", options.reason, "why (in the planner's log and the experiment state)");
         sub->add_option("--to", options.to, "the process that must hear it (default planner)");
     }
     void check() {
         const auto k = dw::dds::command_named(kind);
-        if (!k) throw dw::InputError("command: unknown kind '" + kind + "' (expected " + kKinds + ")");
+        if (!k) throw dw::InputError("command: " + dw::unknown_name_problem("kind", kind, dw::dds::command_names()));
         options.kind = *k;
     }
 };

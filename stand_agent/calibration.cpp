@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -10,6 +11,7 @@
 #include "core/config.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
+#include "core/keys.hpp"
 #include "core/log.hpp"
 #include "physics/stand.hpp"
 
@@ -28,54 +30,47 @@ physics::Wrench Calibration::wrench(const CellVector& tared) const {
     return cell_to_wrench * forces;
 }
 
+namespace {
+
+constexpr const char* kFormat = "downwash-stand-calibration/1";
+constexpr int kAxes = 6;
+constexpr Range kGainRange{-1e12, 1e12, "counts/N"};
+constexpr Range kMatrixRange{-1e12, 1e12};
+using Table = std::array<double, kAxes * kChips>;  // cell_to_wrench, row-major
+
+// Every key of a calibration file, declared once (core/keys.hpp).
+void calibration_keys(KeyVisitor& k, std::array<double, kChips>& gains, Table& matrix) {
+    k.require(k.has("format"), "format", std::string("expected ") + kFormat);
+    k.constant("format", kFormat);
+    k.require(k.has("counts_per_newton"), "counts_per_newton", "expected a list of 8 numbers");
+    k.numbers("counts_per_newton", gains, kGainRange, "expected a list of 8 numbers");
+    k.require(std::ranges::none_of(gains, [](double g) { return g == 0; }), "counts_per_newton",
+              "expected non-zero numbers");
+    const std::string shape = "expected 6 rows (f_n, f_e, f_d, m_roll, m_pitch, m_yaw) of 8 numbers";
+    k.require(k.has("cell_to_wrench"), "cell_to_wrench", shape);
+    k.table("cell_to_wrench", matrix, kChips, kMatrixRange, shape);
+}
+
+}  // namespace
+
 Calibration Calibration::load(const std::string& path) {
-    const YAML::Node root = load_yaml_file(path, "calibration file");
-    auto fail = [&](const YAML::Node& n, const std::string& key, const std::string& what) {
-        fail_at_node(path, n, key, what);
-    };
-    if (!root.IsMap() || !root["format"] || root["format"].Scalar() != "downwash-stand-calibration/1") {
-        fail(root["format"], "format", "expected downwash-stand-calibration/1");
-    }
     Calibration c;
-    const YAML::Node g = root["counts_per_newton"];
-    if (!g || !g.IsSequence() || g.size() != kChips) fail(g, "counts_per_newton", "expected a list of 8 numbers");
-    for (std::size_t i = 0; i < kChips; ++i) {
-        double v = 0;
-        if (!YAML::convert<double>::decode(g[i], v) || !(std::abs(v) > 0) || !std::isfinite(v)) {
-            fail(g[i], log::cat("counts_per_newton[", i, "]"), "expected a non-zero number");
-        }
-        c.counts_per_newton[i] = v;
-    }
-    const YAML::Node m = root["cell_to_wrench"];
-    if (!m || !m.IsSequence() || m.size() != 6)
-        fail(m, "cell_to_wrench", "expected 6 rows (f_n, f_e, f_d, m_roll, m_pitch, m_yaw) of 8 numbers");
-    for (std::size_t r = 0; r < 6; ++r) {
-        if (!m[r].IsSequence() || m[r].size() != kChips)
-            fail(m[r], log::cat("cell_to_wrench[", r, "]"), "expected 8 numbers");
-        for (std::size_t k = 0; k < kChips; ++k) {
-            double v = 0;
-            if (!YAML::convert<double>::decode(m[r][k], v) || !std::isfinite(v))
-                fail(m[r][k], log::cat("cell_to_wrench[", r, "][", k, "]"), "expected a number");
-            c.cell_to_wrench(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = v;
-        }
-    }
+    Table matrix{};
+    read_keys(load_yaml_file(path, "calibration file"), path,
+              [&](KeyVisitor& k) { calibration_keys(k, c.counts_per_newton, matrix); });
+    for (int r = 0; r < kAxes; ++r)
+        for (int j = 0; j < kChips; ++j) c.cell_to_wrench(r, j) = matrix[static_cast<std::size_t>(r * kChips + j)];
     return c;
 }
 
 void Calibration::save(const std::string& path) const {
+    auto gains = counts_per_newton;
+    Table matrix{};
+    for (int r = 0; r < kAxes; ++r)
+        for (int j = 0; j < kChips; ++j) matrix[static_cast<std::size_t>(r * kChips + j)] = cell_to_wrench(r, j);
     YAML::Emitter o;
     o.SetDoublePrecision(12);
-    o << YAML::BeginMap << YAML::Key << "format" << YAML::Value << "downwash-stand-calibration/1";
-    o << YAML::Key << "counts_per_newton" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-    for (double v : counts_per_newton) o << v;
-    o << YAML::EndSeq;
-    o << YAML::Key << "cell_to_wrench" << YAML::Value << YAML::BeginSeq;
-    for (int r = 0; r < 6; ++r) {
-        o << YAML::Flow << YAML::BeginSeq;
-        for (int k = 0; k < kChips; ++k) o << cell_to_wrench(r, k);
-        o << YAML::EndSeq;
-    }
-    o << YAML::EndSeq << YAML::EndMap;
+    write_keys(o, [&](KeyVisitor& k) { calibration_keys(k, gains, matrix); });
     write_file(path,
                std::string("# Stand calibration: per-cell gain and the cell-to-wrench matrix (rows f_n, f_e, f_d,\n"
                            "# m_roll, m_pitch, m_yaw; columns cells 0-7: 4 vertical, 2 along N, 2 along E).\n") +

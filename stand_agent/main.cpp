@@ -5,6 +5,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
@@ -34,12 +35,11 @@ std::vector<unsigned> parse_lines(const std::string& text) {
 }
 
 dw::stand::Gain parse_gain(const std::string& text) {
-    std::vector<const char*> names;
-    for (const auto& [name, gain] : dw::stand::kGains) {
-        if (text == name) return gain;
-        names.push_back(name);
+    try {
+        return dw::parse_entry(dw::stand::kGains, text, "gain");
+    } catch (const dw::InputError& e) {
+        throw dw::InputError(std::string("--gain: ") + e.what());
     }
-    throw dw::InputError("--gain: '" + text + "' (expected " + dw::log::alternatives(names) + ")");
 }
 
 // The emulated HX711 bank, driven by the physics and the mocap topic.

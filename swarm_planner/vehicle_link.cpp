@@ -1,18 +1,15 @@
 #include "swarm_planner/vehicle_link.hpp"
 
-#include <ranges>
-
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "dds/time.hpp"
 #include "swarm_planner/px4_link.hpp"
 
 namespace dw::planner {
 
 LinkKind parse_link(std::string_view name, std::string_view option) {
-    for (const auto& [kind, n] : kLinkNames)
-        if (n == name) return kind;
-    const auto names = std::views::transform(kLinkNames, [](const auto& e) { return e.second; });
-    throw InputError(std::string(option) + ": '" + std::string(name) + "' (expected " + log::join(names, " or ") + ")");
+    if (const auto i = find_name(kLinkNames, name)) return static_cast<LinkKind>(*i);
+    throw InputError(log::cat(option, ": ", unknown_name_problem("vehicle link", name, kLinkNames)));
 }
 
 SimLink::SimLink(dds::Participant& p, std::vector<std::string> vehicles, std::string run_id)

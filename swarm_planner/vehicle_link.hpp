@@ -34,8 +34,7 @@ public:
 };
 
 enum class LinkKind { sim, px4 };
-inline constexpr std::array<std::pair<LinkKind, std::string_view>, 2> kLinkNames{
-    {{LinkKind::sim, "sim"}, {LinkKind::px4, "px4"}}};
+inline constexpr const char* kLinkNames[] = {"sim", "px4"};  // LinkKind's values in order
 // "px4" -> LinkKind::px4; anything else: InputError naming `option` and the known names.
 LinkKind parse_link(std::string_view name, std::string_view option);
 

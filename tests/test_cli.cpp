@@ -55,7 +55,7 @@ TEST(Cli, UsageErrors) {
     expect_one_line_exit_2(run({bin("dw-probe"), "--log-level", "loud", "list"}, d), "unknown log level 'loud'");
     expect_one_line_exit_2(run({bin("dw-probe"), "pub", "--reliability", "mostly"}, d), "--reliability");
     expect_one_line_exit_2(run({bin("dw-probe"), "command", "explode"}, d),
-                           "command: unknown kind 'explode' (expected abort, stop");
+                           "command: unknown kind 'explode' (expected start, calibrate");
     expect_one_line_exit_2(run({bin("dw-mocap-bridge"), "--sim", "--sim-fault", "melt:v1:3"}, d),
                            "unknown fault 'melt' (expected stuck or jump)");
     expect_one_line_exit_2(run({bin("dw-mocap-bridge"), "--sim", "--sim-fault", "stuck:v1:nan"}, d),

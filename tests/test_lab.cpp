@@ -542,6 +542,27 @@ TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
     EXPECT_NE(r.out.find("experiments: DONE, DONE"), std::string::npos) << r.out;
 }
 
+// Issue 17: the lab file is read through core/keys like every configuration; a misspelt key is
+// named, not the missing key it leaves behind, and a restart policy lists the known ones.
+TEST(LabFile, AMisspeltKeyIsNamedBeforeWhatItsAbsenceBreaks) {
+    EXPECT_EQ(error_of("format: downwash-lab/1\nprocesses:\n  - {name: a, rnu: [dw-probe, list]}\n"),
+              "lab.yaml:3:15: processes[0].rnu: unknown key 'rnu' (known: experiment, host, name, restart, run)");
+    EXPECT_EQ(error_of("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe], restart: always}\n"),
+              "lab.yaml:3:41: processes[0].restart: unknown restart policy 'always' (expected never or on-failure)");
+    EXPECT_EQ(error_of("format: downwash-lab/1\nhosts:\n  pi: {launch: ssh}\nprocesses: []\n"),
+              "lab.yaml:3:16: hosts.pi.launch: expected a list of words");
+    const auto lab = dw::lab::parse_lab(
+        "format: downwash-lab/1\nvars: {x: \"1\"}\nhosts:\n  pi: {launch: [ssh, pi], bin: /opt}\n  mocap-pc:\n"
+        "processes:\n  - {name: a, host: pi, run: [dw-probe, list], restart: on-failure}\n",
+        "ok.yaml");
+    EXPECT_EQ(lab.vars.at("x"), "1");
+    EXPECT_EQ(lab.hosts.at("pi").launch, (std::vector<std::string>{"ssh", "pi"}));
+    EXPECT_EQ(lab.hosts.at("pi").name, "pi");
+    EXPECT_EQ(lab.hosts.count("mocap-pc"), 1u);
+    EXPECT_EQ(lab.hosts.count("local"), 1u) << "always there";
+    EXPECT_EQ(lab.processes.at(0).restart, dw::lab::Restart::on_failure);
+}
+
 // Issue 14: a process name that is a path wrote its log outside the run folder; a lab file that
 // starts dw-lab started itself without end.
 TEST(LabFile, ProcessNamesAreNotPathsAndTheLauncherIsNotAProcess) {

@@ -289,6 +289,35 @@ TEST(Calibration, TooFewOrDegenerateLoadsAreRefusedClearly) {
     }
 }
 
+// Issue 17: the calibration file is read and written through core/keys, one declaration.
+TEST(Calibration, EachMistakeInTheFileIsOneLocatedLine) {
+    dw::test::TempDir d;
+    const auto error = [&](const std::string& yaml) {
+        std::ofstream(d.file("c.yaml")) << yaml;
+        try {
+            Calibration::load(d.file("c.yaml"));
+        } catch (const dw::InputError& e) {
+            return std::string(e.what()).substr(d.file("c.yaml").size());
+        }
+        return std::string("(no error)");
+    };
+    const std::string gains = "counts_per_newton: [1, 2, 3, 4, 5, 6, 7, 8]\n";
+    std::string rows = "cell_to_wrench:\n";
+    for (int r = 0; r < 6; ++r) rows += "  - [0, 0, 0, 0, 0, 0, 0, 0]\n";
+    const std::string format = "format: downwash-stand-calibration/1\n";
+    EXPECT_EQ(error(format + gains + rows), "(no error)");
+    EXPECT_EQ(error(gains + rows), ":1:1: format: expected downwash-stand-calibration/1");
+    EXPECT_EQ(error(format + "counts_per_newton: [1, 2, 0, 4, 5, 6, 7, 8]\n" + rows),
+              ":2:20: counts_per_newton: expected non-zero numbers");
+    EXPECT_EQ(error(format + gains),
+              ":1:1: cell_to_wrench: expected 6 rows (f_n, f_e, f_d, m_roll, m_pitch, m_yaw) of 8 numbers");
+    std::string bad = rows;
+    bad.replace(bad.rfind("0]"), 1, "x");
+    EXPECT_EQ(error(format + gains + bad), ":9:27: cell_to_wrench[5][7]: expected a number");
+    EXPECT_EQ(error(format + gains + rows + "gain: 3\n"),
+              ":10:1: gain: unknown key 'gain' (known: cell_to_wrench, counts_per_newton, format)");
+}
+
 TEST(Gpio, NoGpioHereFailsCleanly) {
     try {
         GpiodLines lines(GpioPins{});
