@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 
+#include "core/names.hpp"
+
 namespace dw::dds {
 
 const char* phase_name(msg::ExperimentPhase p) {
@@ -31,26 +33,26 @@ const char* command_name(msg::CommandKind k) {
     return "?";
 }
 
+namespace {
+std::string lower(std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+}
+}  // namespace
+
 std::vector<std::string> command_names() {
     std::vector<std::string> out;
-    for (int k = static_cast<int>(msg::CMD_START); k <= static_cast<int>(msg::CMD_STOP); ++k) {
-        std::string n = command_name(static_cast<msg::CommandKind>(k));
-        for (char& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-        out.push_back(n);
-    }
+    // CMD_START .. CMD_STOP: the IDL's first and last enumerators.
+    for (int k = static_cast<int>(msg::CMD_START); k <= static_cast<int>(msg::CMD_STOP); ++k)
+        out.push_back(lower(command_name(static_cast<msg::CommandKind>(k))));
     return out;
 }
 
 std::optional<msg::CommandKind> command_named(std::string_view name) {
-    // CMD_START .. CMD_STOP: the IDL's first and last enumerators.
-    for (int k = static_cast<int>(msg::CMD_START); k <= static_cast<int>(msg::CMD_STOP); ++k) {
-        const std::string_view n = command_name(static_cast<msg::CommandKind>(k));
-        if (n.size() == name.size() && std::equal(n.begin(), n.end(), name.begin(), [](char a, char b) {
-                return std::toupper(static_cast<unsigned char>(a)) == std::toupper(static_cast<unsigned char>(b));
-            }))
-            return static_cast<msg::CommandKind>(k);
-    }
-    return std::nullopt;
+    const auto i = find_name(command_names(), lower(name));
+    if (!i) return std::nullopt;
+    return static_cast<msg::CommandKind>(static_cast<int>(msg::CMD_START) + static_cast<int>(*i));
 }
 
 const char* process_state_name(msg::ProcessState s) {
