@@ -50,12 +50,15 @@ struct Px4VersionInfo {
     Px4Version version;
     std::string_view name;          // as written in the planner's PX4 file: "1.15"
     std::string_view status_topic;  // fmu/out/<this>: v1.16 versions VehicleStatus (MESSAGE_VERSION 1)
-    std::string_view ack_topic;     // unversioned through v1.16 (VehicleCommandAck_v1 is later: unverified)
+    std::string_view ack_topic;     // unversioned through v1.16 (MESSAGE_VERSION 0; _v1 only on later main)
+    // Whether PX4's own dds_topics.yaml bridges vehicle_command_ack: v1.14's does not (an answer,
+    // a refusal's reason included, never leaves the vehicle unless the lab adds it there).
+    bool ack_bridged;
 };
 inline constexpr std::array<Px4VersionInfo, 3> kPx4Versions{{
-    {Px4Version::v1_14, "1.14", "vehicle_status", "vehicle_command_ack"},
-    {Px4Version::v1_15, "1.15", "vehicle_status", "vehicle_command_ack"},
-    {Px4Version::v1_16, "1.16", "vehicle_status_v1", "vehicle_command_ack"},
+    {Px4Version::v1_14, "1.14", "vehicle_status", "vehicle_command_ack", false},
+    {Px4Version::v1_15, "1.15", "vehicle_status", "vehicle_command_ack", true},
+    {Px4Version::v1_16, "1.16", "vehicle_status_v1", "vehicle_command_ack", true},
 }};
 inline const Px4VersionInfo& px4_version(Px4Version v) {
     for (const auto& i : kPx4Versions)

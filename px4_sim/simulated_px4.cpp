@@ -246,6 +246,7 @@ void SimulatedPx4::publish_status() {
     }
     const auto& version = dds::px4_version(o_.version);
     px4_.publish(dds::px4_topic(o_.ns, "out", version.status_topic), type_name("VehicleStatus"), bytes);
+    if (!o_.publishes_ack.value_or(version.ack_bridged)) return;  // PX4 answered; nothing bridges it
     for (const auto& a : acks)
         px4_.publish(dds::px4_topic(o_.ns, "out", version.ack_topic), type_name("VehicleCommandAck"), a);
 }

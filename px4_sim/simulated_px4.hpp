@@ -43,6 +43,8 @@ struct SimulatedPx4Options {
     double status_period_s = 0.5;                  // vehicle_status (also on every change)
     bool publish_state = true;                     // vehicles/state (false: the motion capture is played elsewhere)
     bool reads_commands = true;  // false: the Agent does not bridge fmu/in/vehicle_command (a misconfigured Agent)
+    // Whether it publishes vehicle_command_ack; default: as the version's dds_topics.yaml (1.14: no).
+    std::optional<bool> publishes_ack;
 };
 
 class SimulatedPx4 {

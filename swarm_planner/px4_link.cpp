@@ -342,7 +342,16 @@ private:
                                       " to ", what, " but vehicle_status never showed it after ", v.tries, " tries"));
         refuse(v, log::cat("no answer from PX4 system ", v.cfg.system_id, " to ", what, " after ", v.tries,
                            " tries (is its MAV_SYS_ID ", v.cfg.system_id, "? PX4 ignores commands for another system",
-                           v.ack->matched() == 0 ? "; or its vehicle_command_ack is not bridged" : "", ")"));
+                           v.ack->matched() == 0 ? unbridged_ack() : "", ")"));
+    }
+
+    // Why no answer could be heard: PX4 1.14 keeps its acks on the vehicle by default.
+    std::string unbridged_ack() const {
+        const auto& version = dds::px4_version(o_.version);
+        if (version.ack_bridged) return "; or its vehicle_command_ack is not bridged";
+        return log::cat("; PX4 ", version.name,
+                        " does not bridge vehicle_command_ack unless its dds_topics.yaml adds it, so a refusal's "
+                        "reason is only on the vehicle (QGroundControl, the PX4 console)");
     }
 
     void refuse(Vehicle& v, const std::string& why) {

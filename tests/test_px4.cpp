@@ -342,6 +342,32 @@ TEST(Px4Refusals, ARefusedArmAbortsTheExperimentBeforeTakeOff) {
     EXPECT_FALSE(lab.vehicles[0]->report().armed);
 }
 
+// PX4 1.14's dds_topics.yaml has no vehicle_command_ack (read from its release sources:
+// docs/research/PX4_LINK.md §7): a refused arm is never answered on DDS. The link still refuses
+// after its tries, and says where the reason is; with the ack added on the vehicle, PX4's answer.
+TEST(Px4Refusals, PX4v114KeepsItsAcksOnTheVehicleAndTheRefusalSaysWhereTheReasonIs) {
+    for (const bool bridged : {false, true}) {
+        Px4Lab lab(bridged ? "px4ack114b" : "px4ack114", Px4Version::v1_14, 1);
+        const auto plan = short_plan("single");
+        lab.start(plan, [&](auto& o) {
+            o.refuse_arm = "battery below the arming threshold";
+            if (bridged) o.publishes_ack = true;
+        });
+        dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+        EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+        if (bridged) {
+            EXPECT_NE(e.reason().find("refused to arm: DENIED after 3 tries"), std::string::npos) << e.reason();
+        } else {
+            EXPECT_NE(e.reason().find("no answer from PX4 system 2 to arm after 3 tries"), std::string::npos)
+                << e.reason();
+            EXPECT_NE(e.reason().find("PX4 1.14 does not bridge vehicle_command_ack"), std::string::npos) << e.reason();
+        }
+        EXPECT_EQ(e.reason().find('\n'), std::string::npos);
+        EXPECT_EQ(e.legs_flown(), 0);
+        EXPECT_FALSE(lab.vehicles[0]->report().was_armed);
+    }
+}
+
 // The offboard stream stops reaching PX4 in flight: its failsafe lands it, and the planner aborts
 // with that reason instead of a tracking error later.
 TEST(Px4Refusals, ALostOffboardStreamIsSeenAsPx4sFailsafeAndAborts) {
