@@ -19,6 +19,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/subprocess.hpp"
+#include "dds/time.hpp"
 #include "testkit/mocap.hpp"
 #include "testkit/recording.hpp"
 
@@ -48,6 +49,7 @@ std::uint64_t write_recording(const std::string& path, std::uint64_t bytes, dw::
         const double s = i / 180.0;
         dw::msg::MocapFrame f;
         f.header().seq(i);
+        f.header().stamp(dw::dds::to_msg(static_cast<dw::Nanos>(t)));  // stamped as the bridge does
         for (int b = 0; b < 4; ++b)
             dw::testkit::add_body(f, names[b], std::sin(s + b), std::cos(s - b), -1.0 - 0.3 * b);
         w.write(cm, i, t, f);
@@ -61,6 +63,7 @@ std::uint64_t write_recording(const std::string& path, std::uint64_t bytes, dw::
         if (i * 80 / 180 == wrench_seq) {
             dw::msg::WrenchStamped m;
             m.header().seq(wrench_seq);
+            m.header().stamp(dw::dds::to_msg(static_cast<dw::Nanos>(t)));
             m.force_n().z(-0.3 + 0.01 * std::sin(s));
             w.write(cw, wrench_seq, t, m);
             dw::msg::LoadCellFrame cells;
@@ -136,6 +139,7 @@ int main(int argc, char** argv) try {
     namespace fs = std::filesystem;
     const std::string file = (fs::path(o.dir) / "dw-bench-stream.mcap").string();
     const std::string csv = (fs::path(o.dir) / "dw-bench-stream-csv").string();
+    const std::string flight = (fs::path(o.dir) / "dw-bench-stream-flight").string();
     std::fprintf(stderr, "writing a %.1f GB recording to %s ...\n", o.gb, file.c_str());
     const std::uint64_t messages = write_recording(file, static_cast<std::uint64_t>(o.gb * 1e9), o.compression);
     const double mb = static_cast<double>(fs::file_size(file)) / 1e6;
@@ -149,6 +153,7 @@ int main(int argc, char** argv) try {
         {"cat (anchor)", {"cat", file}},
         {"dw-recorder info", {recorder, "info", file}},
         {"dw-recorder export --csv", {recorder, "export", file, "--csv", csv}},
+        {"dw-recorder export --flight", {recorder, "export", file, "--flight", flight}},
     };
     std::printf(
         "recording: %.0f MB, %.2f M messages (%s), %s\n\n", mb, static_cast<double>(messages) * 1e-6,
@@ -166,10 +171,14 @@ int main(int argc, char** argv) try {
     }
     std::uint64_t csv_bytes = 0;
     for (const auto& e : fs::directory_iterator(csv)) csv_bytes += fs::file_size(e.path());
-    std::printf("\nCSV written: %.0f MB\n", static_cast<double>(csv_bytes) / 1e6);
+    std::uint64_t flight_bytes = 0;
+    for (const auto& e : fs::directory_iterator(flight)) flight_bytes += fs::file_size(e.path());
+    std::printf("\nCSV written: %.0f MB; flight folder written: %.0f MB\n", static_cast<double>(csv_bytes) / 1e6,
+                static_cast<double>(flight_bytes) / 1e6);
     if (!o.keep) {
         fs::remove(file);
         fs::remove_all(csv);
+        fs::remove_all(flight);
     }
     return 0;
 } catch (const dw::InputError& e) {

@@ -316,12 +316,6 @@ Flight read_flight(const std::string& dir) {
 }
 
 namespace {
-// Formats every file before anything is written: a value that cannot be written (NaN, inf) is an
-// error naming the file, row and column, and leaves no folder behind.
-struct FlightText {
-    std::string meta, wrench, poses, legs;
-};
-
 class Row {
 public:
     Row(std::string& out, const char* file, std::size_t row) : out_(out), file_(file), row_(row) {}
@@ -364,53 +358,77 @@ std::string meta_text(const Meta& m) {
     return meta.dump(2) + "\n";
 }
 
-FlightText format_flight(const Flight& f) {
-    static constexpr const char* kQuaternion[] = {"qw", "qx", "qy", "qz"};
-    static constexpr const char* kPosition[] = {"n", "e", "d"};
-    FlightText t;
-    t.meta = meta_text(f.meta);
-    for (const auto& column : wrench_columns()) t.wrench += (t.wrench.empty() ? "" : ",") + column;
-    t.wrench += "\n";
-    t.wrench.reserve(f.wrench.size() * 80);
-    for (std::size_t i = 0; i < f.wrench.size(); ++i) {
-        Row row(t.wrench, "wrench.csv", i + 2);
-        row.number(f.wrench[i].t, 6, "t");
-        for (std::size_t a = 0; a < kAxes.size(); ++a) row.number(f.wrench[i].w[a], 6, kAxes[a]);
-    }
-    t.poses = "t,body,n,e,d,qw,qx,qy,qz\n";
-    t.poses.reserve(f.poses.size() * 90);
-    for (std::size_t i = 0; i < f.poses.size(); ++i) {
-        const PoseSample& s = f.poses[i];
-        Row row(t.poses, "poses.csv", i + 2);
+constexpr const char* kQuaternion[] = {"qw", "qx", "qy", "qz"};
+constexpr const char* kPosition[] = {"n", "e", "d"};
+}  // namespace
+
+FlightWriter::FlightWriter(const std::string& dir) : root_(dir) {
+    std::error_code ec;
+    created_ = !fs::exists(root_, ec);
+    fs::create_directories(root_, ec);
+    if (ec) throw RuntimeError(log::cat("cannot create the flight folder ", dir, ": ", ec.message()));
+    wrench_.emplace((root_ / "wrench.csv").string());
+    poses_.emplace((root_ / "poses.csv").string());
+    for (const auto& column : wrench_columns()) row_ += (row_.empty() ? "" : ",") + column;
+    wrench_->write(row_ + "\n");
+    poses_->write("t,body,n,e,d,qw,qx,qy,qz\n");
+}
+
+FlightWriter::~FlightWriter() {
+    if (closed_) return;
+    wrench_.reset();  // their temporaries go first, then the folder if this writer made it
+    poses_.reset();
+    std::error_code ec;
+    if (created_) fs::remove(root_, ec);
+}
+
+void FlightWriter::wrench(const WrenchSample& s) {
+    row_.clear();
+    {
+        Row row(row_, "wrench.csv", ++wrench_rows_ + 1);
         row.number(s.t, 6, "t");
-        row.text(f.bodies.at(s.body));
-        for (std::size_t k = 0; k < 3; ++k) row.number(s.p[k], 6, kPosition[k]);
-        for (std::size_t k = 0; k < 4; ++k) row.number(s.q[k], 8, kQuaternion[k]);
+        for (std::size_t a = 0; a < kAxes.size(); ++a) row.number(s.w[a], 6, kAxes[a]);
     }
-    if (f.legs) {
-        t.legs = "leg,t_start,t_end\n";
-        for (std::size_t i = 0; i < f.legs->size(); ++i) {
-            const Leg& leg = (*f.legs)[i];
-            Row row(t.legs, "legs.csv", i + 2);
+    wrench_->write(row_);
+}
+
+void FlightWriter::pose(double t, const std::string& body, const std::array<double, 3>& p,
+                        const std::array<double, 4>& q) {
+    row_.clear();
+    {
+        Row row(row_, "poses.csv", ++pose_rows_ + 1);
+        row.number(t, 6, "t");
+        row.text(body);
+        for (std::size_t k = 0; k < 3; ++k) row.number(p[k], 6, kPosition[k]);
+        for (std::size_t k = 0; k < 4; ++k) row.number(q[k], 8, kQuaternion[k]);
+    }
+    poses_->write(row_);
+}
+
+void FlightWriter::close(const Meta& meta, const std::optional<std::vector<Leg>>& legs) {
+    std::string legs_text = "leg,t_start,t_end\n";
+    if (legs) {
+        for (std::size_t i = 0; i < legs->size(); ++i) {
+            const Leg& leg = (*legs)[i];
+            Row row(legs_text, "legs.csv", i + 2);
             row.text(std::to_string(leg.leg));
             row.number(leg.t_start, 6, "t_start");
             row.number(leg.t_end, 6, "t_end");
         }
     }
-    return t;
+    const std::string meta_json = meta_text(meta);
+    wrench_->commit();
+    poses_->commit();
+    closed_ = true;
+    write_file((root_ / "meta.json").string(), meta_json);
+    if (legs) write_file((root_ / "legs.csv").string(), legs_text);
 }
-}  // namespace
 
 void write_flight(const Flight& f, const std::string& dir) {
-    const FlightText text = format_flight(f);
-    const fs::path root(dir);
-    std::error_code ec;
-    fs::create_directories(root, ec);
-    if (ec) throw RuntimeError(log::cat("cannot create the flight folder ", dir, ": ", ec.message()));
-    write_file((root / "meta.json").string(), text.meta);
-    write_file((root / "wrench.csv").string(), text.wrench);
-    write_file((root / "poses.csv").string(), text.poses);
-    if (f.legs) write_file((root / "legs.csv").string(), text.legs);
+    FlightWriter w(dir);
+    for (const auto& s : f.wrench) w.wrench(s);
+    for (const auto& s : f.poses) w.pose(s.t, f.bodies.at(s.body), s.p, s.q);
+    w.close(f.meta, f.legs);
 }
 
 std::array<double, 3> Track::position_at(double time) const {

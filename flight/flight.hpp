@@ -4,11 +4,13 @@
 // rejected with dw::InputError naming the file, the line and the problem.
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/files.hpp"
 #include "core/numbers.hpp"
 
 namespace dw::flight {
@@ -92,6 +94,31 @@ struct Flight {
 Flight read_flight(const std::string& dir);
 // Writes meta.json, wrench.csv, poses.csv and legs.csv (if any); creates dir. Deterministic bytes.
 void write_flight(const Flight& flight, const std::string& dir);
+
+// A flight folder written sample by sample, in the order given (each file's rows must come in time
+// order): memory independent of the flight's length. Each file appears whole or not at all; a
+// writer destroyed before close() (a non-finite value, a stop) leaves no files, and no folder if it
+// made the folder. Throws dw::RuntimeError (cannot write) or dw::InputError (a value not finite:
+// file, row and column).
+class FlightWriter {
+public:
+    explicit FlightWriter(const std::string& dir);
+    ~FlightWriter();
+    FlightWriter(const FlightWriter&) = delete;
+    FlightWriter& operator=(const FlightWriter&) = delete;
+
+    void wrench(const WrenchSample& s);
+    void pose(double t, const std::string& body, const std::array<double, 3>& p, const std::array<double, 4>& q);
+    // meta.json (and legs.csv), then every file moved into place.
+    void close(const Meta& meta, const std::optional<std::vector<Leg>>& legs = std::nullopt);
+
+private:
+    std::filesystem::path root_;
+    bool created_ = false, closed_ = false;
+    std::optional<AtomicFile> wrench_, poses_;
+    std::string row_;
+    std::size_t wrench_rows_ = 0, pose_rows_ = 0;
+};
 
 // Per-body pose tracks, for lookup by time.
 struct Track {

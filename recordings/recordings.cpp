@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <limits>
+#include <queue>
 #include <iomanip>
 #include <ostream>
 
@@ -19,6 +21,9 @@ namespace dw::recordings {
 namespace {
 
 constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks while exporting
+// How far behind a topic's latest stamp the flight export still puts a row in order (a producer's
+// stamps arrive in order but for jitter; a clock stepping back further makes the export sort in memory).
+constexpr double kReorderWindowS = 2.0;
 
 // A recorded value the flight cannot carry (NaN, inf) is the recording's fault: named there.
 template <std::size_t N>
@@ -166,130 +171,233 @@ bool print_info(const std::string& path, std::ostream& out) {
 
 namespace {
 
-// What a flight is made from, as the recording holds it (stamps on their producers' clocks).
-struct Collected {
-    struct WrenchRow {
-        double t;
-        std::array<double, 6> w;
-    };
-    struct PoseRow {
-        double t;
-        std::string body;
-        std::array<double, 3> p;
-        std::array<double, 4> q;  // w x y z, not yet normalised
-    };
-    std::vector<WrenchRow> wrench;
-    std::vector<PoseRow> poses;
+struct WrenchRow {
+    double t;
+    std::array<double, 6> w;
+};
+struct PoseRow {
+    double t;
+    std::string body;
+    std::array<double, 3> p;
+    std::array<double, 4> q;  // w x y z, not yet normalised
+};
+// What one pass over a recording finds besides its rows.
+struct Found {
     Offsets offsets;  // per process: the time service's measured clock offsets
     std::string formation = "free";
 };
+struct RowHandlers {
+    std::function<void(WrenchRow&&)> wrench;
+    std::function<void(PoseRow&&)> pose;
+};
 
-// One recorded message into what the flight is made from; other topics are passed over.
-void collect_message(Collected& c, const std::string& suffix, const mcap::Message& m, const std::string& path,
-                     std::uint64_t read) {
+// One recorded message: its rows to the handlers, the plan's formation and the clock measurements
+// into `found`; other topics are passed over.
+void read_message(Found& found, const RowHandlers& rows, const std::string& suffix, const mcap::Message& m,
+                  const std::string& path, std::uint64_t read) {
     namespace topics = dds::topics;
     auto undecodable = [&] { return InputError(log::cat(path, ": a ", suffix, " message does not decode")); };
     if (suffix == topics::stand_wrench.suffix) {
         msg::WrenchStamped w;
         if (!deserialize(m.data, w)) throw undecodable();
-        const double t = static_cast<double>(dds::from_msg(w.header().stamp())) * 1e-9;
-        c.wrench.push_back({t,
-                            {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
-                             w.torque_nm().z()}});
-        require_finite(c.wrench.back().w, path, suffix, read);
+        WrenchRow r{static_cast<double>(dds::from_msg(w.header().stamp())) * 1e-9,
+                    {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
+                     w.torque_nm().z()}};
+        require_finite(r.w, path, suffix, read);
+        rows.wrench(std::move(r));
     } else if (suffix == topics::mocap_frame.suffix) {
         msg::MocapFrame fr;
         if (!deserialize(m.data, fr)) throw undecodable();
         const double t = static_cast<double>(dds::from_msg(fr.header().stamp())) * 1e-9;
         for (const auto& b : fr.bodies()) {
-            c.poses.push_back({t,
-                               b.name(),
-                               {b.position_m().x(), b.position_m().y(), b.position_m().z()},
-                               {b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z()}});
-            require_finite(c.poses.back().p, path, suffix, read);
-            require_finite(c.poses.back().q, path, suffix, read);
+            PoseRow r{t,
+                      b.name(),
+                      {b.position_m().x(), b.position_m().y(), b.position_m().z()},
+                      {b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z()}};
+            require_finite(r.p, path, suffix, read);
+            require_finite(r.q, path, suffix, read);
+            rows.pose(std::move(r));
         }
     } else if (suffix == topics::experiment_plan.suffix) {
         msg::ExperimentPlan p;
-        if (deserialize(m.data, p)) c.formation = p.formation();
+        if (deserialize(m.data, p)) found.formation = p.formation();
     } else if (suffix == topics::process_status.suffix) {
         msg::ProcessStatus st;
         if (deserialize(m.data, st) && st.clock_uncertainty_s() >= 0 && std::isfinite(st.clock_offset_s()))
-            c.offsets[st.process()].push_back(st.clock_offset_s());
+            found.offsets[st.process()].push_back(st.clock_offset_s());
     }
 }
 
-// Reads the recording's wrench, poses, plan and clock measurements; a recording without a wrench or poses is refused.
-Collected collect(const std::string& path, const ExportOptions& o) {
+// One pass over the recording, rows to `rows`; a damaged file is refused.
+Found read_rows(const std::string& path, const ExportOptions& o, const RowHandlers& rows) {
     Catalogue l;
-    Collected c;
+    Found found;
     mcap::Handlers h;
     l.watch(h);
     std::uint64_t read = 0;
     h.on_message = [&](const mcap::Message& m) {
         if (++read % kStopCheckEvery == 0) throw_if_stopped(o.stop, "the export");
-        collect_message(c, topic_suffix(l.channels.at(m.channel_id).topic), m, path, read);
+        read_message(found, rows, topic_suffix(l.channels.at(m.channel_id).topic), m, path, read);
     };
     require_sound(mcap::read_file(path, h), path);
-    auto require_some = [&](bool empty, const auto& suffix) {
-        if (empty) throw InputError(log::cat(path, ": no ", suffix, " messages: nothing to export as a flight"));
-    };
-    require_some(c.wrench.empty(), dds::topics::stand_wrench.suffix);
-    require_some(c.poses.empty(), dds::topics::mocap_frame.suffix);
-    return c;
+    return found;
 }
 
-// The samples, sorted, relative to the epoch; quaternions normalised.
-void fill_samples(flight::Flight& f, Collected& c, double epoch) {
-    std::sort(c.wrench.begin(), c.wrench.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-    std::stable_sort(c.poses.begin(), c.poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-    for (const auto& r : c.wrench) f.wrench.push_back({r.t - epoch, r.w});
-    for (const auto& [t, name, p, q] : c.poses) {
-        const std::uint16_t body = f.body_index(name);
-        double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-        if (norm == 0) norm = 1;
-        f.poses.push_back({t - epoch, body, p, {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm}});
+void require_rows(bool wrench, bool poses, const std::string& path) {
+    for (const auto& [some, suffix] :
+         {std::pair{wrench, dds::topics::stand_wrench.suffix}, std::pair{poses, dds::topics::mocap_frame.suffix}})
+        if (!some) throw InputError(log::cat(path, ": no ", suffix, " messages: nothing to export as a flight"));
+}
+
+// Where each topic's stamps go: less its producer's measured offset (unless raw), less the epoch.
+struct Clocks {
+    std::string stand = producer_of(dds::topics::stand_wrench), mocap = producer_of(dds::topics::mocap_frame);
+    std::optional<double> stand_measured, mocap_measured;
+    double stand_offset = 0, mocap_offset = 0, epoch = 0;
+
+    Clocks(const Offsets& offsets, const ExportOptions& o)
+        : stand_measured(median_offset(offsets, stand)), mocap_measured(median_offset(offsets, mocap)) {
+        stand_offset = o.raw_stamps ? 0.0 : stand_measured.value_or(0.0);
+        mocap_offset = o.raw_stamps ? 0.0 : mocap_measured.value_or(0.0);
     }
+    // Both clocks relative to one epoch (whole seconds, kept in meta.json) from each topic's first stamp.
+    void set_epoch(double first_wrench, double first_pose) {
+        epoch = std::floor(std::min(first_wrench - stand_offset, first_pose - mocap_offset));
+    }
+    double wrench_t(double t) const { return t - stand_offset - epoch; }
+    double pose_t(double t) const { return t - mocap_offset - epoch; }
+};
+
+std::array<double, 4> normalised(const std::array<double, 4>& q) {
+    double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (norm == 0) norm = 1;
+    return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+}
+
+// meta.json of an exported flight: the bodies in first-seen order, the plan's formation and which
+// clock offsets were applied.
+flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& found, const Clocks& c,
+                         const std::string& path, const ExportOptions& o) {
+    if (std::find(bodies.begin(), bodies.end(), o.sufferer) == bodies.end())
+        throw InputError(log::cat(path, ": no rigid body named '", o.sufferer, "' (use --sufferer)"));
+    flight::Meta m;
+    m.sufferer = o.sufferer;
+    for (const auto& b : bodies) {
+        if (b == o.sufferer) continue;
+        m.neighbours.push_back(b);
+        m.vehicles[b] = flight::VehicleInfo{};
+    }
+    const bool known = std::find_if(flight::kFormations.begin(), flight::kFormations.end(),
+                                    [&](const char* k) { return found.formation == k; }) != flight::kFormations.end();
+    m.formation = known ? found.formation : "free";
+    nlohmann::json clocks = nlohmann::json::object();
+    if (!o.raw_stamps) clocks = {{c.stand, c.stand_offset}, {c.mocap, c.mocap_offset}};
+    nlohmann::json extra{
+        {"source", path}, {"epoch_unix_s", c.epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
+    extra.update(measured_clocks(c.stand_measured, c.mocap_measured, c.stand, c.mocap));
+    m.extra_json = extra.dump();
+    return m;
 }
 
 }  // namespace
 
 flight::Flight flight_from_recording(const std::string& path, const ExportOptions& o) {
-    namespace topics = dds::topics;
-    Collected c = collect(path, o);
+    std::vector<WrenchRow> wrench;
+    std::vector<PoseRow> poses;
+    const Found found = read_rows(
+        path, o,
+        {[&](WrenchRow&& r) { wrench.push_back(std::move(r)); }, [&](PoseRow&& r) { poses.push_back(std::move(r)); }});
+    require_rows(!wrench.empty(), !poses.empty(), path);
+    Clocks c(found.offsets, o);
+    std::sort(wrench.begin(), wrench.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+    std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+    c.set_epoch(wrench.front().t, poses.front().t);
     flight::Flight f;
-    f.meta.sufferer = o.sufferer;
-    // Onto the recorder's clock: each topic less its producer's offset.
-    const std::string stand = producer_of(topics::stand_wrench), mocap = producer_of(topics::mocap_frame);
-    const auto stand_measured = median_offset(c.offsets, stand), mocap_measured = median_offset(c.offsets, mocap);
-    const double stand_offset = o.raw_stamps ? 0.0 : stand_measured.value_or(0.0);
-    const double mocap_offset = o.raw_stamps ? 0.0 : mocap_measured.value_or(0.0);
-    for (auto& r : c.wrench) r.t -= stand_offset;
-    for (auto& p : c.poses) p.t -= mocap_offset;
-    // Both clocks are written relative to one epoch (whole seconds), kept in meta.json.
-    const double epoch = std::floor(std::min(c.wrench.front().t, c.poses.front().t));
-    fill_samples(f, c, epoch);
-    if (f.find_body(o.sufferer) < 0)
-        throw InputError(log::cat(path, ": no rigid body named '", o.sufferer, "' (use --sufferer)"));
-    for (const auto& b : f.bodies) {
-        if (b == o.sufferer) continue;
-        f.meta.neighbours.push_back(b);
-        f.meta.vehicles[b] = flight::VehicleInfo{};
-    }
-    const bool known = std::find_if(flight::kFormations.begin(), flight::kFormations.end(),
-                                    [&](const char* k) { return c.formation == k; }) != flight::kFormations.end();
-    f.meta.formation = known ? c.formation : "free";
-    nlohmann::json clocks = nlohmann::json::object();
-    if (!o.raw_stamps) clocks = {{stand, stand_offset}, {mocap, mocap_offset}};
-    nlohmann::json extra{
-        {"source", path}, {"epoch_unix_s", epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
-    extra.update(measured_clocks(stand_measured, mocap_measured, stand, mocap));
-    f.meta.extra_json = extra.dump();
+    for (const auto& r : wrench) f.wrench.push_back({c.wrench_t(r.t), r.w});
+    for (const auto& r : poses) f.poses.push_back({c.pose_t(r.t), f.body_index(r.body), r.p, normalised(r.q)});
+    f.meta = export_meta(f.bodies, found, c, path, o);
     return f;
 }
 
+namespace {
+
+// A row older than what its topic already released: the stream cannot put it in order.
+struct OutOfWindow {
+    std::string topic;
+    double step_back_s;
+};
+
+// Rows of one topic put back in time order within a window behind the latest stamp seen.
+template <class Row>
+class Reorder {
+public:
+    Reorder(std::string topic, std::function<void(const Row&)> release)
+        : topic_(std::move(topic)), release_(std::move(release)) {}
+    void push(Row&& r) {
+        if (r.t < released_) throw OutOfWindow{topic_, latest_ - r.t};
+        latest_ = std::max(latest_, r.t);
+        heap_.push({std::move(r), seq_++});
+        while (!heap_.empty() && heap_.top().row.t < latest_ - kReorderWindowS) pop();
+    }
+    void drain() {
+        while (!heap_.empty()) pop();
+    }
+
+private:
+    struct Item {
+        Row row;
+        std::uint64_t seq;  // arrival order among equal stamps (a frame's bodies)
+        bool operator>(const Item& o) const { return row.t != o.row.t ? row.t > o.row.t : seq > o.seq; }
+    };
+    void pop() {
+        released_ = heap_.top().row.t;
+        release_(heap_.top().row);
+        heap_.pop();
+    }
+    std::string topic_;
+    std::function<void(const Row&)> release_;
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> heap_;
+    double latest_ = -std::numeric_limits<double>::infinity(), released_ = latest_;
+    std::uint64_t seq_ = 0;
+};
+
+// Two passes, neither holding the flight: the clocks and the first stamps, then the rows in time
+// order straight into the folder. Throws OutOfWindow when a topic's stamps step back
+// further than the window.
+void stream_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
+    double first_wrench = std::numeric_limits<double>::infinity(), first_pose = first_wrench;
+    const Found found = read_rows(path, o,
+                                  {[&](WrenchRow&& r) { first_wrench = std::min(first_wrench, r.t); },
+                                   [&](PoseRow&& r) { first_pose = std::min(first_pose, r.t); }});
+    require_rows(std::isfinite(first_wrench), std::isfinite(first_pose), path);
+    Clocks c(found.offsets, o);
+    c.set_epoch(first_wrench, first_pose);
+    flight::FlightWriter out(dir);
+    std::vector<std::string> bodies;
+    Reorder<WrenchRow> wrench(std::string(dds::topics::stand_wrench.suffix), [&](const WrenchRow& r) {
+        out.wrench({c.wrench_t(r.t), r.w});
+    });
+    Reorder<PoseRow> poses(std::string(dds::topics::mocap_frame.suffix), [&](const PoseRow& r) {
+        if (std::find(bodies.begin(), bodies.end(), r.body) == bodies.end()) bodies.push_back(r.body);
+        out.pose(c.pose_t(r.t), r.body, r.p, normalised(r.q));
+    });
+    read_rows(path, o,
+              {[&](WrenchRow&& r) { wrench.push(std::move(r)); }, [&](PoseRow&& r) { poses.push(std::move(r)); }});
+    wrench.drain();
+    poses.drain();
+    out.close(export_meta(bodies, found, c, path, o));
+}
+
+}  // namespace
+
 void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
-    flight::write_flight(flight_from_recording(path, o), dir);
+    try {
+        stream_flight(path, dir, o);
+    } catch (const OutOfWindow& e) {
+        log::warn(path, ": ", e.topic, " stamps step back ", fixed(e.step_back_s, 3), " s (more than the ",
+                  kReorderWindowS, " s the streamed export reorders): sorting the whole flight in memory");
+        flight::write_flight(flight_from_recording(path, o), dir);
+    }
 }
 
 flight::Flight read_flight_or_recording(const std::string& path, const ExportOptions& o) {

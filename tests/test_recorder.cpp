@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 
 #include "core/clock.hpp"
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/msg_json.hpp"
 #include "dds/time.hpp"
@@ -524,4 +526,76 @@ TEST(Recorder, ARecordedNonFiniteValueIsOneLineNamingTheRecording) {
                   std::string::npos)
             << e.what();
     }
+}
+
+namespace {
+// A recording of `seconds` at 100 Hz: a wrench and a two-body frame per step, each stamped on its
+// producer's clock; `stamp(i)` gives step i's stamp offset (jitter, a clock stepping back).
+void write_stamped_recording(const std::string& file, int steps, const std::function<double(int)>& stamp) {
+    dw::testkit::LabRecording rec(file, dw::mcap::Compression::none);
+    const auto cw = rec.channel(dw::dds::topics::stand_wrench), cm = rec.channel(dw::dds::topics::mocap_frame);
+    const dw::Nanos epoch = 1'700'000'000'000'000'000;
+    for (int i = 0; i < steps; ++i) {
+        const auto log_time = static_cast<std::uint64_t>(epoch + i * 10'000'000LL);
+        const auto stamp_ns = epoch + static_cast<dw::Nanos>(std::llround((i * 0.01 + stamp(i)) * 1e9));
+        dw::msg::WrenchStamped w;
+        w.header().stamp(dw::dds::to_msg(stamp_ns));
+        w.force_n().z(-0.01 * i);
+        rec.write(cw, static_cast<std::uint32_t>(i), log_time, w);
+        dw::msg::MocapFrame f;
+        f.header().stamp(dw::dds::to_msg(stamp_ns + 3'000'000));
+        for (const char* name : {"sufferer", "v1"}) {
+            dw::msg::RigidBody b;
+            b.name(name);
+            b.position_m().x(0.001 * i);
+            b.position_m().z(name[0] == 's' ? -1.4 : -1.9);
+            b.orientation().w(2.0);  // normalised on export
+            f.bodies().push_back(b);
+        }
+        rec.write(cm, static_cast<std::uint32_t>(i), log_time, f);
+    }
+    rec.close();
+}
+}  // namespace
+
+// Issue 19: the flight export streams (two passes, neither holding the flight) and puts each
+// topic's rows back in time order within its window; a clock stepping back further than that is
+// sorted in memory instead. Either way the folder is byte for byte the in-memory flight's.
+TEST(Export, TheStreamedFlightIsTheInMemoryFlightByteForByte) {
+    TempDir dir;
+    const std::vector<std::pair<std::string, std::function<double(int)>>> cases = {
+        {"in order", [](int) { return 0.0; }},
+        {"jitter", [](int i) { return i % 3 == 1 ? 0.025 : 0.0; }},   // a stamp 2.5 steps late, every third
+        {"clock step", [](int i) { return i >= 400 ? -5.0 : 0.0; }},  // stepped back 5 s: beyond the window
+    };
+    for (const auto& [name, stamp] : cases) {
+        SCOPED_TRACE(name);
+        const std::string file = dir.file(name + ".mcap"), streamed = dir.file(name + "-streamed"),
+                          memory = dir.file(name + "-memory");
+        write_stamped_recording(file, 600, stamp);
+        dw::recordings::export_flight(file, streamed, {});
+        dw::flight::write_flight(dw::recordings::flight_from_recording(file, {}), memory);
+        for (const char* f : {"wrench.csv", "poses.csv", "meta.json"})
+            EXPECT_EQ(dw::read_file(streamed + "/" + f), dw::read_file(memory + "/" + f)) << f;
+        const auto back = dw::flight::read_flight(streamed);  // in time order, or it would not read
+        EXPECT_EQ(back.wrench.size(), 600u);
+        EXPECT_EQ(back.poses.size(), 1200u);
+        EXPECT_EQ(back.meta.neighbours, std::vector<std::string>{"v1"});
+        EXPECT_NEAR(back.poses[0].q[0], 1.0, 1e-9);
+    }
+}
+
+// An export that fails after its rows were streamed (here: no such sufferer, known only at the
+// end) leaves no files and no folder behind.
+TEST(Export, AStreamedExportThatFailsLeavesNoFolder) {
+    TempDir dir;
+    const std::string file = dir.file("f.mcap");
+    write_stamped_recording(file, 300, [](int) { return 0.0; });
+    try {
+        dw::recordings::export_flight(file, dir.file("out"), {.sufferer = "nobody"});
+        ADD_FAILURE() << "exported without its sufferer";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("no rigid body named 'nobody'"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out")));
 }
