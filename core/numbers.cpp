@@ -71,13 +71,20 @@ std::chrono::milliseconds to_millis(double seconds) {
     return std::chrono::milliseconds(static_cast<long long>(std::ceil(seconds * 1000.0)));
 }
 
-void append_fixed(std::string& out, double v, int decimals, std::string_view what) {
-    if (!std::isfinite(v)) throw InputError(log::cat(what, ": ", v, " is not a finite number"));
+bool try_append_fixed(std::string& out, double v, int decimals) {
+    if (!std::isfinite(v)) return false;
     // A double in fixed notation has at most 309 integer digits; decimals are bounded by the caller.
     char buf[400];
     const auto [ptr, ec] = std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::fixed, decimals);
-    if (ec != std::errc()) throw InputError(log::cat(what, ": ", v, " does not fit a number field"));
+    if (ec != std::errc()) return false;
     out.append(buf, static_cast<std::size_t>(ptr - buf));
+    return true;
+}
+
+void append_fixed(std::string& out, double v, int decimals, std::string_view what) {
+    if (try_append_fixed(out, v, decimals)) return;
+    if (!std::isfinite(v)) throw InputError(log::cat(what, ": ", v, " is not a finite number"));
+    throw InputError(log::cat(what, ": ", v, " does not fit a number field"));
 }
 
 std::string fixed(double v, int decimals) {

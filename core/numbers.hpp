@@ -42,6 +42,9 @@ std::chrono::milliseconds to_millis(double seconds);
 // Appends v with `decimals` digits after the point. Throws dw::InputError naming `what` when v is
 // not finite: no NaN or inf reaches a file.
 void append_fixed(std::string& out, double v, int decimals, std::string_view what);
+// append_fixed without the error: false (and nothing appended) for a value it would refuse. For hot
+// loops whose error context costs more than the number (build it only when this fails).
+bool try_append_fixed(std::string& out, double v, int decimals);
 // v with `decimals` digits after the point, for reports and tables ("nan" and "inf" as such).
 std::string fixed(double v, int decimals);
 

@@ -322,7 +322,8 @@ public:
     void number(double v, int decimals, const char* column) {
         if (!first_) out_ += ',';
         first_ = false;
-        append_fixed(out_, v, decimals, log::cat("flight to write: ", file_, " row ", row_, " column ", column));
+        if (!try_append_fixed(out_, v, decimals))  // the context is built only for the error
+            append_fixed(out_, v, decimals, log::cat("flight to write: ", file_, " row ", row_, " column ", column));
     }
     void text(const std::string& v) {
         if (!first_) out_ += ',';
