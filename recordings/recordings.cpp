@@ -309,7 +309,8 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
         {[&](WrenchRow&& r) { wrench.push_back(std::move(r)); }, [&](PoseRow&& r) { poses.push_back(std::move(r)); }});
     require_rows(!wrench.empty(), !poses.empty(), path);
     Clocks c(found.offsets, o);
-    std::sort(wrench.begin(), wrench.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+    // Stable, as the streamed export's window: rows with the same stamp keep their recorded order.
+    std::stable_sort(wrench.begin(), wrench.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
     std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
     c.set_epoch(wrench.front().t, poses.front().t);
     flight::Flight f;
