@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <span>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -36,10 +37,10 @@ constexpr const char* kFormat = "downwash-stand-calibration/1";
 constexpr int kAxes = 6;
 constexpr Range kGainRange{-1e12, 1e12, "counts/N"};
 constexpr Range kMatrixRange{-1e12, 1e12};
-using Table = std::array<double, kAxes * kChips>;  // cell_to_wrench, row-major
+using Rows = Eigen::Matrix<double, kAxes, kChips, Eigen::RowMajor>;  // cell_to_wrench as the file lists it
 
 // Every key of a calibration file, declared once (core/keys.hpp).
-void calibration_keys(KeyVisitor& k, std::array<double, kChips>& gains, Table& matrix) {
+void calibration_keys(KeyVisitor& k, std::array<double, kChips>& gains, Rows& matrix) {
     k.require(k.has("format"), "format", std::string("expected ") + kFormat);
     k.constant("format", kFormat);
     k.require(k.has("counts_per_newton"), "counts_per_newton", "expected a list of 8 numbers");
@@ -48,26 +49,24 @@ void calibration_keys(KeyVisitor& k, std::array<double, kChips>& gains, Table& m
               "expected non-zero numbers");
     const std::string shape = "expected 6 rows (f_n, f_e, f_d, m_roll, m_pitch, m_yaw) of 8 numbers";
     k.require(k.has("cell_to_wrench"), "cell_to_wrench", shape);
-    k.table("cell_to_wrench", matrix, kChips, kMatrixRange, shape);
+    k.table("cell_to_wrench", std::span<double>(matrix.data(), static_cast<std::size_t>(matrix.size())), kChips,
+            kMatrixRange, shape);
 }
 
 }  // namespace
 
 Calibration Calibration::load(const std::string& path) {
     Calibration c;
-    Table matrix{};
+    Rows matrix = Rows::Zero();
     read_keys(load_yaml_file(path, "calibration file"), path,
               [&](KeyVisitor& k) { calibration_keys(k, c.counts_per_newton, matrix); });
-    for (int r = 0; r < kAxes; ++r)
-        for (int j = 0; j < kChips; ++j) c.cell_to_wrench(r, j) = matrix[static_cast<std::size_t>(r * kChips + j)];
+    c.cell_to_wrench = matrix;
     return c;
 }
 
 void Calibration::save(const std::string& path) const {
     auto gains = counts_per_newton;
-    Table matrix{};
-    for (int r = 0; r < kAxes; ++r)
-        for (int j = 0; j < kChips; ++j) matrix[static_cast<std::size_t>(r * kChips + j)] = cell_to_wrench(r, j);
+    Rows matrix = cell_to_wrench;
     YAML::Emitter o;
     o.SetDoublePrecision(12);
     write_keys(o, [&](KeyVisitor& k) { calibration_keys(k, gains, matrix); });
