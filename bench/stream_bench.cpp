@@ -1,14 +1,16 @@
 // dw-bench-stream: `dw-recorder info` and `dw-recorder export --csv` on a large recording (2 GB by
 // default), each run as a process: wall time, throughput and peak RSS, beside `cat` of the same
 // file to /dev/null in the same run (the anchor: reading the bytes and nothing else). The file is
-// read once first, so every row reads it from the page cache.
-//   build/bin/dw-bench-stream [--gb 2] [--dir /tmp] [--compression none|lz4|zstd] [--keep]
+// read once first, so every row reads it from the page cache; each row starts after a sync, and the
+// rows run in rounds (--repeat), each reported by its median.
+//   build/bin/dw-bench-stream [--gb 2] [--dir /tmp] [--compression none|lz4|zstd] [--keep] [--repeat 3]
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +36,7 @@ struct Options {
     std::string dir = "/tmp";
     dw::mcap::Compression compression = dw::mcap::Compression::none;
     bool keep = false;
+    int repeat = 3;  // rounds of every row; each row's median is reported (the machine is shared)
 };
 
 // A lab at full rate: mocap frames of four bodies and four vehicle states at 180 Hz, the stand's
@@ -114,6 +117,29 @@ Run measure(const std::vector<std::string>& argv) {
     return r;
 }
 
+double median_seconds(std::vector<Run> runs) {
+    std::sort(runs.begin(), runs.end(), [](const Run& a, const Run& b) { return a.seconds < b.seconds; });
+    const std::size_t n = runs.size();
+    return n % 2 ? runs[n / 2].seconds : 0.5 * (runs[n / 2 - 1].seconds + runs[n / 2].seconds);
+}
+
+// One row's rounds: the median, fastest and slowest wall time, the largest peak RSS, and the
+// first non-zero exit status (0 when every round passed).
+struct Summary {
+    double median = 0, min = 0, max = 0, peak_rss_mb = 0;
+    int status = 0;
+};
+Summary summarise(const std::vector<Run>& runs) {
+    Summary s{median_seconds(runs), runs.front().seconds, runs.front().seconds, 0, 0};
+    for (const Run& r : runs) {
+        s.min = std::min(s.min, r.seconds);
+        s.max = std::max(s.max, r.seconds);
+        s.peak_rss_mb = std::max(s.peak_rss_mb, r.peak_rss_mb);
+        if (s.status == 0) s.status = r.status;
+    }
+    return s;
+}
+
 Options parse(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
@@ -126,9 +152,11 @@ Options parse(int argc, char** argv) {
         else if (a == "--dir") o.dir = next();
         else if (a == "--compression") o.compression = dw::mcap::parse_compression(next());
         else if (a == "--keep") o.keep = true;
-        else throw dw::InputError("unknown option " + a + " (--gb, --dir, --compression, --keep)");
+        else if (a == "--repeat") o.repeat = std::stoi(next());
+        else throw dw::InputError("unknown option " + a + " (--gb, --dir, --compression, --keep, --repeat)");
     }
     if (!(o.gb > 0 && o.gb <= 64)) throw dw::InputError("--gb: expected (0, 64]");
+    if (o.repeat < 1 || o.repeat > 20) throw dw::InputError("--repeat: expected 1..20");
     return o;
 }
 
@@ -159,15 +187,23 @@ int main(int argc, char** argv) try {
         "recording: %.0f MB, %.2f M messages (%s), %s\n\n", mb, static_cast<double>(messages) * 1e-6,
         o.compression == dw::mcap::Compression::none ? "uncompressed" : dw::mcap::to_string(o.compression).c_str(),
         "mocap 4 bodies + 3 vehicle states at 180 Hz, wrench + cells at 80 Hz");
-    std::printf("| reader | status | wall s | MB/s of the file | vs cat | peak RSS MB |\n|---|---|---|---|---|---|\n");
-    double cat_rate = 0;
-    for (const auto& row : rows) {
-        const Run r = measure(row.argv);
-        const double rate = mb / r.seconds;
-        if (cat_rate == 0) cat_rate = rate;
-        std::printf("| %s | %d | %.2f | %.0f | %.0f %% | %.1f |\n", row.what, r.status, r.seconds, rate,
-                    100.0 * rate / cat_rate, r.peak_rss_mb);
-        std::fflush(stdout);
+    // Rounds of every row in turn, so the anchor meets the same moments of a shared machine.
+    std::vector<std::vector<Run>> runs(rows.size());
+    for (int round = 0; round < o.repeat; ++round) {
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+            ::sync();  // the recording and the previous row's output on disk first: no row pays another's writeback
+            runs[i].push_back(measure(rows[i].argv));
+        }
+    }
+    std::printf(
+        "| reader | status | wall s: median (min-max of %d) | MB/s of the file | vs cat | peak RSS MB |\n"
+        "|---|---|---|---|---|---|\n",
+        o.repeat);
+    const double cat_seconds = median_seconds(runs[0]);
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        const Summary s = summarise(runs[i]);
+        std::printf("| %s | %d | %.2f (%.2f-%.2f) | %.0f | %.0f %% | %.1f |\n", rows[i].what, s.status, s.median, s.min,
+                    s.max, mb / s.median, 100.0 * cat_seconds / s.median, s.peak_rss_mb);
     }
     std::uint64_t csv_bytes = 0;
     for (const auto& e : fs::directory_iterator(csv)) csv_bytes += fs::file_size(e.path());

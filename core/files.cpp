@@ -75,10 +75,6 @@ void require_output_dir(const std::string& path, std::string_view what) {
     }
 }
 
-namespace {
-constexpr std::size_t kWriteBuffer = 1 << 20;
-}  // namespace
-
 AtomicFile::AtomicFile(std::string path, unsigned mode)
     : path_(std::move(path)), tmp_(log::cat(path_, ".tmp-", ::getpid())) {
     const fs::path parent = fs::path(path_).parent_path();
@@ -88,7 +84,7 @@ AtomicFile::AtomicFile(std::string path, unsigned mode)
     }
     fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, static_cast<mode_t>(mode));
     if (fd_ < 0) throw RuntimeError(log::cat("cannot write ", path_, ": ", std::strerror(errno)));
-    buffer_.reserve(kWriteBuffer);
+    buffer_.reserve(kBlock);
 }
 
 AtomicFile::~AtomicFile() {
@@ -105,22 +101,25 @@ void AtomicFile::fail(int err) {
 }
 
 void AtomicFile::flush() {
+    write_through(buffer_);
+    buffer_.clear();
+}
+
+void AtomicFile::write_through(std::string_view bytes) {
     std::size_t done = 0;
-    while (done < buffer_.size()) {
-        const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) fail(n < 0 ? errno : ENOSPC);
         done += static_cast<std::size_t>(n);
     }
-    buffer_.clear();
 }
 
 void AtomicFile::write(std::string_view bytes) {
     if (fd_ < 0) throw RuntimeError(log::cat("cannot write ", path_, ": already closed"));
-    if (buffer_.size() + bytes.size() > kWriteBuffer) flush();
-    if (bytes.size() >= kWriteBuffer) {
-        buffer_.assign(bytes);
-        flush();
+    if (buffer_.size() + bytes.size() > kBlock) flush();
+    if (bytes.size() >= kBlock) {
+        write_through(bytes);  // already a large block: not copied into the buffer first
     } else {
         buffer_.append(bytes);
     }

@@ -31,12 +31,15 @@ public:
     AtomicFile(const AtomicFile&) = delete;
     AtomicFile& operator=(const AtomicFile&) = delete;
 
-    void write(std::string_view bytes);  // buffered
+    // Writes of fewer than this many bytes are gathered in a buffer; larger ones go straight to the file.
+    static constexpr std::size_t kBlock = 1 << 20;
+    void write(std::string_view bytes);
     void commit();
     const std::string& path() const { return path_; }
 
 private:
     void flush();
+    void write_through(std::string_view bytes);
     void fail(int err);
 
     std::string path_, tmp_;

@@ -164,15 +164,13 @@ std::string compress(Compression c, const std::string& in) {
     return in;
 }
 
+// A compressed chunk's records (an uncompressed chunk's are read where they lie: chunk_records).
 std::vector<std::uint8_t> decompress(const std::string& compression, std::span<const std::uint8_t> in,
                                      std::uint64_t size, const In& where) {
     if (size > kMaxChunk)
         where.fail(log::cat("chunk claims ", size, " uncompressed bytes (more than the 1 GiB bound)"));
     std::vector<std::uint8_t> out(static_cast<std::size_t>(size));
-    if (compression.empty()) {
-        if (in.size() != size) where.fail("uncompressed chunk size does not match its records");
-        std::copy(in.begin(), in.end(), out.begin());
-    } else if (compression == "zstd") {
+    if (compression == "zstd") {
         const std::size_t n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
         if (ZSTD_isError(n)) where.fail(log::cat("zstd chunk: ", ZSTD_getErrorName(n)));
         if (n != size) where.fail("zstd chunk decompressed to the wrong size");
@@ -592,18 +590,29 @@ struct Reading {
 
 namespace {
 
-// A chunk's records, decompressed and CRC-checked. Throws InputError (located) when unsound.
-std::vector<std::uint8_t> chunk_records(In& in) {
+// A chunk's records, CRC-checked: where they lie in the file when the chunk is uncompressed (no
+// copy), else decompressed into `owned`. Throws InputError (located) when unsound.
+struct ChunkRecords {
+    std::vector<std::uint8_t> owned;
+    std::span<const std::uint8_t> records;
+};
+ChunkRecords chunk_records(In& in) {
     in.u64();
     in.u64();
     const std::uint64_t size = in.u64();
     const std::uint32_t crc = in.u32();
     const std::string compression = in.str();
     const std::uint64_t n = in.u64();
-    const auto body = in.bytes(n, "chunk records");
-    auto records = decompress(compression, body, size, in);
-    if (crc != 0 && crc != crc32(records)) in.fail("chunk CRC mismatch");
-    return records;
+    ChunkRecords c;
+    c.records = in.bytes(n, "chunk records");
+    if (compression.empty()) {
+        if (c.records.size() != size) in.fail("uncompressed chunk size does not match its records");
+    } else {
+        c.owned = decompress(compression, c.records, size, in);
+        c.records = c.owned;
+    }
+    if (crc != 0 && crc != crc32(c.records)) in.fail("chunk CRC mismatch");
+    return c;
 }
 
 // The next offset after `from` where a whole chunk with a matching (non-zero) CRC starts, or the
@@ -765,7 +774,8 @@ private:
     }
 
     void chunk(In& in) {
-        const auto records = chunk_records(in);
+        const ChunkRecords chunk = chunk_records(in);
+        const std::span<const std::uint8_t> records = chunk.records;
         std::size_t p = 0;
         while (p < records.size()) {
             if (records.size() - p < 9) in.fail("truncated record inside a chunk");

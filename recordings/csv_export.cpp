@@ -4,6 +4,7 @@
 #include <atomic>
 #include <charconv>
 #include <condition_variable>
+#include <cstring>
 #include <deque>
 #include <exception>
 #include <mutex>
@@ -28,36 +29,66 @@ namespace {
 
 constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks
 
-template <class N>
-void append_number(std::string& line, N v) {
-    char buf[64];
-    const auto end = std::to_chars(buf, buf + sizeof buf, v).ptr;
-    line.append(buf, end);
-}
+// A row's text in a buffer it keeps, numbers formatted in place: appending each formatted number
+// to a std::string went through its general replace (6 % of the export, 4 % more in push_back).
+class RowText {
+public:
+    void clear() { n_ = 0; }
+    void reserve(std::size_t n) {
+        if (buf_.size() < n) buf_.resize(n);
+    }
+    void put(char c) {
+        room(1);
+        buf_[n_++] = c;
+    }
+    void put(std::string_view s) {
+        room(s.size());
+        std::memcpy(buf_.data() + n_, s.data(), s.size());
+        n_ += s.size();
+    }
+    template <class N>
+    void number(N v) {
+        room(kNumberRoom);
+        n_ = static_cast<std::size_t>(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v).ptr - buf_.data());
+    }
+    std::string_view view() const { return {buf_.data(), n_}; }
+    std::size_t size() const { return n_; }
+    void truncate(std::size_t n) { n_ = std::min(n, n_); }
+
+private:
+    static constexpr std::size_t kNumberRoom = 64;  // the longest number std::to_chars writes, and more
+    void room(std::size_t k) {
+        if (buf_.size() - n_ < k) [[unlikely]]
+            grow(k);
+    }
+    [[gnu::noinline]] void grow(std::size_t k) { buf_.resize(std::max(2 * buf_.size(), n_ + k)); }
+    std::vector<char> buf_;
+    std::size_t n_ = 0;
+};
 
 // A string CSV-quoted when it holds a separator, a quote or a line break.
-void append_string(std::string& line, const std::string& s) {
+void append_string(RowText& line, const std::string& s) {
     if (s.find_first_of(",\"\n\r") == std::string::npos) {
-        line += s;
+        line.put(s);
         return;
     }
-    line += '"';
-    for (char ch : s) line += ch == '"' ? std::string_view("\"\"") : std::string_view(&ch, 1);
-    line += '"';
+    line.put('"');
+    for (char ch : s) line.put(ch == '"' ? std::string_view("\"\"") : std::string_view(&ch, 1));
+    line.put('"');
 }
 
 template <class T>
-void append_value(std::string& line, const T& v) {
-    if constexpr (std::is_same_v<T, bool>) line += v ? "true" : "false";
-    else if constexpr (std::is_enum_v<T>) append_number(line, static_cast<std::int64_t>(v));
-    else if constexpr (std::is_arithmetic_v<T>) append_number(line, v);
+void append_value(RowText& line, const T& v) {
+    if constexpr (std::is_same_v<T, bool>) line.put(v ? "true" : "false");
+    else if constexpr (std::is_enum_v<T>) line.number(static_cast<std::int64_t>(v));
+    else if constexpr (std::is_arithmetic_v<T>) line.number(v);
     else append_string(line, v);
 }
 
 // A message's cells, each after a comma, onto one line; the lengths of its sequences are its
 // shape (rows of one shape have the same columns).
 struct Cells {
-    std::string& line;
+    RowText& line;
     std::vector<std::uint32_t>& shape;
     template <class T>
     void operator()(const char*, const T& v) {
@@ -71,7 +102,7 @@ struct Cells {
             shape.push_back(static_cast<std::uint32_t>(v.size()));
             for (const auto& e : v) add(e);
         } else {
-            line += ',';
+            line.put(',');
             append_value(line, v);
         }
     }
@@ -96,7 +127,9 @@ struct Columns {
             for (const auto& e : v) add(column + "[" + std::to_string(i++) + "]", e);
         } else {
             names.push_back(column);
-            append_value(values.emplace_back(), v);
+            RowText text;
+            append_value(text, v);
+            values.emplace_back(text.view());
         }
     }
 };
@@ -107,7 +140,7 @@ class RowCodec {
 public:
     virtual ~RowCodec() = default;
     // Appends ",cell,cell..." of the message and its shape; false when the bytes do not decode.
-    virtual bool cells(std::span<const std::uint8_t> cdr, std::string& line, std::vector<std::uint32_t>& shape) = 0;
+    virtual bool cells(std::span<const std::uint8_t> cdr, RowText& line, std::vector<std::uint32_t>& shape) = 0;
     // The last decoded message's columns and cells, one by one.
     virtual void columns(std::vector<std::string>& names, std::vector<std::string>& values) const = 0;
 };
@@ -115,7 +148,7 @@ public:
 template <class T>
 class TypedCodec final : public RowCodec {
 public:
-    bool cells(std::span<const std::uint8_t> cdr, std::string& line, std::vector<std::uint32_t>& shape) override {
+    bool cells(std::span<const std::uint8_t> cdr, RowText& line, std::vector<std::uint32_t>& shape) override {
         // Read in place, as the type's PubSubType does with a payload (no copy: the reader only reads).
         eprosima::fastcdr::FastBuffer buffer(reinterpret_cast<char*>(const_cast<std::uint8_t*>(cdr.data())),
                                              cdr.size());
@@ -161,7 +194,10 @@ struct CsvTable {
     std::optional<std::vector<std::uint32_t>> shape;  // rows of this shape are written as they come
     std::uint64_t rows = 0;
     bool grew = false;
-    std::string line;  // scratch, reused
+    // Rows not yet handed to the file, written in blocks of AtomicFile::kBlock; a row longer than
+    // kRowRoom grows the buffer.
+    static constexpr std::size_t kRowRoom = 64 << 10;
+    RowText pending;
     std::vector<std::uint32_t> row_shape;
 
     void write_header() {
@@ -189,12 +225,13 @@ struct CsvTable {
         return text + "\n";
     }
     void add(const mcap::Message& m) {
-        line.clear();
+        if (rows == 0) pending.reserve(AtomicFile::kBlock + kRowRoom);
+        const std::size_t start = pending.size();
         row_shape.clear();
-        append_number(line, m.log_time);
-        line += ',';
-        append_number(line, m.publish_time);
-        if (!codec->cells(m.data, line, row_shape))
+        pending.number(m.log_time);
+        pending.put(',');
+        pending.number(m.publish_time);
+        if (!codec->cells(m.data, pending, row_shape))
             throw InputError(log::cat(where, ": message ", m.sequence, " (", m.data.size(), " bytes) does not decode"));
         if (columns.empty()) {  // the first row: its columns are the file's
             std::vector<std::string> values;
@@ -204,12 +241,22 @@ struct CsvTable {
         }
         if (rows == 0) write_header();
         if (shape && row_shape == *shape) {
-            out->write(line += '\n');
+            pending.put('\n');
+            if (pending.size() >= AtomicFile::kBlock) flush();
         } else {
+            pending.truncate(start);
             const std::string text = placed(m);
-            if (!grew) out->write(text);  // a grown table is written again in the second read
+            if (!grew) flush(), out->write(text);  // a grown table is written again in the second read
         }
         ++rows;
+    }
+    void flush() {
+        out->write(pending.view());
+        pending.clear();
+    }
+    void commit() {
+        flush();
+        out->commit();
     }
 };
 
@@ -350,9 +397,9 @@ void export_csv(const std::string& path, const std::string& dir, const std::stop
     }
     if (!grown.empty()) csv_pass(path, dir, stop, grown, [&](std::uint16_t id) { return grown.count(id) > 0; });
     for (auto& [id, t] : tables)
-        if (t.out && !t.grew) t.out->commit();
+        if (t.out && !t.grew) t.commit();
     for (auto& [id, t] : grown)
-        if (t.out) t.out->commit();
+        if (t.out) t.commit();
 }
 
 }  // namespace dw::recordings

@@ -507,6 +507,34 @@ TEST(Recorder, CsvExportOfATopicThatGrowsColumnsIsWrittenWithEveryColumn) {
         EXPECT_EQ(entry.path().extension(), ".csv") << "a temporary file was left: " << entry.path();
 }
 
+// Rows of a narrower shape (fewer bodies) are placed by column name between rows written as they
+// come: every row in its recorded order, as wide as the header, the missing cells empty.
+TEST(Recorder, CsvExportKeepsTheOrderOfRowsOfAnotherShape) {
+    TempDir dir;
+    const std::string file = dir.file("shrink.mcap");
+    const std::vector<std::uint32_t> bodies{2, 2, 1, 2, 1, 1, 2};
+    {
+        dw::testkit::LabRecording w(file);
+        const auto cm = w.channel(dw::dds::topics::mocap_frame);
+        for (std::uint32_t i = 0; i < bodies.size(); ++i) {
+            dw::msg::MocapFrame f;
+            for (std::uint32_t b = 0; b < bodies[i]; ++b)
+                dw::testkit::add_body(f, "b" + std::to_string(b), 0.1 * i, 0, -1);
+            w.write(cm, i, 10 + i, f);
+        }
+        w.close();
+    }
+    dw::recordings::export_csv(file, dir.file("csv"));
+    const auto rows = dw::test::lines(dw::read_file(dir.file("csv/mocap_frame.csv")));
+    ASSERT_EQ(rows.size(), bodies.size() + 1);
+    const auto commas = [](const std::string& s) { return std::count(s.begin(), s.end(), ','); };
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+        EXPECT_EQ(rows[i].substr(0, rows[i].find(',')), std::to_string(10 + i - 1)) << rows[i];
+        EXPECT_EQ(commas(rows[i]), commas(rows[0])) << rows[i];
+        EXPECT_EQ(rows[i].find(",b1,") != std::string::npos, bodies[i - 1] == 2) << rows[i];
+    }
+}
+
 TEST(Recorder, ARecordedNonFiniteValueIsOneLineNamingTheRecording) {
     TempDir dir;
     const std::string file = dir.file("nan.mcap");
