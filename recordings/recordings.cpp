@@ -322,24 +322,28 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
 
 namespace {
 
-// A row older than what its topic already released: the stream cannot put it in order.
+// A row older than what its topic already released (stamps stepping back further than the window,
+// or behind rows the row bound released): the stream cannot put it in order.
 struct OutOfWindow {
     std::string topic;
     double step_back_s;
 };
 
-// Rows of one topic put back in time order within a window behind the latest stamp seen.
+// Rows of one topic put back in time order within a window behind the latest stamp seen, and
+// within `max_rows` rows (the oldest goes first when more arrive).
 template <class Row>
 class Reorder {
 public:
-    Reorder(std::string topic, std::function<void(const Row&)> release)
-        : topic_(std::move(topic)), release_(std::move(release)) {}
+    Reorder(std::string topic, std::size_t max_rows, std::function<void(const Row&)> release)
+        : topic_(std::move(topic)), max_rows_(std::max<std::size_t>(max_rows, 1)), release_(std::move(release)) {}
     void push(Row&& r) {
-        if (r.t < released_) throw OutOfWindow{topic_, latest_ - r.t};
+        if (r.t < released_) throw OutOfWindow{topic_, released_ - r.t};
         latest_ = std::max(latest_, r.t);
         heap_.push({std::move(r), seq_++});
-        while (!heap_.empty() && heap_.top().row.t < latest_ - kReorderWindowS) pop();
+        while (!heap_.empty() && (heap_.top().row.t < latest_ - kReorderWindowS || heap_.size() > max_rows_)) pop();
+        most_held_ = std::max(most_held_, heap_.size());
     }
+    std::size_t most_held() const { return most_held_; }
     void drain() {
         while (!heap_.empty()) pop();
     }
@@ -356,6 +360,7 @@ private:
         heap_.pop();
     }
     std::string topic_;
+    std::size_t max_rows_, most_held_ = 0;
     std::function<void(const Row&)> release_;
     std::priority_queue<Item, std::vector<Item>, std::greater<>> heap_;
     double latest_ = -std::numeric_limits<double>::infinity(), released_ = latest_;
@@ -363,9 +368,9 @@ private:
 };
 
 // Two passes, neither holding the flight: the clocks and the first stamps, then the rows in time
-// order straight into the folder. Throws OutOfWindow when a topic's stamps step back
-// further than the window.
-void stream_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
+// order straight into the folder. Throws OutOfWindow when a topic's stamps step back behind rows
+// already written. Returns the most rows one topic's window held.
+std::size_t stream_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
     double first_wrench = std::numeric_limits<double>::infinity(), first_pose = first_wrench;
     const Found found = read_rows(path, o,
                                   {[&](WrenchRow&& r) { first_wrench = std::min(first_wrench, r.t); },
@@ -375,10 +380,10 @@ void stream_flight(const std::string& path, const std::string& dir, const Export
     c.set_epoch(first_wrench, first_pose);
     flight::FlightWriter out(dir);
     std::vector<std::string> bodies;
-    Reorder<WrenchRow> wrench(std::string(dds::topics::stand_wrench.suffix), [&](const WrenchRow& r) {
+    Reorder<WrenchRow> wrench(std::string(dds::topics::stand_wrench.suffix), o.reorder_rows, [&](const WrenchRow& r) {
         out.wrench({c.wrench_t(r.t), r.w});
     });
-    Reorder<PoseRow> poses(std::string(dds::topics::mocap_frame.suffix), [&](const PoseRow& r) {
+    Reorder<PoseRow> poses(std::string(dds::topics::mocap_frame.suffix), o.reorder_rows, [&](const PoseRow& r) {
         if (std::find(bodies.begin(), bodies.end(), r.body) == bodies.end()) bodies.push_back(r.body);
         out.pose(c.pose_t(r.t), r.body, r.p, normalised(r.q));
     });
@@ -387,17 +392,20 @@ void stream_flight(const std::string& path, const std::string& dir, const Export
     wrench.drain();
     poses.drain();
     out.close(export_meta(bodies, found, c, path, o));
+    return std::max(wrench.most_held(), poses.most_held());
 }
 
 }  // namespace
 
-void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
+ExportStats export_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
     try {
-        stream_flight(path, dir, o);
+        return {false, stream_flight(path, dir, o)};
     } catch (const OutOfWindow& e) {
-        log::warn(path, ": ", e.topic, " stamps step back ", fixed(e.step_back_s, 3), " s (more than the ",
-                  kReorderWindowS, " s the streamed export reorders): sorting the whole flight in memory");
+        log::warn(path, ": ", e.topic, " stamps step back ", fixed(e.step_back_s, 3),
+                  " s behind rows already written (the streamed export reorders within ", kReorderWindowS, " s and ",
+                  o.reorder_rows, " rows per topic): sorting the whole flight in memory");
         flight::write_flight(flight_from_recording(path, o), dir);
+        return {true, 0};
     }
 }
 

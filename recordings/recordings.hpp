@@ -34,13 +34,22 @@ struct ExportOptions {
     // clock offset (the median of its heartbeats' clock_offset_s); true: as recorded.
     bool raw_stamps = false;
     std::stop_token stop;  // checked while reading: dw::Stopped, nothing written
+    // The streamed flight export holds at most this many rows per topic while it puts them in
+    // time order (a recording whose stamps stand still would otherwise be held whole).
+    std::size_t reorder_rows = std::size_t{1} << 16;
+};
+// How a flight export went: whether it had to sort in memory (a topic's stamps stepped back
+// behind rows already written), and the most rows one topic's window held.
+struct ExportStats {
+    bool sorted_in_memory = false;
+    std::size_t most_rows_held = 0;
 };
 // The flight a recording holds, in memory: stand/wrench and mocap/frame (+ the plan's formation),
 // the topics named by the registry, on the recorder's clock unless raw_stamps (meta.json's extra
 // says which offsets were applied). Throws dw::InputError naming the recording.
 flight::Flight flight_from_recording(const std::string& path, const ExportOptions& o);
 // That flight written as a flight folder (downwash-flight/1).
-void export_flight(const std::string& path, const std::string& dir, const ExportOptions& o);
+ExportStats export_flight(const std::string& path, const std::string& dir, const ExportOptions& o);
 // A flight folder as it is, or an .mcap recording's flight (no temporary folder): what the
 // analysis tools take. Throws dw::InputError naming the path.
 flight::Flight read_flight_or_recording(const std::string& path, const ExportOptions& o = {});

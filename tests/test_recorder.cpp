@@ -587,21 +587,35 @@ void write_stamped_recording(const std::string& file, int steps, const std::func
 }  // namespace
 
 // Issue 19: the flight export streams (two passes, neither holding the flight) and puts each
-// topic's rows back in time order within its window; a clock stepping back further than that is
-// sorted in memory instead. Either way the folder is byte for byte the in-memory flight's.
+// topic's rows back in time order within its window (2 s, and a bound on rows); a clock stepping
+// back behind rows already written is sorted in memory instead. Either way the folder is byte for
+// byte the in-memory flight's, and a recording whose stamps stand still is held only to the bound.
 TEST(Export, TheStreamedFlightIsTheInMemoryFlightByteForByte) {
     TempDir dir;
-    const std::vector<std::pair<std::string, std::function<double(int)>>> cases = {
-        {"in order", [](int) { return 0.0; }},
-        {"jitter", [](int i) { return i % 3 == 1 ? 0.025 : 0.0; }},   // a stamp 2.5 steps late, every third
-        {"clock step", [](int i) { return i >= 400 ? -5.0 : 0.0; }},  // stepped back 5 s: beyond the window
+    struct Case {
+        std::string name;
+        std::function<double(int)> stamp;
+        std::size_t rows;  // the row bound (ExportOptions::reorder_rows)
+        bool sorted_in_memory;
     };
-    for (const auto& [name, stamp] : cases) {
-        SCOPED_TRACE(name);
-        const std::string file = dir.file(name + ".mcap"), streamed = dir.file(name + "-streamed"),
-                          memory = dir.file(name + "-memory");
-        write_stamped_recording(file, 600, stamp);
-        dw::recordings::export_flight(file, streamed, {});
+    const std::size_t bound = dw::recordings::ExportOptions{}.reorder_rows;
+    const std::vector<Case> cases = {
+        {"in order", [](int) { return 0.0; }, bound, false},
+        {"jitter", [](int i) { return i % 3 == 1 ? 0.025 : 0.0; }, bound, false},        // 2.5 steps late, every third
+        {"clock step", [](int i) { return i >= 400 ? -5.0 : 0.0; }, bound, true},        // 5 s back: beyond the window
+        {"small step", [](int i) { return i >= 400 ? -0.5 : 0.0; }, bound, false},       // within the window
+        {"small step, 10 rows", [](int i) { return i >= 400 ? -0.5 : 0.0; }, 10, true},  // behind the bound
+        {"stamps stand still", [](int i) { return -0.01 * i; }, 50, false},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.name);
+        const std::string file = dir.file(c.name + ".mcap"), streamed = dir.file(c.name + "-streamed"),
+                          memory = dir.file(c.name + "-memory");
+        write_stamped_recording(file, 600, c.stamp);
+        const auto stats = dw::recordings::export_flight(file, streamed, {.reorder_rows = c.rows});
+        EXPECT_EQ(stats.sorted_in_memory, c.sorted_in_memory);
+        EXPECT_LE(stats.most_rows_held, c.rows);
+        if (!c.sorted_in_memory) EXPECT_GT(stats.most_rows_held, 0u);
         dw::flight::write_flight(dw::recordings::flight_from_recording(file, {}), memory);
         for (const char* f : {"wrench.csv", "poses.csv", "meta.json"})
             EXPECT_EQ(dw::read_file(streamed + "/" + f), dw::read_file(memory + "/" + f)) << f;
