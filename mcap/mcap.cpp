@@ -5,7 +5,7 @@
 #include <sys/stat.h>
 #include <lz4frame.h>
 #include <unistd.h>
-#include <zlib.h>
+#include <isa-l/crc.h>
 #include <zstd.h>
 
 #include <algorithm>
@@ -201,14 +201,9 @@ std::vector<std::uint8_t> decompress(const std::string& compression, std::span<c
 }  // namespace
 
 std::uint32_t crc32(std::span<const std::uint8_t> data, std::uint32_t crc) {
-    // zlib's crc32 is the IEEE CRC-32 MCAP uses (reflected 0xEDB88320, init and final xor ~0).
-    std::size_t done = 0;
-    while (done < data.size()) {
-        const auto n = static_cast<uInt>(std::min<std::size_t>(data.size() - done, 1u << 30));
-        crc = static_cast<std::uint32_t>(::crc32(crc, data.data() + done, n));
-        done += n;
-    }
-    return crc;
+    // ISA-L's gzip CRC is the IEEE CRC-32 MCAP uses (reflected 0xEDB88320, init and final xor ~0),
+    // continued from `crc` as zlib's crc32 is (Mcap.Crc32IsZlibs checks it against zlib).
+    return crc32_gzip_refl(crc, data.data(), data.size());
 }
 
 Compression parse_compression(const std::string& text) {

@@ -10,7 +10,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libeigen3-dev
-  libzstd-dev liblz4-dev zlib1g-dev libgpiod-dev libopencv-dev libssl-dev
+  libzstd-dev liblz4-dev libisal-dev zlib1g-dev libgpiod-dev libopencv-dev libssl-dev
   libtorch-dev libceres-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   iproute2 procps python3 clang-format

@@ -8,6 +8,7 @@
 #include <random>
 #include <sys/resource.h>
 #include <algorithm>
+#include <zlib.h>
 
 #include "core/errors.hpp"
 #include "core/subprocess.hpp"
@@ -56,6 +57,24 @@ std::vector<std::uint8_t> bytes_of(const std::string& path) {
     return {s.begin(), s.end()};
 }
 }  // namespace
+
+// MCAP's CRC (ISA-L's) is zlib's crc32: the same value for every length around its block sizes and
+// alignments, and continued from a previous value the same way.
+TEST(Mcap, Crc32IsZlibs) {
+    std::mt19937 rng(7);
+    std::vector<std::uint8_t> data(1 << 20);
+    for (auto& b : data) b = static_cast<std::uint8_t>(rng());
+    for (std::size_t n : {0, 1, 3, 15, 16, 17, 63, 64, 65, 255, 256, 1000, 4096, 65537, 1 << 20}) {
+        for (std::size_t at : {0, 1, 7}) {
+            const std::size_t len = std::min(n, data.size() - at);
+            const std::span<const std::uint8_t> part(data.data() + at, len);
+            const auto expected = static_cast<std::uint32_t>(::crc32(0L, part.data(), static_cast<uInt>(len)));
+            ASSERT_EQ(dw::mcap::crc32(part), expected) << n << " bytes at " << at;
+            const auto continued = static_cast<std::uint32_t>(::crc32(expected, data.data(), 100));
+            ASSERT_EQ(dw::mcap::crc32(std::span<const std::uint8_t>(data.data(), 100), expected), continued);
+        }
+    }
+}
 
 TEST(Mcap, RoundTripsEveryCompression) {
     dw::test::TempDir d;
