@@ -4,12 +4,14 @@
 // defined once here. Sources: ../shared/SPECS.md §3, docs/research/PX4_LINK.md.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <ranges>
 #include <string>
 #include <string_view>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "dds/topics.hpp"
 #include "dw/msg/Px4PubSubTypes.h"
 #include "dw/msg/Px4v114PubSubTypes.h"
@@ -65,13 +67,18 @@ inline const Px4VersionInfo& px4_version(Px4Version v) {
         if (i.version == v) return i;
     throw RuntimeError("unknown PX4 version");
 }
-// "1.15" -> Px4Version::v1_15; anything else is an InputError naming `where` (if any) and the versions known.
-inline Px4Version parse_px4_version(std::string_view text, std::string_view where) {
-    for (const auto& i : kPx4Versions)
-        if (i.name == text) return i.version;
-    const auto names = std::views::transform(kPx4Versions, [](const Px4VersionInfo& i) { return i.name; });
-    throw InputError((where.empty() ? "" : std::string(where) + ": ") + "PX4 version '" + std::string(text) +
-                     "' is not supported (supported: " + log::join(names) + ")");
+// The versions' names in kPx4Versions' order.
+inline auto px4_version_names() {
+    return std::views::transform(kPx4Versions, [](const Px4VersionInfo& i) { return i.name; });
+}
+// "1.15" -> Px4Version::v1_15, or nullopt.
+inline std::optional<Px4Version> find_px4_version(std::string_view text) {
+    const auto i = find_name(px4_version_names(), text);
+    return i ? std::optional(kPx4Versions[*i].version) : std::nullopt;
+}
+// The one message for a version the lab does not speak to.
+inline std::string unknown_px4_version_problem(std::string_view text) {
+    return unknown_name_problem("PX4 version", text, px4_version_names(), "; other releases are not supported");
 }
 
 // rt/[<ns>/]fmu/<in|out>/<name>: PX4's uXRCE-DDS client names (its start line's -n gives ns).

@@ -15,13 +15,9 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 void version_key(KeyVisitor& k, dds::Px4Version& version) {
     std::string name(dds::px4_version(version).name);
     k.text("version", name);
-    std::string problem;
-    try {
-        version = dds::parse_px4_version(name, "");
-    } catch (const InputError& e) {
-        problem = e.what();
-    }
-    k.require(problem.empty(), "version", problem);
+    const auto found = dds::find_px4_version(name);
+    k.require(found.has_value(), "version", dds::unknown_px4_version_problem(name));
+    if (found) version = *found;
 }
 
 // One vehicle's keys; `ids` collects the system ids so far (each PX4 needs its own).
