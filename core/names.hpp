@@ -40,12 +40,13 @@ E parse_name(const Names& names, std::string_view text, std::string_view what) {
 }
 
 // The value of the {name, value} entry of `table` named `text` (values that are not 0..N-1);
-// InputError with the known names otherwise.
+// InputError with the known names otherwise, after "<where>: " when `where` is given (an option).
 template <class Table>
-auto parse_entry(const Table& table, std::string_view text, std::string_view what) {
+auto parse_entry(const Table& table, std::string_view text, std::string_view what, std::string_view where = "") {
     for (const auto& [name, value] : table)
         if (std::string_view(name) == text) return value;
-    throw InputError(unknown_name_problem(what, text, std::views::keys(table)));
+    const std::string problem = unknown_name_problem(what, text, std::views::keys(table));
+    throw InputError(where.empty() ? problem : log::cat(where, ": ", problem));
 }
 
 // The name of an enum value whose names are `names` in value order.

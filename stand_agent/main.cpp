@@ -34,14 +34,6 @@ std::vector<unsigned> parse_lines(const std::string& text) {
     return out;
 }
 
-dw::stand::Gain parse_gain(const std::string& text) {
-    try {
-        return dw::parse_entry(dw::stand::kGains, text, "gain");
-    } catch (const dw::InputError& e) {
-        throw dw::InputError(std::string("--gain: ") + e.what());
-    }
-}
-
 // The emulated HX711 bank, driven by the physics and the mocap topic.
 std::unique_ptr<dw::stand::Hx711Lines> emulated_lines(dw::stand::PhysicsSource& source,
                                                       const dw::physics::PhysicsConfig& physics, double noise_n) {
@@ -102,7 +94,7 @@ int run(int argc, char** argv) {
     }
 
     dw::stand::DriverOptions dopt;
-    dopt.gain = parse_gain(gain);
+    dopt.gain = dw::parse_entry(dw::stand::kGains, gain, "gain", "--gain");
     dw::dds::Participant participant(cli.dds(), "stand_agent", cli.clock());
     dw::dds::Heartbeat heartbeat(participant);
     dw::stand::AgentOptions aopt;
