@@ -52,6 +52,12 @@ public:
     // A rule between values already visited: when reading, !ok is an error at `key`.
     virtual void require(bool ok, const std::string& key, const std::string& problem) = 0;
 
+    // A format tag that must be given and say exactly `value`.
+    void required_constant(const std::string& key, const std::string& value) {
+        require(has(key), key, "expected " + value);
+        constant(key, value);
+    }
+
     // choice() of an enum whose values are 0..N-1 in the order of `names`.
     template <class E>
     void enumeration(const std::string& key, E& v, std::span<const char* const> names, const std::string& what,

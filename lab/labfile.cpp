@@ -71,8 +71,7 @@ void process_keys(KeyVisitor& k, ProcessSpec& p, const LabFile& lab) {
 
 // Every key of a lab file, declared once (core/keys.hpp).
 void lab_keys(KeyVisitor& k, LabFile& lab) {
-    k.require(k.has("format"), "format", std::string("expected ") + kFormat);
-    k.constant("format", kFormat);
+    k.required_constant("format", kFormat);
     k.section("vars", [&](KeyVisitor& v) { var_keys(v, lab.vars); });
     k.section("hosts", [&](KeyVisitor& h) { host_keys(h, lab.hosts); });
     k.require(k.has("processes"), "processes", "expected a non-empty list");

@@ -41,8 +41,7 @@ using Rows = Eigen::Matrix<double, kAxes, kChips, Eigen::RowMajor>;  // cell_to_
 
 // Every key of a calibration file, declared once (core/keys.hpp).
 void calibration_keys(KeyVisitor& k, std::array<double, kChips>& gains, Rows& matrix) {
-    k.require(k.has("format"), "format", std::string("expected ") + kFormat);
-    k.constant("format", kFormat);
+    k.required_constant("format", kFormat);
     k.require(k.has("counts_per_newton"), "counts_per_newton", "expected a list of 8 numbers");
     k.numbers("counts_per_newton", gains, kGainRange, "expected a list of 8 numbers");
     k.require(std::ranges::none_of(gains, [](double g) { return g == 0; }), "counts_per_newton",
