@@ -42,6 +42,7 @@ public:
         buf_[n_++] = c;
     }
     void put(std::string_view s) {
+        if (s.empty()) return;  // an empty buffer's data() may be null, which memcpy must not get
         room(s.size());
         std::memcpy(buf_.data() + n_, s.data(), s.size());
         n_ += s.size();
