@@ -9,8 +9,6 @@
 #include <exception>
 #include <mutex>
 #include <thread>
-#include <fastcdr/Cdr.h>
-#include <fastcdr/FastBuffer.h>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -150,16 +148,7 @@ template <class T>
 class TypedCodec final : public RowCodec {
 public:
     bool cells(std::span<const std::uint8_t> cdr, RowText& line, std::vector<std::uint32_t>& shape) override {
-        // Read in place, as the type's PubSubType does with a payload (no copy: the reader only reads).
-        eprosima::fastcdr::FastBuffer buffer(reinterpret_cast<char*>(const_cast<std::uint8_t*>(cdr.data())),
-                                             cdr.size());
-        eprosima::fastcdr::Cdr in(buffer, eprosima::fastcdr::Cdr::DEFAULT_ENDIAN, eprosima::fastcdr::Cdr::DDS_CDR);
-        try {
-            in.read_encapsulation();
-            message_.deserialize(in);
-        } catch (const std::exception&) {
-            return false;  // Fast CDR throws on short or malformed buffers
-        }
+        if (!deserialize(cdr, message_)) return false;
         Cells{line, shape}.add(message_);
         return true;
     }
