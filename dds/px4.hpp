@@ -124,11 +124,36 @@ inline constexpr std::array<std::pair<std::uint8_t, std::string_view>, 17> kNavS
     {20, "AUTO_PRECLAND"},
     {21, "ORBIT"},
 }};
-inline std::string nav_state_name(std::uint8_t s) {
-    for (const auto& [v, n] : kNavStateNames)
-        if (v == s) return std::string(n);
-    return "nav_state " + std::to_string(s);
+// A value's name in one of PX4's enum tables, or "<field> <value>" for one the table lacks.
+template <std::size_t N>
+std::string enum_name(const std::array<std::pair<std::uint8_t, std::string_view>, N>& table, std::uint8_t value,
+                      std::string_view field) {
+    for (const auto& [v, n] : table)
+        if (v == value) return std::string(n);
+    return std::string(field) + " " + std::to_string(value);
 }
+inline std::string nav_state_name(std::uint8_t s) { return enum_name(kNavStateNames, s, "nav_state"); }
+
+// VehicleStatus.latest_disarming_reason (ARM_DISARM_REASON_*, the same values in 1.14-1.16).
+inline constexpr std::uint8_t kDisarmAfterLanding = 7;
+inline constexpr std::uint8_t kDisarmKillSwitch = 9;
+inline constexpr std::array<std::pair<std::uint8_t, std::string_view>, 14> kDisarmReasonNames{{
+    {0, "transition to standby"},
+    {1, "stick gesture"},
+    {2, "RC switch"},
+    {3, "an internal command"},
+    {4, "an external command"},
+    {5, "mission start"},
+    {6, "safety button"},
+    {kDisarmAfterLanding, "auto-disarm after landing"},
+    {8, "auto-disarm before take-off"},
+    {kDisarmKillSwitch, "kill switch"},
+    {10, "lockdown"},
+    {11, "failure detector"},
+    {12, "shutdown"},
+    {13, "unit test"},
+}};
+inline std::string disarm_reason_name(std::uint8_t r) { return enum_name(kDisarmReasonNames, r, "disarm reason"); }
 
 // VehicleCommandAck.result
 enum class AckResult : std::uint8_t {

@@ -43,7 +43,7 @@ int run(int argc, char** argv) {
     CLI::App& app = cli.app();
     std::vector<std::string> names{"v1"};
     std::string px4_file, refuse_arm;
-    double lose_after = 0;
+    double lose_after = 0, kill_after = 0, low_battery_after = 0;
     std::uint16_t natnet_port = 0;
     std::string physics_file;
     app.add_option("--vehicles", names, "the plan's vehicles, comma-separated (each a PX4)")->delimiter(',');
@@ -51,6 +51,12 @@ int run(int argc, char** argv) {
     app.add_option("--refuse-arm", refuse_arm, "a pre-arm check that fails: every ARM is DENIED with this reason");
     app.add_option("--lose-offboard-after", lose_after,
                    "seconds after arming when the offboard stream stops reaching them (0 = never)")
+        ->check(dw::cli::in(kLoseAfterRange));
+    app.add_option("--kill-after", kill_after,
+                   "seconds after arming when the kill switch is thrown; PX4 disarms 5 s later (0 = never)")
+        ->check(dw::cli::in(kLoseAfterRange));
+    app.add_option("--low-battery-after", low_battery_after,
+                   "seconds after arming when the battery reaches its failsafe level: PX4 lands (0 = never)")
         ->check(dw::cli::in(kLoseAfterRange));
     app.add_option("--natnet-port", natnet_port,
                    "play the motion capture as an emulated NatNet server on 127.0.0.1:PORT for dw-mocap-bridge "
@@ -78,6 +84,8 @@ int run(int argc, char** argv) {
         o.refuse_arm = refuse_arm;
         o.publish_state = natnet_port == 0;
         if (lose_after > 0) o.lose_offboard_after_s = lose_after;
+        if (kill_after > 0) o.kill_after_s = kill_after;
+        if (low_battery_after > 0) o.low_battery_after_s = low_battery_after;
         sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));
         std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID "
                   << v.system_id << ", topics " << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;

@@ -16,6 +16,7 @@ constexpr double kLandSpeed = 0.7;                 // m/s in AUTO_LAND
 constexpr double kGroundTolerance = 0.02;          // m: landed
 constexpr double kQuaternionNormTolerance = 1e-5;  // EKF2's check on vehicle_visual_odometry.q
 constexpr std::uint8_t kNavPosctl = 2;             // after boot
+constexpr double kGravity = 9.81;                  // m/s²: a killed vehicle falls
 constexpr std::uint8_t kFrameNed = 1, kFrameFrd = 2;
 const std::string kTypePrefix = "px4_msgs::msg::dds_::";
 
@@ -29,7 +30,10 @@ struct SimulatedPx4::State {
     bool armed = false;
     std::uint8_t nav = kNavPosctl, intention = kNavPosctl;
     bool failsafe = false;
-    Nanos armed_ns = 0;                           // monotonic
+    std::uint8_t disarm_reason = 0;  // latest_disarming_reason
+    bool killed = false, battery_low = false;
+    double fall_speed = 0;                        // m/s, once killed
+    Nanos armed_ns = 0, killed_ns = 0;            // monotonic
     Nanos stream_since_ns = 0, last_mode_ns = 0;  // monotonic: the offboard stream's start and last sample
     std::uint64_t last_mode_us = 0;               // its timestamp, as PX4 reads it (this host's realtime µs)
     bool mode_flag = false, position_flag = false;
@@ -214,15 +218,43 @@ void SimulatedPx4::step(double dt) {
         event("offboard stream lost for over COM_OF_LOSS_T: failsafe, AUTO_LAND");
     }
     if (!s.armed) return;
+    faults(mono);
+    if (s.killed) {  // motors stopped: it falls, and PX4 disarms after COM_KILL_DISARM
+        s.fall_speed += kGravity * dt;
+        s.x.z() = std::min(s.ground_z, s.x.z() + s.fall_speed * dt);
+        if (to_seconds(mono - s.killed_ns) >= o_.com_kill_disarm_s) disarm(px4::kDisarmKillSwitch, "killed: disarmed");
+        return;
+    }
     if (s.nav == px4::kNavOffboard && s.setpoint) s.x += (*s.setpoint - s.x) * std::min(1.0, kFollowRate * dt);
     if (s.nav == px4::kNavAutoLand) {
         s.x.z() = std::min(s.ground_z, s.x.z() + kLandSpeed * dt);
-        if (s.x.z() >= s.ground_z - kGroundTolerance) {
-            s.armed = false;
-            s.status_changed = true;
-            event("landed: disarmed");
-        }
+        if (s.x.z() >= s.ground_z - kGroundTolerance) disarm(px4::kDisarmAfterLanding, "landed: disarmed");
     }
+}
+
+// The faults a test throws in flight: the kill switch, and the battery at its failsafe level
+// (COM_LOW_BAT_ACT = 3: land; vehicle_status shows the failsafe, not its cause).
+void SimulatedPx4::faults(Nanos mono) {
+    auto& s = *s_;
+    const double armed_for = to_seconds(mono - s.armed_ns);
+    if (o_.kill_after_s && !s.killed && armed_for > *o_.kill_after_s) {
+        s.killed = true;
+        s.killed_ns = mono;
+        event("kill switch: motors stopped");
+    }
+    if (o_.low_battery_after_s && !s.battery_low && armed_for > *o_.low_battery_after_s) {
+        s.battery_low = true;
+        s.nav = px4::kNavAutoLand;
+        s.failsafe = s.status_changed = true;
+        event("battery below its failsafe level: failsafe, AUTO_LAND");
+    }
+}
+
+void SimulatedPx4::disarm(std::uint8_t reason, const std::string& why) {
+    s_->armed = false;
+    s_->disarm_reason = reason;
+    s_->status_changed = true;
+    event(why);
 }
 
 void SimulatedPx4::publish_status() {
@@ -237,6 +269,7 @@ void SimulatedPx4::publish_status() {
                  {"nav_state", {static_cast<double>(s.nav)}},
                  {"nav_state_user_intention", {static_cast<double>(s.intention)}},
                  {"failsafe", {s.failsafe ? 1.0 : 0.0}},
+                 {"latest_disarming_reason", {static_cast<double>(s.disarm_reason)}},
                  {"system_id", {static_cast<double>(o_.system_id)}},
                  {"component_id", {static_cast<double>(px4::kAutopilotComponent)}},
                  {"pre_flight_checks_pass", {o_.refuse_arm.empty() ? 1.0 : 0.0}}};

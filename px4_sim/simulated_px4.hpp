@@ -39,6 +39,9 @@ struct SimulatedPx4Options {
     double position_timeout_s = 0.5;               // visual odometry older than this: no local position
     std::string refuse_arm;                        // non-empty: a pre-arm check that fails (arming DENIED)
     std::optional<double> lose_offboard_after_s;   // after arming it hears no more offboard stream
+    std::optional<double> kill_after_s;            // after arming the kill switch is thrown (motors stop)
+    double com_kill_disarm_s = 5.0;                // COM_KILL_DISARM: killed this long, PX4 disarms
+    std::optional<double> low_battery_after_s;     // after arming the battery reaches its failsafe level
     double rate_hz = 100;                          // dynamics and vehicles/state
     double status_period_s = 0.5;                  // vehicle_status (also on every change)
     bool publish_state = true;                     // vehicles/state (false: the motion capture is played elsewhere)
@@ -76,7 +79,9 @@ private:
     void on_command(std::span<const std::uint8_t> b);
     dds::px4::AckResult commander(const Values& cmd, std::string& why);  // under mutex_
     void loop(std::stop_token stop);
-    void step(double dt);  // under mutex_
+    void step(double dt);                                      // under mutex_
+    void faults(Nanos mono);                                   // under mutex_
+    void disarm(std::uint8_t reason, const std::string& why);  // under mutex_
     void publish_status();
     std::optional<Values> decode_or_count(Msg m, std::span<const std::uint8_t> b);
     void event(const std::string& line);  // under mutex_

@@ -38,11 +38,16 @@ dds::Topic<T> px4_spec(const std::string& name, std::string_view type) {
     return {name, dds::QosProfile::px4, type, "PX4 uXRCE-DDS", "Px4"};
 }
 
+// What PX4 wants before OFFBOARD, as the link can see it from its own side.
+constexpr double kStreamWarmupS = 1.0;  // setpoints streaming for more than this (PX4's offboard check)
+constexpr double kStreamGapS = 0.5;     // no setpoint for longer than this: the stream has stopped (PX4: 2 Hz)
+constexpr double kOdometryGapS = 0.5;   // no visual odometry for longer than this: EKF2 loses the position
+
 // Each arming step: the command that asks for it and what vehicle_status shows when it is done.
 enum class Step { await_status, offboard, arm, ready, refused };
 
 struct StatusSeen {
-    std::uint8_t arming = 0, nav = 0, intention = 0;
+    std::uint8_t arming = 0, nav = 0, intention = 0, disarm_reason = 0;
     bool failsafe = false;
     Nanos seen_ns = 0;  // monotonic; 0 = never
 };
@@ -75,6 +80,9 @@ public:
             mode.acceleration(true);
             v.mode->write_as_is(mode);
             v.traj->write_as_is(trajectory(v.frame, sps[i], us));
+            const Nanos mono = p_.clock().monotonic_ns();
+            if (v.stream_last_ns == 0 || to_seconds(mono - v.stream_last_ns) > kStreamGapS) v.stream_since_ns = mono;
+            v.stream_last_ns = mono;
         }
     }
 
@@ -98,8 +106,15 @@ public:
             if (!(age <= o_.status_timeout_s))
                 return log::cat(v.cfg.name, ": no vehicle_status from PX4 for ", age,
                                 " s (its link or the Agent lost)");
-            const std::string why = s.failsafe ? " (PX4 failsafe: offboard lost, battery, or another check)" : "";
-            if (s.arming != px4::kArmed) return log::cat(v.cfg.name, ": PX4 disarmed in flight", why);
+            // vehicle_status names a disarm's reason (a kill switch among them) but not a failsafe's
+            // trigger: that is in PX4's failsafe_flags, which the link does not read (not yet).
+            const std::string why =
+                s.failsafe ? " (PX4 failsafe: offboard signal lost, low battery or another check; vehicle_status does "
+                             "not say which)"
+                           : "";
+            if (s.arming != px4::kArmed)
+                return log::cat(v.cfg.name, ": PX4 disarmed in flight by ", px4::disarm_reason_name(s.disarm_reason),
+                                why);
             if (s.nav != px4::kNavOffboard)
                 return log::cat(v.cfg.name, ": PX4 left OFFBOARD for ", px4::nav_state_name(s.nav), why);
         }
@@ -121,9 +136,10 @@ private:
         std::unique_ptr<dds::Writer<VehicleOdometry_>> odom;
         std::unique_ptr<dds::Reader<typename Types::Status>> status;
         std::unique_ptr<dds::Reader<typename Types::Ack>> ack;
-        StatusSeen st;     // under mutex_
-        AckSeen last_ack;  // under mutex_
-        Nanos odom_sent_ns = 0;
+        StatusSeen st;                                  // under mutex_
+        AckSeen last_ack;                               // under mutex_
+        Nanos odom_sent_ns = 0;                         // under odom_mutex_
+        Nanos stream_since_ns = 0, stream_last_ns = 0;  // the planner's setpoints, monotonic (planner's thread)
         bool tracking = false;
         std::uint8_t reset_counter = 0;
         Step step = Step::await_status;  // arming: the planner's thread only
@@ -160,7 +176,11 @@ private:
             p_, px4_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
             [this, vp](const typename Types::Status& s, const dds::SampleMeta&) {
                 std::lock_guard lock(mutex_);
-                vp->st = {s.arming_state(), s.nav_state(), s.nav_state_user_intention(), s.failsafe(),
+                vp->st = {s.arming_state(),
+                          s.nav_state(),
+                          s.nav_state_user_intention(),
+                          s.latest_disarming_reason(),
+                          s.failsafe(),
                           p_.clock().monotonic_ns()};
             },
             latest);
@@ -287,9 +307,7 @@ private:
             case Step::offboard:
                 if (s.nav == px4::kNavOffboard) return ask(v, Step::arm, now, true);
                 if (waited > o_.answer_timeout_s)
-                    retry_or_refuse(v, now, "switch to OFFBOARD", px4::kCmdDoSetMode,
-                                    "PX4 needs a valid local position (vehicle_visual_odometry into its estimator) and "
-                                    "a setpoint stream of more than 1 s");
+                    retry_or_refuse(v, now, "switch to OFFBOARD", px4::kCmdDoSetMode, offboard_hint(v, now));
                 return;
             case Step::arm:
                 if (s.arming == px4::kArmed && s.nav != px4::kNavOffboard)
@@ -343,6 +361,32 @@ private:
         refuse(v, log::cat("no answer from PX4 system ", v.cfg.system_id, " to ", what, " after ", v.tries,
                            " tries (is its MAV_SYS_ID ", v.cfg.system_id, "? PX4 ignores commands for another system",
                            v.ack->matched() == 0 ? unbridged_ack() : "", ")"));
+    }
+
+    // Why PX4 may refuse OFFBOARD: what the link itself knows it has not sent (a local position through
+    // visual odometry, a setpoint stream of more than a second), or else PX4's side of it.
+    std::string offboard_hint(Vehicle& v, Nanos now) {
+        std::string missing;
+        const auto add = [&](const std::string& what) { missing += (missing.empty() ? "" : "; ") + what; };
+        Nanos odom = 0;
+        {
+            std::lock_guard lock(odom_mutex_);
+            odom = v.odom_sent_ns;
+        }
+        if (!o_.odometry)
+            add("no local position from the link (odometry: off, so PX4's estimator needs another source)");
+        else if (odom == 0 || to_seconds(now - odom) > kOdometryGapS)
+            add(log::cat("no local position from the link: no vehicle_visual_odometry sent ",
+                         odom == 0 ? std::string("yet") : log::cat("for ", to_seconds(now - odom), " s"), " (is ",
+                         v.cfg.name, " tracked by the motion capture?)"));
+        if (v.stream_last_ns == 0 || to_seconds(now - v.stream_last_ns) > kStreamGapS)
+            add("no setpoint stream from the planner (PX4 wants offboard_control_mode at more than 2 Hz)");
+        else if (to_seconds(v.first_sent_ns - v.stream_since_ns) < kStreamWarmupS)
+            add(log::cat("the setpoint stream had run ", to_seconds(v.first_sent_ns - v.stream_since_ns),
+                         " s when OFFBOARD was asked (PX4 wants more than ", kStreamWarmupS, " s)"));
+        if (!missing.empty()) return missing;
+        return "the link sent visual odometry and a setpoint stream, so PX4's estimator did not give a local position "
+               "from them (EKF2_EV_CTRL, docs/OPERATOR.md) or they do not reach it";
     }
 
     // Why no answer could be heard: PX4 1.14 keeps its acks on the vehicle by default.

@@ -83,7 +83,8 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     o.odometry_hz = 0;
     o.vehicles = {
         {"v1", "uav" + std::to_string(::getpid()), 7, dw::physics::Vec3(1.0, 0.5, 0.0), std::numbers::pi / 2}};
-    const auto in = [&](const char* t) { return dw::dds::px4_topic(o.vehicles[0].ns, "in", t); };
+    // PX4's names as its client spells them with `-n <ns>` (not through the link's own helper).
+    const auto in = [&](const char* t) { return "rt/" + o.vehicles[0].ns + "/fmu/in/" + t; };
     capture(px4side, in("trajectory_setpoint"), "TrajectorySetpoint", traj);
     capture(px4side, in("offboard_control_mode"), "OffboardControlMode", mode);
     capture(px4side, in("vehicle_command"), "VehicleCommand", cmd);
@@ -145,7 +146,12 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     EXPECT_TRUE(misread);
 
     const auto od = dw::px4sim::decode(def(Msg::vehicle_odometry), odom.last());
-    EXPECT_EQ(dw::px4sim::value(od, "pose_frame"), 1);  // NED
+    EXPECT_EQ(dw::px4sim::value(od, "pose_frame"), 1);      // NED
+    EXPECT_EQ(dw::px4sim::value(od, "velocity_frame"), 1);  // NED
+    EXPECT_NEAR(od.at("position_variance")[2], o.position_std_m * o.position_std_m, 1e-9);
+    EXPECT_NEAR(od.at("orientation_variance")[0], o.orientation_std_rad * o.orientation_std_rad, 1e-9);
+    EXPECT_NEAR(od.at("velocity_variance")[1], o.velocity_std_mps * o.velocity_std_mps, 1e-9);
+    EXPECT_TRUE(std::isnan(od.at("angular_velocity")[0]));  // not measured: NaN, as EKF2 expects
     EXPECT_EQ(dw::px4sim::value(od, "timestamp_sample"), static_cast<double>(t0 / 1000));
     EXPECT_NEAR(od.at("position")[0], 1.0, 1e-6);  // lab (1, 1.5) - origin (1, 0.5) = 1 m east = PX4 north
     EXPECT_NEAR(od.at("position")[1], 0.0, 1e-6);
@@ -242,10 +248,16 @@ class Px4Flight : public ::testing::TestWithParam<Px4Version> {};
 // Two PX4s of the configured version, each its own namespace, system id and frame: DONE.
 TEST_P(Px4Flight, ThePlannerFliesSimulatedPx4sThroughTakeOffLegsAndLanding) {
     Px4Lab lab("px4fly", GetParam(), 2);
+    // vehicle_status as PX4 names it: versioned (_v1) from 1.16 on.
+    const std::string status = GetParam() == Px4Version::v1_16 ? "vehicle_status_v1" : "vehicle_status";
+    Captured heard;
+    dw::px4sim::RawParticipant listener(lab.cfg, "listener");
+    capture(listener, "rt/" + lab.options.vehicles[0].ns + "/fmu/out/" + status, "VehicleStatus", heard);
     const auto plan = short_plan("side_by_side");
     lab.start(plan);
     dw::planner::Experiment e(lab.lab, plan, lab.run_options());
     EXPECT_EQ(e.run(), dw::msg::PHASE_DONE) << e.reason();
+    EXPECT_GT(heard.size(), 0U) << "nothing on " << status;
     for (auto& v : lab.vehicles) {
         EXPECT_TRUE(eventually([&] { return !v->report().armed; })) << "still armed after NAV_LAND";
         const auto r = v->report();
@@ -292,6 +304,9 @@ TEST(Px4Refusals, OffboardWithoutASetpointStreamIsRefused) {
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
     EXPECT_NE(a.reason.find("refused to switch to OFFBOARD: TEMPORARILY_REJECTED after 1 tries"), std::string::npos)
         << a.reason;
+    EXPECT_NE(a.reason.find("no setpoint stream from the planner"), std::string::npos) << a.reason;
+    EXPECT_EQ(a.reason.find("local position"), std::string::npos) << a.reason;  // the odometry was sent
+    EXPECT_EQ(a.reason.find('\n'), std::string::npos);
     const auto r = lab.vehicles[0]->report();
     EXPECT_FALSE(r.was_offboard);
     ASSERT_FALSE(r.events.empty());
@@ -307,7 +322,9 @@ TEST(Px4Refusals, OffboardWithoutALocalPositionIsRefused) {
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
     EXPECT_NE(a.reason.find("TEMPORARILY_REJECTED"), std::string::npos) << a.reason;
-    EXPECT_NE(a.reason.find("local position"), std::string::npos) << a.reason;
+    EXPECT_NE(a.reason.find("no local position from the link (odometry: off"), std::string::npos) << a.reason;
+    EXPECT_EQ(a.reason.find("setpoint stream"), std::string::npos) << a.reason;  // the stream ran
+    EXPECT_EQ(a.reason.find('\n'), std::string::npos);
     const auto r = lab.vehicles[0]->report();
     ASSERT_FALSE(r.events.empty());
     EXPECT_NE(r.events.back().find("no local position"), std::string::npos) << r.events.back();
@@ -378,6 +395,39 @@ TEST(Px4Refusals, ALostOffboardStreamIsSeenAsPx4sFailsafeAndAborts) {
     EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
     EXPECT_NE(e.reason().find("v1: PX4 left OFFBOARD for AUTO_LAND (PX4 failsafe"), std::string::npos) << e.reason();
     EXPECT_TRUE(eventually([&] { return !lab.vehicles[0]->report().armed; }));
+}
+
+// The kill switch in flight: the motors stop, PX4 disarms after COM_KILL_DISARM and says why
+// (latest_disarming_reason); the abort names it. (Here 0.05 s, so the disarm is seen before the
+// fall is a tracking error; with PX4's default 5 s a real kill is a tracking error first.)
+TEST(Px4Refusals, AKillSwitchIsSeenAsPx4sDisarmWithItsReason) {
+    Px4Lab lab("px4kill", Px4Version::v1_16, 1);
+    const auto plan = short_plan("single", 4.0);
+    lab.start(plan, [](auto& o) {
+        o.kill_after_s = 3.5;
+        o.com_kill_disarm_s = 0.05;
+    });
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(e.reason().find("v1: PX4 disarmed in flight by kill switch"), std::string::npos) << e.reason();
+    const auto r = lab.vehicles[0]->report();
+    EXPECT_FALSE(r.armed);
+    EXPECT_NE(std::find(r.events.begin(), r.events.end(), "killed: disarmed"), r.events.end());
+}
+
+// The battery at its failsafe level: PX4 lands on its own and the planner aborts with PX4's
+// failsafe as the reason (vehicle_status shows the failsafe, not which check raised it).
+TEST(Px4Refusals, ALowBatteryFailsafeAborts) {
+    Px4Lab lab("px4battery", Px4Version::v1_14, 1);
+    const auto plan = short_plan("single", 4.0);
+    lab.start(plan, [](auto& o) { o.low_battery_after_s = 3.5; });
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(e.reason().find("v1: PX4 left OFFBOARD for AUTO_LAND (PX4 failsafe: offboard signal lost, low battery"),
+              std::string::npos)
+        << e.reason();
+    EXPECT_EQ(e.reason().find('\n'), std::string::npos);
+    EXPECT_TRUE(eventually([&] { return !lab.vehicles[0]->report().armed; }));  // landed by PX4
 }
 
 // The planner's PX4 settings file: each mistake is one line naming file, line and key.
