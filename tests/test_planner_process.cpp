@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <atomic>
 #include <deque>
 #include <fstream>
 #include <functional>
@@ -173,7 +174,21 @@ TEST(Experiment, AnOperatorAbortAbortsAndLandsEveryVehicle) {
 
 TEST(Experiment, KillingThePredictorDoesNotStopTheExperiment) {
     Lab lab("exppred");
-    const auto o = fly_with_fault(lab, {}, [](Lab& l, dw::dds::Participant&) { l.procs[3].signal(SIGKILL); });
+    std::atomic<int> predictions{0};
+    bool killed_mid_flight = false;
+    std::optional<int> predictor_status;
+    const auto o = fly_with_fault(lab, {}, [&](Lab& l, dw::dds::Participant& p) {
+        // The predictor was at work (its predictions arrive) when it is killed mid-leg.
+        dw::dds::Reader<dw::msg::WrenchPrediction> r(p, dw::dds::topics::wrench_prediction,
+                                                     [&](const auto&, const auto&) { ++predictions; });
+        for (int i = 0; i < 1000 && predictions == 0; ++i) std::this_thread::sleep_for(10ms);
+        killed_mid_flight = l.procs[3].running();
+        l.procs[3].signal(SIGKILL);
+        predictor_status = l.procs[3].wait_for(10000ms);
+    });
+    EXPECT_GT(predictions.load(), 0) << "the predictor published nothing before it was killed";
+    EXPECT_TRUE(killed_mid_flight);
+    EXPECT_EQ(predictor_status, std::optional<int>(128 + SIGKILL)) << "the predictor did not die of the kill";
     EXPECT_EQ(o.status, std::optional<int>(0)) << o.log;
     EXPECT_NE(o.log.find("DONE: 4 of 4 legs flown"), std::string::npos) << o.log;
     EXPECT_EQ(o.state.phase(), dw::msg::PHASE_DONE);
