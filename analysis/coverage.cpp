@@ -1,14 +1,12 @@
 #include "analysis/coverage.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <optional>
 #include <random>
 #include <sstream>
-#include <thread>
 
 #include "analysis/effects.hpp"
 #include "analysis/explain.hpp"
@@ -17,6 +15,7 @@
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "core/parallel.hpp"
 #include "flight/flight.hpp"
 
 namespace dw::analysis {
@@ -171,32 +170,16 @@ CoverageResult run_coverage(const CoverageOptions& o) {
     if (o.seeds < 1) throw InputError("--seeds: at least 1 flight per effect");
     fs::create_directories(o.out_dir);
     std::vector<std::vector<Outcome>> outs(chosen.size(), std::vector<Outcome>(static_cast<std::size_t>(o.seeds)));
-    std::atomic<std::size_t> next{0};
     std::mutex m;
-    std::exception_ptr failed;
     const std::size_t total = chosen.size() * static_cast<std::size_t>(o.seeds);
-    auto work = [&] {
-        for (std::size_t k; (k = next++) < total;) {
-            const auto ti = k / static_cast<std::size_t>(o.seeds), s = k % static_cast<std::size_t>(o.seeds);
-            try {
-                outs[ti][s] = one_flight(chosen[ti].first, chosen[ti].second, static_cast<int>(s), o);
-                std::lock_guard lock(m);
-                if (o.progress)
-                    o.progress(log::cat(chosen[ti].first.effect, " seed ", s, ": ",
-                                        outs[ti][s].interval ? "interval" : "no interval", " (", k + 1, " of ", total,
-                                        ")"));
-            } catch (...) {
-                std::lock_guard lock(m);
-                if (!failed) failed = std::current_exception();
-                next = total;
-            }
-        }
-    };
-    {
-        std::vector<std::jthread> pool;
-        for (int j = 0; j < std::max(1, o.jobs); ++j) pool.emplace_back(work);
-    }
-    if (failed) std::rethrow_exception(failed);
+    parallel_for(total, o.jobs, [&](std::size_t k) {
+        const auto ti = k / static_cast<std::size_t>(o.seeds), s = k % static_cast<std::size_t>(o.seeds);
+        outs[ti][s] = one_flight(chosen[ti].first, chosen[ti].second, static_cast<int>(s), o);
+        std::lock_guard lock(m);
+        if (o.progress)
+            o.progress(log::cat(chosen[ti].first.effect, " seed ", s, ": ",
+                                outs[ti][s].interval ? "interval" : "no interval", " (", k + 1, " of ", total, ")"));
+    });
     CoverageResult R;
     for (std::size_t ti = 0; ti < chosen.size(); ++ti)
         for (std::size_t p = 0; p < chosen[ti].second.params.size(); ++p)

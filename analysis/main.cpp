@@ -36,6 +36,8 @@ struct Verdict {
 };
 constexpr Verdict kProofVerdict{"PROOF PASSED", "PROOF FAILED"};
 constexpr Verdict kCoverageVerdict{nullptr, "COVERAGE BELOW TARGET"};
+constexpr dw::Range kJobsRange{1, 64};  // flights flown and explained at once
+constexpr const char* kJobsHelp = "flights flown and explained at once (each explanation is one thread)";
 
 // Prints a study's table and its verdict; a failed verdict is a runtime failure.
 int finish(const std::string& table_path, bool pass, const Verdict& v) {
@@ -64,6 +66,7 @@ struct ProofCommand {
                                  "fly flights with hidden effects (dw-sim fly), explain them, check what was found");
         sub->add_option("--out", options.out_dir, "output folder (flights, reports, proof.md)")->required();
         sub->add_option("--null-seeds", options.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
+        sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(kJobsRange));
         sub->add_option(
             "--cases", cases,
             "clock_offset, wake_transport, sensor_lag, jet_merging, cell_crosstalk, two_effects, null (default: all)");
@@ -114,7 +117,7 @@ struct CoverageCommand {
         sub->add_option("--out", options.out_dir, "output folder (coverage.md)")->required();
         sub->add_option("--seeds", options.seeds, "flights per effect")->check(dw::cli::in({1, 1000}));
         sub->add_option("--legs", options.legs, "legs per flight")->check(dw::cli::in({5, 1000}));
-        sub->add_option("--jobs", options.jobs, "flights at once")->check(dw::cli::in({1, 64}));
+        sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(kJobsRange));
         sub->add_option("--effects", effects,
                         "effects, comma-separated (default: every one a flight over the stand can show)");
     }

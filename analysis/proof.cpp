@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <mutex>
 #include <optional>
 #include <sstream>
 
@@ -13,6 +14,7 @@
 #include "core/log.hpp"
 #include "core/names.hpp"
 #include "core/numbers.hpp"
+#include "core/parallel.hpp"
 #include "core/subprocess.hpp"
 
 namespace dw::analysis {
@@ -162,10 +164,57 @@ namespace {
 bool wanted_null(const ProofOptions& o) {
     return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), "null") != o.cases.end();
 }
+
+// One flight of the proof: flown with `hidden` in its air, explained with the plain physics.
+ExplainResult fly_and_explain(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed,
+                              const std::string& dir, const ProofOptions& o) {
+    fly_simulated(hidden, formation, seed, dir + "/flight", o.stop);
+    ExplainOptions eo;
+    eo.physics = physics::PhysicsConfig{};  // what the explainer is given: every effect off
+    eo.stop = o.stop;
+    const auto f = flight::read_flight(dir + "/flight");
+    auto r = explain(f, eo);
+    write_report(f, r, eo, dir + "/explain");
+    return r;
+}
+
+// The proof's flights: each hidden-effect case, then the null flights (seeds 100...).
+struct ProofFlight {
+    std::optional<Case> c;  // none: a null flight
+    int null_index = 0;
+};
+
+std::vector<ProofFlight> proof_flights(const ProofOptions& o) {
+    std::vector<ProofFlight> out;
+    for (const auto& c : cases())
+        if (o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), c.name) != o.cases.end())
+            out.push_back({c, 0});
+    if (wanted_null(o))
+        for (int k = 0; k < o.null_seeds; ++k) out.push_back({std::nullopt, k});
+    return out;
+}
+
+ProofRow null_row(int clean, int total) {
+    ProofRow row{"null",
+                 "single",
+                 "nothing (noise and turbulence only)",
+                 log::cat(clean, " of ", total, " seeds claim nothing"),
+                 "–",
+                 "–",
+                 "–",
+                 clean * 10 >= total * 9,
+                 true,
+                 "",
+                 0};
+    if (!row.pass) row.why = "effects claimed on noise";
+    return row;
+}
 }  // namespace
 
 ProofResult run_proof(const ProofOptions& o) {
+    std::mutex m;
     auto say = [&](const std::string& s) {
+        std::lock_guard lock(m);
         if (o.progress) o.progress(s);
     };
     std::vector<std::string> known{"null"};
@@ -175,62 +224,40 @@ ProofResult run_proof(const ProofOptions& o) {
     if (wanted_null(o) && o.null_seeds < 1)
         throw InputError("--null-seeds: the null case needs at least 1 flight (or leave it out with --cases)");
     fs::create_directories(o.out_dir);
-    ProofResult R;
-    const physics::PhysicsConfig plain;  // what the explainer is given: every effect off
-    auto wanted = [&](const std::string& n) {
-        return o.cases.empty() || std::find(o.cases.begin(), o.cases.end(), n) != o.cases.end();
-    };
-    for (const auto& c : cases()) {
-        if (!wanted(c.name)) continue;
-        const std::string dir = (fs::path(o.out_dir) / c.name).string();
+    const auto flights = proof_flights(o);
+    std::vector<ProofRow> rows(flights.size());
+    std::vector<char> clean(flights.size(), 0);
+    parallel_for(flights.size(), o.jobs, [&](std::size_t i) {
+        const auto& pf = flights[i];
+        if (!pf.c) {
+            const int k = pf.null_index;
+            const auto r = fly_and_explain(physics::PhysicsConfig{}, "single", 100 + static_cast<std::uint64_t>(k),
+                                           (fs::path(o.out_dir) / log::cat("null_", k)).string(), o);
+            std::string found;
+            for (const auto& a : r.accepted) found += (found.empty() ? "" : ", ") + a.effect.name;
+            clean[i] = !r.detected;  // clean: nothing claimed, nothing detected
+            return say(log::cat("null seed ", 100 + k, ": ", found.empty() ? "nothing claimed" : "claimed " + found,
+                                r.detected ? ", detected" : "", " (", r.seconds, " s)"));
+        }
+        const Case& c = *pf.c;
         physics::PhysicsConfig hidden;
         c.hide(hidden);
         say(log::cat("case ", c.name, ": dw-sim fly --formation ", c.formation, " with ", c.hidden));
-        fly_simulated(hidden, c.formation, c.seed, dir + "/flight", o.stop);
-        ExplainOptions eo;
-        eo.physics = plain;
-        eo.stop = o.stop;
-        const auto f = flight::read_flight(dir + "/flight");
-        const auto r = explain(f, eo);
-        write_report(f, r, eo, dir + "/explain");
+        const auto r = fly_and_explain(hidden, c.formation, c.seed, (fs::path(o.out_dir) / c.name).string(), o);
         ProofRow row{c.name, c.formation, c.hidden, "", "", "", "", true, true, "", r.seconds};
         check(row, r, c.truth);
-        say(log::cat("  found ", row.found, " (", r.seconds, " s): ", row.pass ? "PASS" : "FAIL " + row.why));
-        R.rows.push_back(row);
+        say(log::cat("case ", c.name, ": found ", row.found, " (", r.seconds,
+                     " s): ", row.pass ? "PASS" : "FAIL " + row.why));
+        rows[i] = row;
+    });
+    ProofResult R;
+    for (std::size_t i = 0; i < flights.size(); ++i) {
+        if (flights[i].c) R.rows.push_back(rows[i]);
+        else ++R.null_total, R.null_clean += clean[i];
     }
-    if (wanted("null")) {
-        for (int k = 0; k < o.null_seeds; ++k) {
-            const std::string dir = (fs::path(o.out_dir) / log::cat("null_", k)).string();
-            fly_simulated(plain, "single", 100 + static_cast<std::uint64_t>(k), dir + "/flight", o.stop);
-            ExplainOptions eo;
-            eo.physics = plain;
-            eo.stop = o.stop;
-            const auto f = flight::read_flight(dir + "/flight");
-            const auto r = explain(f, eo);
-            write_report(f, r, eo, dir + "/explain");
-            ++R.null_total;
-            std::string found;
-            for (const auto& a : r.accepted) found += (found.empty() ? "" : ", ") + a.effect.name;
-            if (!r.detected) ++R.null_clean;  // clean: nothing claimed, nothing detected
-            say(log::cat("null seed ", 100 + k, ": ", found.empty() ? "nothing claimed" : "claimed " + found, " (",
-                         r.seconds, " s)"));
-        }
-        ProofRow row{"null",
-                     "single",
-                     "nothing (noise and turbulence only)",
-                     log::cat(R.null_clean, " of ", R.null_total, " seeds claim nothing"),
-                     "–",
-                     "–",
-                     "–",
-                     R.null_clean * 10 >= R.null_total * 9,
-                     true,
-                     "",
-                     0};
-        if (!row.pass) row.why = "effects claimed on noise";
-        R.rows.push_back(row);
-    }
+    if (R.null_total > 0) R.rows.push_back(null_row(R.null_clean, R.null_total));
     // A proof of nothing proves nothing: no rows, or a null case without flights, fails.
-    R.pass = !R.rows.empty() && (!wanted("null") || R.null_total > 0) &&
+    R.pass = !R.rows.empty() && (!wanted_null(o) || R.null_total > 0) &&
              std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass; });
     R.table_path = (fs::path(o.out_dir) / "proof.md").string();
     write_file(R.table_path, table(R.rows, "flight", "hidden effect", "true parameter"));

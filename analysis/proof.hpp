@@ -17,6 +17,7 @@ struct ProofOptions {
     std::string out_dir;
     int null_seeds = 10;
     std::vector<std::string> cases;  // empty: all; an unknown name is a dw::InputError
+    int jobs = 2;                    // flights flown and explained at once
     std::stop_token stop;            // between flights and fits: dw::Stopped
     std::function<void(const std::string&)> progress;
 };
