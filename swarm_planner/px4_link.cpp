@@ -1,5 +1,6 @@
 #include "swarm_planner/px4_link.hpp"
 
+#include <algorithm>
 #include <deque>
 #include <limits>
 #include <map>
@@ -381,9 +382,10 @@ private:
                          v.cfg.name, " tracked by the motion capture?)"));
         if (v.stream_last_ns == 0 || to_seconds(now - v.stream_last_ns) > kStreamGapS)
             add("no setpoint stream from the planner (PX4 wants offboard_control_mode at more than 2 Hz)");
-        else if (to_seconds(v.first_sent_ns - v.stream_since_ns) < kStreamWarmupS)
-            add(log::cat("the setpoint stream had run ", to_seconds(v.first_sent_ns - v.stream_since_ns),
-                         " s when OFFBOARD was asked (PX4 wants more than ", kStreamWarmupS, " s)"));
+        else if (const double ran = std::max(0.0, to_seconds(v.first_sent_ns - v.stream_since_ns));
+                 ran < kStreamWarmupS)
+            add(log::cat("the setpoint stream had run ", ran, " s when OFFBOARD was asked (PX4 wants more than ",
+                         kStreamWarmupS, " s)"));
         if (!missing.empty()) return missing;
         return "the link sent visual odometry and a setpoint stream, so PX4's estimator did not give a local position "
                "from them (EKF2_EV_CTRL, docs/OPERATOR.md) or they do not reach it";
