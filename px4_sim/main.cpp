@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "core/cli.hpp"
+#include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
@@ -53,7 +54,8 @@ int run(int argc, char** argv) {
                    "seconds after arming when the offboard stream stops reaching them (0 = never)")
         ->check(dw::cli::in(kLoseAfterRange));
     app.add_option("--kill-after", kill_after,
-                   "seconds after arming when the kill switch is thrown; PX4 disarms 5 s later (0 = never)")
+                   dw::log::cat("seconds after arming when the kill switch is thrown; PX4 disarms ",
+                                dw::px4sim::SimulatedPx4Options{}.com_kill_disarm_s, " s later (0 = never)"))
         ->check(dw::cli::in(kLoseAfterRange));
     app.add_option("--low-battery-after", low_battery_after,
                    "seconds after arming when the battery reaches its failsafe level: PX4 lands (0 = never)")

@@ -6,7 +6,18 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build="$here/build-asan"
-tests=(dw_unit_tests dw_recorder_tests dw_mocap_tests dw_physics_tests dw_planner_tests dw_stand_tests)
+# Each run is one process. Fast DDS 2.9 numbers the participants of a process 0, 1, 2, ... and
+# never reuses a number, while discovery on loopback reaches ids 0-31 (dds/config.cpp): a process
+# that has created 32 participants can no longer be discovered. The PX4 tests create 2-4 each, so
+# dw_planner_tests runs in two shards (CTest runs every test in a process of its own anyway).
+runs=(dw_unit_tests dw_recorder_tests dw_mocap_tests dw_physics_tests
+      "dw_planner_tests --gtest_filter=Px4Refusals.*" "dw_planner_tests --gtest_filter=-Px4Refusals.*"
+      dw_stand_tests)
+tests=()  # the executables the runs name, built once each
+for run in "${runs[@]}"; do
+  read -r -a cmd <<<"$run"
+  [[ " ${tests[*]} " == *" ${cmd[0]} "* ]] || tests+=("${cmd[0]}")
+done
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DDW_SANITIZE=ON \
   -DDW_BUILD_PREDICTOR=OFF -DDW_BUILD_EXPLAINER=OFF -DDW_BUILD_BENCH=OFF >/dev/null
 cmake --build "$build" -j "$(nproc)" --target "${tests[@]}"
@@ -15,13 +26,6 @@ cmake --build "$build" -j "$(nproc)" --target "${tests[@]}"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1:new_delete_type_mismatch=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 export LSAN_OPTIONS=suppressions="$here/scripts/lsan.supp"
-# Each run is one process. Fast DDS 2.9 numbers the participants of a process 0, 1, 2, ... and
-# never reuses a number, while discovery on loopback reaches ids 0-31 (dds/config.cpp): a process
-# that has created 32 participants can no longer be discovered. The PX4 tests create 2-4 each, so
-# dw_planner_tests runs in two shards (CTest runs every test in a process of its own anyway).
-runs=(dw_unit_tests dw_recorder_tests dw_mocap_tests dw_physics_tests
-      "dw_planner_tests --gtest_filter=Px4Refusals.*" "dw_planner_tests --gtest_filter=-Px4Refusals.*"
-      dw_stand_tests)
 status=0
 for run in "${runs[@]}"; do
   read -r -a cmd <<<"$run"
