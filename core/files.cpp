@@ -46,6 +46,15 @@ std::string read_file(const std::string& path) {
     }
 }
 
+namespace {
+// A folder that exists but refuses writing (read-only file system, permissions) is the machine's
+// state, not a mistake in the command: a runtime failure (exit 1), as a full disk is.
+void require_write_access(const fs::path& dir, const std::string& path, std::string_view what) {
+    if (::access(dir.c_str(), W_OK) != 0)
+        throw RuntimeError(log::cat(what, " ", path, ": cannot write in ", dir.string(), ": ", std::strerror(errno)));
+}
+}  // namespace
+
 void require_writable_path(const std::string& path, std::string_view what) {
     if (path.empty()) throw InputError(log::cat(what, ": no path given"));
     std::error_code ec;
@@ -56,9 +65,7 @@ void require_writable_path(const std::string& path, std::string_view what) {
         throw InputError(log::cat(what, " ", path, ": the folder ", dir.string(), " does not exist"));
     if (!fs::is_directory(dir, ec))
         throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
-    if (::access(dir.c_str(), W_OK) != 0) {
-        throw InputError(log::cat(what, " ", path, ": cannot write in ", dir.string(), ": ", std::strerror(errno)));
-    }
+    require_write_access(dir, path, what);
 }
 
 void require_output_dir(const std::string& path, std::string_view what) {
@@ -70,9 +77,7 @@ void require_output_dir(const std::string& path, std::string_view what) {
     while (!fs::exists(dir, ec) && dir.has_parent_path() && dir != dir.parent_path()) dir = dir.parent_path();
     if (!fs::is_directory(dir, ec))
         throw InputError(log::cat(what, " ", path, ": ", dir.string(), " is not a directory"));
-    if (::access(dir.c_str(), W_OK) != 0) {
-        throw InputError(log::cat(what, " ", path, ": cannot write in ", dir.string(), ": ", std::strerror(errno)));
-    }
+    require_write_access(dir, path, what);
 }
 
 AtomicFile::AtomicFile(std::string path, unsigned mode)

@@ -48,8 +48,9 @@ private:
 };
 
 // Throws dw::InputError when `path` cannot become a file: it is empty or a directory, or its
-// folder does not exist or cannot be written. Creates nothing: for checking an output option
-// before long work starts.
+// folder does not exist; dw::RuntimeError (exit 1) when the folder exists but cannot be written
+// (a read-only file system, permissions). Creates nothing: for checking an output option before
+// long work starts.
 void require_writable_path(const std::string& path, std::string_view what);
 // The same for an output folder: `path` may exist as a directory or be made; creates nothing.
 void require_output_dir(const std::string& path, std::string_view what);

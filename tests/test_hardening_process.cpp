@@ -185,10 +185,11 @@ TEST(Finding6, ProofOfUnknownCasesAndExplainWithoutWrenchOnLegs) {
                            "hold wrench samples");
 }
 
-// Issue 17: a full disk ends a tool with one line and exit 1 (a runtime failure), and leaves no
-// partial file: every file the tools write goes to a temporary name, is checked, and renamed. A
-// read-only output folder is found before any work, so it is the bad-input line and exit 2. Each tool runs in its own mount namespace over a tiny tmpfs (16 KiB, or read-only);
-// what is left there is listed from inside the namespace, before the mount goes away.
+// Issue 17: a full disk or a read-only output folder ends a tool with one line and exit 1 (a
+// runtime failure), and leaves no partial file: every file the tools write goes to a temporary
+// name, is checked, and renamed; a read-only folder is found before any work. Each tool runs in
+// its own mount namespace over a tiny tmpfs (16 KiB, or read-only); what is left there is listed
+// from inside the namespace, before the mount goes away.
 namespace {
 struct Confined {
     dw::test::RunResult run;
@@ -235,7 +236,7 @@ TEST(Issue17, AFullDiskIsOneLineExit1AndNoPartialFile) {
     expect_one_line_nothing_partial(full, 1, "No space left on device", {"./flight/meta.json"});
     auto ro = confined({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", "@/flight"},
                        "ro,size=16k", d);
-    expect_one_line_nothing_partial(ro, 2, "Read-only file system", {});
+    expect_one_line_nothing_partial(ro, 1, "Read-only file system", {});
 
     // The explainer's report and figures into a full folder.
     ASSERT_EQ(
