@@ -36,6 +36,7 @@ struct Data {
     std::vector<std::size_t> on_legs;  // sample indices on measurement legs
     std::vector<Wrench6> buffeting;    // per sample: the lateral buffeting's standard deviation
     std::size_t legs = 0;              // blocks that hold samples
+    double huber_delta = 3;            // noise floors: beyond it a residual counts linearly in the fits
 };
 
 double norm_sq(const Data& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a) {
@@ -60,11 +61,12 @@ public:
     }
     double robust_cost(const std::vector<double>& v, const std::vector<std::size_t>& rows) {
         const auto& p = predict(v);
+        const double delta = d_.huber_delta;
         double c = 0;
         for (auto i : rows)
             for (std::size_t a = 0; a < 6; ++a) {
                 const double s = norm_sq(d_, p, i, a);
-                c += s <= 9 ? s : 2 * 3 * std::sqrt(s) - 9;  // Huber, delta 3
+                c += s <= delta * delta ? s : 2 * delta * std::sqrt(s) - delta * delta;  // Huber
             }
         return c;
     }
@@ -101,7 +103,7 @@ public:
         ceres::Problem::Options po;
         po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
         ceres::Problem problem(po);
-        ceres::HuberLoss loss(3.0);
+        ceres::HuberLoss loss(d_.huber_delta);
         problem.AddParameterBlock(x.data(), static_cast<int>(P));
         for (auto i : rows) {
             auto* cost = new ceres::DynamicNumericDiffCostFunction<RowCost, ceres::CENTRAL>(new RowCost{this, i, P});
@@ -142,10 +144,13 @@ private:
     std::vector<std::pair<std::vector<double>, std::vector<Wrench6>>> cache_;
 };
 
+// The two-sided 95 % quantile of the normal distribution (the intervals' width in standard errors).
+constexpr double kZ95 = 1.96;
+
 // Two-sided 95 % quantile of Student's t with dof degrees of freedom (the fold jackknife).
 double t975(int dof) {
     constexpr std::array<double, 10> table{12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228};
-    return dof >= 1 && dof <= 10 ? table[static_cast<std::size_t>(dof - 1)] : 1.96 + 2.5 / std::max(dof, 1);
+    return dof >= 1 && dof <= 10 ? table[static_cast<std::size_t>(dof - 1)] : kZ95 + 2.5 / std::max(dof, 1);
 }
 
 // The spread of a jackknife over its replicates (each with one group of blocks left out):
@@ -367,12 +372,14 @@ std::vector<Region> locate(const Data& d, const std::vector<Wrench6>& pred, doub
     return out;
 }
 
-std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
+std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base, const ExplainOptions& o) {
     // Per leg direction and altitude band: the clock shift that best aligns recording and model.
     std::map<std::pair<int, int>, std::vector<double>> sse;  // (direction, band) -> SSE per shift
     std::map<std::pair<int, int>, std::pair<std::size_t, double>> count;
+    const double step = o.shift_step_s;
+    const auto half = static_cast<long>(std::floor(o.shift_half_width_s / step + 1e-9));
     std::vector<double> grid;
-    for (double s = -0.3; s <= 0.3 + 1e-9; s += 0.005) grid.push_back(s);
+    for (long k = -half; k <= half; ++k) grid.push_back(static_cast<double>(k) * step);
     const double base_offset = base.effects.clock_offset.enabled ? base.effects.clock_offset.offset_s : 0.0;
     for (std::size_t g = 0; g < grid.size(); ++g) {
         physics::PhysicsConfig c = base;
@@ -397,7 +404,7 @@ std::vector<Shift> shifts(const Data& d, const physics::PhysicsConfig& base) {
         double best = grid[k];
         if (k > 0 && k + 1 < v.size()) {  // parabola through the minimum and its neighbours
             const double den = v[k - 1] - 2 * v[k] + v[k + 1];
-            if (den > 0) best += 0.5 * 0.005 * (v[k - 1] - v[k + 1]) / den;
+            if (den > 0) best += 0.5 * step * (v[k - 1] - v[k + 1]) / den;
         }
         const auto& cn = count[key];
         out.push_back({key.first, kBands[static_cast<std::size_t>(key.second)].name,
@@ -701,14 +708,14 @@ void set_intervals(CandidateResult& c, const Data& d, const Baseline& b, Fit& fi
     const auto jack = jackknife_sd(fold_values);
     const double t = t975(static_cast<int>(fold_values.size()) - 1);
     for (std::size_t p = 0; p < c.values.size(); ++p) {
-        const double half = std::hypot(std::max(t * jack[p], 1.96 * se[p]), 1.96 * tare[p]);
+        const double half = std::hypot(std::max(t * jack[p], kZ95 * se[p]), kZ95 * tare[p]);
         c.lo.push_back(c.values[p] - half);
         c.hi.push_back(c.values[p] + half);
     }
     if (c.effect.type->has_axes()) {
         const double disc = crosstalk_discrepancy(d, b, c.effect);
-        c.lo[0] -= 1.96 * disc;
-        c.hi[0] += 1.96 * disc;
+        c.lo[0] -= kZ95 * disc;
+        c.hi[0] += kZ95 * disc;
     }
 }
 
@@ -829,9 +836,13 @@ Baseline select_effects(ExplainResult& R, const Data& d, const Baseline& base, c
 // the flight has too few blocks for the folds.
 Data prepare(const Replay& replay, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
              const ExplainOptions& o, const std::vector<Wrench6>& base_pred) {
-    Data d{
-        replay, info, floor_of(replay, info, base_pred, o.physics.stand.tare_s), {}, replay.buffeting_sigma(o.physics),
-        0};
+    Data d{replay,
+           info,
+           floor_of(replay, info, base_pred, o.physics.stand.tare_s),
+           {},
+           replay.buffeting_sigma(o.physics),
+           0,
+           o.huber_delta};
     for (std::size_t i = 0; i < info.size(); ++i)
         if (info[i].leg >= 0) d.on_legs.push_back(i);
     std::set<int> leg_ids;
@@ -885,6 +896,12 @@ void validate(const ExplainOptions& o) {
     require_in(o.weak_region_z, kZRange, "explain: weak_region_z");
     require_in(o.detect_excess, kExcessRange, "explain: detect_excess");
     require_in(o.max_effects, kMaxEffectsRange, "explain: max_effects");
+    require_in(o.huber_delta, kHuberRange, "explain: huber_delta");
+    require_in(o.shift_half_width_s, kShiftHalfWidthRange, "explain: shift_half_width_s");
+    require_in(o.shift_step_s, kShiftStepRange, "explain: shift_step_s");
+    if (o.shift_step_s > o.shift_half_width_s)
+        throw InputError(log::cat("explain: shift_step_s ", o.shift_step_s, " is wider than shift_half_width_s ",
+                                  o.shift_half_width_s));
 }
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
@@ -919,7 +936,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     R.legs = d.legs;
     // Locate.
     R.regions = locate(d, base.pred, base.factor, o.region_z, f.meta.formation);
-    R.shifts = shifts(d, o.physics);
+    R.shifts = shifts(d, o.physics, o);
     say(log::cat(R.regions.size(), " significant regions; effective samples ", base.factor * 100,
                  " % of the samples (autocorrelation)"));
     // Screen, cross-validate and select; then the verdict.

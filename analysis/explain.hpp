@@ -39,7 +39,10 @@ struct ExplainOptions {
     double detect_excess = kDetectExcess;
     double weak_region_z = 3.0;
     int max_effects = 3;
-    std::uint64_t seed = 1;  // (the fits are deterministic; kept for the report)
+    double huber_delta = 3.0;         // noise floors: a larger residual counts linearly in the fits
+    double shift_half_width_s = 0.3;  // the located clock shifts are searched within ± this ...
+    double shift_step_s = 0.005;      // ... in steps of this, refined by a parabola through the best
+    std::uint64_t seed = 1;           // (the fits are deterministic; kept for the report)
     std::function<void(const std::string&)> progress;
     std::stop_token stop;  // checked between fits: dw::Stopped
 };
@@ -52,6 +55,9 @@ inline constexpr Range kZRange{0, 1e3, ""};
 inline constexpr Range kGainRange{0, 1, ""};
 inline constexpr Range kExcessRange{1, 1e3, "noise floors"};
 inline constexpr Range kMaxEffectsRange{1, 20, "effects"};
+inline constexpr Range kHuberRange{0.5, 100, "noise floors"};
+inline constexpr Range kShiftHalfWidthRange{0.01, 5, "s"};
+inline constexpr Range kShiftStepRange{1e-4, 0.1, "s"};
 
 struct Region {
     std::string axis;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "analysis/coverage.hpp"
@@ -91,6 +92,31 @@ TEST(ExplainEffects, NamesAreTheContractsAndUnknownOnesAreRefused) {
         effects_named({"gremlins"});
     } catch (const dw::InputError& e) {
         for (const auto& n : names) EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << n;
+    }
+}
+
+// Issue 17: every threshold is an option, checked by name before any work.
+TEST(ExplainOptions, EachThresholdOutsideItsRangeIsNamed) {
+    EXPECT_NO_THROW(validate(ExplainOptions{}));
+    const std::vector<std::pair<std::string, std::function<void(ExplainOptions&)>>> wrong{
+        {"folds", [](ExplainOptions& o) { o.folds = 1; }},
+        {"max_delta_bic", [](ExplainOptions& o) { o.max_delta_bic = 5; }},
+        {"min_gain", [](ExplainOptions& o) { o.min_gain = 2; }},
+        {"detect_excess", [](ExplainOptions& o) { o.detect_excess = 0.5; }},
+        {"huber_delta", [](ExplainOptions& o) { o.huber_delta = 0; }},
+        {"shift_half_width_s", [](ExplainOptions& o) { o.shift_half_width_s = 60; }},
+        {"shift_step_s", [](ExplainOptions& o) { o.shift_step_s = 0; }},
+        {"shift_step_s 0.05 is wider", [](ExplainOptions& o) { o.shift_half_width_s = 0.02, o.shift_step_s = 0.05; }},
+    };
+    for (const auto& [name, change] : wrong) {
+        ExplainOptions o;
+        change(o);
+        try {
+            validate(o);
+            ADD_FAILURE() << name << ": accepted";
+        } catch (const dw::InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("explain: " + name), std::string::npos) << e.what();
+        }
     }
 }
 
