@@ -1,5 +1,8 @@
 #include "dds/config.hpp"
 
+#include <CLI/CLI.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+
 #include <arpa/inet.h>
 
 #include <fastdds/rtps/attributes/ServerAttributes.h>

@@ -1,14 +1,21 @@
 #pragma once
 // How a process joins the lab's DDS domain: from defaults, a config file's `dds:` section and CLI
 // flags (in that order of precedence, flags last).
-#include <CLI/CLI.hpp>
-#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "core/config.hpp"
+
+// Declared only: CLI11 and Fast DDS's QoS headers cost seconds of compile time in every file that
+// would include them through this one (dds/config.cpp and the callers include them).
+namespace CLI {
+class App;
+}
+namespace eprosima::fastdds::dds {
+class DomainParticipantQos;
+}
 
 namespace dw::dds {
 

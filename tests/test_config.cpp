@@ -1,4 +1,5 @@
 // Unit tests of configuration: YAML files with located errors, DDS config resolution/validation.
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <gtest/gtest.h>
 
 #include <fstream>
