@@ -26,12 +26,13 @@ void require_unique_keys(const YAML::Node& node, const std::string& name) {
 }
 }  // namespace
 
-YAML::Node load_yaml(const std::string& text, const std::string& name) {
+YAML::Node load_yaml(const std::string& text, const std::string& name, std::string_view language) {
     YAML::Node root;
     try {
         root = YAML::Load(text);
     } catch (const YAML::ParserException& e) {
-        throw InputError(log::cat(name, ":", e.mark.line + 1, ":", e.mark.column + 1, ": not valid YAML: ", e.msg));
+        throw InputError(
+            log::cat(name, ":", e.mark.line + 1, ":", e.mark.column + 1, ": not valid ", language, ": ", e.msg));
     }
     require_unique_keys(root, name);
     return root;

@@ -13,7 +13,8 @@ namespace dw {
 
 // The one way a YAML document is read: parse errors and duplicate keys (which yaml-cpp would
 // otherwise resolve silently to the first) are dw::InputError "name:line:col: ...".
-YAML::Node load_yaml(const std::string& text, const std::string& name);
+// `language` names the syntax in that message ("not valid JSON" for a JSON document).
+YAML::Node load_yaml(const std::string& text, const std::string& name, std::string_view language = "YAML");
 // load_yaml() of a file's bytes (missing, directory, unreadable: one clear InputError).
 YAML::Node load_yaml_file(const std::string& path, std::string_view what);
 

@@ -1,6 +1,10 @@
 #include "core/keys.hpp"
 
+#include <algorithm>
+#include <cctype>
+#include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <set>
 
@@ -14,6 +18,58 @@ namespace {
 // The first rule a document breaks (require()), reported once every key is known: a misspelt key
 // explains the rules it breaks, so unknown keys come first.
 using BrokenRule = std::optional<std::string>;
+
+// JSON text of a string: quoted, with the escapes RFC 8259 requires.
+std::string json_quoted(const std::string& text) {
+    std::string out = "\"";
+    for (const char ch : text) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += ch;
+        } else if (c < 0x20) {
+            char esc[8];
+            std::snprintf(esc, sizeof esc, "\\u%04x", c);
+            out += esc;
+        } else {
+            out += ch;
+        }
+    }
+    return out + "\"";
+}
+
+// JSON text of a number: the shortest form that reads back to the same double.
+std::string json_number(double v) {
+    if (!std::isfinite(v)) throw RuntimeError(log::cat("cannot write ", v, " as a JSON number"));
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+}
+
+// A plain (unquoted) YAML scalar that JSON reads as itself: a number, true, false or null.
+bool json_literal(const std::string& s) {
+    if (s == "true" || s == "false" || s == "null") return true;
+    const auto digit = [&](std::size_t i) { return i < s.size() && std::isdigit(static_cast<unsigned char>(s[i])); };
+    if (!digit(0) && !(s[0] == '-' && digit(1))) return false;  // JSON: no '+', '.5', 'inf' or 'nan'
+    double x = 0;
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), x);
+    return r.ec == std::errc() && r.ptr == s.data() + s.size() && std::isfinite(x);
+}
+
+// A parsed document back to JSON text (compact): quoted scalars stay strings ('!' is yaml-cpp's
+// tag for a quoted scalar), plain ones that are JSON literals stay literals.
+std::string to_json_text(const YAML::Node& n) {
+    if (!n || n.IsNull()) return "null";
+    if (n.IsScalar()) return n.Tag() != "!" && json_literal(n.Scalar()) ? n.Scalar() : json_quoted(n.Scalar());
+    std::string out = n.IsMap() ? "{" : "[";
+    bool first = true;
+    for (const auto& item : n) {
+        if (!first) out += ",";
+        first = false;
+        out += n.IsMap() ? json_quoted(item.first.Scalar()) + ":" + to_json_text(item.second) : to_json_text(item);
+    }
+    return out + (n.IsMap() ? "}" : "]");
+}
 
 // Reads one mapping strictly; finish() refuses the keys nothing visited.
 class Reader final : public KeyVisitor {
@@ -97,6 +153,35 @@ public:
             for (std::size_t j = 0; j < cols; ++j)
                 element(row[j], log::cat(key, "[", i, "][", j, "]"), v[i * cols + j], r);
         }
+    }
+    void values(const std::string& key, std::vector<double>& v, const Range& r) override {
+        const YAML::Node n = get(key);
+        if (!n) return;
+        if (!n.IsSequence()) fail(n, key, "expected a list of numbers");
+        std::vector<double> out(n.size());
+        for (std::size_t i = 0; i < out.size(); ++i) element(n[i], log::cat(key, "[", i, "]"), out[i], r);
+        v = std::move(out);
+    }
+    void matrix(const std::string& key, std::vector<double>& v, std::size_t& rows, std::size_t& cols,
+                const Range& r) override {
+        const YAML::Node n = get(key);
+        if (!n) return;
+        if (!n.IsSequence() || n.size() == 0 || !n[0].IsSequence() || n[0].size() == 0)
+            fail(n, key, "expected a matrix (a list of rows of numbers)");
+        const std::size_t R = n.size(), C = n[0].size();
+        std::vector<double> out(R * C);
+        for (std::size_t i = 0; i < R; ++i) {
+            const YAML::Node row = n[i];
+            if (!row.IsSequence() || row.size() != C) fail(row, log::cat(key, "[", i, "]"), "rows differ in length");
+            for (std::size_t j = 0; j < C; ++j) element(row[j], log::cat(key, "[", i, "][", j, "]"), out[i * C + j], r);
+        }
+        v = std::move(out);
+        rows = R;
+        cols = C;
+    }
+    void verbatim(const std::string& key, std::string& json) override {
+        const YAML::Node n = get(key);
+        if (n) json = to_json_text(n);
     }
     void constant(const std::string& key, const std::string& value) override {
         const auto word = word_at(key);
@@ -206,6 +291,16 @@ public:
         }
         out_ << YAML::EndSeq;
     }
+    void values(const std::string& key, std::vector<double>& v, const Range&) override {
+        out_ << YAML::Key << key << YAML::Value << YAML::Flow << v;
+    }
+    void matrix(const std::string& key, std::vector<double>& v, std::size_t& rows, std::size_t& cols,
+                const Range& r) override {
+        table(key, std::span<double>(v.data(), std::min(v.size(), rows * cols)), cols, r, "");
+    }
+    void verbatim(const std::string& key, std::string& json) override {
+        out_ << YAML::Key << key << YAML::Value << YAML::Load(json);
+    }
     void constant(const std::string& key, const std::string& value) override {
         out_ << YAML::Key << key << YAML::Value << value;
     }
@@ -230,7 +325,100 @@ private:
     YAML::Emitter& out_;
 };
 
+// Writes one JSON object: each visit is one member, indented one space a level.
+class JsonWriter final : public KeyVisitor {
+public:
+    void number(const std::string& key, double& v, const Range&) override { member(key, json_number(v)); }
+    void integer(const std::string& key, int& v, const Range&) override { member(key, std::to_string(v)); }
+    void flag(const std::string& key, bool& v) override { member(key, v ? "true" : "false"); }
+    void text(const std::string& key, std::string& v) override { member(key, json_quoted(v)); }
+    void texts(const std::string& key, std::vector<std::string>& v) override {
+        std::string a = "[";
+        for (std::size_t i = 0; i < v.size(); ++i) a += (i ? ", " : "") + json_quoted(v[i]);
+        member(key, a + "]");
+    }
+    bool has(const std::string&) override { return true; }
+    void choice(const std::string& key, int& v, std::span<const char* const> names, const std::string&,
+                const std::string&) override {
+        member(key, json_quoted(names[static_cast<std::size_t>(v)]));
+    }
+    void numbers(const std::string& key, std::span<double> v, const Range&, const std::string&) override {
+        member(key, row(v));
+    }
+    void table(const std::string& key, std::span<double> v, std::size_t cols, const Range&,
+               const std::string&) override {
+        std::string a = "[";
+        for (std::size_t i = 0; i + cols <= v.size(); i += cols) a += (i ? ", " : "") + row(v.subspan(i, cols));
+        member(key, a + "]");
+    }
+    void values(const std::string& key, std::vector<double>& v, const Range&) override { member(key, row(v)); }
+    void matrix(const std::string& key, std::vector<double>& v, std::size_t& rows, std::size_t& cols,
+                const Range& r) override {
+        table(key, std::span<double>(v.data(), std::min(v.size(), rows * cols)), cols, r, "");
+    }
+    void verbatim(const std::string& key, std::string& json) override { member(key, json); }
+    void constant(const std::string& key, const std::string& value) override { member(key, json_quoted(value)); }
+    void section(const std::string& key, const Body& body, const std::string&) override {
+        open(key, "{");
+        body(*this);
+        close("}");
+    }
+    void require(bool, const std::string&, const std::string&) override {}
+    void names(std::vector<std::string>&) override {}
+    void list(const std::string& key, std::size_t& count, const Item& item) override {
+        open(key, "[");
+        for (std::size_t i = 0; i < count; ++i) {
+            open("", "{");
+            item(*this, i);
+            close("}");
+        }
+        close("]");
+    }
+
+    std::string document(const Body& body) {
+        out_ = "{";
+        firsts_ = {true};
+        body(*this);
+        close("}");
+        return out_ + "\n";
+    }
+
+private:
+    static std::string row(std::span<const double> v) {
+        std::string a = "[";
+        for (std::size_t i = 0; i < v.size(); ++i) a += (i ? ", " : "") + json_number(v[i]);
+        return a + "]";
+    }
+    // A new member (or array element, when key is empty) on its own line.
+    void start(const std::string& key) {
+        if (!firsts_.back()) out_ += ",";
+        firsts_.back() = false;
+        out_ += "\n" + std::string(firsts_.size(), ' ');
+        if (!key.empty()) out_ += json_quoted(key) + ": ";
+    }
+    void member(const std::string& key, const std::string& value) {
+        start(key);
+        out_ += value;
+    }
+    void open(const std::string& key, const char* bracket) {
+        start(key);
+        out_ += bracket;
+        firsts_.push_back(true);
+    }
+    void close(const char* bracket) {
+        const bool empty = firsts_.back();
+        firsts_.pop_back();
+        if (!empty) out_ += "\n" + std::string(firsts_.size(), ' ');
+        out_ += bracket;
+    }
+
+    std::string out_;
+    std::vector<bool> firsts_;  // per open object or array: nothing written in it yet
+};
+
 }  // namespace
+
+std::string write_json_keys(const KeyVisitor::Body& body) { return JsonWriter().document(body); }
 
 void read_keys(const YAML::Node& root, const std::string& file, const KeyVisitor::Body& body) {
     BrokenRule broken;

@@ -38,6 +38,14 @@ public:
     // it is not that shape ("expected 6 rows of 8 numbers").
     virtual void table(const std::string& key, std::span<double> v, std::size_t cols, const Range& r,
                        const std::string& shape) = 0;
+    // A list of numbers of any length, each in r (when reading: as long as the file's).
+    virtual void values(const std::string& key, std::vector<double>& v, const Range& r) = 0;
+    // A matrix: a non-empty list of rows of one non-zero length, each number in r; `v` row-major,
+    // `rows` x `cols` (when reading: the file's shape; rows of different lengths are an error).
+    virtual void matrix(const std::string& key, std::vector<double>& v, std::size_t& rows, std::size_t& cols,
+                        const Range& r) = 0;
+    // A document kept as it is, as JSON text, without reading its keys (a file's free metadata).
+    virtual void verbatim(const std::string& key, std::string& json) = 0;
     // A key that, when given, must say exactly `value` (a format tag); always written.
     virtual void constant(const std::string& key, const std::string& value) = 0;
     // The mapping under `key`; a key in it that `body` does not visit is "unknown key 'x'" + unknown_hint.
@@ -77,5 +85,11 @@ void read_section(const YAML::Node& root, const std::string& file, const std::st
                   const KeyVisitor::Body& body);
 // Writes what `body` visits as one YAML mapping.
 void write_keys(YAML::Emitter& out, const KeyVisitor::Body& body);
+
+// The same declaration as JSON. JSON is YAML's flow style, so a JSON document is read by the same
+// strict reader: read_keys(load_yaml(text, file, "JSON"), file, body) (errors "file:line:col: key:
+// problem"; a syntax error says "not valid JSON"). Written as one JSON object, indented one space a
+// level; a non-finite number cannot be written (dw::RuntimeError).
+std::string write_json_keys(const KeyVisitor::Body& body);
 
 }  // namespace dw

@@ -2,11 +2,12 @@
 
 #include <cmath>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "core/config.hpp"
 #include "core/files.hpp"
+#include "core/keys.hpp"
 #include "core/log.hpp"
 #include "flight/flight.hpp"
 #include "physics/wrench_model.hpp"
@@ -48,136 +49,131 @@ Wrench6 LearntModel::predict(std::span<const RelState> neighbours) const {
 
 namespace {
 
-using nlohmann::json;
+// The model file (kModelFormat), declared once for reading and writing (core/keys.hpp, as JSON).
+constexpr Range kFinite{-1e30, 1e30};
+constexpr std::array<const char*, 2> kStructureNames{"sum", "deep_sets"};
+constexpr std::array<const char*, 2> kActivationNames{"linear", "silu"};
 
-json to_json(const Mlp& m) {
-    json layers = json::array();
-    for (const auto& l : m.layers) {
-        json w = json::array();
-        for (Eigen::Index r = 0; r < l.w.rows(); ++r) {
-            json row = json::array();
-            for (Eigen::Index c = 0; c < l.w.cols(); ++c) row.push_back(l.w(r, c));
-            w.push_back(row);
-        }
-        json b = json::array();
-        for (Eigen::Index r = 0; r < l.b.size(); ++r) b.push_back(l.b[r]);
-        layers.push_back({{"activation", l.silu ? "silu" : "linear"}, {"weight", w}, {"bias", b}});
-    }
-    return layers;
+// A key the file must have.
+void required(KeyVisitor& k, const std::string& key) { k.require(k.has(key), key, "missing"); }
+
+template <std::size_t N>
+void floats(KeyVisitor& k, const std::string& key, std::array<float, N>& a) {
+    required(k, key);
+    std::array<double, N> d{};
+    std::copy(a.begin(), a.end(), d.begin());
+    k.numbers(key, d, kFinite, log::cat("expected ", N, " numbers"));
+    std::copy(d.begin(), d.end(), a.begin());
 }
 
-struct Reader {
-    std::string file;
-    [[noreturn]] void fail(const std::string& field, const std::string& what) const {
-        throw InputError(log::cat(file, ": ", field, ": ", what));
+// One list of words the model was made with (feature or axis names), checked when read.
+template <std::size_t N>
+void names(KeyVisitor& k, const std::string& key, const std::array<const char*, N>& expected) {
+    std::vector<std::string> v(expected.begin(), expected.end());
+    const auto want = v;
+    k.texts(key, v);
+    k.require(v == want, key, "expected " + log::join(want));
+}
+
+void layer_keys(KeyVisitor& k, Layer& l) {
+    for (const char* key : {"activation", "weight", "bias"}) required(k, key);
+    k.enumeration("activation", l.silu, kActivationNames, "activation");
+    std::size_t rows = static_cast<std::size_t>(l.w.rows()), cols = static_cast<std::size_t>(l.w.cols());
+    std::vector<double> w(rows * cols);
+    for (std::size_t r = 0; r < rows; ++r)
+        for (std::size_t c = 0; c < cols; ++c)
+            w[r * cols + c] = l.w(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+    k.matrix("weight", w, rows, cols, kFinite);
+    l.w.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+    for (std::size_t r = 0; r < rows; ++r)
+        for (std::size_t c = 0; c < cols; ++c)
+            l.w(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = static_cast<float>(w[r * cols + c]);
+    std::vector<double> b(l.b.data(), l.b.data() + l.b.size());
+    k.values("bias", b, kFinite);
+    k.require(b.size() == rows, "bias", log::cat("expected ", rows, " numbers (the weight's rows)"));
+    l.b = Eigen::Map<const Eigen::VectorXd>(b.data(), static_cast<Eigen::Index>(b.size())).cast<float>();
+}
+
+// An MLP: its layers in order, each taking what the one before gives (`may_be_empty`: none at all).
+void mlp_keys(KeyVisitor& k, const std::string& key, Mlp& m, bool may_be_empty = false) {
+    std::size_t count = m.layers.size();
+    k.list(key, count, [&](KeyVisitor& item, std::size_t i) {
+        if (m.layers.size() <= i) m.layers.resize(i + 1);
+        layer_keys(item, m.layers[i]);
+    });
+    m.layers.resize(count);
+    k.require(may_be_empty || !m.layers.empty(), key, "expected a non-empty list of layers");
+    for (std::size_t i = 1; i < m.layers.size(); ++i)
+        k.require(
+            m.layers[i].w.cols() == m.layers[i - 1].w.rows(), log::cat(key, "[", i, "].weight"),
+            log::cat("takes ", m.layers[i].w.cols(), " inputs but the layer before gives ", m.layers[i - 1].w.rows()));
+}
+
+// What the layers must take and give, for each structure.
+void shape_rules(KeyVisitor& k, const LearntModel& m) {
+    k.require(m.phi.inputs() == kFeatureSize, "phi[0].weight",
+              log::cat("takes ", m.phi.inputs(), " inputs, expected ", kFeatureSize));
+    if (m.structure == Structure::deep_sets) {
+        k.require(m.rho.inputs() == m.phi.outputs(), "rho[0].weight", "does not take phi's output");
+        k.require(m.rho.outputs() == 6, "rho", "must give 6 outputs");
+    } else {
+        k.require(m.phi.outputs() == 6, "phi", "must give 6 outputs");
     }
-    const json& at(const json& j, const std::string& key, const std::string& where) const {
-        if (!j.is_object() || !j.contains(key)) fail(where + key, "missing");
-        return j.at(key);
+    if (m.baseline.layers.empty()) return;
+    k.require(m.structure == Structure::deep_sets, "baseline", "only a deep_sets model carries a baseline");
+    k.require(m.baseline.inputs() == kFeatureSize && m.baseline.outputs() == 6, "baseline",
+              log::cat("must take ", kFeatureSize, " inputs and give 6 outputs"));
+}
+
+// The file's format tag, checked before its keys (LearntModel::load): another format's keys are
+// not this one's, and the tag says why.
+void check_format(const YAML::Node& root, const std::string& path) {
+    const YAML::Node& doc = root;  // a const lookup never inserts the key
+    const YAML::Node format = doc.IsMap() ? doc["format"] : YAML::Node();
+    if (format && (!format.IsScalar() || format.Scalar() != kModelFormat))
+        fail_at_node(path, format, "format",
+                     log::cat("expected ", kModelFormat,
+                              " (models saved before the jet features, downwash-model/1, must be trained again)"));
+}
+
+void model_keys(KeyVisitor& k, LearntModel& m) {
+    for (const char* key : {"format", "kind", "structure", "input", "output", "phi"}) required(k, key);
+    k.constant("format", kModelFormat);
+    k.text("kind", m.kind);
+    k.enumeration("structure", m.structure, kStructureNames, "structure");
+    k.section("input", [&](KeyVisitor& in) {
+        names(in, "features", kFeatureNames);
+        floats(in, "mean", m.input_mean);
+        floats(in, "std", m.input_std);
+        for (std::size_t i = 0; i < m.input_std.size(); ++i)
+            in.require(m.input_std[i] > 0, log::cat("std[", i, "]"), "must be > 0");
+    });
+    k.section("output", [&](KeyVisitor& out) {
+        names(out, "axes", flight::kAxes);
+        floats(out, "scale", m.output_scale);
+    });
+    mlp_keys(k, "phi", m.phi);
+    if (m.structure == Structure::deep_sets) {
+        required(k, "rho");
+        mlp_keys(k, "rho", m.rho);
     }
-    template <std::size_t N>
-    std::array<float, N> floats(const json& j, const std::string& field) const {
-        if (!j.is_array() || j.size() != N) fail(field, log::cat("expected ", N, " numbers"));
-        std::array<float, N> a{};
-        for (std::size_t i = 0; i < N; ++i) {
-            if (!j[i].is_number()) fail(log::cat(field, "[", i, "]"), "not a number");
-            a[i] = j[i].get<float>();
-        }
-        return a;
-    }
-    Mlp mlp(const json& j, const std::string& field) const {
-        if (!j.is_array() || j.empty()) fail(field, "expected a non-empty list of layers");
-        Mlp m;
-        for (std::size_t i = 0; i < j.size(); ++i) {
-            const std::string f = log::cat(field, "[", i, "].");
-            const auto& w = at(j[i], "weight", f);
-            const auto& b = at(j[i], "bias", f);
-            const auto act = at(j[i], "activation", f);
-            if (act != "silu" && act != "linear") fail(f + "activation", "expected silu or linear");
-            if (!w.is_array() || w.empty() || !w[0].is_array() || w[0].empty()) fail(f + "weight", "expected a matrix");
-            if (!b.is_array() || b.size() != w.size()) fail(f + "bias", log::cat("expected ", w.size(), " numbers"));
-            Layer l;
-            l.silu = act == "silu";
-            l.w.resize(static_cast<Eigen::Index>(w.size()), static_cast<Eigen::Index>(w[0].size()));
-            l.b.resize(static_cast<Eigen::Index>(w.size()));
-            for (std::size_t r = 0; r < w.size(); ++r) {
-                if (!w[r].is_array() || w[r].size() != w[0].size())
-                    fail(log::cat(f, "weight[", r, "]"), "rows differ in length");
-                for (std::size_t c = 0; c < w[r].size(); ++c) {
-                    if (!w[r][c].is_number()) fail(log::cat(f, "weight[", r, "][", c, "]"), "not a number");
-                    l.w(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = w[r][c].get<float>();
-                }
-                if (!b[r].is_number()) fail(log::cat(f, "bias[", r, "]"), "not a number");
-                l.b[static_cast<Eigen::Index>(r)] = b[r].get<float>();
-            }
-            if (!m.layers.empty() && m.layers.back().w.rows() != l.w.cols())
-                fail(f + "weight",
-                     log::cat("takes ", l.w.cols(), " inputs but the layer before gives ", m.layers.back().w.rows()));
-            m.layers.push_back(std::move(l));
-        }
-        return m;
-    }
-};
+    mlp_keys(k, "baseline", m.baseline, true);  // [] (or absent): none
+    shape_rules(k, m);
+    k.verbatim("metadata", m.metadata_json);
+}
 
 }  // namespace
 
 void LearntModel::save(const std::string& path) const {
-    json j;
-    j["format"] = kModelFormat;
-    j["kind"] = kind;
-    j["structure"] = structure == Structure::sum ? "sum" : "deep_sets";
-    j["input"] = {{"features", kFeatureNames}, {"mean", input_mean}, {"std", input_std}};
-    j["output"] = {{"axes", flight::kAxes}, {"scale", output_scale}};
-    j["phi"] = to_json(phi);
-    if (structure == Structure::deep_sets) j["rho"] = to_json(rho);
-    if (!baseline.layers.empty()) j["baseline"] = to_json(baseline);
-    j["metadata"] = json::parse(metadata_json);
-    write_file(path, j.dump(1) + "\n");
+    LearntModel m = *this;  // the declaration visits what it writes by reference
+    write_file(path, write_json_keys([&](KeyVisitor& k) { model_keys(k, m); }));
 }
 
 LearntModel LearntModel::load(const std::string& path) {
-    const std::string text = read_file(path, "model file");
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw InputError(log::cat(path, ": not JSON (byte ", e.byte, ")"));
-    }
-    Reader r{path};
-    if (r.at(j, "format", "") != kModelFormat)
-        r.fail("format", log::cat("expected ", kModelFormat,
-                                  " (models saved before the jet features, downwash-model/1, must be trained again)"));
+    const YAML::Node root = load_yaml(read_file(path, "model file"), path, "JSON");  // JSON: YAML's flow style
+    check_format(root, path);
     LearntModel m;
-    const auto& kind = r.at(j, "kind", "");
-    if (!kind.is_string()) r.fail("kind", "not a string");
-    m.kind = kind.get<std::string>();
-    const auto st = r.at(j, "structure", "");
-    if (st == "sum") m.structure = Structure::sum;
-    else if (st == "deep_sets") m.structure = Structure::deep_sets;
-    else r.fail("structure", "expected sum or deep_sets");
-    const auto& input = r.at(j, "input", "");
-    m.input_mean = r.floats<kFeatureSize>(r.at(input, "mean", "input."), "input.mean");
-    m.input_std = r.floats<kFeatureSize>(r.at(input, "std", "input."), "input.std");
-    for (std::size_t i = 0; i < m.input_std.size(); ++i)
-        if (!(m.input_std[i] > 0)) r.fail(log::cat("input.std[", i, "]"), "must be > 0");
-    m.output_scale = r.floats<6>(r.at(r.at(j, "output", ""), "scale", "output."), "output.scale");
-    m.phi = r.mlp(r.at(j, "phi", ""), "phi");
-    if (m.phi.inputs() != kFeatureSize)
-        r.fail("phi[0].weight", log::cat("takes ", m.phi.inputs(), " inputs, expected ", kFeatureSize));
-    if (m.structure == Structure::deep_sets) {
-        m.rho = r.mlp(r.at(j, "rho", ""), "rho");
-        if (m.rho.inputs() != m.phi.outputs()) r.fail("rho[0].weight", "does not take phi's output");
-        if (m.rho.outputs() != 6) r.fail("rho", "must give 6 outputs");
-    } else if (m.phi.outputs() != 6) {
-        r.fail("phi", "must give 6 outputs");
-    }
-    if (j.contains("baseline")) {
-        if (m.structure != Structure::deep_sets) r.fail("baseline", "only a deep_sets model carries a baseline");
-        m.baseline = r.mlp(j["baseline"], "baseline");
-        if (m.baseline.inputs() != kFeatureSize || m.baseline.outputs() != 6)
-            r.fail("baseline", log::cat("must take ", kFeatureSize, " inputs and give 6 outputs"));
-    }
-    if (j.contains("metadata")) m.metadata_json = j["metadata"].dump();
+    read_keys(root, path, [&](KeyVisitor& k) { model_keys(k, m); });
     return m;
 }
 

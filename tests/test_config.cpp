@@ -2,8 +2,10 @@
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "core/config.hpp"
 #include "core/keys.hpp"
@@ -193,6 +195,68 @@ TEST(DeclaredKeys, ListItemsAreLocatedAndUnknownKeysComeBeforeBrokenRules) {
               "tags, xy)");
     EXPECT_EQ(error("items: 3\n"), "t.yaml:1:8: items: expected a list");
     EXPECT_EQ(error("tags: [a, [b]]\n"), "t.yaml:1:11: tags: expected a list of words");
+}
+
+// Issue 17: the same declarations as JSON (the predictor's model files): read by the same strict
+// reader, written as JSON that an independent reader (nlohmann) takes back, numbers exact.
+namespace {
+struct Net {
+    std::string name = "n";
+    std::vector<double> bias;
+    std::vector<double> weight;  // row-major
+    std::size_t rows = 0, cols = 0;
+    std::string notes = "{}";
+};
+void net_keys(dw::KeyVisitor& k, Net& n) {
+    k.text("name", n.name);
+    k.values("bias", n.bias, {-10, 10});
+    k.matrix("weight", n.weight, n.rows, n.cols, {-10, 10});
+    k.verbatim("notes", n.notes);
+}
+Net read_net(const std::string& json) {
+    Net n;
+    dw::read_keys(dw::load_yaml(json, "n.json", "JSON"), "n.json", [&](dw::KeyVisitor& k) { net_keys(k, n); });
+    return n;
+}
+}  // namespace
+
+TEST(DeclaredKeys, JsonIsReadStrictlyAndWrittenExactly) {
+    Net n;
+    n.name = "q\"uote\\d";
+    n.bias = {0.1, -1e-7, 3};
+    n.weight = {1.0 / 3, 2, 0.1f, -4, 5, 6};
+    n.rows = 2;
+    n.cols = 3;
+    n.notes = R"({"trained_on":[{"name":"a b","k":3}],"ok":true,"none":null,"text":"0.5"})";
+    const std::string text = dw::write_json_keys([&](dw::KeyVisitor& k) { net_keys(k, n); });
+    const auto j = nlohmann::json::parse(text);  // an independent reader
+    EXPECT_EQ(j["name"], n.name);
+    EXPECT_EQ(j["weight"][0][0].get<double>(), 1.0 / 3);
+    EXPECT_EQ(j["notes"]["trained_on"][0]["k"], 3);
+    EXPECT_TRUE(j["notes"]["text"].is_string()) << "a quoted number stays a string";
+    const Net back = read_net(text);
+    EXPECT_EQ(back.name, n.name);
+    EXPECT_EQ(back.bias, n.bias);
+    EXPECT_EQ(back.weight, n.weight);
+    EXPECT_EQ(back.rows, 2u);
+    EXPECT_EQ(back.cols, 3u);
+    EXPECT_EQ(nlohmann::json::parse(back.notes), nlohmann::json::parse(n.notes));
+    EXPECT_EQ(dw::write_json_keys([&](dw::KeyVisitor& k) { net_keys(k, const_cast<Net&>(back)); }), text);
+
+    const auto error = [](const std::string& json) { return error_of([&] { read_net(json); }); };
+    EXPECT_EQ(error("{\"name\": \"x\",\n \"bais\": []}"),
+              "n.json:2:2: bais: unknown key 'bais' (known: bias, name, notes, weight)");
+    EXPECT_EQ(error(R"({"weight": [[1, 2], [3]]})"), "n.json:1:21: weight[1]: rows differ in length");
+    EXPECT_EQ(error(R"({"weight": [[1, "x"]]})"), "n.json:1:17: weight[0][1]: expected a number");
+    EXPECT_EQ(error(R"({"bias": [1, 20]})"), "n.json:1:14: bias[1]: 20 is not in [-10, 10]");
+    EXPECT_TRUE(error("{").starts_with("n.json:1:")) << error("{");
+    EXPECT_NE(error("{").find(": not valid JSON: "), std::string::npos) << error("{");
+    EXPECT_THROW(dw::write_json_keys([&](dw::KeyVisitor& k) {
+                     double nan = std::nan("");
+                     k.number("x", nan, {-1, 1});
+                 }),
+                 dw::RuntimeError)
+        << "JSON has no NaN";
 }
 
 TEST(DeclaredKeys, EachMistakeIsOneLocatedLine) {

@@ -243,7 +243,7 @@ TEST(PredictorModel, BadModelFilesNameTheField) {
             EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
         }
     };
-    expect_error("{", "not JSON");
+    expect_error("{", "bad.json:1:1: not valid JSON");
     expect_error(R"({"format": "something/1"})", "format");
     auto broken = nlohmann::json::parse(text);
     broken["structure"] = "ring";
@@ -259,7 +259,16 @@ TEST(PredictorModel, BadModelFilesNameTheField) {
     expect_error(wrong.dump(), "phi[1].weight[1]: rows differ in length");
     wrong = nlohmann::json::parse(text);
     wrong["rho"][0]["weight"][3][2] = "x";
-    expect_error(wrong.dump(), "rho[0].weight[3][2]: not a number");
+    expect_error(wrong.dump(), "rho[0].weight[3][2]: expected a number");
+    // Issue 17: read by the one configuration layer: a misspelt key is refused, not ignored (a
+    // Deep Sets model whose "baseline" were misspelt would have lost its baseline silently).
+    wrong = nlohmann::json::parse(text);
+    wrong["baselin"] = wrong["baseline"];
+    wrong.erase("baseline");
+    expect_error(wrong.dump(), "baselin: unknown key 'baselin'");
+    wrong = nlohmann::json::parse(text);
+    wrong["input"]["features"][0] = "north";
+    expect_error(wrong.dump(), "input.features: expected dn, de, dd");
 }
 
 // A model that returns a known field: f_d = A exp(-|x - c|^2 / 2 s^2) of the first neighbour.
