@@ -145,14 +145,8 @@ public:
                const std::string& shape) override {
         const YAML::Node n = get(key);
         if (!n) return;
-        const std::size_t rows = v.size() / cols;
-        if (!n.IsSequence() || n.size() != rows) fail(n, key, shape);
-        for (std::size_t i = 0; i < rows; ++i) {
-            const YAML::Node row = n[i];
-            if (!row.IsSequence() || row.size() != cols) fail(row, log::cat(key, "[", i, "]"), shape);
-            for (std::size_t j = 0; j < cols; ++j)
-                element(row[j], log::cat(key, "[", i, "][", j, "]"), v[i * cols + j], r);
-        }
+        if (!n.IsSequence() || n.size() != v.size() / cols) fail(n, key, shape);
+        rows(n, key, cols, r, shape, v);
     }
     void values(const std::string& key, std::vector<double>& v, const Range& r) override {
         const YAML::Node n = get(key);
@@ -168,16 +162,11 @@ public:
         if (!n) return;
         if (!n.IsSequence() || n.size() == 0 || !n[0].IsSequence() || n[0].size() == 0)
             fail(n, key, "expected a matrix (a list of rows of numbers)");
-        const std::size_t R = n.size(), C = n[0].size();
-        std::vector<double> out(R * C);
-        for (std::size_t i = 0; i < R; ++i) {
-            const YAML::Node row = n[i];
-            if (!row.IsSequence() || row.size() != C) fail(row, log::cat(key, "[", i, "]"), "rows differ in length");
-            for (std::size_t j = 0; j < C; ++j) element(row[j], log::cat(key, "[", i, "][", j, "]"), out[i * C + j], r);
-        }
+        std::vector<double> out(n.size() * n[0].size());
+        this->rows(n, key, n[0].size(), r, "rows differ in length", out);
         v = std::move(out);
-        rows = R;
-        cols = C;
+        rows = n.size();
+        cols = n[0].size();
     }
     void verbatim(const std::string& key, std::string& json) override {
         const YAML::Node n = get(key);
@@ -212,6 +201,17 @@ public:
     }
 
 private:
+    // The rows of the sequence `n` into `out` (row-major), each `cols` numbers in r; a row of
+    // another length is `problem` at key[i].
+    void rows(const YAML::Node& n, const std::string& key, std::size_t cols, const Range& r, const std::string& problem,
+              std::span<double> out) const {
+        for (std::size_t i = 0; i < n.size(); ++i) {
+            const YAML::Node row = n[i];
+            if (!row.IsSequence() || row.size() != cols) fail(row, log::cat(key, "[", i, "]"), problem);
+            for (std::size_t j = 0; j < cols; ++j)
+                element(row[j], log::cat(key, "[", i, "][", j, "]"), out[i * cols + j], r);
+        }
+    }
     void element(const YAML::Node& n, const std::string& key, double& v, const Range& r) const {
         double x = 0;
         if (!n.IsScalar() || !YAML::convert<double>::decode(n, x)) fail(n, key, "expected a number");
@@ -333,9 +333,7 @@ public:
     void flag(const std::string& key, bool& v) override { member(key, v ? "true" : "false"); }
     void text(const std::string& key, std::string& v) override { member(key, json_quoted(v)); }
     void texts(const std::string& key, std::vector<std::string>& v) override {
-        std::string a = "[";
-        for (std::size_t i = 0; i < v.size(); ++i) a += (i ? ", " : "") + json_quoted(v[i]);
-        member(key, a + "]");
+        member(key, array(v.size(), [&](std::size_t i) { return json_quoted(v[i]); }));
     }
     bool has(const std::string&) override { return true; }
     void choice(const std::string& key, int& v, std::span<const char* const> names, const std::string&,
@@ -347,9 +345,7 @@ public:
     }
     void table(const std::string& key, std::span<double> v, std::size_t cols, const Range&,
                const std::string&) override {
-        std::string a = "[";
-        for (std::size_t i = 0; i + cols <= v.size(); i += cols) a += (i ? ", " : "") + row(v.subspan(i, cols));
-        member(key, a + "]");
+        member(key, array(v.size() / cols, [&](std::size_t i) { return row(v.subspan(i * cols, cols)); }));
     }
     void values(const std::string& key, std::vector<double>& v, const Range&) override { member(key, row(v)); }
     void matrix(const std::string& key, std::vector<double>& v, std::size_t& rows, std::size_t& cols,
@@ -384,10 +380,15 @@ public:
     }
 
 private:
-    static std::string row(std::span<const double> v) {
+    // "[a, b, c]" of n items, item(i) the text of each.
+    template <class Item>
+    static std::string array(std::size_t n, const Item& item) {
         std::string a = "[";
-        for (std::size_t i = 0; i < v.size(); ++i) a += (i ? ", " : "") + json_number(v[i]);
+        for (std::size_t i = 0; i < n; ++i) a += (i ? ", " : "") + item(i);
         return a + "]";
+    }
+    static std::string row(std::span<const double> v) {
+        return array(v.size(), [&](std::size_t i) { return json_number(v[i]); });
     }
     // A new member (or array element, when key is empty) on its own line.
     void start(const std::string& key) {

@@ -76,18 +76,15 @@ void names(KeyVisitor& k, const std::string& key, const std::array<const char*, 
 }
 
 void layer_keys(KeyVisitor& k, Layer& l) {
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;  // the file's order
     for (const char* key : {"activation", "weight", "bias"}) required(k, key);
     k.enumeration("activation", l.silu, kActivationNames, "activation");
     std::size_t rows = static_cast<std::size_t>(l.w.rows()), cols = static_cast<std::size_t>(l.w.cols());
     std::vector<double> w(rows * cols);
-    for (std::size_t r = 0; r < rows; ++r)
-        for (std::size_t c = 0; c < cols; ++c)
-            w[r * cols + c] = l.w(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+    Eigen::Map<RowMajor>(w.data(), l.w.rows(), l.w.cols()) = l.w.cast<double>();
     k.matrix("weight", w, rows, cols, kFinite);
-    l.w.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
-    for (std::size_t r = 0; r < rows; ++r)
-        for (std::size_t c = 0; c < cols; ++c)
-            l.w(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = static_cast<float>(w[r * cols + c]);
+    l.w = Eigen::Map<const RowMajor>(w.data(), static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols))
+              .cast<float>();
     std::vector<double> b(l.b.data(), l.b.data() + l.b.size());
     k.values("bias", b, kFinite);
     k.require(b.size() == rows, "bias", log::cat("expected ", rows, " numbers (the weight's rows)"));
