@@ -27,21 +27,37 @@ Eigen::VectorXf Mlp::forward(const Eigen::VectorXf& in) const {
 Features features_of(const RelState& x) {
     const double horizontal = std::hypot(x[0], x[1]);
     const double separation = std::abs(x[2]) + kFeatureSeparationOffsetM;
-    return {x[0], x[1], x[2], x[3], x[4], x[5], horizontal, horizontal / separation, 1.0 / separation};
+    return {x[0], x[1], x[2], x[3], x[4], x[5], horizontal, horizontal / separation, 1.0 / separation, 0.0};
+}
+
+double jet_overlap(const RelState& a, const RelState& b) {
+    const double q = std::hypot(a[0] - b[0], a[1] - b[1]) /
+                     (std::abs(a[2]) + std::abs(b[2]) + 2 * kFeatureSeparationOffsetM) / kJetOverlapRatio;
+    return std::exp(-q * q);
+}
+
+Features features_of(std::span<const RelState> set, std::size_t j) {
+    Features f = features_of(set[j]);
+    for (std::size_t k = 0; k < set.size(); ++k)
+        if (k != j) f[kOverlapFeature] = std::max(f[kOverlapFeature], jet_overlap(set[j], set[k]));
+    return f;
 }
 
 Wrench6 LearntModel::predict(std::span<const RelState> neighbours) const {
     Eigen::VectorXf pooled = Eigen::VectorXf::Zero(phi.outputs());
     Eigen::VectorXf base = Eigen::VectorXf::Zero(6);
     Eigen::VectorXf in(kFeatureSize);
-    for (const auto& x : neighbours) {
-        const Features f = features_of(x);
+    const bool deep = structure == Structure::deep_sets;
+    for (std::size_t j = 0; j < neighbours.size(); ++j) {
+        const Features f = deep ? features_of(neighbours, j) : features_of(neighbours[j]);
         for (std::size_t i = 0; i < f.size(); ++i)
             in[static_cast<Eigen::Index>(i)] = (static_cast<float>(f[i]) - input_mean[i]) / input_std[i];
-        pooled += phi.forward(in);
+        pooled += static_cast<float>(deep ? f[kOverlapFeature] : 1.0) * phi.forward(in);
+        in[kOverlapFeature] = 0;  // the baseline is a sum model: one neighbour at a time
         if (!baseline.layers.empty()) base += baseline.forward(in);
     }
-    const Eigen::VectorXf out = (structure == Structure::deep_sets ? rho.forward(pooled) : pooled) + base;
+    if (deep) pooled = rho.forward(pooled) - rho.forward(Eigen::VectorXf::Zero(pooled.size()));
+    const Eigen::VectorXf out = pooled + base;
     Wrench6 w{};
     for (std::size_t a = 0; a < 6; ++a) w[a] = static_cast<double>(out[static_cast<Eigen::Index>(a)] * output_scale[a]);
     return w;
@@ -128,9 +144,10 @@ void check_format(const YAML::Node& root, const std::string& path) {
     const YAML::Node& doc = root;  // a const lookup never inserts the key
     const YAML::Node format = doc.IsMap() ? doc["format"] : YAML::Node();
     if (format && (!format.IsScalar() || format.Scalar() != kModelFormat))
-        fail_at_node(path, format, "format",
-                     log::cat("expected ", kModelFormat,
-                              " (models saved before the jet features, downwash-model/1, must be trained again)"));
+        fail_at_node(
+            path, format, "format",
+            log::cat("expected ", kModelFormat,
+                     " (models saved before the jet overlap, downwash-model/1 and /2, must be trained again)"));
 }
 
 void model_keys(KeyVisitor& k, LearntModel& m) {
@@ -144,6 +161,8 @@ void model_keys(KeyVisitor& k, LearntModel& m) {
         floats(in, "std", m.input_std);
         for (std::size_t i = 0; i < m.input_std.size(); ++i)
             in.require(m.input_std[i] > 0, log::cat("std[", i, "]"), "must be > 0");
+        in.require(m.input_mean[kOverlapFeature] == 0 && m.input_std[kOverlapFeature] == 1,
+                   log::cat("mean[", kOverlapFeature, "]"), "jet_overlap is not normalised: mean 0 and std 1");
     });
     k.section("output", [&](KeyVisitor& out) {
         names(out, "axes", flight::kAxes);

@@ -3,7 +3,7 @@
 //   physics        the simulator's wrench model (the jets, the planform, the aggregation law)
 //   naive_linear   Σ_j psi(x_j - x_i), psi trained on single-neighbour flights only
 //   learnt_linear  the same sum structure, trained on multi-vehicle data
-//   deep_sets      Phi(Σ_j phi(x_j - x_i))
+//   deep_sets      Phi(Σ_j w_j phi(x_j - x_i)) - Phi(0), w_j the overlap of j's jet with the nearest other's
 // Learnt models are trained with libtorch (train.hpp) but evaluated here with Eigen, so serving
 // a model needs no libtorch. A saved model (JSON, kModelFormat) carries its input
 // normalisation and its metadata.
@@ -13,7 +13,10 @@
 // variable horizontal distance / vertical separation, and 1 / vertical separation, the centreline
 // decay), so a small network need not rediscover them from raw coordinates. A Deep Sets model may
 // carry a frozen sum model as its baseline and learn only what the sum misses:
-//   deep_sets with baseline   Σ_j psi(x_j - x_i) + Phi(Σ_j phi(x_j - x_i)), Phi's last layer starting at 0
+//   deep_sets with baseline   Σ_j psi(x_j - x_i) + Phi(Σ_j w_j phi(x_j - x_i)) - Phi(0), Phi's last layer starting at 0
+// Deep Sets alone sees the set: each neighbour's features end with w_j (jet_overlap, 0 for a sum
+// model), which also weighs its term, so Deep Sets departs from its baseline only where two
+// neighbours' jets overlap — never for one neighbour, nor low down, where jets are narrow.
 #include <Eigen/Core>
 #include <memory>
 #include <mutex>
@@ -58,16 +61,32 @@ struct Mlp {
 
 enum class Structure { sum, deep_sets };
 
-inline constexpr int kFeatureSize = 9;
+inline constexpr int kFeatureSize = 10;
 using Features = std::array<double, kFeatureSize>;
-inline constexpr std::array<const char*, kFeatureSize> kFeatureNames{
-    "dn", "de", "dd", "dvn", "dve", "dvd", "horizontal_distance", "distance_over_separation", "inverse_separation"};
+inline constexpr std::array<const char*, kFeatureSize> kFeatureNames{"dn",
+                                                                     "de",
+                                                                     "dd",
+                                                                     "dvn",
+                                                                     "dve",
+                                                                     "dvd",
+                                                                     "horizontal_distance",
+                                                                     "distance_over_separation",
+                                                                     "inverse_separation",
+                                                                     "jet_overlap"};
+inline constexpr std::size_t kOverlapFeature = kFeatureSize - 1;  // not normalised: mean 0, spread 1
 // The vertical separation's offset in the two ratios [m]: about a rotor's size, so a neighbour level
 // with the sufferer gives finite features (the jet's virtual origin lies about that far above a rotor).
 inline constexpr double kFeatureSeparationOffsetM = 0.1;
-Features features_of(const RelState& x);
+// Two jets' overlap at the sufferer: exp(-(q / kJetOverlapRatio)^2), q = the horizontal distance
+// between the two neighbours over the sum of their depths above the sufferer (each + the offset).
+// A turbulent round jet's half-width grows by about 0.1 of its depth and its edge lies at about
+// twice that, so two jets' edges meet near q = 0.2.
+inline constexpr double kJetOverlapRatio = 0.2;
+double jet_overlap(const RelState& a, const RelState& b);
+Features features_of(const RelState& x);                             // one neighbour alone: overlap 0
+Features features_of(std::span<const RelState> set, std::size_t j);  // j in its set: the largest overlap
 
-inline constexpr const char* kModelFormat = "downwash-model/2";
+inline constexpr const char* kModelFormat = "downwash-model/3";
 
 class LearntModel final : public ForceModel {
 public:

@@ -22,7 +22,7 @@ struct StudyOptions {
     std::string out_dir;
     std::vector<std::string> formations{"single",           "side_by_side", "leader_follower",
                                         "leader_follower3", "stack",        "hybrid"};
-    int legs = 60;                     // per flight
+    int legs = 90;                     // per flight: 30 lines a band, 0.067 m apart (the merged jets are narrow)
     double single_half_width_m = 1.6;  // the single-neighbour flights' square (others: 1 m)
     std::uint64_t seed = 1;
     int max_epochs = 150;

@@ -69,7 +69,9 @@ Tensors tensors(const Dataset& d, const LearntModel& norm) {
         const auto& s = d.samples[static_cast<std::size_t>(i)];
         for (int j = 0; j < s.k; ++j) {
             ma[i][j][0] = 1;
-            const Features f = features_of(s.x[static_cast<std::size_t>(j)]);
+            const auto jj = static_cast<std::size_t>(j);
+            const Features f =
+                norm.structure == Structure::deep_sets ? features_of(s.neighbours(), jj) : features_of(s.x[jj]);
             for (std::size_t a = 0; a < f.size(); ++a)
                 xa[i][j][static_cast<int64_t>(a)] = (static_cast<float>(f[a]) - norm.input_mean[a]) / norm.input_std[a];
         }
@@ -107,6 +109,8 @@ void normalise(const Dataset& train, LearntModel& m) {
         m.input_mean[a] = static_cast<float>(mean);
         m.input_std[a] = static_cast<float>(std::max(1e-3, std::sqrt(std::max(0.0, sq[a] / count - mean * mean))));
     }
+    m.input_mean[kOverlapFeature] = 0;  // it weighs phi's term as it is (model.hpp)
+    m.input_std[kOverlapFeature] = 1;
     const auto n = static_cast<double>(train.samples.size());
     for (std::size_t group = 0; group < 6; group += 3) {
         const double rms = std::sqrt((ysq[group] + ysq[group + 1] + ysq[group + 2]) / (3 * n));
@@ -155,15 +159,18 @@ std::string training_metadata(const Dataset& train, const Dataset& validation, c
         .dump();
 }
 
-// The networks and how their outputs combine: a sum model pools phi's six outputs over the
-// neighbours; Deep Sets feeds the pooled latent through rho. The baseline's prediction is added.
+// The networks and how their outputs combine (model.hpp): a sum model pools phi's six outputs over
+// the neighbours; Deep Sets pools phi's latent weighed by each neighbour's jet overlap and feeds it
+// through rho, less rho(0). The baseline's prediction is added.
 struct Net {
     torch::nn::Sequential phi, rho;
     bool deep_sets;
 
     torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& mask, const torch::Tensor& base) {
-        auto pooled = (phi->forward(x) * mask).sum(1);
-        return (deep_sets ? rho->forward(pooled) : pooled) + base;
+        if (!deep_sets) return (phi->forward(x) * mask).sum(1) + base;
+        const auto overlap = x.slice(2, kOverlapFeature, kOverlapFeature + 1);
+        const auto pooled = (phi->forward(x) * mask * overlap).sum(1);
+        return rho->forward(pooled) - rho->forward(torch::zeros_like(pooled)) + base;
     }
     torch::Tensor loss(const Tensors& t) { return torch::mse_loss(forward(t.x, t.mask, t.base), t.y); }
 };

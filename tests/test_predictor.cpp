@@ -46,8 +46,8 @@ LearntModel random_model(Structure s, unsigned seed) {
     LearntModel m;
     m.kind = s == Structure::sum ? "learnt_linear" : "deep_sets";
     m.structure = s;
-    m.input_mean = {0.1f, -0.2f, -1.0f, 0, 0.3f, 0, 0.8f, 0.6f, 1.2f};
-    m.input_std = {0.6f, 0.7f, 0.4f, 0.1f, 0.5f, 0.1f, 0.5f, 0.4f, 0.6f};
+    m.input_mean = {0.1f, -0.2f, -1.0f, 0, 0.3f, 0, 0.8f, 0.6f, 1.2f, 0};  // jet_overlap: 0 and 1
+    m.input_std = {0.6f, 0.7f, 0.4f, 0.1f, 0.5f, 0.1f, 0.5f, 0.4f, 0.6f, 1};
     m.output_scale = {0.1f, 0.1f, 1.5f, 0.01f, 0.01f, 0.005f};
     m.phi = dw::testkit::random_mlp(rng, {kFeatureSize, 16, 16, s == Structure::sum ? 6 : 8}, 0.5f);
     if (s == Structure::deep_sets) m.rho = dw::testkit::random_mlp(rng, {8, 16, 6}, 0.5f);
@@ -162,6 +162,38 @@ TEST(PredictorModel, FeaturesCarryTheJetsInvariantsAndStayFinite) {
     for (std::size_t a = 6; a < f.size(); ++a) EXPECT_EQ(f[a], g[a]);
 }
 
+TEST(PredictorModel, JetOverlapIsOneForStackedJetsAndVanishesForDistantOnes) {
+    const RelState a{0.2, 0.0, -1.2, 0, 0.5, 0}, b{0.2, 0.4, -1.2, 0, 0.5, 0};
+    EXPECT_EQ(features_of(a)[kOverlapFeature], 0.0) << "a neighbour alone overlaps nothing";
+    // 0.4 m apart, both 1.2 m up: q = 0.4 / (2.4 + 0.2) / 0.2.
+    const double q = 0.4 / (2 * (1.2 + kFeatureSeparationOffsetM)) / kJetOverlapRatio;
+    EXPECT_NEAR(jet_overlap(a, b), std::exp(-q * q), 1e-12);
+    EXPECT_EQ(jet_overlap(a, b), jet_overlap(b, a));
+    EXPECT_NEAR(jet_overlap(a, {0.2, 0.0, -0.7, 0, 0, 0}), 1.0, 1e-12) << "one above the other";
+    // The same pair low down (0.3 m): narrow jets, no overlap to speak of.
+    EXPECT_LT(jet_overlap({0, 0, -0.3, 0, 0, 0}, {0, 0.5, -0.3, 0, 0, 0}), 1e-3);
+    // In a set, each neighbour carries its largest overlap with the others.
+    const std::vector<RelState> set{a, b, {3, 3, -1.2, 0, 0, 0}};
+    EXPECT_EQ(features_of(set, 0)[kOverlapFeature], jet_overlap(a, b));
+    EXPECT_LT(features_of(set, 2)[kOverlapFeature], 1e-12);
+    for (std::size_t i = 0; i < kOverlapFeature; ++i) EXPECT_EQ(features_of(set, 1)[i], features_of(b)[i]);
+}
+
+TEST(PredictorModel, DeepSetsIsItsBaselineWhereNoJetsOverlap) {
+    LearntModel sum = random_model(Structure::sum, 7);
+    LearntModel deep = random_model(Structure::deep_sets, 8);  // a residual that is not zero
+    deep.input_mean = sum.input_mean, deep.input_std = sum.input_std, deep.output_scale = sum.output_scale;
+    deep.baseline = sum.phi;
+    auto same = [&](const std::vector<RelState>& x) {
+        const auto a = deep.predict(x), b = sum.predict(x);
+        for (std::size_t i = 0; i < 6; ++i) EXPECT_NEAR(a[i], b[i], 1e-6 * (1 + std::abs(b[i]))) << i;
+    };
+    same({{0.1, 0.5, -1.2, 0, 0.5, 0}});                                // one neighbour
+    same({{0.0, -3.0, -0.3, 0, 0.5, 0}, {0.0, 3.0, -0.3, 0, 0.5, 0}});  // two far apart
+    const std::vector<RelState> stacked{{0.0, 0.0, -0.8, 0, 0.5, 0}, {0.0, 0.05, -1.3, 0, 0.5, 0}};
+    EXPECT_GT(std::abs(deep.predict(stacked)[2] - sum.predict(stacked)[2]), 1e-4) << "overlapping jets: its own term";
+}
+
 TEST(PredictorModel, DeepSetsOnABaselineStartsAsTheBaselineAndSavesIt) {
     dw::test::TempDir dir;
     LearntModel sum = random_model(Structure::sum, 5);
@@ -211,6 +243,7 @@ TEST(PredictorTraining, DeepSetsOnTheSumModelIsNeverWorseOnValidationAndLearnsTh
     o.max_epochs = 15;
     const TrainResult sum = train_model(s.train, s.validation, o);
     o.kind = "deep_sets";
+    o.max_epochs = 40;  // the pair term is weighed by the two jets' overlap: it takes longer to learn
     const TrainResult deep = train_model(s.train, s.validation, o, &sum.model);
     EXPECT_LT(deep.best_validation_loss, 0.8 * sum.best_validation_loss) << "the residual learns what the sum cannot";
     EXPECT_EQ(deep.model.input_mean, sum.model.input_mean);  // the baseline's normalisation
@@ -431,6 +464,7 @@ TEST(PredictorMetric, ArenaErrorIsTheMeanCellDifference) {
 }
 
 // The issue's claims, on simulated flights with fixed seeds (the table: dw-predictor study).
+constexpr double kMergingFloorGuard = 1.7;  // Deep Sets' D RMSE / the physics floor with jet merging
 TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     dw::test::TempDir dir;
     StudyOptions o;
@@ -443,9 +477,16 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     const double deep = table_value(merging.table, "leader_follower K=3", "deep_sets", 2);
     EXPECT_LE(deep, 0.7 * lin) << "jet merging: Deep Sets " << deep << " vs learnt linear " << lin;
     for (const auto& row : merging.table)  // where jets merge, Deep Sets is closer than the sum it is built on
-        if (row.model == "deep_sets")
-            EXPECT_LT(row.rmse[2], table_value(merging.table, row.formation, "learnt_linear", 2, false))
-                << row.formation;
+        if (row.model == "deep_sets") {
+            const double lin_rmse = table_value(merging.table, row.formation, "learnt_linear", 2, false);
+            if (row.formation == "single K=1")  // one neighbour: Deep Sets is its baseline exactly
+                EXPECT_FLOAT_EQ(static_cast<float>(row.rmse[2]), static_cast<float>(lin_rmse));
+            else EXPECT_LT(row.rmse[2], lin_rmse) << row.formation;
+            // The issue asks 1.5 x the physics floor; at this seed Leader Follower K=3 is at 1.63
+            // (docs/PREDICTOR.md), so this guards what holds rather than claiming the target.
+            EXPECT_LE(row.rmse[2], kMergingFloorGuard * table_value(merging.table, row.formation, "physics", 2, false))
+                << row.formation << ": Deep Sets vs the physics floor";
+        }
 
     o.out_dir = dir.file("sum");
     o.physics.effects.jet_merging.enabled = false;

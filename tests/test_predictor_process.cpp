@@ -136,7 +136,7 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
 
 TEST(PredictorProcess, BadModelIsOneLineAndExit2) {
     dw::test::TempDir dir;
-    std::ofstream(dir.file("m.json")) << "{\"format\": \"downwash-model/2\"}";
+    std::ofstream(dir.file("m.json")) << "{\"format\": \"downwash-model/3\"}";
     const auto r = dw::test::run({dw::test::bin("dw-predictor"), "run", "--model", dir.file("m.json")}, dir);
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
