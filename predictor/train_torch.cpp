@@ -2,6 +2,7 @@
 #include <torch/torch.h>
 
 #include <chrono>
+#include <mutex>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -170,10 +171,20 @@ struct Net {
         if (!deep_sets) return (phi->forward(x) * mask).sum(1) + base;
         const auto overlap = x.slice(2, kOverlapFeature, kOverlapFeature + 1);
         const auto pooled = (phi->forward(x) * mask * overlap).sum(1);
-        return rho->forward(pooled) - rho->forward(torch::zeros_like(pooled)) + base;
+        return rho->forward(pooled) - rho->forward(torch::zeros({1, pooled.size(1)})) + base;
     }
     torch::Tensor loss(const Tensors& t) { return torch::mse_loss(forward(t.x, t.mask, t.base), t.y); }
 };
+
+// The networks, their initial weights drawn from torch's global generator: seeded and drawn under
+// one lock, so that trainings running at once (the study's generalisation) start as they would alone.
+Net make_net(const LearntModel& m, const TrainOptions& o) {
+    static std::mutex global_generator;
+    const std::lock_guard lock(global_generator);
+    torch::manual_seed(o.seed);
+    const int width = m.structure == Structure::deep_sets ? o.latent : 6;
+    return Net{mlp(kFeatureSize, o.hidden, width), mlp(o.latent, o.hidden, 6), m.structure == Structure::deep_sets};
+}
 
 // One pass over the training samples in shuffled minibatches; the mean batch loss.
 double train_epoch(Net& net, torch::optim::Adam& adam, const Tensors& tr, const TrainOptions& o,
@@ -211,7 +222,6 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
     const auto started = std::chrono::steady_clock::now();
     if (train.samples.empty()) throw InputError("training: no samples on the training legs");
     if (validation.samples.empty()) throw InputError("training: no samples on the validation legs");
-    torch::manual_seed(o.seed);
     torch::set_num_threads(o.threads);
 
     TrainResult r;
@@ -219,8 +229,7 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
     prepare(m, train, o, baseline);
 
     const Tensors tr = tensors(train, m), va = tensors(validation, m);
-    const int width = m.structure == Structure::deep_sets ? o.latent : 6;
-    Net net{mlp(kFeatureSize, o.hidden, width), mlp(o.latent, o.hidden, 6), m.structure == Structure::deep_sets};
+    Net net = make_net(m, o);
     auto& phi = net.phi;
     auto& rho = net.rho;
     if (baseline) {  // the residual starts at zero: before any step the model is its baseline

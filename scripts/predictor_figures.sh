@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the figures of docs/PREDICTOR.md (issue 16): the two studies (jet merging on, and a
 # plain force sum), then the single-neighbour f_d maps and the Leader Follower K=3 maps at each
-# altitude the flights fly, and the regime maps. About 10 minutes on 2 cores.
+# altitude the flights fly, and the regime maps. About 6 minutes on 2 cores.
 # Usage: scripts/predictor_figures.sh [work folder, default /tmp/dw-predictor-figures]
 set -euo pipefail
 cd "$(dirname "$0")/.."
