@@ -47,16 +47,17 @@ Wrench6 LearntModel::predict(std::span<const RelState> neighbours) const {
     Eigen::VectorXf pooled = Eigen::VectorXf::Zero(phi.outputs());
     Eigen::VectorXf base = Eigen::VectorXf::Zero(6);
     Eigen::VectorXf in(kFeatureSize);
-    const bool deep = structure == Structure::deep_sets;
+    const bool deep = structure == Structure::deep_sets, residual = deep && !baseline.layers.empty();
     for (std::size_t j = 0; j < neighbours.size(); ++j) {
         const Features f = deep ? features_of(neighbours, j) : features_of(neighbours[j]);
         for (std::size_t i = 0; i < f.size(); ++i)
             in[static_cast<Eigen::Index>(i)] = (static_cast<float>(f[i]) - input_mean[i]) / input_std[i];
-        pooled += static_cast<float>(deep ? f[kOverlapFeature] : 1.0) * phi.forward(in);
+        pooled += static_cast<float>(residual ? f[kOverlapFeature] : 1.0) * phi.forward(in);
         in[kOverlapFeature] = 0;  // the baseline is a sum model: one neighbour at a time
-        if (!baseline.layers.empty()) base += baseline.forward(in);
+        if (residual) base += baseline.forward(in);
     }
-    if (deep) pooled = rho.forward(pooled) - rho.forward(Eigen::VectorXf::Zero(pooled.size()));
+    if (residual) pooled = rho.forward(pooled) - rho.forward(Eigen::VectorXf::Zero(pooled.size()));
+    else if (deep) pooled = rho.forward(pooled);
     const Eigen::VectorXf out = pooled + base;
     Wrench6 w{};
     for (std::size_t a = 0; a < 6; ++a) w[a] = static_cast<double>(out[static_cast<Eigen::Index>(a)] * output_scale[a]);

@@ -3,7 +3,7 @@
 //   physics        the simulator's wrench model (the jets, the planform, the aggregation law)
 //   naive_linear   Σ_j psi(x_j - x_i), psi trained on single-neighbour flights only
 //   learnt_linear  the same sum structure, trained on multi-vehicle data
-//   deep_sets      Phi(Σ_j w_j phi(x_j - x_i)) - Phi(0), w_j the overlap of j's jet with the nearest other's
+//   deep_sets      Phi(Σ_j phi(x_j - x_i))
 // Learnt models are trained with libtorch (train.hpp) but evaluated here with Eigen, so serving
 // a model needs no libtorch. A saved model (JSON, kModelFormat) carries its input
 // normalisation and its metadata.
@@ -14,9 +14,9 @@
 // decay), so a small network need not rediscover them from raw coordinates. A Deep Sets model may
 // carry a frozen sum model as its baseline and learn only what the sum misses:
 //   deep_sets with baseline   Σ_j psi(x_j - x_i) + Phi(Σ_j w_j phi(x_j - x_i)) - Phi(0), Phi's last layer starting at 0
-// Deep Sets alone sees the set: each neighbour's features end with w_j (jet_overlap, 0 for a sum
-// model), which also weighs its term, so Deep Sets departs from its baseline only where two
-// neighbours' jets overlap — never for one neighbour, nor low down, where jets are narrow.
+// Deep Sets alone sees the set: each neighbour's features end with w_j (jet_overlap; 0 for a sum
+// model). On a baseline it also weighs its term, so Deep Sets departs from its baseline only where
+// two neighbours' jets overlap — never for one neighbour, nor low down, where jets are narrow.
 #include <Eigen/Core>
 #include <memory>
 #include <mutex>

@@ -2,8 +2,8 @@
 #include <torch/torch.h>
 
 #include <chrono>
-#include <mutex>
 #include <cmath>
+#include <mutex>
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
@@ -161,14 +161,15 @@ std::string training_metadata(const Dataset& train, const Dataset& validation, c
 }
 
 // The networks and how their outputs combine (model.hpp): a sum model pools phi's six outputs over
-// the neighbours; Deep Sets pools phi's latent weighed by each neighbour's jet overlap and feeds it
-// through rho, less rho(0). The baseline's prediction is added.
+// the neighbours; Deep Sets feeds the pooled latent through rho — on a baseline (residual), each
+// neighbour's term weighed by its jet overlap, less rho(0). The baseline's prediction is added.
 struct Net {
     torch::nn::Sequential phi, rho;
-    bool deep_sets;
+    bool deep_sets, residual;
 
     torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& mask, const torch::Tensor& base) {
         if (!deep_sets) return (phi->forward(x) * mask).sum(1) + base;
+        if (!residual) return rho->forward((phi->forward(x) * mask).sum(1)) + base;
         const auto overlap = x.slice(2, kOverlapFeature, kOverlapFeature + 1);
         const auto pooled = (phi->forward(x) * mask * overlap).sum(1);
         return rho->forward(pooled) - rho->forward(torch::zeros({1, pooled.size(1)})) + base;
@@ -182,8 +183,9 @@ Net make_net(const LearntModel& m, const TrainOptions& o) {
     static std::mutex global_generator;
     const std::lock_guard lock(global_generator);
     torch::manual_seed(o.seed);
-    const int width = m.structure == Structure::deep_sets ? o.latent : 6;
-    return Net{mlp(kFeatureSize, o.hidden, width), mlp(o.latent, o.hidden, 6), m.structure == Structure::deep_sets};
+    const bool deep = m.structure == Structure::deep_sets;
+    return Net{mlp(kFeatureSize, o.hidden, deep ? o.latent : 6), mlp(o.latent, o.hidden, 6), deep,
+               deep && !m.baseline.layers.empty()};
 }
 
 // One pass over the training samples in shuffled minibatches; the mean batch loss.

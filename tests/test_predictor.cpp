@@ -192,6 +192,10 @@ TEST(PredictorModel, DeepSetsIsItsBaselineWhereNoJetsOverlap) {
     same({{0.0, -3.0, -0.3, 0, 0.5, 0}, {0.0, 3.0, -0.3, 0, 0.5, 0}});  // two far apart
     const std::vector<RelState> stacked{{0.0, 0.0, -0.8, 0, 0.5, 0}, {0.0, 0.05, -1.3, 0, 0.5, 0}};
     EXPECT_GT(std::abs(deep.predict(stacked)[2] - sum.predict(stacked)[2]), 1e-4) << "overlapping jets: its own term";
+    // Without a baseline Deep Sets is the whole model: Phi(Σ phi), a lone neighbour included.
+    deep.baseline = {};
+    const std::vector<RelState> one{{0.1, 0.5, -1.2, 0, 0.5, 0}};
+    EXPECT_GT(std::abs(deep.predict(one)[2]), 1e-4);
 }
 
 TEST(PredictorModel, DeepSetsOnABaselineStartsAsTheBaselineAndSavesIt) {
