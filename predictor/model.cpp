@@ -47,9 +47,9 @@ Wrench6 LearntModel::predict(std::span<const RelState> neighbours) const {
     Eigen::VectorXf pooled = Eigen::VectorXf::Zero(phi.outputs());
     Eigen::VectorXf base = Eigen::VectorXf::Zero(6);
     Eigen::VectorXf in(kFeatureSize);
-    const bool deep = structure == Structure::deep_sets, residual = deep && !baseline.layers.empty();
+    const bool deep = structure == Structure::deep_sets, residual = this->residual();
     for (std::size_t j = 0; j < neighbours.size(); ++j) {
-        const Features f = deep ? features_of(neighbours, j) : features_of(neighbours[j]);
+        const Features f = features(neighbours, j);
         for (std::size_t i = 0; i < f.size(); ++i)
             in[static_cast<Eigen::Index>(i)] = (static_cast<float>(f[i]) - input_mean[i]) / input_std[i];
         pooled += static_cast<float>(residual ? f[kOverlapFeature] : 1.0) * phi.forward(in);

@@ -101,6 +101,12 @@ public:
 
     const std::string& name() const override { return kind; }
     Wrench6 predict(std::span<const RelState> neighbours) const override;
+    // Deep Sets on a baseline: its term weighed by the jet overlap, less Phi(0) (above).
+    bool residual() const { return structure == Structure::deep_sets && !baseline.layers.empty(); }
+    // What this model sees of neighbour j (training and serving): a sum model one neighbour alone.
+    Features features(std::span<const RelState> set, std::size_t j) const {
+        return structure == Structure::deep_sets ? features_of(set, j) : features_of(set[j]);
+    }
 
     void save(const std::string& path) const;
     // Throws dw::InputError naming the file and the field for a malformed model.

@@ -70,9 +70,7 @@ Tensors tensors(const Dataset& d, const LearntModel& norm) {
         const auto& s = d.samples[static_cast<std::size_t>(i)];
         for (int j = 0; j < s.k; ++j) {
             ma[i][j][0] = 1;
-            const auto jj = static_cast<std::size_t>(j);
-            const Features f =
-                norm.structure == Structure::deep_sets ? features_of(s.neighbours(), jj) : features_of(s.x[jj]);
+            const Features f = norm.features(s.neighbours(), static_cast<std::size_t>(j));
             for (std::size_t a = 0; a < f.size(); ++a)
                 xa[i][j][static_cast<int64_t>(a)] = (static_cast<float>(f[a]) - norm.input_mean[a]) / norm.input_std[a];
         }
@@ -184,8 +182,7 @@ Net make_net(const LearntModel& m, const TrainOptions& o) {
     const std::lock_guard lock(global_generator);
     torch::manual_seed(o.seed);
     const bool deep = m.structure == Structure::deep_sets;
-    return Net{mlp(kFeatureSize, o.hidden, deep ? o.latent : 6), mlp(o.latent, o.hidden, 6), deep,
-               deep && !m.baseline.layers.empty()};
+    return Net{mlp(kFeatureSize, o.hidden, deep ? o.latent : 6), mlp(o.latent, o.hidden, 6), deep, m.residual()};
 }
 
 // One pass over the training samples in shuffled minibatches; the mean batch loss.
