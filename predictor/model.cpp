@@ -64,6 +64,16 @@ Wrench6 LearntModel::predict(std::span<const RelState> neighbours) const {
     return w;
 }
 
+LearntModel LearntModel::sum_part() const {
+    LearntModel s = *this;
+    s.kind = kind + "_sum_part";
+    s.structure = Structure::sum;
+    s.phi = baseline;
+    s.rho = {};
+    s.baseline = {};
+    return s;
+}
+
 namespace {
 
 // The model file (kModelFormat), declared once for reading and writing (core/keys.hpp, as JSON).

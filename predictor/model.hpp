@@ -12,7 +12,7 @@
 // and three numbers that carry the jet's own invariances (horizontal distance, the similarity
 // variable horizontal distance / vertical separation, and 1 / vertical separation, the centreline
 // decay), so a small network need not rediscover them from raw coordinates. A Deep Sets model may
-// carry a frozen sum model as its baseline and learn only what the sum misses:
+// carry a sum model as its baseline (its psi, which trains on with it) and learn what the sum misses:
 //   deep_sets with baseline   Σ_j psi(x_j - x_i) + Phi(Σ_j w_j phi(x_j - x_i)) - Phi(0), Phi's last layer starting at 0
 // Deep Sets alone sees the set: each neighbour's features end with w_j (jet_overlap; 0 for a sum
 // model). On a baseline it also weighs its term, so Deep Sets departs from its baseline only where
@@ -94,15 +94,17 @@ public:
     Structure structure = Structure::sum;
     std::array<float, kFeatureSize> input_mean{}, input_std{};
     std::array<float, 6> output_scale{};
-    Mlp phi;                           // per neighbour (psi for the sum structure)
-    Mlp rho;                           // deep sets: on the pooled sum
-    Mlp baseline;                      // deep sets: a frozen sum model's psi added to the output (empty: none)
+    Mlp phi;       // per neighbour (psi for the sum structure)
+    Mlp rho;       // deep sets: on the pooled sum
+    Mlp baseline;  // deep sets: a sum model's psi (trained on with it) added to the output (empty: none)
     std::string metadata_json = "{}";  // what it was trained on, how, and how well
 
     const std::string& name() const override { return kind; }
     Wrench6 predict(std::span<const RelState> neighbours) const override;
     // Deep Sets on a baseline: its term weighed by the jet overlap, less Phi(0) (above).
     bool residual() const { return structure == Structure::deep_sets && !baseline.layers.empty(); }
+    // Deep Sets on a baseline without its set term: Σ psi, the sum model that trained beside it.
+    LearntModel sum_part() const;
     // What this model sees of neighbour j (training and serving): a sum model one neighbour alone.
     Features features(std::span<const RelState> set, std::size_t j) const {
         return structure == Structure::deep_sets ? features_of(set, j) : features_of(set[j]);

@@ -3,12 +3,14 @@
 // measured forces show on held-out legs (the D axis, where the downwash pushes):
 //   chaotic     the signal is within the noise: no model (the sum or Deep Sets) explains even
 //               min_explained of the measured f_d's mean square on the held-out legs;
-//   non_linear  Deep Sets is significantly better than the sum model trained on the same data:
+//   non_linear  Deep Sets is significantly better than its own sum part (sum_to_compare):
 //               paired z over held-out legs ≥ min_z and the squared error falls by ≥ min_gain;
 //   linear      otherwise: the sum predicts as well as anything. A formation with one neighbour has
 //               no aggregate: it is linear or chaotic, never non-linear.
-// The sum model compared is learnt linear (the same data and features as Deep Sets), so a naive
-// model's smaller training set is not mistaken for nonlinearity.
+// The sum compared is Deep Sets' own Σ psi, trained with it on the same data: what its set term
+// adds is then the aggregate's nonlinearity alone — not a better single-neighbour model (learnt
+// linear, fitted to flights where jets merge, is bent by them), nor a naive model's smaller
+// training set. A Deep Sets model without a baseline is compared with learnt linear.
 #include <stop_token>
 #include <string>
 #include <vector>
@@ -47,6 +49,9 @@ struct RegimeRow {
 
 // Every formation of `test` (held-out legs) at each altitude; bands with too few pieces of legs are
 // left out. A stop requested through `stop` ends it with dw::Stopped.
+// The sum model Deep Sets is compared with (above).
+LearntModel sum_to_compare(const LearntModel& deep, const LearntModel& learnt_linear);
+
 std::vector<RegimeRow> classify_regimes(const ForceModel& sum, const ForceModel& deep, const Dataset& test,
                                         const std::vector<double>& altitudes_m, const RegimeOptions& o = {},
                                         std::stop_token stop = {});

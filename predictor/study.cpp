@@ -223,8 +223,8 @@ StudyResult run_study(const StudyOptions& o) {
         r.by_altitude.emplace_back(altitude, compare(models, split.test.in_altitude_band(altitude, o.arena.band_m),
                                                      arena_at(o.arena, altitude)));
     say("classifying the regimes");
-    r.regimes =
-        classify_regimes(*linear, *deep, split.test, physics::GridOptions{}.altitudes_m, RegimeOptions{}, o.stop);
+    r.regimes = classify_regimes(sum_to_compare(*deep, *linear), *deep, split.test, physics::GridOptions{}.altitudes_m,
+                                 RegimeOptions{}, o.stop);
     write_regimes(r.regimes, out.string());
 
     if (generalised.valid()) r.generalisation = generalised.get();
@@ -267,9 +267,9 @@ RegimesFiles regimes_of_study(const std::string& study_dir, const RegimeOptions&
     }
     const LearntModel linear = LearntModel::load((models / "learnt_linear.json").string());
     const LearntModel deep = LearntModel::load((models / "deep_sets.json").string());
-    return write_regimes(
-        classify_regimes(linear, deep, split_by_leg(all).test, physics::GridOptions{}.altitudes_m, o, stop),
-        dir.string(), o);
+    return write_regimes(classify_regimes(sum_to_compare(deep, linear), deep, split_by_leg(all).test,
+                                          physics::GridOptions{}.altitudes_m, o, stop),
+                         dir.string(), o);
 }
 
 }  // namespace dw::predictor

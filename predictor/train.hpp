@@ -49,7 +49,8 @@ struct TrainResult {
 };
 
 // Throws dw::InputError when there is nothing to train on. A deep_sets model given a sum model as
-// `baseline` learns only the residual on it (frozen), starting from exactly the baseline.
+// `baseline` starts from exactly the baseline and learns the residual on it; the baseline's psi
+// trains on with it (where jets merge, the residual takes the merging, and psi is freed of it).
 TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o,
                         const LearntModel* baseline = nullptr);
 

@@ -46,41 +46,51 @@ Mlp export_mlp(torch::nn::Sequential& seq) {
     return m;
 }
 
+// The training set in the model's normalisation: one row of features per neighbour there is, and
+// per sample the rows of its neighbours, so that a sample with one neighbour costs the networks one
+// evaluation, not kMaxNeighbours.
 struct Tensors {
-    torch::Tensor x, mask, y;
-    torch::Tensor base;  // the frozen baseline's output (normalised), zeros without one
+    torch::Tensor x;      // [neighbours, kFeatureSize]
+    torch::Tensor slots;  // [samples, kMaxNeighbours]: the row of x of each neighbour, -1 where none
+    torch::Tensor y;      // [samples, 6]
 };
 
-// The training tensors in the model's normalisation; the baseline (if any) evaluated once, here.
 Tensors tensors(const Dataset& d, const LearntModel& norm) {
     const auto n = static_cast<int64_t>(d.samples.size());
-    auto x = torch::zeros({n, kMaxNeighbours, kFeatureSize});
-    auto mask = torch::zeros({n, kMaxNeighbours, 1});
+    int64_t rows = 0;
+    for (const auto& s : d.samples) rows += s.k;
+    auto x = torch::zeros({rows, kFeatureSize});
+    auto slots = torch::full({n, kMaxNeighbours}, -1, torch::kLong);
     auto y = torch::zeros({n, 6});
-    auto base = torch::zeros({n, 6});
-    auto xa = x.accessor<float, 3>();
-    auto ma = mask.accessor<float, 3>();
+    auto xa = x.accessor<float, 2>();
+    auto sa = slots.accessor<int64_t, 2>();
     auto ya = y.accessor<float, 2>();
-    auto ba = base.accessor<float, 2>();
-    LearntModel baseline = norm;  // the baseline alone: a sum over its psi, and nothing else
-    baseline.structure = Structure::sum;
-    baseline.phi = norm.baseline;
-    baseline.baseline = {};
+    int64_t row = 0;
     for (int64_t i = 0; i < n; ++i) {
         const auto& s = d.samples[static_cast<std::size_t>(i)];
-        for (int j = 0; j < s.k; ++j) {
-            ma[i][j][0] = 1;
+        for (int j = 0; j < s.k; ++j, ++row) {
+            sa[i][j] = row;
             const Features f = norm.features(s.neighbours(), static_cast<std::size_t>(j));
             for (std::size_t a = 0; a < f.size(); ++a)
-                xa[i][j][static_cast<int64_t>(a)] = (static_cast<float>(f[a]) - norm.input_mean[a]) / norm.input_std[a];
+                xa[row][static_cast<int64_t>(a)] = (static_cast<float>(f[a]) - norm.input_mean[a]) / norm.input_std[a];
         }
-        const Wrench6 b = norm.baseline.layers.empty() ? Wrench6{} : baseline.predict(s.neighbours());
-        for (std::size_t a = 0; a < 6; ++a) {
+        for (std::size_t a = 0; a < 6; ++a)
             ya[i][static_cast<int64_t>(a)] = static_cast<float>(s.y[a]) / norm.output_scale[a];
-            ba[i][static_cast<int64_t>(a)] = static_cast<float>(b[a]) / norm.output_scale[a];
-        }
     }
-    return {x, mask, y, base};
+    return {x, slots, y};
+}
+
+// Some samples' neighbours: their feature rows, and which of the samples (0 .. size) each belongs to.
+struct Batch {
+    torch::Tensor x, owner;
+    int64_t size;
+};
+
+Batch batch(const Tensors& t, const torch::Tensor& samples) {
+    const auto slots = t.slots.index_select(0, samples);
+    const auto valid = slots.ge(0);
+    const auto owner = torch::arange(samples.size(0), torch::kLong).unsqueeze(1).expand_as(slots).masked_select(valid);
+    return {t.x.index_select(0, slots.masked_select(valid)), owner, samples.size(0)};
 }
 
 // Per-feature mean and spread over every neighbour. The wrench is scaled by one RMS for the three
@@ -117,7 +127,7 @@ void normalise(const Dataset& train, LearntModel& m) {
     }
 }
 
-// The model's kind, structure and normalisation: its own, or a frozen sum baseline's (Deep Sets
+// The model's kind, structure and normalisation: its own, or a sum baseline's (Deep Sets
 // learning the residual on it: its normalisation and its psi).
 void prepare(LearntModel& m, const Dataset& train, const TrainOptions& o, const LearntModel* baseline) {
     m.kind = o.kind;
@@ -160,35 +170,78 @@ std::string training_metadata(const Dataset& train, const Dataset& validation, c
 
 // The networks and how their outputs combine (model.hpp): a sum model pools phi's six outputs over
 // the neighbours; Deep Sets feeds the pooled latent through rho — on a baseline (residual), each
-// neighbour's term weighed by its jet overlap, less rho(0). The baseline's prediction is added.
+// neighbour's term weighed by its jet overlap, less rho(0), plus the baseline's psi summed over the
+// neighbours (psi sees the overlap as 0: one neighbour at a time).
 struct Net {
-    torch::nn::Sequential phi, rho;
+    torch::nn::Sequential phi, rho, psi;
     bool deep_sets, residual;
+    torch::Tensor without_overlap;  // multiplies the features: 1, but 0 at kOverlapFeature
 
-    torch::Tensor forward(const torch::Tensor& x, const torch::Tensor& mask, const torch::Tensor& base) {
-        if (!deep_sets) return (phi->forward(x) * mask).sum(1) + base;
-        if (!residual) return rho->forward((phi->forward(x) * mask).sum(1)) + base;
-        const auto overlap = x.slice(2, kOverlapFeature, kOverlapFeature + 1);
-        const auto pooled = (phi->forward(x) * mask * overlap).sum(1);
+    torch::Tensor forward(const Batch& b) {
+        auto pool = [&](const torch::Tensor& terms) {  // the sum over each sample's neighbours
+            return torch::zeros({b.size, terms.size(1)}).index_add(0, b.owner, terms);
+        };
+        if (!deep_sets) return pool(phi->forward(b.x));
+        if (!residual) return rho->forward(pool(phi->forward(b.x)));
+        const auto overlap = b.x.slice(1, kOverlapFeature, kOverlapFeature + 1);
+        const auto pooled = pool(phi->forward(b.x) * overlap);
+        const auto base = pool(psi->forward(b.x * without_overlap));
         return rho->forward(pooled) - rho->forward(torch::zeros({1, pooled.size(1)})) + base;
     }
-    torch::Tensor loss(const Tensors& t) { return torch::mse_loss(forward(t.x, t.mask, t.base), t.y); }
+    torch::Tensor loss(const Tensors& t) {
+        return torch::mse_loss(forward(batch(t, torch::arange(t.y.size(0), torch::kLong))), t.y);
+    }
 };
+
+// A trained network's weights into a torch network of the same shape.
+void import_mlp(const Mlp& from, torch::nn::Sequential& to) {
+    torch::NoGradGuard no_grad;
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < to->size(); ++i) {
+        auto lin = to[i]->as<torch::nn::Linear>();
+        if (!lin) continue;
+        const Layer& l = from.layers.at(k++);
+        if (lin->weight.size(0) != l.w.rows() || lin->weight.size(1) != l.w.cols())
+            throw InputError(log::cat("training: the baseline's layer ", k, " is ", l.w.rows(), " x ", l.w.cols(),
+                                      ", this model's ", lin->weight.size(0), " x ", lin->weight.size(1),
+                                      " (train both with the same --hidden)"));
+        for (int64_t r = 0; r < l.w.rows(); ++r) {
+            for (int64_t c = 0; c < l.w.cols(); ++c) lin->weight[r][c] = l.w(r, c);
+            lin->bias[r] = l.b[r];
+        }
+    }
+}
 
 // The networks, their initial weights drawn from torch's global generator: seeded and drawn under
 // one lock, so that trainings running at once (the study's generalisation) start as they would alone.
+// On a baseline, psi starts as the baseline's and rho's last layer at zero: before any step the
+// model is its baseline.
 Net make_net(const LearntModel& m, const TrainOptions& o) {
     static std::mutex global_generator;
     const std::lock_guard lock(global_generator);
     torch::manual_seed(o.seed);
     const bool deep = m.structure == Structure::deep_sets;
-    return Net{mlp(kFeatureSize, o.hidden, deep ? o.latent : 6), mlp(o.latent, o.hidden, 6), deep, m.residual()};
+    Net net{mlp(kFeatureSize, o.hidden, deep ? o.latent : 6),
+            mlp(o.latent, o.hidden, 6),
+            mlp(kFeatureSize, o.hidden, 6),
+            deep,
+            m.residual(),
+            torch::ones({1, kFeatureSize})};
+    net.without_overlap[0][kOverlapFeature] = 0;
+    if (net.residual) {
+        import_mlp(m.baseline, net.psi);
+        torch::NoGradGuard no_grad;
+        auto last = net.rho[net.rho->size() - 1]->as<torch::nn::Linear>();
+        last->weight.zero_();
+        last->bias.zero_();
+    }
+    return net;
 }
 
 // One pass over the training samples in shuffled minibatches; the mean batch loss.
 double train_epoch(Net& net, torch::optim::Adam& adam, const Tensors& tr, const TrainOptions& o,
                    const torch::Generator& gen) {
-    const int64_t n = tr.x.size(0);
+    const int64_t n = tr.y.size(0);
     const auto perm = torch::randperm(n, gen, torch::kLong);
     double total = 0;
     int64_t batches = 0;
@@ -196,9 +249,7 @@ double train_epoch(Net& net, torch::optim::Adam& adam, const Tensors& tr, const 
         throw_if_stopped(o.stop, "training");
         const auto idx = perm.slice(0, b, std::min(n, b + o.batch));
         adam.zero_grad();
-        auto loss = torch::mse_loss(
-            net.forward(tr.x.index_select(0, idx), tr.mask.index_select(0, idx), tr.base.index_select(0, idx)),
-            tr.y.index_select(0, idx));
+        auto loss = torch::mse_loss(net.forward(batch(tr, idx)), tr.y.index_select(0, idx));
         loss.backward();
         adam.step();
         total += loss.item<double>();
@@ -229,17 +280,13 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
 
     const Tensors tr = tensors(train, m), va = tensors(validation, m);
     Net net = make_net(m, o);
-    auto& phi = net.phi;
-    auto& rho = net.rho;
-    if (baseline) {  // the residual starts at zero: before any step the model is its baseline
-        torch::NoGradGuard no_grad;
-        auto last = rho[rho->size() - 1]->as<torch::nn::Linear>();
-        last->weight.zero_();
-        last->bias.zero_();
-    }
-    std::vector<torch::Tensor> params = phi->parameters();
+    std::vector<torch::Tensor> params = net.phi->parameters();
     if (net.deep_sets)
-        for (auto& p : rho->parameters()) params.push_back(p);
+        for (auto& p : net.rho->parameters()) params.push_back(p);
+    // On a baseline its psi trains on with the rest (from the baseline's weights): a sum model fitted
+    // to flights where jets merge is bent by them, and rho now takes the merging.
+    if (net.residual)
+        for (auto& p : net.psi->parameters()) params.push_back(p);
     torch::optim::Adam adam(params, torch::optim::AdamOptions(o.learning_rate));
 
     auto snapshot = [&] {
@@ -279,8 +326,9 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
         torch::NoGradGuard no_grad;
         for (std::size_t i = 0; i < params.size(); ++i) params[i].copy_(best[i]);
     }
-    m.phi = export_mlp(phi);
-    if (m.structure == Structure::deep_sets) m.rho = export_mlp(rho);
+    m.phi = export_mlp(net.phi);
+    if (m.structure == Structure::deep_sets) m.rho = export_mlp(net.rho);
+    if (net.residual) m.baseline = export_mlp(net.psi);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     m.metadata_json = training_metadata(train, validation, o, r, baseline);
     return r;

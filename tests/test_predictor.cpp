@@ -192,6 +192,9 @@ TEST(PredictorModel, DeepSetsIsItsBaselineWhereNoJetsOverlap) {
     same({{0.0, -3.0, -0.3, 0, 0.5, 0}, {0.0, 3.0, -0.3, 0, 0.5, 0}});  // two far apart
     const std::vector<RelState> stacked{{0.0, 0.0, -0.8, 0, 0.5, 0}, {0.0, 0.05, -1.3, 0, 0.5, 0}};
     EXPECT_GT(std::abs(deep.predict(stacked)[2] - sum.predict(stacked)[2]), 1e-4) << "overlapping jets: its own term";
+    // Its sum part (what the regime map compares it with) is Σ psi, overlapping jets or not.
+    const auto part = deep.sum_part().predict(stacked), base = sum.predict(stacked);
+    for (std::size_t i = 0; i < 6; ++i) EXPECT_NEAR(part[i], base[i], 1e-6 * (1 + std::abs(base[i]))) << i;
     // Without a baseline Deep Sets is the whole model: Phi(Σ phi), a lone neighbour included.
     deep.baseline = {};
     const std::vector<RelState> one{{0.1, 0.5, -1.2, 0, 0.5, 0}};
@@ -251,6 +254,9 @@ TEST(PredictorTraining, DeepSetsOnTheSumModelIsNeverWorseOnValidationAndLearnsTh
     const TrainResult deep = train_model(s.train, s.validation, o, &sum.model);
     EXPECT_LT(deep.best_validation_loss, 0.8 * sum.best_validation_loss) << "the residual learns what the sum cannot";
     EXPECT_EQ(deep.model.input_mean, sum.model.input_mean);  // the baseline's normalisation
+    // Its psi trained on from the baseline's weights: it carries its own, not the sum model's.
+    ASSERT_EQ(deep.model.baseline.layers.size(), sum.model.phi.layers.size());
+    EXPECT_FALSE(deep.model.baseline.layers.front().w.isApprox(sum.model.phi.layers.front().w, 1e-4F));
     // The served model (Eigen) is the trained one (libtorch): the same validation error.
     double se = 0;
     for (const auto& v : s.validation.samples) {
@@ -480,13 +486,13 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     const double lin = table_value(merging.table, "leader_follower K=3", "learnt_linear", 2);
     const double deep = table_value(merging.table, "leader_follower K=3", "deep_sets", 2);
     EXPECT_LE(deep, 0.7 * lin) << "jet merging: Deep Sets " << deep << " vs learnt linear " << lin;
-    for (const auto& row : merging.table)  // where jets merge, Deep Sets is closer than the sum it is built on
+    // Where jets merge, Deep Sets is closer than the sum it is built on; with one neighbour too: its
+    // psi, trained on beside the residual, is no longer bent by the merged flights.
+    for (const auto& row : merging.table)
         if (row.model == "deep_sets") {
-            const double lin_rmse = table_value(merging.table, row.formation, "learnt_linear", 2, false);
-            if (row.formation == "single K=1")  // one neighbour: Deep Sets is its baseline exactly
-                EXPECT_FLOAT_EQ(static_cast<float>(row.rmse[2]), static_cast<float>(lin_rmse));
-            else EXPECT_LT(row.rmse[2], lin_rmse) << row.formation;
-            // The issue asks 1.5 x the physics floor; at this seed Leader Follower K=3 is at 1.80
+            EXPECT_LT(row.rmse[2], table_value(merging.table, row.formation, "learnt_linear", 2, false))
+                << row.formation;
+            // The issue asks 1.5 x the physics floor; at this seed Leader Follower K=3 is at 1.51
             // (docs/PREDICTOR.md), so this guards what holds rather than claiming the target.
             EXPECT_LE(row.rmse[2], kMergingFloorGuard * table_value(merging.table, row.formation, "physics", 2, false))
                 << row.formation << ": Deep Sets vs the physics floor";
@@ -515,7 +521,8 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
                     EXPECT_LE(row.arena[2], 1.1 * table_value(rows, row.formation, "learnt_linear", 2))
                         << row.formation << " at " << altitude << " m";
     EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));
-    // The regime map: merging jets high up are non-linear; where the physics is a sum nothing is.
+    // The regime map (Deep Sets against its own sum part): merging jets high up are non-linear;
+    // low down, where jets do not merge, and where the physics is a sum, nothing is.
     auto regime_of = [](const StudyResult& r, const std::string& formation, double altitude) {
         for (const auto& row : r.regimes)
             if (row.formation == formation && std::abs(row.altitude_m - altitude) < 1e-9) return row.regime;
