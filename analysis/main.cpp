@@ -37,6 +37,11 @@ struct Verdict {
 constexpr Verdict kProofVerdict{"PROOF PASSED", "PROOF FAILED"};
 constexpr Verdict kCoverageVerdict{nullptr, "COVERAGE BELOW TARGET"};
 constexpr dw::Range kJobsRange{1, 64};  // flights flown and explained at once
+// What the real-data proof may conceal: enough to be a change, not so much that the flight is another.
+constexpr dw::Range kConcealedClockRange{0.001, 2, "s"};
+constexpr dw::Range kConcealedScaleRange{0.1, 10};
+constexpr dw::Range kConcealedLagRange{0.001, 2, "s"};
+constexpr dw::Range kConcealedLeakRange{-1, 1};
 constexpr const char* kJobsHelp = "flights flown and explained at once (each explanation is one thread)";
 
 // Prints a study's table and its verdict; a failed verdict is a runtime failure.
@@ -93,6 +98,19 @@ struct RealProofCommand {
         sub->add_option("--physics", physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
         sub->add_option("--out", options.out_dir, "output folder (reports, proof.md)")->required();
         sub->add_option("--cases", cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
+        auto& c = options.concealed;
+        sub->add_option("--clock", c.clock_s, "clock_offset case: the wrench stamped this late [s]")
+            ->check(dw::cli::in(kConcealedClockRange))
+            ->capture_default_str();
+        sub->add_option("--scale", c.scale, "force_scale case: the wrench multiplied by this")
+            ->check(dw::cli::in(kConcealedScaleRange))
+            ->capture_default_str();
+        sub->add_option("--lag", c.lag_s, "sensor_lag case: first-order lag time constant [s]")
+            ->check(dw::cli::in(kConcealedLagRange))
+            ->capture_default_str();
+        sub->add_option("--leak", c.leak, "cell_crosstalk case: f_n += leak x f_d")
+            ->check(dw::cli::in(kConcealedLeakRange))
+            ->capture_default_str();
     }
     int run(const std::string& main_physics, const Progress& progress) {
         prepare(options, progress);

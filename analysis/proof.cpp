@@ -284,8 +284,6 @@ std::optional<double> untouched_value(const ExplainResult& r, const std::string&
     return std::nullopt;
 }
 
-constexpr double kClock_s = 0.083, kScale = 1.37, kLag_s = 0.047, kLeak = 0.113;
-
 // The recording seen through a first-order lag (the replay's own first-order hold).
 void low_pass(std::vector<flight::WrenchSample>& w, double tau) {
     std::array<double, 6> y = w.front().w, x0 = w.front().w;
@@ -298,39 +296,39 @@ void low_pass(std::vector<flight::WrenchSample>& w, double tau) {
     }
 }
 
-std::vector<Concealment> concealments() {
+std::vector<Concealment> concealments(const Concealed& m) {
     return {
-        {"clock_offset", log::cat("wrench stamped ", kClock_s, " s late"),
-         [](flight::Flight& f) {
-             for (auto& w : f.wrench) w.t += kClock_s;
+        {"clock_offset", log::cat("wrench stamped ", m.clock_s, " s late"),
+         [m](flight::Flight& f) {
+             for (auto& w : f.wrench) w.t += m.clock_s;
          },
-         [](const physics::Effects& own, std::optional<double> u) {
+         [m](const physics::Effects& own, std::optional<double> u) {
              return Truth{"clock_offset", "offset_s",
-                          u.value_or(own.clock_offset.enabled ? own.clock_offset.offset_s : 0) + kClock_s};
+                          u.value_or(own.clock_offset.enabled ? own.clock_offset.offset_s : 0) + m.clock_s};
          }},
-        {"force_scale", log::cat("wrench × ", kScale),
-         [](flight::Flight& f) {
+        {"force_scale", log::cat("wrench × ", m.scale),
+         [m](flight::Flight& f) {
              for (auto& w : f.wrench)
-                 for (auto& v : w.w) v *= kScale;
+                 for (auto& v : w.w) v *= m.scale;
          },
-         [](const physics::Effects& own, std::optional<double> u) {
+         [m](const physics::Effects& own, std::optional<double> u) {
              return Truth{"force_scale", "scale",
-                          u.value_or(own.force_scale.enabled ? own.force_scale.scale : 1) * kScale};
+                          u.value_or(own.force_scale.enabled ? own.force_scale.scale : 1) * m.scale};
          }},
-        {"sensor_lag", log::cat("first-order lag, tau ", kLag_s, " s"),
-         [](flight::Flight& f) { low_pass(f.wrench, kLag_s); },
-         [](const physics::Effects& own, std::optional<double> u) {
+        {"sensor_lag", log::cat("first-order lag, tau ", m.lag_s, " s"),
+         [m](flight::Flight& f) { low_pass(f.wrench, m.lag_s); },
+         [m](const physics::Effects& own, std::optional<double> u) {
              return Truth{"sensor_lag", "tau_s",
-                          u.value_or(own.sensor_lag.enabled ? own.sensor_lag.tau_s : 0) + kLag_s};
+                          u.value_or(own.sensor_lag.enabled ? own.sensor_lag.tau_s : 0) + m.lag_s};
          }},
-        {"cell_crosstalk", log::cat("f_n += ", kLeak, " f_d"),
-         [](flight::Flight& f) {
-             for (auto& w : f.wrench) w.w[0] += kLeak * w.w[2];
+        {"cell_crosstalk", log::cat("f_n += ", m.leak, " f_d"),
+         [m](flight::Flight& f) {
+             for (auto& w : f.wrench) w.w[0] += m.leak * w.w[2];
          },
-         [](const physics::Effects& own, std::optional<double> u) {
+         [m](const physics::Effects& own, std::optional<double> u) {
              const auto& c = own.cell_crosstalk;
              return Truth{"cell_crosstalk", "coefficient",
-                          u.value_or(c.enabled && c.from == 2 && c.to == 0 ? c.coefficient : 0) + kLeak};
+                          u.value_or(c.enabled && c.from == 2 && c.to == 0 ? c.coefficient : 0) + m.leak};
          }},
     };
 }
@@ -341,7 +339,7 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     auto say = [&](const std::string& s) {
         if (o.progress) o.progress(s);
     };
-    const auto all = concealments();
+    const auto all = concealments(o.concealed);
     for (const auto& n : o.cases)
         if (std::none_of(all.begin(), all.end(), [&](const Concealment& c) { return c.name == n; }))
             throw InputError(log::cat("--cases: unknown case '", n,

@@ -233,9 +233,11 @@ TEST(RealFlights, ConcealedEffectsAreRecoveredOnTopOfWhatEachFlightShows) {
         // Every concealed parameter is recovered: the expected value (what the untouched flight
         // shows of the effect, combined with the concealed value) inside the interval of its fit.
         EXPECT_TRUE(row.covered) << row.truth << " vs " << row.fitted;
-        // The clock offset and the crosstalk are also accepted, and nothing else is claimed. (The
-        // force scale and the lag are fitted right but not yet accepted: docs/REAL.md says why.)
-        if (row.name == "clock_offset" || row.name == "cell_crosstalk") EXPECT_TRUE(row.pass) << row.why;
+        // Each is also accepted, and nothing else claimed — but for the force scale on the swap,
+        // whose six encounters cannot carry the held-out test's z to 3 (even a scale of 2.27,
+        // removing 73 % of the held-out error, reaches z 2.3: docs/REAL.md).
+        const bool too_few_encounters = row.name == "force_scale" && row.formation == "swap_ss";
+        if (!too_few_encounters) EXPECT_TRUE(row.pass) << row.why;
     }
     EXPECT_TRUE(fs::exists(r.table_path));
 }
