@@ -99,18 +99,19 @@ struct RealProofCommand {
         sub->add_option("--out", options.out_dir, "output folder (reports, proof.md)")->required();
         sub->add_option("--cases", cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
         auto& c = options.concealed;
-        sub->add_option("--clock", c.clock_s, "clock_offset case: the wrench stamped this late [s]")
-            ->check(dw::cli::in(kConcealedClockRange))
-            ->capture_default_str();
-        sub->add_option("--scale", c.scale, "force_scale case: the wrench multiplied by this")
-            ->check(dw::cli::in(kConcealedScaleRange))
-            ->capture_default_str();
-        sub->add_option("--lag", c.lag_s, "sensor_lag case: first-order lag time constant [s]")
-            ->check(dw::cli::in(kConcealedLagRange))
-            ->capture_default_str();
-        sub->add_option("--leak", c.leak, "cell_crosstalk case: f_n += leak x f_d")
-            ->check(dw::cli::in(kConcealedLeakRange))
-            ->capture_default_str();
+        const struct {
+            const char* flag;
+            double& value;
+            dw::Range range;
+            const char* help;
+        } concealed[] = {
+            {"--clock", c.clock_s, kConcealedClockRange, "clock_offset case: the wrench stamped this late [s]"},
+            {"--scale", c.scale, kConcealedScaleRange, "force_scale case: the wrench multiplied by this"},
+            {"--lag", c.lag_s, kConcealedLagRange, "sensor_lag case: first-order lag time constant [s]"},
+            {"--leak", c.leak, kConcealedLeakRange, "cell_crosstalk case: f_n += leak x f_d"},
+        };
+        for (const auto& k : concealed)
+            sub->add_option(k.flag, k.value, k.help)->check(dw::cli::in(k.range))->capture_default_str();
     }
     int run(const std::string& main_physics, const Progress& progress) {
         prepare(options, progress);

@@ -51,6 +51,7 @@ Mlp export_mlp(torch::nn::Sequential& seq) {
 // evaluation, not kMaxNeighbours.
 struct Tensors {
     torch::Tensor x;      // [neighbours, kFeatureSize]
+    torch::Tensor owner;  // [neighbours]: the sample each row of x belongs to
     torch::Tensor slots;  // [samples, kMaxNeighbours]: the row of x of each neighbour, -1 where none
     torch::Tensor y;      // [samples, 6]
 };
@@ -60,9 +61,11 @@ Tensors tensors(const Dataset& d, const LearntModel& norm) {
     int64_t rows = 0;
     for (const auto& s : d.samples) rows += s.k;
     auto x = torch::zeros({rows, kFeatureSize});
+    auto owner = torch::zeros({rows}, torch::kLong);
     auto slots = torch::full({n, kMaxNeighbours}, -1, torch::kLong);
     auto y = torch::zeros({n, 6});
     auto xa = x.accessor<float, 2>();
+    auto oa = owner.accessor<int64_t, 1>();
     auto sa = slots.accessor<int64_t, 2>();
     auto ya = y.accessor<float, 2>();
     int64_t row = 0;
@@ -70,6 +73,7 @@ Tensors tensors(const Dataset& d, const LearntModel& norm) {
         const auto& s = d.samples[static_cast<std::size_t>(i)];
         for (int j = 0; j < s.k; ++j, ++row) {
             sa[i][j] = row;
+            oa[row] = i;
             const Features f = norm.features(s.neighbours(), static_cast<std::size_t>(j));
             for (std::size_t a = 0; a < f.size(); ++a)
                 xa[row][static_cast<int64_t>(a)] = (static_cast<float>(f[a]) - norm.input_mean[a]) / norm.input_std[a];
@@ -77,7 +81,7 @@ Tensors tensors(const Dataset& d, const LearntModel& norm) {
         for (std::size_t a = 0; a < 6; ++a)
             ya[i][static_cast<int64_t>(a)] = static_cast<float>(s.y[a]) / norm.output_scale[a];
     }
-    return {x, slots, y};
+    return {x, owner, slots, y};
 }
 
 // Some samples' neighbours: their feature rows, and which of the samples (0 .. size) each belongs to.
@@ -85,6 +89,8 @@ struct Batch {
     torch::Tensor x, owner;
     int64_t size;
 };
+
+Batch whole(const Tensors& t) { return {t.x, t.owner, t.y.size(0)}; }
 
 Batch batch(const Tensors& t, const torch::Tensor& samples) {
     const auto slots = t.slots.index_select(0, samples);
@@ -188,9 +194,7 @@ struct Net {
         const auto base = pool(psi->forward(b.x * without_overlap));
         return rho->forward(pooled) - rho->forward(torch::zeros({1, pooled.size(1)})) + base;
     }
-    torch::Tensor loss(const Tensors& t) {
-        return torch::mse_loss(forward(batch(t, torch::arange(t.y.size(0), torch::kLong))), t.y);
-    }
+    torch::Tensor loss(const Tensors& t) { return torch::mse_loss(forward(whole(t)), t.y); }
 };
 
 // A trained network's weights into a torch network of the same shape.
@@ -223,7 +227,7 @@ Net make_net(const LearntModel& m, const TrainOptions& o) {
     const bool deep = m.structure == Structure::deep_sets;
     Net net{mlp(kFeatureSize, o.hidden, deep ? o.latent : 6),
             mlp(o.latent, o.hidden, 6),
-            mlp(kFeatureSize, o.hidden, 6),
+            m.residual() ? mlp(kFeatureSize, o.hidden, 6) : torch::nn::Sequential(),  // psi: on a baseline only
             deep,
             m.residual(),
             torch::ones({1, kFeatureSize})};
