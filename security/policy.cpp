@@ -12,16 +12,25 @@ namespace {
 
 constexpr const char* kHeader = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
 
-// Protection is per submessage (metadata_protection_kind), which holds the serialized payload:
-// signed, the submessage carries a GMAC; encrypted, AES-GCM turns the whole submessage, payload
-// included, into ciphertext with its tag. The payload is not protected a second time
-// (data_protection_kind NONE): end-to-end payload protection only matters where samples pass
-// through a relay (a persistence or routing service), which the lab has none of, and it costs a
-// second AES-GCM operation per sample on each side (docs/BENCHMARKS.md, DDS Security). Fast DDS
-// 2.9.1 cannot decode a payload protected with SIGN anyway (every sample fails with "Error
-// decoding encoded payload"; measured, tests/test_security.cpp).
-const char* metadata_kind(dds::Protection p) { return p == dds::Protection::encrypt ? "ENCRYPT" : "SIGN"; }
-const char* data_kind(dds::Protection) { return "NONE"; }
+// Protection is per RTPS message (rtps_protection_kind), at the strongest any topic of the
+// registry needs: with one topic to encrypt, every message is encrypted (AES-GCM, which also
+// authenticates it: no one without the lab's keys may forge one). Per message rather than per
+// submessage (metadata_protection_kind) because Fast DDS 2.9.1's crypto plugin re-derives a
+// session key for every protected unit it receives (measured: docs/BENCHMARKS.md, DDS Security). Topics
+// then add no protection of their own: their rules keep the access control and say, beside each,
+// what the topic needs and why (the registry's protection). Payloads are not protected a second
+// time (data_protection_kind NONE): that only matters where samples pass through a relay, which
+// the lab has none of; and Fast DDS 2.9.1 cannot decode a payload protected with SIGN anyway
+// (every sample fails with "Error decoding encoded payload"; measured, tests/test_security.cpp).
+dds::Protection strongest_needed() {
+    dds::Protection p = dds::Protection::sign;
+    dds::topics::for_each([&](const auto& t) {
+        if (t.protection == dds::Protection::encrypt) p = dds::Protection::encrypt;
+    });
+    return p;
+}
+const char* kind(dds::Protection p) { return p == dds::Protection::encrypt ? "ENCRYPT" : "SIGN"; }
+const char* needs(dds::Protection p) { return p == dds::Protection::encrypt ? "encrypted" : "signed"; }
 
 // Every domain a lab may use (tests pick their own): the keystore is the lab's, not a domain's.
 std::string domains() {
@@ -51,30 +60,28 @@ std::string governance_xml() {
       << "      <enable_join_access_control>true</enable_join_access_control>\n"
       << "      <discovery_protection_kind>ENCRYPT</discovery_protection_kind>\n"
       << "      <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>\n"
-      << "      <rtps_protection_kind>NONE</rtps_protection_kind>\n"
+      << "      <!-- every message: the strongest protection a topic below needs -->\n"
+      << "      <rtps_protection_kind>" << kind(strongest_needed()) << "</rtps_protection_kind>\n"
       << "      <topic_access_rules>\n";
     dds::topics::for_each([&](const auto& t) {
-        o << "        <!-- " << t.suffix << ": " << t.protection_reason << " -->\n"
+        o << "        <!-- " << t.suffix << ": needs " << needs(t.protection) << ": " << t.protection_reason << " -->\n"
           << "        <topic_rule>\n          <topic_expression>" << topic_expression(t.suffix)
           << "</topic_expression>\n"
           << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
           << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
           << "          <enable_read_access_control>true</enable_read_access_control>\n"
           << "          <enable_write_access_control>true</enable_write_access_control>\n"
-          << "          <metadata_protection_kind>" << metadata_kind(t.protection) << "</metadata_protection_kind>\n"
-          << "          <data_protection_kind>" << data_kind(t.protection)
-          << "</data_protection_kind>\n        </topic_rule>\n";
+          << "          <metadata_protection_kind>NONE</metadata_protection_kind>\n"
+          << "          <data_protection_kind>NONE</data_protection_kind>\n        </topic_rule>\n";
     });
-    o << "        <!-- anything else: access-controlled (the permissions deny it), signed -->\n"
+    o << "        <!-- anything else: access-controlled (the permissions deny it) -->\n"
       << "        <topic_rule>\n          <topic_expression>*</topic_expression>\n"
       << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
       << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
       << "          <enable_read_access_control>true</enable_read_access_control>\n"
       << "          <enable_write_access_control>true</enable_write_access_control>\n"
-      << "          <metadata_protection_kind>" << metadata_kind(dds::Protection::sign)
-      << "</metadata_protection_kind>\n"
-      << "          <data_protection_kind>" << data_kind(dds::Protection::sign)
-      << "</data_protection_kind>\n        </topic_rule>\n"
+      << "          <metadata_protection_kind>NONE</metadata_protection_kind>\n"
+      << "          <data_protection_kind>NONE</data_protection_kind>\n        </topic_rule>\n"
       << "      </topic_access_rules>\n    </domain_rule>\n  </domain_access_rules>\n</dds>\n";
     return o.str();
 }

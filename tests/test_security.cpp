@@ -1,6 +1,8 @@
 // Issue 18: the lab's DDS Security keystore (dw-lab keys) and participants that use it, in one
 // process on loopback: who may publish and read what is what the topic registry says.
 #include <arpa/inet.h>
+#include <fastrtps/attributes/LibrarySettingsAttributes.h>
+#include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <gtest/gtest.h>
 #include <linux/if_packet.h>
 #include <net/ethernet.h>
@@ -271,11 +273,29 @@ private:
 
 std::string bytes_of(double v) { return std::string(reinterpret_cast<const char*>(&v), sizeof v); }
 
+// Fast DDS delivers between open participants of one process without the wire; while one of
+// these lives (and no participant does when it is made or ends), it goes by the wire.
+class ByTheWire {
+public:
+    ByTheWire() { set(eprosima::fastrtps::INTRAPROCESS_OFF); }
+    ~ByTheWire() { set(eprosima::fastrtps::INTRAPROCESS_FULL); }
+
+private:
+    static void set(eprosima::fastrtps::IntraprocessDeliveryType t) {
+        eprosima::fastrtps::LibrarySettingsAttributes s;
+        s.intraprocess_delivery = t;
+        eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(s);
+    }
+};
+
 // Publishes samples from `writer_identity` to `reader_identity` over UDP only (shared memory
-// would bypass the wire) until 20 have arrived.
+// would bypass the wire) until 20 have arrived; with `open`, without DDS Security.
 template <class T, class Topic, class Fill>
-int deliver(const std::string& writer_identity, const std::string& reader_identity, const Topic& topic, Fill fill) {
+int deliver(const std::string& writer_identity, const std::string& reader_identity, const Topic& topic, Fill fill,
+            bool open = false) {
     auto wc = secure(writer_identity), rc = secure(reader_identity);
+    if (open) wc.security = rc.security = {};
+    const ByTheWire by_the_wire;
     wc.transport = rc.transport = dw::dds::Transport::udp;
     Participant a(wc, writer_identity), b(rc, reader_identity);
     std::atomic<int> got{0};
@@ -294,12 +314,13 @@ int deliver(const std::string& writer_identity, const std::string& reader_identi
 
 }  // namespace
 
-// The encrypted topics carry no plaintext on the wire; a signed one does (which shows the capture
-// sees the samples at all).
+// No topic carries plaintext on the wire: every message is encrypted (the governance protects each
+// at the strongest any topic needs, security/policy.cpp), the sensor topics with the setpoints. The
+// same sample sent without DDS Security is readable (which shows the capture sees the samples).
 TEST(SecureDds, EncryptedTopicsAreNotReadableOnTheWire) {
     LoopbackCapture capture;
     if (!capture.ok()) GTEST_SKIP() << "no packet capture here (needs root or CAP_NET_RAW)";
-    const double secret = 12345.678901, open = 8765.4321012;
+    const double secret = 12345.678901, sensor = 8765.4321012, open = 5432.1098765;
     const int setpoints =
         deliver<dw::msg::VehicleSetpoint>("planner", "mocap_bridge", topics::vehicle_setpoint, [&](auto& s) {
             s.vehicle_id("needle-vehicle");
@@ -307,11 +328,15 @@ TEST(SecureDds, EncryptedTopicsAreNotReadableOnTheWire) {
         });
     ASSERT_EQ(setpoints, 20) << "the setpoints did not flow";
     const int wrenches = deliver<dw::msg::WrenchStamped>("stand_agent", "recorder", topics::stand_wrench,
-                                                         [&](auto& s) { s.force_n().x(open); });
+                                                         [&](auto& s) { s.force_n().x(sensor); });
     ASSERT_EQ(wrenches, 20);
+    const int open_wrenches = deliver<dw::msg::WrenchStamped>(
+        "stand_agent", "recorder", topics::stand_wrench, [&](auto& s) { s.force_n().x(open); }, true);
+    ASSERT_EQ(open_wrenches, 20);
     std::this_thread::sleep_for(200ms);
     ASSERT_GT(capture.size(), 10000u);
-    EXPECT_TRUE(capture.contains(bytes_of(open))) << "the signed wrench is readable: the capture works";
+    EXPECT_TRUE(capture.contains(bytes_of(open))) << "the open wrench is readable: the capture works";
+    EXPECT_FALSE(capture.contains(bytes_of(sensor))) << "a secure wrench in plaintext on the wire";
     EXPECT_FALSE(capture.contains(bytes_of(secret))) << "a setpoint's position in plaintext on the wire";
     EXPECT_FALSE(capture.contains("needle-vehicle")) << "a setpoint's vehicle id in plaintext on the wire";
 }
