@@ -170,9 +170,11 @@ PeerMonitor::PeerMonitor(Participant& p, Handler on_event)
       on_event_(std::move(on_event)),
       reader_(p, topics::process_status, [this](const msg::ProcessStatus& s, const SampleMeta& meta) {
           std::optional<PeerEvent> e;
+          const std::string identity = participant_.identity_of(meta.writer);
           {
               std::lock_guard lock(mutex_);
               e = table_.observe(s, handle_key(meta.writer), participant_.clock().monotonic_ns());
+              identities_[s.process()] = identity;
           }
           emit(e);
       }) {
@@ -224,6 +226,12 @@ std::vector<std::string> PeerMonitor::alive() const {
 std::optional<msg::ProcessStatus> PeerMonitor::last(const std::string& process) const {
     std::lock_guard lock(mutex_);
     return table_.last(process);
+}
+
+std::string PeerMonitor::identity(const std::string& process) const {
+    std::lock_guard lock(mutex_);
+    const auto it = identities_.find(process);
+    return it == identities_.end() ? std::string() : it->second;
 }
 
 bool PeerMonitor::wait_for(const std::vector<std::string>& processes, std::chrono::milliseconds timeout,

@@ -93,6 +93,9 @@ public:
 
     std::vector<std::string> alive() const;
     std::optional<msg::ProcessStatus> last(const std::string& process) const;
+    // Under DDS Security, the identity that sent the process's last heartbeat (its participant's
+    // certificate common name); "" without DDS Security or before its participant is discovered.
+    std::string identity(const std::string& process) const;
     // True once every named process has been heard from (and is still alive).
     bool wait_for(const std::vector<std::string>& processes, std::chrono::milliseconds timeout,
                   const std::stop_token& stop = {}) const;  // false also when stop is requested
@@ -107,6 +110,7 @@ private:
     std::condition_variable cv_;
     bool stop_ = false;
     PeerTable table_;
+    std::map<std::string, std::string> identities_;  // process -> identity of its last heartbeat
     Reader<msg::ProcessStatus> reader_;
     std::thread thread_;
 };

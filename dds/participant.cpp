@@ -2,6 +2,7 @@
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/rtps/builtin/data/ParticipantProxyData.h>
 #include <fastdds/rtps/common/InstanceHandle.h>
 
 #include <algorithm>
@@ -17,6 +18,20 @@ namespace dw::dds {
 namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
 
+// The identity a participant authenticated with: its certificate's common name, from the identity
+// token it announced (PKI-DH's "dds.cert.sn", the subject, e.g. "CN=planner"); "" without one.
+std::string common_name_of(const frtps::ParticipantProxyData& p) {
+    for (const auto& property : p.identity_token_.properties()) {
+        if (property.name() != "dds.cert.sn") continue;
+        const std::string& subject = property.value();
+        const auto at = subject.find("CN=");
+        if (at == std::string::npos) return subject;
+        const auto end = subject.find_first_of(",/", at);
+        return subject.substr(at + 3, end == std::string::npos ? std::string::npos : end - at - 3);
+    }
+    return {};
+}
+
 class Participant::Discovery final : public fdds::DomainParticipantListener {
 public:
     void on_participant_discovery(fdds::DomainParticipant*, frtps::ParticipantDiscoveryInfo&& info) override {
@@ -24,20 +39,25 @@ public:
         const bool gone = info.status == frtps::ParticipantDiscoveryInfo::REMOVED_PARTICIPANT ||
                           info.status == frtps::ParticipantDiscoveryInfo::DROPPED_PARTICIPANT;
         if (gone) {
-            names_.erase(info.info.m_guid.guidPrefix);
+            peers_.erase(info.info.m_guid.guidPrefix);
         } else {
-            names_[info.info.m_guid.guidPrefix] = info.info.m_participantName.to_string();
+            peers_[info.info.m_guid.guidPrefix] = {info.info.m_participantName.to_string(), common_name_of(info.info)};
         }
     }
-    std::string name_of(const frtps::GuidPrefix_t& prefix) const {
-        std::lock_guard lock(mutex_);
-        const auto it = names_.find(prefix);
-        return it == names_.end() ? std::string() : it->second;
-    }
+    std::string name_of(const frtps::GuidPrefix_t& prefix) const { return find(prefix).name; }
+    std::string identity_of(const frtps::GuidPrefix_t& prefix) const { return find(prefix).identity; }
 
 private:
+    struct Peer {
+        std::string name, identity;
+    };
+    Peer find(const frtps::GuidPrefix_t& prefix) const {
+        std::lock_guard lock(mutex_);
+        const auto it = peers_.find(prefix);
+        return it == peers_.end() ? Peer{} : it->second;
+    }
     mutable std::mutex mutex_;
-    std::map<frtps::GuidPrefix_t, std::string> names_;
+    std::map<frtps::GuidPrefix_t, Peer> peers_;
 };
 
 Participant::Participant(const DdsConfig& config, std::string process, Clock& clock)
@@ -64,6 +84,10 @@ Participant::Participant(const DdsConfig& config, std::string process, Clock& cl
 Participant::~Participant() {
     participant_->delete_contained_entities();
     fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+std::string Participant::identity_of(const fdds::InstanceHandle_t& endpoint) const {
+    return discovery_->identity_of(frtps::iHandle2GUID(endpoint).guidPrefix);
 }
 
 std::vector<std::string> Participant::unmatched_readers(const std::vector<fdds::InstanceHandle_t>& matched,

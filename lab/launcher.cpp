@@ -140,9 +140,18 @@ std::string clock_text(const msg::ProcessStatus& s) {
     return text;
 }
 
-// One status line per process (from its heartbeat) and the experiment's progress. `secure`: the
-// launcher itself joined with a keystore, so a heartbeat it hears comes from a participant that
-// authenticated with the lab's CA and may publish heartbeats ("auth"); otherwise "open".
+// Who sent a process's heartbeats: "open" when the launcher joined without a keystore; under DDS
+// Security "auth" when the participant that sent it authenticated as the process's own identity,
+// "auth?" while its identity is not yet known, and "AS <identity>" when another lab identity
+// speaks for the process (any lab identity may publish heartbeats: the permissions cannot tell).
+std::string auth_text(bool secure, const std::string& identity, const std::string& process) {
+    if (!secure) return "open";
+    if (identity.empty()) return "auth?";
+    return identity == process ? "auth" : "AS " + identity;
+}
+
+// One status line per process (from its heartbeat) and the experiment's progress (`secure`: the
+// launcher itself joined with a keystore).
 std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor& peers,
                         const std::optional<msg::ExperimentState>& state, bool secure) {
     std::ostringstream s;
@@ -159,9 +168,10 @@ std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor
                 lost += t.lost();
             }
             std::snprintf(line, sizeof line,
-                          "  %-14s %-9s %-10s @%-8s %-4s out %7.1f Hz  in %7.1f Hz  lost %-6llu clock %s%s%s",
+                          "  %-14s %-9s %-10s @%-8s %-5s out %7.1f Hz  in %7.1f Hz  lost %-6llu clock %s%s%s",
                           r.spec.name.c_str(), dds::process_state_name(st->state()), where.c_str(), r.spec.host.c_str(),
-                          secure ? "auth" : "open", out_hz, in_hz, lost, clock_text(*st).c_str(),
+                          auth_text(secure, peers.identity(r.spec.name), r.spec.name).c_str(), out_hz, in_hz, lost,
+                          clock_text(*st).c_str(),
                           st->message().empty() ? "" : "  ", st->message().c_str());
         } else {
             std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-",

@@ -168,8 +168,10 @@ TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
                                  dir, 300000ms);
     ASSERT_EQ(r.status, 0) << r.err << "\nplanner log:\n" << dw::read_file(dir.file("run/logs/planner.log"));
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
-    EXPECT_NE(r.err.find("@local    auth"), std::string::npos) << "the status line says each process authenticated\n"
-                                                               << r.err;
+    EXPECT_NE(r.err.find("@local    auth "), std::string::npos)
+        << "the status line says a process authenticated as its own identity\n"
+        << r.err;
+    EXPECT_EQ(r.err.find(" AS "), std::string::npos) << "no process spoke as another identity\n" << r.err;
     const auto info = dw::test::run({bin("dw-recorder"), "info", dir.file("run/exp.mcap")}, dir);
     ASSERT_EQ(info.status, 0) << info.err;
     for (const char* topic :

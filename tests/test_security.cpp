@@ -22,6 +22,7 @@
 #include "core/files.hpp"
 #include "dds/config.hpp"
 #include "dds/endpoint.hpp"
+#include "dds/heartbeat.hpp"
 #include "dds/security.hpp"
 #include "probe/samples.hpp"
 #include "security/keystore.hpp"
@@ -152,6 +153,24 @@ TEST(SecureDds, PermittedIdentitiesTalkAndAnOpenParticipantSeesNothing) {
     std::this_thread::sleep_for(500ms);
     EXPECT_EQ(overheard.load(), 0) << "a participant without the lab's keys read the wrench";
     EXPECT_EQ(w.matched(), 1) << "only the recorder matched";
+}
+
+// Any lab identity may publish heartbeats (every role produces them), so the permissions cannot
+// stop one process's identity speaking for another; the launcher's status line shows who spoke
+// (lab/launcher.cpp): the identity of the participant that sent each process's heartbeat.
+TEST(SecureDds, TheIdentityBehindEachHeartbeatIsKnown) {
+    Participant launcher(secure("launcher"), "launcher");
+    dw::dds::PeerMonitor peers(launcher);
+    Participant planner(secure("planner"), "planner");
+    Participant impostor(secure("predictor"), "stand_agent");  // the predictor's keys, the stand agent's name
+    dw::dds::Heartbeat honest(planner, 100ms), forged(impostor, 100ms);
+    const auto end = std::chrono::steady_clock::now() + 30s;
+    while ((peers.identity("planner").empty() || peers.identity("stand_agent").empty()) &&
+           std::chrono::steady_clock::now() < end)
+        std::this_thread::sleep_for(50ms);
+    EXPECT_EQ(peers.identity("planner"), "planner");
+    EXPECT_EQ(peers.identity("stand_agent"), "predictor") << "the heartbeat claims stand_agent; its sender is not";
+    EXPECT_EQ(peers.identity("nobody"), "");
 }
 
 TEST(SecureDds, AnIdentityMayNotPublishWhatItsRoleDoesNotProduce) {
