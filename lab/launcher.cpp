@@ -171,8 +171,7 @@ std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor
                           "  %-14s %-9s %-10s @%-8s %-5s out %7.1f Hz  in %7.1f Hz  lost %-6llu clock %s%s%s",
                           r.spec.name.c_str(), dds::process_state_name(st->state()), where.c_str(), r.spec.host.c_str(),
                           auth_text(secure, peers.identity(r.spec.name), r.spec.name).c_str(), out_hz, in_hz, lost,
-                          clock_text(*st).c_str(),
-                          st->message().empty() ? "" : "  ", st->message().c_str());
+                          clock_text(*st).c_str(), st->message().empty() ? "" : "  ", st->message().c_str());
         } else {
             std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-",
                           where.c_str(), r.spec.host.c_str());
