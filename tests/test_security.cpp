@@ -35,16 +35,25 @@ namespace topics = dw::dds::topics;
 namespace {
 
 // One keystore for the suite: making keys is the slow part.
+std::string make_keystore(const dw::test::TempDir& dir) {
+    dw::security::KeystoreOptions o;
+    o.dir = dir.file("keys");
+    o.days = 30;
+    o.identities = dw::security::role_identities();
+    dw::security::create_keystore(o);
+    return o.dir;
+}
+
 const std::string& keystore() {
     static dw::test::TempDir dir;
-    static const std::string path = [] {
-        dw::security::KeystoreOptions o;
-        o.dir = dir.file("keys");
-        o.days = 30;
-        o.identities = dw::security::role_identities();
-        dw::security::create_keystore(o);
-        return o.dir;
-    }();
+    static const std::string path = make_keystore(dir);
+    return path;
+}
+
+// Another lab's keystore: the same identities, each consistent with its own CA, none with ours.
+const std::string& foreign_keystore() {
+    static dw::test::TempDir dir;
+    static const std::string path = make_keystore(dir);
     return path;
 }
 
@@ -171,6 +180,44 @@ TEST(SecureDds, TheIdentityBehindEachHeartbeatIsKnown) {
     EXPECT_EQ(peers.identity("planner"), "planner");
     EXPECT_EQ(peers.identity("stand_agent"), "predictor") << "the heartbeat claims stand_agent; its sender is not";
     EXPECT_EQ(peers.identity("nobody"), "");
+}
+
+// A participant whose certificate another CA signed (a whole keystore of its own, valid in itself,
+// so it starts) joins the running lab's domain: it authenticates with no lab participant, so its
+// setpoints never reach the lab and it reads none of the lab's wrenches, while the lab's own flow.
+TEST(SecureDds, AParticipantFromAnotherCaReachesNothing) {
+    Participant stand(secure("stand_agent"), "stand_agent"), recorder(secure("recorder"), "recorder");
+    Participant bridge(secure("mocap_bridge"), "mocap_bridge");
+    auto outsider = [](const std::string& identity) {
+        auto c = secure(identity);
+        c.security = foreign_keystore();
+        return c;
+    };
+    Participant outside_planner(outsider("planner"), "planner"), outside_recorder(outsider("recorder"), "recorder");
+    std::atomic<int> recorded{0}, overheard{0}, moved{0};
+    dw::dds::Reader<dw::msg::WrenchStamped> r(recorder, topics::stand_wrench,
+                                              [&](const auto&, const auto&) { ++recorded; });
+    dw::dds::Reader<dw::msg::WrenchStamped> eavesdrop(outside_recorder, topics::stand_wrench,
+                                                      [&](const auto&, const auto&) { ++overheard; });
+    dw::dds::Reader<dw::msg::VehicleSetpoint> vehicles(bridge, topics::vehicle_setpoint,
+                                                       [&](const auto&, const auto&) { ++moved; });
+    dw::dds::Writer<dw::msg::WrenchStamped> w(stand, topics::stand_wrench);
+    dw::dds::Writer<dw::msg::VehicleSetpoint> forged(outside_planner, topics::vehicle_setpoint);
+    ASSERT_TRUE(w.wait_for_readers(1, 30000ms)) << "the recorder never matched the stand agent";
+    const auto end = std::chrono::steady_clock::now() + 20s;
+    for (std::uint64_t i = 0; recorded < 20 && std::chrono::steady_clock::now() < end; ++i) {
+        auto wrench = dw::probe::make_sample<dw::msg::WrenchStamped>(i);
+        auto setpoint = dw::probe::make_sample<dw::msg::VehicleSetpoint>(i);
+        ASSERT_TRUE(w.write(wrench));
+        forged.write(setpoint);
+        std::this_thread::sleep_for(10ms);
+    }
+    EXPECT_GE(recorded.load(), 20) << "the lab's own samples did not flow";
+    std::this_thread::sleep_for(500ms);
+    EXPECT_EQ(overheard.load(), 0) << "a participant of another CA read the lab's wrench";
+    EXPECT_EQ(moved.load(), 0) << "a participant of another CA reached the vehicles";
+    EXPECT_EQ(w.matched(), 1) << "only the recorder matched the stand agent";
+    EXPECT_EQ(forged.matched(), 0) << "a lab reader matched a writer of another CA";
 }
 
 TEST(SecureDds, AnIdentityMayNotPublishWhatItsRoleDoesNotProduce) {
