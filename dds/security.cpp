@@ -85,25 +85,32 @@ bool verify_signed(const std::string& signed_file, const std::string& ca_cert, s
     return ok;
 }
 
-void add_security(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& dir,
-                  const std::string& identity) {
+std::vector<std::pair<std::string, std::string>> security_properties(const std::string& dir,
+                                                                     const std::string& identity) {
     if (!std::filesystem::is_directory(dir))
         throw InputError(log::cat("--security: ", dir, ": no such keystore folder"));
     const KeystorePaths k{dir};
     if (!std::filesystem::is_directory(k.identity_dir(identity)))
         refuse(k.identity_dir(identity), log::cat("no identity '", identity, "' in the keystore (dw-lab keys list)"));
-    auto& p = qos.properties().properties();
     const std::string auth = "dds.sec.auth.builtin.PKI-DH.", access = "dds.sec.access.builtin.Access-Permissions.";
-    p.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
-    p.emplace_back(auth + "identity_ca", uri_of(k.ca_cert(), "the lab's CA certificate"));
-    p.emplace_back(auth + "identity_certificate", uri_of(k.cert(identity), "the identity's certificate"));
-    p.emplace_back(auth + "private_key", uri_of(k.key(identity), "the identity's private key"));
-    p.emplace_back("dds.sec.access.plugin", "builtin.Access-Permissions");
-    p.emplace_back(access + "permissions_ca", uri_of(k.ca_cert(), "the lab's CA certificate"));
-    p.emplace_back(access + "governance", uri_of(k.governance(), "the signed governance"));
-    p.emplace_back(access + "permissions", uri_of(k.permissions(identity), "the identity's signed permissions"));
-    p.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
-    check_identity(k, identity);
+    return {
+        {"dds.sec.auth.plugin", "builtin.PKI-DH"},
+        {auth + "identity_ca", uri_of(k.ca_cert(), "the lab's CA certificate")},
+        {auth + "identity_certificate", uri_of(k.cert(identity), "the identity's certificate")},
+        {auth + "private_key", uri_of(k.key(identity), "the identity's private key")},
+        {"dds.sec.access.plugin", "builtin.Access-Permissions"},
+        {access + "permissions_ca", uri_of(k.ca_cert(), "the lab's CA certificate")},
+        {access + "governance", uri_of(k.governance(), "the signed governance")},
+        {access + "permissions", uri_of(k.permissions(identity), "the identity's signed permissions")},
+        {"dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC"},
+    };
+}
+
+void add_security(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& dir,
+                  const std::string& identity) {
+    auto& p = qos.properties().properties();
+    for (auto& [name, value] : security_properties(dir, identity)) p.emplace_back(name, value);
+    check_identity(KeystorePaths{dir}, identity);
 }
 
 }  // namespace dw::dds

@@ -12,6 +12,8 @@
 //   identities/<name>/permissions.xml, permissions.p7s   what it may publish and subscribe
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace dw::dds {
 
@@ -27,6 +29,11 @@ struct KeystorePaths {
     std::string permissions_xml(const std::string& name) const { return identity_dir(name) + "/permissions.xml"; }
     std::string permissions(const std::string& name) const { return identity_dir(name) + "/permissions.p7s"; }
 };
+
+// The properties that hand Fast DDS's builtin plugins `identity` of the keystore `dir` (its files
+// as file:// URIs); throws dw::InputError naming a missing folder or file. Unchecked otherwise.
+std::vector<std::pair<std::string, std::string>> security_properties(const std::string& dir,
+                                                                     const std::string& identity);
 
 // Adds the security properties for `identity` in the keystore `dir` to qos. Checks first what Fast
 // DDS would refuse without saying why — a missing file, a certificate not signed by the

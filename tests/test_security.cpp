@@ -1,12 +1,19 @@
 // Issue 18: the lab's DDS Security keystore (dw-lab keys) and participants that use it, in one
 // process on loopback: who may publish and read what is what the topic registry says.
 #include <arpa/inet.h>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastrtps/attributes/LibrarySettingsAttributes.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <gtest/gtest.h>
 #include <linux/if_packet.h>
 #include <net/ethernet.h>
 #include <net/if.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -23,6 +30,8 @@
 #include "dds/config.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/heartbeat.hpp"
+#include "dds/openssl.hpp"
+#include "dds/qos.hpp"
 #include "dds/security.hpp"
 #include "probe/samples.hpp"
 #include "security/keystore.hpp"
@@ -218,6 +227,94 @@ TEST(SecureDds, AParticipantFromAnotherCaReachesNothing) {
     EXPECT_EQ(moved.load(), 0) << "a participant of another CA reached the vehicles";
     EXPECT_EQ(w.matched(), 1) << "only the recorder matched the stand agent";
     EXPECT_EQ(forged.matched(), 0) << "a lab reader matched a writer of another CA";
+}
+
+// A copy of the lab's keystore in which the planner's certificate, signed by the lab's CA as
+// before, expired yesterday.
+std::string keystore_with_expired_planner(const dw::test::TempDir& dir) {
+    const std::string copy = dir.file("expired-keys");
+    std::filesystem::copy(keystore(), copy, std::filesystem::copy_options::recursive);
+    const dw::dds::KeystorePaths k{copy};
+    auto read = [](const std::string& path) { return dw::ssl::Bio(BIO_new_file(path.c_str(), "r")); };
+    const dw::ssl::Cert cert(PEM_read_bio_X509(read(k.cert("planner")).get(), nullptr, nullptr, nullptr));
+    const dw::ssl::Key ca_key(PEM_read_bio_PrivateKey(read(k.ca_key()).get(), nullptr, nullptr, nullptr));
+    if (!cert || !ca_key) return {};
+    X509_gmtime_adj(X509_getm_notBefore(cert.get()), -2 * 86400L);
+    X509_gmtime_adj(X509_getm_notAfter(cert.get()), -86400L);
+    if (X509_sign(cert.get(), ca_key.get(), EVP_sha256()) <= 0) return {};
+    const dw::ssl::Bio out(BIO_new_file(k.cert("planner").c_str(), "w"));
+    return out && PEM_write_bio_X509(out.get(), cert.get()) == 1 ? copy : std::string();
+}
+
+// A setpoint writer made with Fast DDS alone, its security properties given as they are (without
+// the lab's keystore check, which an attacker's program would not run).
+class RawSetpointWriter {
+public:
+    RawSetpointWriter(const std::string& keystore_dir) {
+        auto config = secure("planner");
+        config.security.clear();
+        config.transport = dw::dds::Transport::udp;
+        auto qos = dw::dds::participant_qos(config, "planner");
+        for (auto& [name, value] : dw::dds::security_properties(keystore_dir, "planner"))
+            qos.properties().properties().emplace_back(name, value);
+        auto* factory = eprosima::fastdds::dds::DomainParticipantFactory::get_instance();
+        participant_ = factory->create_participant(static_cast<eprosima::fastdds::dds::DomainId_t>(config.domain), qos);
+        if (!participant_) return;
+        eprosima::fastdds::dds::TypeSupport type(new dw::dds::PubSubOf<dw::msg::VehicleSetpoint>::type());
+        type.register_type(participant_);
+        auto* topic = participant_->create_topic("rt/" + config.ns + "/" + std::string(topics::vehicle_setpoint.suffix),
+                                                 type.get_type_name(), eprosima::fastdds::dds::TOPIC_QOS_DEFAULT);
+        auto* publisher = participant_->create_publisher(eprosima::fastdds::dds::PUBLISHER_QOS_DEFAULT);
+        if (topic && publisher)
+            writer_ = publisher->create_datawriter(topic, dw::dds::writer_qos(topics::vehicle_setpoint.qos));
+    }
+    ~RawSetpointWriter() {
+        if (!participant_) return;
+        participant_->delete_contained_entities();
+        eprosima::fastdds::dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+    }
+    bool joined() const { return writer_ != nullptr; }
+    void write(std::uint64_t i) {
+        auto s = dw::probe::make_sample<dw::msg::VehicleSetpoint>(i);
+        writer_->write(&s);
+    }
+
+private:
+    eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+    eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+};
+
+// Setpoints a raw writer with the keystore's planner gets to the vehicles' reader in `window`.
+int setpoints_delivered(const std::string& keystore_dir, std::chrono::seconds window) {
+    Participant bridge(secure("mocap_bridge"), "mocap_bridge");
+    std::atomic<int> got{0};
+    dw::dds::Reader<dw::msg::VehicleSetpoint> vehicles(bridge, topics::vehicle_setpoint,
+                                                       [&](const auto&, const auto&) { ++got; });
+    RawSetpointWriter w(keystore_dir);
+    if (!w.joined()) return 0;  // Fast DDS refused the participant itself
+    const auto end = std::chrono::steady_clock::now() + window;
+    for (std::uint64_t i = 0; got < 5 && std::chrono::steady_clock::now() < end; ++i) {
+        w.write(i);
+        std::this_thread::sleep_for(10ms);
+    }
+    return got.load();
+}
+
+// An expired certificate, signed by the lab's CA, given straight to Fast DDS: its setpoints reach
+// no vehicle; the same program with the valid certificate does reach them (so what stops the
+// expired one is its expiry, not the raw writer). Measured: Fast DDS 2.9.1 refuses to create the
+// participant (PKI-DH's validate_local_identity), so the lab's side of the handshake is not what
+// is exercised here — a stack that skipped its own check would meet the lab's.
+TEST(SecureDds, AnExpiredCertificateReachesNothingEvenPastTheKeystoreCheck) {
+    dw::test::TempDir dir;
+    const std::string expired = keystore_with_expired_planner(dir);
+    ASSERT_FALSE(expired.empty()) << "could not re-sign the planner's certificate";
+    auto checked = secure("planner");
+    checked.security = expired;
+    EXPECT_THROW(Participant(checked, "planner"), dw::InputError) << "the lab's own check refuses it first";
+    const int valid = setpoints_delivered(keystore(), 20s), stale = setpoints_delivered(expired, 10s);
+    EXPECT_GE(valid, 5) << "the raw writer with a valid certificate did not deliver";
+    EXPECT_EQ(stale, 0) << "an expired certificate's setpoints reached the vehicles";
 }
 
 TEST(SecureDds, AnIdentityMayNotPublishWhatItsRoleDoesNotProduce) {
