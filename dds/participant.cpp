@@ -18,6 +18,7 @@ namespace dw::dds {
 namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
 
+namespace {
 // The identity a participant authenticated with: its certificate's common name, from the identity
 // token it announced (PKI-DH's "dds.cert.sn", the subject, e.g. "CN=planner"); "" without one.
 std::string common_name_of(const frtps::ParticipantProxyData& p) {
@@ -31,6 +32,7 @@ std::string common_name_of(const frtps::ParticipantProxyData& p) {
     }
     return {};
 }
+}  // namespace
 
 class Participant::Discovery final : public fdds::DomainParticipantListener {
 public:

@@ -43,7 +43,6 @@ namespace topics = dw::dds::topics;
 
 namespace {
 
-// One keystore for the suite: making keys is the slow part.
 std::string make_keystore(const dw::test::TempDir& dir) {
     dw::security::KeystoreOptions o;
     o.dir = dir.file("keys");
@@ -53,6 +52,7 @@ std::string make_keystore(const dw::test::TempDir& dir) {
     return o.dir;
 }
 
+// One keystore for the suite: making keys is the slow part.
 const std::string& keystore() {
     static dw::test::TempDir dir;
     static const std::string path = make_keystore(dir);
@@ -250,7 +250,7 @@ std::string keystore_with_expired_planner(const dw::test::TempDir& dir) {
 // the lab's keystore check, which an attacker's program would not run).
 class RawSetpointWriter {
 public:
-    RawSetpointWriter(const std::string& keystore_dir) {
+    explicit RawSetpointWriter(const std::string& keystore_dir) {
         auto config = secure("planner");
         config.security.clear();
         config.transport = dw::dds::Transport::udp;
