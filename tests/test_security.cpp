@@ -173,6 +173,43 @@ TEST(SecureDds, PermittedIdentitiesTalkAndAnOpenParticipantSeesNothing) {
     EXPECT_EQ(w.matched(), 1) << "only the recorder matched";
 }
 
+// dw-probe without a keystore, on the lab's domain and namespace while the stand agent streams its
+// wrench, sees no sample and times out; the same probe given the recorder's identity sees them (so
+// the probe's silence is the keystore's doing, not a wrong domain or topic).
+TEST(SecureDds, DwProbeWithoutAKeystoreSeesNothing) {
+    dw::test::TempDir dir;
+    Participant stand(secure("stand_agent"), "stand_agent");
+    dw::dds::Writer<dw::msg::WrenchStamped> w(stand, topics::stand_wrench);
+    std::atomic<bool> stop{false};
+    std::thread stream([&] {
+        for (std::uint64_t i = 0; !stop; ++i) {
+            auto s = dw::probe::make_sample<dw::msg::WrenchStamped>(i);
+            w.write(s);
+            std::this_thread::sleep_for(10ms);
+        }
+    });
+    const auto config = secure("recorder");
+    auto probe = [&](std::vector<std::string> extra) {
+        std::vector<std::string> argv{dw::test::bin("dw-probe"),
+                                      "--domain",
+                                      std::to_string(config.domain),
+                                      "--namespace",
+                                      config.ns,
+                                      "--transport",
+                                      "udp"};
+        argv.insert(argv.end(), extra.begin(), extra.end());
+        for (const char* a : {"echo", "stand/wrench", "--expect", "3", "--timeout", "8", "--quiet"}) argv.push_back(a);
+        return dw::test::run(argv, dir, 60000ms);
+    };
+    const auto open = probe({});
+    const auto permitted = probe({"--security", keystore(), "--identity", "recorder"});
+    stop = true;
+    stream.join();
+    EXPECT_EQ(open.status, 1) << "a probe without the lab's keys: " << open.out << open.err;
+    EXPECT_NE(open.out.find("timed out before every topic arrived"), std::string::npos) << open.out;
+    EXPECT_EQ(permitted.status, 0) << "the recorder's identity: " << permitted.out << permitted.err;
+}
+
 // Any lab identity may publish heartbeats (every role produces them), so the permissions cannot
 // stop one process's identity speaking for another; the launcher's status line shows who spoke
 // (lab/launcher.cpp): the identity of the participant that sent each process's heartbeat.
