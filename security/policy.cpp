@@ -46,6 +46,18 @@ std::string utc(std::chrono::system_clock::time_point t) {
     return buf;
 }
 
+// A topic rule: discovered, alive and read or written only by whom the permissions allow; no
+// protection of its own (every message is protected, above).
+std::string topic_rule(const std::string& expression) {
+    return "        <topic_rule>\n          <topic_expression>" + expression + "</topic_expression>\n" +
+           "          <enable_discovery_protection>true</enable_discovery_protection>\n"
+           "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
+           "          <enable_read_access_control>true</enable_read_access_control>\n"
+           "          <enable_write_access_control>true</enable_write_access_control>\n"
+           "          <metadata_protection_kind>NONE</metadata_protection_kind>\n"
+           "          <data_protection_kind>NONE</data_protection_kind>\n        </topic_rule>\n";
+}
+
 }  // namespace
 
 std::string topic_expression(std::string_view suffix) { return "rt/*/" + std::string(suffix); }
@@ -65,24 +77,10 @@ std::string governance_xml() {
       << "      <topic_access_rules>\n";
     dds::topics::for_each([&](const auto& t) {
         o << "        <!-- " << t.suffix << ": needs " << needs(t.protection) << ": " << t.protection_reason << " -->\n"
-          << "        <topic_rule>\n          <topic_expression>" << topic_expression(t.suffix)
-          << "</topic_expression>\n"
-          << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
-          << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
-          << "          <enable_read_access_control>true</enable_read_access_control>\n"
-          << "          <enable_write_access_control>true</enable_write_access_control>\n"
-          << "          <metadata_protection_kind>NONE</metadata_protection_kind>\n"
-          << "          <data_protection_kind>NONE</data_protection_kind>\n        </topic_rule>\n";
+          << topic_rule(topic_expression(t.suffix));
     });
     o << "        <!-- anything else: access-controlled (the permissions deny it) -->\n"
-      << "        <topic_rule>\n          <topic_expression>*</topic_expression>\n"
-      << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
-      << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
-      << "          <enable_read_access_control>true</enable_read_access_control>\n"
-      << "          <enable_write_access_control>true</enable_write_access_control>\n"
-      << "          <metadata_protection_kind>NONE</metadata_protection_kind>\n"
-      << "          <data_protection_kind>NONE</data_protection_kind>\n        </topic_rule>\n"
-      << "      </topic_access_rules>\n    </domain_rule>\n  </domain_access_rules>\n</dds>\n";
+      << topic_rule("*") << "      </topic_access_rules>\n    </domain_rule>\n  </domain_access_rules>\n</dds>\n";
     return o.str();
 }
 
