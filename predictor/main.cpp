@@ -14,6 +14,7 @@
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
 #include "flight/flight.hpp"
+#include "predictor/ensemble.hpp"
 #include "predictor/evaluate.hpp"
 #include "predictor/maps.hpp"
 #include "predictor/node.hpp"
@@ -28,6 +29,9 @@ using namespace dw::predictor;
 
 constexpr const char* kThreadsHelp =
     "libtorch threads per training (default 1: more spin against each other and any other busy process)";
+
+constexpr const char* kMembersHelp =
+    "Deep Sets trainings (each from its own seed) averaged into the model (1: one training)";
 
 dw::physics::PhysicsConfig physics_from(const std::string& path) {
     return path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
@@ -78,6 +82,7 @@ struct StudyCommand {
         cmd->add_option("--epochs", so.max_epochs, "at most this many epochs per model")
             ->check(dw::cli::in(kEpochsRange));
         cmd->add_option("--threads", so.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
+        cmd->add_option("--members", so.members, kMembersHelp)->check(dw::cli::in(kMembersRange));
         cmd->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]")
             ->check(dw::cli::in(dw::physics::kAltitudeRange));
         cmd->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
@@ -127,6 +132,7 @@ struct RegimesCommand {
 struct TrainCommand {
     CLI::App* cmd = nullptr;
     TrainOptions to;
+    int members = kDefaultDeepSetsMembers;
     std::vector<std::string> data;
     std::string model_out, baseline_path;
 
@@ -138,6 +144,7 @@ struct TrainCommand {
         cmd->add_option("--epochs", to.max_epochs, "at most this many epochs")->check(dw::cli::in(kEpochsRange));
         cmd->add_option("--threads", to.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
         cmd->add_option("--seed", to.seed, "seed")->check(dw::cli::in(dw::kSeedRange));
+        cmd->add_option("--members", members, kMembersHelp)->check(dw::cli::in(kMembersRange));
         cmd->add_option("--hidden", to.hidden, "hidden layer width")->check(dw::cli::in(kHiddenRange));
         cmd->add_option("--patience", to.patience, "epochs without a better validation loss before stopping")
             ->check(dw::cli::in(kPatienceRange));
@@ -159,8 +166,11 @@ struct TrainCommand {
         };
         std::optional<LearntModel> baseline;
         if (!baseline_path.empty()) baseline = LearntModel::load(baseline_path);
-        const auto r = train_model(s.train, s.validation, to, baseline ? &*baseline : nullptr);
-        std::fprintf(stderr, "\n");
+        const auto r = train_members(s.train, s.validation, to, members, baseline ? &*baseline : nullptr,
+                                     [](const std::string& line) {
+                                         std::cerr << "\n";  // after the epoch line
+                                         say(line);
+                                     });
         r.model.save(model_out);
         std::cout << to.kind << ": " << r.epochs << " epochs (best " << r.best_epoch << ", validation "
                   << r.best_validation_loss << "), " << r.seconds << " s; wrote " << model_out << "\n";
@@ -215,6 +225,7 @@ struct RealCommand {
         cmd->add_option("--epochs", ro.max_epochs, "at most this many epochs per model")
             ->check(dw::cli::in(kEpochsRange));
         cmd->add_option("--threads", ro.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
+        cmd->add_option("--members", ro.members, kMembersHelp)->check(dw::cli::in(kMembersRange));
         cmd->add_option("--seed", ro.seed, "seed of the training")->check(dw::cli::in(dw::kSeedRange));
     }
     int run() {

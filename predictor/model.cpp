@@ -76,6 +76,58 @@ LearntModel LearntModel::sum_part() const {
 
 namespace {
 
+// How one network of the members sits in the combined one: whether its input is the shared features
+// (else each member's own slice of the previous network's output) and whether its output is averaged
+// (else each member's own slice).
+struct Combine {
+    bool shared_input;
+    bool averaged_output;
+};
+
+Mlp side_by_side(std::span<const LearntModel> members, const Mlp LearntModel::*net, Combine how) {
+    const auto n = static_cast<Eigen::Index>(members.size());
+    const Mlp& first = members.front().*net;
+    Mlp out;
+    for (std::size_t l = 0; l < first.layers.size(); ++l) {
+        const bool shared = how.shared_input && l == 0, averaged = how.averaged_output && l + 1 == first.layers.size();
+        const auto rows = first.layers[l].w.rows(), cols = first.layers[l].w.cols();
+        Layer c{Eigen::MatrixXf::Zero(averaged ? rows : rows * n, shared ? cols : cols * n),
+                Eigen::VectorXf::Zero(averaged ? rows : rows * n), first.layers[l].silu};
+        for (Eigen::Index m = 0; m < n; ++m) {
+            const Layer& from = (members[static_cast<std::size_t>(m)].*net).layers.at(l);
+            if (from.w.rows() != rows || from.w.cols() != cols)
+                throw InputError(log::cat("averaging models: member ", m + 1, "'s layer ", l + 1, " is ", from.w.rows(),
+                                          " x ", from.w.cols(), ", the first's ", rows, " x ", cols));
+            const float scale = averaged ? 1.0f / static_cast<float>(n) : 1.0f;
+            c.w.block(averaged ? 0 : m * rows, shared ? 0 : m * cols, rows, cols) += scale * from.w;
+            c.b.segment(averaged ? 0 : m * rows, rows) += scale * from.b;
+        }
+        out.layers.push_back(std::move(c));
+    }
+    return out;
+}
+
+}  // namespace
+
+LearntModel average_of(std::span<const LearntModel> members) {
+    if (members.empty()) throw InputError("averaging models: no members");
+    const LearntModel& first = members.front();
+    for (const auto& m : members)
+        if (m.kind != first.kind || m.structure != first.structure || m.input_mean != first.input_mean ||
+            m.input_std != first.input_std || m.output_scale != first.output_scale ||
+            m.baseline.layers.size() != first.baseline.layers.size() ||
+            m.phi.layers.size() != first.phi.layers.size() || m.rho.layers.size() != first.rho.layers.size())
+            throw InputError("averaging models: the members differ in kind, normalisation or depth");
+    LearntModel a = first;
+    const bool deep = first.structure == Structure::deep_sets;
+    a.phi = side_by_side(members, &LearntModel::phi, {.shared_input = true, .averaged_output = !deep});
+    a.rho = side_by_side(members, &LearntModel::rho, {.shared_input = false, .averaged_output = true});
+    a.baseline = side_by_side(members, &LearntModel::baseline, {.shared_input = true, .averaged_output = true});
+    return a;
+}
+
+namespace {
+
 // The model file (kModelFormat), declared once for reading and writing (core/keys.hpp, as JSON).
 constexpr Range kFinite{-1e30, 1e30};
 constexpr std::array<const char*, 2> kStructureNames{"sum", "deep_sets"};

@@ -133,6 +133,13 @@ private:
     mutable std::vector<std::pair<physics::VehicleParams, std::unique_ptr<physics::WrenchModel>>> by_sufferer_;
 };
 
+// The mean of several trainings of one model (an ensemble) as one model of their summed width: each
+// network's layers side by side, block-diagonal, so that the last layer averages (psi, rho) or
+// concatenates (phi, whose outputs feed rho) the members' outputs. Exactly the mean of the members'
+// predictions, served as any model is. Throws dw::InputError for members of different kinds or
+// normalisations, or none.
+LearntModel average_of(std::span<const LearntModel> members);
+
 // Loads "physics" (needs the physics config) or a saved learnt model.
 std::unique_ptr<ForceModel> load_model(const std::string& path);
 

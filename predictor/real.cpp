@@ -90,7 +90,13 @@ RealResult run_real(const RealOptions& o) {
     say(log::cat(all.samples.size(), " samples from ", all.sources.size(), " flight(s): ", r.train, " training, ",
                  r.validation, " validation, ", r.test, " held out"));
     fs::create_directories(out / "models");
-    const TrainPlan plan{o.seed, o.max_epochs, o.threads, describe_split(all), o.progress, o.stop};
+    const TrainPlan plan{.seed = o.seed,
+                         .max_epochs = o.max_epochs,
+                         .threads = o.threads,
+                         .members = o.members,
+                         .split = describe_split(all),
+                         .progress = o.progress,
+                         .stop = o.stop};
     auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va,
                      const LearntModel* baseline = nullptr) {
         return train_and_save(kind, tr, va, plan, (out / "models" / (kind + ".json")).string(), baseline);

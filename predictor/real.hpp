@@ -23,7 +23,8 @@ struct RealOptions {
     std::string out_dir;
     std::uint64_t seed = 1;
     int max_epochs = 150;
-    int threads = kDefaultTrainThreads;  // libtorch's threads per training
+    int threads = kDefaultTrainThreads;     // libtorch's threads per training
+    int members = kDefaultDeepSetsMembers;  // Deep Sets trainings averaged
     std::function<void(const std::string&)> progress;
     std::stop_token stop;
 };

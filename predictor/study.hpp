@@ -27,7 +27,8 @@ struct StudyOptions {
     std::uint64_t seed = 1;
     int max_epochs = 150;
     int threads = kDefaultTrainThreads;  // libtorch's threads per training
-    bool generalisation = true;          // train on K <= 2, test on K = 3; leave stack out
+    int members = kDefaultDeepSetsMembers;
+    bool generalisation = true;  // train on K <= 2, test on K = 3; leave stack out
     bool maps = true;
     ArenaOptions arena;
     std::function<void(const std::string&)> progress;  // one line per step
@@ -61,6 +62,7 @@ struct TrainPlan {
     std::uint64_t seed = 1;
     int max_epochs = 150;
     int threads = kDefaultTrainThreads;
+    int members = kDefaultDeepSetsMembers;             // deep_sets: trainings averaged (1: one training)
     std::string split;                                 // how the blocks were split (the model's metadata)
     std::function<void(const std::string&)> progress;  // one line per step
     std::stop_token stop;

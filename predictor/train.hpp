@@ -21,6 +21,12 @@ inline constexpr Range kThreadsRange{1, 64};
 // spin against each other and against any other busy process on a 2-core machine (docs/BENCHMARKS.md).
 inline constexpr int kDefaultTrainThreads = 1;
 
+// Deep Sets trainings averaged into one model (average_of), each from its own seed: one training's
+// spread on the merged jets is as large as what separates two variants (docs/PREDICTOR.md).
+inline constexpr int kDefaultDeepSetsMembers = 2;
+inline constexpr Range kMembersRange{1, 16};
+inline constexpr std::uint64_t kMemberSeedStride = 1000;  // member i trains from seed + i * this
+
 struct TrainOptions {
     std::string kind = "deep_sets";  // naive_linear, learnt_linear or deep_sets
     int hidden = 64;                 // width of the hidden layers

@@ -220,6 +220,40 @@ TEST(PredictorModel, DeepSetsOnABaselineStartsAsTheBaselineAndSavesIt) {
     for (std::size_t i = 0; i < 6; ++i) EXPECT_FLOAT_EQ(static_cast<float>(c[i]), static_cast<float>(d[i]));
 }
 
+// Trainings averaged into one model predict exactly the mean of their predictions, for either
+// structure and for Deep Sets on a baseline (whose Phi(0) and psi average too); the result saves and
+// loads as any model; members of different shapes or normalisations are refused with a line.
+TEST(PredictorModel, AveragedMembersPredictTheMeanOfTheirPredictions) {
+    dw::test::TempDir dir;
+    const std::vector<RelState> x{{0.1, 0.05, -1.2, 0, 0.5, 0}, {0.0, -0.05, -0.8, 0, 0.5, 0}};
+    for (int variant = 0; variant < 3; ++variant) {
+        std::vector<LearntModel> members;
+        for (unsigned seed = 11; seed < 14; ++seed) {
+            LearntModel m = random_model(variant == 0 ? Structure::sum : Structure::deep_sets, seed);
+            if (variant == 2) m.baseline = random_model(Structure::sum, seed + 100).phi;  // on a baseline
+            members.push_back(m);
+        }
+        const LearntModel avg = average_of(members);
+        EXPECT_EQ(avg.phi.layers[1].w.rows(), 3 * members[0].phi.layers[1].w.rows());
+        avg.save(dir.file("avg.json"));
+        const LearntModel back = LearntModel::load(dir.file("avg.json"));
+        for (const auto& set : {std::vector<RelState>{x[0]}, x}) {
+            Wrench6 mean{};
+            for (const auto& m : members)
+                for (std::size_t i = 0; i < 6; ++i) mean[i] += m.predict(set)[i] / 3;
+            const auto a = avg.predict(set), b = back.predict(set);
+            for (std::size_t i = 0; i < 6; ++i) {
+                EXPECT_NEAR(a[i], mean[i], 1e-5 * (1 + std::abs(mean[i]))) << "variant " << variant << " axis " << i;
+                EXPECT_FLOAT_EQ(static_cast<float>(a[i]), static_cast<float>(b[i]));
+            }
+            EXPECT_GT(std::abs(members[0].predict(set)[2] - mean[2]), 1e-4) << "the members differ";
+        }
+    }
+    std::vector<LearntModel> mixed{random_model(Structure::sum, 1), random_model(Structure::deep_sets, 2)};
+    EXPECT_THROW(average_of(mixed), dw::InputError);
+    EXPECT_THROW(average_of(std::span<const LearntModel>{}), dw::InputError);
+}
+
 // Samples from a field that is a sum of single-neighbour jets plus a pair term the sum cannot hold.
 Dataset synthetic(int legs, unsigned seed) {
     std::mt19937 rng(seed);
@@ -474,7 +508,9 @@ TEST(PredictorMetric, ArenaErrorIsTheMeanCellDifference) {
 }
 
 // The issue's claims, on simulated flights with fixed seeds (the table: dw-predictor study).
-constexpr double kMergingFloorGuard = 2.0;  // Deep Sets' D RMSE / the physics floor with jet merging
+// Deep Sets' D RMSE / the physics floor with jet merging: the issue's target (at this seed Leader
+// Follower K=3 is at 1.49, docs/PREDICTOR.md).
+constexpr double kMergingFloorTarget = 1.5;
 TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     dw::test::TempDir dir;
     StudyOptions o;
@@ -492,9 +528,7 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
         if (row.model == "deep_sets") {
             EXPECT_LT(row.rmse[2], table_value(merging.table, row.formation, "learnt_linear", 2, false))
                 << row.formation;
-            // The issue asks 1.5 x the physics floor; at this seed Leader Follower K=3 is at 1.51
-            // (docs/PREDICTOR.md), so this guards what holds rather than claiming the target.
-            EXPECT_LE(row.rmse[2], kMergingFloorGuard * table_value(merging.table, row.formation, "physics", 2, false))
+            EXPECT_LE(row.rmse[2], kMergingFloorTarget * table_value(merging.table, row.formation, "physics", 2, false))
                 << row.formation << ": Deep Sets vs the physics floor";
         }
 
