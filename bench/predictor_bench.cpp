@@ -13,6 +13,7 @@
 #include <random>
 #include <thread>
 
+#include "core/log.hpp"
 #include "core/subprocess.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/process_cli.hpp"
@@ -37,8 +38,8 @@ double percentile(std::vector<double> v, double q) {
 
 // An untrained model of the study's sizes: inference time does not depend on the weights. Deep
 // Sets carries a learnt linear baseline, as the study's does.
-LearntModel sized_model(Structure s) {
-    std::mt19937 rng(1);
+LearntModel sized_model(Structure s, unsigned seed = 1) {
+    std::mt19937 rng(seed);
     auto mlp = [&](const std::vector<int>& sizes) { return dw::testkit::random_mlp(rng, sizes, 0.3f); };
     LearntModel m;
     m.kind = s == Structure::sum ? "learnt_linear" : "deep_sets";
@@ -53,11 +54,22 @@ LearntModel sized_model(Structure s) {
     return m;
 }
 
+// Deep Sets as the study serves it: the average of kDefaultDeepSetsMembers trainings (average_of).
+LearntModel served_deep_sets() {
+    std::vector<LearntModel> members;
+    for (int i = 0; i < kDefaultDeepSetsMembers; ++i)
+        members.push_back(sized_model(Structure::deep_sets, static_cast<unsigned>(i + 1)));
+    LearntModel m = average_of(members);
+    m.kind = dw::log::cat("deep_sets (", kDefaultDeepSetsMembers, " trainings averaged, as served)");
+    return m;
+}
+
 void inference() {
     const LearntModel deep = sized_model(Structure::deep_sets), lin = sized_model(Structure::sum);
+    const LearntModel served = served_deep_sets();
     const PhysicsModel phys(dw::physics::PhysicsConfig{});
     std::printf("| model (K = 3, one prediction) | p50 µs | p99 µs | target p99 |\n|---|---|---|---|\n");
-    for (const ForceModel* m : std::initializer_list<const ForceModel*>{&deep, &lin, &phys}) {
+    for (const ForceModel* m : std::initializer_list<const ForceModel*>{&deep, &served, &lin, &phys}) {
         std::vector<double> us;
         double sink = 0;
         for (int i = 0; i < 20000; ++i) {
