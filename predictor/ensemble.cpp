@@ -32,7 +32,8 @@ TrainResult train_members(const Dataset& train, const Dataset& validation, const
         TrainOptions t = o;
         t.seed = o.seed + static_cast<std::uint64_t>(member) * kMemberSeedStride;
         const std::string name = members > 1 ? log::cat(o.kind, " ", member + 1, "/", members) : o.kind;
-        if (members > 1 && say)  // o.progress cannot tell the members apart
+        // The one progress line of trainings given `say` (o.progress cannot tell members apart).
+        if (say && (members > 1 || !o.progress))
             t.progress = [&say, name](int epoch, double tl, double vl) {
                 if (epoch % kProgressEveryEpochs == 0)
                     say(log::cat("  ", name, " epoch ", epoch, ": training ", tl, ", validation ", vl));

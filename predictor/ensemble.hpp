@@ -19,8 +19,9 @@ int members_for(const std::string& kind, int members);
 // A deep_sets model: `members` trainings at once (member i from seed o.seed + i * kMemberSeedStride,
 // each with o.threads), averaged; its metadata lists every member's. The result's epochs, best epoch
 // and seconds are the members' largest, its validation loss their mean. Any other kind, or one
-// member: one training, as train_model. `say` gets one line per training when it ends. Throws as
-// train_model.
+// member: one training, as train_model. `say` gets one line per training when it ends, and one every
+// kProgressEveryEpochs epochs naming the training, unless o.progress is set and there is one
+// training (o.progress then gets every epoch). Throws as train_model.
 TrainResult train_members(const Dataset& train, const Dataset& validation, const TrainOptions& o, int members,
                           const LearntModel* baseline = nullptr,
                           const std::function<void(const std::string&)>& say = {});

@@ -7,6 +7,7 @@
 #include <future>
 #include <map>
 #include <memory>
+#include <thread>
 
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -42,12 +43,10 @@ std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Datas
     t.seed = plan.seed;
     t.max_epochs = plan.max_epochs;
     t.threads = plan.threads;
+    t.cores = plan.cores;
+    t.turn = plan.turn;
     t.stop = plan.stop;
     t.split = plan.split;
-    t.progress = [&](int epoch, double tl, double vl) {
-        if (epoch % kProgressEveryEpochs == 0)
-            say(log::cat("  ", kind, " epoch ", epoch, ": training ", tl, ", validation ", vl));
-    };
     say(log::cat("training ", kind, " on ", tr.samples.size(), " samples",
                  baseline ? log::cat(" (on ", baseline->kind, ")") : "",
                  members > 1 ? log::cat(", ", members, " trainings at once, averaged") : ""));
@@ -128,6 +127,52 @@ std::vector<ComparisonRow> generalisation(const Split& split, const ForceModel& 
     return out;
 }
 
+// 2. The study's own trainings take a core each at once (each single-threaded, seeded as if alone):
+// naive linear beside learnt linear, then Deep Sets' members together. The generalisation, which
+// compares with naive linear, starts when that is trained and fills the cores they leave free.
+struct Trained {
+    std::unique_ptr<LearntModel> naive, linear, deep;
+    std::future<std::vector<ComparisonRow>> generalised;  // when asked for: still training
+};
+
+Trained train_models(const StudyOptions& o, const Split& split, const fs::path& out, Cores& cores) {
+    const TrainPlan plan{.seed = o.seed,
+                         .max_epochs = o.max_epochs,
+                         .threads = o.threads,
+                         .members = o.members,
+                         .cores = &cores,
+                         .split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
+                         .progress = o.progress,
+                         .stop = o.stop};
+    auto trainer = [&out](const TrainPlan& p) -> Trainer {
+        return [&out, p](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file,
+                         const LearntModel* baseline) {
+            return train_and_save(kind, tr, va, p, (out / "models" / file).string(), baseline);
+        };
+    };
+    const Trainer train = trainer(plan);
+    // The generalisation tests train one Deep Sets each, not an average (the study's time budget):
+    // they ask whether a model carries over to formations it has not seen, not how near the floor it is.
+    TrainPlan filler = plan;
+    filler.members = 1;
+    filler.turn = Cores::Turn::when_free;
+    auto singles = [](const Dataset& d) { return d.from_two_vehicle_flights().with_k(1, 1); };
+    Trained t;
+    auto naive_f = std::async(std::launch::async, [&] {
+        auto naive =
+            train("naive_linear", singles(split.train), singles(split.validation), "naive_linear.json", nullptr);
+        if (o.generalisation)
+            t.generalised = std::async(std::launch::async, [&split, &o, n = naive.get(), f = trainer(filler)] {
+                return generalisation(split, *n, f, o.arena);
+            });
+        return naive;
+    });
+    t.linear = train("learnt_linear", split.train, split.validation, "learnt_linear.json", nullptr);
+    t.naive = naive_f.get();
+    t.deep = train("deep_sets", split.train, split.validation, "deep_sets.json", t.linear.get());
+    return t;
+}
+
 ArenaOptions arena_at(const ArenaOptions& arena,
                       double altitude) {  // the study's arena, at one of the flights' altitudes
     ArenaOptions at = arena;
@@ -196,39 +241,8 @@ StudyResult run_study(const StudyOptions& o) {
                  split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
 
     // 2. Train.
-    const TrainPlan plan{.seed = o.seed,
-                         .max_epochs = o.max_epochs,
-                         .threads = o.threads,
-                         .members = o.members,
-                         .split = "by leg: leg % 5 == 1 validation, leg % 5 == 0 held out for testing, else training",
-                         .progress = o.progress,
-                         .stop = o.stop};
-    auto trainer = [&out](const TrainPlan& p) -> Trainer {
-        return [&out, p](const std::string& kind, const Dataset& tr, const Dataset& va, const std::string& file,
-                         const LearntModel* baseline) {
-            return train_and_save(kind, tr, va, p, (out / "models" / file).string(), baseline);
-        };
-    };
-    const Trainer train = trainer(plan);
-    // The generalisation tests train one Deep Sets each, not an average (the study's time budget):
-    // they ask whether a model carries over to formations it has not seen, not how near the floor it is.
-    TrainPlan one_each = plan;
-    one_each.members = 1;
-    const Trainer train_one_each = trainer(one_each);
-    // Trainings that do not wait for each other run at once, about two at a time (each
-    // single-threaded, seeded as if alone): naive linear beside learnt linear, Deep Sets' members
-    // together, then the generalisation's two tests beside the comparison, the regimes and the maps.
-    // (Measured: no faster than starting the generalisation beside Deep Sets, 268.5 vs 270.7 s.)
-    auto singles = [](const Dataset& d) { return d.from_two_vehicle_flights().with_k(1, 1); };
-    auto naive_f = std::async(std::launch::async, train, "naive_linear", singles(split.train),
-                              singles(split.validation), "naive_linear.json", nullptr);
-    auto linear = train("learnt_linear", split.train, split.validation, "learnt_linear.json", nullptr);
-    const auto naive = naive_f.get();
-    auto deep = train("deep_sets", split.train, split.validation, "deep_sets.json", linear.get());
-    std::future<std::vector<ComparisonRow>> generalised;
-    if (o.generalisation)
-        generalised =
-            std::async(std::launch::async, [&] { return generalisation(split, *naive, train_one_each, o.arena); });
+    Cores cores(std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / o.threads));
+    auto [naive, linear, deep, generalised] = train_models(o, split, out, cores);
     PhysicsModel physics(o.physics);
     write_text(out / "models" / "physics.yaml", physics::to_yaml(o.physics));
 

@@ -62,7 +62,9 @@ struct TrainPlan {
     std::uint64_t seed = 1;
     int max_epochs = 150;
     int threads = kDefaultTrainThreads;
-    int members = kDefaultDeepSetsMembers;             // deep_sets: trainings averaged (1: one training)
+    int members = kDefaultDeepSetsMembers;  // deep_sets: trainings averaged (1: one training)
+    Cores* cores = nullptr;                 // as TrainOptions
+    Cores::Turn turn = Cores::Turn::now;
     std::string split;                                 // how the blocks were split (the model's metadata)
     std::function<void(const std::string&)> progress;  // one line per step
     std::stop_token stop;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/numbers.hpp"
+#include "core/parallel.hpp"
 #include "predictor/dataset.hpp"
 #include "predictor/model.hpp"
 
@@ -38,6 +39,10 @@ struct TrainOptions {
     int batch = 256;
     std::uint64_t seed = 1;
     int threads = kDefaultTrainThreads;
+    // When set, the training holds one of these for its time (each counts `threads` cores), taken at
+    // once or when one is free (work that fills in: the study's generalisation).
+    Cores* cores = nullptr;
+    Cores::Turn turn = Cores::Turn::now;
     std::string split = "by leg";  // how the training and validation legs were chosen (metadata)
     // Called after every epoch: epoch, training loss, validation loss (normalised MSE).
     std::function<void(int, double, double)> progress;

@@ -273,9 +273,10 @@ void halve_learning_rate(torch::optim::Adam& adam) {
 
 TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o,
                         const LearntModel* baseline) {
-    const auto started = std::chrono::steady_clock::now();
     if (train.samples.empty()) throw InputError("training: no samples on the training legs");
     if (validation.samples.empty()) throw InputError("training: no samples on the validation legs");
+    const auto core = o.cores ? o.cores->take(o.turn, o.stop, "training") : Cores::Pass{};
+    const auto started = std::chrono::steady_clock::now();
     torch::set_num_threads(o.threads);
 
     TrainResult r;
