@@ -12,6 +12,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/parallel.hpp"
 #include "core/shutdown.hpp"
 #include "flight/flight.hpp"
 #include "physics/flight_sim.hpp"
@@ -61,13 +62,14 @@ void write_text(const fs::path& p, const std::string& text) { write_file(p.strin
 
 using Say = std::function<void(const std::string&)>;
 
-// 1. Fly: one flight folder per formation, read back through the contract. `label` maps each
-// physics formation name to its dataset label.
+// 1. Fly: one flight folder per formation, read back through the contract, as many at once as
+// there are cores (each seeded by its place in the list, so the flights are those flown one after
+// another). `label` maps each physics formation name to its dataset label.
 Dataset fly_flights(const StudyOptions& o, const fs::path& out, std::map<std::string, std::string>& label,
                     const Say& say) {
-    Dataset all;
-    std::uint64_t seed = o.seed;
-    for (const auto& f : o.formations) {
+    std::vector<Dataset> flown(o.formations.size());
+    parallel_for(flown.size(), static_cast<int>(std::thread::hardware_concurrency()), [&](std::size_t i) {
+        const std::string& f = o.formations[i];
         physics::FlyOptions fly;
         fly.formation = f;
         fly.grid.legs = o.legs;
@@ -78,14 +80,17 @@ Dataset fly_flights(const StudyOptions& o, const fs::path& out, std::map<std::st
             fly.grid.half_width_m = o.single_half_width_m;
             fly.grid.legs = static_cast<int>(std::lround(o.legs * o.single_half_width_m / 1.0));
         }
-        fly.seed = seed++;
+        fly.seed = o.seed + i;
         fly.stop = o.stop;
         const fs::path dir = out / "flights" / f;
         say(log::cat("flying ", f, " (", fly.grid.legs, " legs, simulated)"));
         flight::write_flight(physics::simulate_flight(o.physics, fly).flight, dir.string());
-        const Dataset d = load_dataset(dir.string());
-        label[f] = d.sources.front().formation;
-        all.append(d);
+        flown[i] = load_dataset(dir.string());
+    });
+    Dataset all;
+    for (std::size_t i = 0; i < flown.size(); ++i) {
+        label[o.formations[i]] = flown[i].sources.front().formation;
+        all.append(flown[i]);
     }
     return all;
 }
