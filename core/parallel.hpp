@@ -22,6 +22,9 @@
 
 namespace dw {
 
+// The machine's cores as the standard library reports them; at least one (it may report 0).
+inline int machine_cores() { return std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
+
 // Calls task(i) for every i in [0, n) on `jobs` threads (at least one).
 template <class Task>
 void parallel_for(std::size_t n, int jobs, Task&& task) {
