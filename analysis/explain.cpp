@@ -443,6 +443,16 @@ bool pinned(const Effect& e, const std::vector<double>& values) {
     return false;
 }
 
+// A candidate that passes the whole-flight test and removes enough held-out error, but whose
+// held-out evidence sits in so few pieces (about one per pass of a neighbour) that the sum over
+// pieces cannot reach min_t whatever the data: the flight cannot decide it either way — not
+// identifiable from this flight. (The signed ranks, the other half of the z, count the pieces that
+// carry next to no evidence as much as the rest.) A label only: nothing is accepted by it.
+bool too_few_pieces(const CandidateResult& c, const ExplainOptions& o) {
+    return !c.accepted && c.gain >= o.min_gain && c.total_ratio < 1 && c.delta_bic < o.max_delta_bic &&
+           std::sqrt(c.evidence_pieces) < o.min_t;
+}
+
 // Paired comparison over held-out legs.
 void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const ExplainOptions& o, double dbic) {
     // The axis judged: the most significant among those whose held-out error falls by at least
@@ -467,6 +477,7 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
             best_gains = gains;
             c.best_axis = static_cast<int>(a);
             c.gain = gain;
+            c.evidence_pieces = effective_count(d);
         }
     }
     double total_n = 0;
@@ -485,11 +496,17 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
     c.t = best_t;
     c.total_ratio = tb > 0 ? ta / tb : 1;
     c.delta_bic = dbic;
-    c.accepted = c.t >= o.min_t && c.gain >= o.min_gain && ta < tb && dbic < -10;
+    c.accepted = c.t >= o.min_t && c.gain >= o.min_gain && ta < tb && dbic < o.max_delta_bic;
+    c.too_few_pieces = too_few_pieces(c, o);
     c.note =
         log::cat("held-out ", kAxes[c.best_axis], ": z = ", std::round(c.t * 10) / 10,
                  " (signed ranks or sum over pieces of the held-out blocks), ", std::round(c.gain * 1000) / 10,
                  " % of its error removed; ΔBIC ", std::round(dbic), c.accepted ? " — accepted" : " — not accepted");
+    if (c.too_few_pieces)
+        c.note += log::cat(": its held-out evidence sits in ", std::round(c.evidence_pieces * 10) / 10,
+                           " effective pieces (about one per pass), so the sum over pieces cannot exceed z ",
+                           std::round(std::sqrt(c.evidence_pieces) * 10) / 10,
+                           ": not identifiable from this flight (more passes would decide it)");
 }
 
 // An effect of the vocabulary has one value for the whole flight. Fitted separately on the passes

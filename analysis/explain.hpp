@@ -30,7 +30,7 @@ struct ExplainOptions {
     std::vector<Effect> candidates = all_effects();
     int folds = 5;                 // blocked cross-validation: leg % folds
     double max_delta_bic = -10.0;  // a candidate goes to the held-out test only below this ΔBIC (whole flight)
-    double min_t = 3.0;            // held-out improvement: Wilcoxon z over 1 s blocks of held-out legs, best axis
+    double min_t = 3.0;            // held-out improvement: z over 0.25 s pieces of held-out blocks, best axis
     double min_gain = 0.05;        // ... and at least this fraction of that axis's error
     double region_z = 5.0;         // a region is reported above this |z|
     // A mismatch is detected, whatever its shape, when on some axis the residual's RMS over the
@@ -82,12 +82,16 @@ struct CandidateResult {
     std::vector<double> values, lo, hi;  // estimates and 95 % intervals
     AxisValues heldout_before{}, heldout_after{};
     double delta_bic = 0;
-    double t = 0;  // Wilcoxon signed-rank z over held-out legs, best axis
+    double t = 0;  // held-out z over pieces, best axis: the larger of signed ranks and Σd/√Σd²
     int best_axis = 2;
     double gain = 0;         // fraction of that axis's held-out MSE removed
     double total_ratio = 1;  // held-out error after / before, all axes (normalised)
     bool accepted = false;
-    bool stand_in = false;                       // it passed the held-out test, but its value changes across the flight
+    bool stand_in = false;  // it passed the held-out test, but its value changes across the flight
+    // The held-out pieces that carry the best axis's evidence, counted by weight: (Σ|d|)² / Σd². The
+    // sum over pieces cannot exceed its square root, whatever the data.
+    double evidence_pieces = 0;
+    bool too_few_pieces = false;                 // passes every test but the held-out z, which this flight cannot carry
     std::string note;                            // why (not) accepted
     int round = 0;                               // forward-selection round it was scored in
     std::map<int, double> heldout_pieces;        // per held-out piece: normalised squared error after, all axes

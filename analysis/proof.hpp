@@ -28,6 +28,9 @@ struct ProofRow {
     bool covered = true;  // every true value inside the interval of its fit, accepted or not
     std::string why;
     double seconds = 0;
+    // Not accepted only because the flight cannot carry the held-out test (too few pieces hold its
+    // evidence: CandidateResult::too_few_pieces), and fitted right.
+    bool not_identifiable = false;
 };
 
 struct ProofResult {

@@ -284,6 +284,9 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
                          {"note", c.note}});
         if (!c.indistinguishable.empty()) cands.back()["indistinguishable_from"] = c.indistinguishable;
         if (c.stand_in) cands.back()["stands_in"] = true;
+        if (c.too_few_pieces)
+            cands.back()["not_identifiable"] = {{"evidence_pieces", c.evidence_pieces},
+                                                {"why", "its held-out evidence sits in too few pieces"}};
         if (measured && e.name == physics::kClockOffsetEffect)
             cands.back()["measured"] = {{"offset_s", measured->offset_s}};
     }
@@ -301,6 +304,19 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     j["cross_validation"] = {
         {"blocks", flight::to_string(r.blocks)}, {"count", r.legs}, {"folds", o.folds}, {"samples", r.samples}};
     return j;
+}
+
+// The effects this flight cannot decide (CandidateResult::too_few_pieces in what the report says of them).
+void md_not_identifiable(std::ostream& md, const ExplainResult& r, const ExplainOptions& o) {
+    for (const auto& e : o.candidates) {
+        const CandidateResult* c = final_result(r, e.name);
+        if (!c || !c->too_few_pieces) continue;
+        md << "**Not identifiable from this flight: " << e.name << "** — it passes the whole-flight test and removes "
+           << fmt(c->gain * 100, 1) << " % of the held-out " << kAxes[static_cast<std::size_t>(c->best_axis)]
+           << " error, but that evidence sits in " << fmt(c->evidence_pieces, 1)
+           << " effective pieces, too few for the held-out test to reach its threshold; a flight with more passes "
+              "would decide it.\n\n";
+    }
 }
 
 // The report's opening: the flight, and what explains it.
@@ -371,7 +387,9 @@ void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOption
        << o.min_t << ", by ≥ " << o.min_gain * 100
        << " %, and the total held-out error falls — and when its value fitted on the nearest and the farthest third of "
           "separations agrees "
-          "(else it stands in for a mismatch that depends on separation). Intervals: the wider of the fold jackknife "
+          "(else it stands in for a mismatch that depends on separation). A candidate that passes all but the z while "
+          "its held-out evidence sits in so few pieces that the sum cannot reach the threshold is not identifiable "
+          "from this flight (said in its verdict). Intervals: the wider of the fold jackknife "
           "and the "
           "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model "
           "shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | "
@@ -406,6 +424,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
 
     std::ostringstream md;
     md_summary(md, f, r, who);
+    md_not_identifiable(md, r, o);
     md << measured_clock_text(measured, r);
     md_where(md, r, o, who);
     md_candidates(md, r, o);

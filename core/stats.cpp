@@ -24,4 +24,10 @@ double paired_z(std::span<const double> d) {
     return std::max(ranks, sq > 0 ? sum / std::sqrt(sq) : 0.0);
 }
 
+double effective_count(std::span<const double> d) {
+    double abs_sum = 0, sq = 0;
+    for (double x : d) abs_sum += std::abs(x), sq += x * x;
+    return sq > 0 ? abs_sum * abs_sum / sq : 0.0;
+}
+
 }  // namespace dw

@@ -13,4 +13,9 @@ namespace dw {
 // chance of a false acceptance. 0 for no pieces.
 double paired_z(std::span<const double> d);
 
+// How many of the pieces carry the evidence, counted by weight: (Σ|d|)² / Σd² — n for n equal
+// pieces, about 1 when one piece dominates. The self-normalised sum above never exceeds its square
+// root, whatever the signs. 0 for no pieces.
+double effective_count(std::span<const double> d);
+
 }  // namespace dw
