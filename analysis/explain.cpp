@@ -504,7 +504,7 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
                  " % of its error removed; ΔBIC ", std::round(dbic), c.accepted ? " — accepted" : " — not accepted");
     if (c.too_few_pieces)
         c.note += log::cat(": its held-out evidence sits in ", std::round(c.evidence_pieces * 10) / 10,
-                           " effective pieces (about one per pass), so the sum over pieces cannot exceed z ",
+                           " effective pieces, so the sum over pieces cannot exceed z ",
                            std::round(std::sqrt(c.evidence_pieces) * 10) / 10,
                            ": not identifiable from this flight (more passes would decide it)");
 }

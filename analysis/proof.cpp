@@ -419,12 +419,16 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     // Recorded flights are what they are: an effect a flight cannot show (its fit right, its
     // held-out evidence in too few pieces) is that flight's verdict, not a failure — but every
     // concealed effect must be recovered on some flight.
-    auto recovered_somewhere = [&](const ProofRow& r) {
-        return std::any_of(R.rows.begin(), R.rows.end(), [&](const ProofRow& x) { return x.name == r.name && x.pass; });
-    };
-    R.pass = !R.rows.empty() && std::all_of(R.rows.begin(), R.rows.end(), [&](const ProofRow& r) {
-        return r.pass || (r.not_identifiable && recovered_somewhere(r));
-    });
+    for (auto& row : R.rows) {
+        const bool recovered =
+            std::any_of(R.rows.begin(), R.rows.end(), [&](const ProofRow& x) { return x.name == row.name && x.pass; });
+        if (row.not_identifiable && !recovered) {
+            row.not_identifiable = false;
+            row.why += "And it is recovered on no flight of this proof. ";
+        }
+    }
+    R.pass = !R.rows.empty() &&
+             std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass || r.not_identifiable; });
     R.table_path = (fs::path(o.out_dir) / "proof.md").string();
     write_file(R.table_path,
                table(R.rows, "flight", "concealed effect", "expected (own fit with the concealed value)"));

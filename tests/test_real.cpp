@@ -247,7 +247,8 @@ TEST(RealFlights, ConcealedEffectsAreRecoveredOnTopOfWhatEachFlightShows) {
             bool labelled = false;
             for (const auto& c : j["candidates"])
                 if (c["effect"] == row.name && c.contains("not_identifiable"))
-                    labelled = c["not_identifiable"]["evidence_pieces"].get<double>() < 9;
+                    labelled = std::sqrt(c["not_identifiable"]["evidence_pieces"].get<double>()) <
+                               dw::analysis::ExplainOptions{}.min_t;
             EXPECT_TRUE(labelled);
             EXPECT_NE(dw::read_file(dir + "/report.md").find("Not identifiable from this flight: " + row.name),
                       std::string::npos);
