@@ -532,6 +532,13 @@ bool acts_on(const Data& d, const std::vector<Wrench6>& before, const std::vecto
     return n > 0 && s / n >= kEvidenceChange * kEvidenceChange;
 }
 
+// A candidate that passed the stand-in check: how close it came (a z near kStandInZ is a close call
+// a reader should see).
+std::string one_value_note(double z) {
+    return log::cat("; one value for the flight: fitted on the lowest and the highest passes apart, it differs by z = ",
+                    std::round(z * 10) / 10, " (refused above ", kStandInZ, ")");
+}
+
 void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsConfig& current,
                     const std::vector<Wrench6>& current_pred, double factor) {
     std::vector<std::size_t> near;
@@ -578,6 +585,7 @@ void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsCon
     const auto sd = jackknife_sd(jack);
     for (std::size_t p = 0; p < c.values.size(); ++p) {
         const double z = std::abs(all[p]) / sd[p];
+        c.stand_in_z = std::max(c.stand_in_z.value_or(0.0), z);
         if (!(z > kStandInZ)) continue;
         c.accepted = false;
         c.stand_in = true;
@@ -588,6 +596,7 @@ void stand_in_check(CandidateResult& c, const Data& d, const physics::PhysicsCon
                      "): one value does not fit the flight, so the effect stands in for something else — not accepted");
         return;
     }
+    c.note += one_value_note(*c.stand_in_z);
 }
 
 // The other accepted candidates of a round that the held-out data cannot tell from the best one:
@@ -814,6 +823,8 @@ void refit_together(ExplainResult& R, const Data& d, const Folds& folds, const E
         if (again.accepted) {
             again.heldout_before = R.accepted[k].heldout_before;
             again.indistinguishable = R.accepted[k].indistinguishable;
+            again.stand_in_z = R.accepted[k].stand_in_z;  // checked in its round, not again
+            if (again.stand_in_z) again.note += one_value_note(*again.stand_in_z);
             R.accepted[k] = again;
         }
     }

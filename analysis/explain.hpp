@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <stop_token>
 #include <string>
 #include <vector>
@@ -88,6 +89,9 @@ struct CandidateResult {
     double total_ratio = 1;  // held-out error after / before, all axes (normalised)
     bool accepted = false;
     bool stand_in = false;  // it passed the held-out test, but its value changes across the flight
+    // The stand-in check's largest z over the parameters (low- minus high-pass fit over its spread),
+    // when the check was made.
+    std::optional<double> stand_in_z;
     // The held-out pieces that carry the best axis's evidence, counted by weight: (Σ|d|)² / Σd². The
     // sum over pieces cannot exceed its square root, whatever the data.
     double evidence_pieces = 0;

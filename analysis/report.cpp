@@ -284,6 +284,7 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
                          {"note", c.note}});
         if (!c.indistinguishable.empty()) cands.back()["indistinguishable_from"] = c.indistinguishable;
         if (c.stand_in) cands.back()["stands_in"] = true;
+        if (c.stand_in_z) cands.back()["stand_in_z"] = *c.stand_in_z;
         if (c.too_few_pieces)
             cands.back()["not_identifiable"] = {{"evidence_pieces", c.evidence_pieces},
                                                 {"why", "its held-out evidence sits in too few pieces"}};
