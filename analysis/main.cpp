@@ -212,7 +212,7 @@ int run(int argc, char** argv) {
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     const Progress progress = [quiet](const std::string& s) {
-        if (!quiet) std::cerr << "dw-explain: " << s << "\n";
+        if (!quiet) dw::log::progress(s);
     };
     if (real_proof.sub->parsed()) return real_proof.run(explain.physics_path, progress);
     if (coverage.sub->parsed()) return coverage.run(progress);

@@ -16,7 +16,10 @@ Level level();
 void set_program(std::string name);
 const std::string& program();
 
+// One line, "program: message", whole even when several threads write at once.
 void write(Level level, std::string_view message);
+// A progress line: written whatever the level (the tools' --quiet decides), one line at a time.
+inline void progress(std::string_view message) { write(Level::info, message); }
 
 template <class... Args>
 std::string cat(const Args&... args) {

@@ -71,7 +71,7 @@ struct RunCommand {
             o.vars[v.substr(0, eq)] = v.substr(eq + 1);
         }
         o.dds_args = cli.dds_args();
-        o.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
+        o.say = [](const std::string& s) { dw::log::progress(s); };
         o.stop = dw::Shutdown::instance().token();
         const auto r = dw::lab::launch(lab, o, cli.dds());
         for (const auto& p : r.printed) std::cout << "started elsewhere: " << p << "\n";

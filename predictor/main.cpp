@@ -58,7 +58,7 @@ std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>
     return out;
 }
 
-void say(const std::string& line) { std::cerr << "dw-predictor: " << line << "\n"; }
+void say(const std::string& line) { dw::log::progress(line); }
 
 // ---- one struct per subcommand: its options, how it is declared, what it does --------------------
 
