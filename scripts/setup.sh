@@ -3,6 +3,7 @@
 # Idempotent: run it again after a pull. Needs root (or sudo) for apt-get.
 #   scripts/setup.sh            install + build everything (build/)
 #   DW_SKIP_BUILD=1 scripts/setup.sh   install only
+#   DW_BUILD_TARGETS="dw-tests" scripts/setup.sh   build only those targets (scripts/test.sh)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 
@@ -33,4 +34,6 @@ fi
 
 if [ "${DW_SKIP_BUILD:-0}" = "1" ]; then exit 0; fi
 cmake -S "$here" -B "$here/build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo ${DW_CMAKE_ARGS:-}
-cmake --build "$here/build" -j "$(nproc)"
+start=$SECONDS
+cmake --build "$here/build" -j "$(nproc)" --target ${DW_BUILD_TARGETS:-all}
+echo "setup: built ${DW_BUILD_TARGETS:-all} in $((SECONDS - start)) s"

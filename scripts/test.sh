@@ -1,10 +1,25 @@
 #!/usr/bin/env bash
-# Installs what the project needs (Debian packages), builds, and runs every test with CTest.
-# The README's test command; .ci/run calls it. Multi-host tests need root (network namespaces)
-# and are skipped, and say so, without it.
+# Installs what the project needs (Debian packages), builds the tests and what they start, and runs
+# them with CTest, then the sanitizer stage. The README's test command; .ci/run calls it.
+# Multi-host tests need root (network namespaces) and are skipped, and say so, without it.
+#   scripts/test.sh          every claim, heavy ones at the smallest size that checks them
+#   scripts/test.sh --full   also the full-size twins (CTest label "full"), the benchmarks' build
+#                            and the larger sanitizer runs: docs/BENCHMARKS.md says what it adds
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
-"$here/scripts/setup.sh"
+full=0
+for arg in "$@"; do
+  case "$arg" in
+    --full) full=1 ;;
+    -h|--help) sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "test.sh: error: unknown option '$arg' (known: --full, --help)" >&2; exit 2 ;;
+  esac
+done
+export DW_TEST_FULL=$full  # read by scripts/sanitize.sh
+
+build_targets=dw-tests
+[ "$full" = 1 ] && build_targets=all
+DW_BUILD_TARGETS=$build_targets "$here/scripts/setup.sh"
 # The independent MCAP readers the recorder's tests use: npm's @mcap/core and
 # @foxglove/omgidl-serialization (versions pinned in tests/js/package-lock.json).
 if ! command -v npm >/dev/null; then
@@ -13,10 +28,21 @@ if ! command -v npm >/dev/null; then
   "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends nodejs npm
 fi
 (cd "$here/tests/js" && npm ci --no-audit --no-fund --loglevel=error)
+select=(-LE full)
+[ "$full" = 1 ] && select=()
 status=0
-ctest --test-dir "$here/build" --output-on-failure -j "$(nproc)" --timeout 600 || status=$?
+start=$SECONDS
+# Tests run side by side while the machine's CPU slots last (tests/CMakeLists.txt: what each takes;
+# build/resources.json: how many there are).
+spec="$here/build/resources.json"
+slots=$(grep -o '"slots": [0-9]*' "$spec" | grep -o '[0-9]*$')
+ctest --test-dir "$here/build" --output-on-failure -j "$slots" --resource-spec-file "$spec" --timeout 900 \
+  "${select[@]}" || status=$?
+echo "test.sh: ctest: $((SECONDS - start)) s"
 # The parser and unit tests again under AddressSanitizer + UBSan (build-asan/, issue 14).
+start=$SECONDS
 "$here/scripts/sanitize.sh" || status=1
+echo "test.sh: sanitizer stage: $((SECONDS - start)) s"
 # Processes killed by a failing test can leave Fast DDS shared-memory segments behind.
 command -v fastdds >/dev/null && fastdds shm clean >/dev/null 2>&1 || true
 exit $status

@@ -12,22 +12,12 @@
 //     status no "*.tmp-*" file is left (a stop, 130, may leave whole files, never partial ones).
 // Tool.StopsWhenAsked interrupts each row's valid base command early with the same checks.
 //
-// Registration in tests/CMakeLists.txt (with the other dw_test calls; it starts every tool):
-//
-// if(DW_BUILD_TOOLS AND DW_BUILD_PHYSICS AND DW_BUILD_PLANNER AND DW_BUILD_RECORDER AND DW_BUILD_PREDICTOR AND DW_BUILD_EXPLAINER
-//    AND DW_BUILD_STAND_AGENT AND DW_BUILD_MOCAP_BRIDGE)
-//   dw_test(dw_fuzz_cli_tests SOURCES test_fuzz_cli.cpp LIBS dw_core LABELS fuzz integration
-//           DEPENDS dw-probe dw-lab dw-sim dw-recorder dw-stand-agent dw-mocap-bridge dw-natnet-emulator dw-planner dw-predictor
-//                   dw-explain dw-import dw-px4-sim
-//           LOCK heavy)
-// endif()
-//
-// gtest_discover_tests makes one CTest test per row and test (FuzzCli/Tool.HostileValues/sim_fly,
-// FuzzCli/Tool.StopsWhenAsked/sim_fly, ...); each test process makes the fixtures its row needs,
-// once. LOCK heavy because rows run real work (dw-lab demo starts a whole simulated lab, the
-// predictor study and the explain proof train and fit) that would starve the real-time experiment
-// tests on 2 cores; it also serialises these tests among themselves (about 8 min in all, no row
-// over 2 min). Without LOCK they run in parallel, at that risk.
+// Registration: tests/CMakeLists.txt (dw_fuzz_cli_tests). gtest_discover_tests makes one CTest test
+// per row and test (FuzzCli/Tool.HostileValues/sim_fly, FuzzCli/Tool.StopsWhenAsked/sim_fly, ...);
+// each test process makes the fixtures its row needs, once. The rows mostly wait on the tools they
+// start (CPU class realtime); the predictor's training rows keep one thread busy (class thread).
+// FuzzCli gives each numeric option one value of each class (Row::every_value); FuzzCliFull (label
+// "full", scripts/test.sh --full) gives every option every value.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -104,6 +94,10 @@ struct Row {
     std::vector<std::string> skip;     // numeric options not to attack
     std::vector<PathOption> paths;     // path options to attack (listed by hand)
     std::vector<std::string> outputs;  // what a failed run must not leave (placeholders)
+    // Every hostile number on every numeric option (FuzzCliFull, under --full). Otherwise each
+    // option gets one value of each class — one that is no number and one number at an edge —
+    // taken in turn from the lists, so that every value still meets some option of the row.
+    bool every_value = false;
 };
 
 // gtest prints parameters in test listings and failures: the row's name, not its bytes.
@@ -829,6 +823,15 @@ std::string help_of(const std::string& tool, const std::string& sub) {
     return slurp(d.file("help"));
 }
 
+// The hostile numbers the row's `turn`-th numeric option gets (Row::every_value).
+std::vector<std::string> values_for(const Row& row, std::size_t turn) {
+    if (row.every_value) return kNumbers;
+    std::vector<std::string> never, edge;
+    for (const auto& v : kNumbers) (kNeverNumbers.count(v) ? never : edge).push_back(v);
+    turn += row.name.size();  // rows start at different places in the lists
+    return {never[turn % never.size()], edge[turn % edge.size()]};
+}
+
 std::vector<Case> cases_of(const Row& row) {
     std::vector<std::string> numeric = numeric_options(help_of(row.tool, row.sub));
     if (row.root_options && !row.sub.empty()) {
@@ -837,9 +840,10 @@ std::vector<Case> cases_of(const Row& row) {
         }
     }
     std::vector<Case> cases;
+    std::size_t turn = 0;  // the option's place in the row, for the values it gets in turn
     for (const auto& o : numeric) {
         if (std::find(row.skip.begin(), row.skip.end(), o) != row.skip.end()) continue;
-        for (const auto& v : kNumbers) {
+        for (const auto& v : values_for(row, turn++)) {
             cases.push_back({o + " " + (v.empty() ? "''" : v), with_value(row.argv, o, v), kNeverNumbers.count(v) > 0});
         }
     }
@@ -980,6 +984,7 @@ TEST_P(Tool, HostileValues) {
 // its outputs and no temporary file.
 TEST_P(Tool, StopsWhenAsked) {
     const Row& row = GetParam();
+    if (row.every_value) GTEST_SKIP() << "the base command has no hostile values: FuzzCli/Tool.StopsWhenAsked runs it";
     std::string problem;
     const auto fixture = fixtures_for(row, *fixtures_, &problem);
     if (problem.rfind("skip: ", 0) == 0) GTEST_SKIP() << problem.substr(6);
@@ -991,7 +996,13 @@ TEST_P(Tool, StopsWhenAsked) {
     attempt(row, c, fixture, row.until_stopped ? row.bound : std::chrono::milliseconds(1000));
 }
 
-INSTANTIATE_TEST_SUITE_P(FuzzCli, Tool, ::testing::ValuesIn(table()),
-                         [](const ::testing::TestParamInfo<Row>& info) { return info.param.name; });
+std::vector<Row> every_value(std::vector<Row> rows) {
+    for (auto& r : rows) r.every_value = true;
+    return rows;
+}
+
+const auto kRowName = [](const ::testing::TestParamInfo<Row>& info) { return info.param.name; };
+INSTANTIATE_TEST_SUITE_P(FuzzCli, Tool, ::testing::ValuesIn(table()), kRowName);
+INSTANTIATE_TEST_SUITE_P(FuzzCliFull, Tool, ::testing::ValuesIn(every_value(table())), kRowName);
 
 }  // namespace

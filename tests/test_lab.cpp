@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -313,7 +314,15 @@ std::vector<double> status_clock_ms(const std::string& text, const std::string& 
     for (std::string line; std::getline(lines, line);) {
         const auto at = line.find("clock ");
         if (!line.starts_with("  " + process + " ") || at == std::string::npos) continue;
-        shown.push_back(std::stod(line.substr(at + 6)));
+        const std::string value = line.substr(at + 6);
+        if (value.starts_with("not measured")) continue;  // before the first exchange with the time service
+        char* end = nullptr;
+        const double ms = std::strtod(value.c_str(), &end);
+        if (end == value.c_str()) {
+            ADD_FAILURE() << "a status line's clock is neither a number nor 'not measured': '" << line << "'";
+            continue;
+        }
+        shown.push_back(ms);
     }
     return shown;
 }
@@ -630,23 +639,24 @@ TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
         << dw::lab::judge(short_run, 0);
 }
 
-// Issue 19: the soak CI runs (3 minutes; docs/BENCHMARKS.md has a 30-minute one): every process
-// sampled through the run, memory flat after the warm-up, nothing lost, the charts drawn.
-TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
+// Issue 19: the soak CI runs (`minutes` long: 2 by default, 3 under --full; docs/BENCHMARKS.md has a
+// 30-minute one): every process sampled through the run, memory flat after the warm-up, nothing lost,
+// the charts drawn.
+static void soak_claims(int minutes) {
     dw::test::TempDir dir;
-    const auto r =
-        dw::test::run({bin("dw-lab"), "soak", "--minutes", "3", "--out", dir.file("soak"), "--domain",
-                       std::to_string(dw::test::test_domain()), "--namespace", "soak" + std::to_string(::getpid())},
-                      dir, 900000ms);
+    const auto r = dw::test::run(
+        {bin("dw-lab"), "soak", "--minutes", std::to_string(minutes), "--out", dir.file("soak"), "--domain",
+         std::to_string(dw::test::test_domain()), "--namespace", "soak" + std::to_string(::getpid())},
+        dir, 900000ms);
     std::printf("%s\n", r.out.c_str());
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     const auto j = nlohmann::json::parse(dw::read_file(dir.file("soak/soak.json")));
     EXPECT_EQ(j["verdict"], "pass");
     EXPECT_EQ(j["phase"], "DONE");
-    EXPECT_GE(j["sampled_s"].get<double>(), 150.0);
+    EXPECT_GE(j["sampled_s"].get<double>(), 60.0 * minutes - 30);  // sampled to within 30 s of the end
     ASSERT_EQ(j["processes"].size(), 5u);
     for (const auto& p : j["processes"]) {
-        EXPECT_GE(p["samples"].get<int>(), 30) << p;
+        EXPECT_GE(p["samples"].get<int>(), 10 * minutes) << p;  // one every 5 s or more often
         EXPECT_EQ(p["lost"].get<std::uint64_t>(), 0u) << p;
         EXPECT_LE(p["rss_slope_mb_per_min"].get<double>(), dw::lab::kRssSlopeLimitMbPerMin) << p;
     }
@@ -654,3 +664,5 @@ TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
     for (const char* png : {"soak/soak_rss.png", "soak/soak_cpu.png"})
         EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
 }
+TEST(LabSoak, TwoMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) { soak_claims(2); }
+TEST(LabSoakFull, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) { soak_claims(3); }

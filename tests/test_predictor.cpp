@@ -511,14 +511,19 @@ TEST(PredictorMetric, ArenaErrorIsTheMeanCellDifference) {
 // Deep Sets' D RMSE / the physics floor with jet merging: the issue's target (at this seed Leader
 // Follower K=3 is at 1.49, docs/PREDICTOR.md).
 constexpr double kMergingFloorTarget = 1.5;
-TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
-    dw::test::TempDir dir;
-    StudyOptions o;
-    o.generalisation = false;
-    o.maps = false;
-    o.out_dir = dir.file("merging");
-    o.physics.effects.jet_merging.enabled = true;
-    const auto merging = run_study(o);
+// The size the two studies run at. The accuracy claims hold at the study's own size (90 legs a
+// flight, 150 epochs): at 45 legs Deep Sets is up to 2.2 x the physics floor (issue 40,
+// docs/PREDICTOR.md), so the default run checks what the study makes — every table, band, regime
+// and picture — on small flights, and --full checks the accuracy too.
+struct StudySize {
+    int legs, max_epochs;
+    bool accuracy;
+};
+constexpr StudySize kSmallStudy{18, 10, false};
+const StudySize kFullStudy{StudyOptions{}.legs, StudyOptions{}.max_epochs, true};
+
+// Where jets merge, Deep Sets beats the sum; where the physics is a sum, nothing invents nonlinearity.
+static void study_accuracy(const StudyResult& merging, const StudyResult& sum) {
     const double lin = table_value(merging.table, "leader_follower K=3", "learnt_linear", 2);
     const double deep = table_value(merging.table, "leader_follower K=3", "deep_sets", 2);
     EXPECT_LE(deep, 0.7 * lin) << "jet merging: Deep Sets " << deep << " vs learnt linear " << lin;
@@ -531,10 +536,6 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
             EXPECT_LE(row.rmse[2], kMergingFloorTarget * table_value(merging.table, row.formation, "physics", 2, false))
                 << row.formation << ": Deep Sets vs the physics floor";
         }
-
-    o.out_dir = dir.file("sum");
-    o.physics.effects.jet_merging.enabled = false;
-    const auto sum = run_study(o);
     for (const auto& row : sum.table) {
         if (row.model != "deep_sets") continue;
         SCOPED_TRACE(row.formation);
@@ -554,7 +555,6 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
                 if (row.model == "deep_sets")
                     EXPECT_LE(row.arena[2], 1.1 * table_value(rows, row.formation, "learnt_linear", 2))
                         << row.formation << " at " << altitude << " m";
-    EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));
     // The regime map (Deep Sets against its own sum part): merging jets high up are non-linear;
     // low down, where jets do not merge, and where the physics is a sum, nothing is.
     auto regime_of = [](const StudyResult& r, const std::string& formation, double altitude) {
@@ -565,9 +565,26 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     };
     EXPECT_EQ(regime_of(merging, "leader_follower K=3", 1.3), Regime::non_linear);
     EXPECT_EQ(regime_of(merging, "leader_follower K=3", 0.3), Regime::linear);
-    EXPECT_EQ(sum.regimes.size(), 18u);  // six formations at three altitudes
     for (const auto& row : sum.regimes)
         EXPECT_NE(row.regime, Regime::non_linear) << row.formation << " at " << row.altitude_m << " m";
+}
+
+static void study_claims(const StudySize& size) {
+    dw::test::TempDir dir;
+    StudyOptions o;
+    o.legs = size.legs;
+    o.max_epochs = size.max_epochs;
+    o.generalisation = false;
+    o.maps = false;
+    o.out_dir = dir.file("merging");
+    o.physics.effects.jet_merging.enabled = true;
+    const auto merging = run_study(o);
+    o.out_dir = dir.file("sum");
+    o.physics.effects.jet_merging.enabled = false;
+    const auto sum = run_study(o);
+    if (size.accuracy) study_accuracy(merging, sum);
+    EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));
+    EXPECT_EQ(sum.regimes.size(), 18u);  // six formations at three altitudes
     EXPECT_TRUE(std::filesystem::exists(dir.file("sum/regimes.png")));
     // Every altitude band the flights fly has its own table, with the arena metric at that band.
     ASSERT_EQ(sum.by_altitude.size(), 3u);
@@ -583,3 +600,5 @@ TEST(PredictorStudy, DeepSetsBeatsLinearOnlyWhereJetsMerge) {
     for (const char* h : {"### 0.3 m", "### 0.8 m", "### 1.3 m", "integrated over the occupied cells"})
         EXPECT_NE(md.find(h), std::string::npos) << h;
 }
+TEST(PredictorStudy, MakesEveryTableBandAndRegimeOnSmallFlights) { study_claims(kSmallStudy); }
+TEST(PredictorStudyFull, DeepSetsBeatsLinearOnlyWhereJetsMerge) { study_claims(kFullStudy); }
