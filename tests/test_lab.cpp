@@ -639,9 +639,11 @@ TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
         << dw::lab::judge(short_run, 0);
 }
 
-// Issue 19: the soak CI runs (`minutes` long: 2 by default, 3 under --full; docs/BENCHMARKS.md has a
-// 30-minute one): every process sampled through the run, memory flat after the warm-up, nothing lost,
-// the charts drawn.
+// Issue 19: the soak CI runs (3 minutes; docs/BENCHMARKS.md has a 30-minute one): every process
+// sampled through the run, memory flat after the warm-up, nothing lost, the charts drawn. Not
+// shorter: over 2 minutes the recorder's memory, still filling its first chunks, rose 0.51 MB/min
+// after the warm-up (limit 0.5; issue 40). It holds a realtime slot and starts first, so the rest of
+// the suite runs beside it.
 static void soak_claims(int minutes) {
     dw::test::TempDir dir;
     const auto r = dw::test::run(
@@ -664,5 +666,4 @@ static void soak_claims(int minutes) {
     for (const char* png : {"soak/soak_rss.png", "soak/soak_cpu.png"})
         EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
 }
-TEST(LabSoak, TwoMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) { soak_claims(2); }
-TEST(LabSoakFull, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) { soak_claims(3); }
+TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) { soak_claims(3); }
