@@ -201,11 +201,14 @@ TEST(ExplainCli, BadInputIsOneLineAndExit2) {
 
 // The issue's proof (dw-explain proof does the same from the command line): every hidden effect,
 // and `null_seeds` flights with nothing hidden — three by default, the proof's ten under --full.
-static void proof_claims(int null_seeds) {
+// `jobs` flights at once: by default one, so that the proof takes one core beside the real-time
+// tests instead of both at the end of the run (its results do not depend on it).
+static void proof_claims(int null_seeds, int jobs) {
     dw::test::TempDir dir;
     ProofOptions o;
     o.out_dir = dir.file("proof");
     o.null_seeds = null_seeds;
+    o.jobs = jobs;
     const auto r = run_proof(o);
     for (const auto& row : r.rows)
         EXPECT_TRUE(row.pass) << row.name << ": " << row.why << " (found " << row.found << ")";
@@ -215,8 +218,10 @@ static void proof_claims(int null_seeds) {
     EXPECT_TRUE(r.pass) << dw::read_file(r.table_path);
 }
 constexpr int kSmallProofNullSeeds = 3;
-TEST(ExplainProof, FindsEveryHiddenEffectAndNothingInNoise) { proof_claims(kSmallProofNullSeeds); }
-TEST(ExplainProofFull, FindsEveryHiddenEffectAndNothingInNoise) { proof_claims(ProofOptions{}.null_seeds); }
+TEST(ExplainProof, FindsEveryHiddenEffectAndNothingInNoise) { proof_claims(kSmallProofNullSeeds, 1); }
+TEST(ExplainProofFull, FindsEveryHiddenEffectAndNothingInNoise) {
+    proof_claims(ProofOptions{}.null_seeds, ProofOptions{}.jobs);
+}
 
 // Issue 15, item 6, CI-sized: the coverage run on the quick effects, six flights each, values drawn
 // per seed (the full table, 30 flights per effect and every effect, is docs/EXPLAINER.md's:

@@ -512,7 +512,7 @@ TEST(PredictorMetric, ArenaErrorIsTheMeanCellDifference) {
 // Follower K=3 is at 1.49, docs/PREDICTOR.md).
 constexpr double kMergingFloorTarget = 1.5;
 // The size the two studies run at. The accuracy claims hold at the study's own size (90 legs a
-// flight, 150 epochs): at 45 legs Deep Sets is up to 2.2 x the physics floor (issue 40,
+// flight, 150 epochs): at 45 legs Deep Sets is up to 3.6 x the physics floor (issue 40,
 // docs/PREDICTOR.md), so the default run checks what the study makes — every table, band, regime
 // and picture — on small flights, and --full checks the accuracy too.
 struct StudySize {
