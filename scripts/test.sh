@@ -4,7 +4,7 @@
 # Multi-host tests need root (network namespaces) and are skipped, and say so, without it.
 #   scripts/test.sh          every claim, heavy ones at the smallest size that checks them
 #   scripts/test.sh --full   also the full-size twins (CTest label "full"), the benchmarks' build
-#                            and the larger sanitizer runs: docs/BENCHMARKS.md says what it adds
+#                            (docs/BENCHMARKS.md and the README say what it adds)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 full=0
@@ -15,7 +15,6 @@ for arg in "$@"; do
     *) echo "test.sh: error: unknown option '$arg' (known: --full, --help)" >&2; exit 2 ;;
   esac
 done
-export DW_TEST_FULL=$full  # read by scripts/sanitize.sh
 
 build_targets=dw-tests
 [ "$full" = 1 ] && build_targets=all
