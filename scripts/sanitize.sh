@@ -27,12 +27,27 @@ cmake --build "$build" -j "$(nproc)" --target "${tests[@]}"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1:new_delete_type_mismatch=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 export LSAN_OPTIONS=suppressions="$here/scripts/lsan.supp"
+# The runs go as many at once as there are cores (each test process has its own DDS domain); each
+# one's output is printed whole when it ends.
+logs=$(mktemp -d)
+trap 'rm -rf "$logs"' EXIT
+sanitize_run() {  # run index, run
+  read -r -a cmd <<<"$2"
+  local start=$SECONDS
+  if "$build/bin/${cmd[0]}" --gtest_brief=1 "${cmd[@]:1}" >"$logs/$1.log" 2>&1; then
+    echo "sanitize: $2: passed in $((SECONDS - start)) s" >>"$logs/$1.log"
+  else
+    echo "sanitize: $2 FAILED after $((SECONDS - start)) s" >>"$logs/$1.log"; touch "$logs/$1.failed"
+  fi
+}
+for i in "${!runs[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$(nproc)" ]; do wait -n || true; done
+  sanitize_run "$i" "${runs[$i]}" &
+done
+wait
 status=0
-for run in "${runs[@]}"; do
-  read -r -a cmd <<<"$run"
-  echo "sanitize: $run"
-  start=$SECONDS
-  "$build/bin/${cmd[0]}" --gtest_brief=1 "${cmd[@]:1}" || { echo "sanitize: $run FAILED"; status=1; }
-  echo "sanitize: $run: $((SECONDS - start)) s"
+for i in "${!runs[@]}"; do
+  cat "$logs/$i.log"
+  [ -e "$logs/$i.failed" ] && status=1
 done
 exit $status
