@@ -642,23 +642,23 @@ TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
 // Issue 19: the soak CI runs (3 minutes; docs/BENCHMARKS.md has a 30-minute one): every process
 // sampled through the run, memory flat after the warm-up, nothing lost, the charts drawn. Not
 // shorter: over 2 minutes the recorder's memory, still filling its first chunks, rose 0.51 MB/min
-// after the warm-up (limit 0.5; issue 40). It holds a realtime slot and starts first, so the rest of
-// the suite runs beside it.
-static void soak_claims(int minutes) {
+// after the warm-up (limit 0.5; issue 40). It holds one thread's CPU slots and starts first, so the
+// rest of the suite runs beside it.
+TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
     dw::test::TempDir dir;
-    const auto r = dw::test::run(
-        {bin("dw-lab"), "soak", "--minutes", std::to_string(minutes), "--out", dir.file("soak"), "--domain",
-         std::to_string(dw::test::test_domain()), "--namespace", "soak" + std::to_string(::getpid())},
-        dir, 900000ms);
+    const auto r =
+        dw::test::run({bin("dw-lab"), "soak", "--minutes", "3", "--out", dir.file("soak"), "--domain",
+                       std::to_string(dw::test::test_domain()), "--namespace", "soak" + std::to_string(::getpid())},
+                      dir, 900000ms);
     std::printf("%s\n", r.out.c_str());
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     const auto j = nlohmann::json::parse(dw::read_file(dir.file("soak/soak.json")));
     EXPECT_EQ(j["verdict"], "pass");
     EXPECT_EQ(j["phase"], "DONE");
-    EXPECT_GE(j["sampled_s"].get<double>(), 60.0 * minutes - 30);  // sampled to within 30 s of the end
+    EXPECT_GE(j["sampled_s"].get<double>(), 150.0);
     ASSERT_EQ(j["processes"].size(), 5u);
     for (const auto& p : j["processes"]) {
-        EXPECT_GE(p["samples"].get<int>(), 10 * minutes) << p;  // one every 5 s or more often
+        EXPECT_GE(p["samples"].get<int>(), 30) << p;
         EXPECT_EQ(p["lost"].get<std::uint64_t>(), 0u) << p;
         EXPECT_LE(p["rss_slope_mb_per_min"].get<double>(), dw::lab::kRssSlopeLimitMbPerMin) << p;
     }
@@ -666,4 +666,3 @@ static void soak_claims(int minutes) {
     for (const char* png : {"soak/soak_rss.png", "soak/soak_cpu.png"})
         EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
 }
-TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) { soak_claims(3); }
