@@ -84,8 +84,6 @@ Outcome one_flight(const Target& t, const Effect& e, int seed, const CoverageOpt
     return out;
 }
 
-std::string fmt(double v, int p) { return fixed(v, p); }
-
 void judge(CoverageRow& r) {
     using V = CoverageRow::Verdict;
     if (r.intervals < kMinIdentified * r.flights) {
@@ -127,8 +125,8 @@ std::string table(const std::vector<CoverageRow>& rows, const CoverageOptions& o
     for (const auto& r : rows)
         md << "| " << r.effect << " | " << r.param << " | " << r.formation << " | " << r.drawn << " | " << r.flights
            << " | " << r.intervals << " | " << r.covered << " | "
-           << (r.intervals ? fmt(100 * r.coverage(), 0) + " %" : "–") << " | " << r.accepted << " | "
-           << fmt(r.mean_half_width, 4) << " | " << r.why << " |\n";
+           << (r.intervals ? fixed(100 * r.coverage(), 0) + " %" : "–") << " | " << r.accepted << " | "
+           << fixed(r.mean_half_width, 4) << " | " << r.why << " |\n";
     for (const auto* name : kFlyingOnly)
         md << "| " << name
            << " | – | – | – | 0 | – | – | – | – | – | not measured: it acts only on a flying sufferer; dw-sim flies "

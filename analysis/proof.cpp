@@ -36,8 +36,6 @@ struct Case {
     std::uint64_t seed = 1;
 };
 
-std::string fmt(double v, int p = 3) { return fixed(v, p); }
-
 std::vector<Case> cases() {
     return {
         {"clock_offset",
@@ -103,13 +101,14 @@ bool check_missing(ProofRow& row, const ExplainResult& r, const Truth& t) {
     }
     const double v = fit->values[t.index], lo = fit->lo[t.index], hi = fit->hi[t.index];
     row.fitted +=
-        (row.fitted.empty() ? "" : "; ") + fmt(v, 3) + " [" + fmt(lo, 3) + ", " + fmt(hi, 3) + "] (not accepted)";
+        (row.fitted.empty() ? "" : "; ") + fixed(v, 3) + " [" + fixed(lo, 3) + ", " + fixed(hi, 3) + "] (not accepted)";
     row.covered = row.covered && t.value >= lo && t.value <= hi;
     if (!fit->too_few_pieces) {
         row.why += t.effect + " not found. ";
         return false;
     }
-    row.why += log::cat(t.effect, "'s held-out evidence sits in ", fmt(fit->evidence_pieces, 1), " effective pieces. ");
+    row.why +=
+        log::cat(t.effect, "'s held-out evidence sits in ", fixed(fit->evidence_pieces, 1), " effective pieces. ");
     return true;
 }
 
@@ -124,14 +123,14 @@ void check(ProofRow& row, const ExplainResult& r, const std::vector<Truth>& trut
     for (const auto& t : truth) {
         const auto it = std::find_if(r.accepted.begin(), r.accepted.end(),
                                      [&](const CandidateResult& a) { return a.effect.name == t.effect; });
-        row.truth += (row.truth.empty() ? "" : "; ") + t.param + " " + fmt(t.value, 3);
+        row.truth += (row.truth.empty() ? "" : "; ") + t.param + " " + fixed(t.value, 3);
         if (it == r.accepted.end()) {
             ++missing;
             undecidable += check_missing(row, r, t) ? 1 : 0;
             continue;
         }
         const double v = it->values[t.index], lo = it->lo[t.index], hi = it->hi[t.index];
-        row.fitted += (row.fitted.empty() ? "" : "; ") + fmt(v, 3) + " [" + fmt(lo, 3) + ", " + fmt(hi, 3) + "]";
+        row.fitted += (row.fitted.empty() ? "" : "; ") + fixed(v, 3) + " [" + fixed(lo, 3) + ", " + fixed(hi, 3) + "]";
         if (t.value < lo || t.value > hi) {
             row.pass = false;
             row.covered = false;
@@ -139,7 +138,7 @@ void check(ProofRow& row, const ExplainResult& r, const std::vector<Truth>& trut
         }
         const auto ax = static_cast<std::size_t>(it->best_axis);
         row.rmse += (row.rmse.empty() ? "" : "; ") + std::string(flight::kAxes[ax]) + " " +
-                    fmt(r.heldout_before[ax], 3) + " → " + fmt(r.heldout_after[ax], 3);
+                    fixed(r.heldout_before[ax], 3) + " → " + fixed(r.heldout_after[ax], 3);
         if (!(r.heldout_after[ax] < r.heldout_before[ax])) {
             row.pass = false;
             other_failure = true;

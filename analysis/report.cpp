@@ -24,8 +24,6 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 using flight::kAxes;  // the axes as in wrench.csv
 
-std::string fmt(double v, int p = 3) { return fixed(v, p); }
-
 json axes_json(const AxisValues& v) {
     json j = json::object();
     for (std::size_t a = 0; a < 6; ++a) j[kAxes[a]] = v[a];
@@ -54,8 +52,8 @@ std::string params_text(const CandidateResult& c) {
     std::ostringstream s;
     for (std::size_t k = 0; k < c.values.size(); ++k) {
         if (k) s << ", ";
-        s << c.effect.params[k].name << " = " << fmt(c.values[k], 4) << " [" << fmt(c.lo[k], 4) << ", "
-          << fmt(c.hi[k], 4) << "]";
+        s << c.effect.params[k].name << " = " << fixed(c.values[k], 4) << " [" << fixed(c.lo[k], 4) << ", "
+          << fixed(c.hi[k], 4) << "]";
     }
     if (c.effect.type->has_axes()) s << " (" << kAxes[c.effect.from] << " → " << kAxes[c.effect.to] << ")";
     return s.str();
@@ -81,9 +79,9 @@ physics::EffectVoice voice_of(const Replay& r) {
 
 std::string paragraph(const CandidateResult& c, const physics::EffectVoice& who) {
     const auto axis = static_cast<std::size_t>(c.best_axis);
-    const std::string err =
-        log::cat("Held-out RMSE on ", kAxes[axis], ": ", fmt(c.heldout_before[axis]), " → ", fmt(c.heldout_after[axis]),
-                 " (", fmt(c.gain * 100, 0), " % of its squared error removed on blocks the fit never saw).");
+    const std::string err = log::cat("Held-out RMSE on ", kAxes[axis], ": ", fixed(c.heldout_before[axis], 3), " → ",
+                                     fixed(c.heldout_after[axis], 3), " (", fixed(c.gain * 100, 0),
+                                     " % of its squared error removed on blocks the fit never saw).");
     return c.effect.type->describe(c.values, {c.effect.from, c.effect.to}, who) + err;
 }
 
@@ -242,13 +240,13 @@ std::string measured_clock_text(const std::optional<MeasuredClock>& measured, co
     if (!measured) return "";
     std::string fitted = "not fitted (not a candidate)";
     if (const auto* c = final_result(r, physics::kClockOffsetEffect))
-        fitted = log::cat(fmt(c->values[0], 4), " s [", fmt(c->lo[0], 4), ", ", fmt(c->hi[0], 4), "], ",
+        fitted = log::cat(fixed(c->values[0], 4), " s [", fixed(c->lo[0], 4), ", ", fixed(c->hi[0], 4), "], ",
                           c->accepted ? "accepted" : "not accepted");
     return log::cat(
         "**Clock offset, measured beside fitted.** The lab's time service measured the stand's clock against the "
         "mocap's "
         "while recording: ",
-        fmt(measured->offset_s, 4), " s",
+        fixed(measured->offset_s, 4), " s",
         measured->raw_stamps ? " (these stamps are as recorded)"
                              : " (already taken out of these stamps by the export: expect a fit near 0)",
         ". The explainer's clock_offset: ", fitted, ".\n\n");
@@ -313,8 +311,8 @@ void md_not_identifiable(std::ostream& md, const ExplainResult& r, const Explain
         const CandidateResult* c = final_result(r, e.name);
         if (!c || !c->too_few_pieces) continue;
         md << "**Not identifiable from this flight: " << e.name << "** — it passes the whole-flight test and removes "
-           << fmt(c->gain * 100, 1) << " % of the held-out " << kAxes[static_cast<std::size_t>(c->best_axis)]
-           << " error, but that evidence sits in " << fmt(c->evidence_pieces, 1)
+           << fixed(c->gain * 100, 1) << " % of the held-out " << kAxes[static_cast<std::size_t>(c->best_axis)]
+           << " error, but that evidence sits in " << fixed(c->evidence_pieces, 1)
            << " effective pieces, too few for the held-out test to reach its threshold; a flight with more passes "
               "would decide it.\n\n";
     }
@@ -331,7 +329,7 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
           "own parameters "
           "(meta.json); residual = recorded − simulated"
        << (f.meta.moments_measured ? "" : "; the moments are not measured and take no part") << ". Analysis took "
-       << fmt(r.seconds, 1) << " s.\n\n";
+       << fixed(r.seconds, 1) << " s.\n\n";
     if (!r.detected) {
         md << "**No mismatch**: the recording matches the simulation within its noise. No effect is claimed.\n\n";
     } else if (r.accepted.empty()) {
@@ -351,12 +349,13 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
 void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o, const physics::EffectVoice& who) {
     md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes
        << " of its own motor distances horizontally): ";
-    for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fmt(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
+    for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fixed(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
     if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";
     else {
         md << "| axis | where | mean residual | z |\n|---|---|---|---|\n";
         for (const auto& g : r.regions)
-            md << "| " << g.axis << " | " << g.where << " | " << fmt(g.mean_residual) << " | " << fmt(g.z, 1) << " |\n";
+            md << "| " << g.axis << " | " << g.where << " | " << fixed(g.mean_residual, 3) << " | " << fixed(g.z, 1)
+               << " |\n";
         md << "\nz: the bin's mean residual over its standard error, with the sample count reduced for "
               "autocorrelation.\n\n";
     }
@@ -372,7 +371,7 @@ void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o,
            << (s.direction > 0   ? "+E"
                : s.direction < 0 ? "−E"
                                  : "all")
-           << " | " << s.band << " | " << fmt(s.separation_m, 2) << " | " << s.samples << " | " << fmt(s.shift_s, 3)
+           << " | " << s.band << " | " << fixed(s.separation_m, 2) << " | " << s.samples << " | " << fixed(s.shift_s, 3)
            << " |\n";
 }
 
@@ -396,11 +395,12 @@ void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOption
           "shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | "
           "verdict |\n|---|---|---|---|---|\n";
     for (const auto& c : r.candidates)
-        md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fmt(c.delta_bic, 1)
+        md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fixed(c.delta_bic, 1)
            << " | " << c.note << " |\n";
     md << "\n## Held-out error per axis\n\n| axis | before | after |\n|---|---|---|\n";
     for (std::size_t a = 0; a < 6; ++a)
-        md << "| " << kAxes[a] << " | " << fmt(r.heldout_before[a], 4) << " | " << fmt(r.heldout_after[a], 4) << " |\n";
+        md << "| " << kAxes[a] << " | " << fixed(r.heldout_before[a], 4) << " | " << fixed(r.heldout_after[a], 4)
+           << " |\n";
 }
 
 }  // namespace

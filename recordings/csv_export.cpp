@@ -25,8 +25,6 @@ namespace dw::recordings {
 
 namespace {
 
-constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks
-
 // A row's text in a buffer it keeps, numbers formatted in place: appending each formatted number
 // to a std::string went through its general replace (6 % of the export, 4 % more in push_back).
 class RowText {

@@ -20,7 +20,6 @@
 namespace dw::recordings {
 namespace {
 
-constexpr std::uint64_t kStopCheckEvery = 1024;  // messages between stop checks while exporting
 // How far behind a topic's latest stamp the flight export still puts a row in order (a producer's
 // stamps arrive in order but for jitter; a clock stepping back further makes the export sort in memory).
 constexpr double kReorderWindowS = 2.0;

@@ -21,6 +21,9 @@
 
 namespace dw::recordings {
 
+// Messages read between checks of a stop request while exporting.
+inline constexpr std::uint64_t kStopCheckEvery = 1024;
+
 // Decodes one recorded CDR message of a lab type (by its scoped name) into JSON; nullopt for a
 // type the lab does not know. Throws dw::InputError for bytes that do not decode.
 std::optional<nlohmann::json> decode(const std::string& type_name, std::span<const std::uint8_t> cdr);
