@@ -12,6 +12,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/parallel.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
 #include "recordings/recordings.hpp"
@@ -36,7 +37,6 @@ struct Verdict {
 };
 constexpr Verdict kProofVerdict{"PROOF PASSED", "PROOF FAILED"};
 constexpr Verdict kCoverageVerdict{nullptr, "COVERAGE BELOW TARGET"};
-constexpr dw::Range kJobsRange{1, 64};  // flights flown and explained at once
 // What the real-data proof may conceal: enough to be a change, not so much that the flight is another.
 constexpr dw::Range kConcealedClockRange{0.001, 2, "s"};
 constexpr dw::Range kConcealedScaleRange{0.1, 10};
@@ -71,7 +71,7 @@ struct ProofCommand {
                                  "fly flights with hidden effects (dw-sim fly), explain them, check what was found");
         sub->add_option("--out", options.out_dir, "output folder (flights, reports, proof.md)")->required();
         sub->add_option("--null-seeds", options.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
-        sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(kJobsRange));
+        sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(dw::kJobsRange));
         sub->add_option(
             "--cases", cases,
             "clock_offset, wake_transport, sensor_lag, jet_merging, cell_crosstalk, two_effects, null (default: all)");
@@ -136,7 +136,7 @@ struct CoverageCommand {
         sub->add_option("--out", options.out_dir, "output folder (coverage.md)")->required();
         sub->add_option("--seeds", options.seeds, "flights per effect")->check(dw::cli::in({1, 1000}));
         sub->add_option("--legs", options.legs, "legs per flight")->check(dw::cli::in({5, 1000}));
-        sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(kJobsRange));
+        sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(dw::kJobsRange));
         sub->add_option("--effects", effects,
                         "effects, comma-separated (default: every one a flight over the stand can show)");
     }

@@ -18,12 +18,16 @@
 #include <utility>
 #include <vector>
 
+#include "core/numbers.hpp"
 #include "core/shutdown.hpp"
 
 namespace dw {
 
 // The machine's cores as the standard library reports them; at least one (it may report 0).
 inline int machine_cores() { return std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
+
+// How many pieces of long work a tool may run at once (its --jobs): flights, trainings, explanations.
+inline constexpr Range kJobsRange{1, 64};
 
 // Calls task(i) for every i in [0, n) on `jobs` threads (at least one).
 template <class Task>

@@ -201,8 +201,8 @@ int run_demo(const DemoOptions& o) {
 
     // 3. Train and compare (the study: simulated training flights of every formation).
     step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
-    std::vector<std::string> study{"dw-predictor",           "study",     "--out",
-                                   (run / "study").string(), "--physics", physics_path};
+    std::vector<std::string> study{"dw-predictor", "study",      "--out",  (run / "study").string(),
+                                   "--physics",    physics_path, "--jobs", std::to_string(o.jobs)};
     if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
     run_sibling(study, (run / "logs" / "study.log").string(), o.stop);
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "dds/config.hpp"
 
 namespace dw::lab {
@@ -15,6 +16,7 @@ namespace dw::lab {
 struct DemoOptions {
     std::string out_dir;
     bool quick = false;                 // fewer legs and epochs (the CI test)
+    int jobs = machine_cores();         // cores the study may use (dw-predictor study --jobs)
     std::vector<std::string> dds_args;  // for every process
     dds::DdsConfig dds;                 // the launcher's own participant
     std::stop_token stop;               // every step and child stops: dw::Stopped

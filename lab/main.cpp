@@ -100,6 +100,8 @@ int run(int argc, char** argv) {
         "demo", "fly a simulated experiment end to end: recording, models, table, maps, explained mismatch");
     demo->add_option("--out", demo_o.out_dir, "run folder (default: runs/demo-<time>)");
     demo->add_flag("--quick", demo_o.quick, "fewer legs and epochs (a smoke test, ~3 min)");
+    demo->add_option("--jobs", demo_o.jobs, "cores the study may use (default: every core)")
+        ->check(dw::cli::in(dw::kJobsRange));
     RunCommand runc;
     runc.add(app);
 

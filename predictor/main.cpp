@@ -30,6 +30,9 @@ using namespace dw::predictor;
 constexpr const char* kThreadsHelp =
     "libtorch threads per training (default 1: more spin against each other and any other busy process)";
 
+constexpr const char* kStudyJobsHelp =
+    "cores the study may use: flights flown at once, trainings (jobs / threads) at once (default: every core)";
+
 constexpr const char* kMembersHelp =
     "Deep Sets trainings (each from its own seed) averaged into the model (1: one training)";
 
@@ -82,6 +85,7 @@ struct StudyCommand {
         cmd->add_option("--epochs", so.max_epochs, "at most this many epochs per model")
             ->check(dw::cli::in(kEpochsRange));
         cmd->add_option("--threads", so.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
+        cmd->add_option("--jobs", so.jobs, kStudyJobsHelp)->check(dw::cli::in(dw::kJobsRange));
         cmd->add_option("--members", so.members, kMembersHelp)->check(dw::cli::in(kMembersRange));
         cmd->add_option("--altitude", so.arena.altitude_m, "relative altitude of the Table 1 metric and the maps [m]")
             ->check(dw::cli::in(dw::physics::kAltitudeRange));

@@ -67,7 +67,7 @@ using Say = std::function<void(const std::string&)>;
 Dataset fly_flights(const StudyOptions& o, const fs::path& out, std::map<std::string, std::string>& label,
                     const Say& say) {
     std::vector<Dataset> flown(o.formations.size());
-    parallel_for(flown.size(), machine_cores(), [&](std::size_t i) {
+    parallel_for(flown.size(), o.jobs, [&](std::size_t i) {
         const std::string& f = o.formations[i];
         physics::FlyOptions fly;
         fly.formation = f;
@@ -245,7 +245,7 @@ StudyResult run_study(const StudyOptions& o) {
                  split.validation.samples.size(), " validation, ", split.test.samples.size(), " held out"));
 
     // 2. Train.
-    Cores cores(machine_cores() / o.threads);
+    Cores cores(std::max(1, o.jobs / o.threads));
     auto [naive, linear, deep, generalised] = train_models(o, split, out, cores);
     PhysicsModel physics(o.physics);
     write_text(out / "models" / "physics.yaml", physics::to_yaml(o.physics));

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "physics/config.hpp"
 #include "predictor/evaluate.hpp"
 #include "predictor/regimes.hpp"
@@ -27,6 +28,7 @@ struct StudyOptions {
     std::uint64_t seed = 1;
     int max_epochs = 150;
     int threads = kDefaultTrainThreads;  // libtorch's threads per training
+    int jobs = machine_cores();          // cores it may use: flights flown at once, trainings (jobs / threads) at once
     int members = kDefaultDeepSetsMembers;
     bool generalisation = true;  // train on K <= 2, test on K = 3; leave stack out
     bool maps = true;

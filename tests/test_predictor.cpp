@@ -518,9 +518,10 @@ constexpr double kMergingFloorTarget = 1.5;
 struct StudySize {
     int legs, max_epochs;
     bool accuracy;
+    int jobs;  // the small study flies and trains one at a time: one thread's slots beside the real-time tests
 };
-constexpr StudySize kSmallStudy{18, 10, false};
-const StudySize kFullStudy{StudyOptions{}.legs, StudyOptions{}.max_epochs, true};
+constexpr StudySize kSmallStudy{18, 10, false, 1};
+const StudySize kFullStudy{StudyOptions{}.legs, StudyOptions{}.max_epochs, true, StudyOptions{}.jobs};
 
 // Where jets merge, Deep Sets beats the sum; where the physics is a sum, nothing invents nonlinearity.
 static void study_accuracy(const StudyResult& merging, const StudyResult& sum) {
@@ -574,6 +575,7 @@ static void study_claims(const StudySize& size) {
     StudyOptions o;
     o.legs = size.legs;
     o.max_epochs = size.max_epochs;
+    o.jobs = size.jobs;
     o.generalisation = false;
     o.maps = false;
     o.out_dir = dir.file("merging");
