@@ -105,8 +105,13 @@ public:
         ceres::Problem problem(po);
         ceres::HuberLoss loss(d_.huber_delta);
         problem.AddParameterBlock(x.data(), static_cast<int>(P));
+        // Forward differences: a Jacobian costs P + 1 replays of the flight, not central's 2P + 1
+        // (a flow effect's replay re-evaluates the physics along the whole flight). Measured on the
+        // suite's flights: the same verdicts and, where the data pins a value, the same to 7+ digits
+        // (a 1.6 ms sensor lag on a flight without one moved 2 %, well inside its interval);
+        // explanations ~35 % faster.
         for (auto i : rows) {
-            auto* cost = new ceres::DynamicNumericDiffCostFunction<RowCost, ceres::CENTRAL>(new RowCost{this, i, P});
+            auto* cost = new ceres::DynamicNumericDiffCostFunction<RowCost, ceres::FORWARD>(new RowCost{this, i, P});
             cost->AddParameterBlock(static_cast<int>(P));
             cost->SetNumResiduals(6);
             problem.AddResidualBlock(cost, &loss, x.data());
