@@ -362,6 +362,19 @@ std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLo
 // World z-up (x, y, z) -> NED (n, e, d): a half turn about x. Quaternions: (w, x, -y, -z).
 std::array<double, 3> to_ned(const std::array<double, 3>& v) { return {v[0], -v[1], -v[2]}; }
 
+// A log that is not two folders deep (at /, or in a folder at /).
+constexpr const char* kUnknownCollection = "(unknown collection)";
+
+nlohmann::json source_of(const std::vector<VehicleLog>& logs) {
+    std::vector<std::string> files;
+    nlohmann::json names = nlohmann::json::array();
+    for (const auto& l : logs) {
+        files.push_back(l.file);
+        names.push_back(fs::path(l.file).filename().string());
+    }
+    return {{"collection", "aerorobotics/neural-swarm " + collection_of(files)}, {"logs", names}};
+}
+
 flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     std::map<std::string, int> seen;
     for (const auto& l : logs) {
@@ -421,11 +434,9 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     }
     std::stable_sort(poses.begin(), poses.end(), [](const Pose& a, const Pose& b) { return a.t < b.t; });
     for (const auto& p : poses) f.poses.push_back({p.t, p.body, p.p, p.q});
-    nlohmann::json sources = nlohmann::json::array();
-    for (const auto& l : logs) sources.push_back(fs::path(l.file).filename().string());
     f.meta.extra_json =
         nlohmann::json{
-            {"source", {{"collection", "aerorobotics/neural-swarm datacollection21_06_16_2020"}, {"logs", sources}}},
+            {"source", source_of(logs)},
             {"residual",
              {{"definition", "Fa = m a_imu - T_lag R e_z (the authors'), NED"},
               {"thrust", "per motor c00 + c10 p + c01 v + c20 p^2 + c11 v p gram-force, p = PWM, v = Vbat/4.2"},
@@ -456,6 +467,22 @@ public:
 };
 
 }  // namespace
+
+std::string collection_of(const std::vector<std::string>& log_files) {
+    std::string found, first;
+    for (const auto& file : log_files) {
+        std::string c = fs::absolute(fs::path(file)).lexically_normal().parent_path().parent_path().filename().string();
+        if (c.empty()) c = kUnknownCollection;
+        if (first.empty()) {
+            found = c;
+            first = file;
+        } else if (c != found) {
+            throw InputError(log::cat("the logs of one trial come from two collections: ", first, " (", found, ") and ",
+                                      file, " (", c, ")"));
+        }
+    }
+    return found;
+}
 
 const Importer& neural_swarm_importer() {
     static const NeuralSwarm importer;

@@ -42,6 +42,12 @@ struct CrazyflieType {
 // Throws dw::InputError for a vehicle name the collection does not describe.
 const CrazyflieType& crazyflie_type(const std::string& vehicle);
 
+// The collection a trial's logs came from: the source keeps each log as
+// <collection>/<experiment>/<log> (data/training/datacollection21_06_16_2020/swap_ss/cf50_01), so it
+// is the folder above the log's own ("(unknown collection)" for a log less than two folders deep).
+// Throws dw::InputError naming two logs of different collections.
+std::string collection_of(const std::vector<std::string>& log_files);
+
 // The importer: `dw-import neural-swarm LOG...`.
 const Importer& neural_swarm_importer();
 

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
 #include "flight/flight.hpp"
@@ -116,4 +117,28 @@ TEST(Import, BadColumnsAndValuesAreOneLocatedLine) {
     EXPECT_NE(error_of({kData + "swap_ss/cf50_01.csv"}).find("at least two vehicles"), std::string::npos);
     EXPECT_NE(error_of({d.file("cf99_01.csv")}).find("not one the Neural-Swarm collection describes"),
               std::string::npos);
+}
+
+// Issue 41, item 5: meta.json's source names the collection the logs came from (the folder above
+// the log's own, as the source keeps them), not one fixed name; logs of two collections are refused.
+TEST(Import, MetaNamesTheCollectionTheLogsCameFrom) {
+    REQUIRE_SHARED_DATA();
+    auto collection = [](const dw::flight::Flight& f) {
+        return nlohmann::json::parse(f.meta.extra_json)["source"]["collection"].get<std::string>();
+    };
+    const auto shared = neural_swarm_importer().import(trial({"swap_ss/cf50_01", "swap_ss/cf51_01"}), {});
+    EXPECT_EQ(collection(shared), "aerorobotics/neural-swarm datacollection21_06_16_2020");
+    dw::test::TempDir d;
+    for (const char* dir : {"datacollection_other/swap_ss", "another/swap_ss"}) {
+        fs::create_directories(d.file(dir));
+        for (const char* log : {"cf50_01", "cf51_01"})
+            fs::copy_file(kData + "swap_ss/" + log, d.file(std::string(dir) + "/" + log));
+    }
+    const auto other = neural_swarm_importer().import(
+        {d.file("datacollection_other/swap_ss/cf50_01"), d.file("datacollection_other/swap_ss/cf51_01")}, {});
+    EXPECT_EQ(collection(other), "aerorobotics/neural-swarm datacollection_other");
+    const std::string e = error_of({d.file("datacollection_other/swap_ss/cf50_01"), d.file("another/swap_ss/cf51_01")});
+    EXPECT_NE(e.find("come from two collections"), std::string::npos) << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    EXPECT_EQ(collection_of({"/cf50_01"}), "(unknown collection)");
 }
