@@ -643,9 +643,8 @@ TEST(LabSoak, JudgesMemoryGrowthAndLossesFromTheLaunchersSamples) {
 // Issue 19: the soak CI runs (3 minutes; docs/BENCHMARKS.md has a 30-minute one): every process
 // sampled through the run, memory flat after the warm-up, nothing lost, the charts drawn. Not
 // shorter: over 2 minutes the recorder's memory, still filling its first chunks, rose 0.51 MB/min
-// after the warm-up (limit 0.5; issue 40). It starts first and holds one thread's CPU slots, so
-// the rest of the suite runs beside it: with a real-time test's (it uses 38 % of a core) and more
-// beside it, the recorder grew 1.25 MB/min.
+// after the warm-up (limit 0.5; issue 40). It starts first and runs alone (a heavy test's slots):
+// with other tests beside it the recorder grew 1.0-1.25 MB/min in three fresh clones of four.
 TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
     dw::test::TempDir dir;
     const auto r =
