@@ -11,6 +11,9 @@
 namespace dw::planner {
 namespace {
 constexpr double kFenceTolerance_m = 0.1;  // hover noise on the floor or at a wall is not a breach
+// The last state (DONE or ABORTED) is written just before the process exits: the writer waits this
+// long for every reader to acknowledge it, or it can die with the process unseen.
+constexpr auto kFinalStateAckTimeout = std::chrono::seconds(2);
 
 physics::Setpoint min_jerk(const physics::Vec3& a, const physics::Vec3& b, double t, double T) {
     const double s = std::clamp(t / T, 0.0, 1.0);
@@ -126,6 +129,7 @@ void Experiment::publish_state(msg::ExperimentPhase phase, int leg, double progr
     s.eta_s(-1);
     s.message(message);
     state_.write(s);
+    if (phase == msg::PHASE_DONE || phase == msg::PHASE_ABORTED) state_.wait_for_acknowledgments(kFinalStateAckTimeout);
 }
 
 std::optional<std::string> Experiment::send(const std::vector<physics::Setpoint>& sps) {
