@@ -149,29 +149,6 @@ private:
     std::vector<std::pair<std::vector<double>, std::vector<Wrench6>>> cache_;
 };
 
-// The two-sided 95 % quantile of the normal distribution (the intervals' width in standard errors).
-constexpr double kZ95 = 1.96;
-
-// Two-sided 95 % quantile of Student's t with dof degrees of freedom (the fold jackknife).
-double t975(int dof) {
-    constexpr std::array<double, 10> table{12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228};
-    return dof >= 1 && dof <= 10 ? table[static_cast<std::size_t>(dof - 1)] : kZ95 + 2.5 / std::max(dof, 1);
-}
-
-// The spread of a jackknife over its replicates (each with one group of blocks left out):
-// sqrt((G - 1) / G * sum (x - mean)²), per parameter.
-std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates) {
-    const double G = static_cast<double>(replicates.size());
-    std::vector<double> out;
-    for (std::size_t p = 0; p < replicates.front().size(); ++p) {
-        double mean = 0, var = 0;
-        for (const auto& x : replicates) mean += x[p] / G;
-        for (const auto& x : replicates) var += (x[p] - mean) * (x[p] - mean);
-        out.push_back(std::sqrt(var * (G - 1) / G));
-    }
-    return out;
-}
-
 // Step of the numerical derivatives below, as a fraction of a parameter's range.
 constexpr double kSensitivityStep = 1e-3;
 

@@ -1,6 +1,7 @@
 #include "core/stats.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -28,6 +29,24 @@ double effective_count(std::span<const double> d) {
     double abs_sum = 0, sq = 0;
     for (double x : d) abs_sum += std::abs(x), sq += x * x;
     return sq > 0 ? abs_sum * abs_sum / sq : 0.0;
+}
+
+double t975(int dof) {
+    constexpr std::array<double, 10> table{12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228};
+    return dof >= 1 && dof <= 10 ? table[static_cast<std::size_t>(dof - 1)] : kZ95 + 2.5 / std::max(dof, 1);
+}
+
+std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates) {
+    const double G = static_cast<double>(replicates.size());
+    std::vector<double> out;
+    if (replicates.empty()) return out;
+    for (std::size_t p = 0; p < replicates.front().size(); ++p) {
+        double mean = 0, var = 0;
+        for (const auto& x : replicates) mean += x[p] / G;
+        for (const auto& x : replicates) var += (x[p] - mean) * (x[p] - mean);
+        out.push_back(std::sqrt(var * (G - 1) / G));
+    }
+    return out;
 }
 
 }  // namespace dw

@@ -2,6 +2,7 @@
 // Paired tests over held-out blocks, shared by the explainer (is a candidate effect better?) and
 // the predictor's regime map (is Deep Sets better than the sum?).
 #include <span>
+#include <vector>
 
 namespace dw {
 
@@ -17,5 +18,15 @@ double paired_z(std::span<const double> d);
 // pieces, about 1 when one piece dominates. The self-normalised sum above never exceeds its square
 // root, whatever the signs. 0 for no pieces.
 double effective_count(std::span<const double> d);
+
+// The two-sided 95 % quantile of the normal distribution (an interval's width in standard errors).
+inline constexpr double kZ95 = 1.96;
+
+// Two-sided 95 % quantile of Student's t with dof degrees of freedom (a jackknife's intervals).
+double t975(int dof);
+
+// The spread of a jackknife over its replicates (each with one group left out):
+// sqrt((G - 1) / G * sum (x - mean)²), per parameter.
+std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates);
 
 }  // namespace dw

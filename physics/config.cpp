@@ -2,6 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/config.hpp"
 #include "core/errors.hpp"
 #include "core/keys.hpp"
@@ -32,10 +35,17 @@ void vehicle_keys(KeyVisitor& k, VehicleParams& v) {
     k.number("motor_distance_m", v.motor_distance_m, {0.02, 5.0});
 }
 
+void coefficient_keys(KeyVisitor& k, JetCoefficients& j) {
+    k.number("strength", j.strength, {0.1, 1000});
+    k.number("origin", j.origin, {0, 100});
+    k.number("width", j.width, {0.001, 10});
+}
+
 void jet_keys(KeyVisitor& k, PhysicsConfig& c) {
     k.section("jet", [&](KeyVisitor& jet) {
         jet.enumeration("model", c.jet_model, kJetModelNames, "jet model");
         jet.flag("radial_inflow", c.radial_inflow);
+        jet.section("bauersfeld", [&](KeyVisitor& b) { coefficient_keys(b, c.bauersfeld); });
         jet.section("jain", [&](KeyVisitor& j) {
             j.number("c_ax", c.jain.c_ax, {0.01, 100});
             j.number("c_rad", c.jain.c_rad, {0.01, 1000});
@@ -62,6 +72,21 @@ void body_keys(KeyVisitor& k, PhysicsConfig& c) {
         s.number("rotor_drag_n_per_mps", x.rotor_drag_n_per_mps, {0, 10});
     });
     k.section("neighbour", [&](KeyVisitor& v) { vehicle_keys(v, c.neighbour); });
+}
+
+void class_keys(KeyVisitor& k, PhysicsConfig& c) {
+    std::size_t count = c.classes.size();
+    k.list("classes", count, [&](KeyVisitor& item, std::size_t i) {
+        if (c.classes.size() <= i) c.classes.resize(i + 1);
+        VehicleClass& x = c.classes[i];
+        item.text("name", x.name);
+        item.section("vehicle", [&](KeyVisitor& v) { vehicle_keys(v, x.vehicle); });
+        item.section("jet", [&](KeyVisitor& j) { coefficient_keys(j, x.jet); });
+        item.number("drag_coefficient", x.drag_coefficient, {0, 5});
+        item.number("kv_omega_n_per_mps", x.kv_omega_n_per_mps, {0, 10});
+    });
+    c.classes.resize(count);
+    k.text("calibration", c.calibration);
 }
 
 void stand_keys(KeyVisitor& k, StandParams& x) {
@@ -116,9 +141,40 @@ void physics_keys(KeyVisitor& k, PhysicsConfig& c) {
     k.section("stand", [&](KeyVisitor& s) { stand_keys(s, c.stand); });
     noise_keys(k, c);
     effect_keys(k, c.effects);
+    class_keys(k, c);
 }
 
 }  // namespace
+
+namespace {
+constexpr double kSameClass = 1e-6;  // relative: meta.json and a physics file carry the same numbers
+bool close(double a, double b) { return std::abs(a - b) <= kSameClass * std::max(std::abs(a), std::abs(b)); }
+}  // namespace
+
+const VehicleClass* class_of(const PhysicsConfig& c, const VehicleParams& v) {
+    for (const auto& k : c.classes) {
+        const auto& w = k.vehicle;
+        if (w.rotors == v.rotors && close(w.mass_kg, v.mass_kg) && close(w.prop_radius_m, v.prop_radius_m) &&
+            close(w.motor_distance_m, v.motor_distance_m))
+            return &k;
+    }
+    return nullptr;
+}
+
+JetCoefficients jet_coefficients(const PhysicsConfig& c, const VehicleParams& v) {
+    const auto* k = class_of(c, v);
+    return k ? k->jet : c.bauersfeld;
+}
+
+SuffererParams sufferer_as(const PhysicsConfig& c, const VehicleParams& v) {
+    SuffererParams s = c.sufferer;
+    s.vehicle = v;
+    if (const auto* k = class_of(c, v)) {
+        s.drag_coefficient = k->drag_coefficient;
+        s.kv_omega_n_per_mps = k->kv_omega_n_per_mps;
+    }
+    return s;
+}
 
 PhysicsConfig parse_physics(const std::string& yaml, const std::string& file) {
     PhysicsConfig c;

@@ -31,6 +31,15 @@ struct JainParams {  // Jain et al., ICUAS 2019; published constants disagree: f
     double diameter_m = 0.25;
 };
 
+// The far-wake jet law's three coefficients (Bauersfeld et al.; ../shared/PHYSICS.md), fitted
+// there to larger vehicles: U_c = U_H strength / (s/l + origin), r_half = width (s/l + origin) l.
+// A lab calibrates them per vehicle class (VehicleClass, dw-explain calibrate).
+struct JetCoefficients {
+    double strength = 10.11;
+    double origin = 5.817;
+    double width = 0.07668;
+};
+
 struct SuffererParams {
     VehicleParams vehicle;
     double drag_coefficient = 1.18;         // flat plate, vertical flow
@@ -135,12 +144,24 @@ struct Effects {
     std::map<std::string, std::vector<double>> extra;
 };
 
+// A vehicle class's own physics, calibrated on its flights (dw-explain calibrate): a vehicle whose
+// parameters (meta.json's, else the configuration's) match `vehicle` produces a jet with these
+// coefficients and, as the sufferer, feels the flow with this drag and thrust loss.
+struct VehicleClass {
+    std::string name;
+    VehicleParams vehicle;
+    JetCoefficients jet;
+    double drag_coefficient = 1.18;
+    double kv_omega_n_per_mps = 0.1;
+};
+
 struct PhysicsConfig {
     double air_density_kg_m3 = 1.225;
     double gravity_m_s2 = 9.81;
     JetModelKind jet_model = JetModelKind::bauersfeld;
     bool radial_inflow = true;  // entrainment flow from continuity
     JainParams jain;
+    JetCoefficients bauersfeld;  // every vehicle's that no class matches
     Aggregation aggregation = Aggregation::force_sum;
     SuffererParams sufferer;
     VehicleParams neighbour;  // neighbours' parameters
@@ -149,7 +170,16 @@ struct PhysicsConfig {
     DynamicsParams dynamics;
     MocapParams mocap;
     Effects effects;
+    std::vector<VehicleClass> classes;
+    std::string calibration;  // where the classes came from (the calibration's own line), "" if none
 };
+
+// The class whose vehicle parameters v matches (each within 1e-6 relative), or nullptr.
+const VehicleClass* class_of(const PhysicsConfig& c, const VehicleParams& v);
+// The jet coefficients of vehicle v: its class's, else the configuration's.
+JetCoefficients jet_coefficients(const PhysicsConfig& c, const VehicleParams& v);
+// c's sufferer flown as vehicle v: v's parameters with its class's drag and thrust loss.
+SuffererParams sufferer_as(const PhysicsConfig& c, const VehicleParams& v);
 
 // Throws dw::InputError "file:line:col: key: problem".
 PhysicsConfig load_physics(const std::string& path);

@@ -14,9 +14,10 @@ Jet Jet::make(const VehicleParams& v, const PhysicsConfig& c) {
     j.inv_l = 1.0 / v.motor_distance_m;
     // Every jet carries its Bauersfeld width: merged columns (jet_merging) are Bauersfeld jets
     // whatever their members' model, and a zero width made them NaN.
-    j.c_half = kBauersfeldC * v.motor_distance_m;
+    j.k = jet_coefficients(c, v);
+    j.c_half = j.k.width * v.motor_distance_m;
     if (j.model == JetModelKind::bauersfeld) {
-        j.k_centre = j.u_hover * kBauersfeldA;
+        j.k_centre = j.u_hover * j.k.strength;
     } else {
         j.k_centre = j.u_hover * c.jain.c_ax * c.jain.diameter_m;
         j.jain_z0 = c.jain.z0_m;
@@ -27,12 +28,12 @@ Jet Jet::make(const VehicleParams& v, const PhysicsConfig& c) {
 
 double Jet::centreline(double s) const {
     if (s <= 0) return 0;
-    if (model == JetModelKind::bauersfeld) return k_centre / (s * inv_l + kBauersfeldB);
+    if (model == JetModelKind::bauersfeld) return k_centre / (s * inv_l + k.origin);
     return k_centre / std::max(s - jain_z0, 0.05);
 }
 
 double Jet::half_width(double s) const {
-    if (model == JetModelKind::bauersfeld) return c_half * (std::max(s, 0.0) * inv_l + kBauersfeldB);
+    if (model == JetModelKind::bauersfeld) return c_half * (std::max(s, 0.0) * inv_l + k.origin);
     return std::max(s - jain_z0, 0.05) * std::sqrt(std::log(2.0) / jain_c_rad);
 }
 
@@ -51,7 +52,7 @@ double Jet::radial(double r, double s) const {
     if (s <= 0 || model != JetModelKind::bauersfeld) return 0;
     const double eta = r / half_width(s);
     const double d = 1.0 + kProfileB * eta * eta;
-    return centreline(s) * kBauersfeldC * eta * (1.0 / (d * d) - 0.5 / d);
+    return centreline(s) * k.width * eta * (1.0 / (d * d) - 0.5 / d);
 }
 
 double Jet::momentum_flux(double rho) const {
@@ -62,7 +63,7 @@ double Jet::momentum_flux(double rho) const {
 double Jet::transport_delay(double s) const {
     if (s <= 0) return 0;
     if (model == JetModelKind::bauersfeld) {
-        return (s * s * 0.5 * inv_l + kBauersfeldB * s) / (kBauersfeldA * u_hover);
+        return (s * s * 0.5 * inv_l + k.origin * s) / (k.strength * u_hover);
     }
     // ∫ dz (z - z0) / k for the Jain form (z - z0 clamped at 0.05 m near the pole).
     const double z = std::max(s - jain_z0, 0.05);

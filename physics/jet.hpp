@@ -20,9 +20,6 @@
 
 namespace dw::physics {
 
-inline constexpr double kBauersfeldA = 10.11;
-inline constexpr double kBauersfeldB = 5.817;
-inline constexpr double kBauersfeldC = 0.07668;
 inline constexpr double kProfileB = 0.41421356237309515;  // sqrt(2) - 1
 inline constexpr double kMomentumIntegral = 2.528;        // ∫U² dA = 2.528 U_c² r_half²
 
@@ -33,8 +30,9 @@ struct Jet {
     double thrust_n = 0;  // m g
     double inv_l = 0;     // 1 / l
     double l = 0;
-    double k_centre = 0;  // Bauersfeld: U_H * 10.11; Jain: v_i * C_ax * D
-    double c_half = 0;    // Bauersfeld: 0.07668 * l
+    JetCoefficients k;    // Bauersfeld: the vehicle's class's, else the configuration's
+    double k_centre = 0;  // Bauersfeld: U_H * strength; Jain: v_i * C_ax * D
+    double c_half = 0;    // Bauersfeld: width * l
     double jain_z0 = 0;
     double jain_c_rad = 0;
 
@@ -46,7 +44,7 @@ struct Jet {
     double radial(double r, double s) const;  // V(r, s) [m/s], outward positive
     // ρ ∫U² dA from the closed form [N]; independent of s for the Bauersfeld jet.
     double momentum_flux(double rho) const;
-    // Time for the wake to descend s: ∫0^s dz / U_c(z) = (s²/(2l) + 5.817 s) / (10.11 U_H) [s].
+    // Time for the wake to descend s: ∫0^s dz / U_c(z) = (s²/(2l) + origin s) / (strength U_H) [s].
     double transport_delay(double s) const;
 };
 

@@ -63,6 +63,7 @@ Planform Planform::make(const SuffererParams& s) {
 
 WrenchModel::WrenchModel(const PhysicsConfig& config)
     : config_(config), planform_(Planform::make(config.sufferer)), neighbour_jet_(Jet::make(config.neighbour, config)) {
+    config_.sufferer = sufferer_as(config_, config_.sufferer.vehicle);  // its class's drag and thrust loss
     half_rho_cd_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.drag_coefficient;
     half_rho_clat_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.lateral_drag_coefficient;
 }
@@ -105,13 +106,13 @@ void WrenchModel::add_velocity(const Vec3& suf, const double* cx, const double* 
         const double r2 = rx * rx + ry * ry + rz * rz;
         double u_axial, u_radial_over_r;
         if (jet.model == JetModelKind::bauersfeld) {
-            const double xi = s * jet.inv_l + kBauersfeldB;
+            const double xi = s * jet.inv_l + jet.k.origin;
             const double uc = jet.k_centre / xi;
             const double inv_rh = 1.0 / (jet.c_half * xi);
             const double d = 1.0 + kProfileB * r2 * inv_rh * inv_rh;
             const double inv_d = 1.0 / d;
             u_axial = uc * inv_d * inv_d;
-            u_radial_over_r = radial ? uc * kBauersfeldC * inv_rh * (inv_d * inv_d - 0.5 * inv_d) : 0.0;
+            u_radial_over_r = radial ? uc * jet.k.width * inv_rh * (inv_d * inv_d - 0.5 * inv_d) : 0.0;
         } else {
             u_axial = jet.axial(std::sqrt(r2), s);
             u_radial_over_r = 0.0;
@@ -246,7 +247,7 @@ Producer WrenchModel::merged(std::span<const Producer> producers, const std::vec
     m.jet.u_hover = std::sqrt(uh2);
     m.jet.l = l / total;
     m.jet.inv_l = 1.0 / m.jet.l;
-    m.jet.k_centre = m.jet.u_hover * kBauersfeldA / kappa;
+    m.jet.k_centre = m.jet.u_hover * m.jet.k.strength / kappa;
     m.jet.c_half = kappa * c_half / total;
     return m;
 }
