@@ -1,4 +1,5 @@
 // dw-import: another lab's recordings to a flight folder. One subcommand per source format.
+#include <filesystem>
 #include <iostream>
 
 #include "core/cli.hpp"
@@ -7,8 +8,42 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "importer/importer.hpp"
+#include "importer/neural_swarm.hpp"
 
 namespace {
+
+namespace fs = std::filesystem;
+
+// `dw-import neural-swarm-collection DIR --out DIR`: every trial of a collection, one flight folder
+// each (the lowest vehicle the sufferer). A trial of one vehicle has no neighbour: skipped, said so.
+// A trial that cannot be imported is said in one line and the others go on; then exit 2.
+int import_collection(const std::string& dir, const std::string& out, const dw::importer::ImportOptions& o) {
+    const auto trials = dw::importer::collection_trials(dir);
+    fs::create_directories(out);
+    std::size_t written = 0, failed = 0;
+    for (const auto& t : trials) {
+        dw::throw_if_stopped(o.stop, "the import");
+        const std::string folder = (fs::path(out) / t.name).string();
+        if (t.logs.size() < 2) {
+            std::cout << t.name << ": one vehicle, no neighbour: skipped\n";
+            continue;
+        }
+        try {
+            if (fs::exists(folder)) throw dw::InputError(folder + ": exists already");
+            const auto f = dw::importer::neural_swarm_importer().import(t.logs, o);
+            dw::flight::write_flight(f, folder);
+            std::cout << "wrote " << folder << ": sufferer " << f.meta.sufferer << ", " << f.meta.neighbours.size()
+                      << " neighbour(s)\n";
+            ++written;
+        } catch (const dw::InputError& e) {
+            dw::log::error(t.name, ": ", e.what());
+            ++failed;
+        }
+    }
+    std::cout << written << " flights written to " << out
+              << (failed ? dw::log::cat(", ", failed, " trials failed") : "") << "\n";
+    return failed ? 2 : 0;
+}
 
 int run(int argc, char** argv) {
     CLI::App app{"dw-import: bring another lab's flight logs into a flight folder (downwash-flight/1)"};
@@ -27,13 +62,19 @@ int run(int argc, char** argv) {
                         "the vehicle whose residual force is the wrench (default: the lowest)");
         commands.emplace_back(sub, im);
     }
+    std::string collection;
+    auto* whole = app.add_subcommand("neural-swarm-collection",
+                                     "every trial of a Neural-Swarm collection folder, one flight folder each");
+    whole->add_option("dir", collection, "the collection (e.g. .../datacollection21_06_16_2020)")->required();
+    whole->add_option("--out", out, "folder for the flight folders (one per trial)")->required();
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     dw::require_output_dir(out, "--out");
-    if (std::filesystem::exists(out))
-        throw dw::InputError("--out " + out + ": exists already (a flight folder is written whole, once)");
     o.warn = [](const std::string& w) { dw::log::warn(w); };
     o.stop = dw::Shutdown::instance().token();
+    if (whole->parsed()) return import_collection(collection, out, o);
+    if (std::filesystem::exists(out))
+        throw dw::InputError("--out " + out + ": exists already (a flight folder is written whole, once)");
     for (const auto& [sub, im] : commands) {
         if (!sub->parsed()) continue;
         const auto f = im->import(logs, o);

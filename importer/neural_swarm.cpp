@@ -370,9 +370,19 @@ nlohmann::json source_of(const std::vector<VehicleLog>& logs) {
     nlohmann::json names = nlohmann::json::array();
     for (const auto& l : logs) {
         files.push_back(l.file);
-        names.push_back(fs::path(l.file).filename().string());
+        // <experiment>/<log>: a trial's logs are named alike across experiments (swap_ss/cf50_02 and
+        // randomwalk_ss/cf50_02 are two trials).
+        const fs::path p = fs::absolute(fs::path(l.file)).lexically_normal();
+        names.push_back((p.parent_path().filename() / p.filename()).string());
     }
     return {{"collection", "aerorobotics/neural-swarm " + collection_of(files)}, {"logs", names}};
+}
+
+// The collection's readme: "do not use the Fa of cf100" (a Crazyflie 2.0, much worse IMU).
+constexpr std::array<const char*, 1> kUnusableResidual{"cf100"};
+constexpr const char* kUnusableResidualWhy = "a Crazyflie 2.0 with a much worse IMU, the collection's readme";
+bool residual_usable(const std::string& vehicle) {
+    return std::find(kUnusableResidual.begin(), kUnusableResidual.end(), vehicle) == kUnusableResidual.end();
 }
 
 flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
@@ -387,10 +397,13 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
         return median(z);
     };
     std::string sufferer = o.sufferer;
-    if (sufferer.empty()) {
-        sufferer = std::min_element(logs.begin(), logs.end(), [&](const auto& a, const auto& b) {
-                       return lowest(a) < lowest(b);
-                   })->name;
+    if (sufferer.empty()) {  // the lowest vehicle whose residual the authors trust
+        const VehicleLog* best = nullptr;
+        for (const auto& l : logs)
+            if (residual_usable(l.name) && (!best || lowest(l) < lowest(*best))) best = &l;
+        sufferer = (best ? *best : logs.front()).name;
+    } else if (!residual_usable(sufferer) && o.warn) {
+        o.warn(log::cat(sufferer, ": the authors say not to use this vehicle's residual (", kUnusableResidualWhy, ")"));
     }
     const auto it = std::find_if(logs.begin(), logs.end(), [&](const VehicleLog& l) { return l.name == sufferer; });
     if (it == logs.end()) throw InputError(log::cat("--sufferer: no log of '", sufferer, "' among the inputs"));
@@ -482,6 +495,32 @@ std::string collection_of(const std::vector<std::string>& log_files) {
         }
     }
     return found;
+}
+
+std::vector<CollectionTrial> collection_trials(const std::string& dir) {
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) throw InputError(log::cat(dir, ": not a folder of Neural-Swarm experiments"));
+    std::map<std::string, std::map<std::string, fs::path>> trials;  // name -> vehicle -> log
+    for (const auto& experiment : fs::directory_iterator(dir, ec)) {
+        if (!experiment.is_directory(ec)) continue;
+        for (const auto& file : fs::directory_iterator(experiment.path(), ec)) {
+            const fs::path p = file.path();
+            const std::string stem = p.stem().string();
+            const auto cut = stem.find('_');
+            if (!file.is_regular_file(ec) || cut == std::string::npos || (p.has_extension() && p.extension() != ".csv"))
+                continue;
+            auto& log = trials[experiment.path().filename().string() + stem.substr(cut)][stem.substr(0, cut)];
+            if (log.empty() || !p.has_extension()) log = p;  // the binary log wins over the CSV made from it
+        }
+    }
+    if (ec) throw InputError(log::cat(dir, ": ", ec.message()));
+    std::vector<CollectionTrial> out;
+    for (const auto& [name, logs] : trials) {
+        out.push_back({name, {}});
+        for (const auto& [vehicle, path] : logs) out.back().logs.push_back(path.string());
+    }
+    if (out.empty()) throw InputError(log::cat(dir, ": no Neural-Swarm trial (<experiment>/<vehicle>_<trial> logs)"));
+    return out;
 }
 
 const Importer& neural_swarm_importer() {

@@ -48,6 +48,16 @@ const CrazyflieType& crazyflie_type(const std::string& vehicle);
 // Throws dw::InputError naming two logs of different collections.
 std::string collection_of(const std::vector<std::string>& log_files);
 
+// One trial of a collection folder: its name (<experiment>_<trial>, e.g. swap_ss_01) and one log
+// per vehicle (the binary log where there is one, else the CSV made from it), in name order.
+struct CollectionTrial {
+    std::string name;
+    std::vector<std::string> logs;
+};
+// Every trial under `dir`, laid out as the source keeps it: <dir>/<experiment>/<vehicle>_<trial>[.csv].
+// Files not named so are left out. Throws dw::InputError when `dir` is not a folder or holds no trial.
+std::vector<CollectionTrial> collection_trials(const std::string& dir);
+
 // The importer: `dw-import neural-swarm LOG...`.
 const Importer& neural_swarm_importer();
 

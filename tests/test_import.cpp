@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
@@ -141,4 +142,28 @@ TEST(Import, MetaNamesTheCollectionTheLogsCameFrom) {
     EXPECT_NE(e.find("come from two collections"), std::string::npos) << e;
     EXPECT_EQ(e.find('\n'), std::string::npos) << e;
     EXPECT_EQ(collection_of({"/cf50_01"}), "(unknown collection)");
+}
+
+// Issue 41: a whole collection in one command — every trial found, the binary log preferred, the
+// logs named with their experiment (the same names recur across experiments), and the default
+// sufferer never the vehicle whose residual the authors say not to use.
+TEST(Import, ACollectionIsListedTrialByTrialAndEachTrialKeepsItsExperimentInItsLogs) {
+    REQUIRE_SHARED_DATA();
+    const auto trials = collection_trials(kData);
+    std::map<std::string, std::vector<std::string>> by;
+    for (const auto& t : trials) by[t.name] = t.logs;
+    ASSERT_TRUE(by.count("swap_ss_01") && by.count("randomwalk_ss_02") && by.count("swap_ss_02"));
+    EXPECT_EQ(by["swap_ss_01"], trial({"swap_ss/cf50_01", "swap_ss/cf51_01"})) << "the binary log, not the CSV";
+    EXPECT_EQ(by["swap_sl_01"], trial({"swap_sl/cf101_01.csv", "swap_sl/cf51_01.csv"})) << "a CSV where no binary is";
+    EXPECT_EQ(by["randomwalk_s_00"].size(), 1u);
+    auto logs = [](const dw::flight::Flight& f) { return nlohmann::json::parse(f.meta.extra_json)["source"]["logs"]; };
+    const auto swap = neural_swarm_importer().import(by["swap_ss_02"], {});
+    const auto walk = neural_swarm_importer().import(by["randomwalk_ss_02"], {});
+    EXPECT_EQ(logs(swap)[0], "swap_ss/cf50_02");
+    EXPECT_NE(logs(swap), logs(walk));
+    const auto lll = neural_swarm_importer().import(by["swap_lll_01"], {});
+    EXPECT_NE(lll.meta.sufferer, "cf100");
+    dw::test::TempDir d;
+    EXPECT_THROW(collection_trials(d.file("none")), dw::InputError);
+    EXPECT_THROW(collection_trials(d.file("")), dw::InputError);  // a folder without trials
 }
