@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "analysis/calibrate.hpp"
 #include "analysis/coverage.hpp"
 #include "analysis/explain.hpp"
 #include "analysis/proof.hpp"
@@ -148,6 +149,44 @@ struct CoverageCommand {
     }
 };
 
+// `dw-explain calibrate`: the physics fitted per vehicle class on many flights, checked on trials left out.
+struct CalibrateCommand {
+    CLI::App* sub = nullptr;
+    dw::analysis::CalibrateOptions options;
+    std::string physics;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand("calibrate",
+                                 "fit the physics per vehicle class on many flights; validate by leaving trials out");
+        sub->add_option("--flights", options.flights, "flight folders (e.g. dw-import's), two trials or more")
+            ->required();
+        sub->add_option("--physics", physics, "the base physics (e.g. config/physics.crazyflie.yaml)");
+        sub->add_option("--out", options.out_dir, "output folder (physics.yaml, calibration.md/.json, pictures)")
+            ->required();
+        sub->add_option("--jobs", options.jobs, "flights replayed at once")->check(dw::cli::in(dw::kJobsRange));
+        sub->add_option("--stride", options.stride, "every n-th near sample enters the fit")
+            ->check(dw::cli::in(dw::analysis::kStrideRange))
+            ->capture_default_str();
+        sub->add_option("--iterations", options.max_iterations, "iterations of the fit on every trial")
+            ->check(dw::cli::in(dw::analysis::kIterationsRange))
+            ->capture_default_str();
+        sub->add_option("--fold-iterations", options.fold_iterations, "iterations of each fit with a trial left out")
+            ->check(dw::cli::in(dw::analysis::kIterationsRange))
+            ->capture_default_str();
+    }
+    int run(const std::string& main_physics, const Progress& progress) {
+        prepare(options, progress);
+        const std::string path = physics.empty() ? main_physics : physics;
+        options.physics = path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
+        const auto r = dw::analysis::calibrate(options);
+        for (const auto& p : r.parameters)
+            std::cout << p.vehicle_class << ": " << p.name << " " << p.value << " [" << p.lo << ", " << p.hi << "]\n";
+        std::cout << "calibrated on " << r.trials.size() << " trials: " << r.physics_path << " (report "
+                  << r.report_path << ", " << r.seconds << " s)\n";
+        return 0;
+    }
+};
+
 // The main command: explain one recording.
 struct ExplainCommand {
     std::string physics_path, real, out, effects;
@@ -209,6 +248,8 @@ int run(int argc, char** argv) {
     real_proof.add(app);
     CoverageCommand coverage;
     coverage.add(app);
+    CalibrateCommand calibrate;
+    calibrate.add(app);
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     const Progress progress = [quiet](const std::string& s) {
@@ -216,6 +257,7 @@ int run(int argc, char** argv) {
     };
     if (real_proof.sub->parsed()) return real_proof.run(explain.physics_path, progress);
     if (coverage.sub->parsed()) return coverage.run(progress);
+    if (calibrate.sub->parsed()) return calibrate.run(explain.physics_path, progress);
     if (proof.sub->parsed()) return proof.run(progress);
     return explain.run(progress);
 }

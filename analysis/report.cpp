@@ -300,6 +300,7 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)},
                 {"heldout_rmse_after", axes_json(r.heldout_after)}};
     j["physics_out"] = "physics.yaml";
+    if (!o.physics.calibration.empty()) j["physics_calibration"] = o.physics.calibration;
     j["cross_validation"] = {
         {"blocks", flight::to_string(r.blocks)}, {"count", r.legs}, {"folds", o.folds}, {"samples", r.samples}};
     return j;
@@ -319,7 +320,8 @@ void md_not_identifiable(std::ostream& md, const ExplainResult& r, const Explain
 }
 
 // The report's opening: the flight, and what explains it.
-void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& r, const physics::EffectVoice& who) {
+void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& r, const physics::EffectVoice& who,
+                const std::string& calibration) {
     md << "# Mismatch report\n\n";
     md << "Flight: " << f.meta.formation << ", " << f.meta.neighbours.size() << " neighbour(s), "
        << (who.flying ? log::cat("a flying sufferer (wrench: ", flight::to_string(f.meta.wrench_source), ")")
@@ -330,6 +332,9 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
           "(meta.json); residual = recorded − simulated"
        << (f.meta.moments_measured ? "" : "; the moments are not measured and take no part") << ". Analysis took "
        << fixed(r.seconds, 1) << " s.\n\n";
+    if (!calibration.empty())
+        md << "The physics is calibrated (" << calibration
+           << "): what is left is what that calibration did not cover.\n\n";
     if (!r.detected) {
         md << "**No mismatch**: the recording matches the simulation within its noise. No effect is claimed.\n\n";
     } else if (r.accepted.empty()) {
@@ -424,7 +429,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     const std::string figures_md = who.flying ? flying_figures(figs, blocks) : stand_figures(figs, r);
 
     std::ostringstream md;
-    md_summary(md, f, r, who);
+    md_summary(md, f, r, who, o.physics.calibration);
     md_not_identifiable(md, r, o);
     md << measured_clock_text(measured, r);
     md_where(md, r, o, who);

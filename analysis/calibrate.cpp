@@ -1,0 +1,349 @@
+#include "analysis/calibrate.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "analysis/calibration_report.hpp"
+#include "analysis/replay.hpp"
+#include "core/errors.hpp"
+#include "core/files.hpp"
+#include "core/log.hpp"
+#include "core/parallel.hpp"
+#include "core/shutdown.hpp"
+#include "core/stats.hpp"
+#include "flight/flight.hpp"
+#include "physics/bodies.hpp"
+
+namespace dw::analysis {
+
+namespace {
+
+namespace fs = std::filesystem;
+using physics::PhysicsConfig;
+using physics::VehicleClass;
+using physics::VehicleParams;
+
+constexpr std::size_t kFd = 2;                  // the axis calibrated on: f_d (wrench.csv's order)
+constexpr int kBlocksWanted = 5;                // cross-validation blocks asked of find_blocks (for `near`)
+constexpr double kStepFraction = 1e-3;          // forward-difference step, relative to the value (or start)
+constexpr double kLambda0 = 1e-3;               // Levenberg-Marquardt's first damping
+constexpr double kRelativeTolerance = 1e-6;     // stop when the cost falls by less than this fraction
+constexpr double kLambdaMax = 1e10;             // ... or no step lowers it
+
+// A calibrated quantity of a class: name, unit, role, bounds, and where it lives in the class.
+struct Knob {
+    const char* name;
+    const char* unit;
+    bool producer;  // a producer's (its jet) or a sufferer's
+    double lower, upper;
+    double& (*of)(VehicleClass&);
+};
+constexpr std::array<Knob, 4> kKnobs{{
+    {"jet strength", "", true, 0.5, 60, [](VehicleClass& c) -> double& { return c.jet.strength; }},
+    {"jet width", "", true, 0.01, 0.5, [](VehicleClass& c) -> double& { return c.jet.width; }},
+    {"jet origin", "sizes", true, 0.0, 40, [](VehicleClass& c) -> double& { return c.jet.origin; }},
+    {"thrust loss kv", "N per m/s per rotor", false, 0.0, 1.0,
+     [](VehicleClass& c) -> double& { return c.kv_omega_n_per_mps; }},
+}};
+
+struct FlightData {
+    std::string dir;
+    std::unique_ptr<Replay> replay;
+    std::size_t trial = 0;
+    std::string pairing;
+    std::vector<std::size_t> rows, fit_rows;  // near samples; every stride-th of them
+    std::vector<double> offset, above;        // per row: the nearest neighbour's horizontal offset, height
+};
+
+struct Trial {
+    std::string key, name;
+    std::vector<std::size_t> flights;
+};
+
+std::string class_name(const VehicleParams& v) {
+    return log::cat(std::lround(v.mass_kg * 1000), " g, l ", std::lround(v.motor_distance_m * 1000), " mm");
+}
+
+// The class of v in c, added (starting from c's own values) when there is none.
+std::size_t class_index(PhysicsConfig& c, const VehicleParams& v) {
+    if (const auto* k = physics::class_of(c, v)) return static_cast<std::size_t>(k - c.classes.data());
+    VehicleClass k;
+    k.name = class_name(v);
+    k.vehicle = v;
+    k.jet = c.bauersfeld;
+    k.drag_coefficient = c.sufferer.drag_coefficient;
+    k.kv_omega_n_per_mps = c.sufferer.kv_omega_n_per_mps;
+    c.classes.push_back(k);
+    return c.classes.size() - 1;
+}
+
+// Flights from the same logs are one trial (another sufferer of the same flight is not unseen).
+std::string trial_key(const flight::Flight& f, const std::string& dir) {
+    const auto j = nlohmann::json::parse(f.meta.extra_json, nullptr, false);
+    if (!j.is_object() || !j.contains("source") || !j["source"].is_object() || !j["source"].contains("logs"))
+        return fs::weakly_canonical(dir).string();
+    std::set<std::string> logs;
+    for (const auto& l : j["source"]["logs"])
+        if (l.is_string()) logs.insert(l.get<std::string>());
+    return j["source"].value("collection", std::string()) + " " + log::join(logs, "+");
+}
+
+}  // namespace
+
+// The flights, their trials and classes, and the fit's parameters.
+class Calibration {
+public:
+    explicit Calibration(const CalibrateOptions& o) : o_(o), config_(o.physics) {
+        config_.effects = {};  // calibrated on the flow alone; effects stay the explainer's to find
+        load_flights();
+        if (trials_.size() < 2)
+            throw InputError(log::cat("--flights: ", trials_.size(),
+                                      " trial(s); calibration leaves whole trials out and needs at least two"));
+        choose_parameters();
+    }
+
+    std::size_t size() const { return params_.size(); }
+    const std::vector<Trial>& trials() const { return trials_; }
+    const std::vector<FlightData>& flights() const { return flights_; }
+
+    // The starting values (the base's) and their bounds.
+    std::vector<double> start() const {
+        std::vector<double> x;
+        for (const auto& p : params_) {
+            VehicleClass c = config_.classes[p.cls];
+            x.push_back(kKnobs[p.knob].of(c));
+        }
+        return x;
+    }
+    PhysicsConfig config_of(const std::vector<double>& x) const {
+        PhysicsConfig c = config_;
+        for (std::size_t i = 0; i < params_.size(); ++i) kKnobs[params_[i].knob].of(c.classes[params_[i].cls]) = x[i];
+        return c;
+    }
+    const Knob& knob(std::size_t i) const { return kKnobs[params_[i].knob]; }
+    const std::string& class_of(std::size_t i) const { return config_.classes[params_[i].cls].name; }
+    // Whether parameter i acts on flight f (its class flies there in its role).
+    bool acts_on(std::size_t i, std::size_t f) const { return roles_[f].count({params_[i].cls, knob(i).producer}) > 0; }
+
+    // f_d residuals (recorded − predicted) on the fit rows of the flights in `use`, in order.
+    Eigen::VectorXd residuals(const std::vector<double>& x, const std::vector<std::size_t>& use, bool fit_rows) const {
+        const PhysicsConfig c = config_of(x);
+        std::vector<std::vector<double>> parts(use.size());
+        parallel_for(use.size(), o_.jobs, [&](std::size_t k) {
+            throw_if_stopped(o_.stop, "the calibration");
+            const auto& fd = flights_[use[k]];
+            const auto pred = fd.replay->recorded(c);
+            for (auto i : fit_rows ? fd.fit_rows : fd.rows) parts[k].push_back(fd.replay->measured()[i][kFd] - pred[i][kFd]);
+        });
+        std::size_t n = 0;
+        for (const auto& p : parts) n += p.size();
+        Eigen::VectorXd r(static_cast<Eigen::Index>(n));
+        Eigen::Index at = 0;
+        for (const auto& p : parts)
+            for (double v : p) r[at++] = v;
+        return r;
+    }
+
+private:
+    struct Param {
+        std::size_t cls, knob;
+    };
+
+    void load_flights() {
+        std::map<std::string, std::size_t> trial_of;
+        for (const auto& dir : o_.flights) {
+            throw_if_stopped(o_.stop, "the calibration");
+            if (o_.progress) o_.progress(log::cat("reading ", dir));
+            const flight::Flight f = flight::read_flight(dir);
+            FlightData d;
+            d.dir = dir;
+            d.replay = std::make_unique<Replay>(f, config_);
+            describe_rows(f, d);
+            const auto key = trial_key(f, dir);
+            auto [it, added] = trial_of.try_emplace(key, trials_.size());
+            if (added) trials_.push_back({key, fs::path(dir).filename().string(), {}});
+            d.trial = it->second;
+            trials_[d.trial].flights.push_back(flights_.size());
+            note_roles(f);
+            d.pairing = pairing_of(f);
+            flights_.push_back(std::move(d));
+        }
+    }
+
+    void describe_rows(const flight::Flight& f, FlightData& d) const {
+        if (!d.replay->measured_axes()[kFd])
+            throw InputError(log::cat(d.dir, ": wrench.csv carries no f_d measurement to calibrate on"));
+        const auto blocks = flight::find_blocks(f, kBlocksWanted, physics::encounter_radii(f.meta, config_));
+        const auto info = describe(*d.replay, blocks);
+        for (std::size_t i = 0; i < info.size(); ++i) {
+            if (!info[i].near || !std::isfinite(d.replay->measured()[i][kFd])) continue;
+            if (d.rows.size() % static_cast<std::size_t>(o_.stride) == 0) d.fit_rows.push_back(i);
+            d.rows.push_back(i);
+            d.offset.push_back(info[i].offset);
+            d.above.push_back(info[i].above);
+        }
+        if (d.rows.empty()) throw InputError(log::cat(d.dir, ": no neighbour ever comes near the sufferer"));
+    }
+
+    // Which classes fly in the flight and as what: (class, producer?).
+    void note_roles(const flight::Flight& f) {
+        std::set<std::pair<std::size_t, bool>> r;
+        r.insert({class_index(config_, physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle)), false});
+        for (const auto& v : physics::neighbours_of(f.meta, config_)) r.insert({class_index(config_, v), true});
+        roles_.push_back(r);
+    }
+
+    std::string pairing_of(const flight::Flight& f) const {
+        std::vector<std::string> above;
+        for (const auto& v : physics::neighbours_of(f.meta, config_)) above.push_back(class_name(v));
+        std::sort(above.begin(), above.end());
+        return log::cat(class_name(physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle)), " under ",
+                        log::join(above, " + "));
+    }
+
+    // Every knob of every class that plays its role in some flight.
+    void choose_parameters() {
+        for (std::size_t c = 0; c < config_.classes.size(); ++c)
+            for (std::size_t k = 0; k < kKnobs.size(); ++k) {
+                const bool used = std::any_of(roles_.begin(), roles_.end(),
+                                              [&](const auto& r) { return r.count({c, kKnobs[k].producer}) > 0; });
+                if (used) params_.push_back({c, k});
+            }
+    }
+
+    const CalibrateOptions& o_;
+    PhysicsConfig config_;
+    std::vector<FlightData> flights_;
+    std::vector<Trial> trials_;
+    std::vector<std::set<std::pair<std::size_t, bool>>> roles_;  // per flight
+    std::vector<Param> params_;
+};
+
+namespace {
+
+std::vector<std::size_t> flights_except(const Calibration& cal, std::optional<std::size_t> left_out) {
+    std::vector<std::size_t> use;
+    for (std::size_t f = 0; f < cal.flights().size(); ++f)
+        if (!left_out || cal.flights()[f].trial != *left_out) use.push_back(f);
+    return use;
+}
+
+double rmse(const Eigen::VectorXd& r) { return r.size() ? std::sqrt(r.squaredNorm() / static_cast<double>(r.size())) : 0; }
+
+// The forward-difference Jacobian of the residuals; a parameter that acts on none of the flights
+// gets a zero column (and is left where it is).
+Eigen::MatrixXd jacobian(const Calibration& cal, const std::vector<double>& x, const Eigen::VectorXd& r0,
+                         const std::vector<std::size_t>& use, const std::vector<double>& start) {
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(r0.size(), static_cast<Eigen::Index>(x.size()));
+    for (std::size_t p = 0; p < x.size(); ++p) {
+        if (std::none_of(use.begin(), use.end(), [&](std::size_t f) { return cal.acts_on(p, f); })) continue;
+        auto xp = x;
+        const double h = kStepFraction * std::max(std::abs(x[p]), std::abs(start[p]) + 1e-3);
+        xp[p] += x[p] + h <= cal.knob(p).upper ? h : -h;
+        J.col(static_cast<Eigen::Index>(p)) = (cal.residuals(xp, use, true) - r0) / (xp[p] - x[p]);
+    }
+    return J;
+}
+
+// Levenberg-Marquardt within the knobs' bounds, from x, on the flights in `use`.
+std::vector<double> fit(const Calibration& cal, std::vector<double> x, const std::vector<std::size_t>& use,
+                        int iterations, const CalibrateOptions& o, const std::string& what) {
+    const auto start = cal.start();
+    Eigen::VectorXd r = cal.residuals(x, use, true);
+    double cost = r.squaredNorm(), lambda = kLambda0;
+    if (o.progress) o.progress(log::cat(what, ": start, RMSE f_d ", rmse(r), " N (all rows ", rmse(cal.residuals(x, use, false)), ")"));
+    for (int it = 0; it < iterations && lambda < kLambdaMax; ++it) {
+        const Eigen::MatrixXd J = jacobian(cal, x, r, use, start);
+        const Eigen::MatrixXd A = J.transpose() * J;
+        const Eigen::VectorXd g = J.transpose() * r;
+        bool improved = false;
+        while (!improved && lambda < kLambdaMax) {
+            Eigen::MatrixXd M = A;
+            for (Eigen::Index k = 0; k < M.rows(); ++k) M(k, k) = A(k, k) > 0 ? A(k, k) * (1 + lambda) : 1.0;
+            const Eigen::VectorXd step = M.ldlt().solve(-g);
+            auto y = x;
+            for (std::size_t p = 0; p < y.size(); ++p)
+                y[p] = std::clamp(y[p] + step[static_cast<Eigen::Index>(p)], cal.knob(p).lower, cal.knob(p).upper);
+            const Eigen::VectorXd ry = cal.residuals(y, use, true);
+            if (ry.squaredNorm() < cost) {
+                const double gain = (cost - ry.squaredNorm()) / cost;
+                x = y, r = ry, cost = ry.squaredNorm(), lambda = std::max(lambda / 3, 1e-9), improved = true;
+                if (gain < kRelativeTolerance) return x;
+            } else {
+                lambda *= 4;
+            }
+        }
+        if (o.progress) o.progress(log::cat(what, ": iteration ", it + 1, ", RMSE f_d ", std::sqrt(cost / r.size()), " N"));
+    }
+    return x;
+}
+
+// Per pairing, every near sample: offset, height above, recorded, calibrated and base f_d.
+std::vector<PairingSamples> samples_by_pairing(const Calibration& cal, const std::vector<double>& x0,
+                                               const std::vector<double>& x, const CalibrateOptions& o) {
+    std::map<std::string, PairingSamples> by;
+    const auto base = cal.config_of(x0), fitted = cal.config_of(x);
+    for (const auto& fd : cal.flights()) {
+        throw_if_stopped(o.stop, "the calibration");
+        const auto p0 = fd.replay->recorded(base), p1 = fd.replay->recorded(fitted);
+        auto& s = by[fd.pairing];
+        s.pairing = fd.pairing;
+        for (std::size_t k = 0; k < fd.rows.size(); ++k) {
+            const auto i = fd.rows[k];
+            s.rows.push_back({fd.offset[k], fd.above[k], fd.replay->measured()[i][kFd], p1[i][kFd], p0[i][kFd]});
+        }
+    }
+    std::vector<PairingSamples> out;
+    for (auto& [name, s] : by) out.push_back(std::move(s));
+    return out;
+}
+
+}  // namespace
+
+CalibrateResult calibrate(const CalibrateOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    require_output_dir(o.out_dir, "--out");
+    Calibration cal(o);
+    CalibrateResult R;
+    const auto x0 = cal.start();
+    const auto x = fit(cal, x0, flights_except(cal, std::nullopt), o.max_iterations, o, "every trial");
+    std::vector<std::vector<double>> replicates;
+    for (std::size_t t = 0; t < cal.trials().size(); ++t) {
+        const auto& trial = cal.trials()[t];
+        const auto xt = fit(cal, x, flights_except(cal, t), o.fold_iterations, o, "without " + trial.name);
+        replicates.push_back(xt);
+        const auto& own = trial.flights;
+        TrialError e;
+        e.trial = trial.name;
+        for (auto f : own) e.flights.push_back(cal.flights()[f].dir), e.pairing = cal.flights()[f].pairing;
+        const auto before = cal.residuals(x0, own, false);
+        e.samples = static_cast<std::size_t>(before.size());
+        e.rmse_before = rmse(before);
+        e.rmse_all = rmse(cal.residuals(x, own, false));
+        e.rmse_heldout = rmse(cal.residuals(xt, own, false));
+        R.trials.push_back(e);
+    }
+    const auto sd = jackknife_sd(replicates);
+    const double t = t975(static_cast<int>(replicates.size()) - 1);
+    for (std::size_t p = 0; p < x.size(); ++p)
+        R.parameters.push_back({cal.class_of(p), cal.knob(p).name, cal.knob(p).unit, x0[p], x[p], x[p] - t * sd[p],
+                                x[p] + t * sd[p]});
+    R.calibrated = o.physics;
+    R.calibrated.classes = cal.config_of(x).classes;
+    R.calibrated.calibration = log::cat("dw-explain calibrate on ", cal.flights().size(), " flights of ",
+                                        cal.trials().size(), " trials, f_d where a neighbour is near");
+    R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    R.physics_path = (fs::path(o.out_dir) / "physics.yaml").string();
+    R.report_path = (fs::path(o.out_dir) / "calibration.md").string();
+    write_calibration(samples_by_pairing(cal, x0, x, o), R, o);
+    return R;
+}
+
+}  // namespace dw::analysis

@@ -1,0 +1,61 @@
+#pragma once
+// Calibration: a lab's physics fitted to its own vehicles once, on many flights, and validated on
+// whole trials it did not see. Per vehicle class (vehicles with the same meta.json parameters):
+// as a producer, its jet's strength, width and origin (the far-wake law's three coefficients);
+// as a sufferer, its rotors' thrust loss in oncoming flow. Fitted jointly over every flight by
+// Levenberg-Marquardt on f_d where a neighbour is near; each trial is left out in turn and
+// predicted by the fit on the others (held-out error before/after per trial); the intervals are
+// the leave-one-trial-out jackknife's. Writes a physics file (the base with the classes) and a
+// report (calibration.md/.json, pictures).
+#include <functional>
+#include <stop_token>
+#include <string>
+#include <vector>
+
+#include "core/numbers.hpp"
+#include "physics/config.hpp"
+
+namespace dw::analysis {
+
+struct CalibrateOptions {
+    std::vector<std::string> flights;  // flight folders
+    physics::PhysicsConfig physics;    // the base: what is not calibrated, and the starting values
+    std::string out_dir;
+    int jobs = 2;             // flights replayed at once
+    int stride = 2;           // every stride-th near sample enters the fit (all enter the errors)
+    int max_iterations = 30;  // Levenberg-Marquardt iterations of the fit on every trial
+    int fold_iterations = 8;  // ... of each leave-one-trial-out fit (started from the full fit)
+    std::function<void(const std::string&)> progress;
+    std::stop_token stop;
+};
+inline constexpr Range kStrideRange{1, 100};
+inline constexpr Range kIterationsRange{1, 500};
+
+// One calibrated parameter of one class: its value on every trial and its 95 % interval.
+struct CalibratedParameter {
+    std::string vehicle_class, name, unit;
+    double start = 0, value = 0, lo = 0, hi = 0;
+};
+
+// One trial's f_d error where a neighbour is near: the base physics, the fit on every trial and the
+// fit without this trial (held out).
+struct TrialError {
+    std::string trial, pairing;  // e.g. "swap_ss cf50_01+cf51_01", "32 g under 67 g"
+    std::vector<std::string> flights;
+    std::size_t samples = 0;
+    double rmse_before = 0, rmse_all = 0, rmse_heldout = 0;
+};
+
+struct CalibrateResult {
+    physics::PhysicsConfig calibrated;
+    std::vector<CalibratedParameter> parameters;
+    std::vector<TrialError> trials;
+    std::string physics_path, report_path;
+    double seconds = 0;
+};
+
+// Throws dw::InputError for a flight that cannot be read or calibrated on (named), or when the
+// flights hold fewer than two trials (nothing to leave out).
+CalibrateResult calibrate(const CalibrateOptions& o);
+
+}  // namespace dw::analysis

@@ -1,0 +1,96 @@
+#include "analysis/calibration_report.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/files.hpp"
+#include "core/log.hpp"
+#include "core/numbers.hpp"
+#include "physics/config.hpp"
+#include "plot/chart.hpp"
+
+namespace dw::analysis {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The pictures' grid: the nearest neighbour's horizontal offset and height above the sufferer.
+constexpr double kMaxOffset_m = 0.5, kMaxAbove_m = 1.0;
+constexpr int kOffsetCells = 10, kAboveCells = 10;
+constexpr int kMinPerCell = 5;
+
+std::string pairing_png(std::size_t i) { return log::cat("pairing_", i + 1, ".png"); }
+
+void write_pictures(const std::vector<PairingSamples>& pairings, const std::string& dir) {
+    for (std::size_t i = 0; i < pairings.size(); ++i) {
+        std::vector<plot::Heat> heats;
+        for (const auto& [column, title] : {std::pair{2, "recorded"}, {3, "calibrated"}, {4, "uncalibrated"}}) {
+            std::vector<std::array<double, 3>> s;
+            for (const auto& r : pairings[i].rows) s.push_back({r[0], r[1], r[static_cast<std::size_t>(column)]});
+            heats.push_back(plot::bin_heat(title, s, 0, kMaxOffset_m, 0, kMaxAbove_m, kOffsetCells, kAboveCells,
+                                           kMinPerCell));
+        }
+        plot::render_heats(heats, "f_d, " + pairings[i].pairing, "nearest neighbour's horizontal offset [m]",
+                           "height above the sufferer [m]", "N", (fs::path(dir) / pairing_png(i)).string());
+    }
+}
+
+nlohmann::json to_json(const CalibrateResult& r) {
+    nlohmann::json params = nlohmann::json::array(), trials = nlohmann::json::array();
+    for (const auto& p : r.parameters)
+        params.push_back({{"class", p.vehicle_class}, {"name", p.name}, {"unit", p.unit}, {"start", p.start},
+                          {"value", p.value}, {"ci95", {p.lo, p.hi}}});
+    for (const auto& t : r.trials)
+        trials.push_back({{"trial", t.trial}, {"pairing", t.pairing}, {"flights", t.flights}, {"samples", t.samples},
+                          {"rmse_f_d_before_n", t.rmse_before}, {"rmse_f_d_all_trials_n", t.rmse_all},
+                          {"rmse_f_d_held_out_n", t.rmse_heldout}});
+    return {{"format", "downwash-calibration/1"}, {"calibration", r.calibrated.calibration},
+            {"parameters", params}, {"trials", trials}, {"seconds", r.seconds}};
+}
+
+double median_of(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+std::string markdown(const std::vector<PairingSamples>& pairings, const CalibrateResult& r) {
+    std::ostringstream md;
+    md << "# Calibration\n\n" << r.calibrated.calibration << " (" << fixed(r.seconds, 1) << " s).\n\n"
+       << "## Parameters (95 % intervals: the leave-one-trial-out jackknife)\n\n"
+       << "| class | parameter | start | calibrated | 95 % interval |\n|---|---|---|---|---|\n";
+    for (const auto& p : r.parameters)
+        md << "| " << p.vehicle_class << " | " << p.name << (p.unit[0] ? log::cat(" [", p.unit, "]") : "") << " | "
+           << fixed(p.start, 4) << " | " << fixed(p.value, 4) << " | [" << fixed(p.lo, 4) << ", " << fixed(p.hi, 4)
+           << "] |\n";
+    md << "\n## f_d error where a neighbour is near, per trial [N]\n\n"
+       << "Held out: the trial predicted by the calibration on every other trial.\n\n"
+       << "| trial | pairing | samples | uncalibrated | calibrated on all | held out |\n|---|---|---|---|---|---|\n";
+    std::vector<double> before, heldout;
+    for (const auto& t : r.trials) {
+        md << "| " << t.trial << " | " << t.pairing << " | " << t.samples << " | " << fixed(t.rmse_before, 4) << " | "
+           << fixed(t.rmse_all, 4) << " | " << fixed(t.rmse_heldout, 4) << " |\n";
+        before.push_back(t.rmse_before), heldout.push_back(t.rmse_heldout);
+    }
+    md << "\nMedian over trials: " << fixed(median_of(before), 4) << " N uncalibrated, " << fixed(median_of(heldout), 4)
+       << " N held out.\n\n## f_d by the nearest neighbour's position, per pairing\n\n";
+    for (std::size_t i = 0; i < pairings.size(); ++i)
+        md << "![" << pairings[i].pairing << "](" << pairing_png(i) << ")\n\n";
+    return md.str();
+}
+
+}  // namespace
+
+void write_calibration(const std::vector<PairingSamples>& pairings, const CalibrateResult& r,
+                       const CalibrateOptions& o) {
+    fs::create_directories(o.out_dir);
+    write_pictures(pairings, o.out_dir);
+    write_file((fs::path(o.out_dir) / "calibration.json").string(), to_json(r).dump(2) + "\n");
+    write_file(r.report_path, markdown(pairings, r));
+    write_file(r.physics_path, "# " + r.calibrated.calibration + "\n" + physics::to_yaml(r.calibrated));
+}
+
+}  // namespace dw::analysis
