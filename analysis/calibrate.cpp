@@ -7,10 +7,12 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <nlohmann/json.hpp>
 #include <set>
 
 #include "analysis/calibration_report.hpp"
+#include "analysis/explain.hpp"
 #include "analysis/replay.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -30,12 +32,12 @@ using physics::PhysicsConfig;
 using physics::VehicleClass;
 using physics::VehicleParams;
 
-constexpr std::size_t kFd = 2;                  // the axis calibrated on: f_d (wrench.csv's order)
-constexpr int kBlocksWanted = 5;                // cross-validation blocks asked of find_blocks (for `near`)
-constexpr double kStepFraction = 1e-3;          // forward-difference step, relative to the value (or start)
-constexpr double kLambda0 = 1e-3;               // Levenberg-Marquardt's first damping
-constexpr double kRelativeTolerance = 1e-6;     // stop when the cost falls by less than this fraction
-constexpr double kLambdaMax = 1e10;             // ... or no step lowers it
+constexpr std::size_t kFd = 2;               // the axis calibrated on: f_d (wrench.csv's order)
+constexpr int kBlocksWanted = 5;             // cross-validation blocks asked of find_blocks (for `near`)
+constexpr double kStepFraction = 1e-3;       // forward-difference step, relative to the value (or start)
+constexpr double kLambda0 = 1e-3;            // Levenberg-Marquardt's first damping
+constexpr double kRelativeTolerance = 1e-6;  // stop when the cost falls by less than this fraction
+constexpr double kLambdaMax = 1e10;          // ... or no step lowers it
 
 // A calibrated quantity of a class: name, unit, role, bounds, and where it lives in the class.
 struct Knob {
@@ -140,7 +142,13 @@ public:
             throw_if_stopped(o_.stop, "the calibration");
             const auto& fd = flights_[use[k]];
             const auto pred = fd.replay->recorded(c);
-            for (auto i : fit_rows ? fd.fit_rows : fd.rows) parts[k].push_back(fd.replay->measured()[i][kFd] - pred[i][kFd]);
+            auto& part = parts[k];
+            for (auto i : fit_rows ? fd.fit_rows : fd.rows)
+                part.push_back(fd.replay->measured()[i][kFd] - pred[i][kFd]);
+            if (fd.replay->flying()) {  // its residual's own zero: a nuisance of each flight
+                const double bias = std::accumulate(part.begin(), part.end(), 0.0) / static_cast<double>(part.size());
+                for (double& v : part) v -= bias;
+            }
         });
         std::size_t n = 0;
         for (const auto& p : parts) n += p.size();
@@ -212,8 +220,9 @@ private:
     void choose_parameters() {
         for (std::size_t c = 0; c < config_.classes.size(); ++c)
             for (std::size_t k = 0; k < kKnobs.size(); ++k) {
-                const bool used = std::any_of(roles_.begin(), roles_.end(),
-                                              [&](const auto& r) { return r.count({c, kKnobs[k].producer}) > 0; });
+                const bool used = std::any_of(roles_.begin(), roles_.end(), [&](const auto& r) {
+                    return r.count({c, kKnobs[k].producer}) > 0;
+                });
                 if (used) params_.push_back({c, k});
             }
     }
@@ -235,7 +244,9 @@ std::vector<std::size_t> flights_except(const Calibration& cal, std::optional<st
     return use;
 }
 
-double rmse(const Eigen::VectorXd& r) { return r.size() ? std::sqrt(r.squaredNorm() / static_cast<double>(r.size())) : 0; }
+double rmse(const Eigen::VectorXd& r) {
+    return r.size() ? std::sqrt(r.squaredNorm() / static_cast<double>(r.size())) : 0;
+}
 
 // The forward-difference Jacobian of the residuals; a parameter that acts on none of the flights
 // gets a zero column (and is left where it is).
@@ -258,7 +269,9 @@ std::vector<double> fit(const Calibration& cal, std::vector<double> x, const std
     const auto start = cal.start();
     Eigen::VectorXd r = cal.residuals(x, use, true);
     double cost = r.squaredNorm(), lambda = kLambda0;
-    if (o.progress) o.progress(log::cat(what, ": start, RMSE f_d ", rmse(r), " N (all rows ", rmse(cal.residuals(x, use, false)), ")"));
+    if (o.progress)
+        o.progress(
+            log::cat(what, ": start, RMSE f_d ", rmse(r), " N (all rows ", rmse(cal.residuals(x, use, false)), ")"));
     for (int it = 0; it < iterations && lambda < kLambdaMax; ++it) {
         const Eigen::MatrixXd J = jacobian(cal, x, r, use, start);
         const Eigen::MatrixXd A = J.transpose() * J;
@@ -280,7 +293,8 @@ std::vector<double> fit(const Calibration& cal, std::vector<double> x, const std
                 lambda *= 4;
             }
         }
-        if (o.progress) o.progress(log::cat(what, ": iteration ", it + 1, ", RMSE f_d ", std::sqrt(cost / r.size()), " N"));
+        if (o.progress)
+            o.progress(log::cat(what, ": iteration ", it + 1, ", RMSE f_d ", std::sqrt(cost / r.size()), " N"));
     }
     return x;
 }
@@ -303,6 +317,34 @@ std::vector<PairingSamples> samples_by_pairing(const Calibration& cal, const std
     std::vector<PairingSamples> out;
     for (auto& [name, s] : by) out.push_back(std::move(s));
     return out;
+}
+
+// The base with the calibrated classes, and the line that says where they came from.
+PhysicsConfig with_provenance(const PhysicsConfig& fitted, const PhysicsConfig& base, const std::string& on) {
+    PhysicsConfig c = base;
+    c.classes = fitted.classes;
+    c.calibration = log::cat("dw-explain calibrate ", on, ", f_d where a neighbour is near");
+    return c;
+}
+
+// The trial's flights explained against the calibration that left it out (reports under folds/<trial>/).
+void explain_heldout(TrialError& e, const PhysicsConfig& fold, const CalibrateOptions& o) {
+    const fs::path dir = fs::path(o.out_dir) / "folds" / e.trial;
+    fs::create_directories(dir);
+    write_file((dir / "physics.yaml").string(), physics::to_yaml(fold));
+    for (const auto& folder : e.flights) {
+        throw_if_stopped(o.stop, "the calibration");
+        if (o.progress) o.progress(log::cat("explaining ", folder, " with the calibration without ", e.trial));
+        ExplainOptions xo;
+        xo.physics = fold;
+        xo.stop = o.stop;
+        const flight::Flight f = flight::read_flight(folder);
+        const ExplainResult r = explain(f, xo);
+        write_report(f, r, xo, (dir / fs::path(folder).filename()).string());
+        e.explained_ratio.push_back(r.heldout_after[kFd] / r.noise_floor[kFd]);
+        e.explained_by.emplace_back();
+        for (const auto& c : r.accepted) e.explained_by.back().push_back(c.effect.name);
+    }
 }
 
 }  // namespace
@@ -328,17 +370,18 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         e.rmse_before = rmse(before);
         e.rmse_all = rmse(cal.residuals(x, own, false));
         e.rmse_heldout = rmse(cal.residuals(xt, own, false));
+        if (o.explain_heldout)
+            explain_heldout(e, with_provenance(cal.config_of(xt), o.physics, "without " + trial.name), o);
         R.trials.push_back(e);
     }
     const auto sd = jackknife_sd(replicates);
     const double t = t975(static_cast<int>(replicates.size()) - 1);
     for (std::size_t p = 0; p < x.size(); ++p)
-        R.parameters.push_back({cal.class_of(p), cal.knob(p).name, cal.knob(p).unit, x0[p], x[p], x[p] - t * sd[p],
-                                x[p] + t * sd[p]});
-    R.calibrated = o.physics;
-    R.calibrated.classes = cal.config_of(x).classes;
-    R.calibrated.calibration = log::cat("dw-explain calibrate on ", cal.flights().size(), " flights of ",
-                                        cal.trials().size(), " trials, f_d where a neighbour is near");
+        R.parameters.push_back(
+            {cal.class_of(p), cal.knob(p).name, cal.knob(p).unit, x0[p], x[p], x[p] - t * sd[p], x[p] + t * sd[p]});
+    R.calibrated =
+        with_provenance(cal.config_of(x), o.physics,
+                        log::cat("on ", cal.flights().size(), " flights of ", cal.trials().size(), " trials"));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     R.physics_path = (fs::path(o.out_dir) / "physics.yaml").string();
     R.report_path = (fs::path(o.out_dir) / "calibration.md").string();

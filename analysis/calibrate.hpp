@@ -25,6 +25,9 @@ struct CalibrateOptions {
     int stride = 2;           // every stride-th near sample enters the fit (all enter the errors)
     int max_iterations = 30;  // Levenberg-Marquardt iterations of the fit on every trial
     int fold_iterations = 8;  // ... of each leave-one-trial-out fit (started from the full fit)
+    // Also explain each trial's flights against the calibration that left the trial out (its report
+    // under folds/<trial>/): what is left once the lab's physics is calibrated.
+    bool explain_heldout = false;
     std::function<void(const std::string&)> progress;
     std::stop_token stop;
 };
@@ -44,6 +47,10 @@ struct TrialError {
     std::vector<std::string> flights;
     std::size_t samples = 0;
     double rmse_before = 0, rmse_all = 0, rmse_heldout = 0;
+    // With explain_heldout, per flight: the explainer's held-out f_d error after its fit over its
+    // noise floor, and what it accepted.
+    std::vector<double> explained_ratio;
+    std::vector<std::vector<std::string>> explained_by;
 };
 
 struct CalibrateResult {

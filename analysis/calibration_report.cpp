@@ -30,8 +30,8 @@ void write_pictures(const std::vector<PairingSamples>& pairings, const std::stri
         for (const auto& [column, title] : {std::pair{2, "recorded"}, {3, "calibrated"}, {4, "uncalibrated"}}) {
             std::vector<std::array<double, 3>> s;
             for (const auto& r : pairings[i].rows) s.push_back({r[0], r[1], r[static_cast<std::size_t>(column)]});
-            heats.push_back(plot::bin_heat(title, s, 0, kMaxOffset_m, 0, kMaxAbove_m, kOffsetCells, kAboveCells,
-                                           kMinPerCell));
+            heats.push_back(
+                plot::bin_heat(title, s, 0, kMaxOffset_m, 0, kMaxAbove_m, kOffsetCells, kAboveCells, kMinPerCell));
         }
         plot::render_heats(heats, "f_d, " + pairings[i].pairing, "nearest neighbour's horizontal offset [m]",
                            "height above the sufferer [m]", "N", (fs::path(dir) / pairing_png(i)).string());
@@ -41,14 +41,27 @@ void write_pictures(const std::vector<PairingSamples>& pairings, const std::stri
 nlohmann::json to_json(const CalibrateResult& r) {
     nlohmann::json params = nlohmann::json::array(), trials = nlohmann::json::array();
     for (const auto& p : r.parameters)
-        params.push_back({{"class", p.vehicle_class}, {"name", p.name}, {"unit", p.unit}, {"start", p.start},
-                          {"value", p.value}, {"ci95", {p.lo, p.hi}}});
+        params.push_back({{"class", p.vehicle_class},
+                          {"name", p.name},
+                          {"unit", p.unit},
+                          {"start", p.start},
+                          {"value", p.value},
+                          {"ci95", {p.lo, p.hi}}});
     for (const auto& t : r.trials)
-        trials.push_back({{"trial", t.trial}, {"pairing", t.pairing}, {"flights", t.flights}, {"samples", t.samples},
-                          {"rmse_f_d_before_n", t.rmse_before}, {"rmse_f_d_all_trials_n", t.rmse_all},
-                          {"rmse_f_d_held_out_n", t.rmse_heldout}});
-    return {{"format", "downwash-calibration/1"}, {"calibration", r.calibrated.calibration},
-            {"parameters", params}, {"trials", trials}, {"seconds", r.seconds}};
+        trials.push_back({{"trial", t.trial},
+                          {"pairing", t.pairing},
+                          {"flights", t.flights},
+                          {"samples", t.samples},
+                          {"rmse_f_d_before_n", t.rmse_before},
+                          {"rmse_f_d_all_trials_n", t.rmse_all},
+                          {"rmse_f_d_held_out_n", t.rmse_heldout},
+                          {"explained_f_d_over_noise_floor", t.explained_ratio},
+                          {"explained_by", t.explained_by}});
+    return {{"format", "downwash-calibration/1"},
+            {"calibration", r.calibrated.calibration},
+            {"parameters", params},
+            {"trials", trials},
+            {"seconds", r.seconds}};
 }
 
 double median_of(std::vector<double> v) {
@@ -57,26 +70,50 @@ double median_of(std::vector<double> v) {
     return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
+// "2.31 | force_scale, body_drag |" for each of the trial's flights (one line each), their ratios kept.
+std::string explained_cells(const TrialError& t, std::vector<double>& ratios) {
+    std::string ratio, by;
+    for (std::size_t k = 0; k < t.explained_ratio.size(); ++k) {
+        ratios.push_back(t.explained_ratio[k]);
+        ratio += (k ? "; " : "") + fixed(t.explained_ratio[k], 2);
+        by += (k ? "; " : "") + (t.explained_by[k].empty() ? std::string("nothing") : log::join(t.explained_by[k]));
+    }
+    return ratio + " | " + by + " |";
+}
+
 std::string markdown(const std::vector<PairingSamples>& pairings, const CalibrateResult& r) {
     std::ostringstream md;
-    md << "# Calibration\n\n" << r.calibrated.calibration << " (" << fixed(r.seconds, 1) << " s).\n\n"
+    md << "# Calibration\n\n"
+       << r.calibrated.calibration << " (" << fixed(r.seconds, 1) << " s).\n\n"
        << "## Parameters (95 % intervals: the leave-one-trial-out jackknife)\n\n"
        << "| class | parameter | start | calibrated | 95 % interval |\n|---|---|---|---|---|\n";
     for (const auto& p : r.parameters)
         md << "| " << p.vehicle_class << " | " << p.name << (p.unit[0] ? log::cat(" [", p.unit, "]") : "") << " | "
            << fixed(p.start, 4) << " | " << fixed(p.value, 4) << " | [" << fixed(p.lo, 4) << ", " << fixed(p.hi, 4)
            << "] |\n";
+    const bool explained = !r.trials.empty() && !r.trials.front().explained_ratio.empty();
     md << "\n## f_d error where a neighbour is near, per trial [N]\n\n"
-       << "Held out: the trial predicted by the calibration on every other trial.\n\n"
-       << "| trial | pairing | samples | uncalibrated | calibrated on all | held out |\n|---|---|---|---|---|---|\n";
-    std::vector<double> before, heldout;
+       << "Held out: the trial predicted by the calibration on every other trial."
+       << (explained ? " Then explained against that calibration (reports in folds/<trial>/): the explainer's held-out "
+                       "f_d error after its fit, in noise floors, and what it accepted."
+                     : "")
+       << "\n\n| trial | pairing | samples | uncalibrated | calibrated on all | held out |"
+       << (explained ? " after the explainer / noise floor | explained by |\n|---|---|---|---|---|---|---|---|\n"
+                     : "\n|---|---|---|---|---|---|\n");
+    std::vector<double> before, heldout, ratios;
     for (const auto& t : r.trials) {
         md << "| " << t.trial << " | " << t.pairing << " | " << t.samples << " | " << fixed(t.rmse_before, 4) << " | "
-           << fixed(t.rmse_all, 4) << " | " << fixed(t.rmse_heldout, 4) << " |\n";
+           << fixed(t.rmse_all, 4) << " | " << fixed(t.rmse_heldout, 4) << " |";
+        if (explained) md << " " << explained_cells(t, ratios);
+        md << "\n";
         before.push_back(t.rmse_before), heldout.push_back(t.rmse_heldout);
     }
     md << "\nMedian over trials: " << fixed(median_of(before), 4) << " N uncalibrated, " << fixed(median_of(heldout), 4)
-       << " N held out.\n\n## f_d by the nearest neighbour's position, per pairing\n\n";
+       << " N held out"
+       << (explained ? log::cat("; after the explainer, median ", fixed(median_of(ratios), 2), " noise floors (",
+                                ratios.size(), " flights)")
+                     : std::string())
+       << ".\n\n## f_d by the nearest neighbour's position, per pairing\n\n";
     for (std::size_t i = 0; i < pairings.size(); ++i)
         md << "![" << pairings[i].pairing << "](" << pairing_png(i) << ")\n\n";
     return md.str();

@@ -173,6 +173,8 @@ struct CalibrateCommand {
         sub->add_option("--fold-iterations", options.fold_iterations, "iterations of each fit with a trial left out")
             ->check(dw::cli::in(dw::analysis::kIterationsRange))
             ->capture_default_str();
+        sub->add_flag("--explain", options.explain_heldout,
+                      "also explain each trial against the calibration that left it out (reports in folds/)");
     }
     int run(const std::string& main_physics, const Progress& progress) {
         prepare(options, progress);
