@@ -160,7 +160,7 @@ struct CalibrateCommand {
                                  "fit the physics per vehicle class on many flights; validate by leaving trials out");
         sub->add_option("--flights", options.flights, "flight folders (e.g. dw-import's), two trials or more")
             ->required();
-        sub->add_option("--physics", physics, "the base physics (e.g. config/physics.crazyflie.yaml)");
+        sub->add_option("--physics", physics, "the base physics (e.g. config/physics.crazyflie-uncalibrated.yaml)");
         sub->add_option("--out", options.out_dir, "output folder (physics.yaml, calibration.md/.json, pictures)")
             ->required();
         sub->add_option("--jobs", options.jobs, "flights replayed at once")->check(dw::cli::in(dw::kJobsRange));

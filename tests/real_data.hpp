@@ -43,5 +43,9 @@ inline const std::vector<Trial>& shared_trials() {
 
 // The physics configuration for these vehicles (config/physics.crazyflie.yaml).
 inline std::string crazyflie_physics() { return std::string(DW_SOURCE_DIR) + "/config/physics.crazyflie.yaml"; }
+// The hand-made base it was calibrated from (config/physics.crazyflie-uncalibrated.yaml).
+inline std::string crazyflie_uncalibrated_physics() {
+    return std::string(DW_SOURCE_DIR) + "/config/physics.crazyflie-uncalibrated.yaml";
+}
 
 }  // namespace dw::test
