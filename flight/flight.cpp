@@ -14,15 +14,20 @@
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "flight/csv.hpp"
+#include "flight/reference.hpp"
 
 namespace dw::flight {
 namespace fs = std::filesystem;
+using csv::CsvReader;
+using csv::Row;
 using nlohmann::json;
 
 namespace {
 // The meta.json keys this library reads; every other key is kept as it was (extra_json).
-constexpr std::array<const char*, 8> kMetaKeys = {"format",   "sufferer", "neighbours",    "formation",
-                                                  "vehicles", "stand",    "wrench_source", "moments_measured"};
+constexpr std::array<const char*, 9> kMetaKeys = {"format",        "sufferer",         "neighbours",
+                                                  "formation",     "vehicles",         "stand",
+                                                  "wrench_source", "moments_measured", "reference"};
 }  // namespace
 
 const char* to_string(WrenchSource s) { return s == WrenchSource::stand ? "stand" : "residual"; }
@@ -50,70 +55,6 @@ int Flight::find_body(const std::string& name) const {
 namespace {
 
 std::string slurp(const fs::path& path) { return read_file(path.string(), "flight file"); }
-
-// Splits CSV text into lines of fields; the first line is the header.
-class CsvReader {
-public:
-    CsvReader(std::string text, std::string file) : text_(std::move(text)), file_(std::move(file)) {}
-
-    void expect_header(const std::vector<std::string>& columns) {
-        std::vector<std::string_view> fields;
-        if (!next(fields)) fail(1, "the file is empty (expected the header line)");
-        std::string want, got;
-        for (const auto& c : columns) want += (want.empty() ? "" : ",") + c;
-        for (auto f : fields) got += (got.empty() ? "" : ",") + std::string(f);
-        if (want != got) fail(line_, log::cat("header is '", got, "', expected '", want, "'"));
-        columns_ = columns;
-    }
-    // Next data row; false at the end. Blank trailing lines are allowed.
-    bool next(std::vector<std::string_view>& fields) {
-        while (pos_ < text_.size()) {
-            std::size_t end = text_.find('\n', pos_);
-            if (end == std::string::npos) end = text_.size();
-            std::string_view row(text_.data() + pos_, end - pos_);
-            pos_ = end + 1;
-            ++line_;
-            if (!row.empty() && row.back() == '\r') row.remove_suffix(1);
-            if (row.empty()) continue;
-            fields.clear();
-            std::size_t start = 0;
-            for (;;) {
-                const std::size_t comma = row.find(',', start);
-                fields.push_back(
-                    row.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
-                if (comma == std::string_view::npos) break;
-                start = comma + 1;
-            }
-            if (!columns_.empty() && fields.size() != columns_.size()) {
-                fail(line_, log::cat(fields.size(), " fields, expected ", columns_.size(), " (",
-                                     log::join(columns_, ","), ")"));
-            }
-            return true;
-        }
-        return false;
-    }
-    double number(std::string_view field, std::size_t column) const {
-        double v = 0;
-        const auto* end = field.data() + field.size();
-        auto [ptr, ec] = std::from_chars(field.data(), end, v);
-        if (ec != std::errc() || ptr != end || field.empty()) {
-            fail(line_, log::cat("column ", columns_[column], ": '", field, "' is not a number"));
-        }
-        if (!std::isfinite(v)) fail(line_, log::cat("column ", columns_[column], ": '", field, "' is not finite"));
-        return v;
-    }
-    [[noreturn]] void fail(std::size_t line, const std::string& what) const {
-        throw InputError(log::cat(file_, ":", line, ": ", what));
-    }
-    std::size_t line() const { return line_; }
-
-private:
-    std::string text_;
-    std::string file_;
-    std::size_t pos_ = 0;
-    std::size_t line_ = 0;
-    std::vector<std::string> columns_;
-};
 
 std::string json_location(const std::string& text, std::size_t byte) {
     std::size_t line = 1, col = 1;
@@ -157,6 +98,7 @@ public:
         read_vehicles(m);
         read_stand(m);
         read_wrench_source(m);
+        read_reference(m);
         json extra = json::object();
         for (const auto& [k, v] : j_.items())
             if (std::find(kMetaKeys.begin(), kMetaKeys.end(), k) == kMetaKeys.end()) extra[k] = v;
@@ -233,6 +175,25 @@ private:
             if (!j_["moments_measured"].is_boolean()) fail("moments_measured", "not true or false");
             m.moments_measured = j_["moments_measured"].get<bool>();
         }
+    }
+
+    void read_reference(Meta& m) const {
+        if (!j_.contains("reference")) return;
+        const auto& r = j_["reference"];
+        if (!r.is_object() || !r.contains("source") || !r["source"].is_string())
+            fail("reference", "not an object with a \"source\" text");
+        if (!r.contains("axes") || !r["axes"].is_array() || r["axes"].empty())
+            fail("reference.axes", "missing or not a list of axis names");
+        ReferenceInfo info{r["source"].get<std::string>(), {}};
+        for (const auto& a : r["axes"]) {
+            const std::string name = a.is_string() ? a.get<std::string>() : a.dump();
+            if (std::find(kAxes.begin(), kAxes.end(), name) == kAxes.end())
+                fail("reference.axes", log::cat("'", name, "' is not one of ", axis_list()));
+            if (std::find(info.axes.begin(), info.axes.end(), name) != info.axes.end())
+                fail("reference.axes", log::cat("'", name, "' is listed twice"));
+            info.axes.push_back(name);
+        }
+        m.reference = info;
     }
 
     std::string file_;
@@ -312,33 +273,16 @@ Flight read_flight(const std::string& dir) {
         }
         f.legs = std::move(legs);
     }
+    if (fs::exists(root / "reference.csv") || f.meta.reference) {
+        if (!f.meta.reference)
+            throw InputError(log::cat((root / "meta.json").string(),
+                                      ": field 'reference': missing, but reference.csv is there (what model is it?)"));
+        f.reference = read_reference_csv((root / "reference.csv").string(), *f.meta.reference);
+    }
     return f;
 }
 
 namespace {
-class Row {
-public:
-    Row(std::string& out, const char* file, std::size_t row) : out_(out), file_(file), row_(row) {}
-    void number(double v, int decimals, const char* column) {
-        if (!first_) out_ += ',';
-        first_ = false;
-        if (!try_append_fixed(out_, v, decimals))  // the context is built only for the error
-            append_fixed(out_, v, decimals, log::cat("flight to write: ", file_, " row ", row_, " column ", column));
-    }
-    void text(const std::string& v) {
-        if (!first_) out_ += ',';
-        first_ = false;
-        out_ += v;
-    }
-    ~Row() { out_ += '\n'; }
-
-private:
-    std::string& out_;
-    const char* file_;
-    std::size_t row_;
-    bool first_ = true;
-};
-
 std::string meta_text(const Meta& m) {
     json meta = json::parse(m.extra_json);
     meta["format"] = kFormat;
@@ -356,6 +300,7 @@ std::string meta_text(const Meta& m) {
     if (m.stand_height_m) meta["stand"] = {{"height_m", *m.stand_height_m}};
     if (m.wrench_source != WrenchSource::stand) meta["wrench_source"] = to_string(m.wrench_source);
     if (!m.moments_measured) meta["moments_measured"] = false;
+    if (m.reference) meta["reference"] = {{"source", m.reference->source}, {"axes", m.reference->axes}};
     return meta.dump(2) + "\n";
 }
 
@@ -406,7 +351,11 @@ void FlightWriter::pose(double t, const std::string& body, const std::array<doub
     poses_->write(row_);
 }
 
-void FlightWriter::close(const Meta& meta, const std::optional<std::vector<Leg>>& legs) {
+void FlightWriter::close(const Meta& meta, const std::optional<std::vector<Leg>>& legs,
+                         const std::vector<WrenchSample>& reference) {
+    if (meta.reference.has_value() != !reference.empty())
+        throw InputError("flight to write: meta.json's reference and the reference samples must come together");
+    const std::string reference_text = meta.reference ? reference_csv(reference, *meta.reference) : std::string();
     std::string legs_text = "leg,t_start,t_end\n";
     if (legs) {
         for (std::size_t i = 0; i < legs->size(); ++i) {
@@ -423,13 +372,14 @@ void FlightWriter::close(const Meta& meta, const std::optional<std::vector<Leg>>
     closed_ = true;
     write_file((root_ / "meta.json").string(), meta_json);
     if (legs) write_file((root_ / "legs.csv").string(), legs_text);
+    if (meta.reference) write_file((root_ / "reference.csv").string(), reference_text);
 }
 
 void write_flight(const Flight& f, const std::string& dir) {
     FlightWriter w(dir);
     for (const auto& s : f.wrench) w.wrench(s);
     for (const auto& s : f.poses) w.pose(s.t, f.bodies.at(s.body), s.p, s.q);
-    w.close(f.meta, f.legs);
+    w.close(f.meta, f.legs, f.reference);
 }
 
 std::array<double, 3> Track::position_at(double time) const {

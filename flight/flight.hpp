@@ -67,6 +67,13 @@ inline constexpr const char* kMeasuredClockOffsetKey = "clock_offset_measured_s"
 // The sufferer's rigid-body name unless a flight or an option names another.
 inline constexpr const char* kSufferer = "sufferer";
 
+// meta.json's "reference": another model's prediction of the same wrench, recorded with the flight
+// (reference.csv), e.g. the vehicle's own onboard network.
+struct ReferenceInfo {
+    std::string source;             // the model, in words
+    std::vector<std::string> axes;  // the axes it predicts (wrench.csv's names); the others' cells are empty
+};
+
 struct Meta {
     std::string sufferer = kSufferer;
     std::vector<std::string> neighbours;
@@ -74,8 +81,9 @@ struct Meta {
     std::map<std::string, VehicleInfo> vehicles;
     std::optional<double> stand_height_m = 1.4;  // absent: the sufferer flies (no load stand)
     WrenchSource wrench_source = WrenchSource::stand;
-    bool moments_measured = true;   // false: the moment columns carry no measurement
-    std::string extra_json = "{}";  // unknown keys, kept as they were (a JSON object)
+    bool moments_measured = true;            // false: the moment columns carry no measurement
+    std::optional<ReferenceInfo> reference;  // present exactly when reference.csv is
+    std::string extra_json = "{}";           // unknown keys, kept as they were (a JSON object)
 };
 
 struct Flight {
@@ -84,6 +92,7 @@ struct Flight {
     std::vector<WrenchSample> wrench;
     std::vector<PoseSample> poses;
     std::optional<std::vector<Leg>> legs;
+    std::vector<WrenchSample> reference;  // reference.csv, on the wrench's clock; NaN where it predicts nothing
 
     // Index of a body name, adding it if new.
     std::uint16_t body_index(const std::string& name);
@@ -109,8 +118,10 @@ public:
 
     void wrench(const WrenchSample& s);
     void pose(double t, const std::string& body, const std::array<double, 3>& p, const std::array<double, 4>& q);
-    // meta.json (and legs.csv), then every file moved into place.
-    void close(const Meta& meta, const std::optional<std::vector<Leg>>& legs = std::nullopt);
+    // meta.json (and legs.csv, reference.csv), then every file moved into place. Throws
+    // dw::InputError when meta.reference and `reference` do not come together.
+    void close(const Meta& meta, const std::optional<std::vector<Leg>>& legs = std::nullopt,
+               const std::vector<WrenchSample>& reference = {});
 
 private:
     std::filesystem::path root_;

@@ -19,7 +19,11 @@ namespace dw::importer {
 namespace {
 namespace fs = std::filesystem;
 
-constexpr double kG = 9.81;               // the authors' g for Fa and thrust_des
+constexpr double kG = 9.81;  // the authors' g for Fa and thrust_des
+// The authors' onboard interaction network's prediction of Fa_z (gram-force, z up): the reference.
+constexpr const char* kFazField = "ctrlFa.Faz";
+constexpr const char* kFazSource =
+    "the Neural-Swarm authors' onboard interaction network (ctrlFa.Faz, run on the vehicle in flight)";
 constexpr double kThrustLag = 0.84;       // T_lag[i+1] = 0.84 T_lag[i] + 0.16 T[i] (100 Hz)
 constexpr double kTareDistance_m = 0.35;  // Fa is tared where every neighbour is farther than this
 constexpr double kGap_s = 0.05;           // a longer pause between samples is reported
@@ -215,6 +219,7 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
                 az = field("stateEstimateZ.az"), quat = field("stateEstimateZ.quat"), vbat = field("pm.vbatMV");
     const std::array<Field, 4> pwm = {field("pwm.m1_pwm"), field("pwm.m2_pwm"), field("pwm.m3_pwm"),
                                       field("pwm.m4_pwm")};
+    const auto faz = std::find_if(fields.begin(), fields.end(), [](const Field& f) { return f.name == kFazField; });
     const auto* b = reinterpret_cast<const std::uint8_t*>(bytes.data());
     double first_us = NAN;
     while (pos < bytes.size()) {
@@ -240,6 +245,7 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
             log.quat_xyzw.push_back(decompress_quaternion(packed));
             log.pwm.push_back({v(pwm[0]) / 65536, v(pwm[1]) / 65536, v(pwm[2]) / 65536, v(pwm[3]) / 65536});
             log.vbat_v.push_back(v(vbat) / 1000);
+            if (faz != fields.end()) log.faz_g.push_back(v(*faz));
         }
         pos += size + 4;
     }
@@ -385,6 +391,20 @@ bool residual_usable(const std::string& vehicle) {
     return std::find(kUnusableResidual.begin(), kUnusableResidual.end(), vehicle) == kUnusableResidual.end();
 }
 
+// The onboard network's Fa_z as reference.csv's f_d (NED, newtons), where it ran: in older
+// collections it is 0 throughout (the network was off), which is no prediction.
+void add_reference(flight::Flight& f, const VehicleLog& s, const ImportOptions& o) {
+    if (s.faz_g.empty()) return;
+    if (std::all_of(s.faz_g.begin(), s.faz_g.end(), [](double g) { return g == 0.0; })) {
+        if (o.warn)
+            o.warn(log::cat(s.file, ": ", kFazField, " is 0 throughout (the onboard network was off): no reference"));
+        return;
+    }
+    f.meta.reference = flight::ReferenceInfo{kFazSource, {"f_d"}};
+    for (std::size_t i = 0; i < s.t_s.size(); ++i)
+        f.reference.push_back({s.t_s[i], {NAN, NAN, -s.faz_g[i] * kG / 1000.0, NAN, NAN, NAN}});
+}
+
 flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     std::map<std::string, int> seen;
     for (const auto& l : logs) {
@@ -425,6 +445,7 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
         const auto ned = to_ned(fa[i]);
         f.wrench.push_back({it->t_s[i], {ned[0], ned[1], ned[2], 0, 0, 0}});
     }
+    add_reference(f, *it, o);
     struct Pose {
         double t;
         std::uint16_t body;

@@ -23,6 +23,7 @@ struct VehicleLog {
     std::vector<std::array<double, 4>> quat_xyzw;   // body -> world, scalar last
     std::vector<std::array<double, 4>> pwm;         // 0..1
     std::vector<double> vbat_v;
+    std::vector<double> faz_g;       // binary logs with ctrlFa.Faz: the onboard network's Fa_z [gram-force, z up]
     std::size_t damaged_blocks = 0;  // binary: blocks whose checksum failed, skipped
 };
 

@@ -1,6 +1,7 @@
 // Flight folders (downwash-flight/1): round trip, and every rule enforced with file:line.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -140,4 +141,47 @@ TEST(FlightFolder, EveryRuleIsEnforcedWithFileAndLine) {
     std::filesystem::remove(dir + "/poses.csv");
     EXPECT_NE(error_reading(dir).find("poses.csv: no such file"), std::string::npos);
     EXPECT_NE(error_reading(d.file("nothing")).find("not a flight folder"), std::string::npos);
+}
+
+// Issue 41: reference.csv, another model's prediction of the wrench (../shared/FLIGHT_FORMAT.md):
+// round trip with empty cells where the model predicts nothing, and every rule located.
+TEST(FlightFolder, AReferencePredictionRoundTripsWithEmptyCellsAndItsRulesAreLocated) {
+    dw::test::TempDir d;
+    Flight f = sample_flight();
+    f.meta.reference = ReferenceInfo{"an onboard network", {"f_d"}};
+    for (const auto& s : f.wrench) f.reference.push_back({s.t, {NAN, NAN, 0.5 * s.w[2], NAN, NAN, NAN}});
+    write_flight(f, d.file("f"));
+    const std::string text = dw::read_file(d.file("f/reference.csv"));
+    EXPECT_EQ(text.substr(0, text.find('\n', text.find('\n') + 1)),
+              "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0.000000,,,0.750000,,,");
+    const Flight g = read_flight(d.file("f"));
+    ASSERT_TRUE(g.meta.reference.has_value());
+    EXPECT_EQ(g.meta.reference->source, "an onboard network");
+    ASSERT_EQ(g.reference.size(), f.wrench.size());
+    EXPECT_DOUBLE_EQ(g.reference[3].w[2], 0.75);
+    EXPECT_TRUE(std::isnan(g.reference[3].w[0]));
+    write_flight(g, d.file("g"));
+    EXPECT_EQ(dw::read_file(d.file("g/reference.csv")), text);
+    EXPECT_EQ(dw::read_file(d.file("g/meta.json")), dw::read_file(d.file("f/meta.json")));
+
+    const std::string dir = d.file("f");
+    write(dir + "/reference.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,,,1,,,\n0.1,2,,1,,,\n");
+    EXPECT_NE(error_reading(dir).find("reference.csv:3: column f_n: '2' where the reference predicts nothing"),
+              std::string::npos)
+        << error_reading(dir);
+    write(dir + "/reference.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,,,1,,,\n0.1,,,,,,\n");
+    EXPECT_NE(error_reading(dir).find("reference.csv:3: column f_d: '' is not a number"), std::string::npos)
+        << error_reading(dir);
+    std::filesystem::remove(dir + "/reference.csv");
+    EXPECT_NE(error_reading(dir).find("reference.csv"), std::string::npos) << "meta.json names a missing file";
+    write_flight(sample_flight(), d.file("h"));
+    write(d.file("h/reference.csv"), "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,,,1,,,\n");
+    EXPECT_NE(error_reading(d.file("h")).find("field 'reference': missing, but reference.csv is there"),
+              std::string::npos)
+        << error_reading(d.file("h"));
+    std::string meta = dw::read_file(d.file("h/meta.json"));
+    meta.insert(meta.find('{') + 1, R"("reference": {"source": "x", "axes": ["f_z"]},)");
+    write(d.file("h/meta.json"), meta);
+    EXPECT_NE(error_reading(d.file("h")).find("field 'reference.axes': 'f_z' is not one of"), std::string::npos)
+        << error_reading(d.file("h"));
 }

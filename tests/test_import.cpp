@@ -3,6 +3,7 @@
 // bad columns are one located error, every shared trial becomes a valid flight folder.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -166,4 +167,28 @@ TEST(Import, ACollectionIsListedTrialByTrialAndEachTrialKeepsItsExperimentInItsL
     dw::test::TempDir d;
     EXPECT_THROW(collection_trials(d.file("none")), dw::InputError);
     EXPECT_THROW(collection_trials(d.file("")), dw::InputError);  // a folder without trials
+}
+
+// Issue 41: the authors' onboard network (ctrlFa.Faz) comes along as the flight's reference
+// prediction of f_d — from the binary logs, which carry it; it follows the measured downwash.
+TEST(Import, TheOnboardNetworksPredictionBecomesTheReference) {
+    REQUIRE_SHARED_DATA();
+    const auto f = neural_swarm_importer().import(trial({"swap_ss/cf50_01", "swap_ss/cf51_01"}), {});
+    ASSERT_TRUE(f.meta.reference.has_value());
+    EXPECT_EQ(f.meta.reference->axes, std::vector<std::string>{"f_d"});
+    ASSERT_EQ(f.reference.size(), f.wrench.size());
+    double sxy = 0, sxx = 0, syy = 0, mx = 0, my = 0;
+    for (std::size_t i = 0; i < f.wrench.size(); ++i) mx += f.wrench[i].w[2], my += f.reference[i].w[2];
+    mx /= static_cast<double>(f.wrench.size()), my /= static_cast<double>(f.wrench.size());
+    for (std::size_t i = 0; i < f.wrench.size(); ++i) {
+        const double x = f.wrench[i].w[2] - mx, y = f.reference[i].w[2] - my;
+        sxy += x * y, sxx += x * x, syy += y * y;
+        EXPECT_TRUE(std::isnan(f.reference[i].w[0]));
+    }
+    EXPECT_GT(sxy / std::sqrt(sxx * syy), 0.6) << "the network predicts the downwash the residual measures";
+    const auto csv = neural_swarm_importer().import(trial({"swap_ss/cf50_01.csv", "swap_ss/cf51_01.csv"}), {});
+    EXPECT_FALSE(csv.meta.reference.has_value()) << "the CSVs do not carry it";
+    dw::test::TempDir d;
+    dw::flight::write_flight(f, d.file("f"));
+    EXPECT_EQ(dw::flight::read_flight(d.file("f")).reference.size(), f.reference.size());
 }
