@@ -73,6 +73,30 @@ Split split_by_leg(const Dataset& d, int period, int test_phase, int val_phase) 
     return s;
 }
 
+namespace {
+
+// reference.csv read at increasing times: linear between its rows, none outside them.
+class ReferenceCursor {
+public:
+    explicit ReferenceCursor(const std::vector<flight::WrenchSample>& r) : r_(r) {}
+    Wrench6 at(double t) {
+        if (r_.empty() || t < r_.front().t || t > r_.back().t) return kNoPrediction;
+        while (i_ + 1 < r_.size() && r_[i_ + 1].t < t) ++i_;
+        const auto& a = r_[i_];
+        const auto& b = r_[std::min(i_ + 1, r_.size() - 1)];
+        const double w = b.t > a.t ? (t - a.t) / (b.t - a.t) : 0.0;
+        Wrench6 out;
+        for (std::size_t k = 0; k < 6; ++k) out[k] = a.w[k] + w * (b.w[k] - a.w[k]);
+        return out;
+    }
+
+private:
+    const std::vector<flight::WrenchSample>& r_;
+    std::size_t i_ = 0;
+};
+
+}  // namespace
+
 Dataset from_flight(const flight::Flight& f, const std::string& name, const DatasetOptions& o) {
     const int sufferer = f.find_body(f.meta.sufferer);
     if (sufferer < 0) throw InputError(log::cat(name, "/poses.csv: the sufferer '", f.meta.sufferer, "' has no poses"));
@@ -101,13 +125,16 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
     src.flying = !f.meta.stand_height_m.has_value();
     src.blocks = blocks.kind;
     if (!f.meta.moments_measured) src.measured = {true, true, true, false, false, false};
+    if (f.meta.reference) src.reference = f.meta.reference->source;
     d.sources.push_back(src);
+    ReferenceCursor reference(f.reference);
     std::size_t li = 0;
     for (const auto& w : f.wrench) {
         if (w.t < st.t.front() || w.t > st.t.back()) continue;
         Sample s;
         s.t = w.t;
         s.y = w.w;
+        s.recorded_prediction = reference.at(w.t);
         const auto ps = st.position_at(w.t);
         const auto vs = st.velocity_at(w.t);
         s.height = -ps[2];

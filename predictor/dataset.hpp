@@ -7,6 +7,7 @@
 // time (flight::find_blocks) — so splits are by block (samples are autocorrelated; random splits
 // leak), never by random sample.
 #include <array>
+#include <limits>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -23,6 +24,12 @@ inline constexpr int kStateSize = 6;  // dn de dd dvn dve dvd
 using RelState = std::array<double, kStateSize>;
 using Wrench6 = std::array<double, 6>;  // f_n f_e f_d m_roll m_pitch m_yaw
 
+// No prediction: a model that cannot say anything about a sample (the reference where a flight has none).
+inline constexpr Wrench6 kNoPrediction{
+    std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
+    std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
+    std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+
 struct Sample {
     double t = 0;                                    // stand clock [s]
     int k = 0;                                       // neighbours present
@@ -33,6 +40,7 @@ struct Sample {
     int source = 0;                                  // index into Dataset::sources
     std::array<std::uint8_t, kMaxNeighbours> who{};  // which of the source's neighbours x[j] is
     double height = 0;                               // the sufferer above the floor [m]
+    Wrench6 recorded_prediction = kNoPrediction;     // the flight's reference.csv at t (NaN: none)
     std::span<const RelState> neighbours() const { return {x.data(), static_cast<std::size_t>(k)}; }
     // Where the formation is relative to the sufferer: N and E of the neighbours' centroid, and
     // the height of the lowest neighbour above the sufferer (the formation's reference altitude:
@@ -49,6 +57,7 @@ struct Source {
     bool flying = false;                                               // no load stand: the sufferer's height varies
     std::array<bool, 6> measured{true, true, true, true, true, true};  // columns carrying a measurement
     flight::BlockKind blocks = flight::BlockKind::legs;
+    std::string reference;  // what reference.csv's model is (meta.json), "" when the flight has none
 };
 
 struct Dataset {

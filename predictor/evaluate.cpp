@@ -238,4 +238,26 @@ void require_samples(const Dataset& all, const Dataset& part, const std::string&
                               kSplitPeriod, " blocks (legs, encounters or stretches of time)"));
 }
 
+std::string references_of(const Dataset& test, std::vector<std::string>& missing) {
+    std::vector<bool> used(test.sources.size(), false);
+    for (const auto& s : test.samples) used[static_cast<std::size_t>(s.source)] = true;
+    std::vector<std::string> words;
+    for (std::size_t i = 0; i < test.sources.size(); ++i) {
+        if (!used[i]) continue;
+        const auto& r = test.sources[i].reference;
+        if (r.empty()) missing.push_back(test.sources[i].name);
+        else if (std::find(words.begin(), words.end(), r) == words.end()) words.push_back(r);
+    }
+    return missing.empty() ? log::join(words, "; ") : std::string();
+}
+
+std::string reference_note(const std::string& references, const std::vector<std::string>& missing) {
+    if (!references.empty())
+        return log::cat("The row \"reference\" is the prediction recorded with the flights (reference.csv): ",
+                        references, ", on the same held-out samples.\n\n");
+    if (missing.empty()) return "";
+    return log::cat("No reference row: ", missing.size(), " flight(s) carry no reference.csv (", log::join(missing),
+                    ").\n\n");
+}
+
 }  // namespace dw::predictor

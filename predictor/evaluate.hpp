@@ -61,6 +61,12 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
 std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptions& o);
 std::string to_csv(const std::vector<ComparisonRow>& rows, bool header = true);
 
+// The reference row (ReferenceModel) is compared only when every held-out sample's flight carries
+// a reference (reference.csv): then the models' words, else "" with the flights lacking one in
+// `missing`. What the Markdown says of it, either way.
+std::string references_of(const Dataset& test, std::vector<std::string>& missing);
+std::string reference_note(const std::string& references, const std::vector<std::string>& missing);
+
 // Throws dw::InputError saying why when `part` (of `all`) holds no sample: never an empty table.
 void require_samples(const Dataset& all, const Dataset& part, const std::string& what);
 

@@ -204,8 +204,15 @@ struct CompareCommand {
         const Dataset all = load_all(data);
         const Dataset test = split_by_leg(all).test;
         require_samples(all, test, "held-out");
-        const auto rows = compare(raw(ms), test, arena);
-        dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + to_markdown(rows, arena));
+        auto models = raw(ms);
+        const dw::predictor::ReferenceModel reference;
+        std::vector<std::string> missing;
+        const std::string references = dw::predictor::references_of(test, missing);
+        if (!references.empty()) models.push_back(&reference);
+        const auto rows = compare(models, test, arena);
+        dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" +
+                                                  dw::predictor::reference_note(references, missing) +
+                                                  to_markdown(rows, arena));
         dw::write_file(out_dir + "/table.csv", to_csv(rows));
         std::cout << to_markdown(rows, arena);
         return 0;
@@ -223,6 +230,8 @@ struct RealCommand {
             "recorded flights without legs (e.g. dw-import's): train every model, compare with the physics "
             "on held-out encounters, draw f_d by relative position");
         cmd->add_option("--data", ro.data, "flight folders or .mcap recordings")->required();
+        cmd->add_option("--unseen", ro.unseen,
+                        "flights (of --data) never trained on: every block held out (leave-trials-out)");
         cmd->add_option("--physics", physics_path,
                         "physics configuration (e.g. config/physics.crazyflie.yaml); vehicles come from each flight");
         cmd->add_option("--out", ro.out_dir, "output folder (models, table.md, table.csv, map_f_d.png)")->required();

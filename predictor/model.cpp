@@ -309,4 +309,9 @@ std::unique_ptr<ForceModel> load_model(const std::string& path) {
     return std::make_unique<LearntModel>(LearntModel::load(path));
 }
 
+const std::string& ReferenceModel::name() const {
+    static const std::string kName = "reference";
+    return kName;
+}
+
 }  // namespace dw::predictor

@@ -46,6 +46,39 @@ public:
     }
 };
 
+// Another model's prediction recorded with the flight (reference.csv, e.g. the vehicle's own
+// onboard network), read off each sample; it predicts nothing where a flight has none.
+class ReferenceModel final : public ForceModel {
+public:
+    const std::string& name() const override;
+    Wrench6 predict(std::span<const RelState>) const override { return kNoPrediction; }
+    Wrench6 predict(const Sample& s, const Source&) const override { return s.recorded_prediction; }
+};
+
+// A model plus another's correction (physics-informed: the learnt model trained on what the
+// physics leaves, recorded less physics). Named "<base>+<correction>".
+class CorrectedModel final : public ForceModel {
+public:
+    CorrectedModel(const ForceModel& base, const ForceModel& correction)
+        : base_(base), correction_(correction), name_(base.name() + "+" + correction.name()) {}
+    const std::string& name() const override { return name_; }
+    Wrench6 predict(std::span<const RelState> neighbours) const override {
+        return sum(base_.predict(neighbours), correction_.predict(neighbours));
+    }
+    Wrench6 predict(const Sample& s, const Source& source) const override {
+        return sum(base_.predict(s, source), correction_.predict(s, source));
+    }
+
+private:
+    static Wrench6 sum(Wrench6 a, const Wrench6& b) {
+        for (std::size_t k = 0; k < a.size(); ++k) a[k] += b[k];
+        return a;
+    }
+    const ForceModel& base_;
+    const ForceModel& correction_;
+    std::string name_;
+};
+
 // A dense layer: out = act(W in + b). Activation "silu" or "linear".
 struct Layer {
     Eigen::MatrixXf w;

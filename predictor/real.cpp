@@ -1,5 +1,6 @@
 #include "predictor/real.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -19,6 +20,8 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kMapCell_m = 0.05;
+// The physics-informed models' files: models/<kind>_on_physics.json, corrections to add to the physics.
+constexpr const char* kOnPhysics = "_on_physics";
 
 // Where the horizontally nearest neighbour is: horizontal offset and height above the sufferer.
 std::array<double, 2> nearest(const Sample& s) {
@@ -58,12 +61,35 @@ void draw_maps(const std::vector<const ForceModel*>& models, const Dataset& test
                        "horizontal offset [m]", "height above the sufferer [m]", "f_d [N]", png);
 }
 
-std::string describe_split(const Dataset& all) {
+// Leave-trials-out: every block of the unseen flights held out; the seen flights' blocks train,
+// block % 5 == 1 validating.
+Split split_by_trial(const Dataset& seen, const Dataset& unseen) {
+    Split by_block = split_by_leg(seen);
+    by_block.train.append(by_block.test);
+    return {by_block.train, by_block.validation, unseen.legs_where([](int) { return true; })};
+}
+
+// What the physics leaves: each sample's recorded wrench less the physics' prediction (the
+// physics-informed models' target).
+Dataset less_physics(const Dataset& d, const ForceModel& physics) {
+    Dataset out = d;
+    for (auto& s : out.samples) {
+        const auto p = predict(physics, d, s);
+        for (std::size_t k = 0; k < 6; ++k) s.y[k] -= std::isfinite(p[k]) ? p[k] : 0.0;
+    }
+    return out;
+}
+
+std::string describe_split(const Dataset& all, const std::vector<std::string>& unseen) {
     std::size_t by[3] = {0, 0, 0};
     for (const auto& s : all.sources) ++by[static_cast<int>(s.blocks)];
-    return log::cat("blocks by block % ", kSplitPeriod,
-                    " (== 0 held out, == 1 validation, else training); flights split by legs: ", by[0],
-                    ", by encounters: ", by[1], ", by time: ", by[2]);
+    const std::string blocks =
+        log::cat("flights split by legs: ", by[0], ", by encounters: ", by[1], ", by time: ", by[2]);
+    if (!unseen.empty())
+        return log::cat("leave-trials-out: every block of ", unseen.size(), " unseen flight(s) held out (",
+                        log::join(unseen), "); the others' blocks train, block % ", kSplitPeriod, " == 1 validating; ",
+                        blocks);
+    return log::cat("blocks by block % ", kSplitPeriod, " (== 0 held out, == 1 validation, else training); ", blocks);
 }
 
 }  // namespace
@@ -73,14 +99,19 @@ RealResult run_real(const RealOptions& o) {
         if (o.progress) o.progress(line);
     };
     const fs::path out(o.out_dir);
-    Dataset all;
+    Dataset all, seen, unseen;
     DatasetOptions dopt;
     dopt.physics = o.physics;
     for (const auto& p : o.data) {
         throw_if_stopped(o.stop, "reading the flights");
-        all.append(load_dataset(p, dopt));
+        const Dataset d = load_dataset(p, dopt);
+        all.append(d);
+        (std::find(o.unseen.begin(), o.unseen.end(), p) == o.unseen.end() ? seen : unseen).append(d);
     }
-    const Split split = split_by_leg(all);
+    for (const auto& u : o.unseen)
+        if (std::find(o.data.begin(), o.data.end(), u) == o.data.end())
+            throw InputError(log::cat("--unseen ", u, ": not among --data (list every flight in --data)"));
+    const Split split = o.unseen.empty() ? split_by_leg(all) : split_by_trial(seen, unseen);
     require_samples(all, split.test, "held-out");
     require_samples(all, split.train, "training");
     require_samples(all, split.validation, "validation");
@@ -94,12 +125,12 @@ RealResult run_real(const RealOptions& o) {
                          .max_epochs = o.max_epochs,
                          .threads = o.threads,
                          .members = o.members,
-                         .split = describe_split(all),
+                         .split = describe_split(all, o.unseen),
                          .progress = o.progress,
                          .stop = o.stop};
     auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va,
-                     const LearntModel* baseline = nullptr) {
-        return train_and_save(kind, tr, va, plan, (out / "models" / (kind + ".json")).string(), baseline);
+                     const LearntModel* baseline = nullptr, const std::string& file_suffix = "") {
+        return train_and_save(kind, tr, va, plan, (out / "models" / (kind + file_suffix + ".json")).string(), baseline);
     };
     const PhysicsModel physics(o.physics);
     std::vector<const ForceModel*> models{&physics};
@@ -116,6 +147,18 @@ RealResult run_real(const RealOptions& o) {
     const auto deep = train("deep_sets", split.train, split.validation, linear.get());
     models.push_back(linear.get());
     models.push_back(deep.get());
+    // Physics-informed: the same two trained on what the (calibrated) physics leaves, serving physics + correction.
+    say("training on what the physics leaves");
+    const Dataset left_tr = less_physics(split.train, physics), left_va = less_physics(split.validation, physics);
+    const auto linear_c = train("learnt_linear", left_tr, left_va, nullptr, kOnPhysics);
+    const auto deep_c = train("deep_sets", left_tr, left_va, linear_c.get(), kOnPhysics);
+    const CorrectedModel linear_p(physics, *linear_c), deep_p(physics, *deep_c);
+    models.push_back(&linear_p);
+    models.push_back(&deep_p);
+    const ReferenceModel reference;
+    std::vector<std::string> missing;
+    const std::string references = references_of(split.test, missing);
+    if (!references.empty()) models.push_back(&reference);
     write_file((out / "models" / "physics.yaml").string(), physics::to_yaml(o.physics));
 
     say("comparing on the held-out blocks");
@@ -126,10 +169,13 @@ RealResult run_real(const RealOptions& o) {
     for (const auto& s : all.sources)
         md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
                        flight::to_string(s.blocks), ")\n");
-    md += log::cat("\nSplit: ", describe_split(all), ". Training ", r.train, ", validation ", r.validation,
+    md += log::cat("\nSplit: ", describe_split(all, o.unseen), ". Training ", r.train, ", validation ", r.validation,
                    ", held out ", r.test, " samples. The naive linear model is trained on two-vehicle flights only",
                    r.naive ? "" : " (none here: not trained)",
-                   "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters.\n\n");
+                   "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters. "
+                   "physics+learnt_linear and physics+deep_sets are the physics plus those models trained on what it "
+                   "leaves (recorded − physics; their files models/*_on_physics.json are the corrections alone).\n\n");
+    md += reference_note(references, missing);
     md += to_markdown(r.table, {});
     md += "\n![f_d by relative position](map_f_d.png)\n";
     r.markdown_path = (out / "table.md").string();

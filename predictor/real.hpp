@@ -18,7 +18,10 @@
 namespace dw::predictor {
 
 struct RealOptions {
-    std::vector<std::string> data;   // flight folders or .mcap recordings
+    std::vector<std::string> data;  // flight folders or .mcap recordings
+    // Trials never seen in training (leave-trials-out): every block of these flights is held out,
+    // the others' blocks train (block % 5 == 1 validates). Empty: block % 5 == 0 of every flight.
+    std::vector<std::string> unseen;
     physics::PhysicsConfig physics;  // the physics model, and parameters for bodies a flight does not describe
     std::string out_dir;
     std::uint64_t seed = 1;

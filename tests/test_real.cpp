@@ -13,6 +13,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "flight/flight.hpp"
+#include "analysis/calibrate.hpp"
 #include "importer/neural_swarm.hpp"
 #include "physics/bodies.hpp"
 #include "predictor/real.hpp"
@@ -202,7 +203,10 @@ TEST(RealFlights, ThePredictorComparesEveryModelOnHeldOutEncounters) {
     ASSERT_EQ(by.size(), 2u);  // the two-vehicle flights and the three-vehicle swap
     for (const auto& [formation, models] : by) {
         SCOPED_TRACE(formation);
-        ASSERT_EQ(models.size(), 4u);
+        // physics, naive linear, learnt linear, Deep Sets, and the last two on the physics; no
+        // reference row: the CSV logs of these trials do not carry the onboard network's prediction.
+        ASSERT_EQ(models.size(), 6u);
+        EXPECT_FALSE(models.count("reference"));
         for (const auto& [name, row] : models) {
             EXPECT_TRUE(std::isfinite(row->rmse[2])) << name;
             EXPECT_TRUE(std::isfinite(row->peak_error)) << name;
@@ -216,6 +220,7 @@ TEST(RealFlights, ThePredictorComparesEveryModelOnHeldOutEncounters) {
     EXPECT_TRUE(fs::exists(r.map_path));
     const auto md = dw::read_file(r.markdown_path, "table");
     EXPECT_NE(md.find("Peak f_d error"), std::string::npos);
+    EXPECT_NE(md.find("No reference row"), std::string::npos);
     EXPECT_EQ(md.find("nan"), std::string::npos);
 }
 
@@ -261,4 +266,62 @@ TEST(RealFlights, ConcealedEffectsAreRecoveredOnTopOfWhatEachFlightShows) {
     for (const auto& [name, flights] : recovered) EXPECT_GE(flights, 1) << name << " is recovered on neither flight";
     EXPECT_TRUE(r.pass) << dw::read_file(r.table_path);
     EXPECT_TRUE(fs::exists(r.table_path));
+}
+
+// Issue 41: trained on some trials and tested on trials never seen (one per vehicle mix that has
+// two or more), against the physics calibrated without them: the learnt models on the physics
+// beat the authors' onboard network (the binary logs' ctrlFa.Faz, the "reference" row) on the
+// same samples — peak error everywhere, RMSE with one neighbour (with two it is a tie) — and on the
+// three-vehicle trials Deep Sets on the physics is no worse than the naive sum. Small size (40 epochs, one Deep Sets training, a short calibration); docs/REAL.md
+// has the full-size table.
+TEST(RealFlights, OnUnseenTrialsTheModelsOnThePhysicsBeatTheOnboardNetwork) {
+    REQUIRE_SHARED_DATA();
+    dw::test::TempDir d;
+    const std::vector<std::string> unseen_names{"swap_ss_03", "swap_sl_04", "swap_ll_01", "swap_sss_01", "swap_ssl_00"};
+    dw::predictor::RealOptions o;
+    dw::analysis::CalibrateOptions c;
+    for (const auto& t : dw::importer::collection_trials(dw::test::kNeuralSwarm)) {
+        if (t.logs.size() < 2) continue;
+        const std::string dir = d.file(t.name);
+        dw::flight::write_flight(dw::importer::neural_swarm_importer().import(t.logs, {}), dir);
+        o.data.push_back(dir);
+        const bool unseen = std::find(unseen_names.begin(), unseen_names.end(), t.name) != unseen_names.end();
+        (unseen ? o.unseen : c.flights).push_back(dir);
+    }
+    ASSERT_EQ(o.unseen.size(), unseen_names.size());
+    c.physics = dw::physics::load_physics(dw::test::crazyflie_uncalibrated_physics());
+    c.out_dir = d.file("calibration");
+    c.jobs = 1;
+    c.stride = 4;
+    c.max_iterations = 10;
+    c.fold_iterations = 1;
+    o.physics = dw::analysis::calibrate(c).calibrated;  // never saw the unseen trials
+    o.out_dir = d.file("real");
+    o.max_epochs = 40;
+    o.members = 1;
+    const auto r = dw::predictor::run_real(o);
+    std::map<std::string, std::map<std::string, const dw::predictor::ComparisonRow*>> by;
+    for (const auto& row : r.table) by[row.formation][row.model] = &row;
+    ASSERT_EQ(by.size(), 2u);
+    for (const auto& [formation, models] : by) {
+        SCOPED_TRACE(formation);
+        ASSERT_TRUE(models.count("reference") && models.count("physics+deep_sets"));
+        const auto& ref = *models.at("reference");
+        const auto& best = *std::min_element(models.begin(), models.end(), [](const auto& a, const auto& b) {
+                                const bool la = a.first.starts_with("physics+"), lb = b.first.starts_with("physics+");
+                                return la != lb ? la : a.second->rmse[2] < b.second->rmse[2];
+                            })->second;
+        EXPECT_LT(best.peak_error, ref.peak_error) << best.model;
+        if (formation.find("K=2") == std::string::npos) {
+            EXPECT_LT(best.rmse[2], ref.rmse[2]) << best.model;
+        } else {
+            // Three vehicles: on RMSE a tie with the onboard network (full size 0.0189 against
+            // 0.0191 N, this size 0.0200): not a win, and docs/REAL.md says so; it must not lose by more.
+            EXPECT_LT(best.rmse[2], 1.1 * ref.rmse[2]) << best.model;
+            EXPECT_LE(models.at("physics+deep_sets")->rmse[2], models.at("naive_linear")->rmse[2]);
+        }
+    }
+    const auto md = dw::read_file(r.markdown_path, "table");
+    EXPECT_NE(md.find("onboard interaction network"), std::string::npos);
+    EXPECT_NE(md.find("leave-trials-out"), std::string::npos);
 }
