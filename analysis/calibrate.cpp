@@ -377,8 +377,9 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     const auto sd = jackknife_sd(replicates);
     const double t = t975(static_cast<int>(replicates.size()) - 1);
     for (std::size_t p = 0; p < x.size(); ++p)
-        R.parameters.push_back(
-            {cal.class_of(p), cal.knob(p).name, cal.knob(p).unit, x0[p], x[p], x[p] - t * sd[p], x[p] + t * sd[p]});
+        R.parameters.push_back({cal.class_of(p), cal.knob(p).name, cal.knob(p).unit, x0[p], x[p],
+                                std::max(x[p] - t * sd[p], cal.knob(p).lower),  // within the parameter's bounds
+                                std::min(x[p] + t * sd[p], cal.knob(p).upper)});
     R.calibrated =
         with_provenance(cal.config_of(x), o.physics,
                         log::cat("on ", cal.flights().size(), " flights of ", cal.trials().size(), " trials"));

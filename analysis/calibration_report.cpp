@@ -85,7 +85,7 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
     std::ostringstream md;
     md << "# Calibration\n\n"
        << r.calibrated.calibration << " (" << fixed(r.seconds, 1) << " s).\n\n"
-       << "## Parameters (95 % intervals: the leave-one-trial-out jackknife)\n\n"
+       << "## Parameters (95 % intervals: the leave-one-trial-out jackknife, within each parameter's bounds)\n\n"
        << "| class | parameter | start | calibrated | 95 % interval |\n|---|---|---|---|---|\n";
     for (const auto& p : r.parameters)
         md << "| " << p.vehicle_class << " | " << p.name << (p.unit[0] ? log::cat(" [", p.unit, "]") : "") << " | "
