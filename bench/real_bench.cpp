@@ -1,6 +1,8 @@
 // dw-bench-real: real flights. The import rate (MB of log per second, CSV and binary) beside `cat`
 // of the same files in the same run, and a full explain (every candidate, cross-validation by
-// encounter, report and figures) of the 64 s random walk beside one replay pass of it.
+// encounter, report and figures) of the 64 s random walk beside one replay pass of it; and the
+// calibration of every trial of two vehicles or more (on 2 cores and on one) beside one replay
+// pass of every flight.
 //   build/bin/dw-bench-real [--data DIR] [--physics FILE]
 #include <unistd.h>
 
@@ -10,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "analysis/calibrate.hpp"
 #include "analysis/explain.hpp"
 #include "core/cli.hpp"
 #include "core/errors.hpp"
@@ -32,6 +35,32 @@ double median_of(int runs, F&& f) {
     }
     std::sort(t.begin(), t.end());
     return t[t.size() / 2];
+}
+
+// Every trial of two vehicles or more imported into `dir`, then calibrated as the README does.
+void bench_calibration(const std::string& data, const fs::path& dir) {
+    dw::analysis::CalibrateOptions o;
+    for (const auto& t : dw::importer::collection_trials(data)) {
+        if (t.logs.size() < 2) continue;
+        const std::string folder = (dir / t.name).string();
+        dw::flight::write_flight(dw::importer::neural_swarm_importer().import(t.logs, {}), folder);
+        o.flights.push_back(folder);
+    }
+    o.physics = dw::physics::load_physics(std::string(DW_SOURCE_DIR) + "/config/physics.crazyflie-uncalibrated.yaml");
+    auto t0 = Clock::now();
+    for (const auto& f : o.flights)
+        (void)dw::analysis::Replay(dw::flight::read_flight(f), o.physics).recorded(o.physics);
+    const double replay_s = secs(t0);
+    std::printf("\n| step (%zu trials, the README's calibrate) | seconds |\n|---|---|\n", o.flights.size());
+    std::printf("| read and replay every flight once (anchor) | %.2f |\n", replay_s);
+    for (int jobs : {2, 1}) {
+        o.jobs = jobs;
+        o.out_dir = (dir / ("calibration-" + std::to_string(jobs))).string();
+        t0 = Clock::now();
+        const auto r = dw::analysis::calibrate(o);
+        std::printf("| dw-explain calibrate, --jobs %d (%zu parameters, each trial left out) | **%.1f** |\n", jobs,
+                    r.parameters.size(), secs(t0));
+    }
 }
 
 }  // namespace
@@ -101,6 +130,8 @@ int main(int argc, char** argv) {
         std::printf("| one replay of it through the physics (anchor) | %.2f | – |\n", replay_s);
         std::printf("| full dw-explain + report (%zu blocks by %s; found: %s) | **%.1f** | <= 30 |\n", r.legs,
                     dw::flight::to_string(r.blocks), by.empty() ? "nothing" : by.c_str(), explain_s);
+        bench_calibration(data, dir);
+        fs::remove_all(dir);
         return 0;
     });
 }
