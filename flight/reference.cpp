@@ -40,7 +40,8 @@ std::vector<WrenchSample> read_reference_csv(const std::string& path, const Refe
             }
         }
         if (!out.empty() && s.t < out.back().t)
-            csv.fail(csv.line(), log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
+            csv.fail(csv.line(),
+                     log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
         out.push_back(s);
     }
     if (out.empty()) csv.fail(1, "no samples");
