@@ -122,8 +122,14 @@ public:
         return std::nullopt;
     }
 
+    // No NAV_LAND to a vehicle PX4 reports disarmed: PX4 switches a disarmed vehicle on the ground
+    // into AUTO_LAND too (seen on a real PX4 after a refused arm). A vehicle never heard from gets
+    // it: landing is the safe side of not knowing.
     void land() override {
-        for (auto& v : vehicles_) command(v, px4::kCmdNavLand, 0.0f, 0.0f);
+        for (auto& v : vehicles_) {
+            const StatusSeen s = status_of(v);
+            if (s.seen_ns == 0 || s.arming == px4::kArmed) command(v, px4::kCmdNavLand, 0.0f, 0.0f);
+        }
     }
 
 private:

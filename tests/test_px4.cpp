@@ -357,6 +357,9 @@ TEST(Px4Refusals, ARefusedArmAbortsTheExperimentBeforeTakeOff) {
         << e.reason();
     EXPECT_EQ(e.legs_flown(), 0);
     EXPECT_FALSE(lab.vehicles[0]->report().armed);
+    // Issue 42, problem 6: no NAV_LAND to a vehicle that never armed (PX4, and its double, would
+    // put it in AUTO_LAND on the ground).
+    EXPECT_NE(lab.vehicles[0]->report().nav_state, px4::kNavAutoLand);
 }
 
 // PX4 1.14's dds_topics.yaml has no vehicle_command_ack (read from its release sources:
