@@ -14,6 +14,7 @@
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "core/text.hpp"
 #include "flight/csv.hpp"
 #include "flight/reference.hpp"
 
@@ -24,6 +25,8 @@ using csv::Row;
 using nlohmann::json;
 
 namespace {
+constexpr int kMaxJsonDepth = 64;  // meta.json nests 3 deep; 100 000 crashed a JSON library's destructor
+constexpr Range kLegNumberRange{0, 1e6};
 // The meta.json keys this library reads; every other key is kept as it was (extra_json).
 constexpr std::array<const char*, 9> kMetaKeys = {"format",        "sufferer",         "neighbours",
                                                   "formation",     "vehicles",         "stand",
@@ -75,10 +78,13 @@ class MetaReader {
 public:
     explicit MetaReader(const fs::path& path) : file_(path.string()) {
         const std::string text = slurp(path);
+        require_nesting_at_most(text, kMaxJsonDepth, file_);
         try {
             j_ = json::parse(text);
         } catch (const json::parse_error& e) {
             throw InputError(log::cat(file_, ":", json_location(text, e.byte), ": not valid JSON"));
+        } catch (const json::exception& e) {  // a number past a double's range (1e400), and the like
+            throw InputError(log::cat(file_, ": not valid JSON: ", quote_bytes(e.what(), kQuotedBytes)));
         }
         if (!j_.is_object()) fail("(top)", "expected a JSON object");
         if (!j_.contains("format") || j_["format"] != kFormat) {
@@ -133,19 +139,22 @@ private:
             const std::string key = "vehicles." + name;
             if (!v.is_object()) fail(key, "not an object");
             VehicleInfo info;
-            auto num = [&](const char* field, double& out) {
+            auto num = [&](const char* field, double& out, const Range& range) {
                 if (!v.contains(field)) return;
                 if (!v[field].is_number()) fail(key + "." + field, "not a number");
                 out = v[field].get<double>();
-                if (!(std::isfinite(out) && out > 0)) fail(key + "." + field, "must be a positive finite number");
+                if (!range.contains(out)) fail(key + "." + field, range_problem(out, range));
             };
-            num("mass_kg", info.mass_kg);
-            num("prop_radius_m", info.prop_radius_m);
-            num("motor_distance_m", info.motor_distance_m);
-            if (v.contains("rotors")) {
-                if (!v["rotors"].is_number_integer() || v["rotors"].get<int>() < 1)
-                    fail(key + ".rotors", "not a positive integer");
-                info.rotors = v["rotors"].get<int>();
+            num("mass_kg", info.mass_kg, kVehicleMassRange);
+            num("prop_radius_m", info.prop_radius_m, kPropRadiusRange);
+            num("motor_distance_m", info.motor_distance_m, kMotorDistanceRange);
+            if (v.contains("rotors")) {  // read wide: 2^32 + 1 must not wrap to 1
+                const auto& r = v["rotors"];
+                if (!r.is_number_integer()) fail(key + ".rotors", "not an integer");
+                const double n = r.is_number_unsigned() ? static_cast<double>(r.get<std::uint64_t>())
+                                                        : static_cast<double>(r.get<std::int64_t>());
+                if (!kRotorsRange.contains(n)) fail(key + ".rotors", range_problem(n, kRotorsRange));
+                info.rotors = static_cast<int>(n);
             }
             m.vehicles[name] = info;
         }
@@ -261,8 +270,9 @@ Flight read_flight(const std::string& dir) {
         while (csv.next(row)) {
             Leg l;
             const double id = csv.number(row[0], 0);
-            if (id != std::floor(id) || id < 0)
-                csv.fail(csv.line(), log::cat("column leg: '", row[0], "' is not a leg number"));
+            if (id != std::floor(id) || !kLegNumberRange.contains(id))
+                csv.fail(csv.line(),
+                         log::cat("column leg: '", row[0], "' is not a leg number (", kLegNumberRange.describe(), ")"));
             l.leg = static_cast<int>(id);
             l.t_start = csv.number(row[1], 1);
             l.t_end = csv.number(row[2], 2);

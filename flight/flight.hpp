@@ -47,6 +47,13 @@ struct Leg {
 
 // A vehicle's parameters as meta.json gives them; the physics takes them as they are
 // (physics::VehicleParams is this type).
+// Each vehicle parameter's range, wherever it is read (meta.json, the physics configuration).
+inline constexpr int kMaxRotors = 16;  // the physics holds a planform's rotors in arrays this long
+inline constexpr Range kVehicleMassRange{0.01, 100, "kg"};
+inline constexpr Range kRotorsRange{1, kMaxRotors};
+inline constexpr Range kPropRadiusRange{0.005, 1.0, "m"};
+inline constexpr Range kMotorDistanceRange{0.02, 5.0, "m"};
+
 struct VehicleInfo {
     double mass_kg = 0.7;
     int rotors = 4;

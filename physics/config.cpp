@@ -29,10 +29,10 @@ namespace {
 constexpr const char* kFormat = "downwash-physics/1";
 
 void vehicle_keys(KeyVisitor& k, VehicleParams& v) {
-    k.number("mass_kg", v.mass_kg, {0.01, 100});
-    k.integer("rotors", v.rotors, {1, 16});
-    k.number("prop_radius_m", v.prop_radius_m, {0.005, 1.0});
-    k.number("motor_distance_m", v.motor_distance_m, {0.02, 5.0});
+    k.number("mass_kg", v.mass_kg, flight::kVehicleMassRange);
+    k.integer("rotors", v.rotors, flight::kRotorsRange);
+    k.number("prop_radius_m", v.prop_radius_m, flight::kPropRadiusRange);
+    k.number("motor_distance_m", v.motor_distance_m, flight::kMotorDistanceRange);
 }
 
 void coefficient_keys(KeyVisitor& k, JetCoefficients& j) {

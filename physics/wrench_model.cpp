@@ -144,7 +144,7 @@ Wrench WrenchModel::drag(const Scratch& sc) const {
     }
     if (config_.sufferer.thrust_loss) {
         const std::size_t rotors = planform_.rotor_centre.size();
-        std::array<double, 16> inflow{};  // area-weighted downward flow through each disc
+        std::array<double, flight::kMaxRotors> inflow{};  // area-weighted downward flow through each disc
         for (std::size_t i = 0; i < n; ++i) {
             const int r = planform_.rotor[i];
             if (r >= 0) inflow[static_cast<std::size_t>(r)] += area[i] * sc.uz[i];
@@ -183,14 +183,14 @@ Wrench WrenchModel::buffeting(const Vec3& suf, std::span<const Producer> produce
     const double c_h = config_.sufferer.rotor_drag_n_per_mps;
     if (c_h <= 0) return w;
     const auto& centres = planform_.rotor_centre;
-    std::array<double, 16> cx{}, cy{};
+    std::array<double, flight::kMaxRotors> cx{}, cy{};
     for (std::size_t r = 0; r < centres.size(); ++r) {
         cx[r] = centres[r][0];
         cy[r] = centres[r][1];
     }
     for (const auto& p : producers) {
         if (p.lateral_gust.isZero()) continue;
-        std::array<double, 16> ux{}, uy{}, uz{};
+        std::array<double, flight::kMaxRotors> ux{}, uy{}, uz{};
         add_velocity(suf, cx.data(), cy.data(), centres.size(), p, 1.0, ux.data(), uy.data(), uz.data());
         for (std::size_t r = 0; r < centres.size(); ++r) {
             const double axial = ux[r] * p.axis.x() + uy[r] * p.axis.y() + uz[r] * p.axis.z();

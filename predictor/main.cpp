@@ -204,12 +204,12 @@ struct CompareCommand {
         const Dataset all = load_all(data);
         const Dataset test = split_by_leg(all).test;
         require_samples(all, test, "held-out");
-        auto models = raw(ms);
+        auto compared = raw(ms);
         const dw::predictor::ReferenceModel reference;
         std::vector<std::string> missing;
         const std::string references = dw::predictor::references_of(test, missing);
-        if (!references.empty()) models.push_back(&reference);
-        const auto rows = compare(models, test, arena);
+        if (!references.empty()) compared.push_back(&reference);
+        const auto rows = compare(compared, test, arena);
         dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" +
                                                   dw::predictor::reference_note(references, missing) +
                                                   to_markdown(rows, arena));

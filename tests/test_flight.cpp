@@ -125,7 +125,7 @@ TEST(FlightFolder, EveryRuleIsEnforcedWithFileAndLine) {
         {"meta.json",
          "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": "
          "\"single\", \"vehicles\": {\"v1\": {\"mass_kg\": -1}}}",
-         "meta.json: field 'vehicles.v1.mass_kg': must be a positive finite number"},
+         "meta.json: field 'vehicles.v1.mass_kg': -1 is not in [0.01, 100] kg"},
         {"wrench.csv", many_rows(120) + "1e400,1,2,3,4,5,6\n", "wrench.csv:122: column t: '1e400' is not a number"},
         {"wrench.csv", many_rows(14) + "0.5,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n", "wrench.csv:17: t = 0.1 is earlier"},
     };
@@ -184,4 +184,42 @@ TEST(FlightFolder, AReferencePredictionRoundTripsWithEmptyCellsAndItsRulesAreLoc
     write(d.file("h/meta.json"), meta);
     EXPECT_NE(error_reading(d.file("h")).find("field 'reference.axes': 'f_z' is not one of"), std::string::npos)
         << error_reading(d.file("h"));
+}
+
+// Issue 43: meta.json and legs.csv numbers through the ranges the same quantities have elsewhere,
+// and JSON that would crash or overflow a parser refused in one located line.
+TEST(FlightFolder, HostileNumbersAndNestingInMetaAndLegsAreOneLocatedLine) {
+    dw::test::TempDir d;
+    const std::string dir = d.file("f");
+    write_flight(sample_flight(), dir);
+    const std::string meta = dw::read_file(dir + "/meta.json");
+    auto with = [&](const std::string& from, const std::string& to) {
+        std::string m = meta;
+        const auto at = m.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        m.replace(at, from.size(), to);
+        write(dir + "/meta.json", m);
+        return error_reading(dir);
+    };
+    const struct {
+        std::string from, to, expect;
+    } cases[] = {
+        {"\"rotors\": 4", "\"rotors\": 17", "field 'vehicles.v1.rotors': 17 is not in [1, 16]"},
+        {"\"rotors\": 4", "\"rotors\": 4294967297", "is not in [1, 16]"},
+        {"\"rotors\": 4", "\"rotors\": 2.5", "field 'vehicles.v1.rotors': not an integer"},
+        {"\"mass_kg\": 0.7", "\"mass_kg\": 1e9", "is not in [0.01, 100] kg"},
+        {"\"mass_kg\": 0.7", "\"mass_kg\": 1e400", "meta.json: not valid JSON:"},
+        {"\"formation\"", std::string(100000, '[') + std::string(100000, ']') + ", \"x\"",
+         "nests deeper than 64 levels"},
+    };
+    for (const auto& c : cases) {
+        const std::string e = with(c.from, c.to);
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.to.substr(0, 40) << " -> " << e;
+        EXPECT_LE(e.size(), 200u) << e.substr(0, 300);
+    }
+    write(dir + "/meta.json", meta);
+    write(dir + "/legs.csv", "leg,t_start,t_end\n1000000000000000000,0.01,0.04\n");
+    EXPECT_NE(error_reading(dir).find("legs.csv:2: column leg: '1000000000000000000' is not a leg number"),
+              std::string::npos)
+        << error_reading(dir);
 }

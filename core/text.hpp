@@ -1,0 +1,22 @@
+#pragma once
+// Limits on text a tool reads from a file, checked before a parser sees it, and input quoted
+// safely into a one-line error (issue 43).
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace dw {
+
+// At most this many bytes of input are quoted in an error.
+inline constexpr std::size_t kQuotedBytes = 48;
+
+// `text` escaped for one line (control bytes, quotes and non-ASCII as \xHH), cut after n bytes
+// with "..." when longer.
+std::string quote_bytes(std::string_view text, std::size_t n);
+
+// Throws dw::InputError "<what>: nests deeper than <limit> levels" when JSON (or a YAML flow
+// collection) in `text` opens more than `limit` brackets or braces at once, strings skipped:
+// parsers and their values recurse per level, and deep enough input ends them by stack overflow.
+void require_nesting_at_most(std::string_view text, int limit, std::string_view what);
+
+}  // namespace dw
