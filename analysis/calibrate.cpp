@@ -38,6 +38,9 @@ constexpr double kStepFraction = 1e-3;       // forward-difference step, relativ
 constexpr double kLambda0 = 1e-3;            // Levenberg-Marquardt's first damping
 constexpr double kRelativeTolerance = 1e-6;  // stop when the cost falls by less than this fraction
 constexpr double kLambdaMax = 1e10;          // ... or no step lowers it
+constexpr double kLambdaMin = 1e-9;          // the damping never falls below this
+constexpr double kStepFloor = 1e-3;          // added to the start value: a parameter starting at 0 still gets a step
+constexpr double kUnusedDiagonal = 1.0;      // the normal matrix's diagonal for a parameter no flight sees
 
 // A calibrated quantity of a class: name, unit, role, bounds, and where it lives in the class.
 struct Knob {
@@ -256,7 +259,7 @@ Eigen::MatrixXd jacobian(const Calibration& cal, const std::vector<double>& x, c
     for (std::size_t p = 0; p < x.size(); ++p) {
         if (std::none_of(use.begin(), use.end(), [&](std::size_t f) { return cal.acts_on(p, f); })) continue;
         auto xp = x;
-        const double h = kStepFraction * std::max(std::abs(x[p]), std::abs(start[p]) + 1e-3);
+        const double h = kStepFraction * std::max(std::abs(x[p]), std::abs(start[p]) + kStepFloor);
         xp[p] += x[p] + h <= cal.knob(p).upper ? h : -h;
         J.col(static_cast<Eigen::Index>(p)) = (cal.residuals(xp, use, true) - r0) / (xp[p] - x[p]);
     }
@@ -279,7 +282,8 @@ std::vector<double> fit(const Calibration& cal, std::vector<double> x, const std
         bool improved = false;
         while (!improved && lambda < kLambdaMax) {
             Eigen::MatrixXd M = A;
-            for (Eigen::Index k = 0; k < M.rows(); ++k) M(k, k) = A(k, k) > 0 ? A(k, k) * (1 + lambda) : 1.0;
+            for (Eigen::Index k = 0; k < M.rows(); ++k)
+                M(k, k) = A(k, k) > 0 ? A(k, k) * (1 + lambda) : kUnusedDiagonal;
             const Eigen::VectorXd step = M.ldlt().solve(-g);
             auto y = x;
             for (std::size_t p = 0; p < y.size(); ++p)
@@ -287,7 +291,7 @@ std::vector<double> fit(const Calibration& cal, std::vector<double> x, const std
             const Eigen::VectorXd ry = cal.residuals(y, use, true);
             if (ry.squaredNorm() < cost) {
                 const double gain = (cost - ry.squaredNorm()) / cost;
-                x = y, r = ry, cost = ry.squaredNorm(), lambda = std::max(lambda / 3, 1e-9), improved = true;
+                x = y, r = ry, cost = ry.squaredNorm(), lambda = std::max(lambda / 3, kLambdaMin), improved = true;
                 if (gain < kRelativeTolerance) return x;
             } else {
                 lambda *= 4;

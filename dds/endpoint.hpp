@@ -21,6 +21,10 @@
 
 namespace dw::dds {
 
+// After a writer sees a reader match, how long the reader may still be finishing its side: a
+// best-effort sample written sooner can be lost.
+inline constexpr std::chrono::milliseconds kMatchSettle{100};
+
 namespace detail {
 // Under DDS Security the likely reason an endpoint is refused: the identity's permissions.
 inline std::string denied_hint(const Participant& p, const char* verb) {
@@ -115,7 +119,7 @@ public:
     // side, and best-effort samples sent in between are dropped, so this waits a little more.
     bool wait_for_readers(int n, std::chrono::milliseconds timeout) const {
         if (!detail::wait_until_count([this] { return matched(); }, n, timeout)) return false;
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        std::this_thread::sleep_for(kMatchSettle);
         return true;
     }
     // Waits until every reliable reader acknowledged every sample (call before exiting, or the

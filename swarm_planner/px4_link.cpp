@@ -152,6 +152,7 @@ private:
         Step step = Step::await_status;  // arming: the planner's thread only
         int tries = 0;
         Nanos step_since = 0, first_sent_ns = 0, sent_ns = 0;  // monotonic
+        Nanos cmd_matched_ns = 0;                              // monotonic: PX4's command reader first seen
         std::string refusal;
     };
 
@@ -301,8 +302,14 @@ private:
         const double waited = to_seconds(now - (v.step == Step::await_status ? v.step_since : v.sent_ns));
         switch (v.step) {
             case Step::await_status:
-                // A command sent before PX4's command reader has matched would reach no one.
-                if (s.seen_ns != 0 && v.cmd->matched() > 0) return ask(v, Step::offboard, now, true);
+                // A command sent before PX4's command reader has matched would reach no one, nor one
+                // sent before that reader has settled (dds::kMatchSettle: PX4 reads fmu/in best-effort).
+                if (s.seen_ns != 0 && v.cmd->matched() > 0) {
+                    if (v.cmd_matched_ns == 0) v.cmd_matched_ns = now;
+                    if (now - v.cmd_matched_ns >= std::chrono::nanoseconds(dds::kMatchSettle).count())
+                        return ask(v, Step::offboard, now, true);
+                    return;
+                }
                 if (waited > o_.status_timeout_s && s.seen_ns != 0)
                     refuse(v, log::cat("PX4 publishes vehicle_status but nothing reads ", v.cmd_name, " after ", waited,
                                        " s (is vehicle_command among the Agent's bridged topics?)"));
