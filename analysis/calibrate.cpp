@@ -272,9 +272,7 @@ std::vector<double> fit(const Calibration& cal, std::vector<double> x, const std
     const auto start = cal.start();
     Eigen::VectorXd r = cal.residuals(x, use, true);
     double cost = r.squaredNorm(), lambda = kLambda0;
-    if (o.progress)
-        o.progress(
-            log::cat(what, ": start, RMSE f_d ", rmse(r), " N (all rows ", rmse(cal.residuals(x, use, false)), ")"));
+    if (o.progress) o.progress(log::cat(what, ": start, RMSE f_d ", rmse(r), " N"));
     for (int it = 0; it < iterations && lambda < kLambdaMax; ++it) {
         const Eigen::MatrixXd J = jacobian(cal, x, r, use, start);
         const Eigen::MatrixXd A = J.transpose() * J;
