@@ -21,7 +21,12 @@ void require_readable_file(const std::string& path, std::string_view what) {
     std::error_code ec;
     const auto status = fs::status(path, ec);
     if (path.empty()) throw InputError(log::cat(what, ": no file given"));
-    if (!fs::exists(status)) throw InputError(log::cat(what, " ", path, ": no such file"));
+    if (ec && ec != std::errc::no_such_file_or_directory)  // a symbolic link loop, a path through a file
+        throw InputError(log::cat(what, " ", path, ": cannot read: ", ec.message()));
+    if (!fs::exists(status)) {
+        const bool dangling = fs::is_symlink(fs::symlink_status(path, ec));
+        throw InputError(log::cat(what, " ", path, dangling ? ": a symbolic link to no file" : ": no such file"));
+    }
     if (fs::is_directory(status)) throw InputError(log::cat(what, " ", path, ": is a directory, expected a file"));
     if (!fs::is_regular_file(status)) throw InputError(log::cat(what, " ", path, ": not a regular file"));
     if (::access(path.c_str(), R_OK) != 0) {
@@ -44,6 +49,13 @@ std::string read_file(const std::string& path) {
     } catch (const InputError& e) {
         throw RuntimeError(e.what());
     }
+}
+
+bool present(const std::string& path) {
+    std::error_code ec;
+    const auto type = fs::symlink_status(path, ec).type();
+    if (ec) return ec != std::errc::no_such_file_or_directory;  // another error (permissions): the read says it
+    return type != fs::file_type::not_found;
 }
 
 namespace {

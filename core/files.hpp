@@ -13,6 +13,9 @@ std::string read_file(const std::string& path, std::string_view what);
 // The bytes of a file the lab wrote itself (a child's log, a report it just made): the same read,
 // but a failure is the lab's, a dw::RuntimeError (exit 1), not bad input.
 std::string read_file(const std::string& path);
+// Whether anything is at `path`, a dangling or looping symbolic link included: an optional input
+// that is present is read (and refused if broken), never skipped.
+bool present(const std::string& path);
 // Throws dw::InputError unless `path` is an existing regular file that can be opened for reading.
 void require_readable_file(const std::string& path, std::string_view what);
 

@@ -11,6 +11,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/text.hpp"
 
 namespace dw {
 
@@ -29,7 +30,8 @@ std::optional<std::size_t> find_name(const Names& names, std::string_view text) 
 template <class Names>
 std::string unknown_name_problem(std::string_view what, std::string_view text, const Names& names,
                                  std::string_view note = "") {
-    return log::cat("unknown ", what, " '", text, "' (expected ", log::alternatives(names), note, ")");
+    return log::cat("unknown ", what, " '", quote_bytes(text, kQuotedBytes), "' (expected ", log::alternatives(names),
+                    note, ")");
 }
 
 // The enum value named `text` (its index in `names`); InputError with the known names otherwise.

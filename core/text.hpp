@@ -7,12 +7,15 @@
 
 namespace dw {
 
-// At most this many bytes of input are quoted in an error.
+// At most this many characters of input (escapes included) are quoted in an error.
 inline constexpr std::size_t kQuotedBytes = 48;
 
-// `text` escaped for one line (control bytes, quotes and non-ASCII as \xHH), cut after n bytes
-// with "..." when longer.
+// `text` escaped for one line (control bytes, quotes and non-ASCII as \xHH), cut to at most n
+// characters with "..." after when longer.
 std::string quote_bytes(std::string_view text, std::size_t n);
+
+// Whether `text` is well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF).
+bool valid_utf8(std::string_view text);
 
 // Throws dw::InputError "<what>: nests deeper than <limit> levels" when JSON (or a YAML flow
 // collection) in `text` opens more than `limit` brackets or braces at once, strings skipped:

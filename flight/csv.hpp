@@ -10,6 +10,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "core/text.hpp"
 
 namespace dw::flight::csv {
 
@@ -24,7 +25,7 @@ public:
         std::string want, got;
         for (const auto& c : columns) want += (want.empty() ? "" : ",") + c;
         for (auto f : fields) got += (got.empty() ? "" : ",") + std::string(f);
-        if (want != got) fail(line_, log::cat("header is '", got, "', expected '", want, "'"));
+        if (want != got) fail(line_, log::cat("header is ", quoted(got), ", expected '", want, "'"));
         columns_ = columns;
     }
     // Next data row; false at the end. Blank trailing lines are allowed.
@@ -54,16 +55,20 @@ public:
         }
         return false;
     }
-    double number(std::string_view field, std::size_t column) const {
+    // The number in `field`, inside the range the quantity has (flight.hpp): every number a flight
+    // file holds goes through one.
+    double number(std::string_view field, std::size_t column, const Range& range) const {
         double v = 0;
         const auto* end = field.data() + field.size();
         auto [ptr, ec] = std::from_chars(field.data(), end, v);
         if (ec != std::errc() || ptr != end || field.empty()) {
-            fail(line_, log::cat("column ", columns_[column], ": '", field, "' is not a number"));
+            fail(line_, log::cat("column ", columns_[column], ": ", quoted(field), " is not a number"));
         }
-        if (!std::isfinite(v)) fail(line_, log::cat("column ", columns_[column], ": '", field, "' is not finite"));
+        if (!range.contains(v)) fail(line_, log::cat("column ", columns_[column], ": ", range_problem(v, range)));
         return v;
     }
+    // Input quoted into an error: 'text', escaped and cut short (core/text.hpp).
+    static std::string quoted(std::string_view field) { return "'" + quote_bytes(field, kQuotedBytes) + "'"; }
     [[noreturn]] void fail(std::size_t line, const std::string& what) const {
         throw InputError(log::cat(file_, ":", line, ": ", what));
     }
@@ -81,7 +86,11 @@ private:
 class Row {
 public:
     Row(std::string& out, const char* file, std::size_t row) : out_(out), file_(file), row_(row) {}
-    void number(double v, int decimals, const char* column) {
+    // v, inside the range its quantity is read with (a tool writes nothing it would refuse to read).
+    void number(double v, int decimals, const char* column, const Range& range) {
+        if (!range.contains(v))
+            throw InputError(
+                log::cat("flight to write: ", file_, " row ", row_, " column ", column, ": ", range_problem(v, range)));
         if (!first_) out_ += ',';
         first_ = false;
         if (!try_append_fixed(out_, v, decimals))  // the context is built only for the error

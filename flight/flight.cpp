@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "core/errors.hpp"
@@ -43,9 +44,24 @@ std::vector<std::string> wrench_columns() {
     return c;
 }
 
+const Range& axis_range(std::size_t axis) { return axis < 3 ? kForceRange : kMomentRange; }
+
+std::string body_name_problem(std::string_view name) {
+    if (name.empty()) return "empty";
+    if (name.size() > kMaxNameBytes) return log::cat("longer than ", kMaxNameBytes, " bytes");
+    if (!valid_utf8(name)) return log::cat("'", quote_bytes(name, kQuotedBytes), "' is not UTF-8");
+    for (const char c : name) {
+        if (c == ',' || c == '"' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+            return log::cat("'", quote_bytes(name, kQuotedBytes),
+                            "' holds a comma, a double quote or a control byte (it would not read back)");
+    }
+    return "";
+}
+
 std::uint16_t Flight::body_index(const std::string& name) {
     const int i = find_body(name);
     if (i >= 0) return static_cast<std::uint16_t>(i);
+    if (bodies.size() >= kMaxBodies) throw InputError(log::cat("a flight holds at most ", kMaxBodies, " bodies"));
     bodies.push_back(name);
     return static_cast<std::uint16_t>(bodies.size() - 1);
 }
@@ -79,26 +95,31 @@ public:
     explicit MetaReader(const fs::path& path) : file_(path.string()) {
         const std::string text = slurp(path);
         require_nesting_at_most(text, kMaxJsonDepth, file_);
+        std::string duplicate;
         try {
-            j_ = json::parse(text);
+            j_ = json::parse(text, duplicate_key_finder(duplicate));
         } catch (const json::parse_error& e) {
             throw InputError(log::cat(file_, ":", json_location(text, e.byte), ": not valid JSON"));
         } catch (const json::exception& e) {  // a number past a double's range (1e400), and the like
             throw InputError(log::cat(file_, ": not valid JSON: ", quote_bytes(e.what(), kQuotedBytes)));
         }
+        if (!duplicate.empty()) fail(duplicate, "given twice (which one counts?)");
         if (!j_.is_object()) fail("(top)", "expected a JSON object");
         if (!j_.contains("format") || j_["format"] != kFormat) {
             fail("format",
-                 log::cat("expected \"", kFormat, "\", got ", j_.contains("format") ? j_["format"].dump() : "nothing"));
+                 log::cat("expected \"", kFormat, "\", got ",
+                          j_.contains("format") ? quote_bytes(j_["format"].dump(), kQuotedBytes) : "nothing"));
         }
     }
     Meta read() const {
         Meta m;
         m.sufferer = string_of("sufferer");
+        require_body_name("sufferer", m.sufferer);
         m.formation = string_of("formation");
         if (std::find_if(kFormations.begin(), kFormations.end(), [&](const char* f) { return m.formation == f; }) ==
             kFormations.end()) {
-            fail("formation", log::cat("'", m.formation, "' is not one of ", log::join(kFormations)));
+            fail("formation",
+                 log::cat("'", quote_bytes(m.formation, kQuotedBytes), "' is not one of ", log::join(kFormations)));
         }
         read_neighbours(m);
         read_vehicles(m);
@@ -114,17 +135,34 @@ public:
 
 private:
     [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-        throw InputError(log::cat(file_, ": field '", key, "': ", what));
+        throw InputError(log::cat(file_, ": field '", quote_bytes(key, kQuotedBytes), "': ", what));
+    }
+    // A parser callback that notes the first key given twice in one object (the JSON library keeps
+    // the last silently).
+    static json::parser_callback_t duplicate_key_finder(std::string& duplicate) {
+        return [&duplicate, keys = std::vector<std::set<std::string>>{}](int, json::parse_event_t event,
+                                                                         json& parsed) mutable {
+            if (event == json::parse_event_t::object_start) keys.emplace_back();
+            if (event == json::parse_event_t::object_end) keys.pop_back();
+            if (event == json::parse_event_t::key && !keys.back().insert(parsed.get<std::string>()).second &&
+                duplicate.empty())
+                duplicate = parsed.get<std::string>();
+            return true;
+        };
     }
     std::string string_of(const std::string& key) const {
         if (!j_.contains(key) || !j_[key].is_string()) fail(key, "missing or not a string");
         return j_[key].get<std::string>();
+    }
+    void require_body_name(const std::string& key, const std::string& name) const {
+        if (const auto problem = body_name_problem(name); !problem.empty()) fail(key, "a body name: " + problem);
     }
     void read_neighbours(Meta& m) const {
         if (!j_.contains("neighbours") || !j_["neighbours"].is_array()) fail("neighbours", "missing or not a list");
         for (const auto& n : j_["neighbours"]) {
             if (!n.is_string()) fail("neighbours", "every entry must be a string");
             const std::string name = n.get<std::string>();
+            require_body_name("neighbours", name);
             if (name == m.sufferer) fail("neighbours", log::cat("'", name, "' is the sufferer"));
             if (std::find(m.neighbours.begin(), m.neighbours.end(), name) != m.neighbours.end()) {
                 fail("neighbours", log::cat("'", name, "' is listed twice (its force would count twice)"));
@@ -136,6 +174,7 @@ private:
         if (!j_.contains("vehicles")) return;
         if (!j_["vehicles"].is_object()) fail("vehicles", "not an object");
         for (const auto& [name, v] : j_["vehicles"].items()) {
+            require_body_name("vehicles", name);
             const std::string key = "vehicles." + name;
             if (!v.is_object()) fail(key, "not an object");
             VehicleInfo info;
@@ -178,7 +217,9 @@ private:
             const auto& w = j_["wrench_source"];
             if (w == to_string(WrenchSource::stand)) m.wrench_source = WrenchSource::stand;
             else if (w == to_string(WrenchSource::residual)) m.wrench_source = WrenchSource::residual;
-            else fail("wrench_source", log::cat(w.dump(), " is not \"stand\" or \"residual\""));
+            else
+                fail("wrench_source",
+                     log::cat(quote_bytes(w.dump(), kQuotedBytes), " is not \"stand\" or \"residual\""));
         }
         if (j_.contains("moments_measured")) {
             if (!j_["moments_measured"].is_boolean()) fail("moments_measured", "not true or false");
@@ -197,7 +238,7 @@ private:
         for (const auto& a : r["axes"]) {
             const std::string name = a.is_string() ? a.get<std::string>() : a.dump();
             if (std::find(kAxes.begin(), kAxes.end(), name) == kAxes.end())
-                fail("reference.axes", log::cat("'", name, "' is not one of ", axis_list()));
+                fail("reference.axes", log::cat("'", quote_bytes(name, kQuotedBytes), "' is not one of ", axis_list()));
             if (std::find(info.axes.begin(), info.axes.end(), name) != info.axes.end())
                 fail("reference.axes", log::cat("'", name, "' is listed twice"));
             info.axes.push_back(name);
@@ -213,9 +254,24 @@ Meta read_meta(const fs::path& path) { return MetaReader(path).read(); }
 
 }  // namespace
 
+void require_dense(const Flight& f, const std::string& where) {
+    if (f.wrench.empty() || f.poses.empty()) return;
+    double lo = std::min(f.wrench.front().t, f.poses.front().t);
+    double hi = std::max(f.wrench.back().t, f.poses.back().t);
+    for (const auto& l : f.legs.value_or(std::vector<Leg>{})) lo = std::min(lo, l.t_start), hi = std::max(hi, l.t_end);
+    const std::size_t samples = f.wrench.size() + f.poses.size();
+    if (hi - lo <= kMaxSpanPerSample_s * static_cast<double>(samples)) return;
+    throw InputError(log::cat(where, ": the flight spans ", hi - lo, " s (wrench.csv t = ", f.wrench.front().t, "..",
+                              f.wrench.back().t, ", poses.csv t = ", f.poses.front().t, "..", f.poses.back().t,
+                              ") with ", samples, " samples, fewer than one per ", kMaxSpanPerSample_s,
+                              " s: a stray stamp or a gap"));
+}
+
 Flight read_flight(const std::string& dir) {
     const fs::path root(dir);
-    if (!fs::is_directory(root)) throw InputError(log::cat(dir, ": not a flight folder (no such directory)"));
+    std::error_code ec;
+    if (!fs::is_directory(root, ec))
+        throw InputError(log::cat(dir, ": not a flight folder (", ec ? ec.message() : "no such directory", ")"));
     Flight f;
     f.meta = read_meta(root / "meta.json");
 
@@ -225,8 +281,8 @@ Flight read_flight(const std::string& dir) {
         std::vector<std::string_view> row;
         while (csv.next(row)) {
             WrenchSample s;
-            s.t = csv.number(row[0], 0);
-            for (std::size_t i = 0; i < 6; ++i) s.w[i] = csv.number(row[i + 1], i + 1);
+            s.t = csv.number(row[0], 0, kStampRange);
+            for (std::size_t i = 0; i < 6; ++i) s.w[i] = csv.number(row[i + 1], i + 1, axis_range(i));
             if (!f.wrench.empty() && s.t < f.wrench.back().t) {
                 csv.fail(csv.line(),
                          log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
@@ -241,11 +297,16 @@ Flight read_flight(const std::string& dir) {
         std::vector<std::string_view> row;
         while (csv.next(row)) {
             PoseSample s;
-            s.t = csv.number(row[0], 0);
-            if (row[1].empty()) csv.fail(csv.line(), "column body: empty");
+            s.t = csv.number(row[0], 0, kStampRange);
+            if (f.find_body(std::string(row[1])) < 0) {
+                if (const auto problem = body_name_problem(row[1]); !problem.empty())
+                    csv.fail(csv.line(), "column body: " + problem);
+                if (f.bodies.size() >= kMaxBodies)
+                    csv.fail(csv.line(), log::cat("column body: a flight holds at most ", kMaxBodies, " bodies"));
+            }
             s.body = f.body_index(std::string(row[1]));
-            for (std::size_t i = 0; i < 3; ++i) s.p[i] = csv.number(row[i + 2], i + 2);
-            for (std::size_t i = 0; i < 4; ++i) s.q[i] = csv.number(row[i + 5], i + 5);
+            for (std::size_t i = 0; i < 3; ++i) s.p[i] = csv.number(row[i + 2], i + 2, kPositionRange);
+            for (std::size_t i = 0; i < 4; ++i) s.q[i] = csv.number(row[i + 5], i + 5, kQuaternionRange);
             const double norm = std::sqrt(s.q[0] * s.q[0] + s.q[1] * s.q[1] + s.q[2] * s.q[2] + s.q[3] * s.q[3]);
             if (std::abs(norm - 1.0) > 1e-3) csv.fail(csv.line(), log::cat("quaternion norm ", norm, " is not 1"));
             if (!f.poses.empty() && s.t < f.poses.back().t) {
@@ -262,20 +323,20 @@ Flight read_flight(const std::string& dir) {
             if (f.find_body(n) < 0) csv.fail(1, log::cat("neighbour '", n, "' named in meta.json has no pose"));
         }
     }
-    if (fs::exists(root / "legs.csv")) {
+    if (present((root / "legs.csv").string())) {
         CsvReader csv(slurp(root / "legs.csv"), (root / "legs.csv").string());
         csv.expect_header({"leg", "t_start", "t_end"});
         std::vector<std::string_view> row;
         std::vector<Leg> legs;
         while (csv.next(row)) {
             Leg l;
-            const double id = csv.number(row[0], 0);
-            if (id != std::floor(id) || !kLegNumberRange.contains(id))
+            const double id = csv.number(row[0], 0, kLegNumberRange);
+            if (id != std::floor(id))
                 csv.fail(csv.line(),
                          log::cat("column leg: '", row[0], "' is not a leg number (", kLegNumberRange.describe(), ")"));
             l.leg = static_cast<int>(id);
-            l.t_start = csv.number(row[1], 1);
-            l.t_end = csv.number(row[2], 2);
+            l.t_start = csv.number(row[1], 1, kStampRange);
+            l.t_end = csv.number(row[2], 2, kStampRange);
             if (l.t_end <= l.t_start) csv.fail(csv.line(), "t_end is not after t_start");
             if (!legs.empty() && l.t_start < legs.back().t_start)
                 csv.fail(csv.line(), "legs must be sorted by t_start");
@@ -283,7 +344,8 @@ Flight read_flight(const std::string& dir) {
         }
         f.legs = std::move(legs);
     }
-    if (fs::exists(root / "reference.csv") || f.meta.reference) {
+    require_dense(f, dir);
+    if (present((root / "reference.csv").string()) || f.meta.reference) {
         if (!f.meta.reference)
             throw InputError(log::cat((root / "meta.json").string(),
                                       ": field 'reference': missing, but reference.csv is there (what model is it?)"));
@@ -293,7 +355,18 @@ Flight read_flight(const std::string& dir) {
 }
 
 namespace {
+void require_body_names(const Meta& m) {
+    auto check = [](const std::string& field, const std::string& name) {
+        if (const auto problem = body_name_problem(name); !problem.empty())
+            throw InputError(log::cat("flight to write: meta.json field '", field, "': a body name: ", problem));
+    };
+    check("sufferer", m.sufferer);
+    for (const auto& n : m.neighbours) check("neighbours", n);
+    for (const auto& [name, v] : m.vehicles) check("vehicles", name);
+}
+
 std::string meta_text(const Meta& m) {
+    require_body_names(m);
     json meta = json::parse(m.extra_json);
     meta["format"] = kFormat;
     meta["sufferer"] = m.sufferer;
@@ -311,7 +384,11 @@ std::string meta_text(const Meta& m) {
     if (m.wrench_source != WrenchSource::stand) meta["wrench_source"] = to_string(m.wrench_source);
     if (!m.moments_measured) meta["moments_measured"] = false;
     if (m.reference) meta["reference"] = {{"source", m.reference->source}, {"axes", m.reference->axes}};
-    return meta.dump(2) + "\n";
+    try {
+        return meta.dump(2) + "\n";
+    } catch (const json::type_error&) {  // a text that is not UTF-8 (from a recording's metadata)
+        throw InputError("flight to write: meta.json: a text is not UTF-8");
+    }
 }
 
 constexpr const char* kQuaternion[] = {"qw", "qx", "qy", "qz"};
@@ -342,8 +419,8 @@ void FlightWriter::wrench(const WrenchSample& s) {
     row_.clear();
     {
         Row row(row_, "wrench.csv", ++wrench_rows_ + 1);
-        row.number(s.t, 6, "t");
-        for (std::size_t a = 0; a < kAxes.size(); ++a) row.number(s.w[a], 6, kAxes[a]);
+        row.number(s.t, 6, "t", kStampRange);
+        for (std::size_t a = 0; a < kAxes.size(); ++a) row.number(s.w[a], 6, kAxes[a], axis_range(a));
     }
     wrench_->write(row_);
 }
@@ -351,12 +428,14 @@ void FlightWriter::wrench(const WrenchSample& s) {
 void FlightWriter::pose(double t, const std::string& body, const std::array<double, 3>& p,
                         const std::array<double, 4>& q) {
     row_.clear();
+    if (const auto problem = body_name_problem(body); !problem.empty())
+        throw InputError(log::cat("flight to write: poses.csv row ", pose_rows_ + 2, " column body: ", problem));
     {
         Row row(row_, "poses.csv", ++pose_rows_ + 1);
-        row.number(t, 6, "t");
+        row.number(t, 6, "t", kStampRange);
         row.text(body);
-        for (std::size_t k = 0; k < 3; ++k) row.number(p[k], 6, kPosition[k]);
-        for (std::size_t k = 0; k < 4; ++k) row.number(q[k], 8, kQuaternion[k]);
+        for (std::size_t k = 0; k < 3; ++k) row.number(p[k], 6, kPosition[k], kPositionRange);
+        for (std::size_t k = 0; k < 4; ++k) row.number(q[k], 8, kQuaternion[k], kQuaternionRange);
     }
     poses_->write(row_);
 }
@@ -372,8 +451,8 @@ void FlightWriter::close(const Meta& meta, const std::optional<std::vector<Leg>>
             const Leg& leg = (*legs)[i];
             Row row(legs_text, "legs.csv", i + 2);
             row.text(std::to_string(leg.leg));
-            row.number(leg.t_start, 6, "t_start");
-            row.number(leg.t_end, 6, "t_end");
+            row.number(leg.t_start, 6, "t_start", kStampRange);
+            row.number(leg.t_end, 6, "t_end", kStampRange);
         }
     }
     const std::string meta_json = meta_text(meta);

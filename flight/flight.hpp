@@ -25,6 +25,28 @@ std::vector<std::string> wrench_columns();
 inline constexpr std::array<const char*, 6> kFormations = {"single", "side_by_side", "leader_follower",
                                                            "stack",  "hybrid",       "free"};
 
+// Every number a flight's files hold lies in a range wide enough for any lab; one outside is damage,
+// not a measurement (issue 43). Stamps: Unix-epoch seconds fit.
+inline constexpr Range kStampRange{-1e10, 1e10, "s"};
+inline constexpr Range kForceRange{-1e4, 1e4, "N"};
+inline constexpr Range kMomentRange{-1e4, 1e4, "N·m"};
+inline constexpr Range kPositionRange{-1e6, 1e6, "m"};
+inline constexpr Range kQuaternionRange{-1.01, 1.01};
+// kForceRange for the force axes of kAxes, kMomentRange for the moments.
+const Range& axis_range(std::size_t axis);
+// The tools walk a flight's span on fixed time grids (the replay, leg and encounter finding): a
+// flight holds at least one sample per this many seconds of its span on average, so one stray
+// stamp (10^9 s) cannot size them past a small multiple of the input.
+inline constexpr double kMaxSpanPerSample_s = 0.1;
+
+// Body names (poses.csv's body column, meta.json's sufferer, neighbours and vehicles): what
+// round-trips through the flight format's CSV and JSON, checked where they are read and written.
+inline constexpr std::size_t kMaxBodies = 256;  // bodies in one flight (a lab flies a handful)
+inline constexpr std::size_t kMaxNameBytes = 64;
+// Why `name` cannot name a body, "" when it can: empty, longer than kMaxNameBytes, a comma, a
+// double quote, a control byte (CR, LF, ...) or not UTF-8.
+std::string body_name_problem(std::string_view name);
+
 // The wrench the air exerts on the sufferer, tared, on the stand clock. N, N·m, NED axes.
 struct WrenchSample {
     double t = 0;
@@ -108,6 +130,10 @@ struct Flight {
 };
 
 Flight read_flight(const std::string& dir);
+// Throws dw::InputError "<where>: the flight spans ..." when it holds fewer samples than one per
+// kMaxSpanPerSample_s of its span (read_flight checks it; so does every other way a Flight is made
+// from a file).
+void require_dense(const Flight& f, const std::string& where);
 // Writes meta.json, wrench.csv, poses.csv and legs.csv (if any); creates dir. Deterministic bytes.
 void write_flight(const Flight& flight, const std::string& dir);
 

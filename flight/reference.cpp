@@ -27,13 +27,13 @@ std::vector<WrenchSample> read_reference_csv(const std::string& path, const Refe
     std::vector<std::string_view> row;
     while (csv.next(row)) {
         WrenchSample s;
-        s.t = csv.number(row[0], 0);
+        s.t = csv.number(row[0], 0, kStampRange);
         for (std::size_t a = 0; a < 6; ++a) {
             if (on[a]) {
-                s.w[a] = csv.number(row[a + 1], a + 1);
+                s.w[a] = csv.number(row[a + 1], a + 1, axis_range(a));
             } else if (!row[a + 1].empty()) {
-                csv.fail(csv.line(), log::cat("column ", kAxes[a], ": '", row[a + 1],
-                                              "' where the reference predicts nothing (meta.json's reference.axes: ",
+                csv.fail(csv.line(), log::cat("column ", kAxes[a], ": ", csv.quoted(row[a + 1]),
+                                              " where the reference predicts nothing (meta.json's reference.axes: ",
                                               log::join(info.axes), "): the cell must be empty"));
             } else {
                 s.w[a] = NAN;
@@ -53,9 +53,9 @@ std::string reference_csv(const std::vector<WrenchSample>& samples, const Refere
     std::string text = log::join(wrench_columns(), ",") + "\n";
     for (std::size_t i = 0; i < samples.size(); ++i) {
         csv::Row row(text, "reference.csv", i + 2);
-        row.number(samples[i].t, 6, "t");
+        row.number(samples[i].t, 6, "t", kStampRange);
         for (std::size_t a = 0; a < 6; ++a) {
-            if (on[a]) row.number(samples[i].w[a], 6, kAxes[a]);
+            if (on[a]) row.number(samples[i].w[a], 6, kAxes[a], axis_range(a));
             else row.text("");
         }
     }

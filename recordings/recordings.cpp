@@ -315,7 +315,11 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
     flight::Flight f;
     for (const auto& r : wrench) f.wrench.push_back({c.wrench_t(r.t), r.w});
     for (const auto& r : poses) f.poses.push_back({c.pose_t(r.t), f.body_index(r.body), r.p, normalised(r.q)});
+    for (const auto& body : f.bodies)
+        if (const auto problem = flight::body_name_problem(body); !problem.empty())
+            throw InputError(log::cat(path, ": a motion-capture body's name: ", problem));
     f.meta = export_meta(f.bodies, found, c, path, o);
+    flight::require_dense(f, path);
     return f;
 }
 

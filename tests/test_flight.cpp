@@ -93,8 +93,12 @@ TEST(FlightFolder, EveryRuleIsEnforcedWithFileAndLine) {
          "wrench.csv:3: 6 fields, expected 7"},
         {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,abc,6\n",
          "wrench.csv:3: column m_pitch: 'abc' is not a number"},
+        {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1e308,2,3,4,5,6\n",
+         "wrench.csv:2: column f_n: 1e+308 is not in [-10000, 10000] N"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1e9,1,0,0,0\n",
+         "poses.csv:2: column d: -1e+09 is not in [-1e+06, 1e+06] m"},
         {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,nan\n",
-         "wrench.csv:3: column m_yaw: 'nan' is not finite"},
+         "wrench.csv:3: column m_yaw: nan is not a finite number"},
         {"wrench.csv", "t,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n0.2,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n",
          "wrench.csv:3: t = 0.1 is earlier"},
         {"wrench.csv",
@@ -219,7 +223,67 @@ TEST(FlightFolder, HostileNumbersAndNestingInMetaAndLegsAreOneLocatedLine) {
     }
     write(dir + "/meta.json", meta);
     write(dir + "/legs.csv", "leg,t_start,t_end\n1000000000000000000,0.01,0.04\n");
-    EXPECT_NE(error_reading(dir).find("legs.csv:2: column leg: '1000000000000000000' is not a leg number"),
-              std::string::npos)
+    EXPECT_NE(error_reading(dir).find("legs.csv:2: column leg: 1e+18 is not in [0, 1e+06]"), std::string::npos)
         << error_reading(dir);
+}
+
+// Issue 43: what a hostile flight folder did before (a 10^9 s stamp sized a time grid past memory,
+// a duplicate key or a dangling legs.csv was silently read, a body name that cannot read back was
+// written, a CR-only file was echoed whole into the error) is one located line of at most 200
+// characters, and a flight that cannot be written leaves no folder.
+TEST(FlightFolder, HostileFilesAreRefusedInOneShortLocatedLine) {
+    dw::test::TempDir d;
+    const std::string dir = d.file("f");
+    auto fresh = [&] { write_flight(sample_flight(), dir); };
+    std::string bodies = "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n0,v1,0,0,-1.7,1,0,0,0\n";
+    for (int i = 0; i < 300; ++i) bodies += "0.01,b" + std::to_string(i) + ",0,0,-1,1,0,0,0\n";
+    const std::string meta = (fresh(), dw::read_file(dir + "/meta.json"));
+    const struct {
+        const char* file;
+        std::string text, expect;
+    } cases[] = {
+        {"wrench.csv", many_rows(3) + "1e9,1,2,3,4,5,6\n", "fewer than one per 0.1 s: a stray stamp or a gap"},
+        {"wrench.csv", std::string(375000, '\r'), "wrench.csv:1: header is '\\x0D\\x0D"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n0,v\"1,0,0,-1.7,1,0,0,0\n",
+         "poses.csv:3: column body: 'v\"1' holds a comma, a double quote or a control byte"},
+        {"poses.csv", "t,body,n,e,d,qw,qx,qy,qz\n0,sufferer,0,0,-1.4,1,0,0,0\n0,v\xff,0,0,-1.7,1,0,0,0\n",
+         "poses.csv:3: column body: 'v\\xFF' is not UTF-8"},
+        {"poses.csv", bodies, "column body: a flight holds at most 256 bodies"},
+        {"meta.json", "{\"format\": \"downwash-flight/1\", \"format\": \"downwash-flight/1\"}",
+         "meta.json: field 'format': given twice"},
+        {"meta.json",
+         meta.substr(0, meta.find("\"single\"")) + "\"" + std::string(1 << 20, 'x') + "\"" +
+             meta.substr(meta.find("\"single\"") + 8),
+         "field 'formation': 'xxxxxxxx"},
+        {"meta.json",
+         meta.substr(0, meta.find("\"sufferer\": \"sufferer\"")) + "\"sufferer\": \"a\\nb\"" +
+             meta.substr(meta.find("\"sufferer\": \"sufferer\"") + 22),
+         "field 'sufferer': a body name: 'a\\x0Ab' holds"},
+    };
+    for (const auto& c : cases) {
+        fresh();
+        write(dir + "/" + c.file, c.text);
+        const std::string e = error_reading(dir);
+        EXPECT_NE(e.find(c.expect), std::string::npos) << c.file << ": " << e.substr(0, 300);
+        EXPECT_LE(e.size(), 200u) << e.substr(0, 300);
+        EXPECT_EQ(e.find('\n'), std::string::npos) << e.substr(0, 300);
+    }
+    fresh();
+    std::filesystem::remove(dir + "/legs.csv");
+    std::filesystem::create_symlink("nowhere.csv", dir + "/legs.csv");
+    EXPECT_NE(error_reading(dir).find("legs.csv: a symbolic link to no file"), std::string::npos) << error_reading(dir);
+    std::filesystem::remove(dir + "/legs.csv");
+    std::filesystem::create_symlink("legs.csv", dir + "/legs.csv");
+    EXPECT_NE(error_reading(dir).find("legs.csv: cannot read: Too many levels of symbolic links"), std::string::npos)
+        << error_reading(dir);
+
+    for (const std::string name : std::vector<std::string>{"a,b", "a\rb", "a\nb", "v\xff"}) {
+        Flight f = sample_flight();
+        f.bodies[1] = name;
+        f.meta.neighbours = {name};
+        f.meta.vehicles = {{name, VehicleInfo{}}};
+        const std::string out = d.file("refused");
+        EXPECT_THROW(write_flight(f, out), dw::InputError) << name;
+        EXPECT_FALSE(std::filesystem::exists(out)) << "a refused flight left its folder behind";
+    }
 }

@@ -171,8 +171,16 @@ TEST(Numbers, AppendFixedWritesExactlyWhatItFormatted) {
     EXPECT_THROW(dw::append_fixed(same, -kInf, 6, "v"), InputError);
 }
 
-// Finding 1: a value of 1e41 or more put raw process memory into poses.csv / wrench.csv.
+// Finding 1: a value of 1e41 or more put raw process memory into poses.csv / wrench.csv. Since
+// issue 43 the flight writer refuses what the reader would (values past the quantity's range), so
+// the formatter is checked on its own, and the writer's refusal beside it.
 TEST(FlightWriter, HugeValuesAreWrittenAsNumbersNotMemory) {
+    for (const double v : {1e300, -1e41, 1e41}) {
+        std::string out;
+        dw::append_fixed(out, v, 6, "value");
+        EXPECT_EQ(out.find_first_not_of("0123456789.-"), std::string::npos) << v;
+        EXPECT_EQ(std::stod(out), v);
+    }
     TempDir dir;
     dw::flight::Flight f;
     f.meta.neighbours = {"v1"};
@@ -180,14 +188,9 @@ TEST(FlightWriter, HugeValuesAreWrittenAsNumbersNotMemory) {
     f.poses.push_back({0.0, v, {0, 0, -1.7}, {1, 0, 0, 0}});
     f.wrench.push_back({0.0, {1e300, -1e41, 0, 0, 0, 0}});
     f.poses.push_back({0.0, s, {1e41, 0, -1.4}, {1, 0, 0, 0}});
-    dw::flight::write_flight(f, dir.file("f"));
-    for (const char* file : {"wrench.csv", "poses.csv"}) {
-        const std::string text = slurp(dir.file(std::string("f/") + file));
-        EXPECT_EQ(text.find_first_not_of("0123456789.,-\ntfnedmrolpitchyawbodysufferqxzv_"), std::string::npos) << file;
-    }
-    const auto back = dw::flight::read_flight(dir.file("f"));
-    EXPECT_EQ(back.wrench.at(0).w[0], 1e300);
-    EXPECT_EQ(back.poses.at(1).p[0], 1e41);
+    EXPECT_EQ(error_of([&] { dw::flight::write_flight(f, dir.file("f")); }),
+              "flight to write: wrench.csv row 2 column f_n: 1e+300 is not in [-10000, 10000] N");
+    EXPECT_FALSE(fs::exists(dir.file("f")));
 }
 
 TEST(FlightWriter, NonFiniteValuesAreRefusedAndNoFolderIsLeft) {
@@ -196,7 +199,7 @@ TEST(FlightWriter, NonFiniteValuesAreRefusedAndNoFolderIsLeft) {
     const auto s = f.body_index("sufferer");
     f.poses.push_back({0.0, s, {0, kNaN, -1.4}, {1, 0, 0, 0}});
     const std::string e = error_of([&] { dw::flight::write_flight(f, dir.file("f")); });
-    EXPECT_EQ(e, "flight to write: poses.csv row 2 column e: nan is not a finite number");
+    EXPECT_EQ(e, "flight to write: poses.csv row 2 column e: nan is not a finite number (expected [-1e+06, 1e+06] m)");
     EXPECT_FALSE(fs::exists(dir.file("f")));
 }
 
