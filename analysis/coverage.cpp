@@ -148,8 +148,8 @@ std::string csv(const std::vector<std::pair<Target, Effect>>& chosen, const std:
             for (std::size_t p = 0; p < chosen[ti].second.params.size(); ++p) {
                 const auto& x = outs[ti][k];
                 s << chosen[ti].first.effect << "," << chosen[ti].second.params[p].name << "," << k << ","
-                  << x.hidden[p] << "," << x.values[p] << "," << x.lo[p] << "," << x.hi[p] << "," << x.interval << ","
-                  << x.accepted << "\n";
+                  << csv_cell(x.hidden[p]) << "," << csv_cell(x.values[p]) << "," << csv_cell(x.lo[p]) << ","
+                  << csv_cell(x.hi[p]) << "," << x.interval << "," << x.accepted << "\n";
             }
     return s.str();
 }

@@ -1,5 +1,6 @@
 #include "core/numbers.hpp"
 
+#include <cstdio>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -92,6 +93,13 @@ std::string fixed(double v, int decimals) {
     std::string s;
     append_fixed(s, v, decimals, "fixed");
     return s;
+}
+
+std::string csv_cell(double v, int significant) {
+    if (!std::isfinite(v)) return "";
+    char text[40];
+    std::snprintf(text, sizeof text, "%.*g", significant, v);
+    return text;
 }
 
 }  // namespace dw

@@ -45,6 +45,9 @@ void append_fixed(std::string& out, double v, int decimals, std::string_view wha
 // append_fixed without the error: false (and nothing appended) for a value it would refuse. For hot
 // loops whose error context costs more than the number (build it only when this fails).
 bool try_append_fixed(std::string& out, double v, int decimals);
+// A CSV cell: v with `significant` digits (%g), or empty for NaN and inf (a cell with no value):
+// no CSV a tool writes holds "nan" or "inf".
+std::string csv_cell(double v, int significant = 6);
 // v with `decimals` digits after the point, for reports and tables ("nan" and "inf" as such).
 std::string fixed(double v, int decimals);
 

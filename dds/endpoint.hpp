@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "core/errors.hpp"
+#include "dds/msg_fields.hpp"
 #include "dds/participant.hpp"
 
 namespace dw::dds {
@@ -77,8 +78,10 @@ public:
     Writer(const Writer&) = delete;
     Writer& operator=(const Writer&) = delete;
 
-    // Publishes the sample; its header.seq is set to this writer's next sequence number.
+    // Publishes the sample; its header.seq is set to this writer's next sequence number. On a
+    // command topic a sample holding NaN or inf is not published (false, reported once).
     bool write(T& sample) {
+        if (!sendable(sample)) return false;
         before_first_sample();
         sample.header().seq(next_seq_++);
         const bool ok = writer_->write(&sample);
@@ -92,6 +95,7 @@ public:
 
     // Publishes the sample exactly as given, header.seq included (replaying a recording).
     bool write_as_is(const T& sample) {
+        if (!sendable(sample)) return false;
         before_first_sample();
         const bool ok = writer_->write(const_cast<T*>(&sample));
         (ok ? stats_->samples : stats_->lost).fetch_add(1, std::memory_order_relaxed);
@@ -134,7 +138,16 @@ public:
     std::string qos_text() const { return describe(qos_); }
     eprosima::fastdds::dds::DataWriter& native() { return *writer_; }
 
+    // Samples refused by write() and write_as_is(): NaN or inf on a command topic.
+    std::uint64_t refused() const { return refused_; }
+
 private:
+    bool sendable(const T& sample) {
+        if (!spec_.command || all_finite(sample)) return true;
+        if (refused_++ == 0)
+            participant_.report_problem(name_ + ": a sample holding NaN or inf was not published (a command topic)");
+        return false;
+    }
     // A sensor topic's first sample waits for the lab's required readers (DdsConfig::await_readers):
     // best-effort samples sent before they match are lost to them.
     void before_first_sample() {
@@ -168,6 +181,7 @@ private:
             qos_mismatch_line(name_, spec_.type_name, false, describe(qos_), s.last_policy_id, s.total_count));
     }
 
+    std::uint64_t refused_ = 0;
     detail::ReportedPolicies reported_;
     Participant& participant_;
     Topic<T> spec_;

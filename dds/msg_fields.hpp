@@ -3,7 +3,9 @@
 // visited by the JSON conversion (dds/msg_json.hpp) and the CSV export (recordings). A visitor is
 // called v("name", value) for each field; a value is a number, bool, enum, string, another
 // message (IsMessage) or a sequence/array of those (IsSequence).
+#include <cmath>
 #include <concepts>
+#include <type_traits>
 #include <string>
 
 #include "dds/topics.hpp"
@@ -124,5 +126,33 @@ concept IsSequence = !std::same_as<T, std::string> && requires(const T& s) {
     s.begin();
     s.size();
 };
+
+namespace detail {
+struct FiniteCheck {
+    bool ok = true;
+    template <class T>
+    void operator()(const char*, const T& v) {
+        add(v);
+    }
+    template <class T>
+    void add(const T& v) {
+        if constexpr (IsMessage<T>) {
+            fields(v, *this);
+        } else if constexpr (IsSequence<T>) {
+            for (const auto& e : v) add(e);
+        } else if constexpr (std::is_floating_point_v<T>) {
+            ok = ok && std::isfinite(v);
+        }
+    }
+};
+}  // namespace detail
+
+// Whether every floating-point field of a lab message (nested, in sequences) is finite.
+template <class T>
+bool all_finite(const T& m) {
+    detail::FiniteCheck c;
+    c.add(m);
+    return c.ok;
+}
 
 }  // namespace dw::dds

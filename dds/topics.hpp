@@ -56,6 +56,9 @@ struct Topic {
     Roles consumers = 0;                       // who subscribes to it
     Protection protection = Protection::sign;  // on the wire, under DDS Security (dw-lab keys' governance)
     std::string_view protection_reason = {};   // why: what leaking or forging it would cost
+    // It moves vehicles or starts and stops work: no writer publishes a non-finite number on it,
+    // and `dw-recorder replay` leaves it out unless asked (--commands).
+    bool command = false;
 };
 
 namespace topics {
@@ -118,7 +121,8 @@ inline constexpr Topic<VehicleSetpoint> vehicle_setpoint{
     Roles(Role::planner),
     Role::mocap_bridge | Role::recorder | Role::operator_,
     Protection::encrypt,
-    "moves real multirotors over a person-sized stand: no one outside the lab may read or write it"};
+    "moves real multirotors over a person-sized stand: no one outside the lab may read or write it",
+    true};
 inline constexpr Topic<ExperimentPlan> experiment_plan{
     "experiment/plan",
     QosProfile::state,
@@ -138,7 +142,8 @@ inline constexpr Topic<ExperimentCommand> experiment_command{
     Role::planner | Role::operator_,
     Role::stand_agent | Role::planner | Role::recorder,
     Protection::encrypt,
-    "start, abort and calibrate: only the planner and the operator, unseen"};
+    "start, abort and calibrate: only the planner and the operator, unseen",
+    true};
 inline constexpr Topic<ExperimentState> experiment_state{
     "experiment/state",
     QosProfile::state,

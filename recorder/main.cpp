@@ -179,15 +179,22 @@ struct ReplayCommand {
         cmd->add_option("--speed", rp.speed, "x N of the original rate")->check(dw::cli::in({0.01, 1000}));
         cmd->add_option("--wait-readers", rp.wait_readers, "wait for this many readers per topic first")
             ->check(dw::cli::in(dw::dds::kReadersRange));
+        cmd->add_flag("--commands", rp.commands,
+                      "replay command topics too (setpoints, experiment commands): vehicles listening will move");
     }
     int run(dw::dds::Participant& participant) {
         rp.progress = [](double done) {
             std::fprintf(stderr, "\rdw-recorder: replaying %3d %%", static_cast<int>(done * 100));
         };
         rp.stop = dw::Shutdown::instance().token();
-        const auto n = dw::recorder::replay(file, participant, rp);
+        const auto stats = dw::recorder::replay(file, participant, rp);
         std::fprintf(stderr, "\n");
-        std::cout << "replayed " << n << " samples\n";
+        std::cout << "replayed " << stats.sent << " samples\n";
+        if (!stats.left_out.empty())
+            std::cout << "left out the command topics " << dw::log::join(stats.left_out)
+                      << " (--commands replays them: vehicles listening will move)\n";
+        if (stats.refused > 0)
+            std::cout << "not published: " << stats.refused << " command samples holding NaN or inf\n";
         return 0;
     }
 };

@@ -23,6 +23,7 @@ public:
     virtual bool publish(std::span<const std::uint8_t> cdr) = 0;
     virtual bool wait_for_readers(int n, std::chrono::milliseconds timeout) const = 0;
     virtual void wait_for_acknowledgments() = 0;
+    virtual std::uint64_t refused() const = 0;
 };
 template <class T>
 class TypedReplay final : public ReplayChannel {
@@ -36,6 +37,7 @@ public:
         return writer_.wait_for_readers(n, timeout);
     }
     void wait_for_acknowledgments() override { writer_.wait_for_acknowledgments(std::chrono::seconds(5)); }
+    std::uint64_t refused() const override { return writer_.refused(); }
 
 private:
     dds::Writer<T> writer_;
@@ -57,15 +59,18 @@ struct Pending {
     bool operator>(const Pending& o) const { return std::tie(log_time, order) > std::tie(o.log_time, o.order); }
 };
 
-// The writer replaying one recorded channel, or null when it is not replayed.
+// The writer replaying one recorded channel, or null when it is not replayed (a command topic
+// without o.commands is noted in left_out).
 std::unique_ptr<ReplayChannel> writer_for(const mcap::Channel& c, const std::string& type, dds::Participant& p,
-                                          const ReplayOptions& o) {
+                                          const ReplayOptions& o, std::vector<std::string>& left_out) {
     const std::string suffix = recordings::topic_suffix(c.topic);
     if (!o.topics.empty() && std::find(o.topics.begin(), o.topics.end(), suffix) == o.topics.end()) return nullptr;
     std::unique_ptr<ReplayChannel> w;
     dds::topics::for_each([&](const auto& spec) {
         using T = typename std::decay_t<decltype(spec)>::type;
-        if (spec.suffix == suffix && spec.type_name == type) w = std::make_unique<TypedReplay<T>>(p, spec);
+        if (spec.suffix != suffix || spec.type_name != type) return;
+        if (spec.command && !o.commands) left_out.emplace_back(suffix);
+        else w = std::make_unique<TypedReplay<T>>(p, spec);
     });
     if (w && o.wait_readers > 0)
         while (!w->wait_for_readers(o.wait_readers, std::chrono::seconds(1)) && !o.stop.stop_requested()) {}
@@ -73,7 +78,8 @@ std::unique_ptr<ReplayChannel> writer_for(const mcap::Channel& c, const std::str
 }
 }  // namespace
 
-std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayOptions& o) {
+ReplayStats replay(const std::string& path, dds::Participant& p, const ReplayOptions& o) {
+    ReplayStats stats;
     recordings::Catalogue l;
     std::map<std::uint16_t, std::unique_ptr<ReplayChannel>> writers;
     std::priority_queue<Pending, std::vector<Pending>, std::greater<>> pending;
@@ -90,7 +96,7 @@ std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayO
     l.watch(h);
     h.on_channel = [&](const mcap::Channel& c) {
         l.channels[c.id] = c;
-        if (!writers.count(c.id)) writers[c.id] = writer_for(c, l.type_of(c), p, o);
+        if (!writers.count(c.id)) writers[c.id] = writer_for(c, l.type_of(c), p, o, stats.left_out);
     };
     h.on_message = [&](const mcap::Message& m) {
         if (o.stop.stop_requested()) throw Stopped("the replay");
@@ -111,11 +117,16 @@ std::uint64_t replay(const std::string& path, dds::Participant& p, const ReplayO
         for (; !pending.empty() && !o.stop.stop_requested(); pending.pop()) publish(pending.top());
     } catch (const Stopped&) {}
     if (std::none_of(writers.begin(), writers.end(), [](const auto& w) { return w.second != nullptr; }))
-        throw InputError(log::cat(path, ": no recorded topic to replay"));
-    for (const auto& [id, w] : writers)
-        if (w) w->wait_for_acknowledgments();
+        throw InputError(log::cat(path, ": no recorded topic to replay",
+                                  stats.left_out.empty() ? "" : " (command topics are replayed with --commands)"));
+    for (const auto& [id, w] : writers) {
+        if (!w) continue;
+        w->wait_for_acknowledgments();
+        stats.refused += w->refused();
+    }
     if (o.progress) o.progress(1.0);
-    return sent;
+    stats.sent = sent;
+    return stats;
 }
 
 }  // namespace dw::recorder

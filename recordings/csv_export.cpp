@@ -1,5 +1,6 @@
 // dw-recorder export --csv: one CSV per topic, each message decoded once into its row — straight
 // from the typed message to text (dds/msg_fields.hpp), no JSON in between.
+#include <cmath>
 #include <array>
 #include <atomic>
 #include <charconv>
@@ -78,7 +79,9 @@ template <class T>
 void append_value(RowText& line, const T& v) {
     if constexpr (std::is_same_v<T, bool>) line.put(v ? "true" : "false");
     else if constexpr (std::is_enum_v<T>) line.number(static_cast<std::int64_t>(v));
-    else if constexpr (std::is_arithmetic_v<T>) line.number(v);
+    else if constexpr (std::is_floating_point_v<T>) {
+        if (std::isfinite(v)) line.number(v);  // NaN or inf: an empty cell (no value), never "nan"
+    } else if constexpr (std::is_arithmetic_v<T>) line.number(v);
     else append_string(line, v);
 }
 

@@ -304,10 +304,10 @@ TEST(Recorder, ReplayRepublishesRecordedSamplesIntact) {
                           {"echo", "stand/wrench", "mocap/frame", "experiment/command", "--expect", "15", "--timeout",
                            "120", "--quiet", "--summary", lab.dir.file("echo.json")},
                           "echo");
-    const auto r =
-        dw::test::run({bin("dw-recorder"), "replay", file, "stand/wrench", "mocap/frame", "experiment/command",
-                       "--speed", "4", "--wait-readers", "1", "--domain", lab.domain, "--namespace", lab.ns},
-                      lab.dir);
+    const auto r = dw::test::run(
+        {bin("dw-recorder"), "replay", file, "stand/wrench", "mocap/frame", "experiment/command", "--commands",
+         "--speed", "4", "--wait-readers", "1", "--domain", lab.domain, "--namespace", lab.ns},
+        lab.dir);
     ASSERT_EQ(r.status, 0) << r.err;
     ASSERT_EQ(echo.wait_for(120000ms), std::optional<int>(0)) << lab.text("echo.out");
     const json s = json::parse(lab.text("echo.json"));
@@ -315,6 +315,51 @@ TEST(Recorder, ReplayRepublishesRecordedSamplesIntact) {
         EXPECT_EQ(t["intact"], 15) << t.dump();
         EXPECT_EQ(t["corrupt"], 0) << t.dump();
     }
+}
+
+// Issue 43: a recording holding NaN setpoints was replayed onto vehicles/setpoint (a listener got
+// them, exit 0). Command topics are now left out unless --commands, and even then no sample
+// holding NaN or inf is published.
+TEST(Recorder, ReplayLeavesCommandTopicsOutAndNeverPublishesANonFiniteSetpoint) {
+    Lab lab;
+    const std::string file = lab.dir.file("nan.mcap");
+    {
+        dw::testkit::LabRecording rec(file);
+        const auto ch = rec.channel(dw::dds::topics::vehicle_setpoint, lab.ns);
+        for (std::uint32_t i = 0; i < 10; ++i) {
+            auto m = dw::probe::make_sample<dw::msg::VehicleSetpoint>(i);
+            if (i % 3 == 2) m.position_m().x(std::numeric_limits<double>::quiet_NaN());
+            if (i == 4) m.yaw_rad(std::numeric_limits<double>::infinity());
+            rec.write(ch, i, 1'000'000'000ull + i * 10'000'000ull, m);
+        }
+        rec.close();
+    }
+    const auto dds = std::vector<std::string>{"--domain", lab.domain, "--namespace", lab.ns};
+    auto replay = [&](std::vector<std::string> extra) {
+        std::vector<std::string> cmd{bin("dw-recorder"), "replay", file, "--wait-readers", "1"};
+        cmd.insert(cmd.end(), extra.begin(), extra.end());
+        cmd.insert(cmd.end(), dds.begin(), dds.end());
+        return dw::test::run(cmd, lab.dir);
+    };
+    const auto without = replay({});
+    EXPECT_EQ(without.status, 2) << without.err;
+    EXPECT_NE(without.err.find("no recorded topic to replay (command topics are replayed with --commands)"),
+              std::string::npos)
+        << without.err;
+
+    auto echo = lab.start("dw-probe",
+                          {"echo", "vehicles/setpoint", "--expect", "6", "--timeout", "60", "--quiet", "--summary",
+                           lab.dir.file("echo.json")},
+                          "echo");
+    const auto with = replay({"--commands"});
+    ASSERT_EQ(with.status, 0) << with.err;
+    EXPECT_NE(with.out.find("replayed 6 samples"), std::string::npos) << with.out;
+    EXPECT_NE(with.out.find("not published: 4 command samples holding NaN or inf"), std::string::npos) << with.out;
+    ASSERT_EQ(echo.wait_for(60000ms), std::optional<int>(0)) << lab.text("echo.out") << lab.text("echo.err");
+    const json s = json::parse(lab.text("echo.json"));
+    ASSERT_EQ(s["topics"].size(), 1u);
+    EXPECT_EQ(s["topics"][0]["intact"], 6) << s.dump();
+    EXPECT_EQ(s["topics"][0]["corrupt"], 0) << s.dump();
 }
 
 TEST(Recorder, InfoShowsTopicsAndRefusesDamagedFilesClearly) {
@@ -352,6 +397,32 @@ TEST(Recorder, ExportsCsvPerTopic) {
     EXPECT_NE(lines[0].find("header.seq"), std::string::npos);
     const auto mocap = dw::test::lines(dw::read_file(lab.dir.file("csv/mocap_frame.csv")));
     EXPECT_NE(mocap[0].find("bodies[0].position_m.x"), std::string::npos) << mocap[0];
+}
+
+// Issue 43: `export --csv` wrote "nan,inf" for a recorded NaN or inf; such a cell is now empty.
+TEST(Recorder, CsvExportWritesNoNanOrInf) {
+    TempDir dir;
+    const std::string file = dir.file("nan.mcap");
+    {
+        dw::testkit::LabRecording rec(file);
+        const auto ch = rec.channel(dw::dds::topics::stand_wrench);
+        for (std::uint32_t i = 0; i < 4; ++i) {
+            auto m = dw::probe::make_sample<dw::msg::WrenchStamped>(i);
+            m.force_n().x(i == 1 ? std::numeric_limits<double>::quiet_NaN() : 1.5);
+            m.torque_nm().z(i == 2 ? -std::numeric_limits<double>::infinity() : 0.25);
+            rec.write(ch, i, 1'000'000'000ull + i * 12'500'000ull, m);
+        }
+        rec.close();
+    }
+    const auto r = dw::test::run({bin("dw-recorder"), "export", file, "--csv", dir.file("csv")}, dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto lines = dw::test::lines(dw::read_file(dir.file("csv/stand_wrench.csv")));
+    ASSERT_EQ(lines.size(), 5u);
+    for (std::size_t i = 1; i < lines.size(); ++i) {  // the header has "nanosec"
+        EXPECT_EQ(lines[i].find("nan"), std::string::npos) << lines[i];
+        EXPECT_EQ(lines[i].find("inf"), std::string::npos) << lines[i];
+    }
+    EXPECT_NE(lines[2].find(",,"), std::string::npos) << "the NaN's cell is empty: " << lines[2];
 }
 
 TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
