@@ -143,6 +143,15 @@ private:
 };
 
 constexpr std::uint64_t kMaxChunk = 1ull << 30;  // a sanity bound on a chunk's uncompressed size
+// What a compressed chunk may claim to hold: any size up to kAnyChunk (the lab writes 1 MiB
+// chunks), beyond that at most kMaxRatio times its compressed bytes (recorded CDR compresses
+// 3-20:1). A file of fake chunk headers each claiming 1 GiB made recover allocate and zero each.
+constexpr std::uint64_t kAnyChunk = 8ull << 20;
+constexpr std::uint64_t kMaxRatio = 100;
+// Schema data, per schema and in all (the lab's IDL is a few KB, a ROS bag's a few hundred):
+// schemas are written uncompressed, so a compressed chunk of huge schemas grew 7 MB into 528 MB.
+constexpr std::uint64_t kMaxSchemaBytes = 1ull << 20;
+constexpr std::uint64_t kMaxSchemaBytesInAll = 16ull << 20;
 
 std::string compress(Compression c, const std::string& in) {
     if (c == Compression::zstd) {
@@ -169,6 +178,11 @@ std::vector<std::uint8_t> decompress(const std::string& compression, std::span<c
                                      std::uint64_t size, const In& where) {
     if (size > kMaxChunk)
         where.fail(log::cat("chunk claims ", size, " uncompressed bytes (more than the 1 GiB bound)"));
+    if (size > kAnyChunk && size / kMaxRatio > in.size())
+        where.fail(log::cat("chunk claims ", size, " uncompressed bytes from ", in.size(), " compressed (more than ",
+                            kMaxRatio, ":1)"));
+    if (compression == "zstd" && ZSTD_getFrameContentSize(in.data(), in.size()) != size)  // before allocating
+        where.fail("zstd chunk: its frame does not hold the size the chunk claims");
     std::vector<std::uint8_t> out(static_cast<std::size_t>(size));
     if (compression == "zstd") {
         const std::size_t n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
@@ -531,6 +545,7 @@ struct Reading {
     std::uint64_t messages = 0;
     bool salvage = false;  // a message of an unknown channel (its record lost) is counted, not fatal
     std::uint64_t orphaned = 0;
+    std::uint64_t schema_bytes = 0;  // of the schemas handed on
 
     void inner_record(std::uint8_t op, In& in) {
         switch (op) {
@@ -540,10 +555,15 @@ struct Reading {
                 s.name = in.str();
                 s.encoding = in.str();
                 const std::uint32_t n = in.u32();
+                if (n > kMaxSchemaBytes || schema_bytes + n > kMaxSchemaBytesInAll)
+                    in.fail(log::cat("schema data of ", n, " bytes (at most ", kMaxSchemaBytes, " each, ",
+                                     kMaxSchemaBytesInAll, " in all)"));
                 const auto d = in.bytes(n, "schema data");
                 s.data.assign(reinterpret_cast<const char*>(d.data()), d.size());
                 if (s.id == 0) return;  // readers ignore schema id 0
-                if (schemas.insert(s.id).second && h.on_schema) h.on_schema(s);
+                if (!schemas.insert(s.id).second) return;
+                schema_bytes += n;
+                if (h.on_schema) h.on_schema(s);
                 return;
             }
             case kChannel: {
@@ -880,7 +900,8 @@ bool is_closed(const std::string& path) {
     return in.read(tail, sizeof tail) && std::memcmp(tail, kMagic, sizeof kMagic) == 0;
 }
 
-ReadResult recover(const std::string& in_path, const std::string& out_path, const WriterOptions& options) {
+ReadResult recover(const std::string& in_path, const std::string& out_path, const WriterOptions& options,
+                   const std::stop_token& stop) {
     MappedFile mapped(in_path);  // the input is checked before any output exists
     const auto bytes = mapped.bytes();
     if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) {
@@ -904,6 +925,9 @@ ReadResult recover(const std::string& in_path, const std::string& out_path, cons
         };
         h.on_metadata = [&](const Metadata& m) { out.add_metadata(m); };
         h.on_attachment = [&](const Attachment& a) { out.add_attachment(a); };
+        h.on_progress = [&](std::uint64_t, std::uint64_t) {
+            if (stop.stop_requested()) throw Stopped("the recovery");
+        };
         const ReadResult r =
             LinearRead(bytes, h, ReadMode::salvage, [&](std::uint64_t at) { mapped.release_before(at); }).run();
         out.close();

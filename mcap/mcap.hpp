@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <span>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -163,8 +164,10 @@ ReadResult read_file(const std::string& path, const Handlers& handlers);
 // Rebuilds a readable file (indexes, summary, footer) from a truncated or damaged one: every
 // whole, sound record is kept, before and after damaged chunks (a salvage read). The input is
 // checked first (missing, a directory, not MCAP: dw::InputError, and no output is made); the output
-// appears only when complete. Returns what the read of `in` found.
-ReadResult recover(const std::string& in, const std::string& out, const WriterOptions& options);
+// appears only when complete; a stop request ends it (dw::Stopped) with no output. Returns what
+// the read of `in` found.
+ReadResult recover(const std::string& in, const std::string& out, const WriterOptions& options,
+                   const std::stop_token& stop = {});
 
 // True when the file ends with the closing magic: its writer closed it (a killed writer's file does
 // not, and needs recover() to be read).

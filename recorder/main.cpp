@@ -123,7 +123,7 @@ struct RecoverCommand {
     int run() {
         dw::require_writable_path(out, "recover output");
         dw::mcap::WriterOptions o;
-        const auto r = dw::mcap::recover(file, out, o);
+        const auto r = dw::mcap::recover(file, out, o, dw::Shutdown::instance().token());
         std::cout << "recovered " << r.messages << " messages into " << out << "\n";
         for (const auto& problem : r.damage) std::cout << "  lost: " << problem << "\n";
         if (r.skipped_regions > 0 || r.orphaned_messages > 0) {

@@ -373,3 +373,56 @@ TEST(McapRecover, ChecksItsInputBeforeMakingAnyOutput) {
     }
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(d.file("")), std::filesystem::directory_iterator()), 1);
 }
+
+// Issue 43: 12 KB of chunk headers each claiming 1 GiB made recover allocate and zero 1 GiB per
+// chunk (minutes, deaf to SIGINT); a compressed chunk of huge schemas grew 7 MB into 528 MB. A
+// claim is now checked against what the chunk's bytes can hold before anything is allocated, and
+// schema data is bounded.
+TEST(McapRecover, RefusesImpossibleChunkSizesAndHugeSchemasBeforeAllocating) {
+    dw::test::TempDir d;
+    const struct {
+        Compression c;
+        std::uint64_t claim;
+        std::string why;
+    } cases[] = {{Compression::zstd, 1ull << 30, "uncompressed bytes from"},
+                 {Compression::lz4, 1ull << 30, "uncompressed bytes from"},
+                 {Compression::zstd, 4ull << 20, "its frame does not hold the size the chunk claims"}};
+    for (const auto& c : cases) {
+        write_sample(d.file("full.mcap"), c.c, 499, 1024);
+        auto bytes = bytes_of(d.file("full.mcap"));
+        const auto chunks = chunk_offsets(bytes);
+        ASSERT_GT(chunks.size(), 5u);
+        for (std::size_t k = 0; k < chunks.size(); k += 2)
+            std::memcpy(bytes.data() + chunks[k] + 9 + 16, &c.claim, 8);  // uncompressed_size
+        write_bytes(d.file("bad.mcap"), bytes);
+        WriterOptions o;
+        o.fsync = false;
+        const ReadResult r = recover(d.file("bad.mcap"), d.file("fixed.mcap"), o);
+        EXPECT_EQ(r.skipped_regions, (chunks.size() + 1) / 2);
+        ASSERT_FALSE(r.damage.empty());
+        EXPECT_NE(r.damage[0].find(c.why), std::string::npos) << r.damage[0];
+        EXPECT_GT(sequences(d.file("fixed.mcap")).size(), 200u);  // the other chunks are kept
+    }
+    {
+        WriterOptions o;
+        o.fsync = false;
+        o.compression = Compression::zstd;
+        Writer w(d.file("schemas.mcap"), o);
+        w.add_schema("big", "omgidl", std::string((1 << 20) + 1, 'x'));
+        w.close();
+    }
+    const ReadResult r = read_file(d.file("schemas.mcap"), {});
+    ASSERT_TRUE(r.error);
+    EXPECT_NE(r.error->find("schema data of 1048577 bytes (at most 1048576 each"), std::string::npos) << *r.error;
+}
+
+TEST(McapRecover, StopsWhenAskedAndLeavesNoOutput) {
+    dw::test::TempDir d;
+    write_sample(d.file("full.mcap"), Compression::zstd, 499, 1024);
+    std::stop_source stop;
+    stop.request_stop();
+    WriterOptions o;
+    o.fsync = false;
+    EXPECT_THROW(recover(d.file("full.mcap"), d.file("fixed.mcap"), o, stop.get_token()), dw::Stopped);
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(d.file("")), std::filesystem::directory_iterator()), 1);
+}
