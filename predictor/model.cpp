@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/names.hpp"
 #include "core/errors.hpp"
 #include "core/config.hpp"
 #include "core/files.hpp"
@@ -217,6 +218,8 @@ void model_keys(KeyVisitor& k, LearntModel& m) {
     for (const char* key : {"format", "kind", "structure", "input", "output", "phi"}) required(k, key);
     k.constant("format", kModelFormat);
     k.text("kind", m.kind);
+    k.require(find_name(kModelKinds, m.kind).has_value(), "kind",
+              unknown_name_problem("model kind", m.kind, kModelKinds));
     k.enumeration("structure", m.structure, kStructureNames, "structure");
     k.section("input", [&](KeyVisitor& in) {
         names(in, "features", kFeatureNames);

@@ -17,6 +17,7 @@
 // Deep Sets alone sees the set: each neighbour's features end with w_j (jet_overlap; 0 for a sum
 // model). On a baseline it also weighs its term, so Deep Sets departs from its baseline only where
 // two neighbours' jets overlap — never for one neighbour, nor low down, where jets are narrow.
+#include <array>
 #include <Eigen/Core>
 #include <memory>
 #include <mutex>
@@ -120,10 +121,12 @@ Features features_of(const RelState& x);                             // one neig
 Features features_of(std::span<const RelState> set, std::size_t j);  // j in its set: the largest overlap
 
 inline constexpr const char* kModelFormat = "downwash-model/3";
+// The learnt models' kinds, as model files and --kind name them.
+inline constexpr std::array<const char*, 3> kModelKinds = {"naive_linear", "learnt_linear", "deep_sets"};
 
 class LearntModel final : public ForceModel {
 public:
-    std::string kind;  // naive_linear, learnt_linear, deep_sets (the model's name)
+    std::string kind;  // one of kModelKinds (the model's name)
     Structure structure = Structure::sum;
     std::array<float, kFeatureSize> input_mean{}, input_std{};
     std::array<float, 6> output_scale{};

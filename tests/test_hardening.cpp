@@ -157,6 +157,34 @@ TEST(Yaml, DuplicateKeysAreAnErrorAtTheSecondKey) {
     EXPECT_NO_THROW(dw::load_yaml("a: {c: 1}\nb: {c: 2}\n", "p.yaml"));
 }
 
+// Issue 43: a 547-byte alias bomb kept dw-sim busy past two minutes (the key walk expanded the
+// aliases), a second document was silently ignored, and nesting deep enough ends a recursive parser.
+TEST(Yaml, AliasBombsSecondDocumentsAndDeepNestingAreRefusedInOneLine) {
+    std::string prev = "a";
+    std::string bomb = "a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n";
+    for (char c = 'b'; c <= 'i'; ++c) {
+        const std::string name(1, c);
+        bomb += name + ": &" + name + " [";
+        for (int k = 0; k < 9; ++k) bomb += (k ? ", *" : "*") + prev;
+        bomb += "]\n";
+        prev = name;
+    }
+    const struct {
+        std::string text, expect;
+    } cases[] = {
+        {bomb, "p.yaml: more than"},
+        {"format: x\n---\nb: 1\n", "p.yaml:3: a second document (after '---'): one document per file"},
+        {"a: " + std::string(100000, '[') + std::string(100000, ']') + "\n", "p.yaml: nests deeper than 64 levels"},
+    };
+    for (const auto& c : cases) {
+        const std::string e = error_of([&] { dw::load_yaml(c.text, "p.yaml"); });
+        EXPECT_EQ(e.rfind(c.expect, 0), 0u) << e;
+        EXPECT_LE(e.size(), 200u) << e;
+    }
+    EXPECT_NO_THROW(dw::load_yaml("a: &x {b: 1}\nc: *x\n", "p.yaml"));  // an alias as such is fine
+    EXPECT_NO_THROW(dw::load_yaml("", "p.yaml"));                       // empty: no settings
+}
+
 TEST(Numbers, AppendFixedWritesExactlyWhatItFormatted) {
     std::string out = "x";
     dw::append_fixed(out, 1e300, 6, "v");

@@ -322,6 +322,10 @@ TEST(PredictorModel, BadModelFilesNameTheField) {
     };
     expect_error("{", "bad.json:1:1: not valid JSON");
     expect_error(R"({"format": "something/1"})", "format");
+    auto unknown_kind = nlohmann::json::parse(text);  // issue 43: was accepted
+    unknown_kind["kind"] = "crystal_ball";
+    expect_error(unknown_kind.dump(),
+                 "unknown model kind 'crystal_ball' (expected naive_linear, learnt_linear or deep_sets)");
     auto broken = nlohmann::json::parse(text);
     broken["structure"] = "ring";
     expect_error(broken.dump(), "structure");
