@@ -410,8 +410,9 @@ void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOption
 
 }  // namespace
 
-void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir) {
-    fs::create_directories(dir);
+void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& out) {
+    StagedFolder staged(out);  // the report and its figures appear together, or not at all
+    const std::string& dir = staged.path();
     const auto measured = measured_clock(f);
     write_file((fs::path(dir) / "report.json").string(), report_json(r, o, measured).dump(2) + "\n");
     write_file((fs::path(dir) / "physics.yaml").string(), physics::to_yaml(r.fitted));
@@ -439,6 +440,7 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
        << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects "
           "on).\n";
     write_file((fs::path(dir) / "report.md").string(), md.str());
+    staged.commit();
 }
 
 }  // namespace dw::analysis

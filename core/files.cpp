@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
@@ -153,6 +154,38 @@ void AtomicFile::commit() {
         ::unlink(tmp_.c_str());
         throw RuntimeError(log::cat("cannot write ", path_, ": ", std::strerror(err)));
     }
+}
+
+StagedFolder::StagedFolder(const std::string& dir) : dir_(dir) {
+    std::error_code ec;
+    made_dir_ = !fs::exists(dir_, ec);
+    staging_ = (fs::path(dir_) / log::cat(".staging-", ::getpid())).string();
+    fs::remove_all(staging_, ec);  // a staging folder of a killed process with this pid
+    if (!fs::create_directories(staging_, ec) || ec)
+        throw RuntimeError(log::cat("cannot write ", dir_, ": ", ec ? ec.message() : "cannot create a folder in it"));
+}
+
+StagedFolder::~StagedFolder() {
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+    if (!committed_ && made_dir_) fs::remove(dir_, ec);  // only if empty: nothing else was put there
+}
+
+void StagedFolder::commit() {
+    std::error_code ec;
+    std::vector<fs::path> files;
+    for (auto it = fs::recursive_directory_iterator(staging_, ec); !ec && it != fs::recursive_directory_iterator();
+         it.increment(ec)) {
+        const fs::path to = fs::path(dir_) / fs::relative(it->path(), staging_);
+        if (it->is_directory()) fs::create_directories(to, ec);
+        else files.push_back(it->path());
+        if (ec) break;
+    }
+    for (std::size_t i = 0; !ec && i < files.size(); ++i)
+        fs::rename(files[i], fs::path(dir_) / fs::relative(files[i], staging_), ec);
+    if (ec) throw RuntimeError(log::cat("cannot write ", dir_, ": ", ec.message()));
+    committed_ = true;
+    fs::remove_all(staging_, ec);
 }
 
 void write_file(const std::string& path, std::string_view content, unsigned mode) {

@@ -50,6 +50,26 @@ private:
     std::string buffer_;
 };
 
+// A multi-file output (a flight folder, a report, a keystore) whole or not at all: its files are
+// written under path() (a staging folder inside `dir`, .staging-<pid>) and moved into `dir` by
+// commit(), each by a rename. Destroyed before commit() (an error, a stop), it removes the staging
+// folder, and `dir` too when it made it. Throws dw::RuntimeError naming the folder.
+class StagedFolder {
+public:
+    explicit StagedFolder(const std::string& dir);
+    ~StagedFolder();
+    StagedFolder(const StagedFolder&) = delete;
+    StagedFolder& operator=(const StagedFolder&) = delete;
+
+    const std::string& path() const { return staging_; }
+    const std::string& dir() const { return dir_; }
+    void commit();
+
+private:
+    std::string dir_, staging_;
+    bool made_dir_ = false, committed_ = false;
+};
+
 // Throws dw::InputError when `path` cannot become a file: it is empty or a directory, or its
 // folder does not exist; dw::RuntimeError (exit 1) when the folder exists but cannot be written
 // (a read-only file system, permissions). Creates nothing: for checking an output option before

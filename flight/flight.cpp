@@ -395,11 +395,7 @@ constexpr const char* kQuaternion[] = {"qw", "qx", "qy", "qz"};
 constexpr const char* kPosition[] = {"n", "e", "d"};
 }  // namespace
 
-FlightWriter::FlightWriter(const std::string& dir) : root_(dir) {
-    std::error_code ec;
-    created_ = !fs::exists(root_, ec);
-    fs::create_directories(root_, ec);
-    if (ec) throw RuntimeError(log::cat("cannot create the flight folder ", dir, ": ", ec.message()));
+FlightWriter::FlightWriter(const std::string& dir) : staged_(dir), root_(staged_.path()) {
     wrench_.emplace((root_ / "wrench.csv").string());
     poses_.emplace((root_ / "poses.csv").string());
     for (const auto& column : wrench_columns()) row_ += (row_.empty() ? "" : ",") + column;
@@ -408,11 +404,8 @@ FlightWriter::FlightWriter(const std::string& dir) : root_(dir) {
 }
 
 FlightWriter::~FlightWriter() {
-    if (closed_) return;
-    wrench_.reset();  // their temporaries go first, then the folder if this writer made it
+    wrench_.reset();  // their temporaries go first, then the staging folder (StagedFolder)
     poses_.reset();
-    std::error_code ec;
-    if (created_) fs::remove(root_, ec);
 }
 
 void FlightWriter::wrench(const WrenchSample& s) {
@@ -458,10 +451,14 @@ void FlightWriter::close(const Meta& meta, const std::optional<std::vector<Leg>>
     const std::string meta_json = meta_text(meta);
     wrench_->commit();
     poses_->commit();
-    closed_ = true;
     write_file((root_ / "meta.json").string(), meta_json);
     if (legs) write_file((root_ / "legs.csv").string(), legs_text);
     if (meta.reference) write_file((root_ / "reference.csv").string(), reference_text);
+    staged_.commit();
+    // A flight written over another: its optional files, if this one has none, would be read as this one's.
+    std::error_code ec;
+    if (!legs) fs::remove(fs::path(staged_.dir()) / "legs.csv", ec);
+    if (!meta.reference) fs::remove(fs::path(staged_.dir()) / "reference.csv", ec);
 }
 
 void write_flight(const Flight& f, const std::string& dir) {

@@ -138,9 +138,9 @@ void require_dense(const Flight& f, const std::string& where);
 void write_flight(const Flight& flight, const std::string& dir);
 
 // A flight folder written sample by sample, in the order given (each file's rows must come in time
-// order): memory independent of the flight's length. Each file appears whole or not at all; a
-// writer destroyed before close() (a non-finite value, a stop) leaves no files, and no folder if it
-// made the folder. Throws dw::RuntimeError (cannot write) or dw::InputError (a value not finite:
+// order): memory independent of the flight's length. The folder's files appear together at close()
+// or not at all (a full disk, a late error): a writer destroyed before close() (a non-finite value,
+// a stop) leaves no files, and no folder if it made the folder. Throws dw::RuntimeError (cannot write) or dw::InputError (a value not finite:
 // file, row and column).
 class FlightWriter {
 public:
@@ -157,8 +157,8 @@ public:
                const std::vector<WrenchSample>& reference = {});
 
 private:
-    std::filesystem::path root_;
-    bool created_ = false, closed_ = false;
+    StagedFolder staged_;         // the folder appears whole at close(), or not at all
+    std::filesystem::path root_;  // where the files are written until then (staged_.path())
     std::optional<AtomicFile> wrench_, poses_;
     std::string row_;
     std::size_t wrench_rows_ = 0, pose_rows_ = 0;

@@ -98,7 +98,8 @@ RealResult run_real(const RealOptions& o) {
     auto say = [&](const std::string& line) {
         if (o.progress) o.progress(line);
     };
-    const fs::path out(o.out_dir);
+    StagedFolder staged(o.out_dir);  // models, tables and map appear together, or not at all
+    const fs::path out(staged.path()), final_out(o.out_dir);
     Dataset all, seen, unseen;
     DatasetOptions dopt;
     dopt.physics = o.physics;
@@ -163,8 +164,8 @@ RealResult run_real(const RealOptions& o) {
 
     say("comparing on the held-out blocks");
     r.table = compare(models, split.test);
-    r.map_path = (out / "map_f_d.png").string();
-    draw_maps(models, split.test, r.map_path);
+    draw_maps(models, split.test, (out / "map_f_d.png").string());
+    r.map_path = (final_out / "map_f_d.png").string();
     std::string md = "# Force models on recorded flights\n\n";
     for (const auto& s : all.sources)
         md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
@@ -178,10 +179,11 @@ RealResult run_real(const RealOptions& o) {
     md += reference_note(references, missing);
     md += to_markdown(r.table, {});
     md += "\n![f_d by relative position](map_f_d.png)\n";
-    r.markdown_path = (out / "table.md").string();
-    r.csv_path = (out / "table.csv").string();
-    write_file(r.markdown_path, md);
-    write_file(r.csv_path, to_csv(r.table));
+    write_file((out / "table.md").string(), md);
+    write_file((out / "table.csv").string(), to_csv(r.table));
+    staged.commit();
+    r.markdown_path = (final_out / "table.md").string();
+    r.csv_path = (final_out / "table.csv").string();
     return r;
 }
 

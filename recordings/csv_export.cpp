@@ -346,6 +346,9 @@ void csv_pass(const std::string& path, const std::string& dir, const std::stop_t
     l.watch(h);
     std::array<CsvWorker, 2> workers;
     struct WorkerFailed {};  // stops the read: the worker's own error is rethrown below
+    struct Collision {       // two channels of one CSV name: bad input, said after the read stops
+        std::string what;
+    };
     std::array<Batch, 2> batches;
     auto hand_over = [&](std::size_t w) {
         workers[w].push(std::move(batches[w]));
@@ -358,7 +361,14 @@ void csv_pass(const std::string& path, const std::string& dir, const std::stop_t
         const mcap::Channel& c = l.channels.at(m.channel_id);
         CsvTable& t = tables[m.channel_id];
         if (!t.codec && !(t.codec = codec_for(l.type_of(c)))) return;  // not a lab type: no CSV
-        if (!t.out) t.out = std::make_unique<AtomicFile>(csv_path(dir, c)), t.where = log::cat(path, ": ", c.topic);
+        if (!t.out) {
+            const std::string file = csv_path(dir, c);
+            for (const auto& [id, other] : tables)
+                if (id != m.channel_id && other.out && other.out->path() == file)
+                    throw Collision{log::cat(other.where, " and ", c.topic, " would both be written to ",
+                                             std::filesystem::path(file).filename().string())};
+            t.out = std::make_unique<AtomicFile>(file), t.where = log::cat(path, ": ", c.topic);
+        }
         const std::size_t w = m.channel_id % workers.size();
         if (workers[w].failed()) throw WorkerFailed{};
         Batch& b = batches[w];
@@ -367,17 +377,24 @@ void csv_pass(const std::string& path, const std::string& dir, const std::stop_t
         if (b.messages.size() >= CsvWorker::kBatch) hand_over(w);
     };
     mcap::ReadResult result;
+    std::optional<std::string> collision;
     try {
         result = mcap::read_file(path, h);
-    } catch (const WorkerFailed&) {}
+    } catch (const WorkerFailed&) {
+    } catch (const Collision& c) {
+        collision = c.what;
+    }
     for (std::size_t w = 0; w < workers.size(); ++w) hand_over(w);
     for (auto& w : workers) w.finish();
+    if (collision) throw InputError(*collision);
     require_sound(result, path);
 }
 
 }  // namespace
 
-void export_csv(const std::string& path, const std::string& dir, const std::stop_token& stop) {
+void export_csv(const std::string& path, const std::string& out, const std::stop_token& stop) {
+    StagedFolder staged(out);  // every topic's CSV appears together, or none
+    const std::string& dir = staged.path();
     std::map<std::uint16_t, CsvTable> tables;
     csv_pass(path, dir, stop, tables, [](std::uint16_t) { return true; });
     std::map<std::uint16_t, CsvTable> grown;
@@ -391,6 +408,7 @@ void export_csv(const std::string& path, const std::string& dir, const std::stop
         if (t.out && !t.grew) t.commit();
     for (auto& [id, t] : grown)
         if (t.out) t.commit();
+    staged.commit();
 }
 
 }  // namespace dw::recordings

@@ -133,10 +133,10 @@ struct Ca {
     Key key;
 };
 
-// The keystore's CA: made when the folder has none.
-Ca ensure_ca(const dds::KeystorePaths& k, int days, bool& made) {
-    made = !fs::exists(k.ca_cert());
-    if (!made) return {read_cert(k.ca_cert()), read_key(k.ca_key())};
+// The keystore's CA: read from `have`, or made into `k` when it has none.
+Ca ensure_ca(const dds::KeystorePaths& have, const dds::KeystorePaths& k, int days, bool& made) {
+    made = !fs::exists(have.ca_cert());
+    if (!made) return {read_cert(have.ca_cert()), read_key(have.ca_key())};
     Key key = new_key();
     Cert cert = make_cert("Downwash Lab CA", key.get(), nullptr, nullptr, days);
     write_file(k.ca_key(), pem(key.get()), kPrivate);
@@ -174,22 +174,25 @@ std::vector<IdentityRequest> role_identities() {
 
 KeystoreResult create_keystore(const KeystoreOptions& o) {
     check(o);
-    const dds::KeystorePaths k{o.dir};
+    const dds::KeystorePaths have{o.dir};
+    StagedFolder staged(o.dir);  // every new file appears together, or none (a full disk, an error)
+    const dds::KeystorePaths k{staged.path()};
     KeystoreResult r;
-    const Ca ca = ensure_ca(k, o.days, r.new_ca);
-    if (r.new_ca || !fs::exists(k.governance())) {
+    const Ca ca = ensure_ca(have, k, o.days, r.new_ca);
+    if (r.new_ca || !fs::exists(have.governance())) {
         const std::string g = governance_xml();
         write_file(k.governance_xml(), g);
         write_file(k.governance(), smime_sign(g, ca.cert.get(), ca.key.get()));
     }
     for (const auto& id : o.identities) {
-        if (fs::exists(k.cert(id.name))) {
+        if (fs::exists(have.cert(id.name))) {
             r.kept.push_back(id.name);
             continue;
         }
         make_identity(k, ca, id, o.days);
         r.created.push_back(id.name);
     }
+    staged.commit();
     return r;
 }
 

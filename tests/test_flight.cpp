@@ -1,11 +1,15 @@
 // Flight folders (downwash-flight/1): round trip, and every rule enforced with file:line.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
 #include "flight/flight.hpp"
 #include "support.hpp"
 
@@ -286,4 +290,51 @@ TEST(FlightFolder, HostileFilesAreRefusedInOneShortLocatedLine) {
         EXPECT_THROW(write_flight(f, out), dw::InputError) << name;
         EXPECT_FALSE(std::filesystem::exists(out)) << "a refused flight left its folder behind";
     }
+}
+
+// Issue 43: a multi-file output whole or not at all. A folder staged and given up leaves nothing
+// (and never touches what was in the folder before); a flight whose last file cannot be written
+// (here a file-size limit, as a full disk would) leaves no folder, where wrench.csv, poses.csv and
+// meta.json used to stay without it.
+TEST(StagedFolder, AnOutputAppearsWholeOrNotAtAll) {
+    namespace fs = std::filesystem;
+    dw::test::TempDir d;
+    {
+        dw::StagedFolder out(d.file("new"));
+        write(out.path() + "/a.txt", "a");
+    }
+    EXPECT_FALSE(fs::exists(d.file("new")));
+    fs::create_directories(d.file("old"));
+    write(d.file("old/mine.txt"), "the user's");
+    {
+        dw::StagedFolder out(d.file("old"));
+        fs::create_directories(out.path() + "/figures");
+        write(out.path() + "/figures/b.png", "b");
+    }
+    EXPECT_EQ(std::distance(fs::directory_iterator(d.file("old")), fs::directory_iterator()), 1);
+    {
+        dw::StagedFolder out(d.file("old"));
+        fs::create_directories(out.path() + "/figures");
+        write(out.path() + "/figures/b.png", "b");
+        out.commit();
+    }
+    EXPECT_EQ(dw::read_file(d.file("old/figures/b.png")), "b");
+    EXPECT_EQ(dw::read_file(d.file("old/mine.txt")), "the user's");
+    EXPECT_EQ(std::distance(fs::directory_iterator(d.file("old")), fs::directory_iterator()), 2);
+
+    Flight f = sample_flight();
+    f.meta.reference = ReferenceInfo{"a model", {"f_d"}};
+    for (int i = 0; i < 3000; ++i) f.reference.push_back({0.001 * i, {NAN, NAN, 1.25, NAN, NAN, NAN}});
+    rlimit old{};
+    ::getrlimit(RLIMIT_FSIZE, &old);
+    const auto previous = std::signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG instead
+    rlimit small = old;
+    small.rlim_cur = 16 << 10;  // wrench.csv, poses.csv and meta.json fit; reference.csv (~40 KB) does not
+    ::setrlimit(RLIMIT_FSIZE, &small);
+    EXPECT_THROW(write_flight(f, d.file("flight")), dw::RuntimeError);
+    ::setrlimit(RLIMIT_FSIZE, &old);
+    std::signal(SIGXFSZ, previous);
+    EXPECT_FALSE(fs::exists(d.file("flight")));
+    write_flight(f, d.file("flight"));  // and without the limit it is written whole
+    EXPECT_EQ(read_flight(d.file("flight")).reference.size(), 3000u);
 }

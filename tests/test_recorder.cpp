@@ -425,6 +425,30 @@ TEST(Recorder, CsvExportWritesNoNanOrInf) {
     EXPECT_NE(lines[2].find(",,"), std::string::npos) << "the NaN's cell is empty: " << lines[2];
 }
 
+// Issue 43: two channels of one CSV name (the same topic in two namespaces) interleaved their rows
+// in one temporary file and committed it; now that is one line, exit 2, and no folder.
+TEST(Recorder, CsvExportRefusesTwoTopicsOfOneFileNameAndWritesNothing) {
+    TempDir dir;
+    const std::string file = dir.file("two.mcap");
+    {
+        dw::testkit::LabRecording rec(file);
+        const auto a = rec.channel(dw::dds::topics::stand_wrench, "labA");
+        const auto b = rec.channel(dw::dds::topics::stand_wrench, "labB");
+        for (std::uint32_t i = 0; i < 6; ++i) {
+            auto m = dw::probe::make_sample<dw::msg::WrenchStamped>(i);
+            rec.write(i % 2 ? a : b, i, 1'000'000'000ull + i * 12'500'000ull, m);
+        }
+        rec.close();
+    }
+    const auto r = dw::test::run({bin("dw-recorder"), "export", file, "--csv", dir.file("csv")}, dir);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("rt/labB/stand/wrench and rt/labA/stand/wrench would both be written to stand_wrench.csv"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("csv")));
+}
+
 TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
     // A simulated flight, published as the stand agent and the mocap bridge would, recorded.
     dw::physics::FlyOptions fo;
