@@ -13,7 +13,10 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "core/shutdown.hpp"
+#include "core/text.hpp"
+#include "flight/flight.hpp"
 
 namespace dw::importer {
 namespace {
@@ -49,12 +52,39 @@ const std::map<std::string, CrazyflieType>& types() {
     return t;
 }
 
+// What each logged quantity may be: beyond it a log is damaged, not a flight (issue 43: an az of
+// 1e308 was imported). Positions and attitude as a flight folder holds them (flight/flight.hpp).
+constexpr Range kTimeUsRange{0, 1e16, "us"};
+constexpr Range kAccelRange{-1e3, 1e3, "m/s^2"};  // 100 g
+constexpr Range kVelocityRange{-1e3, 1e3, "m/s"};
+constexpr Range kPwmRange{0, 65536};
+constexpr Range kBatteryRange{0, 100, "V"};
+constexpr Range kFazRange{-1e6, 1e6, "gram-force"};
+
 // ---- CSV -----------------------------------------------------------------------------------------
 
 // The CSV columns this importer uses, by header text (the time header says ms; the values are µs).
 constexpr std::array<const char*, 18> kCsvColumns = {
     "time[ms]", "x[m]", "y[m]",    "z[m]",    "ax[m/s^2]", "ay[m/s^2]", "az[m/s^2]", "qx",      "qy",
     "qz",       "qw",   "u1[PWM]", "u2[PWM]", "u3[PWM]",   "u4[PWM]",   "Vbat[V]",   "vx[m/s]", "vz[m/s]"};
+constexpr std::array<Range, kCsvColumns.size()> kCsvRanges = {kTimeUsRange,
+                                                              flight::kPositionRange,
+                                                              flight::kPositionRange,
+                                                              flight::kPositionRange,
+                                                              kAccelRange,
+                                                              kAccelRange,
+                                                              kAccelRange,
+                                                              flight::kQuaternionRange,
+                                                              flight::kQuaternionRange,
+                                                              flight::kQuaternionRange,
+                                                              flight::kQuaternionRange,
+                                                              kPwmRange,
+                                                              kPwmRange,
+                                                              kPwmRange,
+                                                              kPwmRange,
+                                                              kBatteryRange,
+                                                              kVelocityRange,
+                                                              kVelocityRange};
 
 std::vector<std::string_view> split(std::string_view line) {
     std::vector<std::string_view> out;
@@ -101,9 +131,12 @@ VehicleLog read_csv(const std::string& path, VehicleLog log) {
             const auto field = f[at[c]];
             const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), v[c]);
             if (ec != std::errc() || ptr != field.data() + field.size() || !std::isfinite(v[c])) {
-                throw InputError(log::cat(path, ":", line_no, ": column ", kCsvColumns[c], ": '", field,
-                                          "' is not a finite number"));
+                throw InputError(log::cat(path, ":", line_no, ": column ", kCsvColumns[c], ": '",
+                                          quote_bytes(field, kQuotedBytes), "' is not a finite number"));
             }
+            if (!kCsvRanges[c].contains(v[c]))
+                throw InputError(log::cat(path, ":", line_no, ": column ", kCsvColumns[c], ": ",
+                                          range_problem(v[c], kCsvRanges[c])));
         }
         if (std::isnan(first_us)) first_us = v[0];
         log.t_s.push_back((v[0] - first_us) * 1e-6);
@@ -191,7 +224,8 @@ std::vector<Field> binary_header(const std::string& path, const std::string& byt
         const char type = entry[entry.size() - 2];
         if (entry[entry.size() - 3] != '(' || entry.back() != ')' ||
             std::string("IhHf").find(type) == std::string::npos) {
-            throw InputError(log::cat(path, ": byte ", pos, ": '", entry, "' is not name(T) with T one of I h H f"));
+            throw InputError(log::cat(path, ": byte ", pos, ": '", quote_bytes(entry, kQuotedBytes),
+                                      "' is not name(T) with T one of I h H f"));
         }
         fields.push_back({entry.substr(0, entry.size() - 3), type, offset});
         offset += type_size(type);
@@ -235,17 +269,25 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
         }
         for (std::size_t r = 0; r < k; ++r) {
             const std::uint8_t* rec = b + pos + 1 + r * record;
-            auto v = [&](const Field& f) { return read_value(rec + f.offset, f.type); };
-            if (std::isnan(first_us)) first_us = v(tick);
-            log.t_s.push_back((v(tick) - first_us) * 1e-6);
-            log.position_m.push_back({v(x) / 1000, v(y) / 1000, v(z) / 1000});
-            log.accel_mps2.push_back({v(ax) / 1000, v(ay) / 1000, v(az) / 1000});
+            auto v = [&](const Field& f, const Range& range, double scale = 1) {
+                const double value = read_value(rec + f.offset, f.type) / scale;
+                if (!range.contains(value))
+                    throw InputError(log::cat(path, ": byte ", pos + 1 + r * record + f.offset, ": variable '",
+                                              quote_bytes(f.name, kQuotedBytes), "': ", range_problem(value, range)));
+                return value;
+            };
+            if (std::isnan(first_us)) first_us = v(tick, kTimeUsRange);
+            log.t_s.push_back((v(tick, kTimeUsRange) - first_us) * 1e-6);
+            log.position_m.push_back({v(x, flight::kPositionRange, 1000), v(y, flight::kPositionRange, 1000),
+                                      v(z, flight::kPositionRange, 1000)});
+            log.accel_mps2.push_back({v(ax, kAccelRange, 1000), v(ay, kAccelRange, 1000), v(az, kAccelRange, 1000)});
             std::uint32_t packed = 0;
             std::memcpy(&packed, rec + quat.offset, 4);
             log.quat_xyzw.push_back(decompress_quaternion(packed));
-            log.pwm.push_back({v(pwm[0]) / 65536, v(pwm[1]) / 65536, v(pwm[2]) / 65536, v(pwm[3]) / 65536});
-            log.vbat_v.push_back(v(vbat) / 1000);
-            if (faz != fields.end()) log.faz_g.push_back(v(*faz));
+            log.pwm.push_back({v(pwm[0], kPwmRange, 65536), v(pwm[1], kPwmRange, 65536), v(pwm[2], kPwmRange, 65536),
+                               v(pwm[3], kPwmRange, 65536)});
+            log.vbat_v.push_back(v(vbat, kBatteryRange, 1000));
+            if (faz != fields.end()) log.faz_g.push_back(v(*faz, kFazRange));
         }
         pos += size + 4;
     }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -101,6 +102,14 @@ TEST(Import, DamagedBlocksAreSkippedAndCounted) {
     EXPECT_NE(error_of({d.file("cf52_01"), d.file("cf50_01")}).find("header checksum mismatch"), std::string::npos);
 }
 
+// The column names of a Neural-Swarm CSV's header line ("# a,b,c").
+std::vector<std::string> split_csv_header(const std::string& csv) {
+    std::vector<std::string> out;
+    std::stringstream in(csv.substr(2, csv.find('\n') - 2));
+    for (std::string c; std::getline(in, c, ',');) out.push_back(c);
+    return out;
+}
+
 TEST(Import, BadColumnsAndValuesAreOneLocatedLine) {
     REQUIRE_SHARED_DATA();
     dw::test::TempDir d;
@@ -114,6 +123,17 @@ TEST(Import, BadColumnsAndValuesAreOneLocatedLine) {
     bad.replace(line3, bad.find(',', line3) - line3, "oops");
     std::ofstream(d.file("cf50_01.csv")) << bad;
     EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("cf50_01.csv:3: column time[ms]: 'oops' is not a finite number"),
+              std::string::npos)
+        << error_of({d.file("cf50_01.csv")});
+    // Issue 43: an az of 1e308 was imported (and written into a flight); now one located line.
+    std::string huge = csv;
+    const auto header = split_csv_header(csv);
+    const auto az = static_cast<std::size_t>(std::find(header.begin(), header.end(), "az[m/s^2]") - header.begin());
+    std::size_t at = line3;
+    for (std::size_t c = 0; c < az; ++c) at = huge.find(',', at) + 1;
+    huge.replace(at, huge.find(',', at) - at, "1e308");
+    std::ofstream(d.file("cf50_01.csv")) << huge;
+    EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("cf50_01.csv:3: column az[m/s^2]: 1e+308 is not in [-1000, 1000]"),
               std::string::npos)
         << error_of({d.file("cf50_01.csv")});
     EXPECT_NE(error_of({kData + "swap_ss/cf50_01.csv"}).find("at least two vehicles"), std::string::npos);
