@@ -1,5 +1,7 @@
 #include "core/config.hpp"
 
+#include <cctype>
+#include <cstring>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -44,10 +46,43 @@ private:
     const std::string& name_;
     std::size_t budget_, nodes_ = 0;
 };
+// yaml-cpp 0.7 (Debian bookworm) loops forever, allocating, on a ',' that begins a token outside
+// flow collections (a file that is just ",", or "- 1\n,"): found by tests/test_file_fuzz.cpp. Such
+// a ',' is never valid YAML (an indicator cannot begin a plain scalar), so it is refused first.
+// Quoted scalars and comments are skipped; block scalars (| >) are not told apart (a line of one
+// that begins with ',' is refused too).
+void refuse_stray_commas(std::string_view text, const std::string& name) {
+    int depth = 0;
+    std::size_t line = 1;
+    char quote = 0;
+    bool boundary = true;  // a token may begin here: a line's start, after "- ", ": ", "? ", or a closing ] }
+    auto blank = [&](std::size_t k) { return k >= text.size() || std::isspace(static_cast<unsigned char>(text[k])); };
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (c == '\n') ++line, boundary = true;
+        if (quote) {
+            if (c == quote) quote = 0;
+            continue;
+        }
+        if (c == '#' && (i == 0 || blank(i - 1))) {
+            while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+            continue;
+        }
+        if (c == ',' && depth == 0 && boundary)
+            throw InputError(
+                log::cat(name, ":", line, ": a ',' that begins a value outside [ ] or { }: not valid YAML"));
+        if ((c == '"' || c == '\'') && boundary) quote = c;
+        if (c == '[' || c == '{') ++depth;
+        if ((c == ']' || c == '}') && depth > 0) --depth;
+        if (std::isspace(static_cast<unsigned char>(c))) continue;
+        boundary = ((c == '-' || c == ':' || c == '?') && blank(i + 1)) || ((c == ']' || c == '}') && depth == 0);
+    }
+}
 }  // namespace
 
 YAML::Node load_yaml(const std::string& text, const std::string& name, std::string_view language) {
     require_nesting_at_most(text, kMaxDepth, name);  // the parser recurses per level
+    refuse_stray_commas(text, name);
     std::vector<YAML::Node> documents;
     try {
         documents = YAML::LoadAll(text);
@@ -79,9 +114,14 @@ ConfigFile ConfigFile::parse(const std::string& text, const std::string& name) {
     return c;
 }
 
+namespace {
+constexpr std::size_t kKeyPathChars = 40;  // a key path quoted in an error ("classes[0].jet.strength")
+}  // namespace
+
 std::string located(const std::string& file, const YAML::Node& node, const std::string& key,
                     const std::string& problem) {
-    const std::string what = key.empty() ? problem : key + ": " + problem;  // "" = the document itself
+    const std::string what =
+        key.empty() ? problem : quote_bytes(key, kKeyPathChars) + ": " + problem;  // "" = the document
     if (node && node.Mark().line >= 0)
         return log::cat(file, ":", node.Mark().line + 1, ":", node.Mark().column + 1, ": ", what);
     return log::cat(file, ": ", what);
@@ -92,7 +132,8 @@ void fail_at_node(const std::string& file, const YAML::Node& node, const std::st
 }
 
 std::string unknown_key_problem(const std::string& key, const std::set<std::string>& known) {
-    return log::cat("unknown key '", key, "' (known: ", log::join(known), ")");
+    return log::cat("unknown key '", quote_bytes(key, kQuotedBytes),
+                    "' (known: ", choices(key, {known.begin(), known.end()}, ", "), ")");
 }
 
 }  // namespace dw

@@ -1,3 +1,4 @@
+#include "core/text.hpp"
 #include "core/keys.hpp"
 
 #include <algorithm>
@@ -85,7 +86,8 @@ public:
             if (used_.count(key)) continue;
             fail(kv.first, key,
                  unknown_hint.empty() ? unknown_key_problem(key, used_)
-                                      : log::cat("unknown key '", key, "'", unknown_hint));
+                                      : log::cat("unknown key '", quote_bytes(key, kQuotedBytes), "': ", unknown_hint,
+                                                 " (expected ", choices(key, {used_.begin(), used_.end()}), ")"));
         }
     }
 

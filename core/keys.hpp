@@ -48,7 +48,8 @@ public:
     virtual void verbatim(const std::string& key, std::string& json) = 0;
     // A key that, when given, must say exactly `value` (a format tag); always written.
     virtual void constant(const std::string& key, const std::string& value) = 0;
-    // The mapping under `key`; a key in it that `body` does not visit is "unknown key 'x'" + unknown_hint.
+    // The mapping under `key`; a key in it that `body` does not visit is "unknown key 'x'" and its
+    // known keys, or, given `unknown_hint`, "unknown key 'x': <hint> (expected <the keys visited>)".
     virtual void section(const std::string& key, const Body& body, const std::string& unknown_hint = "") = 0;
     // The keys of this mapping when they are names the user chose (hosts, variables): when reading,
     // `v` becomes the file's keys in order (each must then be visited); when writing, `v` is kept.

@@ -8,6 +8,7 @@
 #include <ranges>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
@@ -30,8 +31,10 @@ std::optional<std::size_t> find_name(const Names& names, std::string_view text) 
 template <class Names>
 std::string unknown_name_problem(std::string_view what, std::string_view text, const Names& names,
                                  std::string_view note = "") {
-    return log::cat("unknown ", what, " '", quote_bytes(text, kQuotedBytes), "' (expected ", log::alternatives(names),
-                    note, ")");
+    std::vector<std::string> all;
+    for (const auto& n : names) all.emplace_back(n);
+    return log::cat("unknown ", what, " '", quote_bytes(text, kQuotedBytes), "' (expected ", choices(text, all), note,
+                    ")");
 }
 
 // The enum value named `text` (its index in `names`); InputError with the known names otherwise.

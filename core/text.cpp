@@ -1,5 +1,6 @@
 #include "core/text.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -21,6 +22,51 @@ std::string quote_bytes(std::string_view text, std::size_t n) {
     }
     if (i < text.size()) out += "...";
     return out;
+}
+
+namespace {
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diagonal = up;
+        }
+    }
+    return row[b.size()];
+}
+}  // namespace
+
+namespace {
+std::string joined(const std::vector<std::string>& names, std::string_view last) {
+    std::string out;
+    for (std::size_t i = 0; i < names.size(); ++i)
+        out += (i == 0 ? "" : i + 1 == names.size() ? std::string(last) : ", ") + names[i];
+    return out;
+}
+}  // namespace
+
+std::string choices(std::string_view given, const std::vector<std::string>& names, std::string_view last) {
+    const std::string all = joined(names, last);
+    if (all.size() <= kChoicesChars) return all;
+    std::vector<std::string> closest = names;
+    const std::string_view g = given.substr(0, 64);  // a hostile name need not cost more
+    std::stable_sort(closest.begin(), closest.end(), [&](const std::string& a, const std::string& b) {
+        return edit_distance(g, a) < edit_distance(g, b);
+    });
+    const std::string suffix = log::cat("; the closest of ", names.size());
+    std::size_t n = 1;  // as many of the closest as fit
+    while (n < closest.size() && n < 3 &&
+           joined({closest.begin(), closest.begin() + static_cast<std::ptrdiff_t>(n) + 1}, last).size() +
+                   suffix.size() <=
+               kChoicesChars)
+        ++n;
+    closest.resize(n);
+    return joined(closest, last) + suffix;
 }
 
 bool valid_utf8(std::string_view text) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <set>
 
+#include "core/text.hpp"
 #include "core/config.hpp"
 #include "core/keys.hpp"
 #include "core/errors.hpp"
@@ -58,7 +59,8 @@ void process_keys(KeyVisitor& k, ProcessSpec& p, const LabFile& lab) {
     k.require(k.has("name"), "name", "missing");
     k.text("name", p.name);
     k.require(is_process_name(p.name), "name",
-              "'" + p.name + "' is not a process name (letters, digits, _ - and ., not starting with .)");
+              "'" + quote_bytes(p.name, kQuotedBytes) +
+                  "' is not a process name (letters, digits, _ - and ., not starting with .)");
     k.text("host", p.host);
     k.require(lab.hosts.count(p.host) > 0, "host", "'" + p.host + "' is not under hosts");
     k.require(k.has("run"), "run", "missing");

@@ -129,7 +129,7 @@ void effect_keys(KeyVisitor& k, Effects& e) {
     const auto each = [&](KeyVisitor& s) {
         for (const auto* t : effect_types()) s.section(t->name(), [&](KeyVisitor& one) { t->keys(one, e); });
     };
-    k.section("effects", each, log::cat(": no such effect (expected ", effect_names(), ")"));
+    k.section("effects", each, "no such effect");
 }
 
 void physics_keys(KeyVisitor& k, PhysicsConfig& c) {

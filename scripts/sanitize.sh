@@ -12,7 +12,7 @@ build="$here/build-asan"
 # dw_planner_tests runs in two shards (CTest runs every test in a process of its own anyway).
 runs=(dw_unit_tests dw_recorder_tests dw_mocap_tests dw_physics_tests
       "dw_planner_tests --gtest_filter=Px4Refusals.*" "dw_planner_tests --gtest_filter=-Px4Refusals.*"
-      dw_stand_tests)
+      dw_stand_tests "dw_file_fuzz_tests --gtest_filter=FileFuzz.*")
 tests=()  # the executables the runs name, built once each
 for run in "${runs[@]}"; do
   read -r -a cmd <<<"$run"

@@ -44,8 +44,6 @@ void px4_keys(KeyVisitor& k, Px4Options& o) {
     k.integer("attempts", o.attempts, kAttemptsRange);
     k.number("status_timeout_s", o.status_timeout_s, kStatusTimeoutRange);
     k.require(k.has("vehicles"), "vehicles", "expected a mapping from each of the plan's vehicles to its PX4 settings");
-    std::vector<std::string> names;
-    for (const auto& v : o.vehicles) names.push_back(v.name);
     std::set<int> ids;
     const auto vehicles = [&](KeyVisitor& vs) {
         for (auto& v : o.vehicles) {
@@ -53,7 +51,7 @@ void px4_keys(KeyVisitor& k, Px4Options& o) {
             vs.section(v.name, [&](KeyVisitor& s) { vehicle_keys(s, v, ids); });
         }
     };
-    k.section("vehicles", vehicles, log::cat(": not a vehicle of this plan (", log::join(names), ")"));
+    k.section("vehicles", vehicles, "not a vehicle of this plan");
 }
 
 }  // namespace

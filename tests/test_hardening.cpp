@@ -181,6 +181,12 @@ TEST(Yaml, AliasBombsSecondDocumentsAndDeepNestingAreRefusedInOneLine) {
         EXPECT_EQ(e.rfind(c.expect, 0), 0u) << e;
         EXPECT_LE(e.size(), 200u) << e;
     }
+    // Found by the file fuzzer: yaml-cpp 0.7 loops forever, allocating, on a ',' beginning a value
+    // outside [ ] or { }; refused before it parses.
+    for (const std::string text : {",\n", "- 1\n,\n", "[1],\n", "# a comment\n,x: 1\n"})
+        EXPECT_NE(error_of([&] { dw::load_yaml(text, "p.yaml"); }).find("a ',' that begins a value"), std::string::npos)
+            << text;
+    EXPECT_NO_THROW(dw::load_yaml("a: v1,v2\nb: [1, 2]\nc: 'x, y'\nd: 1 ,\n", "p.yaml"));
     EXPECT_NO_THROW(dw::load_yaml("a: &x {b: 1}\nc: *x\n", "p.yaml"));  // an alias as such is fine
     EXPECT_NO_THROW(dw::load_yaml("", "p.yaml"));                       // empty: no settings
 }

@@ -70,7 +70,7 @@ dw::Subprocess start_node(dw::test::TempDir& dir, const std::string& model, cons
 TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     dw::test::TempDir dir;
     const auto model = dir.file("model.json");
-    linear_model("model_a", 1.0f).save(model);
+    linear_model("learnt_linear", 1.0f).save(model);
     const auto cfg = node_config("pred");
     dw::Subprocess node = start_node(dir, model, cfg);
     dw::dds::Participant p(cfg, "test");
@@ -98,7 +98,7 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
         EXPECT_GE(got.size(), 175u);  // best effort on loopback: one per frame
         ASSERT_FALSE(got.empty());
         const auto& last = got.back();
-        EXPECT_EQ(last.model_name(), "model_a");
+        EXPECT_EQ(last.model_name(), "learnt_linear");
         const double t = dw::dds::from_msg(last.header().stamp()) * 1e-9;
         const int i = static_cast<int>(std::lround((t - 1000.0) * 180.0));
         const double e = -1.0 + 0.5 * i / 180.0;
@@ -109,7 +109,7 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
         EXPECT_GT(last.input_age_s(), 1e9);
     }
     // Swap: a new file (written beside and renamed in, as an operator should) is picked up.
-    linear_model("model_b", 2.0f).save(dir.file("model.new"));
+    linear_model("naive_linear", 2.0f).save(dir.file("model.new"));
     std::filesystem::rename(dir.file("model.new"), model);
     std::this_thread::sleep_for(1500ms);
     // A broken file is refused; the node keeps predicting with model_b.
@@ -126,10 +126,10 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     EXPECT_EQ(node.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("node.err"));
     std::lock_guard lock(m);
     ASSERT_FALSE(got.empty());
-    EXPECT_EQ(got.back().model_name(), "model_b");
+    EXPECT_EQ(got.back().model_name(), "naive_linear");
     EXPECT_NEAR(got.back().force_n().z(), 2 * 2 * (-2.7 + 1.4), 1e-5);
     const auto err = dw::read_file(dir.file("node.err"));
-    EXPECT_NE(err.find("model swapped: now model_b"), std::string::npos) << err;
+    EXPECT_NE(err.find("model swapped: now naive_linear"), std::string::npos) << err;
     EXPECT_NE(err.find("not swapped"), std::string::npos) << err;
     EXPECT_NE(dw::read_file(dir.file("node.out")).find("1 model swaps"), std::string::npos);
 }
@@ -152,7 +152,7 @@ TEST(PredictorProcess, BadModelIsOneLineAndExit2) {
 TEST(PredictorProcess, AwaitingTheRecorderLosesNoMocapFrame) {
     dw::test::TempDir dir;
     const auto model = dir.file("model.json");
-    linear_model("model_a", 1.0f).save(model);
+    linear_model("learnt_linear", 1.0f).save(model);
     const auto cfg = node_config("predawait");
     dw::Subprocess node = start_node(dir, model, cfg, {"--await-readers", "recorder", "--await-timeout", "30"});
     dw::dds::Participant bridge(cfg, "mocap_bridge");

@@ -457,7 +457,8 @@ TEST(Px4Settings, EachMistakeInTheFileIsOneLineWhereItIs) {
     EXPECT_NE(
         error_of("vehicles:\n  v1: {system_id: 2, sysid: 4}\n  v2: {}\n").find(":2:22: vehicles.v1.sysid: unknown key"),
         std::string::npos);
-    EXPECT_NE(error_of(ok + "  v3: {}\n").find("vehicles.v3: unknown key 'v3': not a vehicle of this plan (v1, v2)"),
+    EXPECT_NE(error_of(ok + "  v3: {}\n")
+                  .find("vehicles.v3: unknown key 'v3': not a vehicle of this plan (expected v1 or v2)"),
               std::string::npos);
     EXPECT_NE(error_of("vehicles:\n  v1: {system_id: 2}\n  v2: {system_id: 2}\n")
                   .find("vehicles.v2.system_id: used by two vehicles"),
