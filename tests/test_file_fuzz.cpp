@@ -37,14 +37,34 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kSmall = 150;   // mutations per seed file by default
-constexpr int kFull = 3000;   // under --full (FileFuzzFull.*)
+constexpr int kSmall = 150;  // mutations per seed file by default
+constexpr int kFull = 3000;  // under --full (FileFuzzFull.*)
 constexpr std::size_t kMaxMessage = 200;
 
 // Values a hostile user tries in text files.
-const std::vector<std::string> kTokens = {"1e308", "-1e308", "1e400", "nan", "inf", "-0", "99999999999999999999",
-                                          "4294967297", ",", "\n", "\r", "\"", "[[[[[[[[", "{{{{", "*a", "&a ",
-                                          "---\n", "\xff\xfe", std::string(1, '\0'), "  ", "1e-320", "0x10", ":"};
+const std::vector<std::string> kTokens = {"1e308",
+                                          "-1e308",
+                                          "1e400",
+                                          "nan",
+                                          "inf",
+                                          "-0",
+                                          "99999999999999999999",
+                                          "4294967297",
+                                          ",",
+                                          "\n",
+                                          "\r",
+                                          "\"",
+                                          "[[[[[[[[",
+                                          "{{{{",
+                                          "*a",
+                                          "&a ",
+                                          "---\n",
+                                          "\xff\xfe",
+                                          std::string(1, '\0'),
+                                          "  ",
+                                          "1e-320",
+                                          "0x10",
+                                          ":"};
 
 // One damaged copy of `seed`.
 std::string mutate(const std::string& seed, std::mt19937_64& rng) {

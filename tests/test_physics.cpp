@@ -268,9 +268,9 @@ TEST(PhysicsConfig, RoundTripsThroughYaml) {
 }
 
 TEST(PhysicsConfig, ErrorsNameFileLineAndKey) {
-    EXPECT_EQ(error("stand:\n  heigth_m: 1.4\n"),
-              "p.yaml:2:3: stand.heigth_m: unknown key 'heigth_m' (known: counts_per_newton, height_m, "
-              "lateral_radius_m, noise_n, offset_sigma_counts, rate_hz, rate_skew, tare_s)");
+    EXPECT_EQ(
+        error("stand:\n  heigth_m: 1.4\n"),
+        "p.yaml:2:3: stand.heigth_m: unknown key 'heigth_m' (known: height_m, noise_n, rate_hz; the closest of 8)");
     EXPECT_EQ(error("jet:\n  model: magic\n"),
               "p.yaml:2:10: jet.model: unknown jet model 'magic' (expected bauersfeld or jain)");
     EXPECT_EQ(error("stand:\n  rate_hz: fast\n"), "p.yaml:2:12: stand.rate_hz: expected a number, got 'fast'");
