@@ -34,6 +34,7 @@ struct SimulatedPx4::State {
     bool killed = false, battery_low = false;
     double fall_speed = 0;                        // m/s, once killed
     Nanos armed_ns = 0, killed_ns = 0;            // monotonic
+    Nanos landed_ns = 0;                          // monotonic: when the land detector saw it on the ground (0: not)
     Nanos stream_since_ns = 0, last_mode_ns = 0;  // monotonic: the offboard stream's start and last sample
     std::uint64_t last_mode_us = 0;               // its timestamp, as PX4 reads it (this host's realtime µs)
     bool mode_flag = false, position_flag = false;
@@ -228,7 +229,11 @@ void SimulatedPx4::step(double dt) {
     if (s.nav == px4::kNavOffboard && s.setpoint) s.x += (*s.setpoint - s.x) * std::min(1.0, kFollowRate * dt);
     if (s.nav == px4::kNavAutoLand) {
         s.x.z() = std::min(s.ground_z, s.x.z() + kLandSpeed * dt);
-        if (s.x.z() >= s.ground_z - kGroundTolerance) disarm(px4::kDisarmAfterLanding, "landed: disarmed");
+        const bool on_ground = s.x.z() >= s.ground_z - kGroundTolerance;
+        if (!on_ground) s.landed_ns = 0;
+        else if (s.landed_ns == 0) s.landed_ns = mono;
+        if (on_ground && to_seconds(mono - s.landed_ns) >= o_.com_disarm_land_s)
+            disarm(px4::kDisarmAfterLanding, "landed: disarmed");
     }
 }
 

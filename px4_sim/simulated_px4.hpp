@@ -9,7 +9,7 @@
 //   without a local position (vehicle_visual_odometry that EKF2 would accept, recently);
 // - arming is DENIED without a local position or when a pre-arm check fails;
 // - in OFFBOARD, a stream older than COM_OF_LOSS_T is a failsafe: AUTO_LAND (COM_OBL_RC_ACT 4);
-// - landed in AUTO_LAND, it disarms.
+// - landed in AUTO_LAND (its land detector: on the ground), it disarms after COM_DISARM_LAND.
 // It also plays the vehicle and the motion capture: it follows the trajectory setpoints in its
 // local frame and publishes its pose as the lab's vehicles/state (lab NED).
 #include <atomic>
@@ -41,6 +41,7 @@ struct SimulatedPx4Options {
     std::optional<double> lose_offboard_after_s;   // after arming it hears no more offboard stream
     std::optional<double> kill_after_s;            // after arming the kill switch is thrown (motors stop)
     double com_kill_disarm_s = 5.0;                // COM_KILL_DISARM: killed this long, PX4 disarms
+    double com_disarm_land_s = 2.0;                // COM_DISARM_LAND: landed this long, PX4 disarms
     std::optional<double> low_battery_after_s;     // after arming the battery reaches its failsafe level
     double rate_hz = 100;                          // dynamics and vehicles/state
     double status_period_s = 0.5;                  // vehicle_status (also on every change)

@@ -225,7 +225,22 @@ void Experiment::land_safely(const std::string& why) {
         },
         msg::PHASE_LANDING, false);
     link_->land();
-    publish_state(msg::PHASE_ABORTED, leg_, 0, "ABORTED: " + why + "; every vehicle landed");
+    const auto up = confirm_landed();
+    publish_state(msg::PHASE_ABORTED, leg_, 0,
+                  "ABORTED: " + why + (up ? "; landing NOT confirmed: " + *up : "; every vehicle landed"));
+}
+
+std::optional<std::string> Experiment::confirm_landed() {
+    const auto start = std::chrono::steady_clock::now();
+    Ticker ticker(o_.setpoint_hz);
+    for (;;) {
+        const auto up = link_->still_flying();
+        if (!up) return std::nullopt;
+        const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (o_.stop.stop_requested()) return *up + " when stopped";
+        if (waited >= link_->land_timeout_s()) return log::cat(*up, " after ", fixed(waited, 1), " s");
+        ticker.wait();
+    }
 }
 
 std::optional<std::string> Experiment::arm_vehicles(const std::vector<physics::Setpoint>& hold) {
@@ -341,7 +356,13 @@ msg::ExperimentPhase Experiment::run() {
         },
         msg::PHASE_LANDING, false);
     link_->land();
-    publish_state(msg::PHASE_DONE, leg_, 1.0, log::cat("DONE: ", legs_flown_, " legs flown"));
+    if (const auto up = confirm_landed()) {  // the run is not over while a vehicle may still be flying
+        reason_ = "landing not confirmed: " + *up;
+        log::error(reason_);
+        publish_state(msg::PHASE_ABORTED, leg_, 1.0, log::cat("ABORTED: ", legs_flown_, " legs flown; ", reason_));
+        return msg::PHASE_ABORTED;
+    }
+    publish_state(msg::PHASE_DONE, leg_, 1.0, log::cat("DONE: ", legs_flown_, " legs flown; every vehicle landed"));
     return msg::PHASE_DONE;
 }
 

@@ -59,6 +59,9 @@ private:
     std::optional<std::string> fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,
                                    msg::ExperimentPhase phase, bool supervise);
     void land_safely(const std::string& why);
+    // After the link's land(): waits (bounded by the link's land timeout) until it confirms every
+    // vehicle landed; returns who is not, and for how long it was waited for.
+    std::optional<std::string> confirm_landed();
     // Holds the parked setpoints while the link arms the vehicles; the refusal if it refuses.
     std::optional<std::string> arm_vehicles(const std::vector<physics::Setpoint>& hold);
     // ABORTED before take-off, with the reason (published and kept).

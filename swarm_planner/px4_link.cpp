@@ -132,6 +132,21 @@ public:
         }
     }
 
+    // Landed is what PX4 says: disarmed (its land detector disarms after COM_DISARM_LAND). A vehicle
+    // never heard from cannot be confirmed.
+    std::optional<std::string> still_flying() override {
+        std::vector<std::string> up;
+        for (auto& v : vehicles_) {
+            const StatusSeen s = status_of(v);
+            if (s.seen_ns == 0) up.push_back(v.cfg.name + " (no vehicle_status)");
+            else if (s.arming == px4::kArmed)
+                up.push_back(log::cat(v.cfg.name, " (armed, ", px4::nav_state_name(s.nav), ")"));
+        }
+        if (up.empty()) return std::nullopt;
+        return log::join(up);
+    }
+    double land_timeout_s() const override { return o_.land_timeout_s; }
+
 private:
     struct Vehicle {
         Px4Vehicle cfg;

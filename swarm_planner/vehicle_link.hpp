@@ -31,6 +31,11 @@ public:
     // In flight: why the vehicles no longer follow this link (a PX4 failsafe), if so.
     virtual std::optional<std::string> failsafe() { return std::nullopt; }
     virtual void land() {}  // after the landing setpoints
+    // After land(): the vehicles not yet confirmed landed ("v1 (armed, AUTO_LAND)"), nullopt when
+    // every one is (PX4: disarmed). A link that cannot tell confirms at once.
+    virtual std::optional<std::string> still_flying() { return std::nullopt; }
+    // How long a landing may take to be confirmed.
+    virtual double land_timeout_s() const { return 0; }
 };
 
 enum class LinkKind { sim, px4 };

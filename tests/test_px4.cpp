@@ -259,8 +259,10 @@ TEST_P(Px4Flight, ThePlannerFliesSimulatedPx4sThroughTakeOffLegsAndLanding) {
     dw::planner::Experiment e(lab.lab, plan, lab.run_options());
     EXPECT_EQ(e.run(), dw::msg::PHASE_DONE) << e.reason();
     for (auto& v : lab.vehicles) {
-        EXPECT_TRUE(eventually([&] { return !v->report().armed; })) << "still armed after NAV_LAND";
+        // Issue 42, problem 4: DONE only once PX4 confirmed the landing (its land detector disarms
+        // COM_DISARM_LAND after touchdown); the planner used to say "landed" right after NAV_LAND.
         const auto r = v->report();
+        EXPECT_FALSE(r.armed) << "DONE while PX4 still had the vehicle armed";
         EXPECT_TRUE(r.was_offboard);
         EXPECT_TRUE(r.was_armed);
         EXPECT_EQ(r.ignored_commands, 0);
@@ -431,6 +433,21 @@ TEST(Px4Refusals, ALowBatteryFailsafeAborts) {
         << e.reason();
     EXPECT_EQ(e.reason().find('\n'), std::string::npos);
     EXPECT_TRUE(eventually([&] { return !lab.vehicles[0]->report().armed; }));  // landed by PX4
+}
+
+// Issue 42, problem 4: a landing PX4 does not confirm (still armed when the land timeout ends) is
+// not DONE: the run aborts naming the vehicle and what PX4 reports, and the planner does not
+// claim "every vehicle landed".
+TEST(Px4Refusals, ALandingPx4DoesNotConfirmIsNotDone) {
+    Px4Lab lab("px4land", Px4Version::v1_15, 1);
+    lab.options.land_timeout_s = 1.5;
+    const auto plan = short_plan("single");
+    lab.start(plan, [](auto& o) { o.com_disarm_land_s = 1000; });  // its land detector never disarms
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(e.reason().find("landing not confirmed: v1 (armed, AUTO_LAND) after 1."), std::string::npos)
+        << e.reason();
+    EXPECT_TRUE(lab.vehicles[0]->report().armed);
 }
 
 // The planner's PX4 settings file: each mistake is one line naming file, line and key.
