@@ -19,18 +19,22 @@
 namespace dw::planner {
 
 inline constexpr Range kRejoinGraceRange{0, 60, "s"};
+// --tracking-bound and --takeoff-time (issue 42: a real PX4's take-off, with its spool-up and ramp,
+// needs more time and room than the simulated vehicles).
+inline constexpr Range kTrackingBoundRange{0.05, 5, "m"};
+inline constexpr Range kTakeoffTimeRange{1, 60, "s"};
 
 struct RunOptions {
     std::vector<std::string> wait_for{"stand_agent", "mocap_bridge", "recorder"};
     double wait_timeout_s = 30;
     double setpoint_hz = 50;
     double calibrate_s = 1.5;
-    double takeoff_s = 4;
+    double takeoff_s = 4;  // the take-off curve, parked to the first setpoint
     double land_s = 4;
     double hold_s = 1;
     double mocap_timeout_s = 0.2;
-    double tracking_error_m = 0.3;
-    double rejoin_grace_s = 0;  // a required process lost aborts unless it is back within this
+    double tracking_error_m = 0.3;  // in flight, farther than this from the setpoint aborts
+    double rejoin_grace_s = 0;      // a required process lost aborts unless it is back within this
     std::string run_id;
     LinkKind link = LinkKind::sim;
     Px4Options px4;        // --vehicles px4: per-vehicle settings (none: the defaults)

@@ -71,6 +71,11 @@ int run(int argc, char** argv) {
                      "seconds a lost required process may take to come back (a restarted recorder) before the "
                      "experiment aborts; 0 = abort at once")
         ->check(dw::cli::in(dw::planner::kRejoinGraceRange));
+    runc->add_option("--tracking-bound", ro.tracking_error_m,
+                     "in flight, a vehicle farther than this from its setpoint aborts the experiment [m]")
+        ->check(dw::cli::in(dw::planner::kTrackingBoundRange));
+    runc->add_option("--takeoff-time", ro.takeoff_s, "the take-off curve's duration, parked to the first setpoint [s]")
+        ->check(dw::cli::in(dw::planner::kTakeoffTimeRange));
     std::string link = "sim", px4_file;
     runc->add_option("--vehicles", link, "sim (vehicles/setpoint) or px4 (PX4's uXRCE-DDS topics)");
     runc->add_option("--px4", px4_file,
