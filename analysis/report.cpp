@@ -410,11 +410,29 @@ void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOption
 
 }  // namespace
 
+namespace {
+// The first non-finite number in `j` (its JSON path), if any: the JSON library would write it as
+// null, where the report's contract has a number.
+std::optional<std::string> non_finite(const json& j, const std::string& path) {
+    if (j.is_number_float() && !std::isfinite(j.get<double>())) return path;
+    for (auto it = j.begin(); (j.is_object() || j.is_array()) && it != j.end(); ++it) {
+        const std::string inner =
+            j.is_object() ? path + "." + it.key() : path + "[" + std::to_string(it - j.begin()) + "]";
+        if (auto p = non_finite(*it, inner)) return p;
+    }
+    return std::nullopt;
+}
+}  // namespace
+
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& out) {
     StagedFolder staged(out);  // the report and its figures appear together, or not at all
     const std::string& dir = staged.path();
     const auto measured = measured_clock(f);
-    write_file((fs::path(dir) / "report.json").string(), report_json(r, o, measured).dump(2) + "\n");
+    const json report = report_json(r, o, measured);
+    if (const auto where = non_finite(report, "report"))
+        throw RuntimeError(
+            log::cat("report.json: ", *where, " is not a finite number: the analysis broke down; no report"));
+    write_file((fs::path(dir) / "report.json").string(), report.dump(2) + "\n");
     write_file((fs::path(dir) / "physics.yaml").string(), physics::to_yaml(r.fitted));
 
     const Replay replay(f, o.physics);

@@ -89,7 +89,7 @@ void append_fixed(std::string& out, double v, int decimals, std::string_view wha
 }
 
 std::string fixed(double v, int decimals) {
-    if (!std::isfinite(v)) return log::cat(v);
+    if (!std::isfinite(v)) return "–";  // no value: a report never says nan or inf
     std::string s;
     append_fixed(s, v, decimals, "fixed");
     return s;

@@ -48,7 +48,7 @@ bool try_append_fixed(std::string& out, double v, int decimals);
 // A CSV cell: v with `significant` digits (%g), or empty for NaN and inf (a cell with no value):
 // no CSV a tool writes holds "nan" or "inf".
 std::string csv_cell(double v, int significant = 6);
-// v with `decimals` digits after the point, for reports and tables ("nan" and "inf" as such).
+// v with `decimals` digits after the point, for reports and tables; "–" (no value) for NaN and inf.
 std::string fixed(double v, int decimals);
 
 }  // namespace dw

@@ -3,6 +3,8 @@
 // proof (every hidden effect found, true parameter inside the interval, null flights clean).
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +15,7 @@
 #include "analysis/explain.hpp"
 #include "analysis/proof.hpp"
 #include "core/errors.hpp"
+#include "core/numbers.hpp"
 #include "physics/flight_sim.hpp"
 #include "recordings/recordings.hpp"
 #include "support.hpp"
@@ -153,6 +156,20 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
     }
     EXPECT_LT(j["fit"]["heldout_rmse_after"]["f_d"].get<double>(),
               j["fit"]["heldout_rmse_before"]["f_d"].get<double>());
+    // Issue 43: a non-finite number never reaches the report (the JSON library wrote it as null and
+    // the Markdown as -nan): the writer refuses, one line, and leaves no report behind.
+    auto broken = r;
+    broken.heldout_after[2] = std::numeric_limits<double>::quiet_NaN();
+    try {
+        write_report(f, broken, o, dir.file("broken"));
+        ADD_FAILURE() << "a NaN reached the report";
+    } catch (const dw::RuntimeError& e) {
+        EXPECT_NE(std::string(e.what()).find("report.fit.heldout_rmse_after.f_d is not a finite number"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("broken")));
+    EXPECT_EQ(dw::fixed(std::numeric_limits<double>::quiet_NaN(), 3), "–");
     EXPECT_FALSE(j["mismatch"]["regions"].empty());
     for (const auto& g : j["mismatch"]["regions"]) {
         EXPECT_TRUE(g["axis"].is_string());
