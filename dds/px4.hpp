@@ -1,5 +1,5 @@
 #pragma once
-// PX4's uXRCE-DDS types (idl/Px4.idl, idl/Px4v114.idl) for the lab's typed writers and readers,
+// PX4's uXRCE-DDS types (idl/Px4.idl, idl/Px4v114.idl, idl/Px4v116.idl) for the lab's typed writers and readers,
 // the PX4 versions the lab supports, and PX4's own numbers (commands, states, results), each
 // defined once here. Sources: ../shared/SPECS.md §3, docs/research/PX4_LINK.md.
 #include <array>
@@ -15,6 +15,7 @@
 #include "dds/topics.hpp"
 #include "dw/msg/Px4PubSubTypes.h"
 #include "dw/msg/Px4v114PubSubTypes.h"
+#include "dw/msg/Px4v116PubSubTypes.h"
 
 namespace dw::dds {
 
@@ -45,6 +46,15 @@ DW_PX4_V114_PUBSUB(VehicleCommand);
 DW_PX4_V114_PUBSUB(VehicleStatus);
 DW_PX4_V114_PUBSUB(VehicleCommandAck);
 #undef DW_PX4_V114_PUBSUB
+
+// PX4 v1.16's vehicle_status_v1, under PX4's one type name.
+struct VehicleStatusV116PubSubType : px4_msgs_v116::msg::dds_::VehicleStatus_PubSubType {
+    VehicleStatusV116PubSubType() { setName("px4_msgs::msg::dds_::VehicleStatus_"); }
+};
+template <>
+struct PubSubOf<px4_msgs_v116::msg::dds_::VehicleStatus_> {
+    using type = VehicleStatusV116PubSubType;
+};
 
 // The PX4 releases the lab speaks to, and what differs between them on the wire.
 enum class Px4Version { v1_14, v1_15, v1_16 };

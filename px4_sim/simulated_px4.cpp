@@ -38,7 +38,8 @@ struct SimulatedPx4::State {
     Nanos stream_since_ns = 0, last_mode_ns = 0;  // monotonic: the offboard stream's start and last sample
     std::uint64_t last_mode_us = 0;               // its timestamp, as PX4 reads it (this host's realtime µs)
     bool mode_flag = false, position_flag = false;
-    Nanos odometry_ns = 0;  // the last odometry EKF2 would accept
+    Nanos odometry_ns = 0;        // the last odometry EKF2 would accept
+    Nanos odometry_since_ns = 0;  // the start of its unbroken run (EKF2's warm-up counts from it)
     bool status_changed = true;
     std::vector<std::vector<std::uint8_t>> acks;  // to publish from the loop
     Report report;
@@ -141,9 +142,20 @@ void SimulatedPx4::on_odometry(std::span<const std::uint8_t> b) {
     const bool ok = (frame == kFrameNed || frame == kFrameFrd) && std::isfinite(norm) &&
                     std::abs(norm - 1.0) <= kQuaternionNormTolerance && std::isfinite(p[0]) && std::isfinite(p[1]) &&
                     std::isfinite(p[2]);
+    const Nanos mono = lab_.clock().monotonic_ns();
     std::lock_guard lock(mutex_);
-    if (ok) s_->odometry_ns = lab_.clock().monotonic_ns();
-    else ++s_->report.rejected_odometry;
+    if (!ok) {
+        ++s_->report.rejected_odometry;
+        return;
+    }
+    if (s_->odometry_ns == 0 || to_seconds(mono - s_->odometry_ns) > o_.position_timeout_s)
+        s_->odometry_since_ns = mono;
+    s_->odometry_ns = mono;
+}
+
+bool SimulatedPx4::local_position(Nanos mono) const {
+    return s_->odometry_ns != 0 && to_seconds(mono - s_->odometry_ns) <= o_.position_timeout_s &&
+           to_seconds(mono - s_->odometry_since_ns) >= o_.ekf_warmup_s;
 }
 
 void SimulatedPx4::on_command(std::span<const std::uint8_t> b) {
@@ -173,7 +185,7 @@ void SimulatedPx4::on_command(std::span<const std::uint8_t> b) {
 dds::px4::AckResult SimulatedPx4::commander(const Values& cmd, std::string& why) {
     using R = px4::AckResult;
     const Nanos mono = lab_.clock().monotonic_ns();
-    const bool position = s_->odometry_ns != 0 && to_seconds(mono - s_->odometry_ns) <= o_.position_timeout_s;
+    const bool position = local_position(mono);
     const auto now_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
     const double stream_age_s =
         (static_cast<double>(now_us) - static_cast<double>(s_->last_mode_us)) * 1e-6;  // signed: a clock step back
@@ -277,7 +289,8 @@ void SimulatedPx4::publish_status() {
                  {"latest_disarming_reason", {static_cast<double>(s.disarm_reason)}},
                  {"system_id", {static_cast<double>(o_.system_id)}},
                  {"component_id", {static_cast<double>(px4::kAutopilotComponent)}},
-                 {"pre_flight_checks_pass", {o_.refuse_arm.empty() ? 1.0 : 0.0}}};
+                 {"pre_flight_checks_pass",
+                  {o_.refuse_arm.empty() && local_position(lab_.clock().monotonic_ns()) ? 1.0 : 0.0}}};
         bytes = encode(msg_def(Msg::vehicle_status, o_.version), v);
         acks.swap(s_->acks);
         s_->status_changed = false;

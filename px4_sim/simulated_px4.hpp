@@ -7,6 +7,9 @@
 // - OFFBOARD is refused (TEMPORARILY_REJECTED) without a fresh offboard_control_mode stream
 //   (its timestamp within COM_OF_LOSS_T of this host's clock) that has lasted over 1 s, or
 //   without a local position (vehicle_visual_odometry that EKF2 would accept, recently);
+// - a local position only after EKF2's warm-up: visual odometry arriving continuously for
+//   ekf_warmup_s (yaw alignment, then position); vehicle_status.pre_flight_checks_pass is false
+//   until then, or while a pre-arm check fails;
 // - arming is DENIED without a local position or when a pre-arm check fails;
 // - in OFFBOARD, a stream older than COM_OF_LOSS_T is a failsafe: AUTO_LAND (COM_OBL_RC_ACT 4);
 // - landed in AUTO_LAND (its land detector: on the ground), it disarms after COM_DISARM_LAND.
@@ -37,6 +40,7 @@ struct SimulatedPx4Options {
     double com_of_loss_t_s = 1.0;                  // COM_OF_LOSS_T
     double offboard_warmup_s = 1.0;                // the stream's age before OFFBOARD is accepted
     double position_timeout_s = 0.5;               // visual odometry older than this: no local position
+    double ekf_warmup_s = 3.0;                     // EKF2: continuous odometry this long before a local position
     std::string refuse_arm;                        // non-empty: a pre-arm check that fails (arming DENIED)
     std::optional<double> lose_offboard_after_s;   // after arming it hears no more offboard stream
     std::optional<double> kill_after_s;            // after arming the kill switch is thrown (motors stop)
@@ -73,7 +77,8 @@ public:
 
 private:
     struct State;
-    bool link_cut(Nanos mono) const;  // under mutex_
+    bool link_cut(Nanos mono) const;        // under mutex_
+    bool local_position(Nanos mono) const;  // under mutex_: EKF2 has one (fresh odometry, warmed up)
     void on_mode(std::span<const std::uint8_t> b);
     void on_trajectory(std::span<const std::uint8_t> b);
     void on_odometry(std::span<const std::uint8_t> b);

@@ -28,6 +28,7 @@ inline constexpr Range kAnswerTimeoutRange{0.05, 10, "s"};
 inline constexpr Range kAttemptsRange{1, 10};
 inline constexpr Range kStatusTimeoutRange{0.2, 30, "s"};
 inline constexpr Range kLandTimeoutRange{1, 600, "s"};
+inline constexpr Range kEstimatorTimeoutRange{0, 600, "s"};
 inline constexpr Range kHeadingRange{-360, 360, "deg"};
 inline constexpr Range kOriginRange{-100, 100, "m"};
 inline constexpr Range kStdRange{1e-6, 10};
@@ -49,9 +50,10 @@ struct Px4Options {
     double velocity_std_mps = 0.05;
     double answer_timeout_s = 1.0;  // per command attempt, waiting for vehicle_status to show it
     int attempts = 3;
-    double status_timeout_s = 3.0;     // the first vehicle_status within this; in flight, one older is a lost link
-    double land_timeout_s = 30.0;      // after NAV_LAND, PX4 must report every vehicle disarmed within this
-    std::vector<Px4Vehicle> vehicles;  // in the plan's order
+    double status_timeout_s = 3.0;      // the first vehicle_status within this; in flight, one older is a lost link
+    double land_timeout_s = 30.0;       // after NAV_LAND, PX4 must report every vehicle disarmed within this
+    double estimator_timeout_s = 30.0;  // before OFFBOARD, the wait for PX4's pre-flight checks to pass
+    std::vector<Px4Vehicle> vehicles;   // in the plan's order
 };
 
 // Where a vehicle's PX4 local frame sits in the lab: local = Rz(-heading) (lab - origin), both NED.

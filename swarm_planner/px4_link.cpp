@@ -27,6 +27,9 @@ struct Types115 {
     using Status = px4_msgs::msg::dds_::VehicleStatus_;
     using Ack = px4_msgs::msg::dds_::VehicleCommandAck_;
 };
+struct Types116 : Types115 {
+    using Status = px4_msgs_v116::msg::dds_::VehicleStatus_;  // vehicle_status_v1: no avoidance flags
+};
 struct Types114 {
     using Mode = px4_msgs_v114::msg::dds_::OffboardControlMode_;
     using Command = px4_msgs_v114::msg::dds_::VehicleCommand_;
@@ -45,12 +48,14 @@ constexpr double kStreamGapS = 0.5;     // no setpoint for longer than this: the
 constexpr double kOdometryGapS = 0.5;   // no visual odometry for longer than this: EKF2 loses the position
 
 // Each arming step: the command that asks for it and what vehicle_status shows when it is done.
-enum class Step { await_status, offboard, arm, ready, refused };
+// await_estimator: PX4's pre-flight checks (its estimator's local position among them) pass.
+enum class Step { await_status, await_estimator, offboard, arm, ready, refused };
 
 struct StatusSeen {
     std::uint8_t arming = 0, nav = 0, intention = 0, disarm_reason = 0;
     bool failsafe = false;
-    Nanos seen_ns = 0;  // monotonic; 0 = never
+    bool preflight_ok = false;  // pre_flight_checks_pass
+    Nanos seen_ns = 0;          // monotonic; 0 = never
 };
 struct AckSeen {
     std::uint32_t command = 0;
@@ -204,6 +209,7 @@ private:
                           s.nav_state_user_intention(),
                           s.latest_disarming_reason(),
                           s.failsafe(),
+                          s.pre_flight_checks_pass(),
                           p_.clock().monotonic_ns()};
             },
             latest);
@@ -314,7 +320,8 @@ private:
     // One step of a vehicle's arming: ask, watch vehicle_status, retry, or refuse with the reason.
     void advance(Vehicle& v, Nanos now) {
         const StatusSeen s = status_of(v);
-        const double waited = to_seconds(now - (v.step == Step::await_status ? v.step_since : v.sent_ns));
+        const bool waiting = v.step == Step::await_status || v.step == Step::await_estimator;
+        const double waited = to_seconds(now - (waiting ? v.step_since : v.sent_ns));
         switch (v.step) {
             case Step::await_status:
                 // A command sent before PX4's command reader has matched would reach no one, nor one
@@ -322,7 +329,7 @@ private:
                 if (s.seen_ns != 0 && v.cmd->matched() > 0) {
                     if (v.cmd_matched_ns == 0) v.cmd_matched_ns = now;
                     if (now - v.cmd_matched_ns >= std::chrono::nanoseconds(dds::kMatchSettle).count())
-                        return ask(v, Step::offboard, now, true);
+                        return await_estimator(v, now);
                     return;
                 }
                 if (waited > o_.status_timeout_s && s.seen_ns != 0)
@@ -332,6 +339,17 @@ private:
                     refuse(v, log::cat("no vehicle_status from PX4 on ", v.status_name, " in ", waited,
                                        " s (is the Agent running on domain ", p_.config().domain,
                                        ", and the vehicle's uXRCE-DDS client started with -n ", v.cfg.ns, "?)"));
+                return;
+            case Step::await_estimator:
+                // A real PX4's EKF2 needs seconds of visual odometry (yaw alignment, then position)
+                // before it arms: asked sooner, it refused three times (issue 42). Past the timeout
+                // the link asks anyway, so PX4's own refusal (and its reason) is what the operator sees.
+                if (s.preflight_ok) return ask(v, Step::offboard, now, true);
+                if (waited > o_.estimator_timeout_s) {
+                    log::warn(v.cfg.name, ": PX4 system ", v.cfg.system_id, "'s pre-flight checks still fail after ",
+                              waited, " s (no local position from its estimator yet?); asking for OFFBOARD anyway");
+                    return ask(v, Step::offboard, now, true);
+                }
                 return;
             case Step::offboard:
                 if (s.nav == px4::kNavOffboard) return ask(v, Step::arm, now, true);
@@ -355,6 +373,13 @@ private:
             case Step::ready:
             case Step::refused: return;
         }
+    }
+
+    void await_estimator(Vehicle& v, Nanos now) {
+        v.step = Step::await_estimator;
+        v.step_since = now;
+        log::info(v.cfg.name, ": waiting for PX4 system ", v.cfg.system_id,
+                  "'s pre-flight checks (its estimator's local position from the visual odometry)");
     }
 
     // Sends the command of `step` (a first try when `first`).
@@ -445,6 +470,7 @@ private:
 
 std::unique_ptr<VehicleLink> make_px4_link(dds::Participant& p, const Px4Options& o) {
     if (o.version == dds::Px4Version::v1_14) return std::make_unique<Px4Link<Types114>>(p, o);
+    if (o.version == dds::Px4Version::v1_16) return std::make_unique<Px4Link<Types116>>(p, o);
     return std::make_unique<Px4Link<Types115>>(p, o);
 }
 

@@ -216,10 +216,14 @@ TEST(Experiment, ThePlannerFliesPx4VehiclesFromItsSettingsFileAndReportsARefusal
 
     auto& refusing =
         lab.start("dw-px4-sim", {"--vehicles", "v1", "--refuse-arm", "battery below BAT_LOW_THR"}, "sim2.log");
-    auto& planner2 = lab.start(
-        "dw-planner",
-        {"run", "--formation", "single", "--legs", "1", "--altitudes", "1.3", "--wait-for", "", "--vehicles", "px4"},
-        "planner2.log");
+    // A failing pre-arm check keeps PX4's pre-flight checks failing: the planner waits for them
+    // (estimator_timeout_s, 30 s by default; 3 here), then asks anyway and reports PX4's answer.
+    const std::string short_wait = lab.dir.file("px4b.yaml");
+    std::ofstream(short_wait) << "estimator_timeout_s: 3\nvehicles:\n  v1: {namespace: v1, system_id: 1}\n";
+    auto& planner2 = lab.start("dw-planner",
+                               {"run", "--formation", "single", "--legs", "1", "--altitudes", "1.3", "--wait-for", "",
+                                "--vehicles", "px4", "--px4", short_wait},
+                               "planner2.log");
     ASSERT_EQ(planner2.wait_for(120000ms), std::optional<int>(1)) << lab.log("planner2.log");
     const auto out = lab.log("planner2.log");
     EXPECT_NE(out.find("error: ABORTED: v1: PX4 (system 1) refused to arm: DENIED after 3 tries"), std::string::npos)

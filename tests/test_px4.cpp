@@ -178,6 +178,9 @@ struct Px4Lab {
     Px4Lab(const std::string& ns, Px4Version version, int count) : cfg(loopback(ns)), lab(cfg, "planner") {
         options.version = version;
         options.answer_timeout_s = 0.5;
+        // The simulated EKF2 warms up in 3 s from the first odometry; a vehicle whose pre-flight
+        // checks never pass (a failing pre-arm check) is asked anyway after this.
+        options.estimator_timeout_s = 4.0;
         for (int i = 0; i < count; ++i) {
             const std::string name = "v" + std::to_string(i + 1);
             // Each PX4 its own namespace and system id; the second's frame turned and moved.
@@ -433,6 +436,23 @@ TEST(Px4Refusals, ALowBatteryFailsafeAborts) {
         << e.reason();
     EXPECT_EQ(e.reason().find('\n'), std::string::npos);
     EXPECT_TRUE(eventually([&] { return !lab.vehicles[0]->report().armed; }));  // landed by PX4
+}
+
+// Issue 42, problem 2: a real PX4's estimator needs seconds of visual odometry before it gives a
+// local position; asked for OFFBOARD sooner it refuses (three times on a real SITL, the experiment
+// ended on the ground). The link now waits for PX4's pre-flight checks (pre_flight_checks_pass)
+// before asking, and flies.
+TEST(Px4Refusals, ArmingWaitsForTheEstimatorsWarmUp) {
+    Px4Lab lab("px4warm", Px4Version::v1_16, 1);
+    lab.options.estimator_timeout_s = 20;
+    const auto plan = short_plan("single");
+    lab.start(plan, [](auto& o) { o.ekf_warmup_s = 6; });
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_DONE) << e.reason();
+    const auto r = lab.vehicles[0]->report();
+    EXPECT_TRUE(r.was_armed);
+    EXPECT_FALSE(r.armed);
+    for (const auto& event : r.events) EXPECT_EQ(event.find("REJECTED"), std::string::npos) << event;
 }
 
 // Issue 42, problem 4: a landing PX4 does not confirm (still armed when the land timeout ends) is
