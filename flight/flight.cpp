@@ -298,13 +298,16 @@ Flight read_flight(const std::string& dir) {
         while (csv.next(row)) {
             PoseSample s;
             s.t = csv.number(row[0], 0, kStampRange);
-            if (f.find_body(std::string(row[1])) < 0) {
-                if (const auto problem = body_name_problem(row[1]); !problem.empty())
+            const std::string name(row[1]);
+            int body = f.find_body(name);  // one look-up per row: a new name is checked, then added
+            if (body < 0) {
+                if (const auto problem = body_name_problem(name); !problem.empty())
                     csv.fail(csv.line(), "column body: " + problem);
                 if (f.bodies.size() >= kMaxBodies)
                     csv.fail(csv.line(), log::cat("column body: a flight holds at most ", kMaxBodies, " bodies"));
+                body = f.body_index(name);
             }
-            s.body = f.body_index(std::string(row[1]));
+            s.body = static_cast<std::uint16_t>(body);
             for (std::size_t i = 0; i < 3; ++i) s.p[i] = csv.number(row[i + 2], i + 2, kPositionRange);
             for (std::size_t i = 0; i < 4; ++i) s.q[i] = csv.number(row[i + 5], i + 5, kQuaternionRange);
             const double norm = std::sqrt(s.q[0] * s.q[0] + s.q[1] * s.q[1] + s.q[2] * s.q[2] + s.q[3] * s.q[3]);
