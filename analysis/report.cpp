@@ -332,6 +332,10 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
           "(meta.json); residual = recorded − simulated"
        << (f.meta.moments_measured ? "" : "; the moments are not measured and take no part") << ". Analysis took "
        << fixed(r.seconds, 1) << " s.\n\n";
+    if (f.meta.pose_source == flight::PoseSource::estimate)
+        md << "The poses are the vehicles' own state estimates (meta.json pose_source: estimate), not motion capture: "
+              "a force that moved a vehicle may already be partly in its estimated pose, and an estimator's error "
+              "reads as a position offset or lag.\n\n";
     if (!calibration.empty())
         md << "The physics is calibrated (" << calibration
            << "): what is left is what that calibration did not cover.\n\n";

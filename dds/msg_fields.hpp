@@ -53,7 +53,7 @@ template <class V>
 void fields(const msg::MocapFrame& m, V& v) {
     v("header", m.header()), v("frame_number", m.frame_number()), v("camera_mid_exposure", m.camera_mid_exposure()),
         v("transmit", m.transmit()), v("receive", m.receive()), v("timestamp_mode", m.timestamp_mode()),
-        v("dropped_frames", m.dropped_frames()), v("bodies", m.bodies());
+        v("dropped_frames", m.dropped_frames()), v("bodies", m.bodies()), v("pose_source", m.pose_source());
 }
 template <class V>
 void fields(const msg::VehicleState& m, V& v) {

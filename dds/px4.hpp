@@ -97,6 +97,13 @@ inline std::string px4_topic(std::string_view ns, std::string_view direction, st
            std::string(name);
 }
 
+// A PX4 topic's spec for the lab's typed endpoints: PX4's QoS, PX4's type name. The spec views
+// `name`, which must outlive it.
+template <class T>
+Topic<T> px4_topic_spec(const std::string& name, std::string_view type) {
+    return {name, QosProfile::px4, type, "PX4 uXRCE-DDS", "Px4"};
+}
+
 namespace px4 {
 // VehicleCommand.command (MAVLink MAV_CMD), as PX4's Commander handles them.
 inline constexpr std::uint32_t kCmdNavLand = 21;
@@ -110,9 +117,15 @@ inline constexpr std::uint8_t kAutopilotComponent = 1;
 inline constexpr std::uint8_t kPlannerSystem = 255;
 inline constexpr std::uint8_t kPlannerComponent = 190;
 
+// VehicleOdometry (every version): pose_frame / velocity_frame, and its best quality.
+inline constexpr std::uint8_t kFrameNed = 1;
+inline constexpr std::uint8_t kFrameFrd = 2;
+inline constexpr std::int8_t kQualityBest = 100;
+
 inline constexpr std::uint8_t kArmed = 2;  // arming_state, every version
 inline constexpr std::uint8_t kNavOffboard = 14;
 inline constexpr std::uint8_t kNavAutoLand = 18;
+inline constexpr std::uint8_t kNavDescend = 12;  // a landing without a position: PX4's "blind land"
 inline constexpr std::uint8_t kNavTermination = 13;
 
 inline constexpr std::array<std::pair<std::uint8_t, std::string_view>, 17> kNavStateNames{{

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <ranges>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -29,12 +30,19 @@ namespace {
 constexpr int kMaxJsonDepth = 64;  // meta.json nests 3 deep; 100 000 crashed a JSON library's destructor
 constexpr Range kLegNumberRange{0, 1e6};
 // The meta.json keys this library reads; every other key is kept as it was (extra_json).
-constexpr std::array<const char*, 9> kMetaKeys = {"format",        "sufferer",         "neighbours",
-                                                  "formation",     "vehicles",         "stand",
-                                                  "wrench_source", "moments_measured", "reference"};
+constexpr std::array<const char*, 10> kMetaKeys = {"format",    "sufferer",   "neighbours",    "formation",
+                                                   "vehicles",  "stand",      "wrench_source", "moments_measured",
+                                                   "reference", "pose_source"};
+constexpr std::array<std::pair<PoseSource, const char*>, 2> kPoseSourceNames{
+    {{PoseSource::motion_capture, "motion_capture"}, {PoseSource::estimate, "estimate"}}};
 }  // namespace
 
 const char* to_string(WrenchSource s) { return s == WrenchSource::stand ? "stand" : "residual"; }
+const char* to_string(PoseSource s) {
+    for (const auto& [source, name] : kPoseSourceNames)
+        if (source == s) return name;
+    return "";
+}
 
 std::string axis_list() { return log::alternatives(kAxes); }
 
@@ -125,6 +133,7 @@ public:
         read_vehicles(m);
         read_stand(m);
         read_wrench_source(m);
+        read_pose_source(m);
         read_reference(m);
         json extra = json::object();
         for (const auto& [k, v] : j_.items())
@@ -225,6 +234,14 @@ private:
             if (!j_["moments_measured"].is_boolean()) fail("moments_measured", "not true or false");
             m.moments_measured = j_["moments_measured"].get<bool>();
         }
+    }
+    void read_pose_source(Meta& m) const {
+        if (!j_.contains("pose_source")) return;
+        const auto& p = j_["pose_source"];
+        for (const auto& [source, name] : kPoseSourceNames)
+            if (p == name) return void(m.pose_source = source);
+        const auto names = std::views::transform(kPoseSourceNames, [](const auto& n) { return n.second; });
+        fail("pose_source", log::cat(quote_bytes(p.dump(), kQuotedBytes), " is not ", log::alternatives(names)));
     }
 
     void read_reference(Meta& m) const {
@@ -386,6 +403,7 @@ std::string meta_text(const Meta& m) {
     if (m.stand_height_m) meta["stand"] = {{"height_m", *m.stand_height_m}};
     if (m.wrench_source != WrenchSource::stand) meta["wrench_source"] = to_string(m.wrench_source);
     if (!m.moments_measured) meta["moments_measured"] = false;
+    if (m.pose_source != PoseSource::motion_capture) meta["pose_source"] = to_string(m.pose_source);
     if (m.reference) meta["reference"] = {{"source", m.reference->source}, {"axes", m.reference->axes}};
     try {
         return meta.dump(2) + "\n";

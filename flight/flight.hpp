@@ -88,6 +88,13 @@ struct VehicleInfo {
 enum class WrenchSource { stand, residual };
 const char* to_string(WrenchSource s);
 
+// Where poses.csv comes from: a motion capture (measured from outside, the default), or each
+// vehicle's own state estimate (PX4's, when a lab flies without motion capture): meta.json
+// "pose_source": "estimate". An estimate follows the vehicle's own sensors and model, so a force
+// that moves the vehicle may already be partly in its estimated pose.
+enum class PoseSource { motion_capture, estimate };
+const char* to_string(PoseSource s);
+
 // meta.json extra key of a flight exported from a recording (dw-recorder export): the stand's clock
 // against the mocap's as the lab's time service measured it live, in seconds, in the sense of the
 // clock_offset effect (a force at mocap time t stamped t + offset).
@@ -110,7 +117,8 @@ struct Meta {
     std::map<std::string, VehicleInfo> vehicles;
     std::optional<double> stand_height_m = 1.4;  // absent: the sufferer flies (no load stand)
     WrenchSource wrench_source = WrenchSource::stand;
-    bool moments_measured = true;            // false: the moment columns carry no measurement
+    bool moments_measured = true;  // false: the moment columns carry no measurement
+    PoseSource pose_source = PoseSource::motion_capture;
     std::optional<ReferenceInfo> reference;  // present exactly when reference.csv is
     std::string extra_json = "{}";           // unknown keys, kept as they were (a JSON object)
 };

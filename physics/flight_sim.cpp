@@ -218,7 +218,7 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     flight::Flight& f = out.flight;
     const std::vector<std::uint16_t> bodies = describe_bodies(f, c, formation);
     const std::uint16_t sufferer_body = f.body_index(flight::kSufferer);
-    const Vec3 sufferer(0, 0, -c.stand.height_m);
+    const Vec3 sufferer = sufferer_on_stand(c.stand);
 
     // 1. Fly, and evaluate the true wrench at every integration step.
     const double dt = 1.0 / c.dynamics.rate_hz;

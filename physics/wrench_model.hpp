@@ -18,6 +18,8 @@
 namespace dw::physics {
 
 using Vec3 = Eigen::Vector3d;
+// Where the load stand holds the sufferer, lab NED: above the origin, at the stand's height.
+inline Vec3 sufferer_on_stand(const StandParams& s) { return Vec3(0, 0, -s.height_m); }
 // f_n, f_e, f_d [N]; m_roll, m_pitch, m_yaw [N·m] — NED axes of the (level) sufferer.
 using Wrench = Eigen::Matrix<double, 6, 1>;
 

@@ -126,6 +126,7 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
     src.blocks = blocks.kind;
     if (!f.meta.moments_measured) src.measured = {true, true, true, false, false, false};
     if (f.meta.reference) src.reference = f.meta.reference->source;
+    src.estimated_poses = f.meta.pose_source == flight::PoseSource::estimate;
     d.sources.push_back(src);
     ReferenceCursor reference(f.reference);
     std::size_t li = 0;

@@ -57,7 +57,8 @@ struct Source {
     bool flying = false;                                               // no load stand: the sufferer's height varies
     std::array<bool, 6> measured{true, true, true, true, true, true};  // columns carrying a measurement
     flight::BlockKind blocks = flight::BlockKind::legs;
-    std::string reference;  // what reference.csv's model is (meta.json), "" when the flight has none
+    std::string reference;         // what reference.csv's model is (meta.json), "" when the flight has none
+    bool estimated_poses = false;  // meta.json pose_source: estimate (the vehicles' own estimates, not motion capture)
 };
 
 struct Dataset {

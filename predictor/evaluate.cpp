@@ -260,4 +260,17 @@ std::string reference_note(const std::string& references, const std::vector<std:
                     ").\n\n");
 }
 
+std::string poses_note(const Dataset& d) {
+    std::vector<std::string> estimated;
+    for (const auto& s : d.sources)
+        if (s.estimated_poses) estimated.push_back(s.name);
+    if (estimated.empty()) return "";
+    return log::cat("The poses of ", estimated.size(),
+                    " flight(s) are the vehicles' own state estimates, not motion "
+                    "capture (",
+                    log::join(estimated),
+                    "): the relative positions the models see carry the "
+                    "estimators' errors.\n\n");
+}
+
 }  // namespace dw::predictor

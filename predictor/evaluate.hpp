@@ -66,6 +66,9 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header = true);
 // `missing`. What the Markdown says of it, either way.
 std::string references_of(const Dataset& test, std::vector<std::string>& missing);
 std::string reference_note(const std::string& references, const std::vector<std::string>& missing);
+// What the Markdown says when some flights' poses are the vehicles' own estimates (meta.json
+// pose_source: estimate) rather than motion capture; "" when none are.
+std::string poses_note(const Dataset& d);
 
 // Throws dw::InputError saying why when `part` (of `all`) holds no sample: never an empty table.
 void require_samples(const Dataset& all, const Dataset& part, const std::string& what);

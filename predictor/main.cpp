@@ -212,7 +212,7 @@ struct CompareCommand {
         const auto rows = compare(compared, test, arena);
         dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" +
                                                   dw::predictor::reference_note(references, missing) +
-                                                  to_markdown(rows, arena));
+                                                  dw::predictor::poses_note(all) + to_markdown(rows, arena));
         dw::write_file(out_dir + "/table.csv", to_csv(rows));
         std::cout << to_markdown(rows, arena);
         return 0;

@@ -177,6 +177,7 @@ RealResult run_real(const RealOptions& o) {
                    "physics+learnt_linear and physics+deep_sets are the physics plus those models trained on what it "
                    "leaves (recorded − physics; their files models/*_on_physics.json are the corrections alone).\n\n");
     md += reference_note(references, missing);
+    md += poses_note(all);
     md += to_markdown(r.table, {});
     md += "\n![f_d by relative position](map_f_d.png)\n";
     write_file((out / "table.md").string(), md);

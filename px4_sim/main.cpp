@@ -6,11 +6,13 @@
 
 #include "core/cli.hpp"
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
 #include "mocap_bridge/emulator.hpp"
 #include "physics/config.hpp"
+#include "physics/wrench_model.hpp"
 #include "px4_sim/simulated_px4.hpp"
 
 namespace {
@@ -30,7 +32,7 @@ std::unique_ptr<dw::natnet::NatNetEmulator> motion_capture(
     o.names.insert(o.names.end(), names.begin(), names.end());
     o.motion = [stand_height_m, &sims](int body, double) {
         dw::natnet::BodyPose p;
-        const dw::physics::Vec3 x = body == 0 ? dw::physics::Vec3(0, 0, -stand_height_m)
+        const dw::physics::Vec3 x = body == 0 ? dw::physics::sufferer_on_stand({.height_m = stand_height_m})
                                               : sims.at(static_cast<std::size_t>(body - 1))->lab_position();
         p.ned = {x.x(), x.y(), x.z()};
         return p;
@@ -64,9 +66,23 @@ int run(int argc, char** argv) {
                    "play the motion capture as an emulated NatNet server on 127.0.0.1:PORT for dw-mocap-bridge "
                    "(0 = publish vehicles/state directly)")
         ->check(dw::cli::in(dw::natnet::kPortRange));
+    std::string position_source = dw::px4sim::kPositionSourceNames[0];
+    app.add_option("--position-source", position_source,
+                   "where each PX4's estimator gets its position: vision (the lab's vehicle_visual_odometry) or "
+                   "onboard (its own sensors: GPS, SITL's ground truth)");
+    bool no_motion_capture = false;
+    app.add_flag("--no-motion-capture", no_motion_capture,
+                 "play no motion capture at all (neither vehicles/state nor NatNet): the lab's poses come from PX4's "
+                 "estimate (dw-mocap-bridge --source px4)");
     app.add_option("--physics", physics_file,
                    "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
     cli.parse(argc, argv);
+    const auto source_index = dw::find_name(dw::px4sim::kPositionSourceNames, position_source);
+    if (!source_index)
+        throw dw::InputError("--position-source: " + dw::unknown_name_problem("position source", position_source,
+                                                                              dw::px4sim::kPositionSourceNames));
+    const auto source = static_cast<dw::px4sim::PositionSource>(*source_index);
+    if (no_motion_capture && natnet_port != 0) throw dw::InputError("--natnet-port: not with --no-motion-capture");
     const double stand_height_m =
         (physics_file.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_file)).stand.height_m;
     const auto options = app.count("--px4") == 0 ? dw::planner::default_px4_options(names)
@@ -84,7 +100,8 @@ int run(int argc, char** argv) {
         o.frame = dw::planner::local_frame(v);
         o.parked = dw::physics::Vec3(kParkedNorth_m, kParkedEast0_m + kParkedSpacing_m * static_cast<double>(i), 0);
         o.refuse_arm = refuse_arm;
-        o.publish_state = natnet_port == 0;
+        o.publish_state = natnet_port == 0 && !no_motion_capture;
+        o.position_source = source;
         if (lose_after > 0) o.lose_offboard_after_s = lose_after;
         if (kill_after > 0) o.kill_after_s = kill_after;
         if (low_battery_after > 0) o.low_battery_after_s = low_battery_after;

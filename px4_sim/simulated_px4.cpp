@@ -14,10 +14,10 @@ namespace {
 constexpr double kFollowRate = 20.0;               // 1/s: how fast the simulated vehicle closes on its setpoint
 constexpr double kLandSpeed = 0.7;                 // m/s in AUTO_LAND
 constexpr double kGroundTolerance = 0.02;          // m: landed
+constexpr double kWantTakeoff_m = 0.2;             // a setpoint this far above it asks for a take-off
 constexpr double kQuaternionNormTolerance = 1e-5;  // EKF2's check on vehicle_visual_odometry.q
 constexpr std::uint8_t kNavPosctl = 2;             // after boot
 constexpr double kGravity = 9.81;                  // m/s²: a killed vehicle falls
-constexpr std::uint8_t kFrameNed = 1, kFrameFrd = 2;
 const std::string kTypePrefix = "px4_msgs::msg::dds_::";
 
 std::string type_name(std::string_view msg) { return kTypePrefix + std::string(msg) + "_"; }
@@ -35,11 +35,14 @@ struct SimulatedPx4::State {
     double fall_speed = 0;                        // m/s, once killed
     Nanos armed_ns = 0, killed_ns = 0;            // monotonic
     Nanos landed_ns = 0;                          // monotonic: when the land detector saw it on the ground (0: not)
+    Nanos ramp_ns = 0;                            // monotonic: the take-off ramp's start (0: none yet)
+    std::uint64_t takeoff_us = 0;                 // vehicle_status.takeoff_time: lift-off (0: on the ground)
     Nanos stream_since_ns = 0, last_mode_ns = 0;  // monotonic: the offboard stream's start and last sample
     std::uint64_t last_mode_us = 0;               // its timestamp, as PX4 reads it (this host's realtime µs)
     bool mode_flag = false, position_flag = false;
     Nanos odometry_ns = 0;        // the last odometry EKF2 would accept
     Nanos odometry_since_ns = 0;  // the start of its unbroken run (EKF2's warm-up counts from it)
+    Nanos boot_ns = 0;            // monotonic: when it started (an onboard warm-up counts from it)
     bool status_changed = true;
     std::vector<std::vector<std::uint8_t>> acks;  // to publish from the loop
     Report report;
@@ -53,6 +56,7 @@ SimulatedPx4::SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side
                                : nullptr),
       px4_(px4_side, "px4_" + o_.vehicle) {
     s_->x = o_.frame.point(o_.parked);
+    s_->boot_ns = lab_.clock().monotonic_ns();
     s_->ground_z = s_->x.z();
     const auto in = [&](std::string_view t) { return dds::px4_topic(o_.ns, "in", t); };
     px4_.subscribe(in("offboard_control_mode"), type_name("OffboardControlMode"), [this](auto b) { on_mode(b); });
@@ -139,11 +143,12 @@ void SimulatedPx4::on_odometry(std::span<const std::uint8_t> b) {
     const auto& p = v->at("position");
     const double frame = value(*v, "pose_frame");
     const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    const bool ok = (frame == kFrameNed || frame == kFrameFrd) && std::isfinite(norm) &&
+    const bool ok = (frame == px4::kFrameNed || frame == px4::kFrameFrd) && std::isfinite(norm) &&
                     std::abs(norm - 1.0) <= kQuaternionNormTolerance && std::isfinite(p[0]) && std::isfinite(p[1]) &&
                     std::isfinite(p[2]);
     const Nanos mono = lab_.clock().monotonic_ns();
     std::lock_guard lock(mutex_);
+    if (s_->armed && o_.lose_vision_after_s && to_seconds(mono - s_->armed_ns) > *o_.lose_vision_after_s) return;
     if (!ok) {
         ++s_->report.rejected_odometry;
         return;
@@ -154,6 +159,7 @@ void SimulatedPx4::on_odometry(std::span<const std::uint8_t> b) {
 }
 
 bool SimulatedPx4::local_position(Nanos mono) const {
+    if (o_.position_source == PositionSource::onboard) return to_seconds(mono - s_->boot_ns) >= o_.ekf_warmup_s;
     return s_->odometry_ns != 0 && to_seconds(mono - s_->odometry_ns) <= o_.position_timeout_s &&
            to_seconds(mono - s_->odometry_since_ns) >= o_.ekf_warmup_s;
 }
@@ -212,6 +218,8 @@ dds::px4::AckResult SimulatedPx4::commander(const Values& cmd, std::string& why)
         if (!position) return why = "no local position", R::denied;
         s_->armed = s_->report.was_armed = s_->status_changed = true;
         s_->armed_ns = mono;
+        s_->ramp_ns = 0;  // a new take-off
+        s_->takeoff_us = 0;
         return R::accepted;
     }
     if (command == px4::kCmdNavLand) {
@@ -231,6 +239,11 @@ void SimulatedPx4::step(double dt) {
         event("offboard stream lost for over COM_OF_LOSS_T: failsafe, AUTO_LAND");
     }
     if (!s.armed) return;
+    if (s.takeoff_us != 0 && s.nav != px4::kNavDescend && !local_position(mono)) {
+        s.nav = px4::kNavDescend;  // no position to land at: descend where it is
+        s.failsafe = s.status_changed = true;
+        event("no local position (vision lost): failsafe, blind land (DESCEND)");
+    }
     faults(mono);
     if (s.killed) {  // motors stopped: it falls, and PX4 disarms after COM_KILL_DISARM
         s.fall_speed += kGravity * dt;
@@ -238,14 +251,43 @@ void SimulatedPx4::step(double dt) {
         if (to_seconds(mono - s.killed_ns) >= o_.com_kill_disarm_s) disarm(px4::kDisarmKillSwitch, "killed: disarmed");
         return;
     }
-    if (s.nav == px4::kNavOffboard && s.setpoint) s.x += (*s.setpoint - s.x) * std::min(1.0, kFollowRate * dt);
-    if (s.nav == px4::kNavAutoLand) {
+    if (s.nav == px4::kNavOffboard && s.setpoint) follow(dt, mono);
+    if (s.nav == px4::kNavAutoLand || s.nav == px4::kNavDescend) {
         s.x.z() = std::min(s.ground_z, s.x.z() + kLandSpeed * dt);
         const bool on_ground = s.x.z() >= s.ground_z - kGroundTolerance;
         if (!on_ground) s.landed_ns = 0;
         else if (s.landed_ns == 0) s.landed_ns = mono;
         if (on_ground && to_seconds(mono - s.landed_ns) >= o_.com_disarm_land_s)
             disarm(px4::kDisarmAfterLanding, "landed: disarmed");
+    }
+}
+
+// Offboard flight: spool-up, then the take-off ramp (vertical only until airborne), then the setpoints.
+void SimulatedPx4::follow(double dt, Nanos mono) {
+    auto& s = *s_;
+    const physics::Vec3 target = *s.setpoint;
+    if (to_seconds(mono - s.armed_ns) < o_.com_spoolup_time_s) return;  // the motors spooling up
+    if (s.ramp_ns == 0) {
+        if (target.z() > s.x.z() - kWantTakeoff_m) return;  // nothing asks it up
+        s.ramp_ns = mono;
+        event("take-off: climb ramp started");
+    }
+    const double ramped = to_seconds(mono - s.ramp_ns);
+    if (ramped >= o_.mpc_tko_ramp_t_s && s.takeoff_us != 0) {
+        s.x += (target - s.x) * std::min(1.0, kFollowRate * dt);
+        return;
+    }
+    const double climb = o_.mpc_tko_speed_mps * std::min(1.0, ramped / o_.mpc_tko_ramp_t_s);
+    const double up = std::clamp((target.z() - s.x.z()) * kFollowRate, -climb, climb);
+    if (s.takeoff_us != 0) {  // airborne: horizontal control too
+        s.x.x() += (target.x() - s.x.x()) * std::min(1.0, kFollowRate * dt);
+        s.x.y() += (target.y() - s.x.y()) * std::min(1.0, kFollowRate * dt);
+    }
+    s.x.z() = std::min(s.ground_z, s.x.z() + up * dt);
+    if (s.takeoff_us == 0 && s.x.z() < s.ground_z - kGroundTolerance) {
+        s.takeoff_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
+        s.status_changed = true;
+        event("airborne (land detector)");
     }
 }
 
@@ -283,6 +325,7 @@ void SimulatedPx4::publish_status() {
         const double armed = s.armed ? px4::kArmed : 1.0;  // 1: STANDBY (1.14) or DISARMED (1.15+)
         Values v{{"timestamp", {static_cast<double>(lab_.clock().now_ns() / 1000)}},
                  {"arming_state", {armed}},
+                 {"takeoff_time", {static_cast<double>(s.takeoff_us)}},
                  {"nav_state", {static_cast<double>(s.nav)}},
                  {"nav_state_user_intention", {static_cast<double>(s.intention)}},
                  {"failsafe", {s.failsafe ? 1.0 : 0.0}},
@@ -302,6 +345,29 @@ void SimulatedPx4::publish_status() {
         px4_.publish(dds::px4_topic(o_.ns, "out", version.ack_topic), type_name("VehicleCommandAck"), a);
 }
 
+// EKF2's estimate as PX4 bridges it (fmu/out/vehicle_odometry): here the simulated truth, in its
+// local NED. PX4's client adds its time-sync offset to outgoing stamps (SPECS.md §3): microseconds
+// on the Agent host's clock, here this host's.
+void SimulatedPx4::publish_estimate(const physics::Vec3& local_velocity) {
+    std::vector<std::uint8_t> bytes;
+    {
+        std::lock_guard lock(mutex_);
+        if (!local_position(lab_.clock().monotonic_ns())) return;
+        const auto now_us = static_cast<double>(lab_.clock().now_ns() / 1000);
+        const auto& x = s_->x;
+        Values v{{"timestamp", {now_us}},
+                 {"timestamp_sample", {now_us}},
+                 {"pose_frame", {px4::kFrameNed}},
+                 {"position", {x.x(), x.y(), x.z()}},
+                 {"q", {1, 0, 0, 0}},
+                 {"velocity_frame", {px4::kFrameNed}},
+                 {"velocity", {local_velocity.x(), local_velocity.y(), local_velocity.z()}},
+                 {"quality", {px4::kQualityBest}}};
+        bytes = encode(msg_def(Msg::vehicle_odometry, o_.version), v);
+    }
+    px4_.publish(dds::px4_topic(o_.ns, "out", "vehicle_odometry"), type_name("VehicleOdometry"), bytes);
+}
+
 void SimulatedPx4::loop(std::stop_token stop) {
     const auto period = std::chrono::duration<double>(1.0 / o_.rate_hz);
     auto next = std::chrono::steady_clock::now();
@@ -309,12 +375,14 @@ void SimulatedPx4::loop(std::stop_token stop) {
     while (!stop.stop_requested()) {
         msg::VehicleState st;
         bool status_due = false;
+        physics::Vec3 local_velocity;
         {
             std::lock_guard lock(mutex_);
             const physics::Vec3 before = s_->x;
             step(period.count());
             const physics::Vec3 x = o_.frame.lab_point(s_->x);
             const physics::Vec3 v = o_.frame.lab_point(s_->x) - o_.frame.lab_point(before);
+            local_velocity = (s_->x - before) / period.count();
             st.header().stamp(dds::to_msg(lab_.clock().now_ns()));
             st.vehicle_id(o_.vehicle);
             st.position_m().x(x.x()), st.position_m().y(x.y()), st.position_m().z(x.z());
@@ -330,6 +398,7 @@ void SimulatedPx4::loop(std::stop_token stop) {
             if (status_due) last_status = mono;
         }
         if (states_) states_->write(st);
+        publish_estimate(local_velocity);
         if (status_due) publish_status();
         next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
         std::this_thread::sleep_until(next);

@@ -7,12 +7,21 @@
 // - OFFBOARD is refused (TEMPORARILY_REJECTED) without a fresh offboard_control_mode stream
 //   (its timestamp within COM_OF_LOSS_T of this host's clock) that has lasted over 1 s, or
 //   without a local position (vehicle_visual_odometry that EKF2 would accept, recently);
-// - a local position only after EKF2's warm-up: visual odometry arriving continuously for
-//   ekf_warmup_s (yaw alignment, then position); vehicle_status.pre_flight_checks_pass is false
-//   until then, or while a pre-arm check fails;
+// - a local position only after EKF2's warm-up: with the vision source, visual odometry arriving
+//   continuously for ekf_warmup_s (yaw alignment, then position); with the onboard source (GPS,
+//   or SITL's ground truth) ekf_warmup_s after boot, no visual odometry needed;
+//   vehicle_status.pre_flight_checks_pass is false until then, or while a pre-arm check fails;
+// - its estimate on fmu/out/vehicle_odometry (NED, stamped as PX4's client stamps what it sends:
+//   on the Agent host's clock) while it has a local position, as PX4's dds_topics.yaml bridges it;
 // - arming is DENIED without a local position or when a pre-arm check fails;
 // - in OFFBOARD, a stream older than COM_OF_LOSS_T is a failsafe: AUTO_LAND (COM_OBL_RC_ACT 4);
-// - landed in AUTO_LAND (its land detector: on the ground), it disarms after COM_DISARM_LAND.
+// - airborne on vision, a local position lost (no visual odometry for position_timeout_s) is a
+//   failsafe: DESCEND, PX4's blind land;
+// - landed in AUTO_LAND or DESCEND (its land detector: on the ground), it disarms after COM_DISARM_LAND;
+// - take-off as mc_pos_control flies it: armed, the motors spool up (COM_SPOOLUP_TIME) and it stays
+//   on the ground; then, once a setpoint asks it up, it climbs at a speed ramped from 0 to
+//   MPC_TKO_SPEED over MPC_TKO_RAMP_T, with no horizontal control until the land detector sees it
+//   airborne (vehicle_status.takeoff_time is then set); after the ramp it follows its setpoints.
 // It also plays the vehicle and the motion capture: it follows the trajectory setpoints in its
 // local frame and publishes its pose as the lab's vehicles/state (lab NED).
 #include <atomic>
@@ -30,6 +39,11 @@
 
 namespace dw::px4sim {
 
+// Where EKF2's position comes from: the lab's visual odometry (motion capture), or the vehicle's
+// own sensors (GPS, optical flow, SITL's ground truth).
+enum class PositionSource { vision, onboard };
+inline constexpr const char* kPositionSourceNames[] = {"vision", "onboard"};  // PositionSource's values in order
+
 struct SimulatedPx4Options {
     dds::Px4Version version = dds::Px4Version::v1_15;
     std::string ns;                                // its client's -n ("" = rt/fmu/...)
@@ -41,15 +55,20 @@ struct SimulatedPx4Options {
     double offboard_warmup_s = 1.0;                // the stream's age before OFFBOARD is accepted
     double position_timeout_s = 0.5;               // visual odometry older than this: no local position
     double ekf_warmup_s = 3.0;                     // EKF2: continuous odometry this long before a local position
-    std::string refuse_arm;                        // non-empty: a pre-arm check that fails (arming DENIED)
-    std::optional<double> lose_offboard_after_s;   // after arming it hears no more offboard stream
-    std::optional<double> kill_after_s;            // after arming the kill switch is thrown (motors stop)
-    double com_kill_disarm_s = 5.0;                // COM_KILL_DISARM: killed this long, PX4 disarms
-    double com_disarm_land_s = 2.0;                // COM_DISARM_LAND: landed this long, PX4 disarms
-    std::optional<double> low_battery_after_s;     // after arming the battery reaches its failsafe level
-    double rate_hz = 100;                          // dynamics and vehicles/state
-    double status_period_s = 0.5;                  // vehicle_status (also on every change)
-    bool publish_state = true;                     // vehicles/state (false: the motion capture is played elsewhere)
+    PositionSource position_source = PositionSource::vision;
+    std::string refuse_arm;                       // non-empty: a pre-arm check that fails (arming DENIED)
+    std::optional<double> lose_offboard_after_s;  // after arming it hears no more offboard stream
+    std::optional<double> lose_vision_after_s;    // after arming no more visual odometry reaches its estimator
+    std::optional<double> kill_after_s;           // after arming the kill switch is thrown (motors stop)
+    double com_kill_disarm_s = 5.0;               // COM_KILL_DISARM: killed this long, PX4 disarms
+    double com_disarm_land_s = 2.0;               // COM_DISARM_LAND: landed this long, PX4 disarms
+    double com_spoolup_time_s = 1.0;              // COM_SPOOLUP_TIME: armed, the motors spool up this long
+    double mpc_tko_ramp_t_s = 3.0;                // MPC_TKO_RAMP_T: the take-off's climb-speed ramp
+    double mpc_tko_speed_mps = 1.5;               // MPC_TKO_SPEED: the take-off's climb speed
+    std::optional<double> low_battery_after_s;    // after arming the battery reaches its failsafe level
+    double rate_hz = 100;                         // dynamics and vehicles/state
+    double status_period_s = 0.5;                 // vehicle_status (also on every change)
+    bool publish_state = true;                    // vehicles/state (false: the motion capture is played elsewhere)
     bool reads_commands = true;  // false: the Agent does not bridge fmu/in/vehicle_command (a misconfigured Agent)
     // Whether it publishes vehicle_command_ack; default: as the version's dds_topics.yaml (1.14: no).
     std::optional<bool> publishes_ack;
@@ -86,9 +105,11 @@ private:
     dds::px4::AckResult commander(const Values& cmd, std::string& why);  // under mutex_
     void loop(std::stop_token stop);
     void step(double dt);                                      // under mutex_
+    void follow(double dt, Nanos mono);                        // under mutex_: in OFFBOARD, armed
     void faults(Nanos mono);                                   // under mutex_
     void disarm(std::uint8_t reason, const std::string& why);  // under mutex_
     void publish_status();
+    void publish_estimate(const physics::Vec3& local_velocity);
     std::optional<Values> decode_or_count(Msg m, std::span<const std::uint8_t> b);
     void event(const std::string& line);  // under mutex_
 

@@ -184,6 +184,7 @@ struct PoseRow {
 struct Found {
     Offsets offsets;  // per process: the time service's measured clock offsets
     std::string formation = "free";
+    bool estimated_poses = false;  // a mocap frame carried the vehicles' own estimates (PX4), not motion capture
 };
 struct RowHandlers {
     std::function<void(WrenchRow&&)> wrench;
@@ -208,6 +209,7 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
         msg::MocapFrame fr;
         if (!deserialize(m.data, fr)) throw undecodable();
         const double t = static_cast<double>(dds::from_msg(fr.header().stamp())) * 1e-9;
+        if (fr.pose_source() == msg::POSE_VEHICLE_ESTIMATE) found.estimated_poses = true;
         for (const auto& b : fr.bodies()) {
             PoseRow r{t,
                       b.name(),
@@ -289,6 +291,7 @@ flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& fo
     const bool known = std::find_if(flight::kFormations.begin(), flight::kFormations.end(),
                                     [&](const char* k) { return found.formation == k; }) != flight::kFormations.end();
     m.formation = known ? found.formation : "free";
+    if (found.estimated_poses) m.pose_source = flight::PoseSource::estimate;
     nlohmann::json clocks = nlohmann::json::object();
     if (!o.raw_stamps) clocks = {{c.stand, c.stand_offset}, {c.mocap, c.mocap_offset}};
     nlohmann::json extra{

@@ -160,11 +160,45 @@ std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint
         if (!plan_.options.fence.contains(x, kFenceTolerance_m)) {
             return log::cat("geofence breach by ", plan_.vehicles[i], " at (", x.x(), ", ", x.y(), ", ", x.z(), ")");
         }
-        const double err = (x - sps[i].position).norm();
-        if (!(err <= o_.tracking_error_m))
-            return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
+        if (auto f = tracking_fault(i, (x - sps[i].position).norm())) return f;
     }
     return std::nullopt;
+}
+
+std::optional<std::string> Experiment::tracking_fault(std::size_t i, double err) {
+    if (i >= held_.size()) held_.resize(plan_.vehicles.size(), true);
+    if (!held_[i]) {
+        std::string how;
+        held_[i] = err <= o_.tracking_error_m && link_->following(i, how);
+        return std::nullopt;
+    }
+    if (!(err <= o_.tracking_error_m))
+        return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
+    return std::nullopt;
+}
+
+std::optional<std::string> Experiment::settle(const std::vector<physics::Setpoint>& first) {
+    const auto start = std::chrono::steady_clock::now();
+    Ticker ticker(o_.setpoint_hz);
+    for (;;) {
+        if (o_.stop.stop_requested()) return std::string("interrupted (SIGINT/SIGTERM)");
+        if (auto refused = send(first)) return refused;
+        if (auto f = fault(first)) return f;
+        std::vector<std::string> lagging;
+        for (std::size_t i = 0; i < first.size(); ++i) {
+            std::string how;
+            if (held_[i]) continue;
+            const bool follows = link_->following(i, how);
+            lagging.push_back(log::cat(plan_.vehicles[i], " (", follows ? "farther than the bound" : how, ")"));
+        }
+        if (lagging.empty()) return std::nullopt;
+        const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (waited >= o_.takeoff_settle_s)
+            return log::cat("take-off not completed ", fixed(waited, 1),
+                            " s after the take-off curve: ", log::join(lagging), " (tracking bound ",
+                            o_.tracking_error_m, " m)");
+        ticker.wait();
+    }
 }
 
 std::optional<std::string> Experiment::fly(double duration,
@@ -330,7 +364,10 @@ msg::ExperimentPhase Experiment::run() {
         link_->land();  // whatever did arm lands (on the ground: PX4 disarms)
         return abort_on_ground(*refused);
     }
-    if (auto f = fly(o_.takeoff_s, takeoff, msg::PHASE_TAKING_OFF, true)) {
+    held_.assign(k, false);  // each vehicle is held to the tracking bound once it meets it
+    auto f = fly(o_.takeoff_s, takeoff, msg::PHASE_TAKING_OFF, true);
+    if (!f) f = settle(takeoff(o_.takeoff_s));
+    if (f) {
         land_safely(*f);
         return msg::PHASE_ABORTED;
     }

@@ -23,6 +23,7 @@ inline constexpr Range kRejoinGraceRange{0, 60, "s"};
 // needs more time and room than the simulated vehicles).
 inline constexpr Range kTrackingBoundRange{0.05, 5, "m"};
 inline constexpr Range kTakeoffTimeRange{1, 60, "s"};
+inline constexpr Range kTakeoffSettleRange{0, 120, "s"};
 
 struct RunOptions {
     std::vector<std::string> wait_for{"stand_agent", "mocap_bridge", "recorder"};
@@ -30,6 +31,9 @@ struct RunOptions {
     double setpoint_hz = 50;
     double calibrate_s = 1.5;
     double takeoff_s = 4;  // the take-off curve, parked to the first setpoint
+    // After the take-off curve, the longest the vehicles may take to reach their first setpoints
+    // (a PX4 spools up and climbs on its ramp first); the tracking bound holds for each from then.
+    double takeoff_settle_s = 10;
     double land_s = 4;
     double hold_s = 1;
     double mocap_timeout_s = 0.2;
@@ -59,6 +63,12 @@ private:
     // Sends the setpoints unless one is not finite: then nothing is sent and the reason returned.
     std::optional<std::string> send(const std::vector<physics::Setpoint>& sps);
     std::optional<std::string> fault(const std::vector<physics::Setpoint>& sps);
+    // The tracking bound of vehicle i at error `err`: why it is broken, if so. A vehicle is held to it
+    // from when it first meets it under position control (PX4: airborne, its take-off ramp over).
+    std::optional<std::string> tracking_fault(std::size_t i, double err);
+    // After the take-off curve: holds the first setpoints until every vehicle meets the tracking
+    // bound, at most takeoff_settle_s; else why not.
+    std::optional<std::string> settle(const std::vector<physics::Setpoint>& first);
     // Flies `target(t)` for `duration` at the setpoint rate; stops early on a fault (returned).
     std::optional<std::string> fly(double duration, const std::function<std::vector<physics::Setpoint>(double)>& target,
                                    msg::ExperimentPhase phase, bool supervise);
@@ -99,6 +109,7 @@ private:
     int legs_flown_ = 0;
     int leg_ = -1;
     std::vector<physics::Setpoint> last_;
+    std::vector<bool> held_;  // per vehicle: under the tracking bound (since take-off, once it met it)
 };
 
 }  // namespace dw::planner

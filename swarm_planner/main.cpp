@@ -76,6 +76,10 @@ int run(int argc, char** argv) {
         ->check(dw::cli::in(dw::planner::kTrackingBoundRange));
     runc->add_option("--takeoff-time", ro.takeoff_s, "the take-off curve's duration, parked to the first setpoint [s]")
         ->check(dw::cli::in(dw::planner::kTakeoffTimeRange));
+    runc->add_option("--takeoff-settle", ro.takeoff_settle_s,
+                     "after the take-off curve, the longest the vehicles may take to come within the tracking bound "
+                     "of their first setpoints (a PX4 spools up and climbs on its ramp first) [s]")
+        ->check(dw::cli::in(dw::planner::kTakeoffSettleRange));
     std::string link = "sim", px4_file;
     runc->add_option("--vehicles", link, "sim (vehicles/setpoint) or px4 (PX4's uXRCE-DDS topics)");
     runc->add_option("--px4", px4_file,

@@ -45,6 +45,7 @@ void px4_keys(KeyVisitor& k, Px4Options& o) {
     k.number("status_timeout_s", o.status_timeout_s, kStatusTimeoutRange);
     k.number("land_timeout_s", o.land_timeout_s, kLandTimeoutRange);
     k.number("estimator_timeout_s", o.estimator_timeout_s, kEstimatorTimeoutRange);
+    k.number("takeoff_ramp_s", o.takeoff_ramp_s, kTakeoffRampRange);
     k.require(k.has("vehicles"), "vehicles", "expected a mapping from each of the plan's vehicles to its PX4 settings");
     std::set<int> ids;
     const auto vehicles = [&](KeyVisitor& vs) {

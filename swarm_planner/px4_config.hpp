@@ -3,6 +3,7 @@
 //
 //   version: "1.15"          # 1.14, 1.15 or 1.16 (dds/px4.hpp)
 //   odometry_hz: 50          # mocap into each PX4's estimator (vehicle_visual_odometry); 0 = every frame
+//   takeoff_ramp_s: 3        # the vehicles' MPC_TKO_RAMP_T (no tracking bound until airborne that long)
 //   vehicles:
 //     v1: {namespace: px4_1, system_id: 2, origin_m: [0, 0, 0], heading_deg: 0}
 //
@@ -29,6 +30,7 @@ inline constexpr Range kAttemptsRange{1, 10};
 inline constexpr Range kStatusTimeoutRange{0.2, 30, "s"};
 inline constexpr Range kLandTimeoutRange{1, 600, "s"};
 inline constexpr Range kEstimatorTimeoutRange{0, 600, "s"};
+inline constexpr Range kTakeoffRampRange{0, 30, "s"};  // PX4's MPC_TKO_RAMP_T is 0-5 s
 inline constexpr Range kHeadingRange{-360, 360, "deg"};
 inline constexpr Range kOriginRange{-100, 100, "m"};
 inline constexpr Range kStdRange{1e-6, 10};
@@ -53,6 +55,7 @@ struct Px4Options {
     double status_timeout_s = 3.0;      // the first vehicle_status within this; in flight, one older is a lost link
     double land_timeout_s = 30.0;       // after NAV_LAND, PX4 must report every vehicle disarmed within this
     double estimator_timeout_s = 30.0;  // before OFFBOARD, the wait for PX4's pre-flight checks to pass
+    double takeoff_ramp_s = 3.0;        // PX4's MPC_TKO_RAMP_T: after lift-off, no tracking bound for this long
     std::vector<Px4Vehicle> vehicles;   // in the plan's order
 };
 
@@ -67,8 +70,12 @@ struct LocalFrame {
     physics::Vec3 point(const physics::Vec3& lab) const { return lab_to_local() * (lab - origin); }
     physics::Vec3 vector(const physics::Vec3& lab) const { return lab_to_local() * lab; }
     physics::Vec3 lab_point(const physics::Vec3& local) const { return origin + lab_to_local().transpose() * local; }
+    physics::Vec3 lab_vector(const physics::Vec3& local) const { return lab_to_local().transpose() * local; }
     Eigen::Quaterniond attitude(const Eigen::Quaterniond& body_to_lab) const {
         return Eigen::Quaterniond(lab_to_local()) * body_to_lab;
+    }
+    Eigen::Quaterniond lab_attitude(const Eigen::Quaterniond& body_to_local) const {
+        return Eigen::Quaterniond(lab_to_local().transpose()) * body_to_local;
     }
     double yaw(double lab_yaw) const { return std::remainder(lab_yaw - heading_rad, 2 * std::numbers::pi); }
 };

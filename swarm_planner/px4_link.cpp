@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "dds/px4.hpp"
 #include "dds/time.hpp"
 
@@ -17,8 +18,6 @@ namespace px4 = dds::px4;
 using px4_msgs::msg::dds_::TrajectorySetpoint_;
 using px4_msgs::msg::dds_::VehicleOdometry_;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr std::uint8_t kFrameNed = 1;      // VehicleOdometry pose_frame / velocity_frame
-constexpr std::int8_t kQualityBest = 100;  // VehicleOdometry quality
 
 // The message types of one PX4 version (the others are the same in every supported version).
 struct Types115 {
@@ -37,15 +36,11 @@ struct Types114 {
     using Ack = px4_msgs_v114::msg::dds_::VehicleCommandAck_;
 };
 
-template <class T>
-dds::Topic<T> px4_spec(const std::string& name, std::string_view type) {
-    return {name, dds::QosProfile::px4, type, "PX4 uXRCE-DDS", "Px4"};
-}
-
 // What PX4 wants before OFFBOARD, as the link can see it from its own side.
-constexpr double kStreamWarmupS = 1.0;  // setpoints streaming for more than this (PX4's offboard check)
-constexpr double kStreamGapS = 0.5;     // no setpoint for longer than this: the stream has stopped (PX4: 2 Hz)
-constexpr double kOdometryGapS = 0.5;   // no visual odometry for longer than this: EKF2 loses the position
+constexpr double kStreamWarmupS = 1.0;        // setpoints streaming for more than this (PX4's offboard check)
+constexpr double kStreamGapS = 0.5;           // no setpoint for longer than this: the stream has stopped (PX4: 2 Hz)
+constexpr double kOdometryGapS = 0.5;         // no visual odometry for longer than this: EKF2 loses the position
+constexpr std::size_t kLatencySamples = 500;  // odometry samples whose capture-to-send latency is logged
 
 // Each arming step: the command that asks for it and what vehicle_status shows when it is done.
 // await_estimator: PX4's pre-flight checks (its estimator's local position among them) pass.
@@ -56,6 +51,7 @@ struct StatusSeen {
     bool failsafe = false;
     bool preflight_ok = false;  // pre_flight_checks_pass
     Nanos seen_ns = 0;          // monotonic; 0 = never
+    Nanos airborne_ns = 0;      // monotonic: when takeoff_time was first seen set (its land detector); 0 = not
 };
 struct AckSeen {
     std::uint32_t command = 0;
@@ -152,6 +148,18 @@ public:
     }
     double land_timeout_s() const override { return o_.land_timeout_s; }
 
+    // Position control from the end of PX4's take-off ramp (MPC_TKO_RAMP_T, `takeoff_ramp_s`) after
+    // its land detector saw the vehicle airborne; before that PX4 climbs straight up on the ramp.
+    bool following(std::size_t i, std::string& how) override {
+        if (i >= vehicles_.size()) return true;
+        const StatusSeen s = status_of(vehicles_[i]);
+        if (s.airborne_ns == 0) return how = "on the ground (PX4's land detector)", false;
+        const double up = to_seconds(p_.clock().monotonic_ns() - s.airborne_ns);
+        if (up < o_.takeoff_ramp_s)
+            return how = log::cat("airborne for ", fixed(up, 1), " s, in its take-off ramp"), false;
+        return true;
+    }
+
 private:
     struct Vehicle {
         Px4Vehicle cfg;
@@ -188,33 +196,38 @@ private:
         v.status_name = dds::px4_topic(cfg.ns, "out", version.status_topic);
         v.ack_name = dds::px4_topic(cfg.ns, "out", version.ack_topic);
         v.traj = std::make_unique<dds::Writer<TrajectorySetpoint_>>(
-            p_, px4_spec<TrajectorySetpoint_>(v.traj_name, "px4_msgs::msg::dds_::TrajectorySetpoint_"));
+            p_, dds::px4_topic_spec<TrajectorySetpoint_>(v.traj_name, "px4_msgs::msg::dds_::TrajectorySetpoint_"));
         v.mode = std::make_unique<dds::Writer<typename Types::Mode>>(
-            p_, px4_spec<typename Types::Mode>(v.mode_name, "px4_msgs::msg::dds_::OffboardControlMode_"));
+            p_, dds::px4_topic_spec<typename Types::Mode>(v.mode_name, "px4_msgs::msg::dds_::OffboardControlMode_"));
         v.cmd = std::make_unique<dds::Writer<typename Types::Command>>(
-            p_, px4_spec<typename Types::Command>(v.cmd_name, "px4_msgs::msg::dds_::VehicleCommand_"));
+            p_, dds::px4_topic_spec<typename Types::Command>(v.cmd_name, "px4_msgs::msg::dds_::VehicleCommand_"));
         v.odom = std::make_unique<dds::Writer<VehicleOdometry_>>(
-            p_, px4_spec<VehicleOdometry_>(v.odom_name, "px4_msgs::msg::dds_::VehicleOdometry_"));
+            p_, dds::px4_topic_spec<VehicleOdometry_>(v.odom_name, "px4_msgs::msg::dds_::VehicleOdometry_"));
         Vehicle* vp = &v;
         // PX4's fmu/out writers are TRANSIENT_LOCAL, and the ack's appears with its first answer:
         // a transient-local reader still gets that answer once it has matched the new writer.
         dds::QosOverrides latest;
         latest.transient_local = true;
         v.status = std::make_unique<dds::Reader<typename Types::Status>>(
-            p_, px4_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
+            p_, dds::px4_topic_spec<typename Types::Status>(v.status_name, "px4_msgs::msg::dds_::VehicleStatus_"),
             [this, vp](const typename Types::Status& s, const dds::SampleMeta&) {
                 std::lock_guard lock(mutex_);
+                const Nanos now = p_.clock().monotonic_ns();
+                // takeoff_time is set by the Commander when the land detector sees the vehicle airborne.
+                const bool took_off = s.arming_state() == px4::kArmed && s.takeoff_time() != 0;
+                const Nanos airborne = !took_off ? 0 : vp->st.airborne_ns != 0 ? vp->st.airborne_ns : now;
                 vp->st = {s.arming_state(),
                           s.nav_state(),
                           s.nav_state_user_intention(),
                           s.latest_disarming_reason(),
                           s.failsafe(),
                           s.pre_flight_checks_pass(),
-                          p_.clock().monotonic_ns()};
+                          now,
+                          airborne};
             },
             latest);
         v.ack = std::make_unique<dds::Reader<typename Types::Ack>>(
-            p_, px4_spec<typename Types::Ack>(v.ack_name, "px4_msgs::msg::dds_::VehicleCommandAck_"),
+            p_, dds::px4_topic_spec<typename Types::Ack>(v.ack_name, "px4_msgs::msg::dds_::VehicleCommandAck_"),
             [this, vp](const typename Types::Ack& a, const dds::SampleMeta&) {
                 // An answer to someone else (a ground station is system 255 too) is not ours.
                 if (a.target_system() != px4::kPlannerSystem || a.target_component() != px4::kPlannerComponent) return;
@@ -261,6 +274,19 @@ private:
             return;
         v.odom_sent_ns = now;
         v.odom->write_as_is(odometry(v, s, x, q));
+        note_latency(p_.clock().now_ns() - dds::from_msg(s.header().stamp()));
+    }
+
+    // A real PX4 replaces the capture time it is sent with its receive time (issue 42), so
+    // EKF2_EV_DELAY must hold the latency: the part from capture to send is logged once, measured.
+    void note_latency(Nanos capture_to_send) {  // under odom_mutex_
+        if (latencies_ms_.size() >= kLatencySamples) return;
+        latencies_ms_.push_back(static_cast<double>(capture_to_send) * 1e-6);
+        if (latencies_ms_.size() < kLatencySamples) return;
+        auto sorted = latencies_ms_;
+        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+        log::info("odometry: capture to send median ", fixed(sorted[sorted.size() / 2], 1), " ms over ",
+                  kLatencySamples, " samples (EKF2_EV_DELAY: this plus the Agent's link; docs/OPERATOR.md)");
     }
 
     VehicleOdometry_ odometry(const Vehicle& v, const msg::VehicleState& s, const physics::Vec3& x,
@@ -268,8 +294,8 @@ private:
         VehicleOdometry_ m;
         m.timestamp(static_cast<std::uint64_t>(p_.clock().now_ns() / 1000));
         m.timestamp_sample(static_cast<std::uint64_t>(dds::from_msg(s.header().stamp()) / 1000));  // the capture time
-        m.pose_frame(kFrameNed);
-        m.velocity_frame(kFrameNed);
+        m.pose_frame(px4::kFrameNed);
+        m.velocity_frame(px4::kFrameNed);
         const physics::Vec3 p = v.frame.point(x);
         const physics::Vec3 vel =
             v.frame.vector(physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z()));
@@ -290,7 +316,7 @@ private:
             m.velocity_variance()[k] = vv;
         }
         m.reset_counter(v.reset_counter);
-        m.quality(static_cast<std::uint8_t>(kQualityBest));
+        m.quality(static_cast<std::uint8_t>(px4::kQualityBest));
         return m;
     }
 
@@ -463,6 +489,7 @@ private:
     std::mutex mutex_, odom_mutex_;
     std::deque<Vehicle> vehicles_;  // stable addresses: callbacks and specs refer to them
     std::map<std::string, Vehicle*> by_name_;
+    std::vector<double> latencies_ms_;  // under odom_mutex_: capture to send, until kLatencySamples
     std::unique_ptr<dds::Reader<msg::VehicleState>> states_;
 };
 

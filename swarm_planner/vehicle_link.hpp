@@ -30,6 +30,13 @@ public:
     virtual ArmProgress arm() { return {ArmProgress::State::ready, ""}; }
     // In flight: why the vehicles no longer follow this link (a PX4 failsafe), if so.
     virtual std::optional<std::string> failsafe() { return std::nullopt; }
+    // Whether vehicle i (the plan's order) flies under position control, so that the tracking bound
+    // applies: PX4 climbs vertically on a ramp after its motors spool up, and only then follows its
+    // setpoints. `how` says where it is otherwise ("on the ground", "in its take-off ramp").
+    virtual bool following(std::size_t i, std::string& how) {
+        (void)i, (void)how;
+        return true;
+    }
     virtual void land() {}  // after the landing setpoints
     // After land(): the vehicles not yet confirmed landed ("v1 (armed, AUTO_LAND)"), nullopt when
     // every one is (PX4: disarmed). A link that cannot tell confirms at once.

@@ -175,6 +175,13 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
             << e.what();
     }
     EXPECT_FALSE(std::filesystem::exists(dir.file("broken")));
+    // Issue 42: poses that are the vehicles' own estimates (meta.json pose_source) are said so.
+    auto estimated = f;
+    estimated.meta.pose_source = dw::flight::PoseSource::estimate;
+    write_report(estimated, r, o, dir.file("estimated"));
+    EXPECT_NE(dw::read_file(dir.file("estimated/report.md")).find("the vehicles' own state estimates"),
+              std::string::npos);
+    EXPECT_EQ(dw::read_file(dir.file("out/report.md")).find("own state estimates"), std::string::npos);
     EXPECT_EQ(dw::fixed(std::numeric_limits<double>::quiet_NaN(), 3), "–");
     EXPECT_FALSE(j["mismatch"]["regions"].empty());
     for (const auto& g : j["mismatch"]["regions"]) {

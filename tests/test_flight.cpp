@@ -65,6 +65,12 @@ TEST(FlightFolder, RoundTripsAndKeepsUnknownMetaKeys) {
     ASSERT_TRUE(g.legs.has_value());
     EXPECT_EQ(g.legs->size(), 1u);
     EXPECT_NE(g.meta.extra_json.find("Cambridge"), std::string::npos);
+    EXPECT_EQ(g.meta.pose_source, dw::flight::PoseSource::motion_capture) << "the default, not written";
+    EXPECT_EQ(dw::read_file(d.file("f/meta.json")).find("pose_source"), std::string::npos);
+    // Poses from the vehicles' own estimates (issue 42) are said so, and read back.
+    f.meta.pose_source = dw::flight::PoseSource::estimate;
+    write_flight(f, d.file("e"));
+    EXPECT_EQ(read_flight(d.file("e")).meta.pose_source, dw::flight::PoseSource::estimate);
     // Writing what was read gives the same bytes.
     write_flight(g, d.file("g"));
     for (const char* name : {"meta.json", "wrench.csv", "poses.csv", "legs.csv"}) {
@@ -134,6 +140,10 @@ TEST(FlightFolder, EveryRuleIsEnforcedWithFileAndLine) {
          "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": "
          "\"single\", \"vehicles\": {\"v1\": {\"mass_kg\": -1}}}",
          "meta.json: field 'vehicles.v1.mass_kg': -1 is not in [0.01, 100] kg"},
+        {"meta.json",
+         "{\"format\": \"downwash-flight/1\", \"sufferer\": \"sufferer\", \"neighbours\": [\"v1\"], \"formation\": "
+         "\"single\", \"pose_source\": \"gps\"}",
+         "meta.json: field 'pose_source': \"gps\" is not motion_capture or estimate"},
         {"wrench.csv", many_rows(120) + "1e400,1,2,3,4,5,6\n", "wrench.csv:122: column t: '1e400' is not a number"},
         {"wrench.csv", many_rows(14) + "0.5,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n", "wrench.csv:17: t = 0.1 is earlier"},
     };

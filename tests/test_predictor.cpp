@@ -93,6 +93,25 @@ TEST(PredictorDataset, AlignsPosesWithTheWrenchAndSplitsByLeg) {
               static_cast<std::size_t>(on_leg));
 }
 
+// Issue 42: a flight whose poses are the vehicles' own estimates (meta.json pose_source) is
+// carried into the dataset, and the tables say which flights those are; motion capture needs no note.
+TEST(PredictorDataset, SaysWhichFlightsPosesAreEstimates) {
+    dw::test::TempDir dir;
+    const auto path = small_flight(dir);
+    auto f = dw::flight::read_flight(path);
+    EXPECT_EQ(dw::predictor::poses_note(load_dataset(path)), "");
+    f.meta.pose_source = dw::flight::PoseSource::estimate;
+    dw::flight::write_flight(f, dir.file("estimated"));
+    Dataset d = load_dataset(path);
+    d.append(load_dataset(dir.file("estimated")));
+    ASSERT_EQ(d.sources.size(), 2u);
+    EXPECT_FALSE(d.sources[0].estimated_poses);
+    EXPECT_TRUE(d.sources[1].estimated_poses);
+    const std::string note = dw::predictor::poses_note(d);
+    EXPECT_NE(note.find("The poses of 1 flight(s) are the vehicles' own state estimates"), std::string::npos) << note;
+    EXPECT_NE(note.find("estimated"), std::string::npos) << note;
+}
+
 TEST(PredictorDataset, FindsLegsWithoutLegsCsv) {
     dw::test::TempDir dir;
     auto f = dw::flight::read_flight(small_flight(dir));

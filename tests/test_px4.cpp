@@ -14,6 +14,7 @@
 
 #include "core/errors.hpp"
 #include "dds/time.hpp"
+#include "mocap_bridge/px4_source.hpp"
 #include "px4_sim/raw.hpp"
 #include "px4_sim/simulated_px4.hpp"
 #include "px4_sim/wire.hpp"
@@ -468,6 +469,123 @@ TEST(Px4Refusals, ALandingPx4DoesNotConfirmIsNotDone) {
     EXPECT_NE(e.reason().find("landing not confirmed: v1 (armed, AUTO_LAND) after 1."), std::string::npos)
         << e.reason();
     EXPECT_TRUE(lab.vehicles[0]->report().armed);
+}
+
+// Issue 42, problem 3: the simulated PX4 takes off as PX4's mc_pos_control does — armed, its
+// motors spool up on the ground (COM_SPOOLUP_TIME, 1 s); then it climbs straight up at a speed
+// ramped to MPC_TKO_SPEED over MPC_TKO_RAMP_T (3 s), with no horizontal control until its land
+// detector says airborne — and the link says a vehicle follows its setpoints (the tracking bound
+// applies) only from the end of that ramp after lift-off.
+TEST(Px4TakeOff, SpoolUpThenAVerticalClimbRampThenTheSetpoints) {
+    Px4Lab lab("px4tko", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single");
+    lab.start(plan);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    const dw::physics::Vec3 parked = lab.vehicles[0]->lab_position();
+    dw::physics::Setpoint hold;
+    hold.position = parked;
+    ASSERT_EQ(arm(*link, lab.lab, {hold}, true).state, dw::planner::ArmProgress::State::ready);
+    dw::physics::Setpoint up = hold;  // 1.5 m up and 1 m north, asked at once
+    up.position += dw::physics::Vec3(1, 0, -1.5);
+    const auto armed = std::chrono::steady_clock::now();
+    double lift_off = -1, sideways_on_ground = 0, fastest_climb = 0, z_before = parked.z();
+    bool followed_early = false;
+    std::string how;
+    for (int i = 0; i < 400; ++i) {  // 8 s at 50 Hz
+        link->send({up}, lab.lab.clock().now_ns());
+        std::this_thread::sleep_for(20ms);
+        const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - armed).count();
+        const auto x = lab.vehicles[0]->lab_position();
+        if (lift_off < 0 && x.z() < parked.z() - 0.02) lift_off = t;
+        if (lift_off < 0) sideways_on_ground = std::max(sideways_on_ground, (x - parked).head<2>().norm());
+        fastest_climb = std::max(fastest_climb, (z_before - x.z()) / 0.02);
+        z_before = x.z();
+        if (link->following(0, how) && t < 3.5) followed_early = true;
+    }
+    EXPECT_GE(lift_off, 0.8) << "the motors spool up for COM_SPOOLUP_TIME first";
+    EXPECT_LT(sideways_on_ground, 1e-9) << "no horizontal control before the land detector says airborne";
+    EXPECT_LT(fastest_climb, 1.5 * 1.5) << "the ramp climbs at MPC_TKO_SPEED at most (sampling jitter allowed)";
+    EXPECT_FALSE(followed_early) << "the tracking bound applied before the take-off ramp ended";
+    EXPECT_TRUE(link->following(0, how)) << how;
+    EXPECT_LT((lab.vehicles[0]->lab_position() - up.position).norm(), 0.05);
+    const auto events = lab.vehicles[0]->report().events;
+    for (const char* e : {"take-off: climb ramp started", "airborne (land detector)"})
+        EXPECT_NE(std::find(events.begin(), events.end(), e), events.end()) << e;
+}
+
+// Issue 42, point 4: a PX4 on its own sensors (GPS, SITL's ground truth) has a local position
+// after its estimator's warm-up without any visual odometry, and publishes its estimate on
+// fmu/out/vehicle_odometry in its local frame (here PX4's north is the lab's east, its origin 1 m N
+// 2 m E); the pose source puts that estimate back in the lab, marked as an estimate, with the
+// sufferer where the stand holds it. Before the warm-up the vehicle is not tracked.
+TEST(Px4Estimate, APx4OnItsOwnSensorsIsPosedInTheLabFromItsEstimate) {
+    const auto cfg = loopback("px4est");
+    dw::dds::Participant lab(cfg, "bridge");
+    dw::px4sim::RawParticipant px4side(cfg, "observer");
+    const dw::planner::Px4Vehicle v{"v1", "px4_1", 1, dw::physics::Vec3(1, 2, 0), std::numbers::pi / 2};
+    Captured odom;
+    capture(px4side, dw::dds::px4_topic(v.ns, "out", "vehicle_odometry"), "VehicleOdometry", odom);
+    dw::px4sim::SimulatedPx4Options o;
+    o.ns = v.ns;
+    o.frame = dw::planner::local_frame(v);
+    o.parked = dw::physics::Vec3(-1.5, 0.5, 0);
+    o.position_source = dw::px4sim::PositionSource::onboard;
+    o.ekf_warmup_s = 2;
+    o.publish_state = false;
+    dw::natnet::Px4SourceOptions so;
+    so.px4.vehicles = {v};
+    so.sufferer = dw::physics::Vec3(0, 0, -1.4);
+    dw::natnet::Px4PoseSource source(lab, so);
+    dw::px4sim::SimulatedPx4 sim(lab, cfg, o);
+    const auto before = source.frame(lab.clock().now_ns());
+    ASSERT_EQ(before.frame.bodies().size(), 2u);
+    EXPECT_FALSE(before.frame.bodies()[1].tracking_valid()) << "no estimate before the warm-up";
+    EXPECT_FALSE(before.states.at(0).tracking_valid());
+
+    ASSERT_TRUE(eventually([&] { return source.received() >= 10 && odom.size() > 0; }));
+    // PX4's side: its local frame (north = the lab's east).
+    const auto m = dw::px4sim::decode(dw::px4sim::msg_def(Msg::vehicle_odometry, Px4Version::v1_15), odom.last());
+    EXPECT_NEAR(m.at("position")[0], -1.5, 1e-5);  // lab east 0.5 - 2
+    EXPECT_NEAR(m.at("position")[1], 2.5, 1e-5);   // lab south of the origin: 1 - (-1.5)
+    EXPECT_EQ(dw::px4sim::value(m, "pose_frame"), px4::kFrameNed);
+    EXPECT_NEAR(dw::px4sim::value(m, "timestamp") * 1e-6, static_cast<double>(lab.clock().now_ns()) * 1e-9, 5.0)
+        << "on the Agent host's clock, as PX4's client stamps what it sends";
+    // The lab's side.
+    const auto out = source.frame(lab.clock().now_ns());
+    EXPECT_EQ(out.frame.pose_source(), dw::msg::POSE_VEHICLE_ESTIMATE);
+    ASSERT_EQ(out.frame.bodies().size(), 2u);
+    const auto& suf = out.frame.bodies()[0];
+    EXPECT_EQ(suf.name(), "sufferer");
+    EXPECT_DOUBLE_EQ(suf.position_m().z(), -1.4);
+    const auto& b = out.frame.bodies()[1];
+    EXPECT_EQ(b.name(), "v1");
+    EXPECT_TRUE(b.tracking_valid());
+    EXPECT_NEAR(b.position_m().x(), -1.5, 1e-5);
+    EXPECT_NEAR(b.position_m().y(), 0.5, 1e-5);
+    EXPECT_NEAR(b.position_m().z(), 0.0, 1e-5);
+    // PX4's level attitude, heading its own north, is the lab's east: yaw +90 degrees.
+    EXPECT_NEAR(std::abs(b.orientation().w()), std::cos(std::numbers::pi / 4), 1e-6);
+    EXPECT_NEAR(b.orientation().z() * b.orientation().w(), 0.5, 1e-6);
+    ASSERT_EQ(out.states.size(), 1u);
+    EXPECT_TRUE(out.states[0].tracking_valid());
+    EXPECT_LT(out.states[0].staleness_s(), so.stale_s);
+    EXPECT_EQ(source.rejected(), 0u);
+}
+
+// Issue 42: a PX4 flying on vision that loses it (no visual odometry reaches its estimator 6 s
+// after arming) has no position left: its failsafe is a blind land (DESCEND). The planner aborts
+// with PX4's reason, and the run ends only once PX4 has landed and disarmed.
+TEST(Px4Refusals, LostVisionIsPx4sBlindLandAndTheRunAborts) {
+    Px4Lab lab("px4blind", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single", 6.0);
+    lab.start(plan, [](auto& o) { o.lose_vision_after_s = 6.0; });
+    dw::planner::Experiment e(lab.lab, plan, lab.run_options());
+    EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(e.reason().find("v1: PX4 left OFFBOARD for DESCEND (PX4 failsafe"), std::string::npos) << e.reason();
+    const auto r = lab.vehicles[0]->report();
+    EXPECT_FALSE(r.armed) << "the run ended before PX4 disarmed";
+    const std::string blind = "no local position (vision lost): failsafe, blind land (DESCEND)";
+    EXPECT_NE(std::find(r.events.begin(), r.events.end(), blind), r.events.end());
 }
 
 // The planner's PX4 settings file: each mistake is one line naming file, line and key.
