@@ -13,9 +13,9 @@ namespace {
 namespace px4 = dds::px4;
 
 using px4_msgs::msg::dds_::VehicleOdometry_;
-constexpr double kMaxPublishDelayS = 1.0;      // timestamp - timestamp_sample beyond this: not an age
-constexpr std::int32_t kSuffererBodyId = 0;   // the stand's sufferer; vehicles are 1, 2, ...
-constexpr float kUnknownResidual = -1.0f;      // an estimate has no marker error
+constexpr double kMaxPublishDelayS = 1.0;    // timestamp - timestamp_sample beyond this: not an age
+constexpr std::int32_t kSuffererBodyId = 0;  // the stand's sufferer; vehicles are 1, 2, ...
+constexpr float kUnknownResidual = -1.0f;    // an estimate has no marker error
 
 physics::Vec3 vec(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
 
@@ -98,8 +98,8 @@ Px4PoseSource::Output Px4PoseSource::frame(Nanos now_ns) {
     std::int32_t id = kSuffererBodyId;
     for (const auto& v : vehicles_) {
         ++id;
-        const double age = v.latest ? to_seconds(now_ns - v.latest->captured_ns)
-                                     : std::numeric_limits<double>::infinity();
+        const double age =
+            v.latest ? to_seconds(now_ns - v.latest->captured_ns) : std::numeric_limits<double>::infinity();
         const bool fresh = age <= o_.stale_s;
         // Carried to the frame's stamp by the estimated velocity (held where it is not fresh).
         physics::Vec3 p = physics::Vec3::Zero();

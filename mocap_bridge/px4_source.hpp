@@ -46,7 +46,7 @@ public:
 private:
     struct Estimate {
         physics::Vec3 position = physics::Vec3::Zero(), velocity = physics::Vec3::Zero();  // lab NED
-        Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();                       // body -> lab NED
+        Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();                      // body -> lab NED
         Nanos captured_ns = 0;  // the lab's clock: received less the estimate's age at publication
     };
     struct Vehicle {
