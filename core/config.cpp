@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cstring>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -46,20 +47,42 @@ private:
     const std::string& name_;
     std::size_t budget_, nodes_ = 0;
 };
+// The indentation of the line that starts at `i`, or nullopt for a blank line.
+std::optional<std::size_t> indentation(std::string_view text, std::size_t i) {
+    std::size_t k = i;
+    while (k < text.size() && text[k] == ' ') ++k;
+    if (k >= text.size() || text[k] == '\n' || text[k] == '\r') return std::nullopt;
+    return k - i;
+}
+
+// Past the lines of a block scalar (`key: |` or `>`) that begins on the line starting at `line_start`:
+// its lines (more indented than that line, or blank) are text, not YAML. Returns where the next
+// line to scan starts, counting the lines skipped into `line`.
+std::size_t skip_block_scalar(std::string_view text, std::size_t line_start, std::size_t from, std::size_t& line) {
+    const std::size_t parent = indentation(text, line_start).value_or(0);
+    std::size_t i = text.find('\n', from);
+    while (i != std::string_view::npos) {
+        const auto indent = indentation(text, i + 1);
+        if (indent && *indent <= parent) return i;  // the '\n' before the next YAML line
+        ++line;
+        i = text.find('\n', i + 1);
+    }
+    return text.size();
+}
+
 // yaml-cpp 0.7 (Debian bookworm) loops forever, allocating, on a ',' that begins a token outside
 // flow collections (a file that is just ",", or "- 1\n,"): found by tests/test_file_fuzz.cpp. Such
 // a ',' is never valid YAML (an indicator cannot begin a plain scalar), so it is refused first.
-// Quoted scalars and comments are skipped; block scalars (| >) are not told apart (a line of one
-// that begins with ',' is refused too).
+// Comments, quoted scalars and block scalars (| >, their more-indented lines) are text and skipped.
 void refuse_stray_commas(std::string_view text, const std::string& name) {
     int depth = 0;
-    std::size_t line = 1;
+    std::size_t line = 1, line_start = 0;
     char quote = 0;
     bool boundary = true;  // a token may begin here: a line's start, after "- ", ": ", "? ", or a closing ] }
     auto blank = [&](std::size_t k) { return k >= text.size() || std::isspace(static_cast<unsigned char>(text[k])); };
     for (std::size_t i = 0; i < text.size(); ++i) {
         const char c = text[i];
-        if (c == '\n') ++line, boundary = true;
+        if (c == '\n') ++line, boundary = true, line_start = i + 1;
         if (quote) {
             if (c == quote) quote = 0;
             continue;
@@ -71,6 +94,10 @@ void refuse_stray_commas(std::string_view text, const std::string& name) {
         if (c == ',' && depth == 0 && boundary)
             throw InputError(
                 log::cat(name, ":", line, ": a ',' that begins a value outside [ ] or { }: not valid YAML"));
+        if ((c == '|' || c == '>') && boundary && depth == 0) {
+            i = skip_block_scalar(text, line_start, i, line) - 1;  // the loop's ++i lands on the '\n'
+            continue;
+        }
         if ((c == '"' || c == '\'') && boundary) quote = c;
         if (c == '[' || c == '{') ++depth;
         if ((c == ']' || c == '}') && depth > 0) --depth;

@@ -12,6 +12,7 @@
 #include "mocap_bridge/bridge.hpp"
 #include "mocap_bridge/px4_source.hpp"
 #include "mocap_bridge/sim_source.hpp"
+#include "swarm_planner/px4_odometry.hpp"
 #include "physics/config.hpp"
 
 namespace {
@@ -20,12 +21,23 @@ enum class Source { natnet, sim, px4 };
 constexpr std::array<std::pair<const char*, Source>, 3> kSources{
     {{"natnet", Source::natnet}, {"sim", Source::sim}, {"px4", Source::px4}}};
 
+// --feed-px4's settings: the file must give the feed to the bridge, so the planner does not feed it too.
+dw::planner::Px4Options feed_options(const std::string& file, const std::vector<std::string>& vehicles) {
+    auto o = dw::planner::load_px4_options(file, vehicles);
+    if (o.odometry != dw::planner::OdometryBy::bridge)
+        throw dw::InputError(dw::log::cat("--feed-px4: ", file,
+                                          " says odometry: ", dw::name_of(dw::planner::kOdometryByNames, o.odometry),
+                                          " (expected bridge: one feed per PX4, the planner reads the same file)"));
+    return o;
+}
+
 // The NatNet path (Motive, or the simulated vehicles behind an emulated Motive).
 struct NatNetArgs {
     std::string axes = "x,z,-y", mode = "compensated", sim_vehicles = "v1,v2,v3", sim_fault;
     std::vector<std::string> name_map;
     dw::natnet::ClientOptions client;
     double sim_rate = 180.0;
+    std::optional<dw::planner::Px4Options> feed;  // --feed-px4: the motion capture into each PX4's estimator
 };
 
 dw::natnet::BridgeOptions bridge_options(const NatNetArgs& a) {
@@ -69,6 +81,8 @@ int bridge_natnet(dw::dds::ProcessCli& cli, NatNetArgs a, bool simulated_source)
     dw::natnet::FrameConverter converter(bo, server, models);
     dw::dds::Writer<dw::msg::MocapFrame> frames(participant, dw::dds::topics::mocap_frame);
     dw::dds::Writer<dw::msg::VehicleState> states(participant, dw::dds::topics::vehicle_state);
+    std::unique_ptr<dw::planner::Px4OdometryFeed> feed;
+    if (a.feed) feed = std::make_unique<dw::planner::Px4OdometryFeed>(participant, *a.feed, false);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
     std::uint64_t n = 0;
     while (!dw::Shutdown::instance().requested()) {
@@ -76,7 +90,10 @@ int bridge_natnet(dw::dds::ProcessCli& cli, NatNetArgs a, bool simulated_source)
         if (!r) continue;
         auto out = converter.convert(r->frame, r->receive_wall_ns);
         frames.write(out.frame);
-        for (auto& s : out.states) states.write(s);
+        for (auto& s : out.states) {
+            states.write(s);
+            if (feed) feed->on_state(s);
+        }
         ++n;
     }
     dw::log::info("bridged ", n, " frames; ", converter.dropped(), " dropped by the network or server; ",
@@ -128,18 +145,28 @@ int run(int argc, char** argv) {
                    "sim: KIND:VEHICLE:AFTER_S — the vehicle stops following its setpoints (stuck) or mocap "
                    "reports it 10 m away (jump), AFTER_S after its first setpoint (fault tests)");
     app.add_option("--sim-rate", a.sim_rate, "sim: camera rate [Hz]")->check(dw::cli::in({1, 1000, "Hz"}));
-    app.add_option("--px4-vehicles", px4_vehicles, "px4: the vehicles, comma-separated (the plan's names)")
+    app.add_option("--px4-vehicles", px4_vehicles,
+                   "px4 and --feed-px4: the vehicles, comma-separated (the plan's names)")
         ->delimiter(',');
     app.add_option("--px4", px4_file,
                    "px4: the planner's PX4 settings file (each vehicle's namespace, origin and heading; default: "
                    "namespace = name, origin 0, heading 0)");
     app.add_option("--physics", physics_file, "px4: physics configuration (the stand's height: where the sufferer is)");
+    std::string feed_file;
+    app.add_option(
+        "--feed-px4", feed_file,
+        "natnet/sim: also feed each tracked vehicle's pose to its PX4's estimator (vehicle_visual_odometry), "
+        "whenever it is tracked, per this PX4 settings file (it must say odometry: bridge); vehicles from "
+        "--px4-vehicles");
     app.add_option("--px4-rate", po.rate_hz, "px4: frames published per second")
         ->check(dw::cli::in(dw::natnet::kEstimateRateRange));
     cli.parse(argc, argv);
     const Source kind =
         sim ? Source::sim : dw::parse_entry(kSources, source, "source", "--source (replay: dw-recorder replay)");
-    if (kind != Source::px4) return bridge_natnet(cli, std::move(a), kind == Source::sim);
+    if (kind != Source::px4) {
+        if (app.count("--feed-px4") > 0) a.feed = feed_options(feed_file, px4_vehicles);
+        return bridge_natnet(cli, std::move(a), kind == Source::sim);
+    }
     po.px4 = app.count("--px4") == 0 ? dw::planner::default_px4_options(px4_vehicles)
                                      : dw::planner::load_px4_options(px4_file, px4_vehicles);
     const auto physics = physics_file.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_file);

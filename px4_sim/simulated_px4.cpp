@@ -82,6 +82,7 @@ SimulatedPx4::Report SimulatedPx4::report() const {
     Report r = s_->report;
     r.armed = s_->armed;
     r.nav_state = s_->nav;
+    r.local_position = local_position(lab_.clock().monotonic_ns());
     return r;
 }
 

@@ -87,6 +87,7 @@ public:
         int undecodable = 0;        // payloads shorter than this version's definition
         int rejected_odometry = 0;  // samples EKF2 would drop
         bool was_offboard = false, was_armed = false, armed = false;
+        bool local_position = false;  // its estimator has one now
         std::uint8_t nav_state = 0;
         std::vector<std::string> events;  // one line each: what it accepted, refused and why
     };

@@ -35,7 +35,7 @@ void vehicle_keys(KeyVisitor& k, Px4Vehicle& v, std::set<int>& ids) {
 // The file's keys; `o.vehicles` holds the plan's vehicles with their defaults.
 void px4_keys(KeyVisitor& k, Px4Options& o) {
     version_key(k, o.version);
-    k.flag("odometry", o.odometry);
+    k.enumeration("odometry", o.odometry, kOdometryByNames, "odometry feed");
     k.number("odometry_hz", o.odometry_hz, kOdometryRateRange);
     k.number("position_std_m", o.position_std_m, kStdRange);
     k.number("orientation_std_rad", o.orientation_std_rad, kStdRange);

@@ -2,6 +2,7 @@
 // Per-vehicle PX4 settings for `dw-planner run --vehicles px4 [--px4 FILE]` (docs/OPERATOR.md):
 //
 //   version: "1.15"          # 1.14, 1.15 or 1.16 (dds/px4.hpp)
+//   odometry: planner        # who feeds mocap to each PX4's estimator: planner, bridge or off
 //   odometry_hz: 50          # mocap into each PX4's estimator (vehicle_visual_odometry); 0 = every frame
 //   takeoff_ramp_s: 3        # the vehicles' MPC_TKO_RAMP_T (no tracking bound until airborne that long)
 //   vehicles:
@@ -43,9 +44,16 @@ struct Px4Vehicle {
     double heading_rad = 0;                        // PX4's local north, from the lab's north towards east
 };
 
+// Who feeds the motion capture to PX4's estimator (vehicle_visual_odometry, swarm_planner/px4_odometry.hpp):
+// the planner's link while it runs; the mocap bridge whenever a vehicle is tracked
+// (dw-mocap-bridge --feed-px4: the estimator has warmed up before anyone arms); or no one (a PX4 on
+// its own sensors: GPS, optical flow, SITL's ground truth).
+enum class OdometryBy { planner, bridge, off };
+inline constexpr const char* kOdometryByNames[] = {"planner", "bridge", "off"};  // OdometryBy's values in order
+
 struct Px4Options {
     dds::Px4Version version = dds::Px4Version::v1_15;
-    bool odometry = true;           // publish vehicle_visual_odometry from vehicles/state
+    OdometryBy odometry = OdometryBy::planner;
     double odometry_hz = 50;        // 0 = every mocap frame
     double position_std_m = 0.005;  // the variances sent with the odometry
     double orientation_std_rad = 0.01;

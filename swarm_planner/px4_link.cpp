@@ -7,16 +7,17 @@
 #include <mutex>
 
 #include "core/log.hpp"
+#include "core/names.hpp"
 #include "core/numbers.hpp"
 #include "dds/px4.hpp"
 #include "dds/time.hpp"
+#include "swarm_planner/px4_odometry.hpp"
 
 namespace dw::planner {
 namespace {
 
 namespace px4 = dds::px4;
 using px4_msgs::msg::dds_::TrajectorySetpoint_;
-using px4_msgs::msg::dds_::VehicleOdometry_;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 // The message types of one PX4 version (the others are the same in every supported version).
@@ -37,10 +38,9 @@ struct Types114 {
 };
 
 // What PX4 wants before OFFBOARD, as the link can see it from its own side.
-constexpr double kStreamWarmupS = 1.0;        // setpoints streaming for more than this (PX4's offboard check)
-constexpr double kStreamGapS = 0.5;           // no setpoint for longer than this: the stream has stopped (PX4: 2 Hz)
-constexpr double kOdometryGapS = 0.5;         // no visual odometry for longer than this: EKF2 loses the position
-constexpr std::size_t kLatencySamples = 500;  // odometry samples whose capture-to-send latency is logged
+constexpr double kStreamWarmupS = 1.0;  // setpoints streaming for more than this (PX4's offboard check)
+constexpr double kStreamGapS = 0.5;     // no setpoint for longer than this: the stream has stopped (PX4: 2 Hz)
+constexpr double kOdometryGapS = 0.5;   // no visual odometry for longer than this: EKF2 loses the position
 
 // Each arming step: the command that asks for it and what vehicle_status shows when it is done.
 // await_estimator: PX4's pre-flight checks (its estimator's local position among them) pass.
@@ -64,11 +64,11 @@ class Px4Link final : public VehicleLink {
 public:
     Px4Link(dds::Participant& p, const Px4Options& o) : p_(p), o_(o) {
         for (std::size_t i = 0; i < o.vehicles.size(); ++i) add_vehicle(o.vehicles[i]);
-        states_ = std::make_unique<dds::Reader<msg::VehicleState>>(
-            p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) { on_state(s); });
+        if (o.odometry == OdometryBy::planner) odometry_ = std::make_unique<Px4OdometryFeed>(p, o, true);
         log::info("PX4 link (", dds::px4_version(o.version).name, "): ", o.vehicles.size(), " vehicles, odometry ",
-                  o.odometry ? log::cat(o.odometry_hz > 0 ? o.odometry_hz : 0.0, " Hz (0 = every mocap frame)")
-                             : std::string("off"));
+                  o.odometry == OdometryBy::planner
+                      ? log::cat(o.odometry_hz > 0 ? o.odometry_hz : 0.0, " Hz (0 = every mocap frame)")
+                      : log::cat("by ", name_of(kOdometryByNames, o.odometry)));
     }
 
     void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) override {
@@ -164,20 +164,16 @@ private:
     struct Vehicle {
         Px4Vehicle cfg;
         LocalFrame frame;
-        std::string traj_name, mode_name, cmd_name, odom_name, status_name, ack_name;  // stable: specs view them
+        std::string traj_name, mode_name, cmd_name, status_name, ack_name;  // stable: specs view them
         std::unique_ptr<dds::Writer<TrajectorySetpoint_>> traj;
         std::unique_ptr<dds::Writer<typename Types::Mode>> mode;
         std::unique_ptr<dds::Writer<typename Types::Command>> cmd;
-        std::unique_ptr<dds::Writer<VehicleOdometry_>> odom;
         std::unique_ptr<dds::Reader<typename Types::Status>> status;
         std::unique_ptr<dds::Reader<typename Types::Ack>> ack;
         StatusSeen st;                                  // under mutex_
         AckSeen last_ack;                               // under mutex_
-        Nanos odom_sent_ns = 0;                         // under odom_mutex_
         Nanos stream_since_ns = 0, stream_last_ns = 0;  // the planner's setpoints, monotonic (planner's thread)
-        bool tracking = false;
-        std::uint8_t reset_counter = 0;
-        Step step = Step::await_status;  // arming: the planner's thread only
+        Step step = Step::await_status;                 // arming: the planner's thread only
         int tries = 0;
         Nanos step_since = 0, first_sent_ns = 0, sent_ns = 0;  // monotonic
         Nanos cmd_matched_ns = 0;                              // monotonic: PX4's command reader first seen
@@ -192,7 +188,6 @@ private:
         v.traj_name = dds::px4_topic(cfg.ns, "in", "trajectory_setpoint");
         v.mode_name = dds::px4_topic(cfg.ns, "in", "offboard_control_mode");
         v.cmd_name = dds::px4_topic(cfg.ns, "in", "vehicle_command");
-        v.odom_name = dds::px4_topic(cfg.ns, "in", "vehicle_visual_odometry");
         v.status_name = dds::px4_topic(cfg.ns, "out", version.status_topic);
         v.ack_name = dds::px4_topic(cfg.ns, "out", version.ack_topic);
         v.traj = std::make_unique<dds::Writer<TrajectorySetpoint_>>(
@@ -201,8 +196,6 @@ private:
             p_, dds::px4_topic_spec<typename Types::Mode>(v.mode_name, "px4_msgs::msg::dds_::OffboardControlMode_"));
         v.cmd = std::make_unique<dds::Writer<typename Types::Command>>(
             p_, dds::px4_topic_spec<typename Types::Command>(v.cmd_name, "px4_msgs::msg::dds_::VehicleCommand_"));
-        v.odom = std::make_unique<dds::Writer<VehicleOdometry_>>(
-            p_, dds::px4_topic_spec<VehicleOdometry_>(v.odom_name, "px4_msgs::msg::dds_::VehicleOdometry_"));
         Vehicle* vp = &v;
         // PX4's fmu/out writers are TRANSIENT_LOCAL, and the ack's appears with its first answer:
         // a transient-local reader still gets that answer once it has matched the new writer.
@@ -251,73 +244,6 @@ private:
         t.yaw(static_cast<float>(f.yaw(sp.yaw_rad)));
         t.yawspeed(kNaN);
         return t;
-    }
-
-    // The motion capture into the vehicle's estimator (EKF2 fuses vehicle_visual_odometry only).
-    void on_state(const msg::VehicleState& s) {
-        if (!o_.odometry) return;
-        const auto it = by_name_.find(s.vehicle_id());
-        if (it == by_name_.end()) return;
-        Vehicle& v = *it->second;
-        const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
-        const Eigen::Quaterniond q(s.orientation().w(), s.orientation().x(), s.orientation().y(), s.orientation().z());
-        const bool valid = s.tracking_valid() && x.allFinite() && q.coeffs().allFinite() && q.norm() > 0.5;
-        std::lock_guard lock(odom_mutex_);
-        if (!valid) {
-            v.tracking = false;
-            return;
-        }
-        if (!v.tracking) ++v.reset_counter;  // tracking came back: the estimator may see a jump
-        v.tracking = true;
-        const Nanos now = p_.clock().monotonic_ns();
-        if (o_.odometry_hz > 0 && v.odom_sent_ns != 0 && to_seconds(now - v.odom_sent_ns) < 1.0 / o_.odometry_hz)
-            return;
-        v.odom_sent_ns = now;
-        v.odom->write_as_is(odometry(v, s, x, q));
-        note_latency(p_.clock().now_ns() - dds::from_msg(s.header().stamp()));
-    }
-
-    // A real PX4 replaces the capture time it is sent with its receive time (issue 42), so
-    // EKF2_EV_DELAY must hold the latency: the part from capture to send is logged once, measured.
-    void note_latency(Nanos capture_to_send) {  // under odom_mutex_
-        if (latencies_ms_.size() >= kLatencySamples) return;
-        latencies_ms_.push_back(static_cast<double>(capture_to_send) * 1e-6);
-        if (latencies_ms_.size() < kLatencySamples) return;
-        auto sorted = latencies_ms_;
-        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-        log::info("odometry: capture to send median ", fixed(sorted[sorted.size() / 2], 1), " ms over ",
-                  kLatencySamples, " samples (EKF2_EV_DELAY: this plus the Agent's link; docs/OPERATOR.md)");
-    }
-
-    VehicleOdometry_ odometry(const Vehicle& v, const msg::VehicleState& s, const physics::Vec3& x,
-                              const Eigen::Quaterniond& q) const {
-        VehicleOdometry_ m;
-        m.timestamp(static_cast<std::uint64_t>(p_.clock().now_ns() / 1000));
-        m.timestamp_sample(static_cast<std::uint64_t>(dds::from_msg(s.header().stamp()) / 1000));  // the capture time
-        m.pose_frame(px4::kFrameNed);
-        m.velocity_frame(px4::kFrameNed);
-        const physics::Vec3 p = v.frame.point(x);
-        const physics::Vec3 vel =
-            v.frame.vector(physics::Vec3(s.velocity_mps().x(), s.velocity_mps().y(), s.velocity_mps().z()));
-        // Normalised in float, as EKF2 checks it (|‖q‖ - 1| <= 1e-5), w first (Hamilton, FRD -> NED).
-        const Eigen::Quaterniond qd = v.frame.attitude(q.normalized());
-        Eigen::Quaternionf ql = qd.cast<float>();
-        ql.normalize();
-        const float pv = static_cast<float>(o_.position_std_m * o_.position_std_m);
-        const float ov = static_cast<float>(o_.orientation_std_rad * o_.orientation_std_rad);
-        const float vv = static_cast<float>(o_.velocity_std_mps * o_.velocity_std_mps);
-        m.q() = {ql.w(), ql.x(), ql.y(), ql.z()};
-        for (std::size_t k = 0; k < 3; ++k) {
-            m.position()[k] = static_cast<float>(p[static_cast<int>(k)]);
-            m.velocity()[k] = static_cast<float>(vel[static_cast<int>(k)]);
-            m.angular_velocity()[k] = kNaN;
-            m.position_variance()[k] = pv;
-            m.orientation_variance()[k] = ov;
-            m.velocity_variance()[k] = vv;
-        }
-        m.reset_counter(v.reset_counter);
-        m.quality(static_cast<std::uint8_t>(px4::kQualityBest));
-        return m;
     }
 
     void command(Vehicle& v, std::uint32_t command, float p1, float p2) {
@@ -448,13 +374,11 @@ private:
     std::string offboard_hint(Vehicle& v, Nanos now) {
         std::string missing;
         const auto add = [&](const std::string& what) { missing += (missing.empty() ? "" : "; ") + what; };
-        Nanos odom = 0;
-        {
-            std::lock_guard lock(odom_mutex_);
-            odom = v.odom_sent_ns;
-        }
-        if (!o_.odometry)
+        const Nanos odom = odometry_ ? odometry_->last_sent_ns(v.cfg.name) : 0;
+        if (o_.odometry == OdometryBy::off)
             add("no local position from the link (odometry: off, so PX4's estimator needs another source)");
+        else if (o_.odometry == OdometryBy::bridge)
+            add("no local position from the link (odometry: bridge: is dw-mocap-bridge running with --feed-px4?)");
         else if (odom == 0 || to_seconds(now - odom) > kOdometryGapS)
             add(log::cat("no local position from the link: no vehicle_visual_odometry sent ",
                          odom == 0 ? std::string("yet") : log::cat("for ", to_seconds(now - odom), " s"), " (is ",
@@ -486,11 +410,10 @@ private:
 
     dds::Participant& p_;
     Px4Options o_;
-    std::mutex mutex_, odom_mutex_;
+    std::mutex mutex_;
     std::deque<Vehicle> vehicles_;  // stable addresses: callbacks and specs refer to them
     std::map<std::string, Vehicle*> by_name_;
-    std::vector<double> latencies_ms_;  // under odom_mutex_: capture to send, until kLatencySamples
-    std::unique_ptr<dds::Reader<msg::VehicleState>> states_;
+    std::unique_ptr<Px4OdometryFeed> odometry_;  // odometry: planner
 };
 
 }  // namespace

@@ -187,6 +187,14 @@ TEST(Yaml, AliasBombsSecondDocumentsAndDeepNestingAreRefusedInOneLine) {
         EXPECT_NE(error_of([&] { dw::load_yaml(text, "p.yaml"); }).find("a ',' that begins a value"), std::string::npos)
             << text;
     EXPECT_NO_THROW(dw::load_yaml("a: v1,v2\nb: [1, 2]\nc: 'x, y'\nd: 1 ,\n", "p.yaml"));
+    // A block scalar's lines are text: one that begins with ',' is valid YAML, and read as such;
+    // the YAML after the block is checked again.
+    const auto block = dw::load_yaml("notes: |\n  , first\n\n  ,second\nb: >-\n    ,x\nc: 1\n", "p.yaml");
+    EXPECT_EQ(block["notes"].as<std::string>(), ", first\n\n,second\n");
+    EXPECT_EQ(block["b"].as<std::string>(), ",x");
+    EXPECT_EQ(block["c"].as<int>(), 1);
+    EXPECT_NE(error_of([] { dw::load_yaml("notes: |\n  text\n,\n", "p.yaml"); }).find("p.yaml:3: a ','"),
+              std::string::npos);
     EXPECT_NO_THROW(dw::load_yaml("a: &x {b: 1}\nc: *x\n", "p.yaml"));  // an alias as such is fine
     EXPECT_NO_THROW(dw::load_yaml("", "p.yaml"));                       // empty: no settings
 }

@@ -236,7 +236,7 @@ TEST(Experiment, ThePlannerFliesPx4VehiclesFromItsSettingsFileAndReportsARefusal
 }
 
 // Issue 42, point 4: a lab with no motion capture at all. The simulated PX4s take their position
-// from their own sensors (no visual odometry: `odometry: false`), publish nothing but PX4's topics,
+// from their own sensors (no visual odometry: `odometry: off`), publish nothing but PX4's topics,
 // and dw-mocap-bridge --source px4 turns each one's estimate (fmu/out/vehicle_odometry, in its
 // local frame: v2's is turned 30 degrees and moved) into the lab's poses. The planner flies to
 // DONE on them; the recording marks its frames as estimates, and the flight exported from it says
@@ -244,7 +244,7 @@ TEST(Experiment, ThePlannerFliesPx4VehiclesFromItsSettingsFileAndReportsARefusal
 TEST(Experiment, ThePlannerFliesPx4OnItsOwnEstimateWithNoMotionCapture) {
     Lab lab("exppxe");
     const std::string settings = lab.dir.file("px4.yaml");
-    std::ofstream(settings) << "odometry: false\nvehicles:\n  v1: {namespace: " << lab.cfg.ns << "_a, system_id: 1}\n"
+    std::ofstream(settings) << "odometry: off\nvehicles:\n  v1: {namespace: " << lab.cfg.ns << "_a, system_id: 1}\n"
                             << "  v2: {namespace: " << lab.cfg.ns
                             << "_b, system_id: 2, origin_m: [0.5, -1, 0], heading_deg: 30}\n";
     auto& sim = lab.start(

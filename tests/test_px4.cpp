@@ -21,6 +21,7 @@
 #include "support.hpp"
 #include "swarm_planner/experiment.hpp"
 #include "swarm_planner/px4_link.hpp"
+#include "swarm_planner/px4_odometry.hpp"
 
 using namespace std::chrono_literals;
 using dw::dds::Px4Version;
@@ -321,7 +322,7 @@ TEST(Px4Refusals, OffboardWithoutASetpointStreamIsRefused) {
 
 TEST(Px4Refusals, OffboardWithoutALocalPositionIsRefused) {
     Px4Lab lab("px4nopos", Px4Version::v1_15, 1);
-    lab.options.odometry = false;  // nothing feeds the motion capture to PX4's estimator
+    lab.options.odometry = dw::planner::OdometryBy::off;  // nothing feeds the motion capture to PX4's estimator
     const auto plan = short_plan("single");
     lab.start(plan);
     auto link = dw::planner::make_px4_link(lab.lab, lab.options);
@@ -588,6 +589,24 @@ TEST(Px4Refusals, LostVisionIsPx4sBlindLandAndTheRunAborts) {
     EXPECT_NE(std::find(r.events.begin(), r.events.end(), blind), r.events.end());
 }
 
+// Issue 42, point 2: with `odometry: bridge` the motion capture reaches PX4's estimator whenever a
+// vehicle is tracked (dw-mocap-bridge --feed-px4 runs this feed), not only while a planner runs:
+// the estimator has warmed up before any link exists, and the link then arms without waiting.
+TEST(Px4Odometry, FedWheneverTrackedTheEstimatorIsReadyBeforeAnyoneArms) {
+    Px4Lab lab("px4feed", Px4Version::v1_15, 1);
+    lab.options.odometry = dw::planner::OdometryBy::bridge;
+    const auto plan = short_plan("single");
+    lab.start(plan);  // it plays its own motion capture (vehicles/state)
+    dw::planner::Px4OdometryFeed feed(lab.lab, lab.options, true);
+    ASSERT_TRUE(eventually([&] { return lab.vehicles[0]->report().local_position; }))
+        << "the simulated EKF2 never warmed up on the feed";
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
+    EXPECT_EQ(a.state, dw::planner::ArmProgress::State::ready) << a.reason;
+    for (const auto& e : lab.vehicles[0]->report().events) EXPECT_EQ(e.find("REJECTED"), std::string::npos) << e;
+    EXPECT_GT(feed.last_sent_ns("v1"), 0);
+}
+
 // The planner's PX4 settings file: each mistake is one line naming file, line and key.
 TEST(Px4Settings, EachMistakeInTheFileIsOneLineWhereItIs) {
     dw::test::TempDir dir;
@@ -620,9 +639,12 @@ TEST(Px4Settings, EachMistakeInTheFileIsOneLineWhereItIs) {
               std::string::npos);
     EXPECT_EQ(error_of("vehicles:\n  v1: {system_id: 2}\n"),
               dir.file("px4.yaml") + ":2:3: vehicles.v2: no entry for the plan's vehicle v2");
-    EXPECT_EQ(error_of("odometry: true\n"),
+    EXPECT_EQ(error_of("odometry: planner\n"),
               dir.file("px4.yaml") +
                   ":1:1: vehicles: expected a mapping from each of the plan's vehicles to its PX4 settings");
+    // Who feeds the estimators is a choice of three (issue 42), no longer a flag.
+    EXPECT_EQ(error_of("odometry: true\n" + ok),
+              dir.file("px4.yaml") + ":1:11: odometry: unknown odometry feed 'true' (expected planner, bridge or off)");
     EXPECT_NE(
         error_of("version: \"1.13\"\n" + ok)
             .find(
