@@ -249,4 +249,9 @@ TEST(Issue17, AFullDiskIsOneLineExit1AndNoPartialFile) {
     ASSERT_EQ(l.size(), 1u) << report.run.err;
     EXPECT_NE(l[0].find("No space left on device"), std::string::npos) << l[0];
     EXPECT_TRUE(report.left.empty()) << report.left.front() << ": a report without its figures (issue 43)";
+
+    // Issue 43 (class 8: tools printed 2-4 lines on a full disk; class 5: 12 files of a keystore
+    // were left): the DDS Security keystore, one line and nothing of it.
+    auto keys = confined({bin("dw-lab"), "keys", "create", "--keystore", "@/keys"}, "size=16k", d);
+    expect_one_line_nothing_partial(keys, 1, "No space left on device", {});
 }
