@@ -62,7 +62,7 @@ void Px4PoseSource::on_odometry(Vehicle& v, const VehicleOdometry_& m) {
     const Nanos now = p_.clock().now_ns();
     const physics::Vec3 x = vec(m.position()), vel = vec(m.velocity());
     const Eigen::Quaterniond q(m.q()[0], m.q()[1], m.q()[2], m.q()[3]);
-    const bool ok = m.pose_frame() == px4::kFrameNed && x.allFinite() && q.coeffs().allFinite() && q.norm() > 0.5;
+    const bool ok = m.pose_frame() == px4::kFrameNed && planner::usable_pose(x, q);
     std::lock_guard lock(mutex_);
     if (!ok) {
         if (rejected_++ == 0)

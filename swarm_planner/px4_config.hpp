@@ -89,6 +89,13 @@ struct LocalFrame {
 };
 inline LocalFrame local_frame(const Px4Vehicle& v) { return {v.origin, v.heading_rad}; }
 
+// A pose LocalFrame can carry between the lab and PX4: finite, its quaternion far enough from zero
+// to be normalised (a unit quaternion sent as floats, or a damaged one, still passes).
+inline constexpr double kMinQuaternionNorm = 0.5;
+inline bool usable_pose(const physics::Vec3& x, const Eigen::Quaterniond& q) {
+    return x.allFinite() && q.coeffs().allFinite() && q.norm() > kMinQuaternionNorm;
+}
+
 // The defaults for the plan's vehicles (see above).
 Px4Options default_px4_options(const std::vector<std::string>& plan_vehicles);
 // Reads the file; every plan vehicle must be listed, nothing else may be. Errors are

@@ -38,7 +38,7 @@ void Px4OdometryFeed::on_state(const msg::VehicleState& s) {
     Vehicle& v = *it->second;
     const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
     const Eigen::Quaterniond q(s.orientation().w(), s.orientation().x(), s.orientation().y(), s.orientation().z());
-    const bool valid = s.tracking_valid() && x.allFinite() && q.coeffs().allFinite() && q.norm() > 0.5;
+    const bool valid = s.tracking_valid() && usable_pose(x, q);
     std::lock_guard lock(mutex_);
     if (!valid) {
         v.tracking = false;
