@@ -258,41 +258,51 @@ void Recorder::on_message(std::uint16_t index, std::span<const std::uint8_t> cdr
         if (c) ++c->skipped;
         return;
     }
-    if (pending_data_.size() + cdr.size() > kMaxPendingBytes) {
+    if (pending_.data.size() + cdr.size() > kMaxPendingBytes) {
         ++dropped_;
         if (c) ++c->dropped;
         return;
     }
-    pending_.push_back({index, sequence, log_time, publish_time, pending_data_.size(), cdr.size()});
-    pending_data_.append(reinterpret_cast<const char*>(cdr.data()), cdr.size());
+    pending_.messages.push_back({index, sequence, log_time, publish_time, pending_.data.size(), cdr.size()});
+    pending_.data.append(reinterpret_cast<const char*>(cdr.data()), cdr.size());
+}
+
+Recorder::Batch::Batch() {
+    messages.resize(kPendingReserveMessages);
+    data.resize(kPendingReserveBytes);
+    clear();
+}
+
+void Recorder::Batch::clear() {
+    messages.clear();
+    data.clear();
+    metadata.clear();
 }
 
 void Recorder::drain_pending() {
-    std::vector<Pending> messages;
-    std::string data;
-    std::vector<mcap::Metadata> metadata;
     {
         std::lock_guard lock(pending_mutex_);
-        messages.swap(pending_);
-        data.swap(pending_data_);
-        metadata.swap(pending_metadata_);
+        std::swap(pending_, draining_);  // both keep their capacity: no allocation per tick
     }
-    if (!writer_) return;
-    for (const auto& m : metadata) writer_->add_metadata(m);
-    const std::int64_t now = participant_.clock().monotonic_ns();
-    const auto bytes = std::span(reinterpret_cast<const std::uint8_t*>(data.data()), data.size());
-    for (const auto& m : messages) {
-        writer_->write({channel_ids_[m.index], m.sequence, m.log_time, m.publish_time, bytes.subspan(m.offset, m.size)},
-                       now);
-        if (m.index < channels_.size()) ++channels_[m.index]->recorded;
+    if (writer_) {
+        for (const auto& m : draining_.metadata) writer_->add_metadata(m);
+        const std::int64_t now = participant_.clock().monotonic_ns();
+        const auto bytes =
+            std::span(reinterpret_cast<const std::uint8_t*>(draining_.data.data()), draining_.data.size());
+        for (const auto& m : draining_.messages) {
+            writer_->write(
+                {channel_ids_[m.index], m.sequence, m.log_time, m.publish_time, bytes.subspan(m.offset, m.size)}, now);
+            if (m.index < channels_.size()) ++channels_[m.index]->recorded;
+        }
     }
+    draining_.clear();
 }
 
 void Recorder::note_run(const std::string& run_id) {
     std::lock_guard lock(pending_mutex_);
     if (run_id.empty() || run_id == run_id_) return;
     run_id_ = run_id;
-    pending_metadata_.push_back(
+    pending_.metadata.push_back(
         {"run", {{"run_id", run_id}, {"since_unix_ns", std::to_string(participant_.clock().now_ns())}}});
     log::info("run id ", run_id);
 }
@@ -302,7 +312,7 @@ void Recorder::note_plan(const std::string& name, const std::string& formation, 
     const std::string key = name + '\n' + formation + '\n' + document;
     if (key == last_plan_) return;  // latched plans are re-sent: store each plan once
     last_plan_ = key;
-    pending_metadata_.push_back(
+    pending_.metadata.push_back(
         {"experiment_plan", {{"name", name}, {"formation", formation}, {"document", document}}});
 }
 

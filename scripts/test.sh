@@ -41,7 +41,7 @@ echo "test.sh: ctest: $((SECONDS - start)) s"
 # The parser and unit tests again under AddressSanitizer + UBSan (build-asan/, issue 14).
 # After CTest, not beside it: built at nice 19 beside the tests (issue 40), it took the idle CPU
 # but the real-time tests lost margin (with it, a 2 s partition was once not waited out; the soak's
-# recorder memory slope failed with and without it, and the soak now runs alone).
+# recorder memory slope failed with and without it: its queue grew on a busy disk, since mended).
 start=$SECONDS
 "$here/scripts/sanitize.sh" || status=1
 echo "test.sh: sanitizer stage: $((SECONDS - start)) s"
