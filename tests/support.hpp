@@ -1,6 +1,9 @@
 #pragma once
 // Helpers for tests that start the lab's executables as separate processes.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -16,8 +19,32 @@ namespace dw::test {
 // Where the lab's executables were built.
 inline std::string bin(const std::string& name) { return std::string(DW_BIN_DIR) + "/" + name; }
 
-// A domain id of this test process's own, so tests run in parallel do not hear each other.
-inline int test_domain() { return 100 + static_cast<int>(::getpid() % 120); }
+// The domain ids tests take, and where a test process marks the one it holds.
+inline constexpr int kFirstTestDomain = 100, kTestDomains = 120;
+inline constexpr const char* kTestDomainLocks = "/tmp/dw-test-domains";
+
+// A domain id of this test process's own, so tests run in parallel do not hear each other: the
+// first free one from a start the process id picks, held by a lock on a file named after it (the
+// kernel drops the lock when the process ends, however it ends). Taken as "100 + pid % 120" it was
+// shared by two tests now and then, and a soak's recorder then discovered another test's
+// participants. Every free id held: the pid's own (as before).
+inline int claim_test_domain() {
+    const int start = static_cast<int>(::getpid() % kTestDomains);
+    if (::mkdir(kTestDomainLocks, 01777) == 0) ::chmod(kTestDomainLocks, 01777);  // every user's tests (umask aside)
+    for (int i = 0; i < kTestDomains; ++i) {
+        const int d = kFirstTestDomain + (start + i) % kTestDomains;
+        const std::string file = std::string(kTestDomainLocks) + "/" + std::to_string(d);
+        const int fd = ::open(file.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0444);  // flock needs no write access
+        if (fd < 0) continue;
+        if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return d;  // fd left open: the lock lasts the process
+        ::close(fd);
+    }
+    return kFirstTestDomain + start;
+}
+inline int test_domain() {
+    static const int domain = claim_test_domain();  // one per process
+    return domain;
+}
 
 // A fresh temporary directory, removed with the object.
 class TempDir {

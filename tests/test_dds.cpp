@@ -36,6 +36,17 @@ bool eventually(F&& done, std::chrono::milliseconds limit = 20000ms) {
 }
 }  // namespace
 
+// Tests run side by side each on a domain of its own: a domain held (by this process or another)
+// is not given again while its holder lives.
+TEST(TestDomains, TwoClaimsWhileBothLiveGetTwoDomains) {
+    const int a = dw::test::claim_test_domain(), b = dw::test::claim_test_domain();
+    EXPECT_NE(a, b);
+    for (const int d : {a, b}) {
+        EXPECT_GE(d, dw::test::kFirstTestDomain);
+        EXPECT_LT(d, dw::test::kFirstTestDomain + dw::test::kTestDomains);
+    }
+}
+
 TEST(Time, RoundTripsAndFloorsNegativeTimes) {
     EXPECT_EQ(dw::dds::from_msg(dw::dds::to_msg(1'700'000'000'123'456'789)), 1'700'000'000'123'456'789);
     const auto m = dw::dds::to_msg(-1);
