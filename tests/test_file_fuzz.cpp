@@ -1,6 +1,6 @@
 // Issue 43: a mutation fuzzer for every file parser the tools share — flight folders, MCAP
 // recordings (strict, salvage, recover, and the flight a recording holds), Neural-Swarm logs (CSV
-// and binary), YAML configuration (physics, lab). Each seed file is damaged many ways (bytes
+// and binary), YAML configuration (physics, lab), learnt model files. Each seed file is damaged many ways (bytes
 // flipped, cut, hostile tokens inserted, lines repeated or dropped); the parser must answer with
 // dw::InputError in one line of at most 200 characters (paths aside) or read the file — never
 // another exception, a crash or a sanitizer report (scripts/sanitize.sh runs this executable).
@@ -26,6 +26,7 @@
 #include "mcap/mcap.hpp"
 #include "physics/config.hpp"
 #include "physics/flight_sim.hpp"
+#include "predictor/model.hpp"
 #include "probe/samples.hpp"
 #include "real_data.hpp"
 #include "recordings/recordings.hpp"
@@ -225,14 +226,53 @@ void yaml_configuration(int mutations) {
     EXPECT_GT(fuzz.refused, 0);
 }
 
+// A learnt model with every part a file can hold: Deep Sets' phi and rho on a sum model's baseline.
+dw::predictor::Mlp mlp(int inputs, int hidden, int outputs) {
+    dw::predictor::Mlp m;
+    for (const auto& [in, out] : {std::pair{inputs, hidden}, std::pair{hidden, outputs}}) {
+        dw::predictor::Layer l{Eigen::MatrixXf::Constant(out, in, 0.01F), Eigen::VectorXf::Constant(out, 0.1F), true};
+        m.layers.push_back(l);
+    }
+    m.layers.back().silu = false;
+    return m;
+}
+
+std::string model_seed(const dw::test::TempDir& d) {
+    using namespace dw::predictor;
+    LearntModel m;
+    m.kind = "deep_sets";
+    m.structure = Structure::deep_sets;
+    m.input_mean.fill(0.0F);
+    m.input_std.fill(1.0F);
+    m.output_scale.fill(0.05F);
+    m.phi = mlp(kFeatureSize, 4, 3);
+    m.rho = mlp(3, 4, 6);
+    m.baseline = mlp(kFeatureSize, 4, 6);
+    m.save(d.file("seed.json"));
+    return bytes_of(d.file("seed.json"));
+}
+
+void model_files(int mutations) {
+    dw::test::TempDir d;
+    const std::string seed = model_seed(d);
+    const std::vector<dw::predictor::RelState> neighbours = {{0.1, 0.0, -0.5, 0, 0, 0}, {-0.2, 0.1, -0.8, 0, 0, 0}};
+    Fuzz fuzz{d, mutations};
+    fuzz.run(d.file("model.json"), {seed}, [&] {  // read, then used: its shapes must fit what it is fed
+        (void)dw::predictor::LearntModel::load(d.file("model.json")).predict(neighbours);
+    });
+    EXPECT_GT(fuzz.refused, 0);
+}
+
 }  // namespace
 
 TEST(FileFuzz, FlightFolders) { flight_folder(kSmall); }
 TEST(FileFuzz, McapRecordings) { mcap_files(kSmall); }
 TEST(FileFuzz, NeuralSwarmLogs) { neural_swarm_logs(kSmall); }
 TEST(FileFuzz, YamlConfiguration) { yaml_configuration(kSmall); }
+TEST(FileFuzz, ModelFiles) { model_files(kSmall); }
 
 TEST(FileFuzzFull, FlightFolders) { flight_folder(kFull); }
 TEST(FileFuzzFull, McapRecordings) { mcap_files(kFull); }
 TEST(FileFuzzFull, NeuralSwarmLogs) { neural_swarm_logs(kFull); }
 TEST(FileFuzzFull, YamlConfiguration) { yaml_configuration(kFull); }
+TEST(FileFuzzFull, ModelFiles) { model_files(kFull); }
