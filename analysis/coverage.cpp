@@ -166,13 +166,15 @@ CoverageResult run_coverage(const CoverageOptions& o) {
             throw InputError(log::cat("--effects: '", n,
                                       "' has no coverage run (body_drag and ground_effect need a flying sufferer)"));
     if (o.seeds < 1) throw InputError("--seeds: at least 1 flight per effect");
-    fs::create_directories(o.out_dir);
+    StagedFolder staged(o.out_dir);  // the flights, reports and tables appear together, or not at all
+    CoverageOptions in = o;          // every flight and report of the run goes into the staging folder
+    in.out_dir = staged.path();
     std::vector<std::vector<Outcome>> outs(chosen.size(), std::vector<Outcome>(static_cast<std::size_t>(o.seeds)));
     std::mutex m;
     const std::size_t total = chosen.size() * static_cast<std::size_t>(o.seeds);
     parallel_for(total, o.jobs, [&](std::size_t k) {
         const auto ti = k / static_cast<std::size_t>(o.seeds), s = k % static_cast<std::size_t>(o.seeds);
-        outs[ti][s] = one_flight(chosen[ti].first, chosen[ti].second, static_cast<int>(s), o);
+        outs[ti][s] = one_flight(chosen[ti].first, chosen[ti].second, static_cast<int>(s), in);
         std::lock_guard lock(m);
         if (o.progress)
             o.progress(log::cat(chosen[ti].first.effect, " seed ", s, ": ",
@@ -184,9 +186,10 @@ CoverageResult run_coverage(const CoverageOptions& o) {
             R.rows.push_back(row_of(chosen[ti].first, chosen[ti].second, p, outs[ti]));
     R.pass = std::none_of(R.rows.begin(), R.rows.end(),
                           [](const CoverageRow& r) { return r.verdict == CoverageRow::Verdict::too_narrow; });
-    write_file((fs::path(o.out_dir) / "coverage.csv").string(), csv(chosen, outs));
+    write_file((fs::path(in.out_dir) / "coverage.csv").string(), csv(chosen, outs));
+    write_file((fs::path(in.out_dir) / "coverage.md").string(), table(R.rows, o));
+    staged.commit();
     R.table_path = (fs::path(o.out_dir) / "coverage.md").string();
-    write_file(R.table_path, table(R.rows, o));
     return R;
 }
 

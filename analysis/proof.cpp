@@ -245,7 +245,8 @@ ProofResult run_proof(const ProofOptions& o) {
         if (!find_name(known, n)) throw InputError("--cases: " + unknown_name_problem("case", n, known));
     if (wanted_null(o) && o.null_seeds < 1)
         throw InputError("--null-seeds: the null case needs at least 1 flight (or leave it out with --cases)");
-    fs::create_directories(o.out_dir);
+    StagedFolder staged(o.out_dir);  // the flights, reports and proof.md appear together, or not at all
+    const fs::path out = staged.path();
     const auto flights = proof_flights(o);
     std::vector<ProofRow> rows(flights.size());
     std::vector<char> clean(flights.size(), 0);
@@ -254,7 +255,7 @@ ProofResult run_proof(const ProofOptions& o) {
         if (!pf.c) {
             const int k = pf.null_index;
             const auto r = fly_and_explain(physics::PhysicsConfig{}, "single", 100 + static_cast<std::uint64_t>(k),
-                                           (fs::path(o.out_dir) / log::cat("null_", k)).string(), o);
+                                           (out / log::cat("null_", k)).string(), o);
             std::string found;
             for (const auto& a : r.accepted) found += (found.empty() ? "" : ", ") + a.effect.name;
             clean[i] = !r.detected;  // clean: nothing claimed, nothing detected
@@ -265,7 +266,7 @@ ProofResult run_proof(const ProofOptions& o) {
         physics::PhysicsConfig hidden;
         c.hide(hidden);
         say(log::cat("case ", c.name, ": dw-sim fly --formation ", c.formation, " with ", c.hidden));
-        const auto r = fly_and_explain(hidden, c.formation, c.seed, (fs::path(o.out_dir) / c.name).string(), o);
+        const auto r = fly_and_explain(hidden, c.formation, c.seed, (out / c.name).string(), o);
         ProofRow row{c.name, c.formation, c.hidden, "", "", "", "", true, true, "", r.seconds};
         check(row, r, c.truth);
         say(log::cat("case ", c.name, ": found ", row.found, " (", r.seconds,
@@ -281,8 +282,9 @@ ProofResult run_proof(const ProofOptions& o) {
     // A proof of nothing proves nothing: no rows, or a null case without flights, fails.
     R.pass = !R.rows.empty() && (!wanted_null(o) || R.null_total > 0) &&
              std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass; });
+    write_file((out / "proof.md").string(), table(R.rows, "flight", "hidden effect", "true parameter"));
+    staged.commit();
     R.table_path = (fs::path(o.out_dir) / "proof.md").string();
-    write_file(R.table_path, table(R.rows, "flight", "hidden effect", "true parameter"));
     return R;
 }
 
@@ -369,12 +371,13 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     if (o.flights.empty()) throw InputError("--flights: no flight to prove on");
     std::vector<flight::Flight> flights;  // every input read before any output is made
     for (const auto& path : o.flights) flights.push_back(flight::read_flight(path));
-    fs::create_directories(o.out_dir);
+    StagedFolder staged(o.out_dir);  // the reports and proof.md appear together, or not at all
+    const fs::path out = staged.path();
     ProofResult R;
     for (std::size_t fi = 0; fi < flights.size(); ++fi) {
         const auto& path = o.flights[fi];
         const auto& f = flights[fi];
-        const std::string name = fs::path(path).filename().string(), dir = (fs::path(o.out_dir) / name).string();
+        const std::string name = fs::path(path).filename().string(), dir = (out / name).string();
         ExplainOptions eo;
         eo.physics = o.physics;
         eo.stop = o.stop;
@@ -428,9 +431,10 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     }
     R.pass = !R.rows.empty() &&
              std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass || r.not_identifiable; });
-    R.table_path = (fs::path(o.out_dir) / "proof.md").string();
-    write_file(R.table_path,
+    write_file((out / "proof.md").string(),
                table(R.rows, "flight", "concealed effect", "expected (own fit with the concealed value)"));
+    staged.commit();
+    R.table_path = (fs::path(o.out_dir) / "proof.md").string();
     return R;
 }
 

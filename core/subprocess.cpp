@@ -118,6 +118,23 @@ std::string executable_dir() {
     return path.substr(0, path.find_last_of('/'));
 }
 
+namespace {
+// At most this many characters of a child's last line are carried into an error.
+constexpr std::size_t kChildLineChars = 240;
+
+// The last non-empty line of `text`, control bytes dropped, cut to kChildLineChars.
+std::string last_line(std::string_view text) {
+    while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.remove_suffix(1);
+    const auto nl = text.find_last_of("\r\n");
+    if (nl != std::string_view::npos) text.remove_prefix(nl + 1);
+    std::string line;
+    for (const char ch : text)
+        if (static_cast<unsigned char>(ch) >= 0x20) line += ch;
+    if (line.size() > kChildLineChars) line = line.substr(0, kChildLineChars) + "...";
+    return line;
+}
+}  // namespace
+
 void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop) {
     std::vector<std::string> argv{executable_dir() + "/" + args.at(0)};
     argv.insert(argv.end(), args.begin() + 1, args.end());
@@ -130,9 +147,8 @@ void run_sibling(const std::vector<std::string>& args, const std::string& log_fi
         }
     }
     if (*st != 0) {
-        std::string out = read_file(log_file);
-        if (out.size() > 2000) out = "..." + out.substr(out.size() - 2000);
-        throw RuntimeError(log::cat(args[0], " failed (status ", *st, "; log ", log_file, "):\n", out));
+        const std::string said = last_line(read_file(log_file));
+        throw RuntimeError(log::cat(args[0], " failed (status ", *st, ")", said.empty() ? "" : ": ", said));
     }
 }
 

@@ -45,8 +45,9 @@ private:
 std::string executable_dir();
 
 // Runs a sibling lab executable (args[0], a name in executable_dir()) to completion with its
-// output in log_file; stops it when `stop` is requested (dw::Stopped). Throws dw::RuntimeError
-// naming it, its status and the end of its log when it fails.
+// output in log_file; stops it when `stop` is requested (dw::Stopped). Throws dw::RuntimeError in
+// one line naming it, its status and the last line of its log (its own error) when it fails: the
+// log may not outlive the failure (it is written into an output that is whole or not at all).
 void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop);
 
 }  // namespace dw

@@ -57,7 +57,7 @@ const std::map<std::string, CrazyflieType>& types() {
 constexpr Range kTimeUsRange{0, 1e16, "us"};
 constexpr Range kAccelRange{-1e3, 1e3, "m/s^2"};  // 100 g
 constexpr Range kVelocityRange{-1e3, 1e3, "m/s"};
-constexpr Range kPwmRange{0, 65536};
+constexpr Range kPwmRange{0, 1};  // the duty as a fraction (CSV; binary: raw / 65536), as the thrust map takes it
 constexpr Range kBatteryRange{0, 100, "V"};
 constexpr Range kFazRange{-1e6, 1e6, "gram-force"};
 
@@ -139,6 +139,7 @@ VehicleLog read_csv(const std::string& path, VehicleLog log) {
                                           range_problem(v[c], kCsvRanges[c])));
         }
         if (std::isnan(first_us)) first_us = v[0];
+        log.origin.push_back(line_no);
         log.t_s.push_back((v[0] - first_us) * 1e-6);
         log.position_m.push_back({v[1], v[2], v[3]});
         log.accel_mps2.push_back({v[4], v[5], v[6]});
@@ -238,6 +239,7 @@ std::vector<Field> binary_header(const std::string& path, const std::string& byt
 }
 
 VehicleLog read_binary(const std::string& path, VehicleLog log) {
+    log.binary = true;
     const std::string bytes = read_file(path, "log");
     std::size_t pos = 0;
     const auto fields = binary_header(path, bytes, pos);
@@ -277,6 +279,7 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
                 return value;
             };
             if (std::isnan(first_us)) first_us = v(tick, kTimeUsRange);
+            log.origin.push_back(pos + 1 + r * record);
             log.t_s.push_back((v(tick, kTimeUsRange) - first_us) * 1e-6);
             log.position_m.push_back({v(x, flight::kPositionRange, 1000), v(y, flight::kPositionRange, 1000),
                                       v(z, flight::kPositionRange, 1000)});
@@ -295,6 +298,11 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
 }
 
 }  // namespace
+
+std::string VehicleLog::where(std::size_t sample) const {
+    if (sample >= origin.size()) return log::cat(file, ": sample ", sample + 1);
+    return binary ? log::cat(file, ": byte ", origin[sample]) : log::cat(file, ":", origin[sample]);
+}
 
 const CrazyflieType& crazyflie_type(const std::string& vehicle) {
     // cf50..cf52: Crazyflie 2.1; cf100..cf102: on a parrot frame (the collection's README).
@@ -374,6 +382,14 @@ void warn_about(const VehicleLog& log, const ImportOptions& o) {
         o.warn(log::cat(log.file, ": ", log.damaged_blocks, " damaged block(s) skipped (checksum)"));
 }
 
+// What a flight may hold (flight::kForceRange), checked where a sample's force is derived: each
+// input is in its own range, but together (full PWM at 100 V) they can make an absurd thrust.
+double require_force(const VehicleLog& s, std::size_t i, const char* what, double v) {
+    if (!flight::kForceRange.contains(v))
+        throw InputError(log::cat(s.where(i), ": ", what, ": ", range_problem(v, flight::kForceRange)));
+    return v;
+}
+
 // Fa = m a_imu − T_lag R e_z (world, z up), tared where no neighbour is near. Returns the tare.
 std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLog>& others, const ImportOptions& o,
                                 std::vector<std::array<double, 3>>& fa) {
@@ -384,7 +400,9 @@ std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLo
         const auto ez = body_z(s.quat_xyzw[i]);
         std::array<double, 3> f{};
         for (std::size_t k = 0; k < 3; ++k) f[k] = type.mass_kg * s.accel_mps2[i][k] - lag * ez[k];
-        lag = kThrustLag * lag + (1 - kThrustLag) * thrust_n(type, s.pwm[i], s.vbat_v[i]);
+        for (const double v : f) require_force(s, i, "the residual force", v);
+        const double thrust = thrust_n(type, s.pwm[i], s.vbat_v[i]);
+        lag = kThrustLag * lag + (1 - kThrustLag) * require_force(s, i, "the thrust of its PWM and battery voltage", thrust);
         fa.push_back(f);
         bool alone = true;
         for (const auto& n : others) {

@@ -25,6 +25,11 @@ struct VehicleLog {
     std::vector<double> vbat_v;
     std::vector<double> faz_g;       // binary logs with ctrlFa.Faz: the onboard network's Fa_z [gram-force, z up]
     std::size_t damaged_blocks = 0;  // binary: blocks whose checksum failed, skipped
+    // Where each sample is in the file: its line (CSV) or its record's first byte (binary), so that
+    // what is derived from a sample (the residual force) is refused where the sample was read.
+    bool binary = false;
+    std::vector<std::size_t> origin;
+    std::string where(std::size_t sample) const;  // "file:line" or "file: byte N"
 };
 
 // Reads a CSV log (`*.csv`) or a binary log (no extension). Throws dw::InputError with the file,

@@ -267,6 +267,10 @@ Writer::Writer(const std::string& path, const WriterOptions& options) : path_(pa
 }
 
 Writer::~Writer() {
+    if (broken_) {  // a write failed: its error was thrown then; nothing more is written
+        if (fd_ >= 0) ::close(fd_);
+        return;
+    }
     try {
         close();
     } catch (const std::exception& e) {
@@ -286,6 +290,7 @@ void Writer::write_out(const char* data, std::size_t size) {
         const ssize_t n = ::write(fd_, data + done, size - done);
         if (n < 0) {
             if (errno == EINTR) continue;
+            broken_ = true;
             throw RuntimeError(log::cat("writing ", path_, ": ", std::strerror(errno)));
         }
         done += static_cast<std::size_t>(n);

@@ -105,6 +105,7 @@ private:
     WriterOptions options_;
     int fd_ = -1;
     bool closed_ = false;
+    bool broken_ = false;  // a write to the file failed (a full disk): nothing more is written
     std::uint64_t offset_ = 0;
     std::uint32_t data_crc_ = 0;
     std::string buffer_;  // pending file bytes (written in large blocks)

@@ -11,7 +11,9 @@
 #include <set>
 #include <thread>
 
+#include "probe/samples.hpp"
 #include "support.hpp"
+#include "testkit/recording.hpp"
 
 using dw::test::bin;
 using dw::test::expect_one_line_exit_2;
@@ -254,4 +256,27 @@ TEST(Issue17, AFullDiskIsOneLineExit1AndNoPartialFile) {
     // were left): the DDS Security keystore, one line and nothing of it.
     auto keys = confined({bin("dw-lab"), "keys", "create", "--keystore", "@/keys"}, "size=16k", d);
     expect_one_line_nothing_partial(keys, 1, "No space left on device", {});
+
+    // `recover` said it twice (the writer's destructor closed the file again); the proof and the
+    // coverage run quoted dw-sim's whole log (three lines) and left its log and physics file.
+    const std::string mcap = d.file("rec.mcap");
+    {
+        dw::testkit::LabRecording rec(mcap, dw::mcap::Compression::none);
+        const auto w = rec.channel(dw::dds::topics::stand_wrench);
+        for (std::uint32_t i = 0; i < 2000; ++i) {  // ~200 KB
+            auto s = dw::probe::make_sample<dw::msg::WrenchStamped>(i);
+            rec.write(w, i, 1'000'000'000ULL + i * 12'500'000ULL, s);
+        }
+        rec.close();
+    }
+    expect_one_line_nothing_partial(confined({bin("dw-recorder"), "recover", mcap, "@/r.mcap"}, "size=16k", d), 1,
+                                    "No space left on device", {});
+    expect_one_line_nothing_partial(
+        confined({bin("dw-explain"), "proof", "--cases", "null", "--null-seeds", "1", "--out", "@/proof"}, "size=16k",
+                 d),
+        1, "No space left on device", {});
+    expect_one_line_nothing_partial(confined({bin("dw-explain"), "coverage", "--effects", "sensor_lag", "--seeds", "1",
+                                              "--legs", "5", "--jobs", "1", "--out", "@/coverage"},
+                                             "size=16k", d),
+                                    1, "No space left on device", {});
 }

@@ -125,17 +125,23 @@ TEST(Import, BadColumnsAndValuesAreOneLocatedLine) {
     EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("cf50_01.csv:3: column time[ms]: 'oops' is not a finite number"),
               std::string::npos)
         << error_of({d.file("cf50_01.csv")});
-    // Issue 43: an az of 1e308 was imported (and written into a flight); now one located line.
-    std::string huge = csv;
+    // Issue 43: an az of 1e308 was imported (and written into a flight); now one located line. A
+    // PWM duty (a fraction) was checked against the raw [0, 65536]: 65536 made a thrust of 3.5e9 N,
+    // refused only when the flight was written, naming the output's row.
     const auto header = split_csv_header(csv);
-    const auto az = static_cast<std::size_t>(std::find(header.begin(), header.end(), "az[m/s^2]") - header.begin());
-    std::size_t at = line3;
-    for (std::size_t c = 0; c < az; ++c) at = huge.find(',', at) + 1;
-    huge.replace(at, huge.find(',', at) - at, "1e308");
-    std::ofstream(d.file("cf50_01.csv")) << huge;
-    EXPECT_NE(error_of({d.file("cf50_01.csv")}).find("cf50_01.csv:3: column az[m/s^2]: 1e+308 is not in [-1000, 1000]"),
-              std::string::npos)
-        << error_of({d.file("cf50_01.csv")});
+    auto with_line3 = [&](const std::string& column, const std::string& value) {
+        std::string text = csv;
+        const auto col = static_cast<std::size_t>(std::find(header.begin(), header.end(), column) - header.begin());
+        std::size_t at = line3;
+        for (std::size_t c = 0; c < col; ++c) at = text.find(',', at) + 1;
+        text.replace(at, text.find(',', at) - at, value);
+        std::ofstream(d.file("cf50_01.csv")) << text;
+        return error_of({d.file("cf50_01.csv")});
+    };
+    const std::string huge = with_line3("az[m/s^2]", "1e308");
+    EXPECT_NE(huge.find("cf50_01.csv:3: column az[m/s^2]: 1e+308 is not in [-1000, 1000]"), std::string::npos) << huge;
+    const std::string duty = with_line3("u1[PWM]", "65536");
+    EXPECT_NE(duty.find("cf50_01.csv:3: column u1[PWM]: 65536 is not in [0, 1]"), std::string::npos) << duty;
     EXPECT_NE(error_of({kData + "swap_ss/cf50_01.csv"}).find("at least two vehicles"), std::string::npos);
     EXPECT_NE(error_of({d.file("cf99_01.csv")}).find("not one the Neural-Swarm collection describes"),
               std::string::npos);
