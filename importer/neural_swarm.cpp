@@ -402,7 +402,8 @@ std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLo
         for (std::size_t k = 0; k < 3; ++k) f[k] = type.mass_kg * s.accel_mps2[i][k] - lag * ez[k];
         for (const double v : f) require_force(s, i, "the residual force", v);
         const double thrust = thrust_n(type, s.pwm[i], s.vbat_v[i]);
-        lag = kThrustLag * lag + (1 - kThrustLag) * require_force(s, i, "the thrust of its PWM and battery voltage", thrust);
+        lag = kThrustLag * lag +
+              (1 - kThrustLag) * require_force(s, i, "the thrust of its PWM and battery voltage", thrust);
         fa.push_back(f);
         bool alone = true;
         for (const auto& n : others) {
