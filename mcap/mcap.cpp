@@ -267,10 +267,6 @@ Writer::Writer(const std::string& path, const WriterOptions& options) : path_(pa
 }
 
 Writer::~Writer() {
-    if (broken_) {  // a write failed: its error was thrown then; nothing more is written
-        if (fd_ >= 0) ::close(fd_);
-        return;
-    }
     try {
         close();
     } catch (const std::exception& e) {
@@ -442,6 +438,12 @@ void Writer::add_attachment(const Attachment& a) {
 
 void Writer::close() {
     if (closed_) return;
+    if (broken_) {  // a write failed: its error was thrown then; nothing more is written
+        closed_ = true;
+        if (fd_ >= 0) ::close(fd_);
+        fd_ = -1;
+        return;
+    }
     close_chunk();
     Out de;
     de.u32(options_.data_crc ? data_crc_ : 0);

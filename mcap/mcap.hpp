@@ -88,6 +88,8 @@ public:
     void close();
 
     std::uint64_t bytes_written() const { return offset_; }
+    // A write to the file failed (its error was thrown then): close() only closes the descriptor.
+    bool broken() const { return broken_; }
     std::uint64_t message_count() const { return message_count_; }
     const std::string& path() const { return path_; }
 

@@ -158,6 +158,7 @@ Recorder::Recorder(dds::Participant& participant, const RecordOptions& options)
 }
 
 Recorder::~Recorder() {
+    if (writer_ && writer_->broken()) return;  // its write failed: said once, by whoever caught it
     try {
         close();
     } catch (const std::exception& e) {  // a destructor must not throw (a full disk, say): said, not thrown
@@ -326,10 +327,16 @@ void Recorder::toggle(const std::string& why) { paused_ ? resume(why) : pause(wh
 
 void Recorder::tick() {
     std::lock_guard lock(mutex_);
-    drain_pending();
+    try {
+        drain_pending();
+        if (writer_) writer_->flush_if_due(participant_.clock().monotonic_ns());
+    } catch (const RuntimeError& e) {  // a full disk: what was flushed before stays readable
+        if (!writer_ || !writer_->broken()) throw;
+        throw RuntimeError(log::cat(e.what(), " (the file keeps what was written before: dw-recorder recover ",
+                                    writer_->path(), " OUT rebuilds it)"));
+    }
     if (!writer_) return;
     const std::int64_t now = participant_.clock().monotonic_ns();
-    writer_->flush_if_due(now);
     const bool by_size = options_.split_bytes > 0 && writer_->bytes_written() >= options_.split_bytes;
     const bool by_time = options_.split_seconds > 0 && now - file_opened_ns_ >= from_seconds(options_.split_seconds);
     if (by_size || by_time) {

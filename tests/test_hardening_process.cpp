@@ -271,6 +271,24 @@ TEST(Issue17, AFullDiskIsOneLineExit1AndNoPartialFile) {
     }
     expect_one_line_nothing_partial(confined({bin("dw-recorder"), "recover", mcap, "@/r.mcap"}, "size=16k", d), 1,
                                     "No space left on device", {});
+    // A recording cannot be whole or nothing: on a full disk it ends in one line that says the
+    // file keeps what was flushed and how to rebuild it (it said the error twice: the recorder's
+    // destructor closed the broken file again).
+    const std::string domain = std::to_string(dw::test::test_domain());
+    dw::Subprocess pub(
+        {{bin("dw-probe"), "--domain", domain, "pub", "stand/wrench", "--count", "20000", "--rate", "1000"},
+         d.file("pub.out"),
+         d.file("pub.err"),
+         {}});
+    const auto rec =
+        confined({bin("dw-recorder"), "--domain", domain, "record", "--out", "@/r.mcap", "--duration", "10", "--quiet"},
+                 "size=16k", d);
+    EXPECT_EQ(rec.run.status, 1) << rec.run.err;
+    const auto rl = lines(rec.run.err);
+    ASSERT_EQ(rl.size(), 2u) << rec.run.err;  // "recording to ..." and the error
+    EXPECT_NE(rl[1].find("No space left on device (the file keeps what was written before: dw-recorder recover"),
+              std::string::npos)
+        << rl[1];
     expect_one_line_nothing_partial(
         confined({bin("dw-explain"), "proof", "--cases", "null", "--null-seeds", "1", "--out", "@/proof"}, "size=16k",
                  d),
