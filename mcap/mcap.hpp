@@ -162,7 +162,7 @@ enum class ReadMode { strict, salvage };
 ReadResult read(std::span<const std::uint8_t> file, const Handlers& handlers, ReadMode mode = ReadMode::strict);
 // The same, streamed from the file: memory stays bounded whatever its size (it is mapped and read
 // front to back; pages behind the reader are released).
-ReadResult read_file(const std::string& path, const Handlers& handlers);
+ReadResult read_file(const std::string& path, const Handlers& handlers, ReadMode mode = ReadMode::strict);
 
 // Rebuilds a readable file (indexes, summary, footer) from a truncated or damaged one: every
 // whole, sound record is kept, before and after damaged chunks (a salvage read). The input is
