@@ -318,3 +318,44 @@ TEST(ExplainOutOfVocabulary, VelocitySuperpositionInsteadOfAForceSumIsDetectedAn
 TEST(ExplainOutOfVocabulary, NoThrustLossOnTheSufferersRotorsIsDetectedAndSoakedUpByStandIns) {
     out_of_vocabulary({"single", [](dw::physics::PhysicsConfig& c) { c.sufferer.thrust_loss = false; }, true, 23});
 }
+
+// Issue 44: the simulator's recording chain and the replay's are one in effect — each built-in
+// effect the simulator can show, switched on with the same parameters in both, leaves a residual
+// far below the stand's noise on every axis (noise and turbulence off, so what is left is the two
+// chains' disagreement: 0.0007-0.0025 N here), while leaving it out of the replay misses by ten
+// times that or more. The effects of a flying sufferer are not in the simulator yet (it flies none).
+TEST(ExplainReplay, EachEffectTheSimulatorShowsIsReplayedAsItSimulatesIt) {
+    constexpr double kForceAgreementN = 0.005, kMomentAgreementNm = 0.0005;  // 1/5 of a cell's noise; at 0.1 m
+    constexpr double kVisible = 10;  // the effect left out of the replay misses by this much more
+    std::vector<std::string> not_simulated;
+    for (const auto& e : all_effects()) {
+        if (!e.type->applies(2, false)) {
+            not_simulated.push_back(e.name);
+            continue;
+        }
+        std::vector<double> v;  // half way to the far end of each parameter's search range
+        for (const auto& p : e.params) v.push_back(0.5 * (std::abs(p.upper) > std::abs(p.lower) ? p.upper : p.lower));
+        dw::physics::PhysicsConfig with, without;
+        for (auto* c : {&with, &without}) {
+            c->turbulence.enabled = false;
+            c->stand.noise_n = 0;
+            c->mocap.noise_m = 0;
+        }
+        e.apply(with, v);
+        const Replay r(fly(with, "leader_follower", 12));
+        const auto same = r.recorded(with), left_out = r.recorded(without);
+        double missed = 0, worst = 0;
+        for (std::size_t a = 0; a < 6; ++a) {
+            std::vector<double> res, res_out;
+            for (std::size_t i = 0; i < same.size(); ++i) {
+                res.push_back(r.measured()[i][a] - same[i][a]);
+                res_out.push_back(r.measured()[i][a] - left_out[i][a]);
+            }
+            EXPECT_LT(rms(res), a < 3 ? kForceAgreementN : kMomentAgreementNm) << e.name << ", axis " << a;
+            worst = std::max(worst, rms(res));
+            missed = std::max(missed, rms(res_out));
+        }
+        EXPECT_GT(missed, kVisible * worst) << e.name << ": the replay without it misses by " << missed;
+    }
+    EXPECT_EQ(not_simulated, (std::vector<std::string>{"body_drag", "ground_effect"}));
+}
