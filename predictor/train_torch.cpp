@@ -10,14 +10,9 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "predictor/train.hpp"
+#include "predictor/train_module.hpp"
 
 namespace dw::predictor {
-
-Structure structure_of(const std::string& kind) {
-    if (kind == "naive_linear" || kind == "learnt_linear") return Structure::sum;
-    if (kind == "deep_sets") return Structure::deep_sets;
-    throw InputError(log::cat("model kind '", kind, "' (expected naive_linear, learnt_linear or deep_sets)"));
-}
 
 namespace {
 
@@ -271,8 +266,8 @@ void halve_learning_rate(torch::optim::Adam& adam) {
 
 }  // namespace
 
-TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o,
-                        const LearntModel* baseline) {
+TrainResult train_with_torch(const Dataset& train, const Dataset& validation, const TrainOptions& o,
+                             const LearntModel* baseline) {
     if (train.samples.empty()) throw InputError("training: no samples on the training legs");
     if (validation.samples.empty()) throw InputError("training: no samples on the validation legs");
     const auto core = o.cores ? o.cores->take(o.turn, o.stop, "training") : Cores::Pass{};
@@ -340,3 +335,6 @@ TrainResult train_model(const Dataset& train, const Dataset& validation, const T
 }
 
 }  // namespace dw::predictor
+
+// The module's one entry (train.cpp loads it): train_with_torch, as a TrainFunction.
+extern "C" dw::predictor::TrainFunction dw_training_entry() { return &dw::predictor::train_with_torch; }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -181,4 +182,26 @@ TEST(PredictorProcess, AwaitingTheRecorderLosesNoMocapFrame) {
     ASSERT_TRUE(predicted) << got.load() << " predictions; " << dw::read_file(dir.file("node.err"));
     const auto out = dw::read_file(dir.file("node.out"));
     EXPECT_NE(out.find(" 0 mocap frames lost"), std::string::npos) << out;
+}
+
+// The training is a module beside the executable, loaded when a model is first trained (libtorch
+// made every start cost ~0.5 s of CPU): without it, training ends in one line and exit 1, and
+// everything else still works.
+TEST(PredictorProcess, WithoutItsTrainingModuleItStillServesAndTrainingIsOneLineExit1) {
+    dw::test::TempDir dir;
+    const std::string alone = dir.file("dw-predictor");
+    std::filesystem::copy_file(dw::test::bin("dw-predictor"), alone);
+    std::filesystem::permissions(alone, std::filesystem::perms::owner_exec, std::filesystem::perm_options::add);
+    const auto help = dw::test::run({alone, "--help"}, dir);
+    EXPECT_EQ(help.status, 0) << help.err;
+    const auto r = dw::test::run({alone, "study", "--legs", "5", "--epochs", "1", "--out", dir.file("s")}, dir);
+    EXPECT_EQ(r.status, 1) << r.err;
+    const auto l = dw::test::lines(r.err);
+    ASSERT_FALSE(l.empty());
+    EXPECT_NE(l.back().find("error: cannot load the training module: "), std::string::npos) << r.err;
+    EXPECT_NE(l.back().find("libdw_torch_train.so"), std::string::npos) << l.back();
+    EXPECT_EQ(
+        std::count_if(l.begin(), l.end(), [](const std::string& s) { return s.find("error:") != std::string::npos; }),
+        1)
+        << r.err;
 }
