@@ -355,6 +355,9 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     require_output_dir(o.out_dir, "--out");
     Calibration cal(o);
+    StagedFolder staged(o.out_dir);  // the physics file, report, pictures and folds appear together, or none
+    CalibrateOptions in = o;         // everything of the run is written into the staging folder
+    in.out_dir = staged.path();
     CalibrateResult R;
     const auto x0 = cal.start();
     const auto x = fit(cal, x0, flights_except(cal, std::nullopt), o.max_iterations, o, "every trial");
@@ -373,7 +376,7 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         e.rmse_all = rmse(cal.residuals(x, own, false));
         e.rmse_heldout = rmse(cal.residuals(xt, own, false));
         if (o.explain_heldout)
-            explain_heldout(e, with_provenance(cal.config_of(xt), o.physics, "without " + trial.name), o);
+            explain_heldout(e, with_provenance(cal.config_of(xt), o.physics, "without " + trial.name), in);
         R.trials.push_back(e);
     }
     const auto sd = jackknife_sd(replicates);
@@ -386,9 +389,10 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         with_provenance(cal.config_of(x), o.physics,
                         log::cat("on ", cal.flights().size(), " flights of ", cal.trials().size(), " trials"));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    R.physics_path = (fs::path(o.out_dir) / "physics.yaml").string();
-    R.report_path = (fs::path(o.out_dir) / "calibration.md").string();
-    write_calibration(samples_by_pairing(cal, x0, x, o), R, o);
+    write_calibration(samples_by_pairing(cal, x0, x, o), R, in);
+    staged.commit();
+    R.physics_path = (fs::path(o.out_dir) / kCalibratedPhysicsFile).string();
+    R.report_path = (fs::path(o.out_dir) / kCalibrationReportFile).string();
     return R;
 }
 

@@ -57,12 +57,16 @@ struct CalibrateResult {
     physics::PhysicsConfig calibrated;
     std::vector<CalibratedParameter> parameters;
     std::vector<TrialError> trials;
-    std::string physics_path, report_path;
+    std::string physics_path, report_path;  // in --out, once it is complete
     double seconds = 0;
 };
 
 // Throws dw::InputError for a flight that cannot be read or calibrated on (named), or when the
 // flights hold fewer than two trials (nothing to leave out).
+// What calibrate() writes in --out (with calibration.json, the pictures and folds/), all together
+// or, on a failure or a stop, nothing.
+inline constexpr const char* kCalibratedPhysicsFile = "physics.yaml";
+inline constexpr const char* kCalibrationReportFile = "calibration.md";
 CalibrateResult calibrate(const CalibrateOptions& o);
 
 }  // namespace dw::analysis

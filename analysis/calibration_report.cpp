@@ -123,11 +123,13 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
 
 void write_calibration(const std::vector<PairingSamples>& pairings, const CalibrateResult& r,
                        const CalibrateOptions& o) {
-    fs::create_directories(o.out_dir);
+    const fs::path dir(o.out_dir);
+    fs::create_directories(dir);
     write_pictures(pairings, o.out_dir);
-    write_file((fs::path(o.out_dir) / "calibration.json").string(), to_json(r).dump(2) + "\n");
-    write_file(r.report_path, markdown(pairings, r));
-    write_file(r.physics_path, "# " + r.calibrated.calibration + "\n" + physics::to_yaml(r.calibrated));
+    write_file((dir / "calibration.json").string(), to_json(r).dump(2) + "\n");
+    write_file((dir / kCalibrationReportFile).string(), markdown(pairings, r));
+    write_file((dir / kCalibratedPhysicsFile).string(),
+               "# " + r.calibrated.calibration + "\n" + physics::to_yaml(r.calibrated));
 }
 
 }  // namespace dw::analysis
