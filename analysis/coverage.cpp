@@ -187,9 +187,9 @@ CoverageResult run_coverage(const CoverageOptions& o) {
     R.pass = std::none_of(R.rows.begin(), R.rows.end(),
                           [](const CoverageRow& r) { return r.verdict == CoverageRow::Verdict::too_narrow; });
     write_file((fs::path(in.out_dir) / "coverage.csv").string(), csv(chosen, outs));
-    write_file((fs::path(in.out_dir) / "coverage.md").string(), table(R.rows, o));
+    write_file((fs::path(in.out_dir) / kCoverageTableFile).string(), table(R.rows, o));
     staged.commit();
-    R.table_path = (fs::path(o.out_dir) / "coverage.md").string();
+    R.table_path = (fs::path(o.out_dir) / kCoverageTableFile).string();
     return R;
 }
 

@@ -42,6 +42,8 @@ struct CoverageResult {
     bool pass = false;  // every row at >= kMinCoverage or said to be not identifiable
 };
 
+// The coverage run's table, in its output folder.
+inline constexpr const char* kCoverageTableFile = "coverage.md";
 CoverageResult run_coverage(const CoverageOptions& o);
 
 }  // namespace dw::analysis

@@ -282,9 +282,9 @@ ProofResult run_proof(const ProofOptions& o) {
     // A proof of nothing proves nothing: no rows, or a null case without flights, fails.
     R.pass = !R.rows.empty() && (!wanted_null(o) || R.null_total > 0) &&
              std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass; });
-    write_file((out / "proof.md").string(), table(R.rows, "flight", "hidden effect", "true parameter"));
+    write_file((out / kProofTableFile).string(), table(R.rows, "flight", "hidden effect", "true parameter"));
     staged.commit();
-    R.table_path = (fs::path(o.out_dir) / "proof.md").string();
+    R.table_path = (fs::path(o.out_dir) / kProofTableFile).string();
     return R;
 }
 
@@ -431,10 +431,10 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     }
     R.pass = !R.rows.empty() &&
              std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass || r.not_identifiable; });
-    write_file((out / "proof.md").string(),
+    write_file((out / kProofTableFile).string(),
                table(R.rows, "flight", "concealed effect", "expected (own fit with the concealed value)"));
     staged.commit();
-    R.table_path = (fs::path(o.out_dir) / "proof.md").string();
+    R.table_path = (fs::path(o.out_dir) / kProofTableFile).string();
     return R;
 }
 

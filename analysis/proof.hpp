@@ -40,6 +40,8 @@ struct ProofResult {
     std::string table_path;
 };
 
+// The proofs' table, in their output folder.
+inline constexpr const char* kProofTableFile = "proof.md";
 ProofResult run_proof(const ProofOptions& o);
 
 // `dw-sim fly` (a sibling executable) with this physics hidden in it, into the flight folder dir.

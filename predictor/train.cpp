@@ -1,8 +1,6 @@
 // train_model(): loads the libtorch training module (train_module.hpp) the first time it is needed.
 #include <dlfcn.h>
 
-#include <mutex>
-
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/subprocess.hpp"
@@ -30,12 +28,7 @@ TrainFunction load_training() {
 
 TrainResult train_model(const Dataset& train, const Dataset& validation, const TrainOptions& o,
                         const LearntModel* baseline) {
-    static std::mutex mutex;
-    static TrainFunction train_function = nullptr;
-    {
-        const std::lock_guard lock(mutex);
-        if (!train_function) train_function = load_training();
-    }
+    static const TrainFunction train_function = load_training();  // once; tried again if it threw
     return train_function(train, validation, o, baseline);
 }
 

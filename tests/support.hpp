@@ -26,8 +26,8 @@ inline constexpr const char* kTestDomainLocks = "/tmp/dw-test-domains";
 // A domain id of this test process's own, so tests run in parallel do not hear each other: the
 // first free one from a start the process id picks, held by a lock on a file named after it (the
 // kernel drops the lock when the process ends, however it ends). Taken as "100 + pid % 120" it was
-// shared by two tests now and then, and a soak's recorder then discovered another test's
-// participants. Every free id held: the pid's own (as before).
+// shared by two running tests now and then, which then discovered each other's participants.
+// Every free id held: the pid's own (as before).
 inline int claim_test_domain() {
     const int start = static_cast<int>(::getpid() % kTestDomains);
     if (::mkdir(kTestDomainLocks, 01777) == 0) ::chmod(kTestDomainLocks, 01777);  // every user's tests (umask aside)

@@ -31,6 +31,7 @@
 #include "real_data.hpp"
 #include "recordings/recordings.hpp"
 #include "support.hpp"
+#include "testkit/mlp.hpp"
 #include "testkit/mocap.hpp"
 #include "testkit/recording.hpp"
 
@@ -227,16 +228,6 @@ void yaml_configuration(int mutations) {
 }
 
 // A learnt model with every part a file can hold: Deep Sets' phi and rho on a sum model's baseline.
-dw::predictor::Mlp mlp(int inputs, int hidden, int outputs) {
-    dw::predictor::Mlp m;
-    for (const auto& [in, out] : {std::pair{inputs, hidden}, std::pair{hidden, outputs}}) {
-        dw::predictor::Layer l{Eigen::MatrixXf::Constant(out, in, 0.01F), Eigen::VectorXf::Constant(out, 0.1F), true};
-        m.layers.push_back(l);
-    }
-    m.layers.back().silu = false;
-    return m;
-}
-
 std::string model_seed(const dw::test::TempDir& d) {
     using namespace dw::predictor;
     LearntModel m;
@@ -245,9 +236,10 @@ std::string model_seed(const dw::test::TempDir& d) {
     m.input_mean.fill(0.0F);
     m.input_std.fill(1.0F);
     m.output_scale.fill(0.05F);
-    m.phi = mlp(kFeatureSize, 4, 3);
-    m.rho = mlp(3, 4, 6);
-    m.baseline = mlp(kFeatureSize, 4, 6);
+    std::mt19937 rng(43);
+    m.phi = dw::testkit::random_mlp(rng, {kFeatureSize, 4, 3}, 0.1F);
+    m.rho = dw::testkit::random_mlp(rng, {3, 4, 6}, 0.1F);
+    m.baseline = dw::testkit::random_mlp(rng, {kFeatureSize, 4, 6}, 0.1F);
     m.save(d.file("seed.json"));
     return bytes_of(d.file("seed.json"));
 }
