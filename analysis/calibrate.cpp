@@ -20,6 +20,7 @@
 #include "core/parallel.hpp"
 #include "core/shutdown.hpp"
 #include "core/stats.hpp"
+#include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "physics/bodies.hpp"
 

@@ -8,6 +8,7 @@
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "core/stats.hpp"
 #include "physics/config.hpp"
 #include "plot/chart.hpp"
 
@@ -64,12 +65,6 @@ nlohmann::json to_json(const CalibrateResult& r) {
             {"seconds", r.seconds}};
 }
 
-double median_of(std::vector<double> v) {
-    if (v.empty()) return 0;
-    std::sort(v.begin(), v.end());
-    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
 // "2.31 | force_scale, body_drag |" for each of the trial's flights (one line each), their ratios kept.
 std::string explained_cells(const TrialError& t, std::vector<double>& ratios) {
     std::string ratio, by;
@@ -108,9 +103,9 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
         md << "\n";
         before.push_back(t.rmse_before), heldout.push_back(t.rmse_heldout);
     }
-    md << "\nMedian over trials: " << fixed(median_of(before), 4) << " N uncalibrated, " << fixed(median_of(heldout), 4)
+    md << "\nMedian over trials: " << fixed(median(before), 4) << " N uncalibrated, " << fixed(median(heldout), 4)
        << " N held out"
-       << (explained ? log::cat("; after the explainer, median ", fixed(median_of(ratios), 2), " noise floors (",
+       << (explained ? log::cat("; after the explainer, median ", fixed(median(ratios), 2), " noise floors (",
                                 ratios.size(), " flights)")
                      : std::string())
        << ".\n\n## f_d by the nearest neighbour's position, per pairing\n\n";

@@ -16,12 +16,13 @@
 #include "analysis/effects.hpp"
 #include "analysis/replay.hpp"
 #include "core/numbers.hpp"
+#include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "physics/config.hpp"
 
 namespace dw::analysis {
 
-using AxisValues = std::array<double, 6>;
+using flight::AxisValues;
 
 // Null flights (noise and turbulence only, 10 seeds) give 0.99-1.04: docs/EXPLAINER.md.
 inline constexpr double kDetectExcess = 1.2;
@@ -117,6 +118,7 @@ struct ExplainResult {
     std::size_t samples = 0, legs = 0;                   // samples in blocks, blocks holding samples
     flight::BlockKind blocks = flight::BlockKind::legs;  // what the cross-validation blocks are
     double seconds = 0;
+    std::size_t replays = 0;  // predictions of the whole flight the fits paid for (analysis/fit.hpp)
 };
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "physics/bodies.hpp"
 #include "physics/config.hpp"
@@ -21,7 +22,7 @@
 
 namespace dw::analysis {
 
-using Wrench6 = std::array<double, 6>;
+using flight::Wrench6;
 
 class Replay {
 public:

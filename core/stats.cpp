@@ -49,4 +49,27 @@ std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replica
     return out;
 }
 
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    if (v.size() % 2) return *mid;
+    return 0.5 * (*mid + *std::max_element(v.begin(), mid));
+}
+
+double sd_from_differences(std::span<const double> x) {
+    if (x.size() < 2) return 0;
+    std::vector<double> d;
+    d.reserve(x.size() - 1);
+    for (std::size_t i = 1; i < x.size(); ++i) d.push_back(std::abs(x[i] - x[i - 1]));
+    constexpr double kMadToSd = 1.4826;  // a normal distribution's sd over its median absolute deviation
+    return kMadToSd * median(std::move(d)) / std::sqrt(2.0);
+}
+
+double huber_cost(double squared, double delta) {
+    return squared <= delta * delta ? squared : 2 * delta * std::sqrt(squared) - delta * delta;
+}
+
+double ar1_independent_fraction(double rho) { return (1 - rho) / (1 + rho); }
+
 }  // namespace dw

@@ -1,6 +1,7 @@
 #pragma once
-// Paired tests over held-out blocks, shared by the explainer (is a candidate effect better?) and
-// the predictor's regime map (is Deep Sets better than the sum?).
+// Statistics shared by the tools: paired tests over held-out blocks (the explainer: is a candidate
+// effect better? the predictor's regime map: is Deep Sets better than the sum?), intervals, and
+// the robust summaries the explainer, the calibration and the importer use.
 #include <span>
 #include <vector>
 
@@ -28,5 +29,21 @@ double t975(int dof);
 // The spread of a jackknife over its replicates (each with one group left out):
 // sqrt((G - 1) / G * sum (x - mean)²), per parameter.
 std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates);
+
+// The median (the mean of the two middle values for an even count); 0 for none.
+double median(std::vector<double> v);
+
+// The standard deviation of white noise in x, from its successive differences and robustly:
+// 1.4826 × median |x[i] − x[i−1]| / √2 (a slow drift or a few spikes do not count). 0 for fewer
+// than two values.
+double sd_from_differences(std::span<const double> x);
+
+// Huber's loss of a residual r (in units of delta) given as squared = r²: r² within ±delta,
+// 2 delta |r| − delta² beyond (continuous, and linear in |r| there).
+double huber_cost(double squared, double delta);
+
+// The fraction of n autocorrelated samples that count as independent, for a lag-1 autocorrelation
+// rho of an AR(1) series: (1 − rho) / (1 + rho).
+double ar1_independent_fraction(double rho);
 
 }  // namespace dw

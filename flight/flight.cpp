@@ -284,6 +284,84 @@ void require_dense(const Flight& f, const std::string& where) {
                               " s: a stray stamp or a gap"));
 }
 
+namespace {
+
+void read_wrench(const fs::path& root, Flight& f) {
+    CsvReader csv(slurp(root / "wrench.csv"), (root / "wrench.csv").string());
+    csv.expect_header(wrench_columns());
+    std::vector<std::string_view> row;
+    while (csv.next(row)) {
+        WrenchSample s;
+        s.t = csv.number(row[0], 0, kStampRange);
+        for (std::size_t i = 0; i < 6; ++i) s.w[i] = csv.number(row[i + 1], i + 1, axis_range(i));
+        if (!f.wrench.empty() && s.t < f.wrench.back().t) {
+            csv.fail(csv.line(),
+                     log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
+        }
+        f.wrench.push_back(s);
+    }
+    if (f.wrench.empty()) csv.fail(1, "no samples");
+}
+
+void read_poses(const fs::path& root, Flight& f) {
+    CsvReader csv(slurp(root / "poses.csv"), (root / "poses.csv").string());
+    csv.expect_header({"t", "body", "n", "e", "d", "qw", "qx", "qy", "qz"});
+    std::vector<std::string_view> row;
+    while (csv.next(row)) {
+        PoseSample s;
+        s.t = csv.number(row[0], 0, kStampRange);
+        const std::string name(row[1]);
+        int body = f.find_body(name);  // one look-up per row: a new name is checked, then added
+        if (body < 0) {
+            if (const auto problem = body_name_problem(name); !problem.empty())
+                csv.fail(csv.line(), "column body: " + problem);
+            if (f.bodies.size() >= kMaxBodies)
+                csv.fail(csv.line(), log::cat("column body: a flight holds at most ", kMaxBodies, " bodies"));
+            body = f.body_index(name);
+        }
+        s.body = static_cast<std::uint16_t>(body);
+        for (std::size_t i = 0; i < 3; ++i) s.p[i] = csv.number(row[i + 2], i + 2, kPositionRange);
+        for (std::size_t i = 0; i < 4; ++i) s.q[i] = csv.number(row[i + 5], i + 5, kQuaternionRange);
+        const double norm = std::sqrt(s.q[0] * s.q[0] + s.q[1] * s.q[1] + s.q[2] * s.q[2] + s.q[3] * s.q[3]);
+        if (std::abs(norm - 1.0) > 1e-3) csv.fail(csv.line(), log::cat("quaternion norm ", norm, " is not 1"));
+        if (!f.poses.empty() && s.t < f.poses.back().t) {
+            csv.fail(csv.line(),
+                     log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
+        }
+        f.poses.push_back(s);
+    }
+    if (f.poses.empty()) csv.fail(1, "no samples");
+    if (f.find_body(f.meta.sufferer) < 0) {
+        csv.fail(1, log::cat("the sufferer '", f.meta.sufferer, "' named in meta.json has no pose"));
+    }
+    for (const auto& n : f.meta.neighbours) {
+        if (f.find_body(n) < 0) csv.fail(1, log::cat("neighbour '", n, "' named in meta.json has no pose"));
+    }
+}
+
+std::vector<Leg> read_legs(const fs::path& root) {
+    CsvReader csv(slurp(root / "legs.csv"), (root / "legs.csv").string());
+    csv.expect_header({"leg", "t_start", "t_end"});
+    std::vector<std::string_view> row;
+    std::vector<Leg> legs;
+    while (csv.next(row)) {
+        Leg l;
+        const double id = csv.number(row[0], 0, kLegNumberRange);
+        if (id != std::floor(id))
+            csv.fail(csv.line(),
+                     log::cat("column leg: '", row[0], "' is not a leg number (", kLegNumberRange.describe(), ")"));
+        l.leg = static_cast<int>(id);
+        l.t_start = csv.number(row[1], 1, kStampRange);
+        l.t_end = csv.number(row[2], 2, kStampRange);
+        if (l.t_end <= l.t_start) csv.fail(csv.line(), "t_end is not after t_start");
+        if (!legs.empty() && l.t_start < legs.back().t_start) csv.fail(csv.line(), "legs must be sorted by t_start");
+        legs.push_back(l);
+    }
+    return legs;
+}
+
+}  // namespace
+
 Flight read_flight(const std::string& dir) {
     const fs::path root(dir);
     std::error_code ec;
@@ -291,79 +369,9 @@ Flight read_flight(const std::string& dir) {
         throw InputError(log::cat(dir, ": not a flight folder (", ec ? ec.message() : "no such directory", ")"));
     Flight f;
     f.meta = read_meta(root / "meta.json");
-
-    {
-        CsvReader csv(slurp(root / "wrench.csv"), (root / "wrench.csv").string());
-        csv.expect_header(wrench_columns());
-        std::vector<std::string_view> row;
-        while (csv.next(row)) {
-            WrenchSample s;
-            s.t = csv.number(row[0], 0, kStampRange);
-            for (std::size_t i = 0; i < 6; ++i) s.w[i] = csv.number(row[i + 1], i + 1, axis_range(i));
-            if (!f.wrench.empty() && s.t < f.wrench.back().t) {
-                csv.fail(csv.line(),
-                         log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
-            }
-            f.wrench.push_back(s);
-        }
-        if (f.wrench.empty()) csv.fail(1, "no samples");
-    }
-    {
-        CsvReader csv(slurp(root / "poses.csv"), (root / "poses.csv").string());
-        csv.expect_header({"t", "body", "n", "e", "d", "qw", "qx", "qy", "qz"});
-        std::vector<std::string_view> row;
-        while (csv.next(row)) {
-            PoseSample s;
-            s.t = csv.number(row[0], 0, kStampRange);
-            const std::string name(row[1]);
-            int body = f.find_body(name);  // one look-up per row: a new name is checked, then added
-            if (body < 0) {
-                if (const auto problem = body_name_problem(name); !problem.empty())
-                    csv.fail(csv.line(), "column body: " + problem);
-                if (f.bodies.size() >= kMaxBodies)
-                    csv.fail(csv.line(), log::cat("column body: a flight holds at most ", kMaxBodies, " bodies"));
-                body = f.body_index(name);
-            }
-            s.body = static_cast<std::uint16_t>(body);
-            for (std::size_t i = 0; i < 3; ++i) s.p[i] = csv.number(row[i + 2], i + 2, kPositionRange);
-            for (std::size_t i = 0; i < 4; ++i) s.q[i] = csv.number(row[i + 5], i + 5, kQuaternionRange);
-            const double norm = std::sqrt(s.q[0] * s.q[0] + s.q[1] * s.q[1] + s.q[2] * s.q[2] + s.q[3] * s.q[3]);
-            if (std::abs(norm - 1.0) > 1e-3) csv.fail(csv.line(), log::cat("quaternion norm ", norm, " is not 1"));
-            if (!f.poses.empty() && s.t < f.poses.back().t) {
-                csv.fail(csv.line(),
-                         log::cat("t = ", row[0], " is earlier than the row before (rows must be sorted by t)"));
-            }
-            f.poses.push_back(s);
-        }
-        if (f.poses.empty()) csv.fail(1, "no samples");
-        if (f.find_body(f.meta.sufferer) < 0) {
-            csv.fail(1, log::cat("the sufferer '", f.meta.sufferer, "' named in meta.json has no pose"));
-        }
-        for (const auto& n : f.meta.neighbours) {
-            if (f.find_body(n) < 0) csv.fail(1, log::cat("neighbour '", n, "' named in meta.json has no pose"));
-        }
-    }
-    if (present((root / "legs.csv").string())) {
-        CsvReader csv(slurp(root / "legs.csv"), (root / "legs.csv").string());
-        csv.expect_header({"leg", "t_start", "t_end"});
-        std::vector<std::string_view> row;
-        std::vector<Leg> legs;
-        while (csv.next(row)) {
-            Leg l;
-            const double id = csv.number(row[0], 0, kLegNumberRange);
-            if (id != std::floor(id))
-                csv.fail(csv.line(),
-                         log::cat("column leg: '", row[0], "' is not a leg number (", kLegNumberRange.describe(), ")"));
-            l.leg = static_cast<int>(id);
-            l.t_start = csv.number(row[1], 1, kStampRange);
-            l.t_end = csv.number(row[2], 2, kStampRange);
-            if (l.t_end <= l.t_start) csv.fail(csv.line(), "t_end is not after t_start");
-            if (!legs.empty() && l.t_start < legs.back().t_start)
-                csv.fail(csv.line(), "legs must be sorted by t_start");
-            legs.push_back(l);
-        }
-        f.legs = std::move(legs);
-    }
+    read_wrench(root, f);
+    read_poses(root, f);
+    if (present((root / "legs.csv").string())) f.legs = read_legs(root);
     require_dense(f, dir);
     if (present((root / "reference.csv").string()) || f.meta.reference) {
         if (!f.meta.reference)
@@ -487,151 +495,6 @@ void write_flight(const Flight& f, const std::string& dir) {
     for (const auto& s : f.wrench) w.wrench(s);
     for (const auto& s : f.poses) w.pose(s.t, f.bodies.at(s.body), s.p, s.q);
     w.close(f.meta, f.legs, f.reference);
-}
-
-std::array<double, 3> Track::position_at(double time) const {
-    if (t.empty()) return {0, 0, 0};
-    if (time <= t.front()) return p.front();
-    if (time >= t.back()) return p.back();
-    const auto it = std::upper_bound(t.begin(), t.end(), time);
-    const std::size_t i = static_cast<std::size_t>(it - t.begin());
-    const double a = (time - t[i - 1]) / (t[i] - t[i - 1]);
-    return {p[i - 1][0] + a * (p[i][0] - p[i - 1][0]), p[i - 1][1] + a * (p[i][1] - p[i - 1][1]),
-            p[i - 1][2] + a * (p[i][2] - p[i - 1][2])};
-}
-
-std::array<double, 3> Track::velocity_at(double time, double h) const {
-    const auto a = position_at(time - h), b = position_at(time + h);
-    return {(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
-}
-
-std::vector<Track> tracks(const Flight& f) {
-    std::vector<Track> out(f.bodies.size());
-    for (const auto& s : f.poses) {
-        auto& tr = out[s.body];
-        tr.t.push_back(s.t);
-        tr.p.push_back(s.p);
-        tr.q.push_back(s.q);
-    }
-    return out;
-}
-
-namespace {
-std::array<double, 3> centroid_at(const std::vector<const Track*>& ts, double t) {
-    std::array<double, 3> c{0, 0, 0};
-    for (const auto* tr : ts) {
-        const auto p = tr->position_at(t);
-        for (std::size_t a = 0; a < 3; ++a) c[a] += p[a] / static_cast<double>(ts.size());
-    }
-    return c;
-}
-}  // namespace
-
-std::vector<Leg> find_legs(const Flight& f) {
-    const auto trs = tracks(f);
-    std::vector<const Track*> ns;
-    for (const auto& name : f.meta.neighbours) {
-        const int b = f.find_body(name);
-        if (b >= 0 && !trs[static_cast<std::size_t>(b)].t.empty()) ns.push_back(&trs[static_cast<std::size_t>(b)]);
-    }
-    std::vector<Leg> legs;
-    if (ns.empty()) return legs;
-    const double t0 = ns.front()->t.front(), t1 = ns.front()->t.back();
-    constexpr double dt = 0.05, h = 0.1;
-    double start = -1;
-    std::array<double, 3> dir{0, 0, 0};
-    auto close = [&](double t) {
-        if (start >= 0 && t - start >= 2.0) legs.push_back({static_cast<int>(legs.size()), start, t});
-        start = -1;
-    };
-    for (double t = t0 + h; t < t1 - h; t += dt) {
-        const auto a = centroid_at(ns, t - h), b = centroid_at(ns, t + h);
-        const std::array<double, 3> v{(b[0] - a[0]) / (2 * h), (b[1] - a[1]) / (2 * h), (b[2] - a[2]) / (2 * h)};
-        const double speed = std::hypot(v[0], v[1]);
-        const bool moving = speed > 0.25 && std::abs(v[2]) < 0.1;
-        if (moving && start >= 0) {  // the same leg only while heading and speed hold
-            const double cosang = (v[0] * dir[0] + v[1] * dir[1]) / speed;
-            if (cosang < 0.98 || std::abs(speed - dir[2]) > 0.15 * dir[2]) close(t);
-        }
-        if (moving && start < 0) {
-            start = t;
-            dir = {v[0] / speed, v[1] / speed, speed};
-        }
-        if (!moving) close(t);
-    }
-    close(t1);
-    return legs;
-}
-
-const char* to_string(BlockKind k) {
-    switch (k) {
-        case BlockKind::legs: return "legs";
-        case BlockKind::encounters: return "encounters";
-        case BlockKind::time: return "time";
-    }
-    return "?";
-}
-
-namespace {
-
-// The times of closest approach: per stretch where some neighbour is within its radius of the
-// sufferer horizontally, the moment the (radius-normalised) distance is smallest.
-std::vector<double> closest_approaches(const Flight& f, const std::vector<double>& radius, double t0, double t1) {
-    const auto trs = tracks(f);
-    const Track& suf = trs[static_cast<std::size_t>(f.find_body(f.meta.sufferer))];
-    std::vector<std::pair<const Track*, double>> ns;
-    for (std::size_t j = 0; j < f.meta.neighbours.size() && j < radius.size(); ++j) {
-        const int b = f.find_body(f.meta.neighbours[j]);
-        if (b >= 0 && !trs[static_cast<std::size_t>(b)].t.empty())
-            ns.emplace_back(&trs[static_cast<std::size_t>(b)], radius[j]);
-    }
-    std::vector<double> out;
-    constexpr double dt = 0.02;
-    double best = INFINITY, best_t = 0;
-    for (double t = t0; t <= t1; t += dt) {
-        const auto s = suf.position_at(t);
-        double d = INFINITY;
-        for (const auto& [tr, r] : ns) {
-            const auto p = tr->position_at(t);
-            d = std::min(d, std::hypot(p[0] - s[0], p[1] - s[1]) / r);
-        }
-        if (d < 1 && d < best) best = d, best_t = t;
-        if (d >= 1 && std::isfinite(best)) {
-            out.push_back(best_t);
-            best = INFINITY;
-        }
-    }
-    if (std::isfinite(best)) out.push_back(best_t);
-    return out;
-}
-
-}  // namespace
-
-Blocks find_blocks(const Flight& f, int min_blocks, const std::vector<double>& encounter_radius_m) {
-    Blocks b;
-    b.blocks = f.legs ? *f.legs : find_legs(f);
-    if (b.blocks.size() >= static_cast<std::size_t>(min_blocks)) return b;
-    b.blocks.clear();
-    const int suf = f.find_body(f.meta.sufferer);
-    if (suf < 0 || f.poses.empty()) return b;
-    double t0 = INFINITY, t1 = -INFINITY;
-    for (const auto& p : f.poses)
-        if (p.body == suf) t0 = std::min(t0, p.t), t1 = std::max(t1, p.t);
-    if (!(t1 > t0)) return b;
-    const auto peaks = closest_approaches(f, encounter_radius_m, t0, t1);
-    if (peaks.size() >= static_cast<std::size_t>(min_blocks)) {
-        b.kind = BlockKind::encounters;
-        for (std::size_t k = 0; k < peaks.size(); ++k) {
-            const double a = k == 0 ? t0 : 0.5 * (peaks[k - 1] + peaks[k]);
-            const double e = k + 1 == peaks.size() ? t1 : 0.5 * (peaks[k] + peaks[k + 1]);
-            b.blocks.push_back({static_cast<int>(k), a, e});
-        }
-        return b;
-    }
-    b.kind = BlockKind::time;
-    const int n = std::max(2 * min_blocks, static_cast<int>(std::ceil((t1 - t0) / kTimeBlock_s)));
-    for (int k = 0; k < n; ++k) b.blocks.push_back({k, t0 + (t1 - t0) * k / n, t0 + (t1 - t0) * (k + 1) / n});
-    return b;
 }
 
 }  // namespace dw::flight

@@ -18,6 +18,9 @@ namespace dw::flight {
 inline constexpr const char* kFormat = "downwash-flight/1";
 inline constexpr Range kStandHeightRange{0.1, 10, "m"};
 inline constexpr std::array<const char*, 6> kAxes = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
+// A wrench (N, N·m) in kAxes' order, and a value per axis of one (a noise floor, an error).
+using Wrench6 = std::array<double, 6>;
+using AxisValues = std::array<double, 6>;
 // kAxes for messages: "f_n, f_e, f_d, m_roll, m_pitch or m_yaw".
 std::string axis_list();
 // wrench.csv's columns: t, then kAxes.
@@ -171,36 +174,5 @@ private:
     std::string row_;
     std::size_t wrench_rows_ = 0, pose_rows_ = 0;
 };
-
-// Per-body pose tracks, for lookup by time.
-struct Track {
-    std::vector<double> t;
-    std::vector<std::array<double, 3>> p;
-    std::vector<std::array<double, 4>> q;
-    // Linear interpolation (clamped at the ends) of the position at time t.
-    std::array<double, 3> position_at(double time) const;
-    // Central difference of the interpolated position over ±half_window_s (±20 ms spans several
-    // 180 Hz poses, so mocap noise is not differentiated sample by sample).
-    std::array<double, 3> velocity_at(double time, double half_window_s = 0.02) const;
-};
-std::vector<Track> tracks(const Flight& flight);  // indexed like Flight::bodies
-
-// Finds measurement legs in a flight without legs.csv: stretches where the neighbours' centroid
-// moves horizontally at a steady speed (> 0.25 m/s) for at least 2 s.
-std::vector<Leg> find_legs(const Flight& f);
-
-// Cross-validation blocks. A flight flown on straight legs uses its legs. A flight without them
-// (a swap, a random walk, another lab's log) is split by encounter: each pass of a neighbour
-// within its encounter radius of the sufferer horizontally is one block, the flight cut halfway
-// between successive closest approaches. Too few encounters: equal stretches of time.
-enum class BlockKind { legs, encounters, time };
-const char* to_string(BlockKind k);
-struct Blocks {
-    BlockKind kind = BlockKind::legs;
-    std::vector<Leg> blocks;  // numbered from 0, in time order
-};
-inline constexpr double kTimeBlock_s = 4.0;  // the longest time block when splitting by time
-// encounter_radius_m: per neighbour of meta.json, in its order.
-Blocks find_blocks(const Flight& f, int min_blocks, const std::vector<double>& encounter_radius_m);
 
 }  // namespace dw::flight

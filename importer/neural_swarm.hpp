@@ -32,6 +32,9 @@ struct VehicleLog {
     std::string where(std::size_t sample) const;  // "file:line" or "file: byte N"
 };
 
+// The binary logs' field of the authors' onboard interaction network's Fa_z (gram-force, z up).
+inline constexpr const char* kFazField = "ctrlFa.Faz";
+
 // Reads a CSV log (`*.csv`) or a binary log (no extension). Throws dw::InputError with the file,
 // the line or byte offset and the problem.
 VehicleLog read_neural_swarm_log(const std::string& path);

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "physics/config.hpp"
 
@@ -22,7 +23,7 @@ inline constexpr int kMaxNeighbours = 3;
 inline constexpr int kStateSize = 6;  // dn de dd dvn dve dvd
 
 using RelState = std::array<double, kStateSize>;
-using Wrench6 = std::array<double, 6>;  // f_n f_e f_d m_roll m_pitch m_yaw
+using flight::Wrench6;
 
 // No prediction: a model that cannot say anything about a sample (the reference where a flight has none).
 inline constexpr Wrench6 kNoPrediction{

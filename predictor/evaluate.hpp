@@ -22,7 +22,7 @@ struct ArenaOptions {
     double cell_m = 0.1;
 };
 
-using AxisValues = std::array<double, 6>;
+using flight::AxisValues;
 
 // The model's prediction for one sample of `data` (the physics uses the sample's source's bodies).
 Wrench6 predict(const ForceModel& model, const Dataset& data, const Sample& s);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 #include "core/errors.hpp"
@@ -92,14 +93,12 @@ std::string describe_split(const Dataset& all, const std::vector<std::string>& u
     return log::cat("blocks by block % ", kSplitPeriod, " (== 0 held out, == 1 validation, else training); ", blocks);
 }
 
-}  // namespace
-
-RealResult run_real(const RealOptions& o) {
-    auto say = [&](const std::string& line) {
-        if (o.progress) o.progress(line);
-    };
-    StagedFolder staged(o.out_dir);  // models, tables and map appear together, or not at all
-    const fs::path out(staged.path()), final_out(o.out_dir);
+// Every flight of --data read, and split: by blocks, or leave-trials-out when --unseen names some.
+struct Loaded {
+    Dataset all;
+    Split split;
+};
+Loaded load_and_split(const RealOptions& o) {
     Dataset all, seen, unseen;
     DatasetOptions dopt;
     dopt.physics = o.physics;
@@ -112,10 +111,82 @@ RealResult run_real(const RealOptions& o) {
     for (const auto& u : o.unseen)
         if (std::find(o.data.begin(), o.data.end(), u) == o.data.end())
             throw InputError(log::cat("--unseen ", u, ": not among --data (list every flight in --data)"));
-    const Split split = o.unseen.empty() ? split_by_leg(all) : split_by_trial(seen, unseen);
+    Split split = o.unseen.empty() ? split_by_leg(all) : split_by_trial(seen, unseen);
     require_samples(all, split.test, "held-out");
     require_samples(all, split.train, "training");
     require_samples(all, split.validation, "validation");
+    return {std::move(all), std::move(split)};
+}
+
+// The models compared, in the table's order: the physics, the naive sum (two-vehicle flights
+// only), learnt linear and Deep Sets, the same two on what the physics leaves, and the
+// recording's own reference prediction where it has one.
+struct Models {
+    explicit Models(const physics::PhysicsConfig& c) : physics(c) {}
+    PhysicsModel physics;
+    std::unique_ptr<LearntModel> naive, linear, deep, linear_c, deep_c;
+    std::unique_ptr<CorrectedModel> linear_p, deep_p;
+    ReferenceModel reference;
+    std::vector<const ForceModel*> list;
+};
+
+void train_models(Models& m, const Split& split, const TrainPlan& plan, const fs::path& dir, bool& naive,
+                  const std::function<void(const std::string&)>& say) {
+    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va,
+                     const LearntModel* baseline = nullptr, const std::string& file_suffix = "") {
+        return train_and_save(kind, tr, va, plan, (dir / (kind + file_suffix + ".json")).string(), baseline);
+    };
+    m.list = {&m.physics};
+    const Dataset two_tr = split.train.from_two_vehicle_flights(), two_va = split.validation.from_two_vehicle_flights();
+    naive = !two_tr.samples.empty() && !two_va.samples.empty();
+    if (naive) {
+        m.naive = train("naive_linear", two_tr, two_va);
+        m.list.push_back(m.naive.get());
+    } else {
+        say("no two-vehicle flight among the data: the naive linear model is not trained");
+    }
+    m.linear = train("learnt_linear", split.train, split.validation);
+    m.deep = train("deep_sets", split.train, split.validation, m.linear.get());
+    m.list.push_back(m.linear.get());
+    m.list.push_back(m.deep.get());
+    // Physics-informed: the same two trained on what the (calibrated) physics leaves, serving physics + correction.
+    say("training on what the physics leaves");
+    const Dataset left_tr = less_physics(split.train, m.physics), left_va = less_physics(split.validation, m.physics);
+    m.linear_c = train("learnt_linear", left_tr, left_va, nullptr, kOnPhysics);
+    m.deep_c = train("deep_sets", left_tr, left_va, m.linear_c.get(), kOnPhysics);
+    m.linear_p = std::make_unique<CorrectedModel>(m.physics, *m.linear_c);
+    m.deep_p = std::make_unique<CorrectedModel>(m.physics, *m.deep_c);
+    m.list.push_back(m.linear_p.get());
+    m.list.push_back(m.deep_p.get());
+}
+
+std::string table_markdown(const Dataset& all, const RealOptions& o, const RealResult& r, const std::string& notes) {
+    std::string md = "# Force models on recorded flights\n\n";
+    for (const auto& s : all.sources)
+        md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
+                       flight::to_string(s.blocks), ")\n");
+    md += log::cat("\nSplit: ", describe_split(all, o.unseen), ". Training ", r.train, ", validation ", r.validation,
+                   ", held out ", r.test, " samples. The naive linear model is trained on two-vehicle flights only",
+                   r.naive ? "" : " (none here: not trained)",
+                   "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters. "
+                   "physics+learnt_linear and physics+deep_sets are the physics plus those models trained on what it "
+                   "leaves (recorded − physics; their files models/*_on_physics.json are the corrections alone).\n\n");
+    md += notes;
+    md += poses_note(all);
+    md += to_markdown(r.table, {});
+    md += "\n![f_d by relative position](map_f_d.png)\n";
+    return md;
+}
+
+}  // namespace
+
+RealResult run_real(const RealOptions& o) {
+    auto say = [&](const std::string& line) {
+        if (o.progress) o.progress(line);
+    };
+    StagedFolder staged(o.out_dir);  // models, tables and map appear together, or not at all
+    const fs::path out(staged.path()), final_out(o.out_dir);
+    const auto [all, split] = load_and_split(o);
     RealResult r;
     r.train = split.train.samples.size(), r.validation = split.validation.samples.size(),
     r.test = split.test.samples.size();
@@ -129,58 +200,18 @@ RealResult run_real(const RealOptions& o) {
                          .split = describe_split(all, o.unseen),
                          .progress = o.progress,
                          .stop = o.stop};
-    auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va,
-                     const LearntModel* baseline = nullptr, const std::string& file_suffix = "") {
-        return train_and_save(kind, tr, va, plan, (out / "models" / (kind + file_suffix + ".json")).string(), baseline);
-    };
-    const PhysicsModel physics(o.physics);
-    std::vector<const ForceModel*> models{&physics};
-    std::unique_ptr<LearntModel> naive;
-    const Dataset two_tr = split.train.from_two_vehicle_flights(), two_va = split.validation.from_two_vehicle_flights();
-    r.naive = !two_tr.samples.empty() && !two_va.samples.empty();
-    if (r.naive) {
-        naive = train("naive_linear", two_tr, two_va);
-        models.push_back(naive.get());
-    } else {
-        say("no two-vehicle flight among the data: the naive linear model is not trained");
-    }
-    const auto linear = train("learnt_linear", split.train, split.validation);
-    const auto deep = train("deep_sets", split.train, split.validation, linear.get());
-    models.push_back(linear.get());
-    models.push_back(deep.get());
-    // Physics-informed: the same two trained on what the (calibrated) physics leaves, serving physics + correction.
-    say("training on what the physics leaves");
-    const Dataset left_tr = less_physics(split.train, physics), left_va = less_physics(split.validation, physics);
-    const auto linear_c = train("learnt_linear", left_tr, left_va, nullptr, kOnPhysics);
-    const auto deep_c = train("deep_sets", left_tr, left_va, linear_c.get(), kOnPhysics);
-    const CorrectedModel linear_p(physics, *linear_c), deep_p(physics, *deep_c);
-    models.push_back(&linear_p);
-    models.push_back(&deep_p);
-    const ReferenceModel reference;
+    Models m(o.physics);
+    train_models(m, split, plan, out / "models", r.naive, say);
     std::vector<std::string> missing;
     const std::string references = references_of(split.test, missing);
-    if (!references.empty()) models.push_back(&reference);
+    if (!references.empty()) m.list.push_back(&m.reference);
     write_file((out / "models" / "physics.yaml").string(), physics::to_yaml(o.physics));
 
     say("comparing on the held-out blocks");
-    r.table = compare(models, split.test);
-    draw_maps(models, split.test, (out / "map_f_d.png").string());
+    r.table = compare(m.list, split.test);
+    draw_maps(m.list, split.test, (out / "map_f_d.png").string());
     r.map_path = (final_out / "map_f_d.png").string();
-    std::string md = "# Force models on recorded flights\n\n";
-    for (const auto& s : all.sources)
-        md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
-                       flight::to_string(s.blocks), ")\n");
-    md += log::cat("\nSplit: ", describe_split(all, o.unseen), ". Training ", r.train, ", validation ", r.validation,
-                   ", held out ", r.test, " samples. The naive linear model is trained on two-vehicle flights only",
-                   r.naive ? "" : " (none here: not trained)",
-                   "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters. "
-                   "physics+learnt_linear and physics+deep_sets are the physics plus those models trained on what it "
-                   "leaves (recorded − physics; their files models/*_on_physics.json are the corrections alone).\n\n");
-    md += reference_note(references, missing);
-    md += poses_note(all);
-    md += to_markdown(r.table, {});
-    md += "\n![f_d by relative position](map_f_d.png)\n";
-    write_file((out / "table.md").string(), md);
+    write_file((out / "table.md").string(), table_markdown(all, o, r, reference_note(references, missing)));
     write_file((out / "table.csv").string(), to_csv(r.table));
     staged.commit();
     r.markdown_path = (final_out / "table.md").string();

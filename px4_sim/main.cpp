@@ -40,6 +40,40 @@ std::unique_ptr<dw::natnet::NatNetEmulator> motion_capture(
     return std::make_unique<dw::natnet::NatNetEmulator>(o);
 }
 
+// What the simulated PX4s are told to do wrong (0 s: never).
+struct Faults {
+    std::string refuse_arm;
+    double lose_after = 0, kill_after = 0, low_battery_after = 0;
+};
+
+std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::Participant& lab,
+                                                                      dw::dds::ProcessCli& cli,
+                                                                      const dw::planner::Px4Options& options,
+                                                                      const Faults& faults, bool publish_state,
+                                                                      dw::px4sim::PositionSource source) {
+    std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> sims;
+    for (std::size_t i = 0; i < options.vehicles.size(); ++i) {
+        const auto& v = options.vehicles[i];
+        dw::px4sim::SimulatedPx4Options o;
+        o.version = options.version;
+        o.ns = v.ns;
+        o.system_id = v.system_id;
+        o.vehicle = v.name;
+        o.frame = dw::planner::local_frame(v);
+        o.parked = dw::physics::Vec3(kParkedNorth_m, kParkedEast0_m + kParkedSpacing_m * static_cast<double>(i), 0);
+        o.refuse_arm = faults.refuse_arm;
+        o.publish_state = publish_state;
+        o.position_source = source;
+        if (faults.lose_after > 0) o.lose_offboard_after_s = faults.lose_after;
+        if (faults.kill_after > 0) o.kill_after_s = faults.kill_after;
+        if (faults.low_battery_after > 0) o.low_battery_after_s = faults.low_battery_after;
+        sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));
+        std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID "
+                  << v.system_id << ", topics " << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;
+    }
+    return sims;
+}
+
 int run(int argc, char** argv) {
     dw::dds::ProcessCli cli(
         "dw-px4-sim: simulated PX4 vehicles (uXRCE-DDS topics, Commander rules) for dw-planner --vehicles px4");
@@ -89,26 +123,8 @@ int run(int argc, char** argv) {
                                                  : dw::planner::load_px4_options(px4_file, names);
     dw::dds::Participant lab(cli.dds(), "px4_sim", cli.clock());
     dw::dds::Heartbeat heartbeat(lab);  // the planner and dw-lab wait for it (--wait-for px4_sim)
-    std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> sims;
-    for (std::size_t i = 0; i < options.vehicles.size(); ++i) {
-        const auto& v = options.vehicles[i];
-        dw::px4sim::SimulatedPx4Options o;
-        o.version = options.version;
-        o.ns = v.ns;
-        o.system_id = v.system_id;
-        o.vehicle = v.name;
-        o.frame = dw::planner::local_frame(v);
-        o.parked = dw::physics::Vec3(kParkedNorth_m, kParkedEast0_m + kParkedSpacing_m * static_cast<double>(i), 0);
-        o.refuse_arm = refuse_arm;
-        o.publish_state = natnet_port == 0 && !no_motion_capture;
-        o.position_source = source;
-        if (lose_after > 0) o.lose_offboard_after_s = lose_after;
-        if (kill_after > 0) o.kill_after_s = kill_after;
-        if (low_battery_after > 0) o.low_battery_after_s = low_battery_after;
-        sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));
-        std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID "
-                  << v.system_id << ", topics " << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;
-    }
+    Faults faults{refuse_arm, lose_after, kill_after, low_battery_after};
+    const auto sims = start_vehicles(lab, cli, options, faults, natnet_port == 0 && !no_motion_capture, source);
     const auto mocap = natnet_port == 0 ? nullptr : motion_capture(natnet_port, stand_height_m, names, sims);
     if (mocap) std::cout << "motion capture: emulated NatNet server on 127.0.0.1:" << mocap->port() << std::endl;
     heartbeat.set_state(dw::msg::PROC_RUNNING);

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Lists C++ functions longer than a limit, longest first; exits 1 when any is (CI runs it).
+"""Lists C++ functions longer than a limit, longest first, and source files (.cpp) longer than
+another; exits 1 when any is (CI runs it).
 
-    scripts/long_functions.py [--limit 100] [--root .] [--all]
+    scripts/long_functions.py [--limit 80] [--file-limit 600] [--root .] [--all]
 
 A function is a brace block opened at namespace or class level after a parameter list (with its
 qualifiers, trailing return type or constructor initialisers); its length runs from the line of
@@ -95,25 +96,33 @@ def functions(text: str):
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--limit", type=int, default=100, help="longest allowed function, in lines")
+    p.add_argument("--limit", type=int, default=80, help="longest allowed function, in lines")
+    p.add_argument("--file-limit", type=int, default=600, help="longest allowed .cpp file, in lines")
     p.add_argument("--root", default=str(pathlib.Path(__file__).resolve().parent.parent))
     p.add_argument("--all", action="store_true", help="list every function over 60 lines, not only those over the limit")
     a = p.parse_args()
     root = pathlib.Path(a.root)
-    rows = []
+    rows, long_files = [], []
     for path in sorted(root.rglob("*")):
         rel = path.relative_to(root)
         if path.suffix not in SOURCE_SUFFIXES or any(part in SKIPPED_FOLDERS or part.startswith("build") for part in rel.parts):
             continue
-        for name, first, last in functions(path.read_text(errors="replace")):
+        text = path.read_text(errors="replace")
+        for name, first, last in functions(text):
             rows.append((last - first + 1, f"{rel}:{first}", name))
+        lines = text.count("\n")
+        if path.suffix == ".cpp" and lines > a.file_limit:
+            long_files.append((lines, str(rel)))
     rows.sort(reverse=True)
     shown = [r for r in rows if r[0] > (60 if a.all else a.limit)]
     for length, where, name in shown:
-        print(f"{length:5d}  {where}  {name}")
+        print(f"{length:5d}  {where}  {name}", flush=True)
+    for lines, rel in sorted(long_files, reverse=True):
+        print(f"{lines:5d}  {rel}  (file)", flush=True)
     over = sum(1 for r in rows if r[0] > a.limit)
-    print(f"{len(rows)} functions; {over} over {a.limit} lines", file=sys.stderr)
-    return 1 if over else 0
+    print(f"{len(rows)} functions; {over} over {a.limit} lines; {len(long_files)} .cpp files over {a.file_limit} lines",
+          file=sys.stderr)
+    return 1 if over or long_files else 0
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@
 #include "analysis/explain.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
+#include "core/stats.hpp"
 #include "flight/flight.hpp"
 #include "importer/neural_swarm.hpp"
 #include "physics/config.hpp"
@@ -32,11 +33,6 @@ VehicleClass small_class() {
     k.drag_coefficient = 0.9;
     k.kv_omega_n_per_mps = 0.02;
     return k;
-}
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
 }
 
 }  // namespace
@@ -185,7 +181,7 @@ TEST(RealCalibration, TheSharedTrialsLeftOutInTurnArePredictedBetterAndTheShippe
     EXPECT_EQ(r.trials.size(), o.flights.size()) << "every flight is a trial of its own";
     std::vector<double> before, heldout;
     for (const auto& t : r.trials) before.push_back(t.rmse_before), heldout.push_back(t.rmse_heldout);
-    EXPECT_LT(median(heldout), 0.7 * median(before)) << dw::read_file(r.report_path);
+    EXPECT_LT(dw::median(heldout), 0.7 * dw::median(before)) << dw::read_file(r.report_path);
     for (const auto& p : r.parameters)
         EXPECT_TRUE(std::isfinite(p.value) && p.lo <= p.value && p.value <= p.hi) << p.vehicle_class << " " << p.name;
     const PhysicsConfig shipped = load_physics(dw::test::crazyflie_physics());

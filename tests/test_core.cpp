@@ -1,4 +1,5 @@
 // Unit tests of the core library's pieces that other tests do not reach on their own.
+#include <random>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -89,4 +90,26 @@ TEST(Stats, EffectiveCountCountsThePiecesThatCarryTheEvidence) {
                                    88.98, -2.02, -6.38, 96.41, -0.67, -19.96, 28.52,  -15.71, 48.99, -0.26};
     EXPECT_NEAR(dw::effective_count(swap), 6.64, 0.01);  // the swap's concealed force scale (docs/REAL.md)
     EXPECT_LT(dw::paired_z(swap), std::sqrt(dw::effective_count(swap)));
+}
+
+// The robust summaries the explainer, the calibration and the importer share (one rule each).
+TEST(Stats, MedianAndTheNoiseOfSuccessiveDifferences) {
+    EXPECT_DOUBLE_EQ(dw::median({3, 1, 2}), 2.0);
+    EXPECT_DOUBLE_EQ(dw::median({4, 1, 3, 2}), 2.5);  // an even count: the middle pair's mean
+    EXPECT_DOUBLE_EQ(dw::median({}), 0.0);
+    // White noise of sd 0.5 on a slow ramp, with a few spikes: the ramp and the spikes do not count.
+    std::mt19937 rng(7);
+    std::normal_distribution<double> noise(0.0, 0.5);
+    std::vector<double> x;
+    for (int i = 0; i < 20000; ++i) x.push_back(1e-4 * i + noise(rng) + (i % 1000 == 0 ? 50.0 : 0.0));
+    EXPECT_NEAR(dw::sd_from_differences(x), 0.5, 0.02);
+    EXPECT_DOUBLE_EQ(dw::sd_from_differences(std::vector<double>{1.0}), 0.0);
+}
+
+TEST(Stats, HuberCostIsQuadraticInsideAndLinearOutside) {
+    EXPECT_DOUBLE_EQ(dw::huber_cost(4.0, 3.0), 4.0);             // |r| = 2 < 3
+    EXPECT_DOUBLE_EQ(dw::huber_cost(25.0, 3.0), 2 * 3 * 5 - 9);  // |r| = 5 > 3
+    EXPECT_DOUBLE_EQ(dw::huber_cost(9.0, 3.0), 9.0);             // continuous at the edge
+    EXPECT_DOUBLE_EQ(dw::ar1_independent_fraction(0.0), 1.0);
+    EXPECT_NEAR(dw::ar1_independent_fraction(0.9), 0.1 / 1.9, 1e-12);
 }

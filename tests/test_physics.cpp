@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "core/errors.hpp"
+#include "flight/blocks.hpp"
 #include "physics/config.hpp"
 #include "physics/flight_sim.hpp"
 #include "physics/jet.hpp"

@@ -13,6 +13,7 @@
 
 #include "core/errors.hpp"
 #include "core/files.hpp"
+#include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "physics/flight_sim.hpp"
 #include "predictor/dataset.hpp"

@@ -12,6 +12,7 @@
 #include "analysis/proof.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
+#include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "analysis/calibrate.hpp"
 #include "importer/neural_swarm.hpp"

@@ -1,0 +1,82 @@
+#pragma once
+// The explainer's fitting layer: the data every stage reads, one effect's fit with Ceres, and the
+// model the candidates are scored against.
+//
+// Where the time goes: a flight's prediction under one set of parameters is a replay of the whole
+// flight (Replay::recorded: for a flow effect the physics along every recorded pose, for a
+// recording-side effect the sensor chain over the cached air). Ceres asks for one residual row at
+// a time, so Fit keeps the last kPredictionCache predictions: the P + 1 replays of a forward-
+// difference Jacobian are paid once and shared by every row. ExplainData::replays counts them.
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "analysis/effects.hpp"
+#include "analysis/replay.hpp"
+#include "physics/config.hpp"
+
+namespace dw::analysis {
+
+using flight::AxisValues;
+
+// Everything a fit needs: the data, which samples, the axes' scales.
+struct ExplainData {
+    const Replay& replay;
+    const std::vector<SampleInfo>& info;
+    AxisValues sigma;
+    std::vector<std::size_t> on_legs;  // sample indices on measurement legs
+    std::vector<Wrench6> buffeting;    // per sample: the lateral buffeting's standard deviation
+    std::size_t legs = 0;              // blocks that hold samples
+    double huber_delta = 3;            // noise floors: beyond it a residual counts linearly in the fits
+    mutable std::size_t replays = 0;   // predictions of the whole flight paid so far (see above)
+
+    // The flight as the recording sees it under physics c: one replay, counted.
+    std::vector<Wrench6> predict(const physics::PhysicsConfig& c) const;
+};
+
+// Sample i's squared residual on axis a in noise floors (0 on an axis that carries no measurement).
+double norm_sq(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a);
+// The sum of norm_sq over the samples on legs and every axis.
+double rss(const ExplainData& d, const std::vector<Wrench6>& pred);
+
+// A fit of one effect's parameters with the rest of the model fixed.
+class Fit {
+public:
+    Fit(const ExplainData& d, const physics::PhysicsConfig& base, const Effect& e) : d_(d), base_(base), e_(e) {}
+
+    // The flight predicted with the effect at values v (from the cache when it holds v).
+    const std::vector<Wrench6>& predict(const std::vector<double>& v);
+    // The Huber cost of rows at v, in noise floors.
+    double robust_cost(const std::vector<double>& v, const std::vector<std::size_t>& rows);
+    // Fits on rows from `start` (a grid search first when asked); returns the values and the
+    // covariance-based standard errors (inflated for autocorrelation by 1/sqrt(neff_factor)).
+    std::pair<std::vector<double>, std::vector<double>> solve(std::vector<double> start,
+                                                              const std::vector<std::size_t>& rows, bool grid,
+                                                              double neff_factor);
+    const ExplainData& data() const { return d_; }
+
+private:
+    static constexpr std::size_t kPredictionCache = 16;
+    const ExplainData& d_;
+    physics::PhysicsConfig base_;
+    Effect e_;
+    std::vector<std::pair<std::vector<double>, std::vector<Wrench6>>> cache_;
+};
+
+// The tare's own noise in each of the effect's parameters at v (see fit.cpp), for tare_samples
+// averaged samples.
+std::vector<double> tare_spread(const ExplainData& d, Fit& fit, const Effect& e, const std::vector<double>& v,
+                                std::size_t tare_samples);
+
+// The model the candidates are scored against: its physics, its prediction of the recording and
+// the autocorrelation of its residual.
+struct Baseline {
+    physics::PhysicsConfig physics;
+    std::vector<Wrench6> pred;
+    double factor = 1;  // effective-sample factor
+    double n_eff = 0;   // effective samples over every axis
+};
+Baseline baseline_of(const ExplainData& d, const physics::PhysicsConfig& c, std::vector<Wrench6> pred);
+Baseline baseline_of(const ExplainData& d, const physics::PhysicsConfig& c);
+
+}  // namespace dw::analysis

@@ -1,0 +1,72 @@
+#include "analysis/noise.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/stats.hpp"
+
+namespace dw::analysis {
+
+AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
+                    double tare_s) {
+    AxisValues sum{}, sq{};
+    double n = 0;
+    for (std::size_t i = 0; i < info.size(); ++i) {
+        if (info[i].near || r.stamps()[i] < r.stamps().front() + tare_s + kTareSettle_s) continue;
+        for (std::size_t a = 0; a < 6; ++a) {
+            const double x = r.measured()[i][a] - pred[i][a];
+            sum[a] += x;
+            sq[a] += x * x;
+        }
+        n += 1;
+    }
+    AxisValues s{};
+    for (std::size_t a = 0; a < 6; ++a) {
+        if (n >= kMinFarSamples) {
+            s[a] = std::sqrt(std::max(0.0, sq[a] / n - (sum[a] / n) * (sum[a] / n)));
+        } else {  // nobody is ever far: the spread of successive differences
+            std::vector<double> residual;
+            for (std::size_t i = 0; i < info.size(); ++i) residual.push_back(r.measured()[i][a] - pred[i][a]);
+            s[a] = sd_from_differences(residual);
+        }
+        s[a] = std::max(s[a], kMinNoiseFloor);
+    }
+    return s;
+}
+
+// Each sample's residual is divided by sqrt(sigma² + (2 I F)² + b²): the noise floor, the force
+// fluctuation of a jet whose speed fluctuates by the turbulence intensity I (F ∝ U², so
+// δF ≈ 2 I F) and the jets' lateral buffeting b.
+AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity) {
+    AxisValues e{};
+    for (auto i : d.on_legs)
+        for (std::size_t a = 0; a < 6; ++a) {
+            if (!d.replay.measured_axes()[a]) continue;
+            const double r = d.replay.measured()[i][a] - pred[i][a], turbulent = 2 * intensity * pred[i][a];
+            const double buffet = d.buffeting[i][a];
+            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent * turbulent + buffet * buffet);
+        }
+    for (auto& v : e) v = d.on_legs.empty() ? 0 : std::sqrt(v / static_cast<double>(d.on_legs.size()));
+    return e;
+}
+
+double largest(const AxisValues& v) { return *std::max_element(v.begin(), v.end()); }
+
+double neff_factor(const ExplainData& d, const std::vector<Wrench6>& pred) {
+    constexpr double kMaxRho = 0.98, kMinFraction = 0.01;
+    double num = 0, den = 0;
+    for (std::size_t k = 1; k < d.on_legs.size(); ++k) {
+        const auto i = d.on_legs[k], j = d.on_legs[k - 1];
+        if (i != j + 1) continue;
+        for (std::size_t a = 0; a < 6; ++a) {
+            const double ri = (d.replay.measured()[i][a] - pred[i][a]) / d.sigma[a];
+            const double rj = (d.replay.measured()[j][a] - pred[j][a]) / d.sigma[a];
+            num += ri * rj;
+            den += ri * ri;
+        }
+    }
+    const double rho = den > 0 ? std::clamp(num / den, 0.0, kMaxRho) : 0.0;
+    return std::clamp(ar1_independent_fraction(rho), kMinFraction, 1.0);
+}
+
+}  // namespace dw::analysis

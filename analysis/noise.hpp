@@ -1,0 +1,28 @@
+#pragma once
+// What noise alone leaves in a recording, for the explainer: the noise floor per axis, the
+// residual's size against noise and turbulence, and how many samples count as independent.
+#include <vector>
+
+#include "analysis/fit.hpp"
+
+namespace dw::analysis {
+
+// The noise floor per axis: the residual's spread where nobody is near (after the tare and
+// kTareSettle_s), or, when nobody ever is, from successive differences. At least kMinNoiseFloor.
+AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
+                    double tare_s);
+inline constexpr double kTareSettle_s = 0.5;
+inline constexpr double kMinNoiseFloor = 1e-4;     // N or N·m
+inline constexpr std::size_t kMinFarSamples = 30;  // fewer far samples: the differences' spread
+
+// The residual's RMS over the blocks against what noise and turbulence alone explain, per measured
+// axis (0 where not measured); about 1 when the physics is right (see noise.cpp).
+AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity);
+
+double largest(const AxisValues& v);
+
+// The fraction of the samples on legs that count as independent, from the lag-1 autocorrelation
+// of the normalised residual along legs.
+double neff_factor(const ExplainData& d, const std::vector<Wrench6>& pred);
+
+}  // namespace dw::analysis
