@@ -13,7 +13,7 @@
 
 #include "analysis/calibration_report.hpp"
 #include "analysis/explain.hpp"
-#include "analysis/replay.hpp"
+#include "analysis/resimulation.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
@@ -61,7 +61,7 @@ constexpr std::array<Knob, 4> kKnobs{{
 
 struct FlightData {
     std::string dir;
-    std::unique_ptr<Replay> replay;
+    std::unique_ptr<Resimulation> sim;
     std::size_t trial = 0;
     std::string pairing;
     std::vector<std::size_t> rows, fit_rows;  // near samples; every stride-th of them
@@ -145,11 +145,10 @@ public:
         parallel_for(use.size(), o_.jobs, [&](std::size_t k) {
             throw_if_stopped(o_.stop, "the calibration");
             const auto& fd = flights_[use[k]];
-            const auto pred = fd.replay->recorded(c);
+            const auto pred = fd.sim->recorded(c);
             auto& part = parts[k];
-            for (auto i : fit_rows ? fd.fit_rows : fd.rows)
-                part.push_back(fd.replay->measured()[i][kFd] - pred[i][kFd]);
-            if (fd.replay->flying()) {  // its residual's own zero: a nuisance of each flight
+            for (auto i : fit_rows ? fd.fit_rows : fd.rows) part.push_back(fd.sim->measured()[i][kFd] - pred[i][kFd]);
+            if (fd.sim->flying()) {  // its residual's own zero: a nuisance of each flight
                 const double bias = std::accumulate(part.begin(), part.end(), 0.0) / static_cast<double>(part.size());
                 for (double& v : part) v -= bias;
             }
@@ -176,7 +175,7 @@ private:
             const flight::Flight f = flight::read_flight(dir);
             FlightData d;
             d.dir = dir;
-            d.replay = std::make_unique<Replay>(f, config_);
+            d.sim = std::make_unique<Resimulation>(f, config_);
             describe_rows(f, d);
             const auto key = trial_key(f, dir);
             auto [it, added] = trial_of.try_emplace(key, trials_.size());
@@ -190,12 +189,12 @@ private:
     }
 
     void describe_rows(const flight::Flight& f, FlightData& d) const {
-        if (!d.replay->measured_axes()[kFd])
+        if (!d.sim->measured_axes()[kFd])
             throw InputError(log::cat(d.dir, ": wrench.csv carries no f_d measurement to calibrate on"));
         const auto blocks = flight::find_blocks(f, kBlocksWanted, physics::encounter_radii(f.meta, config_));
-        const auto info = describe(*d.replay, blocks);
+        const auto info = describe(*d.sim, blocks);
         for (std::size_t i = 0; i < info.size(); ++i) {
-            if (!info[i].near || !std::isfinite(d.replay->measured()[i][kFd])) continue;
+            if (!info[i].near || !std::isfinite(d.sim->measured()[i][kFd])) continue;
             if (d.rows.size() % static_cast<std::size_t>(o_.stride) == 0) d.fit_rows.push_back(i);
             d.rows.push_back(i);
             d.offset.push_back(info[i].offset);
@@ -309,12 +308,12 @@ std::vector<PairingSamples> samples_by_pairing(const Calibration& cal, const std
     const auto base = cal.config_of(x0), fitted = cal.config_of(x);
     for (const auto& fd : cal.flights()) {
         throw_if_stopped(o.stop, "the calibration");
-        const auto p0 = fd.replay->recorded(base), p1 = fd.replay->recorded(fitted);
+        const auto p0 = fd.sim->recorded(base), p1 = fd.sim->recorded(fitted);
         auto& s = by[fd.pairing];
         s.pairing = fd.pairing;
         for (std::size_t k = 0; k < fd.rows.size(); ++k) {
             const auto i = fd.rows[k];
-            s.rows.push_back({fd.offset[k], fd.above[k], fd.replay->measured()[i][kFd], p1[i][kFd], p0[i][kFd]});
+            s.rows.push_back({fd.offset[k], fd.above[k], fd.sim->measured()[i][kFd], p1[i][kFd], p0[i][kFd]});
         }
     }
     std::vector<PairingSamples> out;

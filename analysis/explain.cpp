@@ -19,19 +19,15 @@ namespace dw::analysis {
 
 namespace {
 
-// ---- explain(), stage by stage: replay -> locate -> screen -> cross-validate -> select -> report
+// ---- explain(), stage by stage: resimulate -> locate -> screen -> cross-validate -> select -> report
 
-// Replay and sample bookkeeping: the data every later stage reads. Throws dw::InputError when
+// Resimulation and sample bookkeeping: the data every later stage reads. Throws dw::InputError when
 // the flight has too few blocks for the folds.
-ExplainData prepare(const Replay& replay, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
+ExplainData prepare(const Resimulation& sim, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
                     const ExplainOptions& o, const std::vector<Wrench6>& base_pred) {
-    ExplainData d{replay,
-                  info,
-                  floor_of(replay, info, base_pred, o.physics.stand.tare_s),
-                  {},
-                  replay.buffeting_sigma(o.physics),
-                  0,
-                  o.huber_delta};
+    ExplainData d{
+        sim, info,         floor_of(sim, info, base_pred, o.physics.stand.tare_s), {}, sim.buffeting_sigma(o.physics),
+        0,   o.huber_delta};
     for (std::size_t i = 0; i < info.size(); ++i)
         if (info[i].leg >= 0) d.on_legs.push_back(i);
     std::set<int> leg_ids;
@@ -106,19 +102,19 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     };
     ExplainResult R;
     R.formation = f.meta.formation;
-    // Replay.
-    const Replay replay(f, o.physics);
+    // Resimulation.
+    const Resimulation sim(f, o.physics);
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
     R.blocks = blocks.kind;
     if (blocks.blocks.size() < static_cast<std::size_t>(o.folds))
         throw InputError(log::cat("poses.csv: ", blocks.blocks.size(), " cross-validation blocks (",
                                   flight::to_string(blocks.kind), ") in the flight; cross-validation needs at least ",
                                   o.folds));
-    const auto info = describe(replay, blocks);
-    say(log::cat("simulating the recorded flight: ", replay.stamps().size(), " wrench samples, ", replay.neighbours(),
+    const auto info = describe(sim, blocks);
+    say(log::cat("simulating the recorded flight: ", sim.stamps().size(), " wrench samples, ", sim.neighbours(),
                  " neighbours, ", blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
-    auto base_pred = replay.recorded(o.physics);
-    const ExplainData d = prepare(replay, info, blocks, o, base_pred);
+    auto base_pred = sim.recorded(o.physics);
+    const ExplainData d = prepare(sim, info, blocks, o, base_pred);
     const Baseline base = baseline_of(d, o.physics, std::move(base_pred));
     R.noise_floor = d.sigma;
     R.samples = d.on_legs.size();
@@ -133,8 +129,8 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     const Baseline final_model = select_effects(R, d, base, folds_of(d, o.folds), o, say, stand_in);
     conclude(R, d, base, final_model, stand_in, o, f.meta.formation);
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    R.replays = d.replays + 1;  // and the base model's, before the data
-    say(log::cat("done: ", R.replays, " replays of the flight in ", std::round(R.seconds * 10) / 10, " s"));
+    R.resimulations = d.resimulations + 1;  // and the base model's, before the data
+    say(log::cat("done: ", R.resimulations, " resimulations of the flight in ", std::round(R.seconds * 10) / 10, " s"));
     return R;
 }
 

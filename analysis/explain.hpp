@@ -1,5 +1,5 @@
 #pragma once
-// The mismatch explainer: replay a recorded flight through the physics, form residuals per axis,
+// The mismatch explainer: resimulate a recorded flight through the physics, form residuals per axis,
 // locate where they exceed the noise, fit each candidate effect with Ceres (robust loss) on
 // training legs and score it on held-out legs (blocked cross-validation by leg) and by BIC,
 // select effects forward, and report what was found (report.json per ../shared/FLIGHT_FORMAT.md,
@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "analysis/effects.hpp"
-#include "analysis/replay.hpp"
+#include "analysis/resimulation.hpp"
 #include "core/numbers.hpp"
 #include "flight/blocks.hpp"
 #include "flight/flight.hpp"
@@ -118,7 +118,7 @@ struct ExplainResult {
     std::size_t samples = 0, legs = 0;                   // samples in blocks, blocks holding samples
     flight::BlockKind blocks = flight::BlockKind::legs;  // what the cross-validation blocks are
     double seconds = 0;
-    std::size_t replays = 0;  // predictions of the whole flight the fits paid for (analysis/fit.hpp)
+    std::size_t resimulations = 0;  // predictions of the whole flight the fits paid for (analysis/fit.hpp)
 };
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);

@@ -13,13 +13,13 @@
 namespace dw::analysis {
 
 std::vector<Wrench6> ExplainData::predict(const physics::PhysicsConfig& c) const {
-    ++replays;
-    return replay.recorded(c);
+    ++resimulations;
+    return sim.recorded(c);
 }
 
 double norm_sq(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a) {
-    if (!d.replay.measured_axes()[a]) return 0;  // a column that carries no measurement
-    const double r = (d.replay.measured()[i][a] - pred[i][a]) / d.sigma[a];
+    if (!d.sim.measured_axes()[a]) return 0;  // a column that carries no measurement
+    const double r = (d.sim.measured()[i][a] - pred[i][a]) / d.sigma[a];
     return r * r;
 }
 
@@ -54,7 +54,7 @@ struct RowCost {
         const auto& p = fit->predict(v);
         const auto& d = fit->data();
         for (std::size_t a = 0; a < 6; ++a)
-            residual[a] = d.replay.measured_axes()[a] ? (d.replay.measured()[row][a] - p[row][a]) / d.sigma[a] : 0.0;
+            residual[a] = d.sim.measured_axes()[a] ? (d.sim.measured()[row][a] - p[row][a]) / d.sigma[a] : 0.0;
         return true;
     }
 };
@@ -78,8 +78,8 @@ std::pair<std::vector<double>, std::vector<double>> Fit::solve(std::vector<doubl
     ceres::Problem problem(po);
     ceres::HuberLoss loss(d_.huber_delta);
     problem.AddParameterBlock(x.data(), static_cast<int>(P));
-    // Forward differences: a Jacobian costs P + 1 replays of the flight, not central's 2P + 1
-    // (a flow effect's replay re-evaluates the physics along the whole flight). Measured on the
+    // Forward differences: a Jacobian costs P + 1 resimulations of the flight, not central's 2P + 1
+    // (a flow effect's resimulation re-evaluates the physics along the whole flight). Measured on the
     // suite's flights: the same verdicts and, where the data pins a value, the same to 7+ digits
     // (a 1.6 ms sensor lag on a flight without one moved 2 %, well inside its interval);
     // explanations ~35 % faster.
@@ -140,14 +140,14 @@ std::vector<double> tare_spread(const ExplainData& d, Fit& fit, const Effect& e,
         const auto& ph = fit.predict(hi);
         for (std::size_t k = 0; k < rows; ++k)
             for (std::size_t a = 0; a < 6; ++a)
-                if (d.replay.measured_axes()[a])
+                if (d.sim.measured_axes()[a])
                     J(static_cast<Eigen::Index>(k * 6 + a), static_cast<Eigen::Index>(p)) =
                         (ph[d.on_legs[k]][a] - pl[d.on_legs[k]][a]) / (hi[p] - lo[p]) / d.sigma[a];
     }
     const Eigen::MatrixXd A = J.transpose() * J;
     const auto solver = A.ldlt();
     for (std::size_t a = 0; a < 6; ++a) {
-        if (!d.replay.measured_axes()[a]) continue;
+        if (!d.sim.measured_axes()[a]) continue;
         Eigen::VectorXd b = Eigen::VectorXd::Zero(
             static_cast<Eigen::Index>(P));  // J' u, u: every row of axis a shifted by 1/sqrt(n) noise floors
         for (std::size_t k = 0; k < rows; ++k) b += J.row(static_cast<Eigen::Index>(k * 6 + a)).transpose();

@@ -2,17 +2,17 @@
 // The explainer's fitting layer: the data every stage reads, one effect's fit with Ceres, and the
 // model the candidates are scored against.
 //
-// Where the time goes: a flight's prediction under one set of parameters is a replay of the whole
-// flight (Replay::recorded: for a flow effect the physics along every recorded pose, for a
+// Where the time goes: a flight's prediction under one set of parameters is a resimulation of the whole
+// flight (Resimulation::recorded: for a flow effect the physics along every recorded pose, for a
 // recording-side effect the sensor chain over the cached air). Ceres asks for one residual row at
-// a time, so Fit keeps the last kPredictionCache predictions: the P + 1 replays of a forward-
-// difference Jacobian are paid once and shared by every row. ExplainData::replays counts them.
+// a time, so Fit keeps the last kPredictionCache predictions: the P + 1 resimulations of a forward-
+// difference Jacobian are paid once and shared by every row. ExplainData::resimulations counts them.
 #include <cstddef>
 #include <utility>
 #include <vector>
 
 #include "analysis/effects.hpp"
-#include "analysis/replay.hpp"
+#include "analysis/resimulation.hpp"
 #include "physics/config.hpp"
 
 namespace dw::analysis {
@@ -21,16 +21,16 @@ using flight::AxisValues;
 
 // Everything a fit needs: the data, which samples, the axes' scales.
 struct ExplainData {
-    const Replay& replay;
+    const Resimulation& sim;
     const std::vector<SampleInfo>& info;
     AxisValues sigma;
-    std::vector<std::size_t> on_legs;  // sample indices on measurement legs
-    std::vector<Wrench6> buffeting;    // per sample: the lateral buffeting's standard deviation
-    std::size_t legs = 0;              // blocks that hold samples
-    double huber_delta = 3;            // noise floors: beyond it a residual counts linearly in the fits
-    mutable std::size_t replays = 0;   // predictions of the whole flight paid so far (see above)
+    std::vector<std::size_t> on_legs;       // sample indices on measurement legs
+    std::vector<Wrench6> buffeting;         // per sample: the lateral buffeting's standard deviation
+    std::size_t legs = 0;                   // blocks that hold samples
+    double huber_delta = 3;                 // noise floors: beyond it a residual counts linearly in the fits
+    mutable std::size_t resimulations = 0;  // predictions of the whole flight paid so far (see above)
 
-    // The flight as the recording sees it under physics c: one replay, counted.
+    // The flight as the recording sees it under physics c: one resimulation, counted.
     std::vector<Wrench6> predict(const physics::PhysicsConfig& c) const;
 };
 

@@ -59,13 +59,13 @@ std::vector<BinZ> bins_of(const ExplainData& d, const std::vector<Wrench6>& pred
         std::size_t n = 0;
     };
     std::map<std::pair<int, Cell>, Acc> bins;  // axis, cell
-    const bool flying = d.replay.flying();
+    const bool flying = d.sim.flying();
     for (auto i : d.on_legs) {
         const auto cell = cell_of(d.info[i], flying);
         if (!cell) continue;
         for (int a = 0; a < 6; ++a) {
-            if (!d.replay.measured_axes()[static_cast<std::size_t>(a)]) continue;
-            const double r = d.replay.measured()[i][static_cast<std::size_t>(a)] - pred[i][static_cast<std::size_t>(a)];
+            if (!d.sim.measured_axes()[static_cast<std::size_t>(a)]) continue;
+            const double r = d.sim.measured()[i][static_cast<std::size_t>(a)] - pred[i][static_cast<std::size_t>(a)];
             auto& b = bins[{a, *cell}];
             b.sum += r;
             b.sq += r * r;
@@ -88,7 +88,7 @@ std::vector<BinZ> bins_of(const ExplainData& d, const std::vector<Wrench6>& pred
 
 std::vector<Region> locate(const ExplainData& d, const std::vector<Wrench6>& pred, double factor, double z_min,
                            const std::string& formation) {
-    const bool flying = d.replay.flying();
+    const bool flying = d.sim.flying();
     std::vector<Region> out;
     for (const auto& b : bins_of(d, pred, factor)) {
         if (std::abs(b.z) < z_min) continue;
@@ -124,7 +124,7 @@ std::vector<Shift> shifts(const ExplainData& d, const physics::PhysicsConfig& ba
         const auto p = d.predict(c);
         for (auto i : d.on_legs) {
             const auto& s = d.info[i];
-            if (!s.near || (!d.replay.flying() && s.direction == 0)) continue;
+            if (!s.near || (!d.sim.flying() && s.direction == 0)) continue;
             auto& v = sse[{s.direction, band_index(s.h)}];
             v.resize(grid.size());
             for (std::size_t a = 0; a < 6; ++a) v[g] += norm_sq(d, p, i, a);

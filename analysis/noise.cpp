@@ -7,7 +7,7 @@
 
 namespace dw::analysis {
 
-AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
+AxisValues floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
                     double tare_s) {
     AxisValues sum{}, sq{};
     double n = 0;
@@ -41,8 +41,8 @@ AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, dou
     AxisValues e{};
     for (auto i : d.on_legs)
         for (std::size_t a = 0; a < 6; ++a) {
-            if (!d.replay.measured_axes()[a]) continue;
-            const double r = d.replay.measured()[i][a] - pred[i][a], turbulent = 2 * intensity * pred[i][a];
+            if (!d.sim.measured_axes()[a]) continue;
+            const double r = d.sim.measured()[i][a] - pred[i][a], turbulent = 2 * intensity * pred[i][a];
             const double buffet = d.buffeting[i][a];
             e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent * turbulent + buffet * buffet);
         }
@@ -59,8 +59,8 @@ double neff_factor(const ExplainData& d, const std::vector<Wrench6>& pred) {
         const auto i = d.on_legs[k], j = d.on_legs[k - 1];
         if (i != j + 1) continue;
         for (std::size_t a = 0; a < 6; ++a) {
-            const double ri = (d.replay.measured()[i][a] - pred[i][a]) / d.sigma[a];
-            const double rj = (d.replay.measured()[j][a] - pred[j][a]) / d.sigma[a];
+            const double ri = (d.sim.measured()[i][a] - pred[i][a]) / d.sigma[a];
+            const double rj = (d.sim.measured()[j][a] - pred[j][a]) / d.sigma[a];
             num += ri * rj;
             den += ri * ri;
         }

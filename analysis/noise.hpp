@@ -9,7 +9,7 @@ namespace dw::analysis {
 
 // The noise floor per axis: the residual's spread where nobody is near (after the tare and
 // kTareSettle_s), or, when nobody ever is, from successive differences. At least kMinNoiseFloor.
-AxisValues floor_of(const Replay& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
+AxisValues floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
                     double tare_s);
 inline constexpr double kTareSettle_s = 0.5;
 inline constexpr double kMinNoiseFloor = 1e-4;     // N or N·m

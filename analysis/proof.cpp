@@ -15,7 +15,8 @@
 #include "core/names.hpp"
 #include "core/numbers.hpp"
 #include "core/parallel.hpp"
-#include "core/subprocess.hpp"
+#include "physics/flight_sim.hpp"
+#include "physics/recording_chain.hpp"
 
 namespace dw::analysis {
 
@@ -175,11 +176,13 @@ std::string table(const std::vector<ProofRow>& rows, const std::string& flight, 
 void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed,
                    const std::string& dir, const std::stop_token& stop, int legs) {
     fs::create_directories(fs::path(dir).parent_path());
-    const std::string yaml = dir + ".physics.yaml";
-    write_file(yaml, physics::to_yaml(hidden));
-    run_sibling({"dw-sim", "fly", "--formation", formation, "--physics", yaml, "--seed", std::to_string(seed), "--legs",
-                 std::to_string(legs), "--out", dir, "--quiet"},
-                dir + ".log", stop);
+    write_file(dir + ".physics.yaml", physics::to_yaml(hidden));  // what was hidden, beside the flight
+    physics::FlyOptions fly;
+    fly.formation = formation;
+    fly.seed = seed;
+    fly.grid.legs = legs;
+    fly.stop = stop;
+    flight::write_flight(physics::simulate_flight(hidden, fly).flight, dir);
 }
 
 namespace {
@@ -308,23 +311,27 @@ std::optional<double> untouched_value(const ExplainResult& r, const std::string&
     return std::nullopt;
 }
 
-// The recording seen through a first-order lag (the replay's own first-order hold).
-void low_pass(std::vector<flight::WrenchSample>& w, double tau) {
-    std::array<double, 6> y = w.front().w, x0 = w.front().w;
-    for (std::size_t i = 1; i < w.size(); ++i) {
-        const double dt = w[i].t - w[i - 1].t, a = std::exp(-dt / tau), b = tau / dt * (1 - a);
-        const auto x1 = w[i].w;
-        for (std::size_t k = 0; k < 6; ++k) y[k] = a * y[k] + x1[k] - a * x0[k] - b * (x1[k] - x0[k]);
-        x0 = x1;
-        w[i].w = y;
-    }
+// The recording-side effects of fx put into a recorded flight through the recording chain: the
+// sensor on the recorded stamps, the calibration, the clock (the recording keeps its own tare: the
+// calibration is linear, so its zero moves with it).
+void conceal(flight::Flight& f, const physics::Effects& fx) {
+    const physics::RecordingChain chain(fx);
+    std::vector<double> t;
+    physics::RecordedWrench w;
+    for (const auto& s : f.wrench) t.push_back(s.t), w.push_back(s.w);
+    chain.sensor(t, w);
+    for (auto& x : w) chain.calibration(x);
+    const double delay = chain.clock_delay_s();
+    for (std::size_t i = 0; i < w.size(); ++i) f.wrench[i] = {t[i] + delay, w[i]};
 }
 
 std::vector<Concealment> concealments(const Concealed& m) {
     return {
         {"clock_offset", log::cat("wrench stamped ", m.clock_s, " s late"),
          [m](flight::Flight& f) {
-             for (auto& w : f.wrench) w.t += m.clock_s;
+             physics::Effects fx;
+             fx.clock_offset = {true, m.clock_s};
+             conceal(f, fx);
          },
          [m](const physics::Effects& own, std::optional<double> u) {
              return Truth{"clock_offset", "offset_s",
@@ -332,22 +339,29 @@ std::vector<Concealment> concealments(const Concealed& m) {
          }},
         {"force_scale", log::cat("wrench × ", m.scale),
          [m](flight::Flight& f) {
-             for (auto& w : f.wrench)
-                 for (auto& v : w.w) v *= m.scale;
+             physics::Effects fx;
+             fx.force_scale = {true, m.scale};
+             conceal(f, fx);
          },
          [m](const physics::Effects& own, std::optional<double> u) {
              return Truth{"force_scale", "scale",
                           u.value_or(own.force_scale.enabled ? own.force_scale.scale : 1) * m.scale};
          }},
         {"sensor_lag", log::cat("first-order lag, tau ", m.lag_s, " s"),
-         [m](flight::Flight& f) { low_pass(f.wrench, m.lag_s); },
+         [m](flight::Flight& f) {
+             physics::Effects fx;
+             fx.sensor_lag = {true, m.lag_s};
+             conceal(f, fx);
+         },
          [m](const physics::Effects& own, std::optional<double> u) {
              return Truth{"sensor_lag", "tau_s",
                           u.value_or(own.sensor_lag.enabled ? own.sensor_lag.tau_s : 0) + m.lag_s};
          }},
         {"cell_crosstalk", log::cat("f_n += ", m.leak, " f_d"),
          [m](flight::Flight& f) {
-             for (auto& w : f.wrench) w.w[0] += m.leak * w.w[2];
+             physics::Effects fx;
+             fx.cell_crosstalk = {true, 2, 0, m.leak};  // f_d into f_n
+             conceal(f, fx);
          },
          [m](const physics::Effects& own, std::optional<double> u) {
              const auto& c = own.cell_crosstalk;

@@ -44,8 +44,9 @@ struct ProofResult {
 inline constexpr const char* kProofTableFile = "proof.md";
 ProofResult run_proof(const ProofOptions& o);
 
-// `dw-sim fly` (a sibling executable) with this physics hidden in it, into the flight folder dir.
-// A stop request stops it (dw::Stopped).
+// A flight simulated as `dw-sim fly` flies it (the simulator as a library), with this physics
+// hidden in it, into the flight folder dir; the hidden physics beside it (dir.physics.yaml). A
+// stop request stops it (dw::Stopped).
 void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed,
                    const std::string& dir, const std::stop_token& stop, int legs = physics::GridOptions{}.legs);
 

@@ -69,7 +69,7 @@ std::string alternatives(const CandidateResult& c) {
 }
 
 // Who measured the force, in the report's words: a load stand, or a flying sufferer's estimate.
-physics::EffectVoice voice_of(const Replay& r) {
+physics::EffectVoice voice_of(const Resimulation& r) {
     if (!r.flying())
         return {false, "the stand", "the stand's clock",
                 "along each leg — towards the travel on one leg, against it on the next"};
@@ -106,10 +106,10 @@ plot::Field binned(const std::vector<double>& value, const std::vector<SampleInf
     return f;
 }
 
-// What the figures are drawn from: the replay, where each sample is, the simulation before and
+// What the figures are drawn from: the resimulation, where each sample is, the simulation before and
 // after the fit, the axis shown, and the output folder.
 struct Figures {
-    const Replay& replay;
+    const Resimulation& sim;
     std::vector<SampleInfo> info;
     std::vector<Wrench6> before, after;
     std::size_t axis;
@@ -124,7 +124,7 @@ std::string stand_figures(const Figures& g, const ExplainResult& r) {
     const std::size_t n = g.info.size(), axis = g.axis;
     std::vector<double> rb(n), ra(n), obs(n), sb(n), sa(n);
     for (std::size_t i = 0; i < n; ++i) {
-        obs[i] = g.replay.measured()[i][axis];
+        obs[i] = g.sim.measured()[i][axis];
         sb[i] = g.before[i][axis];
         sa[i] = g.after[i][axis];
         rb[i] = obs[i] - sb[i];
@@ -172,7 +172,7 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
     for (std::size_t i = 0; i < g.info.size(); ++i) {
         const auto& s = g.info[i];
         if (!std::isfinite(s.offset)) continue;
-        const double m = g.replay.measured()[i][axis];
+        const double m = g.sim.measured()[i][axis];
         before.push_back({s.offset, s.above, m - g.before[i][axis]});
         after.push_back({s.offset, s.above, m - g.after[i][axis]});
         off = std::max(off, s.offset), lo = std::min(lo, s.above), hi = std::max(hi, s.above);
@@ -192,11 +192,11 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
                   unit,
                   {},
                   {}};
-    plot::Series rec{"recorded", g.replay.stamps(), {}, {40, 40, 40}},
-        sb{"simulated before the fit", g.replay.stamps(), {}, {200, 120, 30}},
-        sa{"simulated after the fit", g.replay.stamps(), {}, {30, 30, 210}};
+    plot::Series rec{"recorded", g.sim.stamps(), {}, {40, 40, 40}},
+        sb{"simulated before the fit", g.sim.stamps(), {}, {200, 120, 30}},
+        sa{"simulated after the fit", g.sim.stamps(), {}, {30, 30, 210}};
     for (std::size_t i = 0; i < g.info.size(); ++i) {
-        rec.y.push_back(g.replay.measured()[i][axis]);
+        rec.y.push_back(g.sim.measured()[i][axis]);
         sb.y.push_back(g.before[i][axis]);
         sa.y.push_back(g.after[i][axis]);
     }
@@ -439,16 +439,16 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     write_file((fs::path(dir) / "report.json").string(), report.dump(2) + "\n");
     write_file((fs::path(dir) / "physics.yaml").string(), physics::to_yaml(r.fitted));
 
-    const Replay replay(f, o.physics);
+    const Resimulation sim(f, o.physics);
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
     const Figures figs{
-        replay,
-        describe(replay, blocks),
-        replay.recorded(o.physics),
-        replay.recorded(r.fitted),
+        sim,
+        describe(sim, blocks),
+        sim.recorded(o.physics),
+        sim.recorded(r.fitted),
         r.regions.empty() ? std::size_t{2} : static_cast<std::size_t>(physics::axis_index(r.regions.front().axis)),
         dir};
-    const physics::EffectVoice who = voice_of(replay);
+    const physics::EffectVoice who = voice_of(sim);
     const std::string figures_md = who.flying ? flying_figures(figs, blocks) : stand_figures(figs, r);
 
     std::ostringstream md;

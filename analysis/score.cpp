@@ -107,8 +107,8 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
 std::pair<double, double> regress_residual(const ExplainData& d, const Baseline& b, int from, int to) {
     double xy = 0, xx = 0;
     for (auto i : d.on_legs) {
-        const double x = d.replay.measured()[i][static_cast<std::size_t>(from)];
-        xy += x * (d.replay.measured()[i][static_cast<std::size_t>(to)] - b.pred[i][static_cast<std::size_t>(to)]);
+        const double x = d.sim.measured()[i][static_cast<std::size_t>(from)];
+        xy += x * (d.sim.measured()[i][static_cast<std::size_t>(to)] - b.pred[i][static_cast<std::size_t>(to)]);
         xx += x * x;
     }
     return xx > 0 ? std::pair{xy / xx, xy * xy / xx} : std::pair{0.0, 0.0};
@@ -117,7 +117,7 @@ std::pair<double, double> regress_residual(const ExplainData& d, const Baseline&
 // cell_crosstalk: the axis pair whose residual the model's other axis explains best.
 Effect with_crosstalk_axes(Effect e, const ExplainData& d, const Baseline& b) {
     double best = -1;
-    const auto& measured = d.replay.measured_axes();
+    const auto& measured = d.sim.measured_axes();
     for (int from = 0; from < 6; ++from)
         for (int to = 0; to < 6; ++to) {
             if (from == to || !measured[static_cast<std::size_t>(from)] || !measured[static_cast<std::size_t>(to)])
@@ -155,12 +155,12 @@ Scores cross_validate(const ExplainData& d, const Baseline& b, const Effect& e, 
         for (auto i : folds.test[k]) {
             const int leg = d.info[i].leg;
             const int piece =
-                leg * 1000 + static_cast<int>(std::floor((d.replay.stamps()[i] - folds.leg_start.at(leg)) / kPiece_s));
+                leg * 1000 + static_cast<int>(std::floor((d.sim.stamps()[i] - folds.leg_start.at(leg)) / kPiece_s));
             ++s.n[piece];
             for (std::size_t a = 0; a < 6; ++a) {
                 s.before[piece][a] += norm_sq(d, b.pred, i, a);
                 s.after[piece][a] += norm_sq(d, p, i, a);
-                if (d.replay.measured_axes()[a]) s.change[piece] += std::pow((p[i][a] - b.pred[i][a]) / d.sigma[a], 2);
+                if (d.sim.measured_axes()[a]) s.change[piece] += std::pow((p[i][a] - b.pred[i][a]) / d.sigma[a], 2);
             }
         }
     }
@@ -171,7 +171,7 @@ Scores cross_validate(const ExplainData& d, const Baseline& b, const Effect& e, 
 // the tare's shared error added in quadrature (and crosstalk's discrepancy, see above).
 void set_intervals(CandidateResult& c, const ExplainData& d, const Baseline& b, Fit& fit, const std::vector<double>& se,
                    const std::vector<std::vector<double>>& fold_values) {
-    const auto tare = tare_spread(d, fit, c.effect, c.values, d.replay.tare_samples(b.physics));
+    const auto tare = tare_spread(d, fit, c.effect, c.values, d.sim.tare_samples(b.physics));
     const auto jack = jackknife_sd(fold_values);
     const double t = t975(static_cast<int>(fold_values.size()) - 1);
     for (std::size_t p = 0; p < c.values.size(); ++p) {
@@ -195,7 +195,7 @@ Folds folds_of(const ExplainData& d, int folds) {
     for (auto i : d.on_legs) {
         for (int k = 0; k < folds; ++k)
             (d.info[i].leg % folds == k ? f.test : f.train)[static_cast<std::size_t>(k)].push_back(i);
-        if (!f.leg_start.count(d.info[i].leg)) f.leg_start[d.info[i].leg] = d.replay.stamps()[i];
+        if (!f.leg_start.count(d.info[i].leg)) f.leg_start[d.info[i].leg] = d.sim.stamps()[i];
     }
     return f;
 }

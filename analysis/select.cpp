@@ -15,7 +15,7 @@ namespace {
 
 // Whether an effect can act in this flight (its type says: merging needs two jets, a sufferer's own
 // drag and the ground effect need a sufferer that flies).
-bool applies(const Effect& e, const Replay& r) { return e.type->applies(r.neighbours(), r.flying()); }
+bool applies(const Effect& e, const Resimulation& r) { return e.type->applies(r.neighbours(), r.flying()); }
 
 // An effect of the vocabulary has one value for the whole flight. Fitted separately on the passes
 // where the neighbours are lowest and where they are highest (the near samples' lowest and highest
@@ -36,7 +36,7 @@ bool acts_on(const ExplainData& d, const std::vector<Wrench6>& before, const std
     double s = 0, n = 0;
     for (auto i : rows)
         for (std::size_t a = 0; a < 6; ++a)
-            if (d.replay.measured_axes()[a]) s += std::pow((after[i][a] - before[i][a]) / d.sigma[a], 2), n += 1;
+            if (d.sim.measured_axes()[a]) s += std::pow((after[i][a] - before[i][a]) / d.sigma[a], 2), n += 1;
     return n > 0 && s / n >= kEvidenceChange * kEvidenceChange;
 }
 
@@ -136,7 +136,7 @@ Round select_round(const ExplainData& d, const Baseline& b, const Folds& folds, 
                    int round, const ExplainOptions& o, const Progress& say) {
     Round r;
     for (const auto& e : remaining) {
-        if (!applies(e, d.replay)) continue;
+        if (!applies(e, d.sim)) continue;
         say(log::cat("round ", round, ": fitting ", e.name));
         r.scored.push_back(score(d, b, folds, e, round, o));
         say(log::cat("  ", r.scored.back().note));

@@ -1,6 +1,6 @@
 // dw-bench-explain: a full analysis (every candidate of the vocabulary, cross-validation,
 // report and figures) of a 36-leg Leader Follower K=3 flight, with jet merging hidden and with
-// nothing hidden; beside it, in the same run, simulating that flight and one replay pass.
+// nothing hidden; beside it, in the same run, simulating that flight and one resimulation pass.
 //   build/bin/dw-bench-explain
 #include <unistd.h>
 
@@ -33,9 +33,9 @@ int main(int argc, char** argv) {
             const auto flight = dw::physics::simulate_flight(hidden, fly).flight;
             const double sim_s = secs(t0);
             t0 = Clock::now();
-            const dw::analysis::Replay replay(flight);
-            (void)replay.recorded(dw::physics::PhysicsConfig{});
-            const double replay_s = secs(t0);
+            const dw::analysis::Resimulation sim(flight);
+            (void)sim.recorded(dw::physics::PhysicsConfig{});
+            const double resim_s = secs(t0);
             dw::analysis::ExplainOptions o;
             t0 = Clock::now();
             const auto r = dw::analysis::explain(flight, o);
@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
             for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
             const char* what = merging ? "jet merging hidden" : "nothing hidden";
             std::printf("| simulate the flight (dw-sim fly's work), %s | %.2f | (anchor) |\n", what, sim_s);
-            std::printf("| one replay of it through the physics | %.2f | (anchor) |\n", replay_s);
+            std::printf("| one sim of it through the physics | %.2f | (anchor) |\n", resim_s);
             std::printf("| full analysis + report, %s (found: %s) | **%.1f** | <= 60 |\n", what,
                         by.empty() ? "nothing" : by.c_str(), explain_s);
         }

@@ -1,7 +1,7 @@
 // dw-bench-real: real flights. The import rate (MB of log per second, CSV and binary) beside `cat`
 // of the same files in the same run, and a full explain (every candidate, cross-validation by
-// encounter, report and figures) of the 64 s random walk beside one replay pass of it; and the
-// calibration of every trial of two vehicles or more (on 2 cores and on one) beside one replay
+// encounter, report and figures) of the 64 s random walk beside one resimulation pass of it; and the
+// calibration of every trial of two vehicles or more (on 2 cores and on one) beside one sim
 // pass of every flight.
 //   build/bin/dw-bench-real [--data DIR] [--physics FILE]
 #include <unistd.h>
@@ -49,10 +49,10 @@ void bench_calibration(const std::string& data, const fs::path& dir) {
     o.physics = dw::physics::load_physics(std::string(DW_SOURCE_DIR) + "/config/physics.crazyflie-uncalibrated.yaml");
     auto t0 = Clock::now();
     for (const auto& f : o.flights)
-        (void)dw::analysis::Replay(dw::flight::read_flight(f), o.physics).recorded(o.physics);
-    const double replay_s = secs(t0);
+        (void)dw::analysis::Resimulation(dw::flight::read_flight(f), o.physics).recorded(o.physics);
+    const double resim_s = secs(t0);
     std::printf("\n| step (%zu trials, the README's calibrate) | seconds |\n|---|---|\n", o.flights.size());
-    std::printf("| read and replay every flight once (anchor) | %.2f |\n", replay_s);
+    std::printf("| read and sim every flight once (anchor) | %.2f |\n", resim_s);
     for (int jobs : {2, 1}) {
         o.jobs = jobs;
         o.out_dir = (dir / ("calibration-" + std::to_string(jobs))).string();
@@ -114,9 +114,9 @@ int main(int argc, char** argv) {
         dw::analysis::ExplainOptions o;
         o.physics = dw::physics::load_physics(physics);
         auto t0 = Clock::now();
-        const dw::analysis::Replay replay(flight, o.physics);
-        (void)replay.recorded(o.physics);
-        const double replay_s = secs(t0);
+        const dw::analysis::Resimulation sim(flight, o.physics);
+        (void)sim.recorded(o.physics);
+        const double resim_s = secs(t0);
         const auto dir = fs::temp_directory_path() / ("dw-bench-real-" + std::to_string(::getpid()));
         t0 = Clock::now();
         const auto r = dw::analysis::explain(flight, o);
@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
         for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
         std::printf("| step (64 s random walk, %zu wrench samples, 2 cores) | seconds | target |\n|---|---|---|\n",
                     flight.wrench.size());
-        std::printf("| one replay of it through the physics (anchor) | %.2f | – |\n", replay_s);
+        std::printf("| one sim of it through the physics (anchor) | %.2f | – |\n", resim_s);
         std::printf("| full dw-explain + report (%zu blocks by %s; found: %s) | **%.1f** | <= 30 |\n", r.legs,
                     dw::flight::to_string(r.blocks), by.empty() ? "nothing" : by.c_str(), explain_s);
         bench_calibration(data, dir);

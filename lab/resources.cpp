@@ -7,10 +7,14 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 
 namespace dw::lab {
 
 namespace {
+
+// A run's seconds to 0.1 s for over a day.
+constexpr int kTimeDigits = 7;
 // /proc/<pid>/stat fields 14 and 15 (utime, stime, in clock ticks), after the command in parentheses.
 std::optional<double> cpu_seconds(pid_t pid) {
     std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
@@ -46,10 +50,8 @@ std::optional<Usage> usage_of(pid_t pid) {
 }
 
 std::string to_csv_line(const ResourceRow& r) {
-    char line[256];
-    std::snprintf(line, sizeof line, "%.1f,%s,%d,%.2f,%.2f,%llu", r.t_s, r.process.c_str(), static_cast<int>(r.pid),
-                  r.usage.rss_mb, r.usage.cpu_s, static_cast<unsigned long long>(r.lost));
-    return line;
+    return log::cat(csv_cell(r.t_s, kTimeDigits), ",", r.process, ",", r.pid, ",", csv_cell(r.usage.rss_mb), ",",
+                    csv_cell(r.usage.cpu_s), ",", r.lost);
 }
 
 std::vector<ResourceRow> read_resources(const std::string& path) {

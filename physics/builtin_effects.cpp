@@ -1,6 +1,8 @@
 // The ten effects of ../shared/FLIGHT_FORMAT.md's vocabulary: one class each, with the bounds a
-// configuration may give, the bounds the explainer searches, and the report's words. Their
-// physics is the simulator's and the replay's own (wrench_model, flight_sim, analysis/replay).
+// configuration may give, the bounds the explainer searches, the report's words and the stage of
+// the recording chain it acts at. The recording-side effects' physics is here, behind the chain's
+// hooks (physics/recording_chain.hpp); the flow's is wrench_model's, a flying sufferer's own
+// forces the resimulation's (analysis/resimulation.cpp).
 #include <cmath>
 #include <cstdlib>
 
@@ -8,6 +10,7 @@
 #include "core/numbers.hpp"
 #include "flight/flight.hpp"
 #include "physics/effect_types.hpp"
+#include "physics/recording_chain.hpp"
 
 namespace dw::physics {
 namespace {
@@ -50,6 +53,8 @@ public:
     std::vector<EffectParameter> parameters() const override {
         return {{"offset_s", "s", -10, 10, -0.5, 0.5, range(-0.3, 0.3, 25), 0.0}};
     }
+    Stage stage() const override { return Stage::clock; }
+    double clock_delay_s(const Effects& e) const override { return e.clock_offset.offset_s; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**clock_offset** — ", who.clock, " is ", f3(std::abs(v[0])), " s ",
                         v[0] >= 0 ? "behind" : "ahead of",
@@ -67,6 +72,10 @@ public:
     std::string name() const override { return "sensor_lag"; }
     std::vector<EffectParameter> parameters() const override {
         return {{"tau_s", "s", 0, 10, 0.0, 0.5, range(0.0, 0.3, 13), 0.0}};
+    }
+    Stage stage() const override { return Stage::sensor; }
+    void on_sensor(const Effects& e, const std::vector<double>& t, RecordedWrench& series) const override {
+        first_order_lag(e.sensor_lag.tau_s, t, series);
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(
@@ -101,6 +110,10 @@ public:
     ForceScale() : OneNumber(&Effects::force_scale, &DW_FIELD(force_scale)::scale) {}
     std::string name() const override { return "force_scale"; }
     std::vector<EffectParameter> parameters() const override { return {{"scale", "", 0, 10, 0.3, 3.0, {}, 1.0}}; }
+    Stage stage() const override { return Stage::calibration; }
+    void on_calibration(const Effects& e, Wrench6& w, const Wrench6&) const override {
+        for (auto& v : w) v *= e.force_scale.scale;
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**force_scale** — the recorded wrench is ", f3(v[0]),
                         " × the simulated one everywhere: a mass, drag coefficient or ",
@@ -117,6 +130,7 @@ public:
         return {{"coefficient", "", 0, 50, 0.0, 50.0, range(0.0, 20.0, 5), 0.0}};
     }
     bool applies(int, bool flying) const override { return flying; }
+    Stage stage() const override { return Stage::sufferer; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**ground_effect** — extra lift near the floor: ", f3(v[0], 2),
                         " × the hover thrust × (R / 4h)². ");
@@ -150,6 +164,8 @@ public:
         k.numbers(grouped_key(), e.position_offset.offset_m, {p.config_min, p.config_max, "m"},
                   "expected [n, e, d] in metres");
     }
+    Stage stage() const override { return Stage::positions; }
+    std::array<double, 3> position_error_m(const Effects& e) const override { return e.position_offset.offset_m; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(
             "**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", f3(v[0]),
@@ -179,6 +195,12 @@ public:
         k.choice("to", x.to, kAxes, "axis");
         const auto p = parameters().front();
         k.number(p.name, x.coefficient, {p.config_min, p.config_max});
+    }
+    Stage stage() const override { return Stage::calibration; }
+    // The leak is of the true `from` axis, which the recording holds (crosstalk leaves it alone).
+    void on_calibration(const Effects& e, Wrench6& w, const Wrench6& recorded) const override {
+        const auto& x = e.cell_crosstalk;
+        w[static_cast<std::size_t>(x.to)] += x.coefficient * recorded[static_cast<std::size_t>(x.from)];
     }
     std::string describe(const std::vector<double>& v, AxisPair a, const EffectVoice& who) const override {
         return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration",
@@ -260,6 +282,7 @@ public:
     void clear(Effects& e) const override { e.body_drag = {}; }
     bool enabled(const Effects& e) const override { return e.body_drag.enabled; }
     std::vector<double> values(const Effects& e) const override { return {e.body_drag.cda_h_m2, e.body_drag.cda_v_m2}; }
+    Stage stage() const override { return Stage::sufferer; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**body_drag** — the flying sufferer's own drag against its motion through still air: C_d A = ",
                         f3(v[0], 4), " m² horizontally, ", f3(v[1], 4),

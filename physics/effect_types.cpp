@@ -100,5 +100,7 @@ void EffectType::keys(KeyVisitor& k, Effects& e) const {
 }
 
 void EffectType::on_recording(const std::vector<double>&, const std::vector<double>&, RecordedWrench&) const {}
+void EffectType::on_sensor(const Effects&, const std::vector<double>&, RecordedWrench&) const {}
+void EffectType::on_calibration(const Effects&, Wrench6&, const Wrench6&) const {}
 
 }  // namespace dw::physics

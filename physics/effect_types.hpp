@@ -5,10 +5,12 @@
 // the report. The configuration, the simulator, the replay, the explainer and the report iterate
 // the registry; none of them compares effect names.
 //
-// The ten built-in effects (builtin_effects.cpp) act through the simulator's and the replay's own
-// code (the air, the stand, the recording). An effect added in a file of its own keeps its values
-// in Effects::extra and acts through on_recording, which the simulator and the replay both call on
-// the recorded wrench (after the tare): adding such an effect is that one file and its tests.
+// Each effect acts at one stage of the recording chain (physics/recording_chain.hpp), which the
+// simulator, the explainer's resimulation and dw-stand-agent --sim share: the recording-side
+// built-ins (builtin_effects.cpp) through the hooks below, one discretisation each; the flow's
+// (wrench_model) and a flying sufferer's own forces (analysis/resimulation) where those are
+// evaluated. An effect added in a file of its own keeps its values in Effects::extra and acts
+// through on_recording, after the tare: adding such an effect is that one file and its tests.
 #include <yaml-cpp/yaml.h>
 
 #include <array>
@@ -45,6 +47,12 @@ struct EffectVoice {
 };
 
 using RecordedWrench = std::vector<std::array<double, 6>>;
+using Wrench6 = std::array<double, 6>;
+
+// The recording chain's stages, in its order: the positions the motion capture reports, the air
+// the neighbours make, the sufferer's own forces, the sensor's response, the stand's calibration
+// (after the tare), the stamps' clock, and the recorded wrench as written.
+enum class Stage { positions, air, sufferer, sensor, calibration, clock, recording };
 
 class EffectType {
 public:
@@ -71,8 +79,21 @@ public:
     // (core/keys.hpp): by default `enabled` and each parameter by name.
     virtual void keys(KeyVisitor& k, Effects& e) const;
 
-    // The change to the recorded wrench (stamps in s) of an effect the engine does not know by
-    // name; the built-ins act in the simulator and the replay themselves.
+    // Where in the recording chain it acts (default: the air when it changes the flow, else the
+    // recorded wrench).
+    virtual Stage stage() const { return changes_flow() ? Stage::air : Stage::recording; }
+    // The chain's hooks, each called only at the effect's own stage while it is on:
+    // positions: how far the motion capture's positions are off the truth (NED, m).
+    virtual std::array<double, 3> position_error_m(const Effects&) const { return {0, 0, 0}; }
+    // sensor: what the sensor reads of the force on the sufferer, sampled at times t (s, increasing).
+    virtual void on_sensor(const Effects&, const std::vector<double>& t, RecordedWrench& series) const;
+    // calibration: one calibrated sample after the tare; `recorded` is the recording's own value of
+    // that sample (while simulating, w itself as the earlier effects left it).
+    virtual void on_calibration(const Effects&, Wrench6& w, const Wrench6& recorded) const;
+    // clock: how late the wrench's stamps run against the poses' (s).
+    virtual double clock_delay_s(const Effects&) const { return 0; }
+    // recording: the change to the recorded wrench (stamps in s) of an effect kept in
+    // Effects::extra.
     virtual void on_recording(const std::vector<double>& values, const std::vector<double>& stamps,
                               RecordedWrench& w) const;
     // Its paragraph in the report (without the held-out numbers, which the report adds).

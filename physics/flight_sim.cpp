@@ -9,6 +9,7 @@
 #include "core/shutdown.hpp"
 #include "physics/bodies.hpp"
 #include "physics/effect_types.hpp"
+#include "physics/recording_chain.hpp"
 #include "physics/stand.hpp"
 #include "physics/vehicle.hpp"
 
@@ -53,13 +54,16 @@ Wrench interpolate(const std::vector<Wrench>& w, double t, double dt) {
     return (1 - a) * w[i] + a * w[i + 1];
 }
 
-// 2. The stand's response: a first-order lag of the true wrench (sensor_lag).
-std::vector<Wrench> felt_wrench(const std::vector<Wrench>& truth, double dt, const Effects& fx) {
-    std::vector<Wrench> felt = truth;
-    if (fx.sensor_lag.enabled && fx.sensor_lag.tau_s > 0) {
-        const double a = std::exp(-dt / fx.sensor_lag.tau_s);
-        for (std::size_t n = 1; n < felt.size(); ++n) felt[n] = a * felt[n - 1] + (1 - a) * truth[n];
-    }
+// 2. The stand's response: the recording chain's sensor stage on the true wrench.
+std::vector<Wrench> felt_wrench(const std::vector<Wrench>& truth, const std::vector<double>& t,
+                                const RecordingChain& chain) {
+    RecordedWrench series(truth.size());
+    for (std::size_t n = 0; n < truth.size(); ++n)
+        for (int a = 0; a < 6; ++a) series[n][static_cast<std::size_t>(a)] = truth[n][a];
+    chain.sensor(t, series);
+    std::vector<Wrench> felt(truth.size());
+    for (std::size_t n = 0; n < truth.size(); ++n)
+        for (int a = 0; a < 6; ++a) felt[n][a] = series[n][static_cast<std::size_t>(a)];
     return felt;
 }
 
@@ -108,37 +112,28 @@ StandFrames convert_on_chips(const PhysicsConfig& c, const StandModel& stand, co
     return out;
 }
 
-// Effects registered beyond the built-ins, on the recorded wrench (physics/effect_types.hpp).
-void apply_extra_effects(const Effects& fx, std::vector<flight::WrenchSample>& wrench) {
-    if (fx.extra.empty()) return;
-    std::vector<double> stamps;
-    RecordedWrench w;
-    for (const auto& s : wrench) stamps.push_back(s.t), w.push_back(s.w);
-    apply_registered_effects(fx, stamps, w);
-    for (std::size_t i = 0; i < wrench.size(); ++i) wrench[i].w = w[i];
-}
-
 // 4. Tare (the mean of the first tare_s: neighbours far away, sufferer at hover thrust), the
-// calibrated wrench, then the recording's own errors, stamped on the stand clock.
-void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandFrames& frames, flight::Flight& f) {
-    const auto& fx = c.effects;
+// calibrated wrench, then the recording chain's calibration, clock and recording stages.
+void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandFrames& frames,
+                   const RecordingChain& chain, flight::Flight& f) {
     Counts zero = Counts::Zero();
     int tare_n = 0;
     for (std::size_t i = 0; i < frames.t.size() && frames.t[i] < frames.t.front() + c.stand.tare_s; ++i, ++tare_n)
         zero += frames.counts[i];
     zero /= std::max(tare_n, 1);
-    const double clock = fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0;
+    const double delay = chain.clock_delay_s();
+    std::vector<double> stamps;
+    RecordedWrench recorded;
     for (std::size_t i = 0; i < frames.t.size(); ++i) {
-        Wrench w = stand.cells_to_wrench() * ((frames.counts[i] - zero) / c.stand.counts_per_newton);
-        if (fx.force_scale.enabled) w *= fx.force_scale.scale;
-        if (fx.cell_crosstalk.enabled)
-            w[fx.cell_crosstalk.to] += fx.cell_crosstalk.coefficient * w[fx.cell_crosstalk.from];
-        flight::WrenchSample s;
-        s.t = frames.t[i] + clock;
-        for (int a = 0; a < 6; ++a) s.w[static_cast<std::size_t>(a)] = w[a];
-        f.wrench.push_back(s);
+        const Wrench w = stand.cells_to_wrench() * ((frames.counts[i] - zero) / c.stand.counts_per_newton);
+        Wrench6 x;
+        for (int a = 0; a < 6; ++a) x[static_cast<std::size_t>(a)] = w[a];
+        chain.calibration(x);
+        stamps.push_back(frames.t[i] + delay);
+        recorded.push_back(x);
     }
-    apply_extra_effects(fx, f.wrench);
+    chain.recording(stamps, recorded);
+    for (std::size_t i = 0; i < stamps.size(); ++i) f.wrench.push_back({stamps[i], recorded[i]});
 }
 
 // The flight's bodies in meta.json: the sufferer, then v1..vK; returns the neighbours' indices.
@@ -157,12 +152,6 @@ std::vector<std::uint16_t> describe_bodies(flight::Flight& f, const PhysicsConfi
         bodies.push_back(f.body_index(name));
     }
     return bodies;
-}
-
-// Where the motion capture puts the neighbours relative to their true positions.
-Vec3 mocap_offset(const Effects& fx) {
-    const auto& o = fx.position_offset;
-    return o.enabled ? Vec3(o.offset_m[0], o.offset_m[1], o.offset_m[2]) : Vec3::Zero();
 }
 
 // The flying vehicles and their jets' turbulence.
@@ -200,7 +189,7 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     const ReferenceTrajectory reference(grid);
     const WrenchModel model(c);
     const StandModel stand(c.stand);
-    const auto& fx = c.effects;
+    const RecordingChain chain(c.effects);
 
     Rng master(o.seed);
     const std::size_t k = formation.offsets.size();
@@ -236,7 +225,8 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
         s.q = {q.w(), q.x(), q.y(), q.z()};
         f.poses.push_back(s);
     };
-    const Vec3 pos_offset = mocap_offset(fx);
+    const auto error = chain.position_error_m();  // the motion capture's, on the neighbours
+    const Vec3 pos_offset(error[0], error[1], error[2]);
     for (std::size_t n = 0; n < steps; ++n) {
         const double t = static_cast<double>(n) * dt;
         fleet.step(formation, reference.at(t), n, t, dt, c, model);
@@ -261,9 +251,9 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     }
 
     // 2-4. The stand's response, its chips, the tare and the recorded wrench.
-    const std::vector<Wrench> felt = felt_wrench(out.truth, dt, fx);
+    const std::vector<Wrench> felt = felt_wrench(out.truth, out.truth_t, chain);
     const StandFrames frames = convert_on_chips(c, stand, felt, dt, out.truth_t.back(), stand_rng);
-    record_wrench(c, stand, frames, f);
+    record_wrench(c, stand, frames, chain, f);
 
     std::vector<flight::Leg> legs;
     for (const auto& l : reference.legs()) legs.push_back({l.index, l.t_start, l.t_end});

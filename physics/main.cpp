@@ -22,7 +22,7 @@ int run(int argc, char** argv) {
     app.require_subcommand(1);
 
     dw::physics::FlyOptions fly;
-    std::string physics_path, out_dir, altitudes = "0.3,0.8,1.3";
+    std::string physics_path, out_dir, altitudes;  // empty: GridOptions' own
     bool quiet = false;
     auto* cmd =
         app.add_subcommand("fly", "simulate a formation flying grid legs over the stand; write a flight folder");
@@ -34,7 +34,10 @@ int run(int argc, char** argv) {
     cmd->add_option("--seed", fly.seed, "random seed: the same inputs and seed give the same bytes")
         ->check(dw::cli::in(dw::kSeedRange));
     cmd->add_option("--out", out_dir, "flight folder to write")->required();
-    cmd->add_option("--altitudes", altitudes, "relative altitudes above the sufferer [m], comma-separated");
+    std::string default_altitudes;
+    for (double a : fly.grid.altitudes_m) default_altitudes += (default_altitudes.empty() ? "" : ",") + dw::log::cat(a);
+    cmd->add_option("--altitudes", altitudes,
+                    "relative altitudes above the sufferer [m], comma-separated (default " + default_altitudes + ")");
     cmd->add_option("--legs", fly.grid.legs, "number of legs")->check(dw::cli::in(dw::physics::kLegsRange));
     cmd->add_option("--speed", fly.grid.speed_mps, "leg speed [m/s]")->check(dw::cli::in(dw::physics::kSpeedRange));
     cmd->add_flag("--quiet", quiet, "no progress");
@@ -42,7 +45,8 @@ int run(int argc, char** argv) {
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     dw::require_output_dir(out_dir, "--out");
-    fly.grid.altitudes_m = dw::parse_number_list(altitudes, dw::physics::kAltitudeRange, "--altitudes");
+    if (!altitudes.empty())
+        fly.grid.altitudes_m = dw::parse_number_list(altitudes, dw::physics::kAltitudeRange, "--altitudes");
     const dw::physics::PhysicsConfig physics =
         physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
     if (!quiet) {

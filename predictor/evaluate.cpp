@@ -215,13 +215,13 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
             out << r.formation << "," << r.model << "," << name << "," << r.samples;
             for (std::size_t a = 0; a < 6; ++a) {
                 const double v = (r.*metric)[a];
-                out << "," << (std::isfinite(v) ? fmt(v, 5) : "");  // empty: no sample in the band (never nan or inf)
+                out << "," << csv_cell(v);  // empty: no sample in the band (never nan or inf)
             }
             out << "\n";
         }
     for (const auto& r : rows)  // the peak error is of f_d only
-        out << r.formation << "," << r.model << ",peak_f_d_mean_abs," << r.blocks << ",,,"
-            << (std::isfinite(r.peak_error) ? fmt(r.peak_error, 5) : "") << ",,,\n";
+        out << r.formation << "," << r.model << ",peak_f_d_mean_abs," << r.blocks << ",,," << csv_cell(r.peak_error)
+            << ",,,\n";
     return out.str();
 }
 

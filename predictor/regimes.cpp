@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "core/shutdown.hpp"
 #include "core/stats.hpp"
 #include "plot/draw.hpp"
@@ -119,9 +120,9 @@ std::string regimes_csv(const std::vector<RegimeRow>& rows) {
     std::ostringstream out;
     out << "formation,altitude_m,regime,legs,f_d_rms,explained,gain,z\n";
     for (const auto& r : rows)
-        out << r.formation << "," << r.altitude_m << "," << regime_name(r.regime) << "," << r.legs << ","
-            << plot::num(r.signal_rms, 5) << "," << plot::num(r.explained, 4) << "," << plot::num(r.gain, 4) << ","
-            << plot::num(r.z, 3) << "\n";
+        out << r.formation << "," << csv_cell(r.altitude_m) << "," << regime_name(r.regime) << "," << r.legs << ","
+            << csv_cell(r.signal_rms) << "," << csv_cell(r.explained) << "," << csv_cell(r.gain) << "," << csv_cell(r.z)
+            << "\n";
     return out.str();
 }
 

@@ -49,7 +49,7 @@ Flight crossing(int passes, double neighbour_mass_kg = 0.7) {
 
 // The time and value of the largest simulated f_d at the wrench stamps.
 std::pair<double, double> peak_f_d(const Flight& f, const dw::physics::PhysicsConfig& c = {}) {
-    const dw::analysis::Replay r(f, c);
+    const dw::analysis::Resimulation r(f, c);
     const auto w = r.recorded(c);
     std::size_t best = 0;
     for (std::size_t i = 0; i < w.size(); ++i)
@@ -88,7 +88,7 @@ TEST(RealPhysics, UnusableBodyParametersAreOneClearError) {
     auto f = crossing(1);
     f.meta.vehicles.erase("n");  // so the configuration's (unusable) neighbour is used
     try {
-        dw::analysis::Replay r(f, c);
+        dw::analysis::Resimulation r(f, c);
         FAIL() << "a neighbour without a propeller disc was accepted";
     } catch (const dw::InputError& e) {
         EXPECT_NE(std::string(e.what()).find("vehicles.n"), std::string::npos) << e.what();

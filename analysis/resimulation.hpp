@@ -1,5 +1,5 @@
 #pragma once
-// Simulating a recorded flight: the physics evaluated along the recorded poses (the neighbours'
+// Resimulating a recorded flight (not `dw-recorder replay`, which plays an MCAP file back onto DDS): the physics evaluated along the recorded poses (the neighbours'
 // positions, velocities and attitudes from poses.csv, the sufferer's pose at every sample — it may
 // fly), with each body's parameters from meta.json, then seen the way the recording sees it —
 // sensor lag, clock offset, force scale, cell crosstalk, the tare — at the recorded wrench stamps.
@@ -24,11 +24,11 @@ namespace dw::analysis {
 
 using flight::Wrench6;
 
-class Replay {
+class Resimulation {
 public:
     // Throws dw::InputError if the sufferer or a neighbour of meta.json has no poses, or a body's
     // parameters (meta.json, else `physics`) are unusable.
-    explicit Replay(const flight::Flight& f, const physics::PhysicsConfig& physics = {}, double grid_hz = 100.0);
+    explicit Resimulation(const flight::Flight& f, const physics::PhysicsConfig& physics = {}, double grid_hz = 100.0);
 
     // The wrench the recording would hold under physics c, at every wrench stamp. The stand's
     // own sample-and-hold is included: a wrench frame combines chip 0's fresh conversion with the
@@ -101,7 +101,7 @@ struct SampleInfo {
     double leg_fraction = 0;  // 0..1 through the leg
     bool near = false;        // a neighbour within its near radius horizontally (physics/bodies.hpp)
 };
-std::vector<SampleInfo> describe(const Replay& r, const flight::Blocks& blocks);
+std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks);
 
 // The vertical-separation bands residuals are located and drawn in.
 struct Band {

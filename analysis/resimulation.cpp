@@ -1,4 +1,4 @@
-#include "analysis/replay.hpp"
+#include "analysis/resimulation.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -8,11 +8,12 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "physics/effect_types.hpp"
+#include "physics/recording_chain.hpp"
 #include "physics/wrench_model.hpp"
 
 namespace dw::analysis {
 
-Replay::Replay(const flight::Flight& f, const physics::PhysicsConfig& physics, double grid_hz)
+Resimulation::Resimulation(const flight::Flight& f, const physics::PhysicsConfig& physics, double grid_hz)
     : tracks_(flight::tracks(f)), dt_(1.0 / grid_hz) {
     sufferer_params_ = physics::vehicle_of(f.meta, f.meta.sufferer, physics.sufferer.vehicle);
     neighbour_params_ = physics::neighbours_of(f.meta, physics);
@@ -59,15 +60,15 @@ Replay::Replay(const flight::Flight& f, const physics::PhysicsConfig& physics, d
     }
 }
 
-std::array<double, 3> Replay::position(int j, double t) const {
+std::array<double, 3> Resimulation::position(int j, double t) const {
     return tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])].position_at(t);
 }
 
-std::array<double, 3> Replay::velocity(int j, double t) const {
+std::array<double, 3> Resimulation::velocity(int j, double t) const {
     return tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])].velocity_at(t);
 }
 
-std::array<double, 3> Replay::sufferer(double t) const {
+std::array<double, 3> Resimulation::sufferer(double t) const {
     return tracks_[static_cast<std::size_t>(sufferer_)].position_at(t);
 }
 
@@ -84,29 +85,27 @@ physics::PhysicsConfig flow_part(const physics::PhysicsConfig& c) {
 
 }  // namespace
 
-physics::PhysicsConfig Replay::flow_of(const physics::PhysicsConfig& c) const {
+physics::PhysicsConfig Resimulation::flow_of(const physics::PhysicsConfig& c) const {
     physics::PhysicsConfig flow = flow_part(c);
     flow.sufferer.vehicle = sufferer_params_;
     return flow;
 }
 
-std::vector<physics::Jet> Replay::jets_of(const physics::PhysicsConfig& flow) const {
+std::vector<physics::Jet> Resimulation::jets_of(const physics::PhysicsConfig& flow) const {
     std::vector<physics::Jet> jets;
     for (const auto& v : neighbour_params_) jets.push_back(physics::Jet::make(v, flow));
     return jets;
 }
 
-const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
+const std::vector<Wrench6>& Resimulation::air(const physics::PhysicsConfig& c) const {
     const physics::PhysicsConfig flow = flow_of(c);
     const std::string key = physics::to_yaml(flow);
     if (auto it = cache_.find(key); it != cache_.end()) return it->second;
     const physics::WrenchModel model(flow);
     const std::vector<physics::Jet> jets = jets_of(flow);
     const auto& fx = flow.effects;
-    const physics::Vec3 offset = fx.position_offset.enabled
-                                     ? physics::Vec3(fx.position_offset.offset_m[0], fx.position_offset.offset_m[1],
-                                                     fx.position_offset.offset_m[2])
-                                     : physics::Vec3::Zero();
+    const auto error = physics::RecordingChain(fx).position_error_m();
+    const physics::Vec3 offset(error[0], error[1], error[2]);  // the motion capture's, on the neighbours
     const bool far_is_zero = !fx.floor_recirculation.enabled;
     std::vector<Wrench6> out(n_, Wrench6{});
     std::vector<physics::Producer> ps(neighbours_.size());
@@ -128,9 +127,9 @@ const std::vector<Wrench6>& Replay::air(const physics::PhysicsConfig& c) const {
     return cache_.emplace(key, std::move(out)).first->second;
 }
 
-physics::Vec3 Replay::producers_at(std::size_t i, const physics::WrenchModel& model,
-                                   const std::vector<physics::Jet>& jets, const physics::Vec3& offset,
-                                   std::vector<physics::Producer>& ps) const {
+physics::Vec3 Resimulation::producers_at(std::size_t i, const physics::WrenchModel& model,
+                                         const std::vector<physics::Jet>& jets, const physics::Vec3& offset,
+                                         std::vector<physics::Producer>& ps) const {
     const auto& g = grid_[i];
     for (std::size_t j = 0; j < neighbours_.size(); ++j) {
         const auto& x = g.neighbours[j];
@@ -142,13 +141,13 @@ physics::Vec3 Replay::producers_at(std::size_t i, const physics::WrenchModel& mo
     return physics::Vec3(g.sufferer[0], g.sufferer[1], g.sufferer[2]);
 }
 
-bool Replay::near(const physics::Vec3& suf, const std::vector<physics::Producer>& ps) const {
+bool Resimulation::near(const physics::Vec3& suf, const std::vector<physics::Producer>& ps) const {
     for (std::size_t j = 0; j < ps.size(); ++j)
         if (std::hypot(ps[j].position.x() - suf.x(), ps[j].position.y() - suf.y()) < near_radius_[j]) return true;
     return false;
 }
 
-std::vector<Wrench6> Replay::buffeting_sigma(const physics::PhysicsConfig& c) const {
+std::vector<Wrench6> Resimulation::buffeting_sigma(const physics::PhysicsConfig& c) const {
     std::vector<Wrench6> out(stamps_.size(), Wrench6{});
     if (!c.turbulence.enabled || c.turbulence.lateral_intensity <= 0 || n_ == 0) return out;
     const physics::PhysicsConfig flow = flow_of(c);
@@ -165,7 +164,7 @@ std::vector<Wrench6> Replay::buffeting_sigma(const physics::PhysicsConfig& c) co
     return out;
 }
 
-std::vector<Wrench6> Replay::own_forces(const physics::PhysicsConfig& c) const {
+std::vector<Wrench6> Resimulation::own_forces(const physics::PhysicsConfig& c) const {
     const auto& fx = c.effects;
     std::vector<Wrench6> out(n_, Wrench6{});
     const double half_rho = 0.5 * c.air_density_kg_m3;
@@ -187,43 +186,28 @@ std::vector<Wrench6> Replay::own_forces(const physics::PhysicsConfig& c) const {
     return out;
 }
 
-std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
+std::vector<Wrench6> Resimulation::recorded(const physics::PhysicsConfig& c) const {
     const auto& fx = c.effects;
-    const std::vector<Wrench6>* series = &air(c);
-    std::vector<Wrench6> with_own;
+    const physics::RecordingChain chain(fx);
+    std::vector<Wrench6> series = air(c);
     if (fx.body_drag.enabled || fx.ground_effect.enabled) {
-        with_own = own_forces(c);
+        const auto own = own_forces(c);
         for (std::size_t i = 0; i < n_; ++i)
-            for (std::size_t a = 0; a < 6; ++a) with_own[i][a] += (*series)[i][a];
-        series = &with_own;
+            for (std::size_t a = 0; a < 6; ++a) series[i][a] += own[i][a];
     }
-    std::vector<Wrench6> lagged;
-    if (fx.sensor_lag.enabled && fx.sensor_lag.tau_s > 0) {
-        // dy/dt = (x - y)/tau with x linear between grid points (exact first-order hold).
-        const double tau = fx.sensor_lag.tau_s, a = std::exp(-dt_ / tau), b = tau / dt_ * (1 - a);
-        lagged = *series;
-        for (std::size_t i = 1; i < lagged.size(); ++i)
-            for (std::size_t k = 0; k < 6; ++k) {
-                const double x0 = (*series)[i - 1][k], x1 = (*series)[i][k];
-                lagged[i][k] = a * lagged[i - 1][k] + x1 - a * x0 - b * (x1 - x0);
-            }
-        series = &lagged;
-    }
+    std::vector<double> grid_t(n_);
+    for (std::size_t i = 0; i < n_; ++i) grid_t[i] = t0_ + static_cast<double>(i) * dt_;
+    chain.sensor(grid_t, series);
     // A load stand's sample-and-hold ages its wrench by 7/16 of a conversion period; another
     // lab's residual is computed from one sample's own readings.
     const double hold = residual_ ? 0.0 : 7.0 / 16.0 / c.stand.rate_hz;
-    const double clock = (fx.clock_offset.enabled ? fx.clock_offset.offset_s : 0.0) + hold;
+    const double delay = chain.clock_delay_s() + hold;
     std::vector<Wrench6> out(stamps_.size());
     for (std::size_t i = 0; i < stamps_.size(); ++i) {
-        const double g = std::clamp((stamps_[i] - clock - t0_) / dt_, 0.0, static_cast<double>(n_ - 1) - 1e-9);
+        const double g = std::clamp((stamps_[i] - delay - t0_) / dt_, 0.0, static_cast<double>(n_ - 1) - 1e-9);
         const auto k = static_cast<std::size_t>(g);
         const double f = g - static_cast<double>(k);
-        Wrench6 w;
-        for (std::size_t a = 0; a < 6; ++a)
-            w[a] = (1 - f) * (*series)[k][a] + f * (*series)[std::min(k + 1, n_ - 1)][a];
-        if (fx.force_scale.enabled)
-            for (auto& v : w) v *= fx.force_scale.scale;
-        out[i] = w;
+        for (std::size_t a = 0; a < 6; ++a) out[i][a] = (1 - f) * series[k][a] + f * series[std::min(k + 1, n_ - 1)][a];
     }
     // The tare: a stand's recording is zeroed over its first tare_s (a residual source is tared
     // by its importer where no neighbour is near, where the physics gives no force either).
@@ -231,27 +215,23 @@ std::vector<Wrench6> Replay::recorded(const physics::PhysicsConfig& c) const {
     const std::size_t n = tare_samples(c);
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t a = 0; a < 6; ++a) zero[a] += out[i][a];
-    if (n > 0)
-        for (auto& w : out)
-            for (std::size_t a = 0; a < 6; ++a) w[a] -= zero[a] / static_cast<double>(n);
-    // Crosstalk leaks the true `from` axis into `to`; the recording's own `from` axis is that
-    // true value (crosstalk leaves it alone), so the leak is modelled from the measured axis.
-    if (fx.cell_crosstalk.enabled)
-        for (std::size_t i = 0; i < out.size(); ++i)
-            out[i][static_cast<std::size_t>(fx.cell_crosstalk.to)] +=
-                fx.cell_crosstalk.coefficient * measured_[i][static_cast<std::size_t>(fx.cell_crosstalk.from)];
-    physics::apply_registered_effects(fx, stamps_, out);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        if (n > 0)
+            for (std::size_t a = 0; a < 6; ++a) out[i][a] -= zero[a] / static_cast<double>(n);
+        chain.calibration(out[i], measured_[i]);
+    }
+    chain.recording(stamps_, out);
     return out;
 }
 
-std::size_t Replay::tare_samples(const physics::PhysicsConfig& c) const {
+std::size_t Resimulation::tare_samples(const physics::PhysicsConfig& c) const {
     if (residual_) return 0;
     std::size_t n = 0;
     while (n < stamps_.size() && stamps_[n] < stamps_.front() + c.stand.tare_s) ++n;
     return n;
 }
 
-std::vector<SampleInfo> describe(const Replay& r, const flight::Blocks& blocks) {
+std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks) {
     const auto& legs = blocks.blocks;
     std::vector<SampleInfo> out(r.stamps().size());
     std::size_t li = 0;
