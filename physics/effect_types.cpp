@@ -1,5 +1,8 @@
 #include "physics/effect_types.hpp"
 
+#include <dlfcn.h>
+
+#include <cstdlib>
 #include <stdexcept>
 
 #include "core/errors.hpp"
@@ -29,9 +32,29 @@ Registry& registry() {
     return r;
 }
 
+// Each module of kEffectModulesVariable loaded, kept for the process's life; its static
+// registrations add its effects to the registry as it loads.
+void load_effect_modules() {
+    const char* list = std::getenv(kEffectModulesVariable);
+    if (!list) return;
+    std::string_view rest(list);
+    while (!rest.empty()) {
+        const auto colon = rest.find(':');
+        const std::string path(rest.substr(0, colon));
+        rest = colon == std::string_view::npos ? std::string_view{} : rest.substr(colon + 1);
+        if (path.empty()) continue;
+        if (!::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL))
+            throw InputError(log::cat(kEffectModulesVariable, ": cannot load effect module: ", ::dlerror()));
+    }
+}
+
 }  // namespace
 
-const std::vector<const EffectType*>& effect_types() { return registry().views; }
+const std::vector<const EffectType*>& effect_types() {
+    static const bool loaded = (load_effect_modules(), true);  // once; a failure is thrown again next time
+    (void)loaded;
+    return registry().views;
+}
 
 namespace {
 std::vector<std::string> names() {
@@ -51,7 +74,7 @@ const EffectType& effect_type(const std::string& name, const std::string& what) 
 }
 
 void register_effect(std::unique_ptr<EffectType> type) {
-    for (const auto* t : effect_types())
+    for (const auto* t : registry().views)  // not effect_types(): a module registers while it loads
         if (t->name() == type->name()) throw std::logic_error("effect registered twice: " + type->name());
     registry().add(std::move(type));
 }

@@ -7,7 +7,7 @@
 //
 // Each effect acts at one stage of the recording chain (physics/recording_chain.hpp), which the
 // simulator, the explainer's resimulation and dw-stand-agent --sim share: the recording-side
-// built-ins (builtin_effects.cpp) through the hooks below, one discretisation each; the flow's
+// built-ins (effects/, one file each) through the hooks below, one discretisation each; the flow's
 // (wrench_model) and a flying sufferer's own forces (analysis/resimulation) where those are
 // evaluated. An effect added in a file of its own keeps its values in Effects::extra and acts
 // through on_recording, after the tare: adding such an effect is that one file and its tests.
@@ -102,8 +102,16 @@ public:
     std::vector<double> neutral() const;
 };
 
-// Every registered effect, built-ins first in the vocabulary's order.
+// Every registered effect, built-ins first in the vocabulary's order, then those of the effect
+// modules (below). Throws dw::InputError naming a module that cannot be loaded.
 const std::vector<const EffectType*>& effect_types();
+
+// A lab's own effects without rebuilding the programs: shared libraries named in this environment
+// variable (paths, colon-separated), each registering its effects when it is loaded (a static
+// EffectRegistration in its one file, as tests/toy_effect.cpp does; built as a MODULE library
+// against the lab's headers). Loaded on the registry's first use; every program that reads a
+// physics configuration then knows them.
+inline constexpr const char* kEffectModulesVariable = "DW_EFFECT_MODULES";
 // The named effect; throws dw::InputError "<what>: unknown effect 'x' (expected one of ...)".
 const EffectType& effect_type(const std::string& name, const std::string& what = "effect");
 // The known names, comma separated (for messages).
@@ -119,7 +127,7 @@ struct EffectRegistration {
 // Every switched-on effect outside the built-ins applied to a recorded wrench, in registry order.
 void apply_registered_effects(const Effects& e, const std::vector<double>& stamps, RecordedWrench& w);
 
-// The built-ins (builtin_effects.cpp).
+// The built-ins (effects/builtins.cpp: effects/builtins.hpp lists them).
 std::vector<std::unique_ptr<EffectType>> builtin_effects();
 
 }  // namespace dw::physics

@@ -70,11 +70,13 @@ struct RunResult {
 };
 
 // Runs a command to completion (killed after `limit`, a safety net, not a performance bound).
+// env: extra NAME=VALUE entries.
 inline RunResult run(const std::vector<std::string>& argv, const TempDir& dir,
-                     std::chrono::milliseconds limit = std::chrono::milliseconds(120000)) {
+                     std::chrono::milliseconds limit = std::chrono::milliseconds(120000),
+                     const std::vector<std::string>& env = {}) {
     static int counter = 0;
     const std::string tag = std::to_string(counter++);
-    Subprocess p({argv, dir.file("out" + tag), dir.file("err" + tag), {}});
+    Subprocess p({argv, dir.file("out" + tag), dir.file("err" + tag), env});
     auto status = p.wait_for(limit);
     RunResult r;
     r.status = status ? *status : p.stop();

@@ -1,7 +1,8 @@
 // Issue 17: an effect defined in one file (toy_effect.cpp) is read from a configuration, simulated,
 // fitted by the explainer and written in its report, without any other file naming it: through
-// the libraries, and through the dw-sim and dw-explain programs built with that file. It lives in
-// its own test executable so that the other tests' vocabulary stays the contract's.
+// the libraries, and (issue 44) through the shipped dw-sim and dw-explain, which load that file
+// built as an effect module (DW_EFFECT_MODULES). It lives in its own test executable so that the
+// other tests' vocabulary stays the contract's.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -29,8 +30,8 @@ std::string toy_yaml() {
 }
 PhysicsConfig with_toy() { return parse_physics(toy_yaml(), "toy.yaml"); }
 
-// The dw-sim and dw-explain programs built from their own main.cpp with toy_effect.cpp beside it.
-std::string toy_bin(const std::string& name) { return std::string(DW_TOY_BIN_DIR) + "/" + name; }
+// The shipped programs with the toy effect's file built as an effect module.
+const std::vector<std::string> kWithToyModule{std::string(dw::physics::kEffectModulesVariable) + "=" + DW_TOY_MODULE};
 
 dw::flight::Flight fly(const PhysicsConfig& c) {
     FlyOptions o;
@@ -96,7 +97,7 @@ TEST(EffectRegistry, AToyEffectIsSimulatedExplainedAndReported) {
     EXPECT_TRUE(listed) << j["candidates"].dump();
 }
 
-TEST(EffectRegistry, TheProgramsBuiltWithItFlyExplainAndReportIt) {
+TEST(EffectRegistry, TheShippedProgramsLoadItAsAModuleFlyExplainAndReportIt) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("toy.yaml")) << toy_yaml();
     const std::vector<std::string> fly_args{"fly",       "--formation",        "single",  "--legs", "12", "--seed", "5",
@@ -107,13 +108,18 @@ TEST(EffectRegistry, TheProgramsBuiltWithItFlyExplainAndReportIt) {
         a.push_back(out);
         return a;
     };
-    // The lab's own dw-sim does not know it: the vocabulary there stays the contract's.
+    // Without the module dw-sim does not know it: the vocabulary stays the contract's.
     dw::test::expect_one_line_exit_2(dw::test::run(args(dw::test::bin("dw-sim"), dir.file("plain")), dir),
                                      "unknown key 'toy_lateral_bias': no such effect");
-    auto r = dw::test::run(args(toy_bin("dw-sim"), dir.file("f")), dir);
+    // A module that is not there: one line, exit 2.
+    dw::test::expect_one_line_exit_2(
+        dw::test::run(args(dw::test::bin("dw-sim"), dir.file("none")), dir, std::chrono::minutes(2),
+                      {std::string(dw::physics::kEffectModulesVariable) + "=" + dir.file("missing.so")}),
+        "cannot load effect module");
+    auto r = dw::test::run(args(dw::test::bin("dw-sim"), dir.file("f")), dir, std::chrono::minutes(2), kWithToyModule);
     ASSERT_EQ(r.status, 0) << r.err;
-    r = dw::test::run({toy_bin("dw-explain"), "--real", dir.file("f"), "--out", dir.file("o"), "--quiet"}, dir,
-                      std::chrono::minutes(10));
+    r = dw::test::run({dw::test::bin("dw-explain"), "--real", dir.file("f"), "--out", dir.file("o"), "--quiet"}, dir,
+                      std::chrono::minutes(10), kWithToyModule);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("explained by: toy_lateral_bias"), std::string::npos) << r.out;
     const auto j = nlohmann::json::parse(dw::read_file(dir.file("o/report.json")));

@@ -1,6 +1,8 @@
-// Issue 17: an effect defined in one file — this one. Linked into a test and into copies of the
-// dw-sim and dw-explain programs (tests/CMakeLists.txt), it is read from a configuration,
-// simulated, fitted by the explainer and written in its report without any other file naming it.
+// Issue 17: an effect defined in one file — this one, its last line its registration. Linked into a
+// test, and built as an effect module that the shipped dw-sim and dw-explain load
+// (DW_EFFECT_MODULES, physics/effect_types.hpp; tests/CMakeLists.txt), it is read from a
+// configuration, simulated, fitted by the explainer and written in its report without any other
+// file naming it.
 // A steady sideways force the physics knows nothing of (a draught across the stand, say).
 #include "core/log.hpp"
 #include "core/numbers.hpp"

@@ -1,0 +1,35 @@
+// body_drag: a flying sufferer's own drag (stage: sufferer; its physics is the resimulation's).
+#include <cmath>
+
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+class BodyDrag final : public EffectType {
+public:
+    std::string name() const override { return "body_drag"; }
+    std::vector<EffectParameter> parameters() const override {
+        return {{"cda_h_m2", "m²", 0, 10, 0.0, 0.1, {}, 0.0}, {"cda_v_m2", "m²", 0, 10, 0.0, 0.1, {}, 0.0}};
+    }
+    bool applies(int, bool flying) const override { return flying; }
+    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
+        e.body_drag = {on, v[0], v[1]};
+    }
+    void clear(Effects& e) const override { e.body_drag = {}; }
+    bool enabled(const Effects& e) const override { return e.body_drag.enabled; }
+    std::vector<double> values(const Effects& e) const override { return {e.body_drag.cda_h_m2, e.body_drag.cda_v_m2}; }
+    Stage stage() const override { return Stage::sufferer; }
+    std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
+        return log::cat("**body_drag** — the flying sufferer's own drag against its motion through still air: C_d A = ",
+                        f3(v[0], 4), " m² horizontally, ", f3(v[1], 4),
+                        " m² vertically (f = −½ ρ C_d A |v| v). The simulation had only the neighbours' air. ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_body_drag() { return std::make_unique<BodyDrag>(); }
+
+}  // namespace dw::physics::effects

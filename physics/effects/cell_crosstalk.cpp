@@ -1,0 +1,55 @@
+// cell_crosstalk: one axis of the calibration leaking into another (stage: calibration).
+#include <cmath>
+
+#include "flight/flight.hpp"
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+using flight::kAxes;
+
+class CellCrosstalk final : public EffectType {
+public:
+    std::string name() const override { return "cell_crosstalk"; }
+    std::vector<EffectParameter> parameters() const override {
+        return {{"coefficient", "", -1, 1, -0.5, 0.5, {}, 0.0}};
+    }
+    bool has_axes() const override { return true; }
+    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair a) const override {
+        e.cell_crosstalk = {on, a.from, a.to, v[0]};
+    }
+    void clear(Effects& e) const override { e.cell_crosstalk = {}; }
+    bool enabled(const Effects& e) const override { return e.cell_crosstalk.enabled; }
+    std::vector<double> values(const Effects& e) const override { return {e.cell_crosstalk.coefficient}; }
+    void keys(KeyVisitor& k, Effects& e) const override {
+        auto& x = e.cell_crosstalk;
+        k.flag("enabled", x.enabled);
+        k.choice("from", x.from, kAxes, "axis");
+        k.choice("to", x.to, kAxes, "axis");
+        const auto p = parameters().front();
+        k.number(p.name, x.coefficient, {p.config_min, p.config_max});
+    }
+    Stage stage() const override { return Stage::calibration; }
+    // The leak is of the true `from` axis, which the recording holds (crosstalk leaves it alone).
+    void on_calibration(const Effects& e, Wrench6& w, const Wrench6& recorded) const override {
+        const auto& x = e.cell_crosstalk;
+        w[static_cast<std::size_t>(x.to)] += x.coefficient * recorded[static_cast<std::size_t>(x.from)];
+    }
+    std::string describe(const std::vector<double>& v, AxisPair a, const EffectVoice& who) const override {
+        return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration",
+                        " leaks ", kAxes[a.from], " into ", kAxes[a.to], ": ", f3(v[0] * 100, 2), " % of the true ",
+                        kAxes[a.from], " appears on ", kAxes[a.to], ". ",
+                        who.flying
+                            ? "A flying sufferer has no load cells: this stands for a force that follows another axis "
+                              "(the vehicle tilting as it is pushed, or the thrust direction misestimated). "
+                            : "Recalibrate the stand (dw-stand-agent calibrate). ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_cell_crosstalk() { return std::make_unique<CellCrosstalk>(); }
+
+}  // namespace dw::physics::effects

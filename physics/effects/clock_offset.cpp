@@ -1,0 +1,34 @@
+// clock_offset: the wrench's clock against the poses' (stage: clock).
+#include <cmath>
+
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+class ClockOffset final : public OneNumber<DW_FIELD(clock_offset)> {
+public:
+    ClockOffset() : OneNumber(&Effects::clock_offset, &DW_FIELD(clock_offset)::offset_s) {}
+    std::string name() const override { return kClockOffsetEffect; }
+    std::vector<EffectParameter> parameters() const override {
+        return {{"offset_s", "s", -10, 10, -0.5, 0.5, range(-0.3, 0.3, 25), 0.0}};
+    }
+    Stage stage() const override { return Stage::clock; }
+    double clock_delay_s(const Effects& e) const override { return e.clock_offset.offset_s; }
+    std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
+        return log::cat("**clock_offset** — ", who.clock, " is ", f3(std::abs(v[0])), " s ",
+                        v[0] >= 0 ? "behind" : "ahead of",
+                        " the poses': the force on the sufferer at pose time t is stamped t ", v[0] >= 0 ? "+ " : "− ",
+                        f3(std::abs(v[0])),
+                        " s in wrench.csv. Nothing aerodynamic is missing; the two time bases differ. At 0.5 m/s it ",
+                        "moves the force pattern ", f3(std::abs(v[0]) * 50, 1), " cm ", who.along,
+                        " — while the time shift is the same at every separation (table of shifts). ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_clock_offset() { return std::make_unique<ClockOffset>(); }
+
+}  // namespace dw::physics::effects

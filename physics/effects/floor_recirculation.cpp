@@ -1,0 +1,40 @@
+// floor_recirculation: jets hitting the floor coming back as a bias (stage: air; its physics is wrench_model's).
+#include <cmath>
+
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+class FloorRecirculation final : public EffectType {
+public:
+    std::string name() const override { return "floor_recirculation"; }
+    std::vector<EffectParameter> parameters() const override {
+        return {{"coefficient", "", 0, 1, 0.0, 0.3, range(0.0, 0.1, 5), 0.02}};
+    }
+    bool changes_flow() const override { return true; }
+    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
+        e.floor_recirculation.enabled = on;
+        e.floor_recirculation.coefficient = v[0];
+    }
+    void clear(Effects& e) const override { e.floor_recirculation = {}; }
+    bool enabled(const Effects& e) const override { return e.floor_recirculation.enabled; }
+    std::vector<double> values(const Effects& e) const override { return {e.floor_recirculation.coefficient}; }
+    void keys(KeyVisitor& k, Effects& e) const override {
+        EffectType::keys(k, e);
+        k.number("length_m", e.floor_recirculation.length_m, {0.01, 100});
+    }
+    std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
+        return log::cat(
+            "**floor_recirculation** — jets hitting the floor come back as a bias that grows with the jets impinging "
+            "(coefficient ",
+            f3(v[0]), "). ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_floor_recirculation() { return std::make_unique<FloorRecirculation>(); }
+
+}  // namespace dw::physics::effects

@@ -1,0 +1,31 @@
+// force_scale: a gain on the whole recorded wrench (stage: calibration).
+#include <cmath>
+
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+class ForceScale final : public OneNumber<DW_FIELD(force_scale)> {
+public:
+    ForceScale() : OneNumber(&Effects::force_scale, &DW_FIELD(force_scale)::scale) {}
+    std::string name() const override { return "force_scale"; }
+    std::vector<EffectParameter> parameters() const override { return {{"scale", "", 0, 10, 0.3, 3.0, {}, 1.0}}; }
+    Stage stage() const override { return Stage::calibration; }
+    void on_calibration(const Effects& e, Wrench6& w, const Wrench6&) const override {
+        for (auto& v : w) v *= e.force_scale.scale;
+    }
+    std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
+        return log::cat("**force_scale** — the recorded wrench is ", f3(v[0]),
+                        " × the simulated one everywhere: a mass, drag coefficient or ",
+                        who.flying ? "thrust-model gain" : "load-cell gain", " that differs from the model by ",
+                        f3((v[0] - 1) * 100, 1), " %. ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_force_scale() { return std::make_unique<ForceScale>(); }
+
+}  // namespace dw::physics::effects

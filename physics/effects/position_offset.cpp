@@ -1,0 +1,50 @@
+// position_offset: the neighbours' motion-capture frame offset from the sufferer's (stage: positions).
+#include <cmath>
+
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+class PositionOffset final : public EffectType {
+public:
+    std::string name() const override { return "position_offset"; }
+    std::vector<EffectParameter> parameters() const override {
+        std::vector<EffectParameter> p;
+        for (const char* axis : {"offset_n_m", "offset_e_m", "offset_d_m"})
+            p.push_back({axis, "m", -10, 10, -0.3, 0.3, {}, 0.0});
+        return p;
+    }
+    bool changes_flow() const override { return true; }
+    std::string grouped_key() const override { return "offset_m"; }
+    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
+        e.position_offset = {on, {v[0], v[1], v[2]}};
+    }
+    void clear(Effects& e) const override { e.position_offset = {}; }
+    bool enabled(const Effects& e) const override { return e.position_offset.enabled; }
+    std::vector<double> values(const Effects& e) const override {
+        return {e.position_offset.offset_m.begin(), e.position_offset.offset_m.end()};
+    }
+    void keys(KeyVisitor& k, Effects& e) const override {
+        k.flag("enabled", e.position_offset.enabled);
+        const auto p = parameters().front();  // the three axes share their bounds
+        k.numbers(grouped_key(), e.position_offset.offset_m, {p.config_min, p.config_max, "m"},
+                  "expected [n, e, d] in metres");
+    }
+    Stage stage() const override { return Stage::positions; }
+    std::array<double, 3> position_error_m(const Effects& e) const override { return e.position_offset.offset_m; }
+    std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
+        return log::cat(
+            "**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", f3(v[0]),
+            ", ", f3(v[1]), ", ", f3(v[2]),
+            ") m (N, E, D): the force pattern sits off the recorded positions by a fixed distance, the same ",
+            who.flying ? "whichever way the neighbour passes" : "on +E and −E legs", ". ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_position_offset() { return std::make_unique<PositionOffset>(); }
+
+}  // namespace dw::physics::effects

@@ -1,0 +1,36 @@
+// sensor_lag: the sensor's first-order response (stage: sensor).
+#include <cmath>
+
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+#include "physics/recording_chain.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+class SensorLag final : public OneNumber<DW_FIELD(sensor_lag)> {
+public:
+    SensorLag() : OneNumber(&Effects::sensor_lag, &DW_FIELD(sensor_lag)::tau_s) {}
+    std::string name() const override { return "sensor_lag"; }
+    std::vector<EffectParameter> parameters() const override {
+        return {{"tau_s", "s", 0, 10, 0.0, 0.5, range(0.0, 0.3, 13), 0.0}};
+    }
+    Stage stage() const override { return Stage::sensor; }
+    void on_sensor(const Effects& e, const std::vector<double>& t, RecordedWrench& series) const override {
+        first_order_lag(e.sensor_lag.tau_s, t, series);
+    }
+    std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
+        return log::cat(
+            "**sensor_lag** — ", who.sensor, " is a first-order low-pass of the force with a time constant of ",
+            f3(v[0]), " s: peaks are late and flattened. ",
+            who.flying ? "The estimate's own dynamics (the thrust model's motor lag, the state estimator's filtering)"
+                       : "The stand's dynamics (filtering, mounting)",
+            " were left out. ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_sensor_lag() { return std::make_unique<SensorLag>(); }
+
+}  // namespace dw::physics::effects

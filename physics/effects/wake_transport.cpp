@@ -1,0 +1,32 @@
+// wake_transport: the downwash's descent time (stage: air; its physics is wrench_model's).
+#include <cmath>
+
+#include "physics/effects/builtins.hpp"
+#include "physics/effects/common.hpp"
+
+namespace dw::physics::effects {
+namespace {
+
+class WakeTransport final : public OneNumber<DW_FIELD(wake_transport)> {
+public:
+    WakeTransport() : OneNumber(&Effects::wake_transport, &DW_FIELD(wake_transport)::delay_scale) {}
+    std::string name() const override { return "wake_transport"; }
+    std::vector<EffectParameter> parameters() const override {
+        return {{"delay_scale", "", 0, 10, 0.0, 5.0, range(0.0, 3.0, 7), 1.0}};
+    }
+    bool changes_flow() const override { return true; }
+    std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
+        return log::cat(
+            "**wake_transport** — the downwash takes time to descend: the force follows each neighbour's state ",
+            f3(v[0], 2),
+            " × τ(s) ago, τ(s) the turbulent jet's descent time over the vertical separation s (146 ms at 1.3 m for ",
+            "k = 1). The simulation had the force follow the neighbour instantly. Its signature: the time shift grows "
+            "with separation. ");
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<EffectType> make_wake_transport() { return std::make_unique<WakeTransport>(); }
+
+}  // namespace dw::physics::effects
