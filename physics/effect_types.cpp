@@ -123,7 +123,7 @@ void EffectType::keys(KeyVisitor& k, Effects& e) const {
 }
 
 void EffectType::on_recording(const std::vector<double>&, const std::vector<double>&, RecordedWrench&) const {}
-void EffectType::on_sensor(const Effects&, const std::vector<double>&, RecordedWrench&) const {}
+void EffectType::sensor_step(const Effects&, double, const Wrench6&, const Wrench6& x1, Wrench6& y) const { y = x1; }
 void EffectType::on_calibration(const Effects&, Wrench6&, const Wrench6&) const {}
 
 }  // namespace dw::physics

@@ -85,8 +85,10 @@ public:
     // The chain's hooks, each called only at the effect's own stage while it is on:
     // positions: how far the motion capture's positions are off the truth (NED, m).
     virtual std::array<double, 3> position_error_m(const Effects&) const { return {0, 0, 0}; }
-    // sensor: what the sensor reads of the force on the sufferer, sampled at times t (s, increasing).
-    virtual void on_sensor(const Effects&, const std::vector<double>& t, RecordedWrench& series) const;
+    // sensor: one step of the sensor's response: over dt seconds the force on the sufferer went
+    // (linearly) from x0 to x1 and the reading from y, which becomes the reading at the step's end.
+    // One recurrence for a whole series and for a live stream (RecordingChain).
+    virtual void sensor_step(const Effects&, double dt, const Wrench6& x0, const Wrench6& x1, Wrench6& y) const;
     // calibration: one calibrated sample after the tare; `recorded` is the recording's own value of
     // that sample (while simulating, w itself as the earlier effects left it).
     virtual void on_calibration(const Effects&, Wrench6& w, const Wrench6& recorded) const;

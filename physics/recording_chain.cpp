@@ -19,7 +19,35 @@ std::array<double, 3> RecordingChain::position_error_m() const {
 }
 
 void RecordingChain::sensor(const std::vector<double>& t, RecordedWrench& series) const {
-    for (const auto* e : at(Stage::sensor)) e->on_sensor(effects_, t, series);
+    for (const auto* e : at(Stage::sensor)) {
+        if (series.empty()) return;
+        Wrench6 x0 = series.front();  // the reading starts at the force
+        for (std::size_t i = 1; i < series.size(); ++i) {
+            const Wrench6 x1 = series[i];
+            series[i] = series[i - 1];
+            e->sensor_step(effects_, t[i] - t[i - 1], x0, x1, series[i]);
+            x0 = x1;
+        }
+    }
+}
+
+Wrench6 RecordingChain::SensorStream::read(double t, const Wrench6& x) {
+    const auto& effects = chain_.at(Stage::sensor);
+    if (in_.empty()) {  // the first reading is the force
+        in_.assign(effects.size(), x);
+        out_.assign(effects.size(), x);
+        t_ = t;
+        return x;
+    }
+    if (!(t > t_)) return effects.empty() ? x : out_.back();
+    Wrench6 input = x;
+    for (std::size_t k = 0; k < effects.size(); ++k) {
+        effects[k]->sensor_step(chain_.effects_, t - t_, in_[k], input, out_[k]);
+        in_[k] = input;
+        input = out_[k];
+    }
+    t_ = t;
+    return input;
 }
 
 void RecordingChain::calibration(Wrench6& w, const Wrench6& recorded) const {
@@ -40,17 +68,14 @@ void RecordingChain::recording(const std::vector<double>& stamps, RecordedWrench
     apply_registered_effects(effects_, stamps, w);
 }
 
-void first_order_lag(double tau_s, const std::vector<double>& t, RecordedWrench& series) {
-    if (!(tau_s > 0) || series.empty()) return;
-    // dy/dt = (x - y) / tau with x linear between samples.
-    Wrench6 x0 = series.front();
-    for (std::size_t i = 1; i < series.size(); ++i) {
-        const double dt = t[i] - t[i - 1], a = std::exp(-dt / tau_s), b = dt > 0 ? tau_s / dt * (1 - a) : 1.0;
-        const Wrench6 x1 = series[i];
-        for (std::size_t k = 0; k < 6; ++k)
-            series[i][k] = a * series[i - 1][k] + x1[k] - a * x0[k] - b * (x1[k] - x0[k]);
-        x0 = x1;
+void first_order_lag_step(double tau_s, double dt, const Wrench6& x0, const Wrench6& x1, Wrench6& y) {
+    if (!(tau_s > 0)) {
+        y = x1;
+        return;
     }
+    // dy/dt = (x - y) / tau with x linear over the step.
+    const double a = std::exp(-dt / tau_s), b = dt > 0 ? tau_s / dt * (1 - a) : 1.0;
+    for (std::size_t k = 0; k < 6; ++k) y[k] = a * y[k] + x1[k] - a * x0[k] - b * (x1[k] - x0[k]);
 }
 
 }  // namespace dw::physics

@@ -22,6 +22,18 @@ public:
     std::array<double, 3> position_error_m() const;
     // sensor: the force on the sufferer, sampled at times t, becomes what the sensor reads.
     void sensor(const std::vector<double>& t, RecordedWrench& series) const;
+    // The same, live: each call gives the reading at time t (s) of the force x then; a time not
+    // after the last one gives the last reading.
+    class SensorStream {
+    public:
+        explicit SensorStream(const RecordingChain& chain) : chain_(chain) {}
+        Wrench6 read(double t, const Wrench6& x);
+
+    private:
+        const RecordingChain& chain_;
+        std::vector<Wrench6> in_, out_;  // per sensor effect: its last input and reading
+        double t_ = 0;
+    };
     // calibration: one calibrated, tared sample; `recorded` as EffectType::on_calibration says.
     void calibration(Wrench6& w, const Wrench6& recorded) const;
     void calibration(Wrench6& w) const;  // while simulating: the sample is its own recording
@@ -36,8 +48,8 @@ private:
     const std::vector<const EffectType*>& at(Stage s) const { return at_[static_cast<std::size_t>(s)]; }
 };
 
-// A first-order lag of time constant tau_s (s) of a series sampled at times t, the input taken as
-// linear between samples (exact for that input; the first sample is the start).
-void first_order_lag(double tau_s, const std::vector<double>& t, RecordedWrench& series);
+// One step of a first-order lag of time constant tau_s (s) over dt seconds, the input going linearly
+// from x0 to x1 (exact for that input); y, the output at the step's start, becomes its end's.
+void first_order_lag_step(double tau_s, double dt, const Wrench6& x0, const Wrench6& x1, Wrench6& y);
 
 }  // namespace dw::physics

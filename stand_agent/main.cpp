@@ -99,7 +99,9 @@ int run(int argc, char** argv) {
     dw::dds::Heartbeat heartbeat(participant);
     dw::stand::AgentOptions aopt;
     aopt.calibration = cal;
-    dw::stand::StandAgent agent(aopt, cli.clock());
+    // Simulated, the physics' clock effect is the agent's clock running late (the recording chain).
+    dw::OffsetClock agent_clock(cli.clock(), sim ? dw::from_seconds(dw::stand::sim_clock_delay_s(physics)) : 0);
+    dw::stand::StandAgent agent(aopt, agent_clock);
 
     std::unique_ptr<dw::stand::Hx711Lines> lines;
     std::unique_ptr<dw::stand::PhysicsSource> source;

@@ -12,7 +12,14 @@
 namespace dw::stand {
 
 PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, std::string sufferer)
-    : model_(physics),
+    : physics_(physics),
+      chain_(physics_.effects),
+      sensor_(chain_),
+      position_error_([&] {
+          const auto e = chain_.position_error_m();
+          return physics::Vec3(e[0], e[1], e[2]);
+      }()),
+      model_(physics),
       stand_(physics.stand),
       sufferer_name_(std::move(sufferer)),
       sufferer_(0, 0, -physics.stand.height_m),
@@ -26,7 +33,7 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
                   continue;
               }
               if (!b.tracking_valid()) continue;
-              physics::Producer pr = model_.producer(pos);
+              physics::Producer pr = model_.producer(pos - position_error_);  // reported = true + error
               const Eigen::Quaterniond q(b.orientation().w(), b.orientation().x(), b.orientation().y(),
                                          b.orientation().z());
               if (q.norm() > 0.5) pr.axis = q.normalized() * physics::Vec3::UnitZ();
@@ -37,10 +44,20 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
           sufferer_ = suf;
       }) {}
 
-double PhysicsSource::force(int chip, Nanos) {
+double PhysicsSource::force(int chip, Nanos t) {
     std::lock_guard lock(mutex_);
-    const physics::Wrench w = model_.evaluate(sufferer_, producers_);
+    const physics::Wrench truth = model_.evaluate(sufferer_, producers_);
+    physics::Wrench6 x;
+    for (int a = 0; a < 6; ++a) x[static_cast<std::size_t>(a)] = truth[a];
+    physics::Wrench6 read = sensor_.read(to_seconds(t), x);
+    chain_.calibration(read);
+    physics::Wrench w;
+    for (int a = 0; a < 6; ++a) w[a] = read[static_cast<std::size_t>(a)];
     return stand_.wrench_to_cells(w)[chip];
+}
+
+double sim_clock_delay_s(const physics::PhysicsConfig& physics) {
+    return physics::RecordingChain(physics.effects).clock_delay_s();
 }
 
 std::uint64_t run_agent(dds::Participant& p, Hx711Driver& driver, StandAgent& agent, const RunOptions& o) {

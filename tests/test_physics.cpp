@@ -10,6 +10,7 @@
 #include "physics/config.hpp"
 #include "physics/flight_sim.hpp"
 #include "physics/jet.hpp"
+#include "physics/recording_chain.hpp"
 #include "physics/stand.hpp"
 #include "physics/wrench_model.hpp"
 
@@ -576,4 +577,42 @@ TEST(PhysicsHardening, DuplicateKeysAndNonFiniteOffsetsAreRefused) {
         error("effects:\n  position_offset: {enabled: true, offset_m: [.nan, 0, 0]}\n").find("not a finite number"),
         std::string::npos);
     EXPECT_NE(error("stand: {noise_n: .inf}\n").find("not a finite number"), std::string::npos);
+}
+
+// Issue 44: one recording chain. Each stage acts once, in the chain's order, and the sensor's
+// recurrence gives the same readings to a whole series and to a live stream.
+TEST(RecordingChain, EachStageActsOnceAndLiveReadingsAreTheSeriesReadings) {
+    dw::physics::Effects fx;
+    fx.sensor_lag = {true, 0.05};
+    fx.force_scale = {true, 1.2};
+    fx.cell_crosstalk = {true, 2, 0, 0.1};  // f_d leaks into f_n
+    fx.clock_offset = {true, 0.03};
+    fx.position_offset = {true, {0.1, -0.2, 0.0}};
+    const dw::physics::RecordingChain chain(fx);
+    EXPECT_DOUBLE_EQ(chain.clock_delay_s(), 0.03);
+    EXPECT_EQ(chain.position_error_m(), (std::array<double, 3>{0.1, -0.2, 0.0}));
+    dw::physics::Wrench6 w{0, 0, 1, 0, 0, 0};
+    chain.calibration(w);  // the gain, then the leak of the recorded (gained) f_d
+    EXPECT_DOUBLE_EQ(w[2], 1.2);
+    EXPECT_DOUBLE_EQ(w[0], 0.1 * 1.2);
+
+    std::vector<double> t;
+    dw::physics::RecordedWrench series;
+    for (int i = 0; i < 400; ++i) {  // irregular stamps, a step and a ramp
+        t.push_back(0.004 * i + 0.001 * (i % 3));
+        series.push_back({0, 0, t.back() < 0.5 ? 0.0 : 1.0 + t.back(), 0, 0, 0});
+    }
+    auto whole = series;
+    chain.sensor(t, whole);
+    dw::physics::RecordingChain::SensorStream live(chain);
+    for (std::size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(live.read(t[i], series[i])[2], whole[i][2], 1e-12) << i;
+    // A first-order lag: 63 % of a step after one time constant (the ramp adds a little).
+    std::size_t k = 0;
+    while (t[k] < 0.5 + 0.05) ++k;
+    EXPECT_NEAR(whole[k][2] / series[k][2], 1 - std::exp(-1.0), 0.05);
+    // Nothing on: the series is what the sensor reads.
+    const dw::physics::Effects none;
+    auto untouched = series;
+    dw::physics::RecordingChain(none).sensor(t, untouched);
+    EXPECT_EQ(untouched, series);
 }

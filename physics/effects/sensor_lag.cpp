@@ -16,8 +16,8 @@ public:
         return {{"tau_s", "s", 0, 10, 0.0, 0.5, range(0.0, 0.3, 13), 0.0}};
     }
     Stage stage() const override { return Stage::sensor; }
-    void on_sensor(const Effects& e, const std::vector<double>& t, RecordedWrench& series) const override {
-        first_order_lag(e.sensor_lag.tau_s, t, series);
+    void sensor_step(const Effects& e, double dt, const Wrench6& x0, const Wrench6& x1, Wrench6& y) const override {
+        first_order_lag_step(e.sensor_lag.tau_s, dt, x0, x1, y);
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(
