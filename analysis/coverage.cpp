@@ -24,30 +24,37 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// An effect hidden in the flights: the formation that shows it and the range each parameter's
-// hidden value is drawn from (uniformly, a new value per seed).
+// An effect hidden in the flights, as its type's coverage case says.
 struct Target {
-    std::string effect, formation;
-    std::vector<std::pair<double, double>> ranges;
-    std::optional<std::pair<int, int>> axes = {};  // an effect between two axes: from, to
+    std::string effect;
+    physics::CoverageCase c;
 };
 
+// Every registered effect with a coverage case, in the registry's order.
 std::vector<Target> targets() {
-    return {
-        {"clock_offset", "single", {{-0.15, 0.15}}},
-        {"sensor_lag", "single", {{0.02, 0.15}}},
-        {"wake_transport", "leader_follower", {{0.5, 2.0}}},
-        {"position_offset", "single", {{-0.1, 0.1}, {-0.1, 0.1}, {-0.1, 0.1}}},
-        {"force_scale", "single", {{0.8, 1.25}}},
-        {"cell_crosstalk", "single", {{-0.06, 0.06}}, std::pair{2, 1}},  // f_d leaks into f_e
-        {"jet_merging", "leader_follower3", {{0.5, 0.95}}},
-        {"floor_recirculation", "stack", {{0.01, 0.08}}},
-    };
+    std::vector<Target> out;
+    for (const auto* t : physics::effect_types())
+        if (auto c = t->coverage_case()) out.push_back({t->name(), std::move(*c)});
+    return out;
 }
 
-// Effects of the vocabulary a flight over the stand cannot show: they act only on a sufferer
-// that flies, and dw-sim flies the neighbours over a fixed stand.
-constexpr const char* kFlyingOnly[] = {"body_drag", "ground_effect"};
+std::string covered_names() {
+    std::vector<std::string> names;
+    for (const auto& t : targets()) names.push_back(t.effect);
+    return log::alternatives(names);
+}
+
+// The effects without one, and why (for the table).
+std::vector<std::pair<std::string, std::string>> not_covered() {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto* t : physics::effect_types())
+        if (!t->coverage_case())
+            out.emplace_back(t->name(), t->applies(3, false)
+                                            ? "not measured: it has no coverage case"
+                                            : "not measured: it acts only on a flying sufferer; dw-sim flies over a "
+                                              "fixed stand");
+    return out;
+}
 
 // A fraction of flights below this giving an interval at all: the effect is not identifiable from
 // such flights (the explainer then claims nothing, rather than a confident wrong value).
@@ -62,13 +69,13 @@ struct Outcome {
 Outcome one_flight(const Target& t, const Effect& e, int seed, const CoverageOptions& o) {
     std::mt19937_64 rng(static_cast<std::uint64_t>(seed) * 7919 + std::hash<std::string>{}(t.effect) % 7919);
     Outcome out;
-    for (const auto& [lo, hi] : t.ranges) out.hidden.push_back(std::uniform_real_distribution<double>(lo, hi)(rng));
+    for (const auto& [lo, hi] : t.c.hidden) out.hidden.push_back(std::uniform_real_distribution<double>(lo, hi)(rng));
     Effect hide = e;
-    if (t.axes) hide.from = t.axes->first, hide.to = t.axes->second;
+    if (e.type->has_axes()) hide.from = t.c.axes.from, hide.to = t.c.axes.to;
     physics::PhysicsConfig truth;
     hide.apply(truth, out.hidden);
     const std::string dir = (fs::path(o.out_dir) / t.effect / log::cat("seed_", seed)).string();
-    fly_simulated(truth, t.formation, 1000 + static_cast<std::uint64_t>(seed), dir + "/flight", o.stop, o.legs);
+    fly_simulated(truth, t.c.formation, 1000 + static_cast<std::uint64_t>(seed), dir + "/flight", o.stop, o.legs);
     ExplainOptions eo;
     eo.candidates = {e};
     eo.max_effects = 1;
@@ -79,7 +86,7 @@ Outcome one_flight(const Target& t, const Effect& e, int seed, const CoverageOpt
     out.values = c.values, out.lo = c.lo, out.hi = c.hi;
     out.interval = c.lo != c.hi;  // the explainer makes an interval only for a fit worth the held-out test
     out.accepted = c.accepted;
-    if (t.axes && *t.axes != std::pair{c.effect.from, c.effect.to})
+    if (e.type->has_axes() && (t.c.axes.from != c.effect.from || t.c.axes.to != c.effect.to))
         out.hidden.assign(out.hidden.size(), 0.0);  // no leak between the axes it chose
     return out;
 }
@@ -101,8 +108,8 @@ void judge(CoverageRow& r) {
 
 CoverageRow row_of(const Target& t, const Effect& e, std::size_t p, const std::vector<Outcome>& outs) {
     CoverageRow r;
-    r.effect = t.effect, r.param = e.params[p].name, r.formation = t.formation;
-    r.drawn = log::cat("U(", t.ranges[p].first, ", ", t.ranges[p].second, ")");
+    r.effect = t.effect, r.param = e.params[p].name, r.formation = t.c.formation;
+    r.drawn = log::cat("U(", t.c.hidden[p].first, ", ", t.c.hidden[p].second, ")");
     double width = 0;
     for (const auto& x : outs) {
         ++r.flights;
@@ -127,10 +134,8 @@ std::string table(const std::vector<CoverageRow>& rows, const CoverageOptions& o
            << " | " << r.intervals << " | " << r.covered << " | "
            << (r.intervals ? fixed(100 * r.coverage(), 0) + " %" : "–") << " | " << r.accepted << " | "
            << fixed(r.mean_half_width, 4) << " | " << r.why << " |\n";
-    for (const auto* name : kFlyingOnly)
-        md << "| " << name
-           << " | – | – | – | 0 | – | – | – | – | – | not measured: it acts only on a flying sufferer; dw-sim flies "
-              "over a fixed stand |\n";
+    for (const auto& [name, why] : not_covered())
+        md << "| " << name << " | – | – | – | 0 | – | – | – | – | – | " << why << " |\n";
     md << "\n"
        << o.seeds << " flights per effect, " << o.legs
        << " legs each (dw-sim fly, seeds 1000 + k); each explained with the hidden effect as the "
@@ -163,8 +168,8 @@ CoverageResult run_coverage(const CoverageOptions& o) {
             chosen.emplace_back(t, effects_named({t.effect}).front());
     for (const auto& n : o.effects)
         if (std::none_of(chosen.begin(), chosen.end(), [&](const auto& c) { return c.first.effect == n; }))
-            throw InputError(log::cat("--effects: '", n,
-                                      "' has no coverage run (body_drag and ground_effect need a flying sufferer)"));
+            throw InputError(
+                log::cat("--effects: '", n, "' has no coverage run (those with one: ", covered_names(), ")"));
     if (o.seeds < 1) throw InputError("--seeds: at least 1 flight per effect");
     StagedFolder staged(o.out_dir);  // the flights, reports and tables appear together, or not at all
     CoverageOptions in = o;          // every flight and report of the run goes into the staging folder

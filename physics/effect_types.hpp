@@ -15,6 +15,8 @@
 
 #include <array>
 #include <memory>
+#include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -44,6 +46,15 @@ struct AxisPair {
 struct EffectVoice {
     bool flying = false;
     std::string sensor, clock, along;  // "the stand", "the stand's clock", where the force pattern moves
+};
+
+// How `dw-explain coverage` checks the explainer's intervals on an effect: simulated flights in
+// this formation, each parameter's hidden value drawn uniformly from its range (an effect between
+// two axes: these).
+struct CoverageCase {
+    std::string formation;
+    std::vector<std::pair<double, double>> hidden;
+    AxisPair axes{};
 };
 
 using RecordedWrench = std::vector<std::array<double, 6>>;
@@ -98,6 +109,8 @@ public:
     // Effects::extra.
     virtual void on_recording(const std::vector<double>& values, const std::vector<double>& stamps,
                               RecordedWrench& w) const;
+    // Its coverage case; none for an effect that the simulated flights over a stand cannot show.
+    virtual std::optional<CoverageCase> coverage_case() const { return std::nullopt; }
     // Its paragraph in the report (without the held-out numbers, which the report adds).
     virtual std::string describe(const std::vector<double>& values, AxisPair axes, const EffectVoice& who) const = 0;
 

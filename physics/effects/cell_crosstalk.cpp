@@ -37,6 +37,9 @@ public:
         const auto& x = e.cell_crosstalk;
         w[static_cast<std::size_t>(x.to)] += x.coefficient * recorded[static_cast<std::size_t>(x.from)];
     }
+    std::optional<CoverageCase> coverage_case() const override {
+        return CoverageCase{"single", {{-0.06, 0.06}}, {2, 1}};
+    }  // f_d leaks into f_e
     std::string describe(const std::vector<double>& v, AxisPair a, const EffectVoice& who) const override {
         return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration",
                         " leaks ", kAxes[a.from], " into ", kAxes[a.to], ": ", f3(v[0] * 100, 2), " % of the true ",

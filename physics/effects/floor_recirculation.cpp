@@ -25,6 +25,7 @@ public:
         EffectType::keys(k, e);
         k.number("length_m", e.floor_recirculation.length_m, {0.01, 100});
     }
+    std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"stack", {{0.01, 0.08}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat(
             "**floor_recirculation** — jets hitting the floor come back as a bias that grows with the jets impinging "

@@ -16,6 +16,7 @@ public:
     void on_calibration(const Effects& e, Wrench6& w, const Wrench6&) const override {
         for (auto& v : w) v *= e.force_scale.scale;
     }
+    std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{0.8, 1.25}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**force_scale** — the recorded wrench is ", f3(v[0]),
                         " × the simulated one everywhere: a mass, drag coefficient or ",

@@ -28,6 +28,9 @@ public:
         k.number("full", e.jet_merging.full, {0, 10});
         k.require(e.jet_merging.full > e.jet_merging.onset, "full", "must be greater than onset");
     }
+    std::optional<CoverageCase> coverage_case() const override {
+        return CoverageCase{"leader_follower3", {{0.5, 0.95}}};
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat(
             "**jet_merging** — neighbouring jets merge into one contracted, momentum-conserving column where their "

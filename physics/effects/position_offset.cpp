@@ -34,6 +34,9 @@ public:
     }
     Stage stage() const override { return Stage::positions; }
     std::array<double, 3> position_error_m(const Effects& e) const override { return e.position_offset.offset_m; }
+    std::optional<CoverageCase> coverage_case() const override {
+        return CoverageCase{"single", {{-0.1, 0.1}, {-0.1, 0.1}, {-0.1, 0.1}}};
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(
             "**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", f3(v[0]),

@@ -15,6 +15,7 @@ public:
         return {{"delay_scale", "", 0, 10, 0.0, 5.0, range(0.0, 3.0, 7), 1.0}};
     }
     bool changes_flow() const override { return true; }
+    std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"leader_follower", {{0.5, 2.0}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat(
             "**wake_transport** — the downwash takes time to descend: the force follows each neighbour's state ",
