@@ -73,9 +73,7 @@ struct ProofCommand {
         sub->add_option("--out", options.out_dir, "output folder (flights, reports, proof.md)")->required();
         sub->add_option("--null-seeds", options.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
         sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(dw::kJobsRange));
-        sub->add_option(
-            "--cases", cases,
-            "clock_offset, wake_transport, sensor_lag, jet_merging, cell_crosstalk, two_effects, null (default: all)");
+        sub->add_option("--cases", cases, dw::analysis::proof_case_list() + " (default: all)");
     }
     int run(const Progress& progress) {
         prepare(options, progress);

@@ -37,56 +37,38 @@ struct Case {
     std::uint64_t seed = 1;
 };
 
+// Every registered effect's own proof case (in the registry's order), then two effects at once.
 std::vector<Case> cases() {
-    return {
-        {"clock_offset",
-         "single",
-         "clock offset 0.1 s (legs both ways; the maps look right)",
-         [](physics::PhysicsConfig& c) {
-             c.effects.clock_offset = {true, 0.1};
-         },
-         {{"clock_offset", "offset_s", 0.1}},
-         11},
-        {"wake_transport",
-         "leader_follower",
-         "wake transport delay (jet law, scale 1)",
-         [](physics::PhysicsConfig& c) {
-             c.effects.wake_transport = {true, 1.0};
-         },
-         {{"wake_transport", "delay_scale", 1.0}},
-         12},
-        {"sensor_lag",
-         "single",
-         "stand lag, tau 0.08 s",
-         [](physics::PhysicsConfig& c) {
-             c.effects.sensor_lag = {true, 0.08};
-         },
-         {{"sensor_lag", "tau_s", 0.08}},
-         13},
-        {"jet_merging",
-         "leader_follower3",
-         "jet merging (only where jets overlap: K = 3, >= 1 m)",
-         [](physics::PhysicsConfig& c) { c.effects.jet_merging.enabled = true; },
-         {{"jet_merging", "contraction", 0.8}},
-         14},
-        {"cell_crosstalk",
-         "single",
-         "crosstalk f_d -> f_e, 4 %",
-         [](physics::PhysicsConfig& c) {
-             c.effects.cell_crosstalk = {true, 2, 1, 0.04};
-         },
-         {{"cell_crosstalk", "coefficient", 0.04}},
-         15},
-        {"two_effects",
-         "side_by_side",
-         "clock offset 0.08 s and force scale 1.15",
-         [](physics::PhysicsConfig& c) {
-             c.effects.clock_offset = {true, 0.08};
-             c.effects.force_scale = {true, 1.15};
-         },
-         {{"clock_offset", "offset_s", 0.08}, {"force_scale", "scale", 1.15}},
-         16},
-    };
+    std::vector<Case> out;
+    for (const auto* t : physics::effect_types()) {
+        auto p = t->proof_case();
+        if (!p) continue;
+        Case c{t->name(),
+               p->formation,
+               p->description,
+               [t, v = p->values, axes = p->axes](physics::PhysicsConfig& config) { t->set(config.effects, v, axes); },
+               {},
+               p->seed};
+        const auto params = t->parameters();
+        for (std::size_t k = 0; k < params.size(); ++k) c.truth.push_back({t->name(), params[k].name, p->values[k], k});
+        out.push_back(std::move(c));
+    }
+    out.push_back({"two_effects",
+                   "side_by_side",
+                   "clock offset 0.08 s and force scale 1.15",
+                   [](physics::PhysicsConfig& c) {
+                       c.effects.clock_offset = {true, 0.08};
+                       c.effects.force_scale = {true, 1.15};
+                   },
+                   {{"clock_offset", "offset_s", 0.08}, {"force_scale", "scale", 1.15}},
+                   16});
+    return out;
+}
+
+std::vector<std::string> case_names() {
+    std::vector<std::string> known{"null"};
+    for (const auto& c : cases()) known.push_back(c.name);
+    return known;
 }
 
 // A truth the explainer did not accept: its fit all the same (is the parameter recovered, only not
@@ -173,6 +155,8 @@ std::string table(const std::vector<ProofRow>& rows, const std::string& flight, 
 
 }  // namespace
 
+std::string proof_case_list() { return log::join(case_names()); }
+
 void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& formation, std::uint64_t seed,
                    const std::string& dir, const std::stop_token& stop, int legs) {
     fs::create_directories(fs::path(dir).parent_path());
@@ -242,8 +226,7 @@ ProofResult run_proof(const ProofOptions& o) {
         std::lock_guard lock(m);
         if (o.progress) o.progress(s);
     };
-    std::vector<std::string> known{"null"};
-    for (const auto& c : cases()) known.push_back(c.name);
+    const auto known = case_names();
     for (const auto& n : o.cases)
         if (!find_name(known, n)) throw InputError("--cases: " + unknown_name_problem("case", n, known));
     if (wanted_null(o) && o.null_seeds < 1)

@@ -16,7 +16,7 @@ namespace dw::analysis {
 struct ProofOptions {
     std::string out_dir;
     int null_seeds = 10;
-    std::vector<std::string> cases;  // empty: all; an unknown name is a dw::InputError
+    std::vector<std::string> cases;  // empty: all (proof_case_list); an unknown name is a dw::InputError
     int jobs = 2;                    // flights flown and explained at once
     std::stop_token stop;            // between flights and fits: dw::Stopped
     std::function<void(const std::string&)> progress;
@@ -42,6 +42,8 @@ struct ProofResult {
 
 // The proofs' table, in their output folder.
 inline constexpr const char* kProofTableFile = "proof.md";
+// The proof's cases, comma-separated: "null", each effect's own (EffectType::proof_case), "two_effects".
+std::string proof_case_list();
 ProofResult run_proof(const ProofOptions& o);
 
 // A flight simulated as `dw-sim fly` flies it (the simulator as a library), with this physics

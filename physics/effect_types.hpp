@@ -14,6 +14,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -55,6 +56,15 @@ struct CoverageCase {
     std::string formation;
     std::vector<std::pair<double, double>> hidden;
     AxisPair axes{};
+};
+
+// How `dw-explain proof` shows the explainer finds an effect: one simulated flight in this
+// formation (this seed) with the effect hidden at these values (an effect between two axes: these).
+struct ProofCase {
+    std::string formation, description;
+    std::vector<double> values;
+    AxisPair axes{};
+    std::uint64_t seed = 1;
 };
 
 using RecordedWrench = std::vector<std::array<double, 6>>;
@@ -109,6 +119,8 @@ public:
     // Effects::extra.
     virtual void on_recording(const std::vector<double>& values, const std::vector<double>& stamps,
                               RecordedWrench& w) const;
+    // Its proof case; none for an effect that the simulated flights over a stand cannot show.
+    virtual std::optional<ProofCase> proof_case() const { return std::nullopt; }
     // Its coverage case; none for an effect that the simulated flights over a stand cannot show.
     virtual std::optional<CoverageCase> coverage_case() const { return std::nullopt; }
     // Its paragraph in the report (without the held-out numbers, which the report adds).

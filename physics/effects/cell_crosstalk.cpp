@@ -37,6 +37,9 @@ public:
         const auto& x = e.cell_crosstalk;
         w[static_cast<std::size_t>(x.to)] += x.coefficient * recorded[static_cast<std::size_t>(x.from)];
     }
+    std::optional<ProofCase> proof_case() const override {
+        return ProofCase{"single", "crosstalk f_d -> f_e, 4 %", {0.04}, {2, 1}, 15};
+    }
     std::optional<CoverageCase> coverage_case() const override {
         return CoverageCase{"single", {{-0.06, 0.06}}, {2, 1}};
     }  // f_d leaks into f_e

@@ -16,6 +16,9 @@ public:
     }
     Stage stage() const override { return Stage::clock; }
     double clock_delay_s(const Effects& e) const override { return e.clock_offset.offset_s; }
+    std::optional<ProofCase> proof_case() const override {
+        return ProofCase{"single", "clock offset 0.1 s (legs both ways; the maps look right)", {0.1}, {}, 11};
+    }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{-0.15, 0.15}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**clock_offset** — ", who.clock, " is ", f3(std::abs(v[0])), " s ",

@@ -28,6 +28,9 @@ public:
         k.number("full", e.jet_merging.full, {0, 10});
         k.require(e.jet_merging.full > e.jet_merging.onset, "full", "must be greater than onset");
     }
+    std::optional<ProofCase> proof_case() const override {
+        return ProofCase{"leader_follower3", "jet merging (only where jets overlap: K = 3, >= 1 m)", {0.8}, {}, 14};
+    }
     std::optional<CoverageCase> coverage_case() const override {
         return CoverageCase{"leader_follower3", {{0.5, 0.95}}};
     }

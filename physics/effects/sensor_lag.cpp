@@ -19,6 +19,9 @@ public:
     void sensor_step(const Effects& e, double dt, const Wrench6& x0, const Wrench6& x1, Wrench6& y) const override {
         first_order_lag_step(e.sensor_lag.tau_s, dt, x0, x1, y);
     }
+    std::optional<ProofCase> proof_case() const override {
+        return ProofCase{"single", "stand lag, tau 0.08 s", {0.08}, {}, 13};
+    }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{0.02, 0.15}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(

@@ -15,6 +15,9 @@ public:
         return {{"delay_scale", "", 0, 10, 0.0, 5.0, range(0.0, 3.0, 7), 1.0}};
     }
     bool changes_flow() const override { return true; }
+    std::optional<ProofCase> proof_case() const override {
+        return ProofCase{"leader_follower", "wake transport delay (jet law, scale 1)", {1.0}, {}, 12};
+    }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"leader_follower", {{0.5, 2.0}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat(
