@@ -3,11 +3,7 @@
 namespace dw::analysis {
 
 namespace {
-Effect candidate(const physics::EffectType& t) {
-    Effect e{&t, t.name(), {}};
-    for (const auto& p : t.parameters()) e.params.push_back({p.name, p.fit_min, p.fit_max, p.grid, p.start});
-    return e;
-}
+Effect candidate(const physics::EffectType& t) { return Effect{&t, t.name(), t.parameters()}; }
 }  // namespace
 
 std::vector<Effect> all_effects() {

@@ -10,12 +10,9 @@
 
 namespace dw::analysis {
 
-struct Parameter {
-    std::string name;
-    double lower = 0, upper = 0;
-    std::vector<double> grid;  // starting points tried before the local fit (may be empty)
-    double start = 0;
-};
+// A parameter is the type's own (physics::EffectParameter): the fit searches [fit_min, fit_max]
+// from `start`, after trying `grid`.
+using Parameter = physics::EffectParameter;
 
 struct Effect {
     const physics::EffectType* type = nullptr;

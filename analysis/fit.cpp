@@ -90,8 +90,8 @@ std::pair<std::vector<double>, std::vector<double>> Fit::solve(std::vector<doubl
         problem.AddResidualBlock(cost, &loss, x.data());
     }
     for (std::size_t k = 0; k < P; ++k) {
-        problem.SetParameterLowerBound(x.data(), static_cast<int>(k), e_.params[k].lower);
-        problem.SetParameterUpperBound(x.data(), static_cast<int>(k), e_.params[k].upper);
+        problem.SetParameterLowerBound(x.data(), static_cast<int>(k), e_.params[k].fit_min);
+        problem.SetParameterUpperBound(x.data(), static_cast<int>(k), e_.params[k].fit_max);
     }
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_QR;
@@ -132,10 +132,10 @@ std::vector<double> tare_spread(const ExplainData& d, Fit& fit, const Effect& e,
     const std::size_t rows = d.on_legs.size();
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows * 6), static_cast<Eigen::Index>(P));
     for (std::size_t p = 0; p < P; ++p) {
-        const double h = kSensitivityStep * (e.params[p].upper - e.params[p].lower);
+        const double h = kSensitivityStep * (e.params[p].fit_max - e.params[p].fit_min);
         auto lo = v, hi = v;
-        lo[p] = std::max(e.params[p].lower, v[p] - h);
-        hi[p] = std::min(e.params[p].upper, v[p] + h);
+        lo[p] = std::max(e.params[p].fit_min, v[p] - h);
+        hi[p] = std::min(e.params[p].fit_max, v[p] + h);
         const auto pl = fit.predict(lo);
         const auto& ph = fit.predict(hi);
         for (std::size_t k = 0; k < rows; ++k)

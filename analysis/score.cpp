@@ -29,9 +29,9 @@ constexpr double kPinnedFraction = 1e-4;  // of the parameter's range
 bool pinned(const Effect& e, const std::vector<double>& values) {
     for (std::size_t k = 0; k < values.size(); ++k) {
         const auto& p = e.params[k];
-        const double tol = kPinnedFraction * (p.upper - p.lower);
-        const bool at_lower = values[k] - p.lower < tol && std::abs(p.start - p.lower) > tol;
-        if (at_lower || p.upper - values[k] < tol) return true;
+        const double tol = kPinnedFraction * (p.fit_max - p.fit_min);
+        const bool at_lower = values[k] - p.fit_min < tol && std::abs(p.start - p.fit_min) > tol;
+        if (at_lower || p.fit_max - values[k] < tol) return true;
     }
     return false;
 }

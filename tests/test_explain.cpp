@@ -335,7 +335,8 @@ TEST(ExplainResimulation, EachEffectTheSimulatorShowsIsReplayedAsItSimulatesIt) 
             continue;
         }
         std::vector<double> v;  // half way to the far end of each parameter's search range
-        for (const auto& p : e.params) v.push_back(0.5 * (std::abs(p.upper) > std::abs(p.lower) ? p.upper : p.lower));
+        for (const auto& p : e.params)
+            v.push_back(0.5 * (std::abs(p.fit_max) > std::abs(p.fit_min) ? p.fit_max : p.fit_min));
         dw::physics::PhysicsConfig with, without;
         for (auto* c : {&with, &without}) {
             c->turbulence.enabled = false;
