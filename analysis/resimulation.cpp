@@ -14,28 +14,19 @@
 namespace dw::analysis {
 
 Resimulation::Resimulation(const flight::Flight& f, const physics::PhysicsConfig& physics, double grid_hz)
-    : tracks_(flight::tracks(f)), dt_(1.0 / grid_hz) {
+    : bodies_(flight::body_tracks(f)), dt_(1.0 / grid_hz) {
     sufferer_params_ = physics::vehicle_of(f.meta, f.meta.sufferer, physics.sufferer.vehicle);
     neighbour_params_ = physics::neighbours_of(f.meta, physics);
     for (const auto& v : neighbour_params_) near_radius_.push_back(physics::near_radius(v));
     flying_ = !f.meta.stand_height_m.has_value();
     residual_ = f.meta.wrench_source == flight::WrenchSource::residual;
     if (!f.meta.moments_measured) measured_axes_ = {true, true, true, false, false, false};
-    sufferer_ = f.find_body(f.meta.sufferer);
-    if (sufferer_ < 0 || tracks_[static_cast<std::size_t>(sufferer_)].t.empty())
-        throw InputError(log::cat("poses.csv: the sufferer '", f.meta.sufferer, "' (meta.json) has no poses"));
-    for (const auto& n : f.meta.neighbours) {
-        const int b = f.find_body(n);
-        if (b < 0 || tracks_[static_cast<std::size_t>(b)].t.size() < 2)
-            throw InputError(log::cat("poses.csv: the neighbour '", n, "' (meta.json) has no poses"));
-        neighbours_.push_back(b);
-    }
     for (const auto& w : f.wrench) {
         stamps_.push_back(w.t);
         measured_.push_back(w.w);
     }
     if (stamps_.empty()) throw InputError("wrench.csv: no samples");
-    const auto& st = tracks_[static_cast<std::size_t>(sufferer_)].t;
+    const auto& st = bodies_.sufferer.t;
     // The grid covers the poses and the wrench stamps, with a margin for time shifts.
     t0_ = std::min(st.front(), stamps_.front()) - 1.0;
     const double t1 = std::max(st.back(), stamps_.back()) + 1.0;
@@ -45,11 +36,11 @@ Resimulation::Resimulation(const flight::Flight& f, const physics::PhysicsConfig
         const double t = t0_ + static_cast<double>(i) * dt_;
         auto& g = grid_[i];
         g.sufferer = sufferer(t);
-        g.sufferer_velocity = tracks_[static_cast<std::size_t>(sufferer_)].velocity_at(t);
-        for (std::size_t j = 0; j < neighbours_.size(); ++j) {
+        g.sufferer_velocity = bodies_.sufferer.velocity_at(t);
+        for (std::size_t j = 0; j < bodies_.neighbours.size(); ++j) {
             const auto p = position(static_cast<int>(j), t);
             const auto v = velocity(static_cast<int>(j), t);
-            const auto& tr = tracks_[static_cast<std::size_t>(neighbours_[j])];
+            const auto& tr = bodies_.neighbours[j];
             auto it = std::lower_bound(tr.t.begin(), tr.t.end(), t);
             const auto k = static_cast<std::size_t>(
                 std::min<std::ptrdiff_t>(it - tr.t.begin(), static_cast<std::ptrdiff_t>(tr.t.size()) - 1));
@@ -61,16 +52,14 @@ Resimulation::Resimulation(const flight::Flight& f, const physics::PhysicsConfig
 }
 
 std::array<double, 3> Resimulation::position(int j, double t) const {
-    return tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])].position_at(t);
+    return bodies_.neighbours[static_cast<std::size_t>(j)].position_at(t);
 }
 
 std::array<double, 3> Resimulation::velocity(int j, double t) const {
-    return tracks_[static_cast<std::size_t>(neighbours_[static_cast<std::size_t>(j)])].velocity_at(t);
+    return bodies_.neighbours[static_cast<std::size_t>(j)].velocity_at(t);
 }
 
-std::array<double, 3> Resimulation::sufferer(double t) const {
-    return tracks_[static_cast<std::size_t>(sufferer_)].position_at(t);
-}
+std::array<double, 3> Resimulation::sufferer(double t) const { return bodies_.sufferer.position_at(t); }
 
 namespace {
 
@@ -108,7 +97,7 @@ const std::vector<Wrench6>& Resimulation::air(const physics::PhysicsConfig& c) c
     const physics::Vec3 offset(error[0], error[1], error[2]);  // the motion capture's, on the neighbours
     const bool far_is_zero = !fx.floor_recirculation.enabled;
     std::vector<Wrench6> out(n_, Wrench6{});
-    std::vector<physics::Producer> ps(neighbours_.size());
+    std::vector<physics::Producer> ps(bodies_.neighbours.size());
     for (std::size_t i = 0; i < n_; ++i) {
         const physics::Vec3 suf = producers_at(i, model, jets, offset, ps);
         if (far_is_zero && !near(suf, ps)) continue;
@@ -131,7 +120,7 @@ physics::Vec3 Resimulation::producers_at(std::size_t i, const physics::WrenchMod
                                          const std::vector<physics::Jet>& jets, const physics::Vec3& offset,
                                          std::vector<physics::Producer>& ps) const {
     const auto& g = grid_[i];
-    for (std::size_t j = 0; j < neighbours_.size(); ++j) {
+    for (std::size_t j = 0; j < bodies_.neighbours.size(); ++j) {
         const auto& x = g.neighbours[j];
         const physics::Vec3 pos = physics::Vec3(x[0], x[1], x[2]) - offset;  // recorded = true + offset
         ps[j] = model.producer(pos, physics::Vec3(x[3], x[4], x[5]));
@@ -153,7 +142,7 @@ std::vector<Wrench6> Resimulation::buffeting_sigma(const physics::PhysicsConfig&
     const physics::PhysicsConfig flow = flow_of(c);
     const physics::WrenchModel model(flow);
     const std::vector<physics::Jet> jets = jets_of(flow);
-    std::vector<physics::Producer> ps(neighbours_.size());
+    std::vector<physics::Producer> ps(bodies_.neighbours.size());
     for (std::size_t k = 0; k < stamps_.size(); ++k) {
         const double x = std::round((stamps_[k] - t0_) / dt_);
         const auto i = static_cast<std::size_t>(std::clamp(x, 0.0, static_cast<double>(n_ - 1)));
@@ -232,9 +221,8 @@ std::size_t Resimulation::tare_samples(const physics::PhysicsConfig& c) const {
 }
 
 std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks) {
-    const auto& legs = blocks.blocks;
     std::vector<SampleInfo> out(r.stamps().size());
-    std::size_t li = 0;
+    flight::BlockCursor block(blocks.blocks);
     for (std::size_t i = 0; i < out.size(); ++i) {
         const double t = r.stamps()[i];
         auto& s = out[i];
@@ -256,10 +244,9 @@ std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& bl
         s.h = -low;
         s.speed = std::hypot(vn, ve);
         if (blocks.kind == flight::BlockKind::legs) s.direction = ve > 0.1 ? 1 : (ve < -0.1 ? -1 : 0);
-        while (li < legs.size() && legs[li].t_end < t) ++li;
-        if (li < legs.size() && t >= legs[li].t_start && t <= legs[li].t_end) {
-            s.leg = legs[li].leg;
-            s.leg_fraction = (t - legs[li].t_start) / std::max(1e-9, legs[li].t_end - legs[li].t_start);
+        if (const auto* leg = block.at(t)) {
+            s.leg = leg->leg;
+            s.leg_fraction = (t - leg->t_start) / std::max(1e-9, leg->t_end - leg->t_start);
         }
     }
     return out;

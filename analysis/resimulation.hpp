@@ -45,7 +45,7 @@ public:
     double grid_t0() const { return t0_; }
     double grid_dt() const { return dt_; }
     std::size_t grid_size() const { return n_; }
-    int neighbours() const { return static_cast<int>(neighbours_.size()); }
+    int neighbours() const { return static_cast<int>(bodies_.neighbours.size()); }
     // Neighbour j's recorded position and velocity at mocap time t.
     std::array<double, 3> position(int j, double t) const;
     std::array<double, 3> velocity(int j, double t) const;
@@ -73,10 +73,8 @@ private:
         std::array<double, 3> sufferer_velocity;
         std::vector<std::array<double, 9>> neighbours;  // position, velocity, jet axis
     };
-    std::vector<flight::Track> tracks_;
+    flight::BodyTracks bodies_;
     std::vector<GridState> grid_;
-    int sufferer_ = -1;
-    std::vector<int> neighbours_;
     physics::VehicleParams sufferer_params_;
     std::vector<physics::VehicleParams> neighbour_params_;
     std::vector<double> near_radius_;

@@ -35,6 +35,28 @@ std::vector<Track> tracks(const Flight& f) {
     return out;
 }
 
+BodyTracks body_tracks(const Flight& f, const std::string& where) {
+    auto all = tracks(f);
+    const int sufferer = f.find_body(f.meta.sufferer);
+    if (sufferer < 0 || all[static_cast<std::size_t>(sufferer)].t.empty())
+        throw InputError(log::cat(where, "poses.csv: the sufferer '", f.meta.sufferer, "' (meta.json) has no poses"));
+    BodyTracks out;
+    out.sufferer = all[static_cast<std::size_t>(sufferer)];
+    for (const auto& n : f.meta.neighbours) {
+        const int b = f.find_body(n);
+        if (b < 0 || all[static_cast<std::size_t>(b)].t.size() < 2)
+            throw InputError(log::cat(where, "poses.csv: the neighbour '", n, "' (meta.json) has no poses"));
+        out.neighbours.push_back(all[static_cast<std::size_t>(b)]);
+    }
+    return out;
+}
+
+const Leg* BlockCursor::at(double t) {
+    while (i_ < blocks_.size() && blocks_[i_].t_end < t) ++i_;
+    if (i_ < blocks_.size() && t >= blocks_[i_].t_start && t <= blocks_[i_].t_end) return &blocks_[i_];
+    return nullptr;
+}
+
 namespace {
 std::array<double, 3> centroid_at(const std::vector<const Track*>& ts, double t) {
     std::array<double, 3> c{0, 0, 0};

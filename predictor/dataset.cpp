@@ -98,21 +98,13 @@ private:
 }  // namespace
 
 Dataset from_flight(const flight::Flight& f, const std::string& name, const DatasetOptions& o) {
-    const int sufferer = f.find_body(f.meta.sufferer);
-    if (sufferer < 0) throw InputError(log::cat(name, "/poses.csv: the sufferer '", f.meta.sufferer, "' has no poses"));
-    const auto trs = flight::tracks(f);
-    std::vector<const flight::Track*> ns;
-    for (const auto& n : f.meta.neighbours) {
-        const int b = f.find_body(n);
-        if (b < 0) throw InputError(log::cat(name, "/poses.csv: neighbour '", n, "' (meta.json) has no poses"));
-        ns.push_back(&trs[static_cast<std::size_t>(b)]);
-    }
+    const auto bodies = flight::body_tracks(f, name + "/");
+    const auto& ns = bodies.neighbours;
     if (ns.size() > static_cast<std::size_t>(kMaxNeighbours))
         throw InputError(
             log::cat(name, "/meta.json: neighbours: ", ns.size(), " (the models take at most ", kMaxNeighbours, ")"));
-    const auto& st = trs[static_cast<std::size_t>(sufferer)];
+    const auto& st = bodies.sufferer;
     const auto blocks = flight::find_blocks(f, kSplitPeriod, physics::encounter_radii(f.meta, o.physics));
-    const auto& legs = blocks.blocks;
 
     Dataset d;
     std::string formation = f.meta.formation;
@@ -129,7 +121,7 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
     src.estimated_poses = f.meta.pose_source == flight::PoseSource::estimate;
     d.sources.push_back(src);
     ReferenceCursor reference(f.reference);
-    std::size_t li = 0;
+    flight::BlockCursor block(blocks.blocks);
     for (const auto& w : f.wrench) {
         if (w.t < st.t.front() || w.t > st.t.back()) continue;
         Sample s;
@@ -140,18 +132,17 @@ Dataset from_flight(const flight::Flight& f, const std::string& name, const Data
         const auto vs = st.velocity_at(w.t);
         s.height = -ps[2];
         for (std::size_t j = 0; j < ns.size(); ++j) {
-            const auto* tr = ns[j];
-            if (tr->t.empty() || w.t < tr->t.front() || w.t > tr->t.back()) continue;
-            const auto p = tr->position_at(w.t);
-            const auto v = tr->velocity_at(w.t);
+            const auto& tr = ns[j];
+            if (w.t < tr.t.front() || w.t > tr.t.back()) continue;
+            const auto p = tr.position_at(w.t);
+            const auto v = tr.velocity_at(w.t);
             RelState r{p[0] - ps[0], p[1] - ps[1], p[2] - ps[2], v[0] - vs[0], v[1] - vs[1], v[2] - vs[2]};
             if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > o.max_distance_m) continue;
             s.who[static_cast<std::size_t>(s.k)] = static_cast<std::uint8_t>(j);
             s.x[static_cast<std::size_t>(s.k++)] = r;
         }
-        while (li < legs.size() && legs[li].t_end < w.t) ++li;
-        if (li < legs.size() && w.t >= legs[li].t_start && w.t <= legs[li].t_end) {
-            s.leg = legs[li].leg;
+        if (const auto* leg = block.at(w.t)) {
+            s.leg = leg->leg;
             if (blocks.kind != flight::BlockKind::legs) {
                 d.samples.push_back(s);
                 continue;

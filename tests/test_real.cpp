@@ -109,6 +109,31 @@ TEST(RealBlocks, FlightsWithoutLegsAreSplitByEncounterElseByTime) {
     EXPECT_GE(one.blocks.size(), 10u);
 }
 
+TEST(RealBlocks, TheFlightViewIsTheSuffererAndItsNeighboursWalkedBlockByBlock) {
+    const auto f = crossing(6);
+    const auto bodies = dw::flight::body_tracks(f, "crossing/");
+    ASSERT_EQ(bodies.neighbours.size(), 1u);
+    EXPECT_EQ(bodies.sufferer.t.size() + bodies.neighbours[0].t.size(), f.poses.size());
+    const auto blocks = dw::flight::find_blocks(f, 5, {0.3});
+    dw::flight::BlockCursor cursor(blocks.blocks);
+    for (const auto& b : blocks.blocks) {
+        const double mid = 0.5 * (b.t_start + b.t_end);
+        ASSERT_NE(cursor.at(mid), nullptr);
+        EXPECT_EQ(cursor.at(mid)->leg, b.leg);
+    }
+    EXPECT_EQ(cursor.at(blocks.blocks.back().t_end + 1.0), nullptr);  // past the last block
+    // A neighbour named in meta.json without poses is one clear error naming it and the flight.
+    auto lost = f;
+    lost.meta.neighbours.push_back("ghost");
+    try {
+        dw::flight::body_tracks(lost, "crossing/");
+        FAIL() << "a neighbour without poses was accepted";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("crossing/poses.csv: the neighbour 'ghost'"), std::string::npos)
+            << e.what();
+    }
+}
+
 TEST(RealPredictor, NoHeldOutSampleIsOneLineNeverAnEmptyTable) {
     dw::test::TempDir d;
     auto f = crossing(6);
