@@ -51,8 +51,8 @@ std::vector<std::pair<std::string, std::string>> not_covered() {
         if (!t->coverage_case())
             out.emplace_back(t->name(), t->applies(3, false)
                                             ? "not measured: it has no coverage case"
-                                            : "not measured: it acts only on a flying sufferer; dw-sim flies over a "
-                                              "fixed stand");
+                                            : "not measured: it acts only on a flying sufferer; the coverage "
+                                              "cases fly over the stand");
     return out;
 }
 

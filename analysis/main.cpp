@@ -69,7 +69,8 @@ struct ProofCommand {
 
     void add(CLI::App& app) {
         sub = app.add_subcommand("proof",
-                                 "fly flights with hidden effects (dw-sim fly), explain them, check what was found");
+                                 "simulate flights with hidden effects (in-process, as dw-sim fly does), explain them, "
+                                 "check what was found");
         sub->add_option("--out", options.out_dir, "output folder (flights, reports, proof.md)")->required();
         sub->add_option("--null-seeds", options.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
         sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(dw::kJobsRange));

@@ -93,8 +93,8 @@ const std::vector<Wrench6>& Resimulation::air(const physics::PhysicsConfig& c) c
     const physics::WrenchModel model(flow);
     const std::vector<physics::Jet> jets = jets_of(flow);
     const auto& fx = flow.effects;
-    const auto error = physics::RecordingChain(fx).position_error_m();
-    const physics::Vec3 offset(error[0], error[1], error[2]);  // the motion capture's, on the neighbours
+    const physics::Vec3 offset =
+        physics::RecordingChain(fx).position_error_m();  // the motion capture's, on the neighbours
     const bool far_is_zero = !fx.floor_recirculation.enabled;
     std::vector<Wrench6> out(n_, Wrench6{});
     std::vector<physics::Producer> ps(bodies_.neighbours.size());
@@ -106,7 +106,7 @@ const std::vector<Wrench6>& Resimulation::air(const physics::PhysicsConfig& c) c
             throw InputError(
                 log::cat("the physics gave a non-finite wrench at t = ", t0_ + static_cast<double>(i) * dt_,
                          " s of the recorded flight: check meta.json's vehicles and the physics configuration"));
-        for (std::size_t a = 0; a < 6; ++a) out[i][a] = w[static_cast<Eigen::Index>(a)];
+        out[i] = physics::to_wrench6(w);
     }
     if (cache_order_.size() >= 12) {  // a few flows: the fits revisit the last ones
         cache_.erase(cache_order_.front());
@@ -147,30 +147,19 @@ std::vector<Wrench6> Resimulation::buffeting_sigma(const physics::PhysicsConfig&
         const double x = std::round((stamps_[k] - t0_) / dt_);
         const auto i = static_cast<std::size_t>(std::clamp(x, 0.0, static_cast<double>(n_ - 1)));
         const physics::Vec3 suf = producers_at(i, model, jets, physics::Vec3::Zero(), ps);
-        const physics::Wrench s = model.buffeting_sigma(suf, ps, c.turbulence.lateral_intensity);
-        for (std::size_t a = 0; a < 6; ++a) out[k][a] = s[static_cast<Eigen::Index>(a)];
+        out[k] = physics::to_wrench6(model.buffeting_sigma(suf, ps, c.turbulence.lateral_intensity));
     }
     return out;
 }
 
-std::vector<Wrench6> Resimulation::own_forces(const physics::PhysicsConfig& c) const {
-    const auto& fx = c.effects;
+std::vector<Wrench6> Resimulation::own_forces(const physics::PhysicsConfig& c,
+                                              const physics::RecordingChain& chain) const {
     std::vector<Wrench6> out(n_, Wrench6{});
-    const double half_rho = 0.5 * c.air_density_kg_m3;
-    const double hover = sufferer_params_.mass_kg * c.gravity_m_s2, radius = sufferer_params_.prop_radius_m;
     for (std::size_t i = 0; i < n_; ++i) {
-        const auto& v = grid_[i].sufferer_velocity;
-        if (fx.body_drag.enabled) {
-            const double vh = std::hypot(v[0], v[1]);
-            out[i][0] = -half_rho * fx.body_drag.cda_h_m2 * vh * v[0];
-            out[i][1] = -half_rho * fx.body_drag.cda_h_m2 * vh * v[1];
-            out[i][2] = -half_rho * fx.body_drag.cda_v_m2 * std::abs(v[2]) * v[2];
-        }
-        if (fx.ground_effect.enabled) {
-            // Above its own propeller radius: the image-rotor law's pole is not reached by a flying vehicle.
-            const double h = std::max(-grid_[i].sufferer[2], radius);
-            out[i][2] -= fx.ground_effect.coefficient * hover * std::pow(radius / (4 * h), 2);
-        }
+        const auto& g = grid_[i];
+        out[i] = chain.sufferer_force(physics::sufferer_state(
+            c, sufferer_params_, physics::Vec3(g.sufferer[0], g.sufferer[1], g.sufferer[2]),
+            physics::Vec3(g.sufferer_velocity[0], g.sufferer_velocity[1], g.sufferer_velocity[2])));
     }
     return out;
 }
@@ -179,8 +168,8 @@ std::vector<Wrench6> Resimulation::recorded(const physics::PhysicsConfig& c) con
     const auto& fx = c.effects;
     const physics::RecordingChain chain(fx);
     std::vector<Wrench6> series = air(c);
-    if (fx.body_drag.enabled || fx.ground_effect.enabled) {
-        const auto own = own_forces(c);
+    if (chain.acts_on_sufferer()) {
+        const auto own = own_forces(c, chain);
         for (std::size_t i = 0; i < n_; ++i)
             for (std::size_t a = 0; a < 6; ++a) series[i][a] += own[i][a];
     }

@@ -18,6 +18,7 @@
 #include "flight/flight.hpp"
 #include "physics/bodies.hpp"
 #include "physics/config.hpp"
+#include "physics/recording_chain.hpp"
 #include "physics/wrench_model.hpp"
 
 namespace dw::analysis {
@@ -66,8 +67,8 @@ private:
     physics::Vec3 producers_at(std::size_t i, const physics::WrenchModel& model, const std::vector<physics::Jet>& jets,
                                const physics::Vec3& offset, std::vector<physics::Producer>& ps) const;
     bool near(const physics::Vec3& sufferer, const std::vector<physics::Producer>& ps) const;
-    // The flying sufferer's own forces on the grid: body_drag and ground_effect.
-    std::vector<Wrench6> own_forces(const physics::PhysicsConfig& c) const;
+    // The flying sufferer's own forces on the grid: the chain's stage sufferer at its recorded states.
+    std::vector<Wrench6> own_forces(const physics::PhysicsConfig& c, const physics::RecordingChain& chain) const;
     struct GridState {  // the recorded states at one grid time
         std::array<double, 3> sufferer;
         std::array<double, 3> sufferer_velocity;

@@ -79,13 +79,6 @@ void register_effect(std::unique_ptr<EffectType> type) {
     registry().add(std::move(type));
 }
 
-void apply_registered_effects(const Effects& e, const std::vector<double>& stamps, RecordedWrench& w) {
-    for (const auto* t : effect_types()) {
-        auto it = e.extra.find(t->name());
-        if (it != e.extra.end()) t->on_recording(it->second, stamps, w);
-    }
-}
-
 bool EffectType::applies(int neighbours, bool flying) const {
     (void)neighbours;
     (void)flying;

@@ -6,10 +6,9 @@
 // the registry; none of them compares effect names.
 //
 // Each effect acts at one stage of the recording chain (physics/recording_chain.hpp), which the
-// simulator, the explainer's resimulation and dw-stand-agent --sim share: the recording-side
-// built-ins (effects/, one file each) through the hooks below, one discretisation each; the flow's
-// (wrench_model) and a flying sufferer's own forces (analysis/resimulation) where those are
-// evaluated. An effect added in a file of its own keeps its values in Effects::extra and acts
+// simulator, the explainer's resimulation and dw-stand-agent --sim share: the built-ins
+// (effects/, one file each) through the hooks below, one discretisation each; the flow's in
+// wrench_model, where the air is evaluated. An effect added in a file of its own keeps its values in Effects::extra and acts
 // through on_recording, after the tare: adding such an effect is that one file and its tests.
 #include <yaml-cpp/yaml.h>
 
@@ -67,13 +66,20 @@ struct ProofCase {
     std::uint64_t seed = 1;
 };
 
-using RecordedWrench = std::vector<std::array<double, 6>>;
-using Wrench6 = std::array<double, 6>;
+using flight::Wrench6;
+using RecordedWrench = std::vector<Wrench6>;
 
 // The recording chain's stages, in its order: the positions the motion capture reports, the air
 // the neighbours make, the sufferer's own forces, the sensor's response, the stand's calibration
 // (after the tare), the stamps' clock, and the recorded wrench as written.
 enum class Stage { positions, air, sufferer, sensor, calibration, clock, recording };
+inline constexpr std::size_t kStages = static_cast<std::size_t>(Stage::recording) + 1;
+
+// What an effect on a flying sufferer's own forces sees of it (stage sufferer): NED, SI.
+struct SuffererState {
+    std::array<double, 3> position_m{}, velocity_m_s{};
+    double hover_thrust_n = 0, prop_radius_m = 0, air_density_kg_m3 = 0;
+};
 
 class EffectType {
 public:
@@ -106,6 +112,8 @@ public:
     // The chain's hooks, each called only at the effect's own stage while it is on:
     // positions: how far the motion capture's positions are off the truth (NED, m).
     virtual std::array<double, 3> position_error_m(const Effects&) const { return {0, 0, 0}; }
+    // sufferer: the force a flying sufferer's own motion adds to what it feels (NED, N).
+    virtual Wrench6 sufferer_force(const Effects&, const SuffererState&) const { return {}; }
     // sensor: one step of the sensor's response: over dt seconds the force on the sufferer went
     // (linearly) from x0 to x1 and the reading from y, which becomes the reading at the step's end.
     // One recurrence for a whole series and for a live stream (RecordingChain).
@@ -115,8 +123,7 @@ public:
     virtual void on_calibration(const Effects&, Wrench6& w, const Wrench6& recorded) const;
     // clock: how late the wrench's stamps run against the poses' (s).
     virtual double clock_delay_s(const Effects&) const { return 0; }
-    // recording: the change to the recorded wrench (stamps in s) of an effect kept in
-    // Effects::extra.
+    // recording: the change to the recorded wrench (stamps in s), given the effect's values.
     virtual void on_recording(const std::vector<double>& values, const std::vector<double>& stamps,
                               RecordedWrench& w) const;
     // Its proof case; none for an effect that the simulated flights over a stand cannot show.
@@ -150,9 +157,6 @@ template <class T>
 struct EffectRegistration {
     EffectRegistration() { register_effect(std::make_unique<T>()); }
 };
-
-// Every switched-on effect outside the built-ins applied to a recorded wrench, in registry order.
-void apply_registered_effects(const Effects& e, const std::vector<double>& stamps, RecordedWrench& w);
 
 // The built-ins (effects/builtins.cpp: effects/builtins.hpp lists them).
 std::vector<std::unique_ptr<EffectType>> builtin_effects();

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
@@ -57,13 +58,11 @@ Wrench interpolate(const std::vector<Wrench>& w, double t, double dt) {
 // 2. The stand's response: the recording chain's sensor stage on the true wrench.
 std::vector<Wrench> felt_wrench(const std::vector<Wrench>& truth, const std::vector<double>& t,
                                 const RecordingChain& chain) {
-    RecordedWrench series(truth.size());
-    for (std::size_t n = 0; n < truth.size(); ++n)
-        for (int a = 0; a < 6; ++a) series[n][static_cast<std::size_t>(a)] = truth[n][a];
+    RecordedWrench series;
+    for (const auto& w : truth) series.push_back(to_wrench6(w));
     chain.sensor(t, series);
-    std::vector<Wrench> felt(truth.size());
-    for (std::size_t n = 0; n < truth.size(); ++n)
-        for (int a = 0; a < 6; ++a) felt[n][a] = series[n][static_cast<std::size_t>(a)];
+    std::vector<Wrench> felt;
+    for (const auto& w : series) felt.push_back(to_wrench(w));
     return felt;
 }
 
@@ -112,6 +111,13 @@ StandFrames convert_on_chips(const PhysicsConfig& c, const StandModel& stand, co
     return out;
 }
 
+// The recorded wrench at its stamps, after the chain's recording stage, into the flight.
+void write_recording(const RecordingChain& chain, const std::vector<double>& stamps, RecordedWrench& recorded,
+                     flight::Flight& f) {
+    chain.recording(stamps, recorded);
+    for (std::size_t i = 0; i < stamps.size(); ++i) f.wrench.push_back({stamps[i], recorded[i]});
+}
+
 // 4. Tare (the mean of the first tare_s: neighbours far away, sufferer at hover thrust), the
 // calibrated wrench, then the recording chain's calibration, clock and recording stages.
 void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandFrames& frames,
@@ -125,22 +131,44 @@ void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandF
     std::vector<double> stamps;
     RecordedWrench recorded;
     for (std::size_t i = 0; i < frames.t.size(); ++i) {
-        const Wrench w = stand.cells_to_wrench() * ((frames.counts[i] - zero) / c.stand.counts_per_newton);
-        Wrench6 x;
-        for (int a = 0; a < 6; ++a) x[static_cast<std::size_t>(a)] = w[a];
+        Wrench6 x = to_wrench6(stand.cells_to_wrench() * ((frames.counts[i] - zero) / c.stand.counts_per_newton));
         chain.calibration(x);
         stamps.push_back(frames.t[i] + delay);
         recorded.push_back(x);
     }
-    chain.recording(stamps, recorded);
-    for (std::size_t i = 0; i < stamps.size(); ++i) f.wrench.push_back({stamps[i], recorded[i]});
+    write_recording(chain, stamps, recorded, f);
+}
+
+// 3-4 for a flying sufferer: its residual, the felt forces at the residual's rate with noise (no
+// moments, no tare), through the chain's calibration, clock and recording stages.
+void record_residual(const PhysicsConfig& c, const FlyingSufferer& o, const std::vector<Wrench>& felt, double dt,
+                     double end, const RecordingChain& chain, Rng& rng, flight::Flight& f) {
+    const double delay = chain.clock_delay_s();
+    std::vector<double> stamps;
+    RecordedWrench recorded;
+    for (std::size_t i = 0; static_cast<double>(i) / o.rate_hz <= end; ++i) {
+        const double t = static_cast<double>(i) / o.rate_hz;
+        Wrench6 x = to_wrench6(interpolate(felt, t, dt));
+        for (std::size_t a = 0; a < 3; ++a) x[a] += c.stand.noise_n * rng.normal();
+        chain.calibration(x);
+        for (std::size_t a = 3; a < 6; ++a) x[a] = 0;  // moments_measured: false
+        stamps.push_back(t + delay);
+        recorded.push_back(x);
+    }
+    write_recording(chain, stamps, recorded, f);
 }
 
 // The flight's bodies in meta.json: the sufferer, then v1..vK; returns the neighbours' indices.
-std::vector<std::uint16_t> describe_bodies(flight::Flight& f, const PhysicsConfig& c, const Formation& formation) {
+std::vector<std::uint16_t> describe_bodies(flight::Flight& f, const PhysicsConfig& c, const Formation& formation,
+                                           bool flying) {
     f.meta.sufferer = flight::kSufferer;
     f.meta.formation = formation.meta_name;
     f.meta.stand_height_m = c.stand.height_m;
+    if (flying) {
+        f.meta.stand_height_m.reset();
+        f.meta.wrench_source = flight::WrenchSource::residual;
+        f.meta.moments_measured = false;
+    }
     f.meta.extra_json = R"({"generator":"dw-sim fly"})";
     f.body_index(flight::kSufferer);
     f.meta.vehicles[flight::kSufferer] = c.sufferer.vehicle;
@@ -180,6 +208,57 @@ struct Fleet {
     }
 };
 
+// The fleet at the reference's start, each vehicle with its own streams split off `master`.
+Fleet launch(const PhysicsConfig& c, const Formation& formation, const ReferenceTrajectory& reference,
+             std::uint64_t seed, Rng& master) {
+    Fleet fleet;
+    fleet.producers.resize(formation.offsets.size());
+    for (std::size_t j = 0; j < formation.offsets.size(); ++j) {
+        fleet.vehicles.emplace_back(c.dynamics, c.gravity_m_s2, reference.at(0).position + formation.offsets[j],
+                                    master.split());
+        fleet.turbulence.emplace_back(c.turbulence, master.split(), Rng(seed ^ (kBuffetSeed * (j + 1))));
+    }
+    return fleet;
+}
+
+// The sufferer: held by the stand, or flying its sway about the stand's point.
+class Sufferer {
+public:
+    Sufferer(const PhysicsConfig& c, const FlyingSufferer& o, Rng& master)
+        : c_(c), o_(o), home_(sufferer_on_stand(c.stand)) {
+        if (o.enabled) vehicle_.emplace(c.dynamics, c.gravity_m_s2, home_, master.split());
+    }
+    void step(std::size_t n, double t, double dt) {
+        if (vehicle_ && n > 0) vehicle_->step(sway(t), dt);
+    }
+    Vec3 position() const { return vehicle_ ? vehicle_->state().position : home_; }
+    Eigen::Quaterniond orientation() const {
+        return vehicle_ ? vehicle_->state().orientation : Eigen::Quaterniond::Identity();
+    }
+    // What its own flight adds to the air's wrench (the chain's stage sufferer); nothing on the stand.
+    Wrench own_force(const RecordingChain& chain) const {
+        if (!vehicle_) return Wrench::Zero();
+        const auto& s = vehicle_->state();
+        return to_wrench(chain.sufferer_force(sufferer_state(c_, c_.sufferer.vehicle, s.position, s.velocity)));
+    }
+
+private:
+    Setpoint sway(double t) const {
+        const double wn = 2 * M_PI / o_.period_n_s, wd = 2 * M_PI / o_.period_d_s;
+        const Vec3 phase(std::sin(wn * t), 0, std::sin(wd * t)), rate(wn * std::cos(wn * t), 0, wd * std::cos(wd * t));
+        const Vec3 amplitude(o_.sway_n_m, 0, o_.sway_d_m);
+        Setpoint sp;
+        sp.position = home_ + amplitude.cwiseProduct(phase);
+        sp.velocity = amplitude.cwiseProduct(rate);
+        sp.acceleration = -amplitude.cwiseProduct(Vec3(wn * wn, 0, wd * wd)).cwiseProduct(phase);
+        return sp;
+    }
+    const PhysicsConfig& c_;
+    FlyingSufferer o_;
+    Vec3 home_;
+    std::optional<SimVehicle> vehicle_;
+};
+
 }  // namespace
 
 SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
@@ -193,21 +272,15 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
 
     Rng master(o.seed);
     const std::size_t k = formation.offsets.size();
-    Fleet fleet;
-    fleet.producers.resize(k);
-    for (std::size_t j = 0; j < k; ++j) {
-        fleet.vehicles.emplace_back(c.dynamics, c.gravity_m_s2, reference.at(0).position + formation.offsets[j],
-                                    master.split());
-        fleet.turbulence.emplace_back(c.turbulence, master.split(), Rng(o.seed ^ (kBuffetSeed * (j + 1))));
-    }
+    Fleet fleet = launch(c, formation, reference, o.seed, master);
     Rng mocap_rng = master.split();
     Rng stand_rng = master.split();
 
     SimResult out;
     flight::Flight& f = out.flight;
-    const std::vector<std::uint16_t> bodies = describe_bodies(f, c, formation);
+    const std::vector<std::uint16_t> bodies = describe_bodies(f, c, formation, o.flying_sufferer.enabled);
     const std::uint16_t sufferer_body = f.body_index(flight::kSufferer);
-    const Vec3 sufferer = sufferer_on_stand(c.stand);
+    Sufferer sufferer(c, o.flying_sufferer, master);  // after the other streams: theirs stay as they were
 
     // 1. Fly, and evaluate the true wrench at every integration step.
     const double dt = 1.0 / c.dynamics.rate_hz;
@@ -225,19 +298,19 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
         s.q = {q.w(), q.x(), q.y(), q.z()};
         f.poses.push_back(s);
     };
-    const auto error = chain.position_error_m();  // the motion capture's, on the neighbours
-    const Vec3 pos_offset(error[0], error[1], error[2]);
+    const Vec3 pos_offset = chain.position_error_m();  // the motion capture's, on the neighbours
     for (std::size_t n = 0; n < steps; ++n) {
         const double t = static_cast<double>(n) * dt;
         fleet.step(formation, reference.at(t), n, t, dt, c, model);
+        sufferer.step(n, t, dt);
         out.truth_t.push_back(t);
-        out.truth.push_back(model.evaluate(sufferer, fleet.producers));
+        out.truth.push_back(model.evaluate(sufferer.position(), fleet.producers) + sufferer.own_force(chain));
         if (!out.truth.back().allFinite()) {
             throw InputError(log::cat("physics: the configuration gives a non-finite wrench at t = ", t,
                                       " s (jet model, aggregation and effects together are not usable)"));
         }
         if (t + 1e-9 >= next_mocap) {
-            add_pose(t, sufferer_body, sufferer, Eigen::Quaterniond::Identity(), Vec3::Zero());
+            add_pose(t, sufferer_body, sufferer.position(), sufferer.orientation(), Vec3::Zero());
             for (std::size_t j = 0; j < k; ++j) {
                 const VehicleState& s = fleet.vehicles[j].state();
                 add_pose(t, bodies[j], s.position, s.orientation, pos_offset);
@@ -250,10 +323,11 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
         }
     }
 
-    // 2-4. The stand's response, its chips, the tare and the recorded wrench.
+    // 2-4. The stand's response, its chips, the tare and the recorded wrench (or the residual).
     const std::vector<Wrench> felt = felt_wrench(out.truth, out.truth_t, chain);
-    const StandFrames frames = convert_on_chips(c, stand, felt, dt, out.truth_t.back(), stand_rng);
-    record_wrench(c, stand, frames, chain, f);
+    if (o.flying_sufferer.enabled)
+        record_residual(c, o.flying_sufferer, felt, dt, out.truth_t.back(), chain, stand_rng, f);
+    else record_wrench(c, stand, convert_on_chips(c, stand, felt, dt, out.truth_t.back(), stand_rng), chain, f);
 
     std::vector<flight::Leg> legs;
     for (const auto& l : reference.legs()) legs.push_back({l.index, l.t_start, l.t_end});

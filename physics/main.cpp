@@ -40,6 +40,9 @@ int run(int argc, char** argv) {
                     "relative altitudes above the sufferer [m], comma-separated (default " + default_altitudes + ")");
     cmd->add_option("--legs", fly.grid.legs, "number of legs")->check(dw::cli::in(dw::physics::kLegsRange));
     cmd->add_option("--speed", fly.grid.speed_mps, "leg speed [m/s]")->check(dw::cli::in(dw::physics::kSpeedRange));
+    cmd->add_flag("--flying-sufferer", fly.flying_sufferer.enabled,
+                  "the sufferer flies (swaying about the stand's point) and its wrench is recorded as a residual "
+                  "(forces only, no stand)");
     cmd->add_flag("--quiet", quiet, "no progress");
 
     dw::cli::parse(app, argc, argv);

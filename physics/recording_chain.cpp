@@ -9,13 +9,27 @@ RecordingChain::RecordingChain(const Effects& effects) : effects_(effects) {
         if (t->enabled(effects)) at_[static_cast<std::size_t>(t->stage())].push_back(t);
 }
 
-std::array<double, 3> RecordingChain::position_error_m() const {
-    std::array<double, 3> out{0, 0, 0};
+Vec3 RecordingChain::position_error_m() const {
+    Vec3 out = Vec3::Zero();
     for (const auto* t : at(Stage::positions)) {
         const auto e = t->position_error_m(effects_);
-        for (std::size_t k = 0; k < 3; ++k) out[k] += e[k];
+        out += Vec3(e[0], e[1], e[2]);
     }
     return out;
+}
+
+Wrench6 RecordingChain::sufferer_force(const SuffererState& s) const {
+    Wrench out{Wrench::Zero()};
+    for (const auto* t : at(Stage::sufferer)) out += to_wrench(t->sufferer_force(effects_, s));
+    return to_wrench6(out);
+}
+
+SuffererState sufferer_state(const PhysicsConfig& c, const VehicleParams& v, const Vec3& p, const Vec3& velocity) {
+    return {{p.x(), p.y(), p.z()},
+            {velocity.x(), velocity.y(), velocity.z()},
+            v.mass_kg * c.gravity_m_s2,
+            v.prop_radius_m,
+            c.air_density_kg_m3};
 }
 
 void RecordingChain::sensor(const std::vector<double>& t, RecordedWrench& series) const {
@@ -65,7 +79,7 @@ double RecordingChain::clock_delay_s() const {
 }
 
 void RecordingChain::recording(const std::vector<double>& stamps, RecordedWrench& w) const {
-    apply_registered_effects(effects_, stamps, w);
+    for (const auto* t : at(Stage::recording)) t->on_recording(t->values(effects_), stamps, w);
 }
 
 void first_order_lag_step(double tau_s, double dt, const Wrench6& x0, const Wrench6& x1, Wrench6& y) {

@@ -22,6 +22,13 @@ using Vec3 = Eigen::Vector3d;
 inline Vec3 sufferer_on_stand(const StandParams& s) { return Vec3(0, 0, -s.height_m); }
 // f_n, f_e, f_d [N]; m_roll, m_pitch, m_yaw [N·m] — NED axes of the (level) sufferer.
 using Wrench = Eigen::Matrix<double, 6, 1>;
+// The same six numbers as the flight folder and the recording chain hold them (flight::Wrench6).
+inline Wrench to_wrench(const flight::Wrench6& w) { return Eigen::Map<const Wrench>(w.data()); }
+inline flight::Wrench6 to_wrench6(const Wrench& w) {
+    flight::Wrench6 out;
+    Eigen::Map<Wrench>(out.data()) = w;
+    return out;
+}
 
 struct Producer {
     Vec3 position = Vec3::Zero();  // world NED [m]

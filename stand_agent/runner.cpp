@@ -15,10 +15,7 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
     : physics_(physics),
       chain_(physics_.effects),
       sensor_(chain_),
-      position_error_([&] {
-          const auto e = chain_.position_error_m();
-          return physics::Vec3(e[0], e[1], e[2]);
-      }()),
+      position_error_(chain_.position_error_m()),
       model_(physics),
       stand_(physics.stand),
       sufferer_name_(std::move(sufferer)),
@@ -46,14 +43,9 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
 
 double PhysicsSource::force(int chip, Nanos t) {
     std::lock_guard lock(mutex_);
-    const physics::Wrench truth = model_.evaluate(sufferer_, producers_);
-    physics::Wrench6 x;
-    for (int a = 0; a < 6; ++a) x[static_cast<std::size_t>(a)] = truth[a];
-    physics::Wrench6 read = sensor_.read(to_seconds(t), x);
+    physics::Wrench6 read = sensor_.read(to_seconds(t), physics::to_wrench6(model_.evaluate(sufferer_, producers_)));
     chain_.calibration(read);
-    physics::Wrench w;
-    for (int a = 0; a < 6; ++a) w[a] = read[static_cast<std::size_t>(a)];
-    return stand_.wrench_to_cells(w)[chip];
+    return stand_.wrench_to_cells(physics::to_wrench(read))[chip];
 }
 
 double sim_clock_delay_s(const physics::PhysicsConfig& physics) {

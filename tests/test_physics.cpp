@@ -503,6 +503,35 @@ TEST(Flight, VehiclesFollowTheLegsWithSmallErrorsAndRecordAtTheirRates) {
     EXPECT_LT(std::abs(p0[2] - (-1.4 - 0.3)), 0.1);
 }
 
+TEST(Flight, AFlyingSuffererSwaysAndIsRecordedAsAResidual) {
+    const PhysicsConfig c;
+    FlyOptions o;
+    o.formation = "single";
+    o.grid.legs = 2;
+    o.flying_sufferer.enabled = true;
+    const auto r = simulate_flight(c, o);
+    const auto& f = r.flight;
+    EXPECT_FALSE(f.meta.stand_height_m.has_value());
+    EXPECT_EQ(f.meta.wrench_source, dw::flight::WrenchSource::residual);
+    EXPECT_FALSE(f.meta.moments_measured);
+    EXPECT_NEAR(static_cast<double>(f.wrench.size()) / r.truth_t.back(), o.flying_sufferer.rate_hz, 1.0);
+    for (const auto& w : f.wrench) ASSERT_EQ(w.w[3] + w.w[4] + w.w[5], 0.0) << "a moment at t = " << w.t;
+    // It flies its sway about the stand's point: N over ±sway_n_m, D over ±sway_d_m (within the
+    // tracking's lag and wander).
+    const auto tracks = dw::flight::tracks(f);
+    const auto& s = tracks[static_cast<std::size_t>(f.find_body(f.meta.sufferer))];
+    std::array<double, 3> lo{1e9, 1e9, 1e9}, hi{-1e9, -1e9, -1e9};
+    for (const auto& p : s.p)
+        for (std::size_t k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+    EXPECT_NEAR(0.5 * (hi[0] - lo[0]), o.flying_sufferer.sway_n_m, 0.1);
+    EXPECT_NEAR(0.5 * (hi[2] - lo[2]), o.flying_sufferer.sway_d_m, 0.1);
+    EXPECT_NEAR(0.5 * (hi[2] + lo[2]), -c.stand.height_m, 0.1);
+    EXPECT_LT(hi[1] - lo[1], 0.2);
+    // On the stand, the same options give the stand's flight (the sway's stream drawn apart).
+    o.flying_sufferer.enabled = false;
+    EXPECT_TRUE(simulate_flight(c, o).flight.meta.stand_height_m.has_value());
+}
+
 TEST(Flight, SameSeedSameBytesOtherSeedOtherNoise) {
     const PhysicsConfig c;
     FlyOptions o;
@@ -590,7 +619,7 @@ TEST(RecordingChain, EachStageActsOnceAndLiveReadingsAreTheSeriesReadings) {
     fx.position_offset = {true, {0.1, -0.2, 0.0}};
     const dw::physics::RecordingChain chain(fx);
     EXPECT_DOUBLE_EQ(chain.clock_delay_s(), 0.03);
-    EXPECT_EQ(chain.position_error_m(), (std::array<double, 3>{0.1, -0.2, 0.0}));
+    EXPECT_EQ(chain.position_error_m(), dw::physics::Vec3(0.1, -0.2, 0.0));
     dw::physics::Wrench6 w{0, 0, 1, 0, 0, 0};
     chain.calibration(w);  // the gain, then the leak of the recorded (gained) f_d
     EXPECT_DOUBLE_EQ(w[2], 1.2);

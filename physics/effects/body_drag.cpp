@@ -1,4 +1,4 @@
-// body_drag: a flying sufferer's own drag (stage: sufferer; its physics is the resimulation's).
+// body_drag: a flying sufferer's own drag against its motion through still air (stage: sufferer).
 #include <cmath>
 
 #include "physics/effects/builtins.hpp"
@@ -21,6 +21,17 @@ public:
     bool enabled(const Effects& e) const override { return e.body_drag.enabled; }
     std::vector<double> values(const Effects& e) const override { return {e.body_drag.cda_h_m2, e.body_drag.cda_v_m2}; }
     Stage stage() const override { return Stage::sufferer; }
+    // f = −½ ρ C_d A |v| v, horizontally and vertically with their own areas.
+    Wrench6 sufferer_force(const Effects& e, const SuffererState& s) const override {
+        const auto& v = s.velocity_m_s;
+        const double half_rho = 0.5 * s.air_density_kg_m3, vh = std::hypot(v[0], v[1]);
+        return {-half_rho * e.body_drag.cda_h_m2 * vh * v[0],
+                -half_rho * e.body_drag.cda_h_m2 * vh * v[1],
+                -half_rho * e.body_drag.cda_v_m2 * std::abs(v[2]) * v[2],
+                0,
+                0,
+                0};
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**body_drag** — the flying sufferer's own drag against its motion through still air: C_d A = ",
                         f3(v[0], 4), " m² horizontally, ", f3(v[1], 4),

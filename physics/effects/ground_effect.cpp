@@ -1,4 +1,4 @@
-// ground_effect: a flying sufferer's extra lift near the floor (stage: sufferer; its physics is the resimulation's).
+// ground_effect: a flying sufferer's extra lift near the floor, by the image-rotor law (stage: sufferer).
 #include <cmath>
 
 #include "physics/effects/builtins.hpp"
@@ -16,6 +16,13 @@ public:
     }
     bool applies(int, bool flying) const override { return flying; }
     Stage stage() const override { return Stage::sufferer; }
+    // Lift (−D) of coefficient × hover thrust × (R / 4h)², h the height above the floor (D = 0),
+    // held at the propeller radius: the law's pole is not reached by a flying vehicle.
+    Wrench6 sufferer_force(const Effects& e, const SuffererState& s) const override {
+        const double h = std::max(-s.position_m[2], s.prop_radius_m);
+        return {0, 0, -e.ground_effect.coefficient * s.hover_thrust_n * std::pow(s.prop_radius_m / (4 * h), 2),
+                0, 0, 0};
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**ground_effect** — extra lift near the floor: ", f3(v[0], 2),
                         " × the hover thrust × (R / 4h)². ");
