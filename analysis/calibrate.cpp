@@ -118,6 +118,7 @@ public:
     std::size_t size() const { return params_.size(); }
     const std::vector<Trial>& trials() const { return trials_; }
     const std::vector<FlightData>& flights() const { return flights_; }
+    const std::vector<AloneFlight>& alone() const { return alone_; }
 
     // The starting values (the base's) and their bounds.
     std::vector<double> start() const {
@@ -173,6 +174,12 @@ private:
             throw_if_stopped(o_.stop, "the calibration");
             if (o_.progress) o_.progress(log::cat("reading ", dir));
             const flight::Flight f = flight::read_flight(dir);
+            if (f.meta.neighbours.empty()) {  // nobody near: the residual's own errors, not the fit's
+                const auto v = physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle);
+                const auto* k = physics::class_of(config_, v);
+                alone_.push_back(measure_alone(f, dir, k ? k->name : class_name(v)));
+                continue;
+            }
             FlightData d;
             d.dir = dir;
             d.sim = std::make_unique<Resimulation>(f, config_);
@@ -234,6 +241,7 @@ private:
     PhysicsConfig config_;
     std::vector<FlightData> flights_;
     std::vector<Trial> trials_;
+    std::vector<AloneFlight> alone_;
     std::vector<std::set<std::pair<std::size_t, bool>>> roles_;  // per flight
     std::vector<Param> params_;
 };
@@ -351,6 +359,27 @@ void explain_heldout(TrialError& e, const PhysicsConfig& fold, const CalibrateOp
 
 }  // namespace
 
+AloneFlight measure_alone(const flight::Flight& f, const std::string& dir, const std::string& vehicle_class) {
+    const auto sufferer = flight::body_tracks(f, dir + "/").sufferer;
+    AloneFlight a{fs::path(dir).filename().string(), vehicle_class};
+    std::vector<double> y, v;
+    for (const auto& w : f.wrench)
+        if (w.t >= sufferer.t.front() && w.t <= sufferer.t.back() && std::isfinite(w.w[kFd]))
+            y.push_back(w.w[kFd]), v.push_back(sufferer.velocity_at(w.t)[2]);
+    if (y.size() < 3) throw InputError(log::cat(dir, "/wrench.csv: fewer than 3 f_d samples while the sufferer flies"));
+    Eigen::MatrixXd X(static_cast<Eigen::Index>(y.size()), 2);
+    const Eigen::VectorXd Y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
+    X.col(0).setOnes();
+    X.col(1) = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+    const Eigen::Vector2d line = X.colPivHouseholderQr().solve(Y);
+    a.samples = y.size();
+    a.mean_f_d = Y.mean();
+    a.rms_f_d = std::sqrt(Y.squaredNorm() / static_cast<double>(y.size()));
+    a.slope_per_v_d = line[1];
+    a.rms_after_line = std::sqrt((Y - X * line).squaredNorm() / static_cast<double>(y.size()));
+    return a;
+}
+
 CalibrateResult calibrate(const CalibrateOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     require_output_dir(o.out_dir, "--out");
@@ -385,6 +414,7 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         R.parameters.push_back({cal.class_of(p), cal.knob(p).name, cal.knob(p).unit, x0[p], x[p],
                                 std::max(x[p] - t * sd[p], cal.knob(p).lower),  // within the parameter's bounds
                                 std::min(x[p] + t * sd[p], cal.knob(p).upper)});
+    R.alone = cal.alone();
     R.calibrated =
         with_provenance(cal.config_of(x), o.physics,
                         log::cat("on ", cal.flights().size(), " flights of ", cal.trials().size(), " trials"));

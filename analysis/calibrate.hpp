@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/numbers.hpp"
+#include "flight/flight.hpp"
 #include "physics/config.hpp"
 
 namespace dw::analysis {
@@ -53,10 +54,23 @@ struct TrialError {
     std::vector<std::vector<std::string>> explained_by;
 };
 
+// A flight with nobody near the sufferer (a vehicle flying alone): no downwash to calibrate on, so
+// it takes no part in the fit, but the residual's own errors show there. Its f_d mean and RMS, and
+// their least-squares line against the sufferer's own vertical velocity (NED: + descending).
+struct AloneFlight {
+    std::string flight, vehicle_class;
+    std::size_t samples = 0;
+    double mean_f_d = 0, rms_f_d = 0;
+    double slope_per_v_d = 0;   // N per m/s
+    double rms_after_line = 0;  // f_d's RMS once that line is taken away
+};
+AloneFlight measure_alone(const flight::Flight& f, const std::string& dir, const std::string& vehicle_class);
+
 struct CalibrateResult {
     physics::PhysicsConfig calibrated;
     std::vector<CalibratedParameter> parameters;
     std::vector<TrialError> trials;
+    std::vector<AloneFlight> alone;
     std::string physics_path, report_path;  // in --out, once it is complete
     double seconds = 0;
 };

@@ -58,10 +58,20 @@ nlohmann::json to_json(const CalibrateResult& r) {
                           {"rmse_f_d_held_out_n", t.rmse_heldout},
                           {"explained_f_d_over_noise_floor", t.explained_ratio},
                           {"explained_by", t.explained_by}});
+    nlohmann::json alone = nlohmann::json::array();
+    for (const auto& a : r.alone)
+        alone.push_back({{"flight", a.flight},
+                         {"class", a.vehicle_class},
+                         {"samples", a.samples},
+                         {"mean_f_d_n", a.mean_f_d},
+                         {"rms_f_d_n", a.rms_f_d},
+                         {"slope_f_d_per_v_d_n_s_per_m", a.slope_per_v_d},
+                         {"rms_f_d_after_line_n", a.rms_after_line}});
     return {{"format", "downwash-calibration/1"},
             {"calibration", r.calibrated.calibration},
             {"parameters", params},
             {"trials", trials},
+            {"alone", alone},
             {"seconds", r.seconds}};
 }
 
@@ -74,6 +84,25 @@ std::string explained_cells(const TrialError& t, std::vector<double>& ratios) {
         by += (k ? "; " : "") + (t.explained_by[k].empty() ? std::string("nothing") : log::join(t.explained_by[k]));
     }
     return ratio + " | " + by + " |";
+}
+
+// The flights of one vehicle: what the residual does with nobody near (none: nothing).
+std::string alone_section(const std::vector<AloneFlight>& alone) {
+    if (alone.empty()) return "";
+    std::ostringstream md;
+    md << "## The residual with nobody near (flights of one vehicle, not in the fit)\n\n"
+       << "f_d where no downwash can be: its mean and RMS, and the least-squares line against the "
+          "sufferer's own vertical velocity (v_d, + descending) — errors of the residual itself, which "
+          "the physics cannot be calibrated to remove.\n\n"
+       << "| flight | class | samples | mean f_d [N] | RMS f_d [N] | slope [N per m/s of v_d] | RMS after the line [N] "
+          "|\n"
+       << "|---|---|---|---|---|---|---|\n";
+    for (const auto& a : alone)
+        md << "| " << a.flight << " | " << a.vehicle_class << " | " << a.samples << " | " << fixed(a.mean_f_d, 4)
+           << " | " << fixed(a.rms_f_d, 4) << " | " << fixed(a.slope_per_v_d, 4) << " | " << fixed(a.rms_after_line, 4)
+           << " |\n";
+    md << "\n";
+    return md.str();
 }
 
 std::string markdown(const std::vector<PairingSamples>& pairings, const CalibrateResult& r) {
@@ -108,7 +137,8 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
        << (explained ? log::cat("; after the explainer, median ", fixed(median(ratios), 2), " noise floors (",
                                 ratios.size(), " flights)")
                      : std::string())
-       << ".\n\n## f_d by the nearest neighbour's position, per pairing\n\n";
+       << ".\n\n";
+    md << alone_section(r.alone) << "## f_d by the nearest neighbour's position, per pairing\n\n";
     for (std::size_t i = 0; i < pairings.size(); ++i)
         md << "![" << pairings[i].pairing << "](" << pairing_png(i) << ")\n\n";
     return md.str();

@@ -356,6 +356,23 @@ std::vector<Concealment> concealments(const Concealed& m) {
 
 }  // namespace
 
+// Recorded flights are what they are: an effect a flight cannot show (its fit right, its held-out
+// evidence in too few pieces) is that flight's verdict, not a failure — but every concealed effect
+// must be recovered on some flight.
+void require_recovered_somewhere(std::vector<ProofRow>& rows) {
+    for (auto& row : rows) {
+        const bool recovered =
+            std::any_of(rows.begin(), rows.end(), [&](const ProofRow& x) { return x.name == row.name && x.pass; });
+        if (row.not_identifiable && !recovered) {
+            row.not_identifiable = false;
+            row.why += "And it is recovered on no flight of this proof. ";
+        }
+    }
+}
+
+// Why a flight of one vehicle is not proved on.
+constexpr const char* kNoNeighbourSkipped = "no neighbour, so no downwash for a concealed effect to act on — skipped";
+
 ProofResult run_real_proof(const RealProofOptions& o) {
     auto say = [&](const std::string& s) {
         if (o.progress) o.progress(s);
@@ -375,6 +392,11 @@ ProofResult run_real_proof(const RealProofOptions& o) {
         const auto& path = o.flights[fi];
         const auto& f = flights[fi];
         const std::string name = fs::path(path).filename().string(), dir = (out / name).string();
+        if (f.meta.neighbours.empty()) {
+            say(log::cat(name, ": ", kNoNeighbourSkipped));
+            R.skipped.push_back(name);
+            continue;
+        }
         ExplainOptions eo;
         eo.physics = o.physics;
         eo.stop = o.stop;
@@ -415,21 +437,14 @@ ProofResult run_real_proof(const RealProofOptions& o) {
             R.rows.push_back(row);
         }
     }
-    // Recorded flights are what they are: an effect a flight cannot show (its fit right, its
-    // held-out evidence in too few pieces) is that flight's verdict, not a failure — but every
-    // concealed effect must be recovered on some flight.
-    for (auto& row : R.rows) {
-        const bool recovered =
-            std::any_of(R.rows.begin(), R.rows.end(), [&](const ProofRow& x) { return x.name == row.name && x.pass; });
-        if (row.not_identifiable && !recovered) {
-            row.not_identifiable = false;
-            row.why += "And it is recovered on no flight of this proof. ";
-        }
-    }
+    require_recovered_somewhere(R.rows);
     R.pass = !R.rows.empty() &&
              std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass || r.not_identifiable; });
+    std::string skipped;
+    if (!R.skipped.empty())
+        skipped = log::cat("\nNot proved on (", kNoNeighbourSkipped, "): ", log::join(R.skipped), ".\n");
     write_file((out / kProofTableFile).string(),
-               table(R.rows, "flight", "concealed effect", "expected (own fit with the concealed value)"));
+               table(R.rows, "flight", "concealed effect", "expected (own fit with the concealed value)") + skipped);
     staged.commit();
     R.table_path = (fs::path(o.out_dir) / kProofTableFile).string();
     return R;

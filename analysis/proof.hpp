@@ -36,6 +36,7 @@ struct ProofRow {
 struct ProofResult {
     std::vector<ProofRow> rows;
     int null_clean = 0, null_total = 0;
+    std::vector<std::string> skipped;  // real-proof: flights without a neighbour (nothing near to conceal an effect in)
     bool pass = false;
     std::string table_path;
 };

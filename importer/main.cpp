@@ -15,7 +15,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // `dw-import neural-swarm-collection DIR --out DIR`: every trial of a collection, one flight folder
-// each (the lowest vehicle the sufferer). A trial of one vehicle has no neighbour: skipped, said so.
+// each (the lowest vehicle the sufferer). A trial of one vehicle is a flight without neighbours
+// (what its residual does with nobody near: dw-explain calibrate reports it).
 // A trial that cannot be imported is said in one line and the others go on; then exit 2.
 int import_collection(const std::string& dir, const std::string& out, const dw::importer::ImportOptions& o) {
     const auto trials = dw::importer::collection_trials(dir);
@@ -24,10 +25,6 @@ int import_collection(const std::string& dir, const std::string& out, const dw::
     for (const auto& t : trials) {
         dw::throw_if_stopped(o.stop, "the import");
         const std::string folder = (fs::path(out) / t.name).string();
-        if (t.logs.size() < 2) {
-            std::cout << t.name << ": one vehicle, no neighbour: skipped\n";
-            continue;
-        }
         try {
             if (fs::exists(folder)) throw dw::InputError(folder + ": exists already");
             const auto f = dw::importer::neural_swarm_importer().import(t.logs, o);

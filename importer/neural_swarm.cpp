@@ -120,7 +120,8 @@ double require_force(const VehicleLog& s, std::size_t i, const char* what, doubl
     return v;
 }
 
-// Fa = m a_imu − T_lag R e_z (world, z up), tared where no neighbour is near. Returns the tare.
+// Fa = m a_imu − T_lag R e_z (world, z up), tared where no neighbour is near (a vehicle alone:
+// over its whole flight). Returns the tare.
 std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLog>& others, const ImportOptions& o,
                                 std::vector<std::array<double, 3>>& fa) {
     const auto& type = crazyflie_type(s.name);
@@ -221,8 +222,6 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     std::vector<VehicleLog> others;
     for (const auto& l : logs)
         if (l.name != sufferer) others.push_back(l);
-    if (others.empty())
-        throw InputError("a trial needs the logs of at least two vehicles (a sufferer and a neighbour)");
 
     flight::Flight f;
     f.meta.sufferer = sufferer;

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/errors.hpp"
+#include "core/stats.hpp"
 #include "flight/flight.hpp"
 #include "importer/neural_swarm.hpp"
 #include "real_data.hpp"
@@ -142,7 +143,8 @@ TEST(Import, BadColumnsAndValuesAreOneLocatedLine) {
     EXPECT_NE(huge.find("cf50_01.csv:3: column az[m/s^2]: 1e+308 is not in [-1000, 1000]"), std::string::npos) << huge;
     const std::string duty = with_line3("u1[PWM]", "65536");
     EXPECT_NE(duty.find("cf50_01.csv:3: column u1[PWM]: 65536 is not in [0, 1]"), std::string::npos) << duty;
-    EXPECT_NE(error_of({kData + "swap_ss/cf50_01.csv"}).find("at least two vehicles"), std::string::npos);
+    // One log alone is no longer an error: a vehicle alone (Import.AVehicleAloneIsAFlightWithout...).
+    EXPECT_EQ(error_of({kData + "swap_ss/cf50_01.csv"}), "(no error)");
     EXPECT_NE(error_of({d.file("cf99_01.csv")}).find("not one the Neural-Swarm collection describes"),
               std::string::npos);
 }
@@ -169,6 +171,23 @@ TEST(Import, MetaNamesTheCollectionTheLogsCameFrom) {
     EXPECT_NE(e.find("come from two collections"), std::string::npos) << e;
     EXPECT_EQ(e.find('\n'), std::string::npos) << e;
     EXPECT_EQ(collection_of({"/cf50_01"}), "(unknown collection)");
+}
+
+// Issue 41: a vehicle flying alone is a flight without neighbours (what its residual does with
+// nobody near), its Fa tared over the whole flight.
+TEST(Import, AVehicleAloneIsAFlightWithoutNeighboursTaredOverItsWholeFlight) {
+    REQUIRE_SHARED_DATA();
+    std::vector<std::string> logs;
+    for (const auto& t : collection_trials(kData))
+        if (t.name == "randomwalk_s_00") logs = t.logs;
+    ASSERT_EQ(logs.size(), 1u);
+    const auto f = neural_swarm_importer().import(logs, {});
+    EXPECT_TRUE(f.meta.neighbours.empty());
+    EXPECT_EQ(f.meta.sufferer, "cf50");
+    std::vector<double> fd;
+    for (const auto& w : f.wrench) fd.push_back(w.w[2]);
+    ASSERT_GT(fd.size(), 1000u);
+    EXPECT_NEAR(dw::median(fd), 0.0, 1e-9);  // the tare is the median of every sample
 }
 
 // Issue 41: a whole collection in one command — every trial found, the binary log preferred, the

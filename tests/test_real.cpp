@@ -250,6 +250,24 @@ TEST(RealFlights, ThePredictorComparesEveryModelOnHeldOutEncounters) {
     EXPECT_EQ(md.find("nan"), std::string::npos);
 }
 
+// A flight of one vehicle has no downwash for a concealed effect to act on: the real-data proof
+// says it skipped it, and with nothing else to prove on it does not pass.
+TEST(RealProof, AFlightWithoutNeighboursIsSkippedAndSaidSo) {
+    dw::test::TempDir d;
+    auto f = crossing(2);
+    f.meta.neighbours.clear();
+    f.meta.vehicles.erase("n");
+    dw::flight::write_flight(f, d.file("alone"));
+    dw::analysis::RealProofOptions o;
+    o.flights = {d.file("alone")};
+    o.out_dir = d.file("proof");
+    const auto r = dw::analysis::run_real_proof(o);
+    EXPECT_EQ(r.skipped, std::vector<std::string>{"alone"});
+    EXPECT_TRUE(r.rows.empty());
+    EXPECT_FALSE(r.pass);
+    EXPECT_NE(dw::read_file(r.table_path).find("Not proved on"), std::string::npos);
+}
+
 TEST(RealFlights, ConcealedEffectsAreRecoveredOnTopOfWhatEachFlightShows) {
     REQUIRE_SHARED_DATA();
     dw::test::TempDir d;
