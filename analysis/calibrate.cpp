@@ -33,15 +33,15 @@ using physics::PhysicsConfig;
 using physics::VehicleClass;
 using physics::VehicleParams;
 
-constexpr std::size_t kFd = 2;               // the axis calibrated on: f_d (wrench.csv's order)
-constexpr int kBlocksWanted = 5;             // cross-validation blocks asked of find_blocks (for `near`)
-constexpr double kStepFraction = 1e-3;       // forward-difference step, relative to the value (or start)
-constexpr double kLambda0 = 1e-3;            // Levenberg-Marquardt's first damping
-constexpr double kRelativeTolerance = 1e-6;  // stop when the cost falls by less than this fraction
-constexpr double kLambdaMax = 1e10;          // ... or no step lowers it
-constexpr double kLambdaMin = 1e-9;          // the damping never falls below this
-constexpr double kStepFloor = 1e-3;          // added to the start value: a parameter starting at 0 still gets a step
-constexpr double kUnusedDiagonal = 1.0;      // the normal matrix's diagonal for a parameter no flight sees
+constexpr std::size_t kFd = flight::kFdAxis;  // the axis calibrated on
+constexpr int kBlocksWanted = 5;              // cross-validation blocks asked of find_blocks (for `near`)
+constexpr double kStepFraction = 1e-3;        // forward-difference step, relative to the value (or start)
+constexpr double kLambda0 = 1e-3;             // Levenberg-Marquardt's first damping
+constexpr double kRelativeTolerance = 1e-6;   // stop when the cost falls by less than this fraction
+constexpr double kLambdaMax = 1e10;           // ... or no step lowers it
+constexpr double kLambdaMin = 1e-9;           // the damping never falls below this
+constexpr double kStepFloor = 1e-3;           // added to the start value: a parameter starting at 0 still gets a step
+constexpr double kUnusedDiagonal = 1.0;       // the normal matrix's diagonal for a parameter no flight sees
 
 // A calibrated quantity of a class: name, unit, role, bounds, and where it lives in the class.
 struct Knob {
@@ -109,6 +109,7 @@ public:
     explicit Calibration(const CalibrateOptions& o) : o_(o), config_(o.physics) {
         config_.effects = {};  // calibrated on the flow alone; effects stay the explainer's to find
         load_flights();
+        set_residual_noise();
         if (trials_.size() < 2)
             throw InputError(log::cat("--flights: ", trials_.size(),
                                       " trial(s); calibration leaves whole trials out and needs at least two"));
@@ -175,9 +176,10 @@ private:
             if (o_.progress) o_.progress(log::cat("reading ", dir));
             const flight::Flight f = flight::read_flight(dir);
             if (f.meta.neighbours.empty()) {  // nobody near: the residual's own errors, not the fit's
-                const auto v = physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle);
-                const auto* k = physics::class_of(config_, v);
-                alone_.push_back(measure_alone(f, dir, k ? k->name : class_name(v)));
+                const auto k =
+                    class_index(config_, physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle));
+                alone_.push_back(measure_alone(f, dir, config_.classes[k].name));
+                alone_class_.push_back(k);
                 continue;
             }
             FlightData d;
@@ -193,6 +195,17 @@ private:
             d.pairing = pairing_of(f);
             flights_.push_back(std::move(d));
         }
+    }
+
+    // Each class flown alone: its residual noise, the SD of f_d pooled over its flights alone.
+    void set_residual_noise() {
+        std::map<std::size_t, std::pair<double, double>> pooled;  // class: (Σ n sd², Σ n)
+        for (std::size_t i = 0; i < alone_.size(); ++i) {
+            const double n = static_cast<double>(alone_[i].samples);
+            pooled[alone_class_[i]].first += n * alone_[i].sd_f_d * alone_[i].sd_f_d;
+            pooled[alone_class_[i]].second += n;
+        }
+        for (const auto& [k, p] : pooled) config_.classes[k].residual_noise_n = std::sqrt(p.first / p.second);
     }
 
     void describe_rows(const flight::Flight& f, FlightData& d) const {
@@ -242,6 +255,7 @@ private:
     std::vector<FlightData> flights_;
     std::vector<Trial> trials_;
     std::vector<AloneFlight> alone_;
+    std::vector<std::size_t> alone_class_;                       // per flight alone: its class in config_
     std::vector<std::set<std::pair<std::size_t, bool>>> roles_;  // per flight
     std::vector<Param> params_;
 };
@@ -364,9 +378,12 @@ AloneFlight measure_alone(const flight::Flight& f, const std::string& dir, const
     AloneFlight a{fs::path(dir).filename().string(), vehicle_class};
     std::vector<double> y, v;
     for (const auto& w : f.wrench)
-        if (w.t >= sufferer.t.front() && w.t <= sufferer.t.back() && std::isfinite(w.w[kFd]))
+        if (w.t >= sufferer.t.front() && w.t <= sufferer.t.back() && std::isfinite(w.w[kFd]) &&
+            -sufferer.position_at(w.t)[2] >= kAloneMinHeight_m)
             y.push_back(w.w[kFd]), v.push_back(sufferer.velocity_at(w.t)[2]);
-    if (y.size() < 3) throw InputError(log::cat(dir, "/wrench.csv: fewer than 3 f_d samples while the sufferer flies"));
+    if (y.size() < 3)
+        throw InputError(log::cat(dir, "/wrench.csv: fewer than 3 f_d samples while the sufferer flies alone at least ",
+                                  kAloneMinHeight_m, " m above the floor"));
     Eigen::MatrixXd X(static_cast<Eigen::Index>(y.size()), 2);
     const Eigen::VectorXd Y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
     X.col(0).setOnes();
@@ -375,6 +392,7 @@ AloneFlight measure_alone(const flight::Flight& f, const std::string& dir, const
     a.samples = y.size();
     a.mean_f_d = Y.mean();
     a.rms_f_d = std::sqrt(Y.squaredNorm() / static_cast<double>(y.size()));
+    a.sd_f_d = std::sqrt(std::max(0.0, a.rms_f_d * a.rms_f_d - a.mean_f_d * a.mean_f_d));
     a.slope_per_v_d = line[1];
     a.rms_after_line = std::sqrt((Y - X * line).squaredNorm() / static_cast<double>(y.size()));
     return a;

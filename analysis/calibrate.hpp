@@ -56,14 +56,19 @@ struct TrialError {
 
 // A flight with nobody near the sufferer (a vehicle flying alone): no downwash to calibrate on, so
 // it takes no part in the fit, but the residual's own errors show there. Its f_d mean and RMS, and
-// their least-squares line against the sufferer's own vertical velocity (NED: + descending).
+// their least-squares line against the sufferer's own vertical velocity (NED: + descending). Its
+// class's residual_noise_n in the calibrated physics is the pooled SD of its flights alone.
 struct AloneFlight {
     std::string flight, vehicle_class;
     std::size_t samples = 0;
-    double mean_f_d = 0, rms_f_d = 0;
+    double mean_f_d = 0, rms_f_d = 0, sd_f_d = 0;
     double slope_per_v_d = 0;   // N per m/s
     double rms_after_line = 0;  // f_d's RMS once that line is taken away
 };
+// Only the samples this high above the floor count: flights alone may fly low and touch the floor
+// (the Neural-Swarm ones did, with onboard ground-effect compensation: below 0.2 m their f_d
+// spreads three times wider), where the flights under neighbours do not go.
+inline constexpr double kAloneMinHeight_m = 0.3;
 AloneFlight measure_alone(const flight::Flight& f, const std::string& dir, const std::string& vehicle_class);
 
 struct CalibrateResult {

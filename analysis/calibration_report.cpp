@@ -65,6 +65,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
                          {"samples", a.samples},
                          {"mean_f_d_n", a.mean_f_d},
                          {"rms_f_d_n", a.rms_f_d},
+                         {"sd_f_d_n", a.sd_f_d},
                          {"slope_f_d_per_v_d_n_s_per_m", a.slope_per_v_d},
                          {"rms_f_d_after_line_n", a.rms_after_line}});
     return {{"format", "downwash-calibration/1"},
@@ -91,16 +92,19 @@ std::string alone_section(const std::vector<AloneFlight>& alone) {
     if (alone.empty()) return "";
     std::ostringstream md;
     md << "## The residual with nobody near (flights of one vehicle, not in the fit)\n\n"
-       << "f_d where no downwash can be: its mean and RMS, and the least-squares line against the "
+       << "f_d where no downwash can be (at least " << kAloneMinHeight_m
+       << " m above the floor: lower, flights alone may touch it): its mean and RMS, and the least-squares line "
+          "against the "
           "sufferer's own vertical velocity (v_d, + descending) — errors of the residual itself, which "
-          "the physics cannot be calibrated to remove.\n\n"
-       << "| flight | class | samples | mean f_d [N] | RMS f_d [N] | slope [N per m/s of v_d] | RMS after the line [N] "
-          "|\n"
-       << "|---|---|---|---|---|---|---|\n";
+          "the physics cannot be calibrated to remove. Each class's SD, pooled over its flights alone, is "
+          "its `residual_noise_n` in physics.yaml: the explainer's f_d noise floor for that class's "
+          "residual where nobody is ever far.\n\n"
+       << "| flight | class | samples | mean f_d [N] | RMS f_d [N] | SD f_d [N] | slope [N per m/s of v_d] | RMS after "
+          "the line [N] |\n|---|---|---|---|---|---|---|---|\n";
     for (const auto& a : alone)
         md << "| " << a.flight << " | " << a.vehicle_class << " | " << a.samples << " | " << fixed(a.mean_f_d, 4)
-           << " | " << fixed(a.rms_f_d, 4) << " | " << fixed(a.slope_per_v_d, 4) << " | " << fixed(a.rms_after_line, 4)
-           << " |\n";
+           << " | " << fixed(a.rms_f_d, 4) << " | " << fixed(a.sd_f_d, 4) << " | " << fixed(a.slope_per_v_d, 4) << " | "
+           << fixed(a.rms_after_line, 4) << " |\n";
     md << "\n";
     return md.str();
 }

@@ -24,10 +24,8 @@ namespace {
 // Resimulation and sample bookkeeping: the data every later stage reads. Throws dw::InputError when
 // the flight has too few blocks for the folds.
 ExplainData prepare(const Resimulation& sim, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
-                    const ExplainOptions& o, const std::vector<Wrench6>& base_pred) {
-    ExplainData d{
-        sim, info,         floor_of(sim, info, base_pred, o.physics.stand.tare_s), {}, sim.buffeting_sigma(o.physics),
-        0,   o.huber_delta};
+                    const ExplainOptions& o, const AxisValues& sigma) {
+    ExplainData d{sim, info, sigma, {}, sim.buffeting_sigma(o.physics), 0, o.huber_delta};
     for (std::size_t i = 0; i < info.size(); ++i)
         if (info[i].leg >= 0) d.on_legs.push_back(i);
     std::set<int> leg_ids;
@@ -114,9 +112,12 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     say(log::cat("simulating the recorded flight: ", sim.stamps().size(), " wrench samples, ", sim.neighbours(),
                  " neighbours, ", blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
     auto base_pred = sim.recorded(o.physics);
-    const ExplainData d = prepare(sim, info, blocks, o, base_pred);
+    const NoiseFloor floor =
+        floor_of(sim, info, base_pred, o.physics.stand.tare_s, known_residual_noise(sim, o.physics));
+    const ExplainData d = prepare(sim, info, blocks, o, floor.sigma);
     const Baseline base = baseline_of(d, o.physics, std::move(base_pred));
     R.noise_floor = d.sigma;
+    R.noise_floor_basis = floor.basis;
     R.samples = d.on_legs.size();
     R.legs = d.legs;
     // Locate.

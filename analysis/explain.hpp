@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "analysis/effects.hpp"
+#include "analysis/noise.hpp"
 #include "analysis/resimulation.hpp"
 #include "core/numbers.hpp"
 #include "flight/blocks.hpp"
@@ -106,6 +107,7 @@ struct CandidateResult {
 struct ExplainResult {
     bool detected = false;
     AxisValues noise_floor{};
+    FloorBasis noise_floor_basis = FloorBasis::far_samples;
     std::vector<Region> regions;  // strongest first
     std::vector<Shift> shifts;
     std::vector<CandidateResult> candidates;  // every score, every round

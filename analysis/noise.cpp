@@ -7,8 +7,25 @@
 
 namespace dw::analysis {
 
-AxisValues floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
-                    double tare_s) {
+double known_residual_noise(const Resimulation& r, const physics::PhysicsConfig& c) {
+    if (!r.residual()) return 0;
+    const auto* k = physics::class_of(c, r.sufferer_params());
+    return k ? k->residual_noise_n : 0;
+}
+
+const char* describe(FloorBasis b) {
+    switch (b) {
+        case FloorBasis::far_samples: return "the residual's spread where no neighbour is within";
+        case FloorBasis::differences: return "no neighbour is ever far: the spread of successive differences";
+        case FloorBasis::calibrated:
+            return "no neighbour is ever far: on f_d the calibrated residual noise of the sufferer's class (its "
+                   "flights alone), elsewhere the spread of successive differences";
+    }
+    return "";
+}
+
+NoiseFloor floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
+                    double tare_s, double known_f_d) {
     AxisValues sum{}, sq{};
     double n = 0;
     for (std::size_t i = 0; i < info.size(); ++i) {
@@ -20,18 +37,22 @@ AxisValues floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, 
         }
         n += 1;
     }
-    AxisValues s{};
+    NoiseFloor out;
+    auto& s = out.sigma;
+    const bool far = n >= kMinFarSamples;
+    out.basis = far ? FloorBasis::far_samples : FloorBasis::differences;
     for (std::size_t a = 0; a < 6; ++a) {
-        if (n >= kMinFarSamples) {
+        if (far) {
             s[a] = std::sqrt(std::max(0.0, sq[a] / n - (sum[a] / n) * (sum[a] / n)));
         } else {  // nobody is ever far: the spread of successive differences
             std::vector<double> residual;
             for (std::size_t i = 0; i < info.size(); ++i) residual.push_back(r.measured()[i][a] - pred[i][a]);
             s[a] = sd_from_differences(residual);
+            if (a == flight::kFdAxis && known_f_d > s[a]) s[a] = known_f_d, out.basis = FloorBasis::calibrated;
         }
         s[a] = std::max(s[a], kMinNoiseFloor);
     }
-    return s;
+    return out;
 }
 
 // Each sample's residual is divided by sqrt(sigma² + (2 I F)² + b²): the noise floor, the force

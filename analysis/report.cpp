@@ -356,8 +356,10 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
 
 // Where: the noise floor, the significant regions and the time-shift signatures.
 void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o, const physics::EffectVoice& who) {
-    md << "## Where: noise floor and significant regions\n\nNoise floor (no neighbour within " << physics::kNearSizes
-       << " of its own motor distances horizontally): ";
+    md << "## Where: noise floor and significant regions\n\nNoise floor (" << describe(r.noise_floor_basis);
+    if (r.noise_floor_basis == FloorBasis::far_samples)
+        md << " " << physics::kNearSizes << " of its own motor distances horizontally";
+    md << "): ";
     for (std::size_t a = 0; a < 6; ++a) md << kAxes[a] << " " << fixed(r.noise_floor[a], 4) << (a < 5 ? ", " : ".\n\n");
     if (r.regions.empty()) md << "No region departs from the simulation by more than |z| = " << o.region_z << ".\n\n";
     else {

@@ -18,6 +18,7 @@ namespace dw::flight {
 inline constexpr const char* kFormat = "downwash-flight/1";
 inline constexpr Range kStandHeightRange{0.1, 10, "m"};
 inline constexpr std::array<const char*, 6> kAxes = {"f_n", "f_e", "f_d", "m_roll", "m_pitch", "m_yaw"};
+inline constexpr std::size_t kFdAxis = 2;  // f_d's place in kAxes
 // A wrench (N, N·m) in kAxes' order, and a value per axis of one (a noise floor, an error).
 using Wrench6 = std::array<double, 6>;
 using AxisValues = std::array<double, 6>;
