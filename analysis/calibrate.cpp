@@ -109,7 +109,6 @@ public:
     explicit Calibration(const CalibrateOptions& o) : o_(o), config_(o.physics) {
         config_.effects = {};  // calibrated on the flow alone; effects stay the explainer's to find
         load_flights();
-        set_residual_noise();
         if (trials_.size() < 2)
             throw InputError(log::cat("--flights: ", trials_.size(),
                                       " trial(s); calibration leaves whole trials out and needs at least two"));
@@ -176,10 +175,9 @@ private:
             if (o_.progress) o_.progress(log::cat("reading ", dir));
             const flight::Flight f = flight::read_flight(dir);
             if (f.meta.neighbours.empty()) {  // nobody near: the residual's own errors, not the fit's
-                const auto k =
-                    class_index(config_, physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle));
-                alone_.push_back(measure_alone(f, dir, config_.classes[k].name));
-                alone_class_.push_back(k);
+                const auto v = physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle);
+                const auto* k = physics::class_of(config_, v);
+                alone_.push_back(measure_alone(f, dir, k ? k->name : class_name(v)));
                 continue;
             }
             FlightData d;
@@ -195,17 +193,6 @@ private:
             d.pairing = pairing_of(f);
             flights_.push_back(std::move(d));
         }
-    }
-
-    // Each class flown alone: its residual noise, the SD of f_d pooled over its flights alone.
-    void set_residual_noise() {
-        std::map<std::size_t, std::pair<double, double>> pooled;  // class: (Σ n sd², Σ n)
-        for (std::size_t i = 0; i < alone_.size(); ++i) {
-            const double n = static_cast<double>(alone_[i].samples);
-            pooled[alone_class_[i]].first += n * alone_[i].sd_f_d * alone_[i].sd_f_d;
-            pooled[alone_class_[i]].second += n;
-        }
-        for (const auto& [k, p] : pooled) config_.classes[k].residual_noise_n = std::sqrt(p.first / p.second);
     }
 
     void describe_rows(const flight::Flight& f, FlightData& d) const {
@@ -255,7 +242,6 @@ private:
     std::vector<FlightData> flights_;
     std::vector<Trial> trials_;
     std::vector<AloneFlight> alone_;
-    std::vector<std::size_t> alone_class_;                       // per flight alone: its class in config_
     std::vector<std::set<std::pair<std::size_t, bool>>> roles_;  // per flight
     std::vector<Param> params_;
 };

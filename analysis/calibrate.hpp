@@ -56,8 +56,7 @@ struct TrialError {
 
 // A flight with nobody near the sufferer (a vehicle flying alone): no downwash to calibrate on, so
 // it takes no part in the fit, but the residual's own errors show there. Its f_d mean and RMS, and
-// their least-squares line against the sufferer's own vertical velocity (NED: + descending). Its
-// class's residual_noise_n in the calibrated physics is the pooled SD of its flights alone.
+// their least-squares line against the sufferer's own vertical velocity (NED: + descending).
 struct AloneFlight {
     std::string flight, vehicle_class;
     std::size_t samples = 0;

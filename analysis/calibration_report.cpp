@@ -96,9 +96,7 @@ std::string alone_section(const std::vector<AloneFlight>& alone) {
        << " m above the floor: lower, flights alone may touch it): its mean and RMS, and the least-squares line "
           "against the "
           "sufferer's own vertical velocity (v_d, + descending) — errors of the residual itself, which "
-          "the physics cannot be calibrated to remove. Each class's SD, pooled over its flights alone, is "
-          "its `residual_noise_n` in physics.yaml: the explainer's f_d noise floor for that class's "
-          "residual where nobody is ever far.\n\n"
+          "the physics cannot be calibrated to remove.\n\n"
        << "| flight | class | samples | mean f_d [N] | RMS f_d [N] | SD f_d [N] | slope [N per m/s of v_d] | RMS after "
           "the line [N] |\n|---|---|---|---|---|---|---|---|\n";
     for (const auto& a : alone)

@@ -112,8 +112,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     say(log::cat("simulating the recorded flight: ", sim.stamps().size(), " wrench samples, ", sim.neighbours(),
                  " neighbours, ", blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
     auto base_pred = sim.recorded(o.physics);
-    const NoiseFloor floor =
-        floor_of(sim, info, base_pred, o.physics.stand.tare_s, known_residual_noise(sim, o.physics));
+    const NoiseFloor floor = floor_of(sim, info, base_pred, o.physics.stand.tare_s);
     const ExplainData d = prepare(sim, info, blocks, o, floor.sigma);
     const Baseline base = baseline_of(d, o.physics, std::move(base_pred));
     R.noise_floor = d.sigma;

@@ -7,25 +7,16 @@
 
 namespace dw::analysis {
 
-double known_residual_noise(const Resimulation& r, const physics::PhysicsConfig& c) {
-    if (!r.residual()) return 0;
-    const auto* k = physics::class_of(c, r.sufferer_params());
-    return k ? k->residual_noise_n : 0;
-}
-
 const char* describe(FloorBasis b) {
     switch (b) {
         case FloorBasis::far_samples: return "the residual's spread where no neighbour is within";
         case FloorBasis::differences: return "no neighbour is ever far: the spread of successive differences";
-        case FloorBasis::calibrated:
-            return "no neighbour is ever far: on f_d the calibrated residual noise of the sufferer's class (its "
-                   "flights alone), elsewhere the spread of successive differences";
     }
     return "";
 }
 
 NoiseFloor floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
-                    double tare_s, double known_f_d) {
+                    double tare_s) {
     AxisValues sum{}, sq{};
     double n = 0;
     for (std::size_t i = 0; i < info.size(); ++i) {
@@ -48,7 +39,6 @@ NoiseFloor floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, 
             std::vector<double> residual;
             for (std::size_t i = 0; i < info.size(); ++i) residual.push_back(r.measured()[i][a] - pred[i][a]);
             s[a] = sd_from_differences(residual);
-            if (a == flight::kFdAxis && known_f_d > s[a]) s[a] = known_f_d, out.basis = FloorBasis::calibrated;
         }
         s[a] = std::max(s[a], kMinNoiseFloor);
     }

@@ -8,19 +8,16 @@
 namespace dw::analysis {
 
 // The noise floor per axis: the residual's spread where nobody is near (after the tare and
-// kTareSettle_s), or, when nobody ever is, from successive differences — on f_d at least `known_f_d`
-// (a calibrated class's residual noise with nobody near; 0: none). At least kMinNoiseFloor.
+// kTareSettle_s), or, when nobody ever is, from successive differences. At least kMinNoiseFloor.
 // Which of those it is, for the report.
-enum class FloorBasis { far_samples, differences, calibrated };
+enum class FloorBasis { far_samples, differences };
 const char* describe(FloorBasis b);
 struct NoiseFloor {
     AxisValues sigma{};
     FloorBasis basis = FloorBasis::far_samples;
 };
 NoiseFloor floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
-                    double tare_s, double known_f_d = 0);
-// The calibrated residual noise of r's sufferer class in c, for a residual flight (else 0).
-double known_residual_noise(const Resimulation& r, const physics::PhysicsConfig& c);
+                    double tare_s);
 inline constexpr double kTareSettle_s = 0.5;
 inline constexpr double kMinNoiseFloor = 1e-4;     // N or N·m
 inline constexpr std::size_t kMinFarSamples = 30;  // fewer far samples: the differences' spread

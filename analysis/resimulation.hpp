@@ -54,9 +54,7 @@ public:
     double near_radius(int j) const { return near_radius_[static_cast<std::size_t>(j)]; }
     // Which wrench columns carry a measurement (a residual source may not measure moments).
     const std::array<bool, 6>& measured_axes() const { return measured_axes_; }
-    bool flying() const { return flying_; }      // no load stand: the sufferer flies
-    bool residual() const { return residual_; }  // wrench.csv is a flying sufferer's residual
-    const physics::VehicleParams& sufferer_params() const { return sufferer_params_; }
+    bool flying() const { return flying_; }  // no load stand: the sufferer flies
     // How many of the recording's first samples a stand's tare averages (0: no tare here — a
     // residual source is tared by its importer).
     std::size_t tare_samples(const physics::PhysicsConfig& c) const;

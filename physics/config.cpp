@@ -84,7 +84,6 @@ void class_keys(KeyVisitor& k, PhysicsConfig& c) {
         item.section("jet", [&](KeyVisitor& j) { coefficient_keys(j, x.jet); });
         item.number("drag_coefficient", x.drag_coefficient, {0, 5});
         item.number("kv_omega_n_per_mps", x.kv_omega_n_per_mps, {0, 10});
-        item.number("residual_noise_n", x.residual_noise_n, {0, 10});
     });
     c.classes.resize(count);
     k.text("calibration", c.calibration);

@@ -153,10 +153,6 @@ struct VehicleClass {
     JetCoefficients jet;
     double drag_coefficient = 1.18;
     double kv_omega_n_per_mps = 0.1;
-    // The spread of f_d in this class's residual with nobody near (N; 0: not measured). Measured by
-    // dw-explain calibrate on the lab's flights of one vehicle; the explainer's noise floor for a
-    // residual where nobody is ever far (a swap), which successive differences underestimate.
-    double residual_noise_n = 0;
 };
 
 struct PhysicsConfig {

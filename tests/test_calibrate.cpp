@@ -224,8 +224,7 @@ TEST(RealCalibration, TheSharedTrialsLeftOutInTurnArePredictedBetterAndTheShippe
         for (auto [x, y] : {std::pair{a.jet.strength, b.jet.strength},
                             {a.jet.width, b.jet.width},
                             {a.jet.origin, b.jet.origin},
-                            {a.kv_omega_n_per_mps, b.kv_omega_n_per_mps},
-                            {a.residual_noise_n, b.residual_noise_n}})
+                            {a.kv_omega_n_per_mps, b.kv_omega_n_per_mps}})
             EXPECT_NEAR(x, y, 1e-4 * std::abs(y) + 1e-9) << a.name << ": regenerate config/physics.crazyflie.yaml";
     }
     EXPECT_EQ(shipped.calibration, r.calibrated.calibration);
