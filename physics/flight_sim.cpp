@@ -208,6 +208,18 @@ struct Fleet {
     }
 };
 
+// Throws dw::InputError naming the first option of a flying sufferer outside its range.
+void check(const FlyingSufferer& o) {
+    const std::pair<const char*, std::pair<double, Range>> checks[] = {{"sway_n_m", {o.sway_n_m, kSwayRange}},
+                                                                       {"sway_d_m", {o.sway_d_m, kSwayRange}},
+                                                                       {"period_n_s", {o.period_n_s, kSwayPeriodRange}},
+                                                                       {"period_d_s", {o.period_d_s, kSwayPeriodRange}},
+                                                                       {"rate_hz", {o.rate_hz, kResidualRateRange}}};
+    for (const auto& [name, v] : checks)
+        if (!v.second.contains(v.first))
+            throw InputError(log::cat("flying sufferer: ", name, " ", v.first, " is not in ", v.second.describe()));
+}
+
 // The fleet at the reference's start, each vehicle with its own streams split off `master`.
 Fleet launch(const PhysicsConfig& c, const Formation& formation, const ReferenceTrajectory& reference,
              std::uint64_t seed, Rng& master) {
@@ -226,7 +238,9 @@ class Sufferer {
 public:
     Sufferer(const PhysicsConfig& c, const FlyingSufferer& o, Rng& master)
         : c_(c), o_(o), home_(sufferer_on_stand(c.stand)) {
-        if (o.enabled) vehicle_.emplace(c.dynamics, c.gravity_m_s2, home_, master.split());
+        if (!o.enabled) return;
+        check(o);
+        vehicle_.emplace(c.dynamics, c.gravity_m_s2, home_, master.split());
     }
     void step(std::size_t n, double t, double dt) {
         if (vehicle_ && n > 0) vehicle_->step(sway(t), dt);

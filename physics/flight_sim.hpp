@@ -27,6 +27,9 @@ struct FlyingSufferer {
     double sway_d_m = 0.2, period_d_s = 3.0;
     double rate_hz = 100.0;
 };
+inline constexpr Range kSwayRange{0.0, 2.0, "m"};
+inline constexpr Range kSwayPeriodRange{0.5, 600.0, "s"};
+inline constexpr Range kResidualRateRange{1.0, 1000.0, "Hz"};
 
 struct FlyOptions {
     std::string formation = "single";

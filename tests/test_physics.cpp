@@ -527,6 +527,15 @@ TEST(Flight, AFlyingSuffererSwaysAndIsRecordedAsAResidual) {
     EXPECT_NEAR(0.5 * (hi[2] - lo[2]), o.flying_sufferer.sway_d_m, 0.1);
     EXPECT_NEAR(0.5 * (hi[2] + lo[2]), -c.stand.height_m, 0.1);
     EXPECT_LT(hi[1] - lo[1], 0.2);
+    // An option out of its range is one error naming it (a zero rate would never end).
+    auto bad = o;
+    bad.flying_sufferer.rate_hz = 0;
+    try {
+        simulate_flight(c, bad);
+        ADD_FAILURE() << "a zero residual rate was accepted";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("rate_hz 0 is not in"), std::string::npos) << e.what();
+    }
     // On the stand, the same options give the stand's flight (the sway's stream drawn apart).
     o.flying_sufferer.enabled = false;
     EXPECT_TRUE(simulate_flight(c, o).flight.meta.stand_height_m.has_value());
