@@ -17,12 +17,13 @@ if [ "${1:-}" = "--fix" ]; then
   clang-format -i "${files[@]}"
   exit 0
 fi
-bad=0
-for f in "${files[@]}"; do
-  if ! clang-format --style=file "$f" | cmp -s - "$f"; then
-    echo "check_format: $f is not formatted (scripts/check_format.sh --fix)"
-    bad=1
-  fi
-done
-[ $bad -eq 0 ] && echo "check_format: ${#files[@]} files formatted"
-exit $bad
+# One clang-format for every file (one process per file took 30 s, most of it starting them): its
+# --dry-run names each place that differs; each file is listed once.
+if report=$(clang-format --style=file --dry-run --Werror "${files[@]}" 2>&1); then
+  echo "check_format: ${#files[@]} files formatted"
+  exit 0
+fi
+mapfile -t bad < <(grep -o '^[^:]*:[0-9]*:[0-9]*: error: code should be clang-formatted' <<<"$report" | cut -d: -f1 | sort -u)
+[ ${#bad[@]} -eq 0 ] && { echo "check_format: clang-format failed: $report" | head -5; exit 1; }
+for f in "${bad[@]}"; do echo "check_format: $f is not formatted (scripts/check_format.sh --fix)"; done
+exit 1
