@@ -4,12 +4,15 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "core/numbers.hpp"
 #include "core/shutdown.hpp"
+#include "flight/flight.hpp"
 #include "physics/config.hpp"
 #include "plot/chart.hpp"
 #include "predictor/study.hpp"
@@ -62,12 +65,52 @@ void draw_maps(const std::vector<const ForceModel*>& models, const Dataset& test
                        "horizontal offset [m]", "height above the sufferer [m]", "f_d [N]", png);
 }
 
-// Leave-trials-out: every block of the unseen flights held out; the seen flights' blocks train,
-// block % 5 == 1 validating.
-Split split_by_trial(const Dataset& seen, const Dataset& unseen) {
-    Split by_block = split_by_leg(seen);
-    by_block.train.append(by_block.test);
-    return {by_block.train, by_block.validation, unseen.legs_where([](int) { return true; })};
+// A flight's vehicle mix: the sufferer's mass under its neighbours' (grams, sorted), e.g. "32 under 32+67".
+std::string vehicle_mix(const Source& s) {
+    auto grams = [](const physics::VehicleParams& v) { return static_cast<int>(std::lround(v.mass_kg * 1000)); };
+    std::vector<int> above;
+    for (const auto& n : s.neighbours) above.push_back(grams(n));
+    std::sort(above.begin(), above.end());
+    std::vector<std::string> names;
+    for (int g : above) names.push_back(std::to_string(g));
+    return log::cat(grams(s.sufferer), " under ", log::join(names, "+"));
+}
+
+// The seen flights that validate: of each vehicle mix flown in two or more seen flights, the last
+// by name, whole (a model stopped on blocks of the flights it trains on learns those flights; one
+// stopped on flights it never saw learns what carries over). Empty when no mix has two.
+std::vector<int> validating_sources(const Dataset& seen) {
+    std::map<std::string, std::vector<int>> by_mix;
+    for (std::size_t i = 0; i < seen.sources.size(); ++i)
+        by_mix[vehicle_mix(seen.sources[i])].push_back(static_cast<int>(i));
+    std::vector<int> out;
+    for (const auto& [mix, flights] : by_mix) {
+        if (flights.size() < 2) continue;
+        out.push_back(*std::max_element(flights.begin(), flights.end(), [&](int a, int b) {
+            return seen.sources[static_cast<std::size_t>(a)].name < seen.sources[static_cast<std::size_t>(b)].name;
+        }));
+    }
+    return out;
+}
+
+// Leave-trials-out: every block of the unseen flights held out; of the seen flights, those of
+// validating_sources validate whole and the others train — or, when none can be spared, every
+// seen flight trains with block % 5 == 1 validating.
+Split split_by_trial(const Dataset& seen, const Dataset& unseen, std::vector<std::string>& validating) {
+    const auto held = validating_sources(seen);
+    for (int i : held) validating.push_back(seen.sources[static_cast<std::size_t>(i)].name);
+    const Dataset test = unseen.legs_where([](int) { return true; });
+    if (held.empty()) {
+        Split by_block = split_by_leg(seen);
+        by_block.train.append(by_block.test);
+        return {by_block.train, by_block.validation, test};
+    }
+    auto validates = [&](int source) { return std::find(held.begin(), held.end(), source) != held.end(); };
+    Dataset train, validation;
+    train.sources = validation.sources = seen.sources;
+    for (const auto& s : seen.samples)
+        if (s.leg >= 0) (validates(s.source) ? validation : train).samples.push_back(s);
+    return {std::move(train), std::move(validation), test};
 }
 
 // What the physics leaves: each sample's recorded wrench less the physics' prediction (the
@@ -81,22 +124,48 @@ Dataset less_physics(const Dataset& d, const ForceModel& physics) {
     return out;
 }
 
-std::string describe_split(const Dataset& all, const std::vector<std::string>& unseen) {
+// A correction shrunk towards none, axis by axis, by flights it never trained on: the least-squares
+// factor in [0, 1] by which its prediction best matches what the physics leaves on `left` (the
+// validation flights less the physics). A correction whose shape carries over keeps about 1; one
+// that learnt its training flights' own errors goes to about 0 on that axis. Returns the factors.
+Wrench6 shrink_to(LearntModel& m, const Dataset& left) {
+    Wrench6 cr{}, cc{}, factor{};
+    for (const auto& s : left.samples) {
+        const auto& src = left.sources[static_cast<std::size_t>(s.source)];
+        const auto c = predict(m, left, s);
+        for (std::size_t a = 0; a < 6; ++a)
+            if (src.measured[a] && std::isfinite(c[a]) && std::isfinite(s.y[a]))
+                cr[a] += c[a] * s.y[a], cc[a] += c[a] * c[a];
+    }
+    for (std::size_t a = 0; a < 6; ++a) {
+        factor[a] = cc[a] > 0 ? std::clamp(cr[a] / cc[a], 0.0, 1.0) : 1.0;
+        m.output_scale[a] = static_cast<float>(m.output_scale[a] * factor[a]);
+    }
+    return factor;
+}
+
+std::string describe_split(const Dataset& all, const std::vector<std::string>& unseen,
+                           const std::vector<std::string>& validating) {
     std::size_t by[3] = {0, 0, 0};
     for (const auto& s : all.sources) ++by[static_cast<int>(s.blocks)];
     const std::string blocks =
         log::cat("flights split by legs: ", by[0], ", by encounters: ", by[1], ", by time: ", by[2]);
-    if (!unseen.empty())
-        return log::cat("leave-trials-out: every block of ", unseen.size(), " unseen flight(s) held out (",
-                        log::join(unseen), "); the others' blocks train, block % ", kSplitPeriod, " == 1 validating; ",
+    if (unseen.empty())
+        return log::cat("blocks by block % ", kSplitPeriod, " (== 0 held out, == 1 validation, else training); ",
                         blocks);
-    return log::cat("blocks by block % ", kSplitPeriod, " (== 0 held out, == 1 validation, else training); ", blocks);
+    const std::string held = log::cat("leave-trials-out: every block of ", unseen.size(),
+                                      " unseen flight(s) held out (", log::join(unseen), "); ");
+    if (validating.empty())
+        return log::cat(held, "the others' blocks train, block % ", kSplitPeriod, " == 1 validating; ", blocks);
+    return log::cat(held, "of the others, one whole flight of each vehicle mix flown twice or more validates (",
+                    log::join(validating), ") and the rest train; ", blocks);
 }
 
 // Every flight of --data read, and split: by blocks, or leave-trials-out when --unseen names some.
 struct Loaded {
     Dataset all;
     Split split;
+    std::vector<std::string> validating;  // seen flights validating whole (leave-trials-out)
 };
 Loaded load_and_split(const RealOptions& o) {
     Dataset all, seen, unseen;
@@ -111,11 +180,12 @@ Loaded load_and_split(const RealOptions& o) {
     for (const auto& u : o.unseen)
         if (std::find(o.data.begin(), o.data.end(), u) == o.data.end())
             throw InputError(log::cat("--unseen ", u, ": not among --data (list every flight in --data)"));
-    Split split = o.unseen.empty() ? split_by_leg(all) : split_by_trial(seen, unseen);
+    std::vector<std::string> validating;
+    Split split = o.unseen.empty() ? split_by_leg(all) : split_by_trial(seen, unseen, validating);
     require_samples(all, split.test, "held-out");
     require_samples(all, split.train, "training");
     require_samples(all, split.validation, "validation");
-    return {std::move(all), std::move(split)};
+    return {std::move(all), std::move(split), std::move(validating)};
 }
 
 // The models compared, in the table's order: the physics, the naive sum (two-vehicle flights
@@ -128,13 +198,18 @@ struct Models {
     std::unique_ptr<CorrectedModel> linear_p, deep_p;
     ReferenceModel reference;
     std::vector<const ForceModel*> list;
+    std::vector<std::string> shrunk;  // each correction's factors per axis (shrink_to)
 };
 
 void train_models(Models& m, const Split& split, const TrainPlan& plan, const fs::path& dir, bool& naive,
                   const std::function<void(const std::string&)>& say) {
+    // A correction to the physics starts at none: it moves off the physics only as far as validation agrees.
     auto train = [&](const std::string& kind, const Dataset& tr, const Dataset& va,
-                     const LearntModel* baseline = nullptr, const std::string& file_suffix = "") {
-        return train_and_save(kind, tr, va, plan, (dir / (kind + file_suffix + ".json")).string(), baseline);
+                     const LearntModel* baseline = nullptr, bool correction = false) {
+        TrainPlan p = plan;
+        p.from_zero = correction;
+        const std::string file = kind + (correction ? kOnPhysics : "") + ".json";
+        return train_and_save(kind, tr, va, p, (dir / file).string(), baseline);
     };
     m.list = {&m.physics};
     const Dataset two_tr = split.train.from_two_vehicle_flights(), two_va = split.validation.from_two_vehicle_flights();
@@ -152,25 +227,43 @@ void train_models(Models& m, const Split& split, const TrainPlan& plan, const fs
     // Physics-informed: the same two trained on what the (calibrated) physics leaves, serving physics + correction.
     say("training on what the physics leaves");
     const Dataset left_tr = less_physics(split.train, m.physics), left_va = less_physics(split.validation, m.physics);
-    m.linear_c = train("learnt_linear", left_tr, left_va, nullptr, kOnPhysics);
-    m.deep_c = train("deep_sets", left_tr, left_va, m.linear_c.get(), kOnPhysics);
+    m.linear_c = train("learnt_linear", left_tr, left_va, nullptr, true);
+    m.deep_c = train("deep_sets", left_tr, left_va, m.linear_c.get(), true);
+    for (auto* c : {m.linear_c.get(), m.deep_c.get()}) {
+        const auto f = shrink_to(*c, left_va);
+        std::vector<std::string> axes;
+        for (std::size_t a = 0; a < f.size(); ++a) axes.push_back(log::cat(flight::kAxes[a], " ", fixed(f[a], 2)));
+        m.shrunk.push_back(log::cat("physics+", c->kind, ": ", log::join(axes)));
+        c->save((dir / (c->kind + kOnPhysics + ".json")).string());
+    }
     m.linear_p = std::make_unique<CorrectedModel>(m.physics, *m.linear_c);
     m.deep_p = std::make_unique<CorrectedModel>(m.physics, *m.deep_c);
     m.list.push_back(m.linear_p.get());
     m.list.push_back(m.deep_p.get());
 }
 
-std::string table_markdown(const Dataset& all, const RealOptions& o, const RealResult& r, const std::string& notes) {
+std::string shrink_note(const std::vector<std::string>& shrunk) {
+    return log::cat(
+        "The corrections (physics+…) are shrunk towards none, axis by axis, by the least-squares factor "
+        "in [0, 1] that fits each to what the physics leaves on the validation samples (1: kept whole, "
+        "0: what it learnt does not carry over there): ",
+        log::join(shrunk, "; "), ".\n\n");
+}
+
+std::string table_markdown(const Dataset& all, const std::string& split, const RealResult& r,
+                           const std::string& notes) {
     std::string md = "# Force models on recorded flights\n\n";
     for (const auto& s : all.sources)
         md += log::cat("- ", s.name, " (", s.formation, ", ", s.neighbours.size(), " neighbour(s), blocks by ",
                        flight::to_string(s.blocks), ")\n");
-    md += log::cat("\nSplit: ", describe_split(all, o.unseen), ". Training ", r.train, ", validation ", r.validation,
-                   ", held out ", r.test, " samples. The naive linear model is trained on two-vehicle flights only",
+    md += log::cat("\nSplit: ", split, ". Training ", r.train, ", validation ", r.validation, ", held out ", r.test,
+                   " samples. The naive linear model is trained on two-vehicle flights only",
                    r.naive ? "" : " (none here: not trained)",
                    "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters. "
                    "physics+learnt_linear and physics+deep_sets are the physics plus those models trained on what it "
-                   "leaves (recorded − physics; their files models/*_on_physics.json are the corrections alone).\n\n");
+                   "leaves (recorded − physics; their files models/*_on_physics.json are the corrections alone), "
+                   "starting from no correction: they move off the physics only as far as the validation blocks "
+                   "agree.\n\n");
     md += notes;
     md += poses_note(all);
     md += to_markdown(r.table, {});
@@ -186,7 +279,8 @@ RealResult run_real(const RealOptions& o) {
     };
     StagedFolder staged(o.out_dir);  // models, tables and map appear together, or not at all
     const fs::path out(staged.path()), final_out(o.out_dir);
-    const auto [all, split] = load_and_split(o);
+    const auto [all, split, validating] = load_and_split(o);
+    const std::string split_text = describe_split(all, o.unseen, validating);
     RealResult r;
     r.train = split.train.samples.size(), r.validation = split.validation.samples.size(),
     r.test = split.test.samples.size();
@@ -197,7 +291,7 @@ RealResult run_real(const RealOptions& o) {
                          .max_epochs = o.max_epochs,
                          .threads = o.threads,
                          .members = o.members,
-                         .split = describe_split(all, o.unseen),
+                         .split = split_text,
                          .progress = o.progress,
                          .stop = o.stop};
     Models m(o.physics);
@@ -211,7 +305,8 @@ RealResult run_real(const RealOptions& o) {
     r.table = compare(m.list, split.test);
     draw_maps(m.list, split.test, (out / "map_f_d.png").string());
     r.map_path = (final_out / "map_f_d.png").string();
-    write_file((out / "table.md").string(), table_markdown(all, o, r, reference_note(references, missing)));
+    write_file((out / "table.md").string(),
+               table_markdown(all, split_text, r, reference_note(references, missing) + shrink_note(m.shrunk)));
     write_file((out / "table.csv").string(), to_csv(r.table));
     staged.commit();
     r.markdown_path = (final_out / "table.md").string();

@@ -5,6 +5,8 @@
 // and Deep Sets models on all, compare them with the physics (each vehicle with its own
 // parameters) on the held-out blocks — RMSE per axis and peak f_d error per block — and draw f_d
 // against the nearest neighbour's position relative to the sufferer, recorded beside each model.
+// The same two models are also trained on what the physics leaves (physics+…): each correction
+// starts at none and is shrunk, axis by axis, by the validation samples (shrink_to in real.cpp).
 #include <cstdint>
 #include <functional>
 #include <stop_token>
@@ -19,8 +21,10 @@ namespace dw::predictor {
 
 struct RealOptions {
     std::vector<std::string> data;  // flight folders or .mcap recordings
-    // Trials never seen in training (leave-trials-out): every block of these flights is held out,
-    // the others' blocks train (block % 5 == 1 validates). Empty: block % 5 == 0 of every flight.
+    // Trials never seen in training (leave-trials-out): every block of these flights is held out;
+    // of the others, one whole flight per vehicle mix flown twice or more validates and the rest
+    // train (when no mix is flown twice: every block trains but block % 5 == 1, which validates).
+    // Empty: block % 5 == 0 of every flight held out.
     std::vector<std::string> unseen;
     physics::PhysicsConfig physics;  // the physics model, and parameters for bodies a flight does not describe
     std::string out_dir;

@@ -41,6 +41,7 @@ std::unique_ptr<LearntModel> train_and_save(const std::string& kind, const Datas
     TrainOptions t;
     t.kind = kind;
     t.seed = plan.seed;
+    t.from_zero = plan.from_zero;
     t.max_epochs = plan.max_epochs;
     t.threads = plan.threads;
     t.cores = plan.cores;

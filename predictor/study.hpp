@@ -65,6 +65,7 @@ struct TrainPlan {
     int max_epochs = 150;
     int threads = kDefaultTrainThreads;
     int members = kDefaultDeepSetsMembers;  // deep_sets: trainings averaged (1: one training)
+    bool from_zero = false;                 // a sum model starts at zero (TrainOptions::from_zero)
     Cores* cores = nullptr;                 // as TrainOptions
     Cores::Turn turn = Cores::Turn::now;
     std::string split;                                 // how the blocks were split (the model's metadata)

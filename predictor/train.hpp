@@ -38,6 +38,9 @@ struct TrainOptions {
     double learning_rate = 2e-3;
     int batch = 256;
     std::uint64_t seed = 1;
+    // A sum model that starts at zero (phi's last layer zeroed), that zero its score to beat: a
+    // correction to a base model moves off the base only as far as the validation flights agree.
+    bool from_zero = false;
     int threads = kDefaultTrainThreads;
     // When set, the training holds one of these for its time (each counts `threads` cores), taken at
     // once or when one is free (work that fills in: the study's generalisation).

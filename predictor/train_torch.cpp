@@ -160,6 +160,7 @@ std::string training_metadata(const Dataset& train, const Dataset& validation, c
                           {"best_epoch", r.best_epoch},
                           {"best_validation_mse_normalised", r.best_validation_loss},
                           {"seed", o.seed},
+                          {"from_zero", o.from_zero},
                           {"hidden", o.hidden},
                           {"latent", o.latent},
                           {"learning_rate", o.learning_rate},
@@ -227,12 +228,17 @@ Net make_net(const LearntModel& m, const TrainOptions& o) {
             m.residual(),
             torch::ones({1, kFeatureSize})};
     net.without_overlap[0][kOverlapFeature] = 0;
-    if (net.residual) {
-        import_mlp(m.baseline, net.psi);
+    auto zero_last = [](torch::nn::Sequential& s) {
         torch::NoGradGuard no_grad;
-        auto last = net.rho[net.rho->size() - 1]->as<torch::nn::Linear>();
+        auto last = s[s->size() - 1]->as<torch::nn::Linear>();
         last->weight.zero_();
         last->bias.zero_();
+    };
+    if (net.residual) {
+        import_mlp(m.baseline, net.psi);
+        zero_last(net.rho);
+    } else if (o.from_zero && !deep) {
+        zero_last(net.phi);
     }
     return net;
 }
@@ -296,7 +302,7 @@ TrainResult train_with_torch(const Dataset& train, const Dataset& validation, co
     };
     auto best = snapshot();
     r.best_validation_loss = INFINITY;
-    if (baseline) {  // the baseline alone is the score to beat
+    if (baseline || o.from_zero) {  // the baseline alone (or zero) is the score to beat
         torch::NoGradGuard no_grad;
         r.best_validation_loss = net.loss(va).item<double>();
     }
