@@ -377,8 +377,8 @@ msg::ExperimentPhase Experiment::run() {
         for (std::size_t v = 0; v < k; ++v) sps.push_back(plan_.setpoint(v, t));
         return sps;
     };
-    if (auto f = fly(plan_.duration_s(), legs, msg::PHASE_FLYING, true)) {
-        land_safely(*f);
+    if (auto failed = fly(plan_.duration_s(), legs, msg::PHASE_FLYING, true)) {
+        land_safely(*failed);
         return msg::PHASE_ABORTED;
     }
     legs_flown_ = static_cast<int>(plan_.reference.legs().size());
