@@ -26,6 +26,9 @@ namespace fs = std::filesystem;
 constexpr double kMapCell_m = 0.05;
 // The physics-informed models' files: models/<kind>_on_physics.json, corrections to add to the physics.
 constexpr const char* kOnPhysics = "_on_physics";
+std::string model_file(const std::string& kind, bool correction) {
+    return kind + (correction ? kOnPhysics : "") + ".json";
+}
 
 // Where the horizontally nearest neighbour is: horizontal offset and height above the sufferer.
 std::array<double, 2> nearest(const Sample& s) {
@@ -208,8 +211,7 @@ void train_models(Models& m, const Split& split, const TrainPlan& plan, const fs
                      const LearntModel* baseline = nullptr, bool correction = false) {
         TrainPlan p = plan;
         p.from_zero = correction;
-        const std::string file = kind + (correction ? kOnPhysics : "") + ".json";
-        return train_and_save(kind, tr, va, p, (dir / file).string(), baseline);
+        return train_and_save(kind, tr, va, p, (dir / model_file(kind, correction)).string(), baseline);
     };
     m.list = {&m.physics};
     const Dataset two_tr = split.train.from_two_vehicle_flights(), two_va = split.validation.from_two_vehicle_flights();
@@ -234,7 +236,7 @@ void train_models(Models& m, const Split& split, const TrainPlan& plan, const fs
         std::vector<std::string> axes;
         for (std::size_t a = 0; a < f.size(); ++a) axes.push_back(log::cat(flight::kAxes[a], " ", fixed(f[a], 2)));
         m.shrunk.push_back(log::cat("physics+", c->kind, ": ", log::join(axes)));
-        c->save((dir / (c->kind + kOnPhysics + ".json")).string());
+        c->save((dir / model_file(c->kind, true)).string());  // the file train_and_save wrote, shrunk
     }
     m.linear_p = std::make_unique<CorrectedModel>(m.physics, *m.linear_c);
     m.deep_p = std::make_unique<CorrectedModel>(m.physics, *m.deep_c);
@@ -262,8 +264,7 @@ std::string table_markdown(const Dataset& all, const std::string& split, const R
                    "; learnt linear and Deep Sets on all. The physics uses each vehicle's own parameters. "
                    "physics+learnt_linear and physics+deep_sets are the physics plus those models trained on what it "
                    "leaves (recorded − physics; their files models/*_on_physics.json are the corrections alone), "
-                   "starting from no correction: they move off the physics only as far as the validation blocks "
-                   "agree.\n\n");
+                   "each starting from no correction.\n\n");
     md += notes;
     md += poses_note(all);
     md += to_markdown(r.table, {});
