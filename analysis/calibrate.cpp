@@ -352,6 +352,7 @@ void explain_heldout(TrialError& e, const PhysicsConfig& fold, const CalibrateOp
         const ExplainResult r = explain(f, xo);
         write_report(f, r, xo, (dir / fs::path(folder).filename()).string());
         e.explained_ratio.push_back(r.heldout_after[kFd] / r.noise_floor[kFd]);
+        e.discrepancy_ratio.push_back(r.discrepancy.heldout_after[kFd] / r.noise_floor[kFd]);
         e.explained_by.emplace_back();
         for (const auto& c : r.accepted) e.explained_by.back().push_back(c.effect.name);
     }

@@ -51,6 +51,7 @@ struct TrialError {
     // With explain_heldout, per flight: the explainer's held-out f_d error after its fit over its
     // noise floor, and what it accepted.
     std::vector<double> explained_ratio;
+    std::vector<double> discrepancy_ratio;  // ... and with the learnt discrepancy (analysis/discrepancy.hpp)
     std::vector<std::vector<std::string>> explained_by;
 };
 

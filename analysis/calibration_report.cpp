@@ -57,6 +57,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
                           {"rmse_f_d_all_trials_n", t.rmse_all},
                           {"rmse_f_d_held_out_n", t.rmse_heldout},
                           {"explained_f_d_over_noise_floor", t.explained_ratio},
+                          {"with_discrepancy_f_d_over_noise_floor", t.discrepancy_ratio},
                           {"explained_by", t.explained_by}});
     nlohmann::json alone = nlohmann::json::array();
     for (const auto& a : r.alone)
@@ -77,14 +78,16 @@ nlohmann::json to_json(const CalibrateResult& r) {
 }
 
 // "2.31 | force_scale, body_drag |" for each of the trial's flights (one line each), their ratios kept.
-std::string explained_cells(const TrialError& t, std::vector<double>& ratios) {
-    std::string ratio, by;
+std::string explained_cells(const TrialError& t, std::vector<double>& ratios, std::vector<double>& with) {
+    std::string ratio, learnt, by;
     for (std::size_t k = 0; k < t.explained_ratio.size(); ++k) {
         ratios.push_back(t.explained_ratio[k]);
+        with.push_back(t.discrepancy_ratio[k]);
         ratio += (k ? "; " : "") + fixed(t.explained_ratio[k], 2);
+        learnt += (k ? "; " : "") + fixed(t.discrepancy_ratio[k], 2);
         by += (k ? "; " : "") + (t.explained_by[k].empty() ? std::string("nothing") : log::join(t.explained_by[k]));
     }
-    return ratio + " | " + by + " |";
+    return ratio + " | " + learnt + " | " + by + " |";
 }
 
 // The flights of one vehicle: what the residual does with nobody near (none: nothing).
@@ -120,24 +123,28 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
     const bool explained = !r.trials.empty() && !r.trials.front().explained_ratio.empty();
     md << "\n## f_d error where a neighbour is near, per trial [N]\n\n"
        << "Held out: the trial predicted by the calibration on every other trial."
-       << (explained ? " Then explained against that calibration (reports in folds/<trial>/): the explainer's held-out "
-                       "f_d error after its fit, in noise floors, and what it accepted."
-                     : "")
+       << (explained
+               ? " Then explained against that calibration (reports in folds/<trial>/): the explainer's held-out "
+                 "f_d error after its effects, in noise floors, then with its learnt discrepancy (what the effects "
+                 "leave, as a function of the geometry), and what it accepted."
+               : "")
        << "\n\n| trial | pairing | samples | uncalibrated | calibrated on all | held out |"
-       << (explained ? " after the explainer / noise floor | explained by |\n|---|---|---|---|---|---|---|---|\n"
+       << (explained ? " after the effects / noise floor | with the discrepancy | explained by "
+                       "|\n|---|---|---|---|---|---|---|---|---|\n"
                      : "\n|---|---|---|---|---|---|\n");
-    std::vector<double> before, heldout, ratios;
+    std::vector<double> before, heldout, ratios, with;
     for (const auto& t : r.trials) {
         md << "| " << t.trial << " | " << t.pairing << " | " << t.samples << " | " << fixed(t.rmse_before, 4) << " | "
            << fixed(t.rmse_all, 4) << " | " << fixed(t.rmse_heldout, 4) << " |";
-        if (explained) md << " " << explained_cells(t, ratios);
+        if (explained) md << " " << explained_cells(t, ratios, with);
         md << "\n";
         before.push_back(t.rmse_before), heldout.push_back(t.rmse_heldout);
     }
     md << "\nMedian over trials: " << fixed(median(before), 4) << " N uncalibrated, " << fixed(median(heldout), 4)
        << " N held out"
-       << (explained ? log::cat("; after the explainer, median ", fixed(median(ratios), 2), " noise floors (",
-                                ratios.size(), " flights)")
+       << (explained ? log::cat("; after the explainer, median ", fixed(median(ratios), 2),
+                                " noise floors after its effects and ", fixed(median(with), 2),
+                                " with its learnt discrepancy (", ratios.size(), " flights)")
                      : std::string())
        << ".\n\n";
     md << alone_section(r.alone) << "## f_d by the nearest neighbour's position, per pairing\n\n";

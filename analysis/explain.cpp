@@ -6,6 +6,7 @@
 #include <mutex>
 #include <set>
 
+#include "analysis/discrepancy.hpp"
 #include "analysis/fit.hpp"
 #include "analysis/locate.hpp"
 #include "analysis/noise.hpp"
@@ -126,8 +127,12 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
                  " % of the samples (autocorrelation)"));
     // Screen, cross-validate and select; then the verdict.
     bool stand_in = false;
-    const Baseline final_model = select_effects(R, d, base, folds_of(d, o.folds), o, say, stand_in);
+    const Folds folds = folds_of(d, o.folds);
+    const Baseline final_model = select_effects(R, d, base, folds, o, say, stand_in);
     conclude(R, d, base, final_model, stand_in, o, f.meta.formation);
+    say("learning what is left as a function of the geometry");
+    R.discrepancy = learn_discrepancy(d, final_model.pred, folds, o);
+    say(log::cat("  ", R.discrepancy.note));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     R.resimulations = d.resimulations + 1;  // and the base model's, before the data
     say(log::cat("done: ", R.resimulations, " resimulations of the flight in ", std::round(R.seconds * 10) / 10, " s"));

@@ -104,6 +104,19 @@ struct CandidateResult {
     std::vector<std::string> indistinguishable;  // accepted alternatives the held-out data cannot tell from it
 };
 
+// What the accepted effects leave, learnt as a function of the geometry (analysis/discrepancy.hpp).
+struct Discrepancy {
+    bool fitted = false;     // false: too few samples for its inputs (note says why)
+    std::size_t inputs = 0;  // regressors per axis
+    AxisValues heldout_before{},
+        heldout_after{};  // the final model's residual RMS on the held-out samples, without and with it
+    double t = 0;         // held-out z over pieces, best axis
+    int best_axis = 2;
+    double gain = 0;           // fraction of that axis's held-out error removed
+    bool significant = false;  // t >= min_t and gain >= min_gain, as for a candidate
+    std::string note;
+};
+
 struct ExplainResult {
     bool detected = false;
     AxisValues noise_floor{};
@@ -121,6 +134,7 @@ struct ExplainResult {
     flight::BlockKind blocks = flight::BlockKind::legs;  // what the cross-validation blocks are
     double seconds = 0;
     std::size_t resimulations = 0;  // predictions of the whole flight the fits paid for (analysis/fit.hpp)
+    Discrepancy discrepancy;        // what is left after the accepted effects, learnt
 };
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);

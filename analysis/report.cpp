@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "analysis/discrepancy.hpp"
 #include "analysis/explain.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -299,6 +300,17 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     j["unexplained"] = r.unexplained;
     j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)},
                 {"heldout_rmse_after", axes_json(r.heldout_after)}};
+    const Discrepancy& g = r.discrepancy;
+    j["discrepancy"] = {{"model", kDiscrepancyModel},
+                        {"learnt", g.fitted},
+                        {"inputs", g.inputs},
+                        {"heldout_rmse_before", axes_json(g.heldout_before)},
+                        {"heldout_rmse_after", axes_json(g.heldout_after)},
+                        {"axis", kAxes[static_cast<std::size_t>(g.best_axis)]},
+                        {"heldout_z", g.fitted ? g.t : 0.0},
+                        {"gain", g.gain},
+                        {"significant", g.significant},
+                        {"note", g.note}};
     j["physics_out"] = "physics.yaml";
     if (!o.physics.calibration.empty()) j["physics_calibration"] = o.physics.calibration;
     j["cross_validation"] = {
@@ -408,10 +420,16 @@ void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOption
     for (const auto& c : r.candidates)
         md << "| " << c.round << " | " << c.effect.name << " | " << params_text(c) << " | " << fixed(c.delta_bic, 1)
            << " | " << c.note << " |\n";
-    md << "\n## Held-out error per axis\n\n| axis | before | after |\n|---|---|---|\n";
+    md << "\n## Held-out error per axis\n\n| axis | before | after the effects | and a learnt discrepancy "
+          "|\n|---|---|---|---|\n";
     for (std::size_t a = 0; a < 6; ++a)
         md << "| " << kAxes[a] << " | " << fixed(r.heldout_before[a], 4) << " | " << fixed(r.heldout_after[a], 4)
-           << " |\n";
+           << " | " << fixed(r.discrepancy.heldout_after[a], 4) << " |\n";
+    md << "\n**What is left, learnt** (`discrepancy` in report.json; it names no physics and chose no effect): "
+       << kDiscrepancyModel << ", fitted on each fold's training blocks. " << r.discrepancy.note
+       << ". Its held-out error before it is the fitted model's residual on the same samples ("
+       << kAxes[static_cast<std::size_t>(r.discrepancy.best_axis)] << " "
+       << fixed(r.discrepancy.heldout_before[static_cast<std::size_t>(r.discrepancy.best_axis)], 4) << ").\n";
 }
 
 }  // namespace

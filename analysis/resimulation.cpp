@@ -61,6 +61,8 @@ std::array<double, 3> Resimulation::velocity(int j, double t) const {
 
 std::array<double, 3> Resimulation::sufferer(double t) const { return bodies_.sufferer.position_at(t); }
 
+std::array<double, 3> Resimulation::sufferer_velocity(double t) const { return bodies_.sufferer.velocity_at(t); }
+
 namespace {
 
 // The part of a configuration that changes the air's wrench (not the recording's view of it).

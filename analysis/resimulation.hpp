@@ -51,6 +51,7 @@ public:
     std::array<double, 3> position(int j, double t) const;
     std::array<double, 3> velocity(int j, double t) const;
     std::array<double, 3> sufferer(double t) const;
+    std::array<double, 3> sufferer_velocity(double t) const;
     double near_radius(int j) const { return near_radius_[static_cast<std::size_t>(j)]; }
     // Which wrench columns carry a measurement (a residual source may not measure moments).
     const std::array<bool, 6>& measured_axes() const { return measured_axes_; }

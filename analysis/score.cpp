@@ -20,9 +20,6 @@ struct Scores {
     std::map<int, double> change;  // per piece: how much the candidate changes the prediction (normalised, summed)
 };
 
-// The held-out blocks are scored in pieces of this length (the residual decorrelates within ~0.1 s).
-constexpr double kPiece_s = 0.25;
-
 // A parameter fitted to a bound that is not its neutral value has not been identified: the effect
 // is standing in for something else.
 constexpr double kPinnedFraction = 1e-4;  // of the parameter's range
@@ -153,9 +150,7 @@ Scores cross_validate(const ExplainData& d, const Baseline& b, const Effect& e, 
         fold_values.push_back(vk);
         const auto& p = fk.predict(vk);
         for (auto i : folds.test[k]) {
-            const int leg = d.info[i].leg;
-            const int piece =
-                leg * 1000 + static_cast<int>(std::floor((d.sim.stamps()[i] - folds.leg_start.at(leg)) / kPiece_s));
+            const int piece = piece_of(d, folds, i);
             ++s.n[piece];
             for (std::size_t a = 0; a < 6; ++a) {
                 s.before[piece][a] += norm_sq(d, b.pred, i, a);
@@ -187,6 +182,11 @@ void set_intervals(CandidateResult& c, const ExplainData& d, const Baseline& b, 
 }
 
 }  // namespace
+
+int piece_of(const ExplainData& d, const Folds& folds, std::size_t i) {
+    const int leg = d.info[i].leg;
+    return leg * 1000 + static_cast<int>(std::floor((d.sim.stamps()[i] - folds.leg_start.at(leg)) / kPiece_s));
+}
 
 Folds folds_of(const ExplainData& d, int folds) {
     Folds f{std::vector<std::vector<std::size_t>>(static_cast<std::size_t>(folds)),

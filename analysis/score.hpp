@@ -17,6 +17,11 @@ struct Folds {
 };
 Folds folds_of(const ExplainData& d, int folds);
 
+// The held-out blocks are scored in pieces of this length (the residual decorrelates within ~0.1 s):
+// sample i's piece (its block and the piece's index within it).
+inline constexpr double kPiece_s = 0.25;
+int piece_of(const ExplainData& d, const Folds& folds, std::size_t i);
+
 // A held-out piece where the candidate predicts what the current model does — its prediction
 // moves by less than this fraction of the noise (RMS) — carries no evidence either way and is
 // left out of the signed-rank test (it would only dilute it).

@@ -153,6 +153,9 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
     EXPECT_EQ(r.accepted.front().effect.name, "clock_offset");
     EXPECT_LE(r.accepted.front().lo[0], 0.12);
     EXPECT_GE(r.accepted.front().hi[0], 0.12);
+    // With the hidden effect found, what is left is noise: no learnt discrepancy predicts it.
+    EXPECT_TRUE(r.discrepancy.fitted) << r.discrepancy.note;
+    EXPECT_FALSE(r.discrepancy.significant) << r.discrepancy.note;
     // report.json per ../shared/FLIGHT_FORMAT.md
     const auto j = nlohmann::json::parse(dw::read_file(dir.file("out/report.json")));
     EXPECT_EQ(j["format"], "downwash-explain/1");
@@ -206,6 +209,10 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
     }
     EXPECT_TRUE(saw);
     EXPECT_EQ(j["physics_out"], "physics.yaml");
+    for (const char* key : {"model", "learnt", "inputs", "heldout_rmse_before", "heldout_rmse_after", "axis",
+                            "heldout_z", "gain", "significant", "note"})
+        EXPECT_TRUE(j["discrepancy"].contains(key)) << key;
+    EXPECT_NE(dw::read_file(dir.file("out/report.md")).find("What is left, learnt"), std::string::npos);
     const auto fitted = dw::physics::load_physics(dir.file("out/physics.yaml"));
     EXPECT_TRUE(fitted.effects.clock_offset.enabled);
     EXPECT_NEAR(fitted.effects.clock_offset.offset_s, 0.12, 0.02);
@@ -306,6 +313,12 @@ static void out_of_vocabulary(const OutOfVocabularyCase& k) {
     }
     for (const auto& a : r.accepted) ADD_FAILURE() << "blamed on " << a.effect.name << ": " << a.note;
     EXPECT_TRUE(r.unexplained);
+    // What no effect names is modelled instead of left as a stand-in: the learnt discrepancy, a
+    // function of where the neighbours are, predicts held-out blocks of it.
+    const auto& g = r.discrepancy;
+    EXPECT_TRUE(g.significant) << g.note;
+    const auto a = static_cast<std::size_t>(g.best_axis);
+    EXPECT_LT(g.heldout_after[a], g.heldout_before[a]) << g.note;
 }
 TEST(ExplainOutOfVocabulary, AJainJetInsteadOfBauersfeldIsDetectedAndUnexplained) {
     out_of_vocabulary(
