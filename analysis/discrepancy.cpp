@@ -92,26 +92,18 @@ Eigen::RowVectorXd inputs_of(const ExplainData& d, std::size_t i, const Heights&
     return row;
 }
 
-// The normal equations' parts of the rows of one fold's held-out blocks: XᵀX and XᵀY.
+// One fold's held-out samples: their regressors and residuals, and the normal equations' parts XᵀX, XᵀY.
 struct Gram {
+    Eigen::MatrixXd x, y;  // one row per sample of `samples`
+    std::vector<std::size_t> samples;
     Eigen::MatrixXd xx, xy;
 };
 
-Gram gram_of(const Eigen::MatrixXd& X, const Eigen::MatrixXd& Y, const std::vector<std::size_t>& rows) {
-    Gram g{Eigen::MatrixXd::Zero(X.cols(), X.cols()), Eigen::MatrixXd::Zero(X.cols(), Y.cols())};
-    for (auto i : rows) {
-        const auto r = static_cast<Eigen::Index>(i);
-        g.xx.selfadjointView<Eigen::Lower>().rankUpdate(X.row(r).transpose());
-        g.xy += X.row(r).transpose() * Y.row(r);
-    }
-    g.xx = g.xx.selfadjointView<Eigen::Lower>();
-    return g;
-}
-
 // The folds' parts summed, but those of the folds `without`.
 Gram sum_without(const std::vector<Gram>& parts, std::size_t a, std::size_t b = SIZE_MAX) {
-    Gram g{Eigen::MatrixXd::Zero(parts[0].xx.rows(), parts[0].xx.cols()),
-           Eigen::MatrixXd::Zero(parts[0].xy.rows(), parts[0].xy.cols())};
+    Gram g;
+    g.xx = Eigen::MatrixXd::Zero(parts[0].xx.rows(), parts[0].xx.cols());
+    g.xy = Eigen::MatrixXd::Zero(parts[0].xy.rows(), parts[0].xy.cols());
     for (std::size_t k = 0; k < parts.size(); ++k)
         if (k != a && k != b) g.xx += parts[k].xx, g.xy += parts[k].xy;
     return g;
@@ -181,21 +173,38 @@ void judge(Discrepancy& r, const PieceScores& s, const ExplainData& d, const Exp
                       r.significant ? ": part of what is left is repeatable" : ": what is left is not repeatable");
 }
 
-// The regressors (standardised, so that one penalty suits every input) and the residual, per sample.
-std::pair<Eigen::MatrixXd, Eigen::MatrixXd> design(const ExplainData& d, const std::vector<Wrench6>& pred) {
+// Per fold, its held-out samples' regressors (standardised over every sample, so that one penalty
+// suits every input) and residuals, with their normal equations' parts.
+std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds) {
     const Heights h = heights_of(d);
     const Drift drift = drift_of(d);
-    const auto rows = static_cast<Eigen::Index>(d.sim.stamps().size());
-    Eigen::MatrixXd X = Eigen::MatrixXd::Zero(rows, kGeometry + drift.count), Y = Eigen::MatrixXd::Zero(rows, 6);
-    for (auto i : d.on_legs) {
-        const auto row = static_cast<Eigen::Index>(i);
-        X.row(row) = inputs_of(d, i, h, drift);
-        for (std::size_t a = 0; a < 6; ++a)
-            if (d.sim.measured_axes()[a]) Y(row, static_cast<Eigen::Index>(a)) = d.sim.measured()[i][a] - pred[i][a];
+    std::vector<Gram> parts;
+    Eigen::VectorXd sum_sq = Eigen::VectorXd::Zero(kGeometry + drift.count);
+    for (const auto& test : folds.test) {
+        Gram g{Eigen::MatrixXd(static_cast<Eigen::Index>(test.size()), kGeometry + drift.count),
+               Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(test.size()), 6),
+               test,
+               {},
+               {}};
+        for (std::size_t r = 0; r < test.size(); ++r) {
+            const auto row = static_cast<Eigen::Index>(r);
+            g.x.row(row) = inputs_of(d, test[r], h, drift);
+            for (std::size_t a = 0; a < 6; ++a)
+                if (d.sim.measured_axes()[a])
+                    g.y(row, static_cast<Eigen::Index>(a)) = d.sim.measured()[test[r]][a] - pred[test[r]][a];
+        }
+        sum_sq += g.x.colwise().squaredNorm().transpose();
+        parts.push_back(std::move(g));
     }
-    for (Eigen::Index k = 1; k < X.cols(); ++k)
-        if (const double rms = X.col(k).norm(); rms > 0) X.col(k) /= rms / std::sqrt(static_cast<double>(rows));
-    return {X, Y};
+    Eigen::VectorXd scale = Eigen::VectorXd::Ones(sum_sq.size());
+    for (Eigen::Index k = 1; k < scale.size(); ++k)
+        if (sum_sq(k) > 0) scale(k) = std::sqrt(static_cast<double>(d.on_legs.size()) / sum_sq(k));
+    for (auto& g : parts) {
+        g.x = g.x * scale.asDiagonal();
+        g.xx = g.x.transpose() * g.x;
+        g.xy = g.x.transpose() * g.y;
+    }
+    return parts;
 }
 
 }  // namespace
@@ -203,25 +212,23 @@ std::pair<Eigen::MatrixXd, Eigen::MatrixXd> design(const ExplainData& d, const s
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
                               const ExplainOptions& o) {
     Discrepancy r;
-    const auto [X, Y] = design(d, pred);
-    r.inputs = static_cast<std::size_t>(X.cols());
-    std::vector<Gram> parts;
-    for (const auto& test : folds.test) parts.push_back(gram_of(X, Y, test));
+    const std::vector<Gram> parts = design(d, pred, folds);
+    r.inputs = static_cast<std::size_t>(parts[0].x.cols());
     PieceScores s;
-    for (std::size_t k = 0; k < folds.test.size(); ++k) {
+    for (std::size_t k = 0; k < parts.size(); ++k) {
         const auto lambda = choose_penalty(parts, k);
         const Gram train = sum_without(parts, k);
-        Eigen::MatrixXd coef(X.cols(), Y.cols());
-        for (Eigen::Index a = 0; a < Y.cols(); ++a)
+        Eigen::MatrixXd coef(train.xy.rows(), train.xy.cols());
+        for (Eigen::Index a = 0; a < coef.cols(); ++a)
             coef.col(a) = ridge(train, lambda[static_cast<std::size_t>(a)]).col(a);
-        for (auto i : folds.test[k]) {
-            const int piece = piece_of(d, folds, i);
-            const Eigen::RowVectorXd g = X.row(static_cast<Eigen::Index>(i)) * coef;
+        const Eigen::MatrixXd left = parts[k].y - parts[k].x * coef;  // the residual less the discrepancy
+        for (std::size_t i = 0; i < parts[k].samples.size(); ++i) {
+            const int piece = piece_of(d, folds, parts[k].samples[i]);
             ++s.n[piece];
             for (std::size_t a = 0; a < 6; ++a) {
-                const double y = Y(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(a));
-                s.before[piece][a] += std::pow(y / d.sigma[a], 2);
-                s.after[piece][a] += std::pow((y - g(static_cast<Eigen::Index>(a))) / d.sigma[a], 2);
+                const auto row = static_cast<Eigen::Index>(i), col = static_cast<Eigen::Index>(a);
+                s.before[piece][a] += std::pow(parts[k].y(row, col) / d.sigma[a], 2);
+                s.after[piece][a] += std::pow(left(row, col) / d.sigma[a], 2);
             }
         }
     }
