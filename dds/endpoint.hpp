@@ -7,6 +7,7 @@
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <set>
 #include <vector>
@@ -25,6 +26,10 @@ namespace dw::dds {
 // After a writer sees a reader match, how long the reader may still be finishing its side: a
 // best-effort sample written sooner can be lost.
 inline constexpr std::chrono::milliseconds kMatchSettle{100};
+// Best-effort samples are never acknowledged: a writer about to go away stays this long after its
+// last sample so matched readers can take it (a process exiting at once lost its last sample,
+// seen on a loaded 2-core machine: the reader had not yet taken it from shared memory).
+inline constexpr std::chrono::milliseconds kBestEffortDrain{500};
 
 namespace detail {
 // Under DDS Security the likely reason an endpoint is refused: the identity's permissions.
@@ -84,22 +89,14 @@ public:
         if (!sendable(sample)) return false;
         before_first_sample();
         sample.header().seq(next_seq_++);
-        const bool ok = writer_->write(&sample);
-        if (ok) {
-            stats_->samples.fetch_add(1, std::memory_order_relaxed);
-        } else {
-            stats_->lost.fetch_add(1, std::memory_order_relaxed);
-        }
-        return ok;
+        return counted(writer_->write(&sample));
     }
 
     // Publishes the sample exactly as given, header.seq included (replaying a recording).
     bool write_as_is(const T& sample) {
         if (!sendable(sample)) return false;
         before_first_sample();
-        const bool ok = writer_->write(const_cast<T*>(&sample));
-        (ok ? stats_->samples : stats_->lost).fetch_add(1, std::memory_order_relaxed);
-        return ok;
+        return counted(writer_->write(const_cast<T*>(&sample)));
     }
 
     // Holds the caller until the lab's required readers matched (once, bounded: DdsConfig).
@@ -127,8 +124,16 @@ public:
         return true;
     }
     // Waits until every reliable reader acknowledged every sample (call before exiting, or the
-    // last samples can die with the process). True at once for best-effort writers.
+    // last samples can die with the process). A best-effort writer with readers waits until
+    // kBestEffortDrain after its last sample (at most timeout), the nearest it has to one; several
+    // writers that stopped together wait that once.
     bool wait_for_acknowledgments(std::chrono::milliseconds timeout) {
+        if (qos_.reliability().kind == eprosima::fastdds::dds::BEST_EFFORT_RELIABILITY_QOS) {
+            if (matched() > 0)
+                std::this_thread::sleep_until(
+                    std::min(std::chrono::steady_clock::now() + timeout, last_sample_.load() + kBestEffortDrain));
+            return true;
+        }
         const eprosima::fastrtps::Duration_t d(static_cast<std::int32_t>(timeout.count() / 1000),
                                                static_cast<std::uint32_t>((timeout.count() % 1000) * 1'000'000));
         return writer_->wait_for_acknowledgments(d) == ReturnCode_t::RETCODE_OK;
@@ -142,6 +147,11 @@ public:
     std::uint64_t refused() const { return refused_; }
 
 private:
+    bool counted(bool ok) {
+        (ok ? stats_->samples : stats_->lost).fetch_add(1, std::memory_order_relaxed);
+        if (ok) last_sample_.store(std::chrono::steady_clock::now(), std::memory_order_relaxed);
+        return ok;
+    }
     bool sendable(const T& sample) {
         if (!spec_.command || all_finite(sample)) return true;
         if (refused_++ == 0)
@@ -182,6 +192,8 @@ private:
     }
 
     std::uint64_t refused_ = 0;
+    // When the last sample went out (the epoch until then: nothing to drain).
+    std::atomic<std::chrono::steady_clock::time_point> last_sample_{};
     detail::ReportedPolicies reported_;
     Participant& participant_;
     Topic<T> spec_;
