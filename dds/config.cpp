@@ -116,7 +116,7 @@ void require_security_choice(const DdsConfig& c) {
 void add_cli_options(CLI::App& app, DdsCliOptions& o) {
     app.add_option("--domain", o.domain, "DDS domain id (0-232)")->type_name("ID")->check(cli::in(kDomainRange));
     app.add_option("--profile", o.profile, "local (loopback only, default) or lab (real network)")->type_name("NAME");
-    app.add_option("--transport", o.transport, "default (UDP+SHM; UDP alone under --security), shm or udp")
+    app.add_option("--transport", o.transport, "default (UDP alone), shm (shared memory, one host) or udp")
         ->type_name("NAME");
     app.add_option("--peer", o.peers, "initial peer ip[:port] (repeatable)")->type_name("ADDR");
     app.add_option("--discovery-server", o.discovery_server, "discovery server ip:port (lab profile)")
@@ -205,10 +205,13 @@ fdds::DomainParticipantQos participant_qos(const DdsConfig& c, const std::string
     qos.name(name);
     auto& transport = qos.transport();
     const bool want_udp = c.transport != Transport::shm;
-    // Under DDS Security the default is UDP alone: with shared memory beside it, Fast DDS 2.9.1
-    // sometimes never authenticates a pair of participants, and under load drops samples in
-    // bursts (measured: docs/BENCHMARKS.md, DDS Security).
-    const bool want_shm = c.transport == Transport::shm || (c.transport == Transport::default_ && c.security.empty());
+    // The default is UDP alone. Fast DDS 2.9.1's shared memory, beside UDP: a pair of secure
+    // participants sometimes never authenticates and samples drop in bursts under load
+    // (docs/BENCHMARKS.md, DDS Security); a SIGKILLed peer's port is health-checked on the
+    // sender's thread under its send lock (up to 1 s), stalling every writer of the sender — two
+    // lab runs saw a crash of one process abort the experiment for another's silence. On loopback
+    // it is no faster here (docs/BENCHMARKS.md, latency). `shm` still asks for it.
+    const bool want_shm = c.transport == Transport::shm;
     transport.use_builtin_transports = false;
     if (want_udp) {
         auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();

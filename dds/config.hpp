@@ -22,7 +22,7 @@ namespace dw::dds {
 // local: everything on loopback (the default on one machine and in every test; nothing leaves the
 // host). lab: the real network, multicast discovery or a discovery server.
 enum class Profile { local, lab };
-// default: UDP + shared memory; shm: shared memory only (one host); udp: UDP only.
+// default: UDP alone (why: dds/config.cpp); shm: shared memory only (one host); udp: UDP only.
 enum class Transport { default_, shm, udp };
 inline constexpr const char* kProfileNames[] = {"local", "lab"};             // Profile's values in order
 inline constexpr const char* kTransportNames[] = {"default", "shm", "udp"};  // Transport's values in order

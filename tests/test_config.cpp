@@ -369,6 +369,18 @@ TEST(DdsConfig, LocalProfileKeepsUdpOnLoopback) {
     ASSERT_EQ(qos.wire_protocol().builtin.initialPeersList.size(), 1u);
 }
 
+// The default is UDP alone: shared memory is used only when asked (dds/config.cpp says why).
+TEST(DdsConfig, TheDefaultTransportIsUdpAlone) {
+    for (const auto profile : {dw::dds::Profile::local, dw::dds::Profile::lab}) {
+        DdsConfig c;
+        c.profile = profile;
+        const auto qos = dw::dds::participant_qos(c, "t");
+        ASSERT_EQ(qos.transport().user_transports.size(), 1u);
+        EXPECT_TRUE(std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(
+            qos.transport().user_transports[0]));
+    }
+}
+
 TEST(DdsConfig, ShmTransportHasNoUdp) {
     DdsConfig c;
     c.transport = dw::dds::Transport::shm;
