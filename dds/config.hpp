@@ -56,8 +56,9 @@ struct DdsConfig {
     std::vector<std::string> await_readers;
     double await_timeout_s = kDefaultAwaitTimeoutS;
     // Per process, never from a shared file. A restarted process needs one its predecessor did not
-    // have: Fast DDS 2.9.1's peers keep sending to the dead one's shared-memory port, and a new
-    // participant on the same id heard nothing for ~2 s (measured: dw_lab_tests ARecorderKilled...).
+    // have: over shared memory (the default until 2026-11-29, `shm` now) Fast DDS 2.9.1's peers
+    // keep sending to the dead one's port, and a new participant on the same id heard nothing for
+    // ~2 s (measured: dw_lab_tests ARecorderKilled...). Kept under UDP too, as a margin.
     int participant_id = kAutoParticipantId;
 };
 

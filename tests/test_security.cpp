@@ -361,7 +361,8 @@ TEST(SecureDds, AnIdentityMayNotPublishWhatItsRoleDoesNotProduce) {
 }
 
 // Shared memory beside UDP made secure participants sometimes never authenticate (Fast DDS 2.9.1,
-// docs/BENCHMARKS.md): under --security the default transport is UDP alone, and shm is refused.
+// docs/BENCHMARKS.md): under --security the default transport stays UDP alone (as it is for every
+// participant now) and shm is refused.
 TEST(SecureDds, TheDefaultTransportIsUdpAloneAndSharedMemoryIsRefused) {
     const auto qos = dw::dds::participant_qos(secure("planner"), "planner");
     ASSERT_EQ(qos.transport().user_transports.size(), 1u);
