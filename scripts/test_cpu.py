@@ -8,8 +8,8 @@ measurements (issue 40).
 Runs the tests CTest lists (`ctest --show-only=json-v1`, full-size twins left out), several at once
 (--jobs; a waiting test's CPU time does not depend on what runs beside it, a busy one's barely),
 each in its own process as CTest would, and writes one CSV row per test: name, wall [s], CPU [s],
-CPU share of one core, the class it has now (slots), pass/fail. Prints the tests whose measured
-share would fit a smaller class. Exit 2 on bad arguments, 1 when a test could not be started.
+CPU share of one core, the slots it reserves now, pass/fail. Exit 2 on bad arguments or a build
+directory CTest cannot list, 1 when a test could not be started.
 """
 import argparse
 import concurrent.futures
@@ -55,10 +55,14 @@ def main():
         print(f"test_cpu.py: error: cannot list the tests of build directory '{args.build}': {e}", file=sys.stderr)
         return 2
     rows = []
-    with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
-        for n, (test, wall, status, usage) in enumerate(pool.map(measure_children, listed), 1):
-            rows.append((test, wall, status, usage))
-            print(f"[{n}/{len(listed)}] {test['name']}: {wall:.1f} s wall, {usage:.1f} s CPU", flush=True)
+    try:
+        with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
+            for n, (test, wall, status, usage) in enumerate(pool.map(measure_children, listed), 1):
+                rows.append((test, wall, status, usage))
+                print(f"[{n}/{len(listed)}] {test['name']}: {wall:.1f} s wall, {usage:.1f} s CPU", flush=True)
+    except OSError as e:
+        print(f"test_cpu.py: error: cannot start a test: {e}", file=sys.stderr)
+        return 1
     with open(args.out, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["test", "wall_s", "cpu_s", "cpu_share", "slots", "passed"])
@@ -76,7 +80,7 @@ def measure_children(test):
     with open(os.devnull, "wb") as null:
         proc = subprocess.Popen(test["command"], cwd=test["cwd"], stdout=null, stderr=null)
     try:
-        _, status, usage = wait4_with_timeout(proc.pid, test["timeout"])
+        status, usage = wait4_with_timeout(proc.pid, test["timeout"])
     except TimeoutError:
         proc.kill()
         _, status, usage = os.wait4(proc.pid, 0)
@@ -90,7 +94,7 @@ def wait4_with_timeout(pid, timeout):
     while True:
         got, status, usage = os.wait4(pid, os.WNOHANG)
         if got == pid:
-            return got, status, usage
+            return status, usage
         if time.monotonic() > deadline:
             raise TimeoutError
         time.sleep(0.05)
