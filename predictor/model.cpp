@@ -25,10 +25,22 @@ Eigen::VectorXf Mlp::forward(const Eigen::VectorXf& in) const {
     return x;
 }
 
-Features features_of(const RelState& x) {
+Features features_of(const RelState& x, double neighbour_kg, double sufferer_kg) {
     const double horizontal = std::hypot(x[0], x[1]);
     const double separation = std::abs(x[2]) + kFeatureSeparationOffsetM;
-    return {x[0], x[1], x[2], x[3], x[4], x[5], horizontal, horizontal / separation, 1.0 / separation, 0.0};
+    return {x[0],         x[1],        x[2], x[3], x[4], x[5], horizontal, horizontal / separation, 1.0 / separation,
+            neighbour_kg, sufferer_kg, 0.0};
+}
+
+Bodies bodies_of(const Sample& s, const Source& source) {
+    Bodies b;
+    b.sufferer_kg = source.sufferer.mass_kg;
+    for (int j = 0; j < s.k; ++j) {
+        const std::size_t who = s.who[static_cast<std::size_t>(j)];
+        if (who < source.neighbours.size())
+            b.neighbour_kg[static_cast<std::size_t>(j)] = source.neighbours[who].mass_kg;
+    }
+    return b;
 }
 
 double jet_overlap(const RelState& a, const RelState& b) {
@@ -37,22 +49,21 @@ double jet_overlap(const RelState& a, const RelState& b) {
     return std::exp(-q * q);
 }
 
-Features features_of(std::span<const RelState> set, std::size_t j) {
-    Features f = features_of(set[j]);
+Features features_of(std::span<const RelState> set, std::size_t j, const Bodies& bodies) {
+    Features f = features_of(set[j], bodies.neighbour_kg[j], bodies.sufferer_kg);
     for (std::size_t k = 0; k < set.size(); ++k)
         if (k != j) f[kOverlapFeature] = std::max(f[kOverlapFeature], jet_overlap(set[j], set[k]));
     return f;
 }
 
-Wrench6 LearntModel::predict(std::span<const RelState> neighbours) const {
+Wrench6 LearntModel::predict(std::span<const RelState> neighbours, const Bodies& bodies) const {
     Eigen::VectorXf pooled = Eigen::VectorXf::Zero(phi.outputs());
     Eigen::VectorXf base = Eigen::VectorXf::Zero(6);
     Eigen::VectorXf in(kFeatureSize);
     const bool deep = structure == Structure::deep_sets, residual = this->residual();
     for (std::size_t j = 0; j < neighbours.size(); ++j) {
-        const Features f = features(neighbours, j);
-        for (std::size_t i = 0; i < f.size(); ++i)
-            in[static_cast<Eigen::Index>(i)] = (static_cast<float>(f[i]) - input_mean[i]) / input_std[i];
+        const Features f = features(neighbours, j, bodies);
+        for (std::size_t i = 0; i < f.size(); ++i) in[static_cast<Eigen::Index>(i)] = normalised(f, i);
         pooled += static_cast<float>(residual ? f[kOverlapFeature] : 1.0) * phi.forward(in);
         in[kOverlapFeature] = 0;  // the baseline is a sum model: one neighbour at a time
         if (residual) base += baseline.forward(in);
@@ -211,7 +222,7 @@ void check_format(const YAML::Node& root, const std::string& path) {
         fail_at_node(
             path, format, "format",
             log::cat("expected ", kModelFormat,
-                     " (models saved before the jet overlap, downwash-model/1 and /2, must be trained again)"));
+                     " (models saved before the bodies' masses, downwash-model/1 to /3, must be trained again)"));
 }
 
 void model_keys(KeyVisitor& k, LearntModel& m) {

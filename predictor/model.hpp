@@ -18,7 +18,9 @@
 // model). On a baseline it also weighs its term, so Deep Sets departs from its baseline only where
 // two neighbours' jets overlap — never for one neighbour, nor low down, where jets are narrow.
 #include <array>
+#include <cmath>
 #include <Eigen/Core>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -95,7 +97,7 @@ struct Mlp {
 
 enum class Structure { sum, deep_sets };
 
-inline constexpr int kFeatureSize = 10;
+inline constexpr int kFeatureSize = 12;
 using Features = std::array<double, kFeatureSize>;
 inline constexpr std::array<const char*, kFeatureSize> kFeatureNames{"dn",
                                                                      "de",
@@ -106,8 +108,21 @@ inline constexpr std::array<const char*, kFeatureSize> kFeatureNames{"dn",
                                                                      "horizontal_distance",
                                                                      "distance_over_separation",
                                                                      "inverse_separation",
+                                                                     "neighbour_mass",
+                                                                     "sufferer_mass",
                                                                      "jet_overlap"};
+inline constexpr std::size_t kNeighbourMassFeature = 9;
+inline constexpr std::size_t kSuffererMassFeature = 10;
 inline constexpr std::size_t kOverlapFeature = kFeatureSize - 1;  // not normalised: mean 0, spread 1
+// The bodies behind a sample's relative states: their masses [kg], what tells a 32 g neighbour's jet
+// from a 67 g one's and a small sufferer from a large one. NaN: not known (a bare set of relative
+// states: the contour maps, the online node), served as the training set's mean mass.
+inline constexpr double kUnknownMass = std::numeric_limits<double>::quiet_NaN();
+struct Bodies {
+    double sufferer_kg = kUnknownMass;
+    std::array<double, kMaxNeighbours> neighbour_kg{kUnknownMass, kUnknownMass, kUnknownMass};
+};
+Bodies bodies_of(const Sample& s, const Source& source);  // from the flight's own parameters
 // The vertical separation's offset in the two ratios [m]: about a rotor's size, so a neighbour level
 // with the sufferer gives finite features (the jet's virtual origin lies about that far above a rotor).
 inline constexpr double kFeatureSeparationOffsetM = 0.1;
@@ -117,10 +132,11 @@ inline constexpr double kFeatureSeparationOffsetM = 0.1;
 // twice that, so two jets' edges meet near q = 0.2.
 inline constexpr double kJetOverlapRatio = 0.2;
 double jet_overlap(const RelState& a, const RelState& b);
-Features features_of(const RelState& x);                             // one neighbour alone: overlap 0
-Features features_of(std::span<const RelState> set, std::size_t j);  // j in its set: the largest overlap
+// One neighbour alone (overlap 0); j in its set (the largest overlap with another).
+Features features_of(const RelState& x, double neighbour_kg = kUnknownMass, double sufferer_kg = kUnknownMass);
+Features features_of(std::span<const RelState> set, std::size_t j, const Bodies& bodies = {});
 
-inline constexpr const char* kModelFormat = "downwash-model/3";
+inline constexpr const char* kModelFormat = "downwash-model/4";
 // The learnt models' kinds, as model files and --kind name them.
 inline constexpr std::array<const char*, 3> kModelKinds = {"naive_linear", "learnt_linear", "deep_sets"};
 
@@ -136,14 +152,23 @@ public:
     std::string metadata_json = "{}";  // what it was trained on, how, and how well
 
     const std::string& name() const override { return kind; }
-    Wrench6 predict(std::span<const RelState> neighbours) const override;
+    Wrench6 predict(std::span<const RelState> neighbours) const override { return predict(neighbours, Bodies{}); }
+    Wrench6 predict(const Sample& s, const Source& source) const override {
+        return predict(s.neighbours(), bodies_of(s, source));
+    }
+    Wrench6 predict(std::span<const RelState> neighbours, const Bodies& bodies) const;
     // Deep Sets on a baseline: its term weighed by the jet overlap, less Phi(0) (above).
     bool residual() const { return structure == Structure::deep_sets && !baseline.layers.empty(); }
     // Deep Sets on a baseline without its set term: Σ psi, the sum model that trained beside it.
     LearntModel sum_part() const;
     // What this model sees of neighbour j (training and serving): a sum model one neighbour alone.
-    Features features(std::span<const RelState> set, std::size_t j) const {
-        return structure == Structure::deep_sets ? features_of(set, j) : features_of(set[j]);
+    Features features(std::span<const RelState> set, std::size_t j, const Bodies& bodies) const {
+        return structure == Structure::deep_sets ? features_of(set, j, bodies)
+                                                 : features_of(set[j], bodies.neighbour_kg[j], bodies.sufferer_kg);
+    }
+    // Features in the model's normalisation (an unknown mass: the training set's mean).
+    float normalised(const Features& f, std::size_t i) const {
+        return std::isnan(f[i]) ? 0.0f : (static_cast<float>(f[i]) - input_mean[i]) / input_std[i];
     }
 
     void save(const std::string& path) const;

@@ -66,12 +66,12 @@ Tensors tensors(const Dataset& d, const LearntModel& norm) {
     int64_t row = 0;
     for (int64_t i = 0; i < n; ++i) {
         const auto& s = d.samples[static_cast<std::size_t>(i)];
+        const Bodies bodies = bodies_of(s, d.sources[static_cast<std::size_t>(s.source)]);
         for (int j = 0; j < s.k; ++j, ++row) {
             sa[i][j] = row;
             oa[row] = i;
-            const Features f = norm.features(s.neighbours(), static_cast<std::size_t>(j));
-            for (std::size_t a = 0; a < f.size(); ++a)
-                xa[row][static_cast<int64_t>(a)] = (static_cast<float>(f[a]) - norm.input_mean[a]) / norm.input_std[a];
+            const Features f = norm.features(s.neighbours(), static_cast<std::size_t>(j), bodies);
+            for (std::size_t a = 0; a < f.size(); ++a) xa[row][static_cast<int64_t>(a)] = norm.normalised(f, a);
         }
         for (std::size_t a = 0; a < 6; ++a)
             ya[i][static_cast<int64_t>(a)] = static_cast<float>(s.y[a]) / norm.output_scale[a];
@@ -99,25 +99,27 @@ Batch batch(const Tensors& t, const torch::Tensor& samples) {
 // the loss is then an error in newtons, dominated by the axes that carry a signal, not a per-axis
 // ratio in which an axis of pure noise (f_n, f_e under a hover) weighs as much as f_d.
 void normalise(const Dataset& train, LearntModel& m) {
-    std::array<double, kFeatureSize> sum{}, sq{};
+    std::array<double, kFeatureSize> sum{}, sq{}, count{};  // per feature: a mass may be unknown (NaN)
     std::array<double, 6> ysq{};
-    double count = 0;
     for (const auto& s : train.samples) {
-        for (const auto& x : s.neighbours()) {
-            const Features f = features_of(x);
+        const Bodies bodies = bodies_of(s, train.sources[static_cast<std::size_t>(s.source)]);
+        for (std::size_t j = 0; j < static_cast<std::size_t>(s.k); ++j) {
+            const Features f = features_of(s.x[j], bodies.neighbour_kg[j], bodies.sufferer_kg);
             for (std::size_t a = 0; a < f.size(); ++a) {
+                if (std::isnan(f[a])) continue;
                 sum[a] += f[a];
                 sq[a] += f[a] * f[a];
+                count[a] += 1;
             }
         }
-        count += s.k;
         for (std::size_t a = 0; a < 6; ++a) ysq[a] += s.y[a] * s.y[a];
     }
-    if (count == 0) throw InputError("training: no sample has a neighbour");
+    if (count[0] == 0) throw InputError("training: no sample has a neighbour");
     for (std::size_t a = 0; a < sum.size(); ++a) {
-        const double mean = sum[a] / count;
+        const double mean = count[a] > 0 ? sum[a] / count[a] : 0.0;
         m.input_mean[a] = static_cast<float>(mean);
-        m.input_std[a] = static_cast<float>(std::max(1e-3, std::sqrt(std::max(0.0, sq[a] / count - mean * mean))));
+        m.input_std[a] =
+            static_cast<float>(std::max(1e-3, std::sqrt(std::max(0.0, sq[a] / std::max(1.0, count[a]) - mean * mean))));
     }
     m.input_mean[kOverlapFeature] = 0;  // it weighs phi's term as it is (model.hpp)
     m.input_std[kOverlapFeature] = 1;

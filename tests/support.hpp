@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -46,7 +48,8 @@ inline int test_domain() {
     return domain;
 }
 
-// A fresh temporary directory, removed with the object.
+// A fresh temporary directory, removed with the object (kept, and named on stderr, when the
+// environment sets DW_TEST_KEEP: to read a test's files after it ran).
 class TempDir {
 public:
     TempDir() {
@@ -54,6 +57,10 @@ public:
         path_ = ::mkdtemp(pattern.data());
     }
     ~TempDir() {
+        if (std::getenv("DW_TEST_KEEP")) {
+            std::fprintf(stderr, "kept %s (DW_TEST_KEEP)\n", path_.c_str());
+            return;
+        }
         std::error_code ec;
         std::filesystem::remove_all(path_, ec);
     }

@@ -47,8 +47,8 @@ LearntModel random_model(Structure s, unsigned seed) {
     LearntModel m;
     m.kind = s == Structure::sum ? "learnt_linear" : "deep_sets";
     m.structure = s;
-    m.input_mean = {0.1f, -0.2f, -1.0f, 0, 0.3f, 0, 0.8f, 0.6f, 1.2f, 0};  // jet_overlap: 0 and 1
-    m.input_std = {0.6f, 0.7f, 0.4f, 0.1f, 0.5f, 0.1f, 0.5f, 0.4f, 0.6f, 1};
+    m.input_mean = {0.1f, -0.2f, -1.0f, 0, 0.3f, 0, 0.8f, 0.6f, 1.2f, 0.7f, 0.7f, 0};  // jet_overlap: 0 and 1
+    m.input_std = {0.6f, 0.7f, 0.4f, 0.1f, 0.5f, 0.1f, 0.5f, 0.4f, 0.6f, 0.1f, 0.1f, 1};
     m.output_scale = {0.1f, 0.1f, 1.5f, 0.01f, 0.01f, 0.005f};
     m.phi = dw::testkit::random_mlp(rng, {kFeatureSize, 16, 16, s == Structure::sum ? 6 : 8}, 0.5f);
     if (s == Structure::deep_sets) m.rho = dw::testkit::random_mlp(rng, {8, 16, 6}, 0.5f);
@@ -169,17 +169,47 @@ TEST(PredictorModel, SavesAndLoadsExactlyAndIsPermutationInvariant) {
     }
 }
 
-TEST(PredictorModel, FeaturesCarryTheJetsInvariantsAndStayFinite) {
-    const Features f = features_of({0.3, 0.4, -1.2, 0.1, 0.5, 0});
+TEST(PredictorModel, FeaturesCarryTheJetsInvariantsTheMassesAndStayFinite) {
+    const Features f = features_of({0.3, 0.4, -1.2, 0.1, 0.5, 0}, 0.032, 0.067);
     for (std::size_t a = 0; a < 6; ++a) EXPECT_EQ(f[a], (RelState{0.3, 0.4, -1.2, 0.1, 0.5, 0})[a]);
     EXPECT_NEAR(f[6], 0.5, 1e-12);                                      // horizontal distance
     EXPECT_NEAR(f[7], 0.5 / (1.2 + kFeatureSeparationOffsetM), 1e-12);  // distance over separation
     EXPECT_NEAR(f[8], 1 / (1.2 + kFeatureSeparationOffsetM), 1e-12);
-    for (double v : features_of({0.2, 0, 0, 0, 0, 0}))
+    EXPECT_EQ(f[kNeighbourMassFeature], 0.032);
+    EXPECT_EQ(f[kSuffererMassFeature], 0.067);
+    for (double v : features_of({0.2, 0, 0, 0, 0, 0}, 0.7, 0.7))
         EXPECT_TRUE(std::isfinite(v)) << "a neighbour level with the sufferer";
     // Mirror images across the sufferer's vertical axis share the invariant features.
-    const Features g = features_of({-0.3, -0.4, -1.2, 0.1, 0.5, 0});
+    const Features g = features_of({-0.3, -0.4, -1.2, 0.1, 0.5, 0}, 0.032, 0.067);
     for (std::size_t a = 6; a < f.size(); ++a) EXPECT_EQ(f[a], g[a]);
+    EXPECT_TRUE(std::isnan(features_of({0.3, 0.4, -1.2, 0, 0, 0})[kNeighbourMassFeature])) << "unknown: NaN";
+}
+
+// The masses tell a small neighbour's jet from a large one's (issue 41: relative states alone
+// cannot); where they are not known (a bare set of relative states) the model serves its training
+// set's mean mass, and a flight's sample gives each neighbour its own (meta.json's parameters).
+TEST(PredictorModel, AModelSeesEachBodysMassAndServesTheMeanWhereItIsUnknown) {
+    LearntModel m = random_model(Structure::sum, 11);
+    m.input_mean[kNeighbourMassFeature] = 0.05f, m.input_std[kNeighbourMassFeature] = 0.02f;
+    m.input_mean[kSuffererMassFeature] = 0.05f, m.input_std[kSuffererMassFeature] = 0.02f;
+    const std::vector<RelState> x{{0.1, 0.2, -0.6, 0, 0, 0}};
+    Bodies small, large, mean;
+    small.sufferer_kg = large.sufferer_kg = mean.sufferer_kg = 0.05;
+    small.neighbour_kg[0] = 0.032, large.neighbour_kg[0] = 0.067, mean.neighbour_kg[0] = 0.05;
+    const auto ps = m.predict(x, small), pl = m.predict(x, large), pm = m.predict(x, mean), pu = m.predict(x);
+    EXPECT_GT(std::abs(ps[2] - pl[2]), 1e-6) << "the neighbour's mass changes nothing";
+    for (std::size_t a = 0; a < 6; ++a) EXPECT_NEAR(pu[a], pm[a], 1e-5) << "unknown is not the mean, axis " << a;
+    Source src;
+    src.sufferer.mass_kg = 0.05;
+    src.neighbours = {{}, {}};
+    src.neighbours[1].mass_kg = 0.067;
+    Sample s;
+    s.k = 1, s.x[0] = x[0], s.who[0] = 1;  // the source's second neighbour
+    const auto b = bodies_of(s, src);
+    EXPECT_EQ(b.neighbour_kg[0], 0.067);
+    EXPECT_EQ(b.sufferer_kg, 0.05);
+    const auto pf = m.predict(s, src);
+    for (std::size_t a = 0; a < 6; ++a) EXPECT_NEAR(pf[a], pl[a], 1e-6) << "a flight's sample, axis " << a;
 }
 
 TEST(PredictorModel, JetOverlapIsOneForStackedJetsAndVanishesForDistantOnes) {
@@ -196,7 +226,10 @@ TEST(PredictorModel, JetOverlapIsOneForStackedJetsAndVanishesForDistantOnes) {
     const std::vector<RelState> set{a, b, {3, 3, -1.2, 0, 0, 0}};
     EXPECT_EQ(features_of(set, 0)[kOverlapFeature], jet_overlap(a, b));
     EXPECT_LT(features_of(set, 2)[kOverlapFeature], 1e-12);
-    for (std::size_t i = 0; i < kOverlapFeature; ++i) EXPECT_EQ(features_of(set, 1)[i], features_of(b)[i]);
+    Bodies bodies;
+    bodies.sufferer_kg = 0.067, bodies.neighbour_kg = {0.032, 0.067, 0.032};
+    for (std::size_t i = 0; i < kOverlapFeature; ++i)
+        EXPECT_EQ(features_of(set, 1, bodies)[i], features_of(b, 0.067, 0.067)[i]);
 }
 
 TEST(PredictorModel, DeepSetsIsItsBaselineWhereNoJetsOverlap) {

@@ -137,7 +137,7 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
 
 TEST(PredictorProcess, BadModelIsOneLineAndExit2) {
     dw::test::TempDir dir;
-    std::ofstream(dir.file("m.json")) << "{\"format\": \"downwash-model/3\"}";
+    std::ofstream(dir.file("m.json")) << "{\"format\": \"" << kModelFormat << "\"}";
     const auto r = dw::test::run({dw::test::bin("dw-predictor"), "run", "--model", dir.file("m.json")}, dir);
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
