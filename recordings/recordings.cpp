@@ -173,6 +173,7 @@ namespace {
 struct WrenchRow {
     double t;
     std::array<double, 6> w;
+    bool tared;  // false: recorded before the stand's first tare, the hover thrust in it
 };
 struct PoseRow {
     double t;
@@ -185,6 +186,12 @@ struct Found {
     Offsets offsets;  // per process: the time service's measured clock offsets
     std::string formation = "free";
     bool estimated_poses = false;  // a mocap frame carried the vehicles' own estimates (PX4), not motion capture
+    std::size_t tared_rows = 0, untared_rows = 0;  // stand/wrench samples after and before the stand's first tare
+    // Whether a wrench row goes into the flight. FLIGHT_FORMAT's wrench.csv is tared: the samples a
+    // stand published before its first tare carry the hover thrust (several newtons) and are left
+    // out. A recording whose stand never tared keeps them all (an untared flight is still a flight),
+    // and the export says so.
+    bool keeps(const WrenchRow& r) const { return r.tared || tared_rows == 0; }
 };
 struct RowHandlers {
     std::function<void(WrenchRow&&)> wrench;
@@ -202,8 +209,10 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
         if (!deserialize(m.data, w)) throw undecodable();
         WrenchRow r{static_cast<double>(dds::from_msg(w.header().stamp())) * 1e-9,
                     {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
-                     w.torque_nm().z()}};
+                     w.torque_nm().z()},
+                    w.tared()};
         require_finite(r.w, path, suffix, read);
+        ++(r.tared ? found.tared_rows : found.untared_rows);
         rows.wrench(std::move(r));
     } else if (suffix == topics::mocap_frame.suffix) {
         msg::MocapFrame fr;
@@ -275,6 +284,20 @@ std::array<double, 4> normalised(const std::array<double, 4>& q) {
     return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
 }
 
+// meta.json's word on the samples from before the stand's tare, said once on stderr too.
+nlohmann::json tare_note(const Found& found, const std::string& path) {
+    if (found.untared_rows == 0) return nlohmann::json::object();
+    if (found.tared_rows == 0) {
+        log::warn(path,
+                  ": the stand never tared (no stand/wrench sample says tared): wrench.csv holds the hover "
+                  "thrust as well as the air's push");
+        return {{"wrench_untared", true}};
+    }
+    log::info(path, ": left out ", found.untared_rows,
+              " stand/wrench samples from before the stand's tare (the hover thrust in them)");
+    return {{"wrench_untared_rows_left_out", found.untared_rows}};
+}
+
 // meta.json of an exported flight: the bodies in first-seen order, the plan's formation and which
 // clock offsets were applied.
 flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& found, const Clocks& c,
@@ -297,6 +320,7 @@ flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& fo
     nlohmann::json extra{
         {"source", path}, {"epoch_unix_s", c.epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
     extra.update(measured_clocks(c.stand_measured, c.mocap_measured, c.stand, c.mocap));
+    extra.update(tare_note(found, path));
     m.extra_json = extra.dump();
     return m;
 }
@@ -309,6 +333,7 @@ flight::Flight flight_from_recording(const std::string& path, const ExportOption
     const Found found = read_rows(
         path, o,
         {[&](WrenchRow&& r) { wrench.push_back(std::move(r)); }, [&](PoseRow&& r) { poses.push_back(std::move(r)); }});
+    std::erase_if(wrench, [&](const WrenchRow& r) { return !found.keeps(r); });
     require_rows(!wrench.empty(), !poses.empty(), path);
     Clocks c(found.offsets, o);
     // Stable, as the streamed export's window: rows with the same stamp keep their recorded order.
@@ -377,10 +402,14 @@ private:
 // order straight into the folder. Throws OutOfWindow when a topic's stamps step back behind rows
 // already written. Returns the most rows one topic's window held.
 std::size_t stream_flight(const std::string& path, const std::string& dir, const ExportOptions& o) {
-    double first_wrench = std::numeric_limits<double>::infinity(), first_pose = first_wrench;
+    double first_any = std::numeric_limits<double>::infinity(), first_tared = first_any, first_pose = first_any;
     const Found found = read_rows(path, o,
-                                  {[&](WrenchRow&& r) { first_wrench = std::min(first_wrench, r.t); },
+                                  {[&](WrenchRow&& r) {
+                                       first_any = std::min(first_any, r.t);
+                                       if (r.tared) first_tared = std::min(first_tared, r.t);
+                                   },
                                    [&](PoseRow&& r) { first_pose = std::min(first_pose, r.t); }});
+    const double first_wrench = found.tared_rows > 0 ? first_tared : first_any;  // of the rows kept
     require_rows(std::isfinite(first_wrench), std::isfinite(first_pose), path);
     Clocks c(found.offsets, o);
     c.set_epoch(first_wrench, first_pose);
@@ -394,7 +423,10 @@ std::size_t stream_flight(const std::string& path, const std::string& dir, const
         out.pose(c.pose_t(r.t), r.body, r.p, normalised(r.q));
     });
     read_rows(path, o,
-              {[&](WrenchRow&& r) { wrench.push(std::move(r)); }, [&](PoseRow&& r) { poses.push(std::move(r)); }});
+              {[&](WrenchRow&& r) {
+                   if (found.keeps(r)) wrench.push(std::move(r));
+               },
+               [&](PoseRow&& r) { poses.push(std::move(r)); }});
     wrench.drain();
     poses.drain();
     out.close(export_meta(bodies, found, c, path, o));

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
 
 #include "core/clock.hpp"
@@ -653,9 +654,13 @@ TEST(Recorder, ARecordedNonFiniteValueIsOneLineNamingTheRecording) {
 }
 
 namespace {
+constexpr double kHoverThrustN = 5.9;  // what an untared stand reads: the sufferer's own thrust
+
 // A recording of `seconds` at 100 Hz: a wrench and a two-body frame per step, each stamped on its
-// producer's clock; `stamp(i)` gives step i's stamp offset (jitter, a clock stepping back).
-void write_stamped_recording(const std::string& file, int steps, const std::function<double(int)>& stamp) {
+// producer's clock; `stamp(i)` gives step i's stamp offset (jitter, a clock stepping back). The stand
+// says it tared from step `tared_from` on (never: none); before, its wrench carries a hover thrust.
+void write_stamped_recording(const std::string& file, int steps, const std::function<double(int)>& stamp,
+                             std::optional<int> tared_from = std::nullopt) {
     dw::testkit::LabRecording rec(file, dw::mcap::Compression::none);
     const auto cw = rec.channel(dw::dds::topics::stand_wrench), cm = rec.channel(dw::dds::topics::mocap_frame);
     const dw::Nanos epoch = 1'700'000'000'000'000'000;
@@ -664,7 +669,9 @@ void write_stamped_recording(const std::string& file, int steps, const std::func
         const auto stamp_ns = epoch + static_cast<dw::Nanos>(std::llround((i * 0.01 + stamp(i)) * 1e9));
         dw::msg::WrenchStamped w;
         w.header().stamp(dw::dds::to_msg(stamp_ns));
-        w.force_n().z(-0.01 * i);
+        const bool tared = tared_from && i >= *tared_from;
+        w.force_n().z(tared || !tared_from ? -0.01 * i : kHoverThrustN);
+        w.tared(tared);
         rec.write(cw, static_cast<std::uint32_t>(i), log_time, w);
         dw::msg::MocapFrame f;
         f.header().stamp(dw::dds::to_msg(stamp_ns + 3'000'000));
@@ -721,6 +728,31 @@ TEST(Export, TheStreamedFlightIsTheInMemoryFlightByteForByte) {
         EXPECT_EQ(back.meta.neighbours, std::vector<std::string>{"v1"});
         EXPECT_NEAR(back.poses[0].q[0], 1.0, 1e-9);
     }
+}
+
+// FLIGHT_FORMAT's wrench.csv is tared: what the stand published before its first tare (the hover
+// thrust, several newtons) is left out, streamed or in memory, and meta.json says how much. Under
+// load a stand tares later, and those samples, kept, once made a demo's noise floor 40 times too
+// large. A stand that never tared keeps every sample, and meta.json says the wrench is untared.
+TEST(Export, SamplesFromBeforeTheStandsTareAreLeftOutAndSaidSo) {
+    TempDir dir;
+    const std::string file = dir.file("tare.mcap"), streamed = dir.file("streamed"), memory = dir.file("memory");
+    write_stamped_recording(
+        file, 600, [](int) { return 0.0; }, 137);
+    dw::recordings::export_flight(file, streamed, {});
+    dw::flight::write_flight(dw::recordings::flight_from_recording(file, {}), memory);
+    for (const char* f : {"wrench.csv", "poses.csv", "meta.json"})
+        EXPECT_EQ(dw::read_file(streamed + "/" + f), dw::read_file(memory + "/" + f)) << f;
+    const auto back = dw::flight::read_flight(streamed);
+    ASSERT_EQ(back.wrench.size(), 600u - 137u);
+    for (const auto& r : back.wrench) ASSERT_NE(r.w[2], kHoverThrustN) << "an untared sample at " << r.t;
+    EXPECT_EQ(nlohmann::json::parse(back.meta.extra_json)["wrench_untared_rows_left_out"], 137);
+    EXPECT_EQ(back.poses.size(), 1200u) << "the poses are all kept";
+    const std::string never = dir.file("never.mcap");
+    write_stamped_recording(never, 300, [](int) { return 0.0; });
+    const auto untared = dw::recordings::flight_from_recording(never, {});
+    EXPECT_EQ(untared.wrench.size(), 300u);
+    EXPECT_EQ(nlohmann::json::parse(untared.meta.extra_json)["wrench_untared"], true);
 }
 
 // An export that fails after its rows were streamed (here: no such sufferer, known only at the
