@@ -123,6 +123,10 @@ struct Bodies {
     std::array<double, kMaxNeighbours> neighbour_kg{kUnknownMass, kUnknownMass, kUnknownMass};
 };
 Bodies bodies_of(const Sample& s, const Source& source);  // from the flight's own parameters
+// A feature that took one value in training (every vehicle of one mass, as in the simulated lab)
+// taught the model nothing: its spread is saved as this, so that served it weighs nothing, whatever
+// its value (a simulated lab's model on a flight of other vehicles is not thrown off by their mass).
+inline constexpr float kUnvariedStd = 1e20F;
 // The vertical separation's offset in the two ratios [m]: about a rotor's size, so a neighbour level
 // with the sufferer gives finite features (the jet's virtual origin lies about that far above a rotor).
 inline constexpr double kFeatureSeparationOffsetM = 0.1;

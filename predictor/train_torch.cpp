@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
 
@@ -100,6 +101,9 @@ Batch batch(const Tensors& t, const torch::Tensor& samples) {
 // ratio in which an axis of pure noise (f_n, f_e under a hover) weighs as much as f_d.
 void normalise(const Dataset& train, LearntModel& m) {
     std::array<double, kFeatureSize> sum{}, sq{}, count{};  // per feature: a mass may be unknown (NaN)
+    std::array<double, kFeatureSize> lo, hi;                // its range: a single value teaches nothing
+    lo.fill(std::numeric_limits<double>::infinity());
+    hi.fill(-std::numeric_limits<double>::infinity());
     std::array<double, 6> ysq{};
     for (const auto& s : train.samples) {
         const Bodies bodies = bodies_of(s, train.sources[static_cast<std::size_t>(s.source)]);
@@ -110,6 +114,8 @@ void normalise(const Dataset& train, LearntModel& m) {
                 sum[a] += f[a];
                 sq[a] += f[a] * f[a];
                 count[a] += 1;
+                lo[a] = std::min(lo[a], f[a]);
+                hi[a] = std::max(hi[a], f[a]);
             }
         }
         for (std::size_t a = 0; a < 6; ++a) ysq[a] += s.y[a] * s.y[a];
@@ -118,8 +124,8 @@ void normalise(const Dataset& train, LearntModel& m) {
     for (std::size_t a = 0; a < sum.size(); ++a) {
         const double mean = count[a] > 0 ? sum[a] / count[a] : 0.0;
         m.input_mean[a] = static_cast<float>(mean);
-        m.input_std[a] =
-            static_cast<float>(std::max(1e-3, std::sqrt(std::max(0.0, sq[a] / std::max(1.0, count[a]) - mean * mean))));
+        const double spread = std::sqrt(std::max(0.0, sq[a] / std::max(1.0, count[a]) - mean * mean));
+        m.input_std[a] = !(hi[a] > lo[a]) ? kUnvariedStd : static_cast<float>(std::max(1e-3, spread));
     }
     m.input_mean[kOverlapFeature] = 0;  // it weighs phi's term as it is (model.hpp)
     m.input_std[kOverlapFeature] = 1;

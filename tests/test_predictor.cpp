@@ -210,6 +210,13 @@ TEST(PredictorModel, AModelSeesEachBodysMassAndServesTheMeanWhereItIsUnknown) {
     EXPECT_EQ(b.sufferer_kg, 0.05);
     const auto pf = m.predict(s, src);
     for (std::size_t a = 0; a < 6; ++a) EXPECT_NEAR(pf[a], pl[a], 1e-6) << "a flight's sample, axis " << a;
+    // Trained where every vehicle had one mass, the model learnt nothing from it: another mass
+    // served changes nothing (train_torch.cpp's normalisation saves that spread as kUnvariedStd).
+    m.input_std[kNeighbourMassFeature] = m.input_std[kSuffererMassFeature] = kUnvariedStd;
+    Bodies heavy = small;
+    heavy.neighbour_kg[0] = heavy.sufferer_kg = 0.7;
+    const auto p1 = m.predict(x, small), p2 = m.predict(x, heavy);
+    for (std::size_t a = 0; a < 6; ++a) EXPECT_NEAR(p1[a], p2[a], 1e-6) << "an unvaried mass weighs, axis " << a;
 }
 
 TEST(PredictorModel, JetOverlapIsOneForStackedJetsAndVanishesForDistantOnes) {
@@ -336,6 +343,9 @@ TEST(PredictorTraining, DeepSetsOnTheSumModelIsNeverWorseOnValidationAndLearnsTh
     o.kind = "learnt_linear";
     o.max_epochs = 15;
     const TrainResult sum = train_model(s.train, s.validation, o);
+    // Every body here has one mass (the source's defaults): the masses did not vary, and weigh nothing.
+    EXPECT_EQ(sum.model.input_std[kSuffererMassFeature], kUnvariedStd);
+    EXPECT_GT(sum.model.input_std[0], 0.1F) << "a feature that varied keeps its spread";
     o.kind = "deep_sets";
     o.max_epochs = 40;  // the pair term is weighed by the two jets' overlap: it takes longer to learn
     const TrainResult deep = train_model(s.train, s.validation, o, &sum.model);
