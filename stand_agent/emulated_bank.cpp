@@ -112,6 +112,10 @@ void EmulatedBank::do_set_clocks(std::uint8_t mask, bool high) {
             }
         }
     }
+    if (high && stall_after_raise_ns_ > 0) {  // pre-empted with the clock just raised
+        sleep_for_ns(stall_after_raise_ns_);
+        stall_after_raise_ns_ = 0;
+    }
 }
 
 std::uint8_t EmulatedBank::do_read_data() {

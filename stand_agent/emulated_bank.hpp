@@ -41,7 +41,9 @@ public:
     void unplug(int chip, bool unplugged = true);  // DOUT floats high: never ready
     void stick_low(int chip, bool stuck = true);   // DOUT stuck low
     void stretch_next_pulse(Nanos extra_high_ns);  // the next clock-high lasts this much longer
-    void spike_next(int chip, bool high);          // next conversion reads 0x7FFFFF / 0x800000
+    // The thread is pre-empted right after it raises the clock, before it can read the time.
+    void stall_after_next_raise(Nanos stall_ns) { stall_after_raise_ns_ = stall_ns; }
+    void spike_next(int chip, bool high);  // next conversion reads 0x7FFFFF / 0x800000
     void set_noise(double counts_sigma) { options_.noise_counts = counts_sigma; }
 
     int gain(int chip) const { return chips_[static_cast<std::size_t>(chip)].gain; }
@@ -82,6 +84,7 @@ private:
     physics::Rng rng_;
     std::array<Chip, kChips> chips_;
     Nanos stretch_ns_ = 0;
+    Nanos stall_after_raise_ns_ = 0;
 };
 
 }  // namespace dw::stand

@@ -23,8 +23,10 @@ bool Hx711Driver::wait_ready(std::uint8_t mask, Hx711Sample& s) {
 void Hx711Driver::pulses(std::uint8_t mask, std::array<std::uint32_t, kChips>* words, Hx711Sample& s) {
     const int n = static_cast<int>(options_.gain);
     for (int p = 0; p < n; ++p) {
-        lines_.set_clocks(mask, true);
+        // Timed from before the edge: a thread pre-empted right after raising the clock, before
+        // it could read the time, must still count the stall (the phase is over-timed by one call).
         const Nanos high = lines_.now_ns();
+        lines_.set_clocks(mask, true);
         const std::uint8_t bits = p < 24 ? lines_.read_data() : 0;
         lines_.set_clocks(mask, false);
         if (lines_.now_ns() - high > options_.max_high_ns) s.timing_violation = true;

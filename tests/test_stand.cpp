@@ -112,6 +112,20 @@ TEST(Hx711, ParallelReadTakesAtMost80LineOperationsOneByOneTakesEightTimesMore) 
     EXPECT_EQ(b.ops, 8u * s.ops);
 }
 
+// A thread pre-empted right after it raised the clock, before it read the time: the clock-high
+// phase is timed from before the edge, so the stall still counts (timed from after it, a lab run
+// under load published a sample of garbage: 4.7 N on f_n for one sample).
+TEST(Faults, APreemptionRightAfterTheClockRisesNeverYieldsAPublishedSample) {
+    Rig rig;
+    rig.force.fill(1.0);
+    for (int i = 0; i < 5; ++i) rig.step();
+    rig.clock.advance(std::chrono::milliseconds(20));
+    rig.bank->stall_after_next_raise(70'000);
+    const Hx711Sample bad = rig.driver->read_parallel();
+    EXPECT_TRUE(bad.timing_violation);
+    EXPECT_FALSE(rig.agent->process(bad).publish);
+}
+
 TEST(Faults, AStretchedPulseNeverYieldsAPublishedSample) {
     Rig rig;
     rig.force.fill(1.0);
