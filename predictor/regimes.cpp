@@ -20,7 +20,6 @@ namespace dw::predictor {
 
 namespace {
 
-constexpr std::size_t kAxisD = 2;
 constexpr std::size_t kMinPieces = 6;         // pieces of held-out legs in a band, or the band is left out
 constexpr std::size_t kMinPieceSamples = 10;  // shorter pieces (a leg's ragged end) are left out
 
