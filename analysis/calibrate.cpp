@@ -33,15 +33,15 @@ using physics::PhysicsConfig;
 using physics::VehicleClass;
 using physics::VehicleParams;
 
-constexpr std::size_t kFd = flight::kFdAxis;  // the axis calibrated on
-constexpr int kBlocksWanted = 5;              // cross-validation blocks asked of find_blocks (for `near`)
-constexpr double kStepFraction = 1e-3;        // forward-difference step, relative to the value (or start)
-constexpr double kLambda0 = 1e-3;             // Levenberg-Marquardt's first damping
-constexpr double kRelativeTolerance = 1e-6;   // stop when the cost falls by less than this fraction
-constexpr double kLambdaMax = 1e10;           // ... or no step lowers it
-constexpr double kLambdaMin = 1e-9;           // the damping never falls below this
-constexpr double kStepFloor = 1e-3;           // added to the start value: a parameter starting at 0 still gets a step
-constexpr double kUnusedDiagonal = 1.0;       // the normal matrix's diagonal for a parameter no flight sees
+using flight::kFdAxis;                       // the axis calibrated on
+constexpr int kBlocksWanted = 5;             // cross-validation blocks asked of find_blocks (for `near`)
+constexpr double kStepFraction = 1e-3;       // forward-difference step, relative to the value (or start)
+constexpr double kLambda0 = 1e-3;            // Levenberg-Marquardt's first damping
+constexpr double kRelativeTolerance = 1e-6;  // stop when the cost falls by less than this fraction
+constexpr double kLambdaMax = 1e10;          // ... or no step lowers it
+constexpr double kLambdaMin = 1e-9;          // the damping never falls below this
+constexpr double kStepFloor = 1e-3;          // added to the start value: a parameter starting at 0 still gets a step
+constexpr double kUnusedDiagonal = 1.0;      // the normal matrix's diagonal for a parameter no flight sees
 
 // A calibrated quantity of a class: name, unit, role, bounds, and where it lives in the class.
 struct Knob {
@@ -148,7 +148,8 @@ public:
             const auto& fd = flights_[use[k]];
             const auto pred = fd.sim->recorded(c);
             auto& part = parts[k];
-            for (auto i : fit_rows ? fd.fit_rows : fd.rows) part.push_back(fd.sim->measured()[i][kFd] - pred[i][kFd]);
+            for (auto i : fit_rows ? fd.fit_rows : fd.rows)
+                part.push_back(fd.sim->measured()[i][kFdAxis] - pred[i][kFdAxis]);
             if (fd.sim->flying()) {  // its residual's own zero: a nuisance of each flight
                 const double bias = std::accumulate(part.begin(), part.end(), 0.0) / static_cast<double>(part.size());
                 for (double& v : part) v -= bias;
@@ -196,12 +197,12 @@ private:
     }
 
     void describe_rows(const flight::Flight& f, FlightData& d) const {
-        if (!d.sim->measured_axes()[kFd])
+        if (!d.sim->measured_axes()[kFdAxis])
             throw InputError(log::cat(d.dir, ": wrench.csv carries no f_d measurement to calibrate on"));
         const auto blocks = flight::find_blocks(f, kBlocksWanted, physics::encounter_radii(f.meta, config_));
         const auto info = describe(*d.sim, blocks);
         for (std::size_t i = 0; i < info.size(); ++i) {
-            if (!info[i].near || !std::isfinite(d.sim->measured()[i][kFd])) continue;
+            if (!info[i].near || !std::isfinite(d.sim->measured()[i][kFdAxis])) continue;
             if (d.rows.size() % static_cast<std::size_t>(o_.stride) == 0) d.fit_rows.push_back(i);
             d.rows.push_back(i);
             d.offset.push_back(info[i].offset);
@@ -321,7 +322,8 @@ std::vector<PairingSamples> samples_by_pairing(const Calibration& cal, const std
         s.pairing = fd.pairing;
         for (std::size_t k = 0; k < fd.rows.size(); ++k) {
             const auto i = fd.rows[k];
-            s.rows.push_back({fd.offset[k], fd.above[k], fd.sim->measured()[i][kFd], p1[i][kFd], p0[i][kFd]});
+            s.rows.push_back(
+                {fd.offset[k], fd.above[k], fd.sim->measured()[i][kFdAxis], p1[i][kFdAxis], p0[i][kFdAxis]});
         }
     }
     std::vector<PairingSamples> out;
@@ -351,8 +353,8 @@ void explain_heldout(TrialError& e, const PhysicsConfig& fold, const CalibrateOp
         const flight::Flight f = flight::read_flight(folder);
         const ExplainResult r = explain(f, xo);
         write_report(f, r, xo, (dir / fs::path(folder).filename()).string());
-        e.explained_ratio.push_back(r.heldout_after[kFd] / r.noise_floor[kFd]);
-        e.discrepancy_ratio.push_back(r.discrepancy.heldout_after[kFd] / r.noise_floor[kFd]);
+        e.explained_ratio.push_back(r.heldout_after[kFdAxis] / r.noise_floor[kFdAxis]);
+        e.discrepancy_ratio.push_back(r.discrepancy.heldout_after[kFdAxis] / r.noise_floor[kFdAxis]);
         e.explained_by.emplace_back();
         for (const auto& c : r.accepted) e.explained_by.back().push_back(c.effect.name);
     }
@@ -365,9 +367,9 @@ AloneFlight measure_alone(const flight::Flight& f, const std::string& dir, const
     AloneFlight a{fs::path(dir).filename().string(), vehicle_class};
     std::vector<double> y, v;
     for (const auto& w : f.wrench)
-        if (w.t >= sufferer.t.front() && w.t <= sufferer.t.back() && std::isfinite(w.w[kFd]) &&
+        if (w.t >= sufferer.t.front() && w.t <= sufferer.t.back() && std::isfinite(w.w[kFdAxis]) &&
             -sufferer.position_at(w.t)[2] >= kAloneMinHeight_m)
-            y.push_back(w.w[kFd]), v.push_back(sufferer.velocity_at(w.t)[2]);
+            y.push_back(w.w[kFdAxis]), v.push_back(sufferer.velocity_at(w.t)[2]);
     if (y.size() < 3)
         throw InputError(log::cat(dir, "/wrench.csv: fewer than 3 f_d samples while the sufferer flies alone at least ",
                                   kAloneMinHeight_m, " m above the floor"));

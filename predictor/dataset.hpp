@@ -23,8 +23,8 @@ inline constexpr int kMaxNeighbours = 3;
 inline constexpr int kStateSize = 6;  // dn de dd dvn dve dvd
 
 using RelState = std::array<double, kStateSize>;
+using flight::kFdAxis;
 using flight::Wrench6;
-inline constexpr std::size_t kAxisD = 2;  // f_d in a Wrench6 (flight::kAxes)
 
 // No prediction: a model that cannot say anything about a sample (the reference where a flight has none).
 inline constexpr Wrench6 kNoPrediction{

@@ -35,7 +35,7 @@ struct PeakError {
     double mean_abs = NAN;
     std::size_t blocks = 0;
 };
-PeakError peak_error(const ForceModel& model, const Dataset& data, int axis = 2);
+PeakError peak_error(const ForceModel& model, const Dataset& data, int axis = kFdAxis);
 // NaN on every axis when no sample falls in the band.
 AxisValues arena_error(const ForceModel& model, const Dataset& data, const ArenaOptions& o = {});
 // Σ |mean prediction − mean truth| × cell area over the occupied cells (NaN when none is).

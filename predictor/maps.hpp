@@ -24,7 +24,7 @@ struct MapRequest {
     std::string formation = "leader_follower3";  // physics formation name (offsets of the vehicles)
     double altitude_m = 1.3;                     // the formation's reference point above the sufferer
     double speed_mps = 0.5;                      // along +E
-    int axis = 2;                                // f_d
+    int axis = kFdAxis;                          // f_d
     double half_width_m = 1.2;
     int cells = 61;
     std::optional<Dataset> observed;  // recorded samples of this formation (binned, legs both ways)

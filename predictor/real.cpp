@@ -208,8 +208,8 @@ struct Models {
 // Deep Sets starts from the sum model with the lower f_d RMSE on the validation flights: learnt
 // linear, or the naive sum where single-neighbour training carries over to unseen flights better.
 const LearntModel* deep_sets_baseline(Models& m, const Dataset& validation) {
-    const double linear = rmse(*m.linear, validation)[kAxisD];
-    const double naive = m.naive ? rmse(*m.naive, validation)[kAxisD] : linear;
+    const double linear = rmse(*m.linear, validation)[kFdAxis];
+    const double naive = m.naive ? rmse(*m.naive, validation)[kFdAxis] : linear;
     const LearntModel* base = naive < linear ? m.naive.get() : m.linear.get();
     m.baseline = log::cat("Deep Sets starts from ", base->kind, " (validation f_d RMSE: naive_linear ",
                           m.naive ? fixed(naive, 4) : std::string("–"), ", learnt_linear ", fixed(linear, 4), " N). ");

@@ -83,10 +83,10 @@ std::vector<RegimeRow> classify_regimes(const ForceModel& sum, const ForceModel&
         std::map<std::string, std::map<PieceKey, PieceErrors>> by_formation;
         for (const auto& s : band.samples) {
             const auto& source = band.sources[static_cast<std::size_t>(s.source)];
-            if (s.leg < 0 || s.k == 0 || !source.measured[kAxisD]) continue;
+            if (s.leg < 0 || s.k == 0 || !source.measured[kFdAxis]) continue;
             auto& e = by_formation[source.formation][{s.source, s.leg, std::lround(std::floor(s.t / o.piece_s))}];
-            const double y = s.y[kAxisD];
-            const double ps = predict(sum, band, s)[kAxisD] - y, pd = predict(deep, band, s)[kAxisD] - y;
+            const double y = s.y[kFdAxis];
+            const double ps = predict(sum, band, s)[kFdAxis] - y, pd = predict(deep, band, s)[kFdAxis] - y;
             e.sum_sq += ps * ps, e.deep_sq += pd * pd, e.truth_sq += y * y, ++e.n;
             e.k_max = std::max(e.k_max, s.k);
         }
