@@ -267,9 +267,9 @@ private:
     json j_;
 };
 
-Meta read_meta(const fs::path& path) { return MetaReader(path).read(); }
-
 }  // namespace
+
+Meta read_meta(const std::string& path) { return MetaReader(path).read(); }
 
 void require_dense(const Flight& f, const std::string& where) {
     if (f.wrench.empty() || f.poses.empty()) return;

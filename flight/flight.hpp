@@ -142,6 +142,8 @@ struct Flight {
 };
 
 Flight read_flight(const std::string& dir);
+// A meta.json alone (its bodies' names and parameters); throws dw::InputError naming the file and field.
+Meta read_meta(const std::string& path);
 // Throws dw::InputError "<where>: the flight spans ..." when it holds fewer samples than one per
 // kMaxSpanPerSample_s of its span (read_flight checks it; so does every other way a Flight is made
 // from a file).

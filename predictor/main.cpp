@@ -297,7 +297,11 @@ struct OnlineCommand {
         cmd->add_option("--model", no.model_path,
                         "model file (.json) or physics configuration (.yaml); swapped in when it changes")
             ->required();
-        cmd->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
+        auto* sufferer = cmd->add_option("--sufferer", no.sufferer, "the sufferer's rigid-body name");
+        cmd->add_option("--vehicles", no.vehicles_path,
+                        "a flight's meta.json describing the lab's bodies (sufferer, neighbours, each one's mass and "
+                        "rotors): the models take them per body, as on a recorded flight")
+            ->excludes(sufferer);
     }
     int run(const dw::dds::ProcessCli& cli) {
         dw::dds::Participant participant(cli.dds(), "predictor", cli.clock());

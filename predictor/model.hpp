@@ -41,8 +41,8 @@ public:
     virtual ~ForceModel() = default;
     virtual const std::string& name() const = 0;
     virtual Wrench6 predict(std::span<const RelState> neighbours) const = 0;
-    // A recorded sample of `source`: models that know the bodies (the physics) use each vehicle's
-    // parameters and the sufferer's height; the learnt ones see only the relative states.
+    // A recorded sample of `source`: the physics uses each vehicle's parameters and the sufferer's
+    // height, the learnt models each body's mass.
     virtual Wrench6 predict(const Sample& s, const Source& source) const {
         (void)source;
         return predict(s.neighbours());

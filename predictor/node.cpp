@@ -7,6 +7,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "dds/time.hpp"
+#include "physics/bodies.hpp"
 
 namespace dw::predictor {
 
@@ -21,11 +22,15 @@ std::array<double, 3> FrameFeatures::velocity(History& h, double t, const std::a
     return {(p[0] - p0[0]) / dt, (p[1] - p0[1]) / dt, (p[2] - p0[2]) / dt};
 }
 
-std::optional<std::vector<RelState>> FrameFeatures::update(const msg::MocapFrame& frame) {
+std::optional<FrameNeighbours> FrameFeatures::update(const msg::MocapFrame& frame) {
     const double t = static_cast<double>(dds::from_msg(frame.header().stamp())) * 1e-9;
     std::array<double, 3> ps{}, vs{};
     bool have_sufferer = false;
-    std::vector<std::pair<std::array<double, 3>, std::array<double, 3>>> others;
+    struct Other {
+        const std::string* name;
+        std::array<double, 3> p, v;
+    };
+    std::vector<Other> others;
     for (const auto& b : frame.bodies()) {
         if (!b.tracking_valid()) continue;
         const std::array<double, 3> p{b.position_m().x(), b.position_m().y(), b.position_m().z()};
@@ -35,31 +40,67 @@ std::optional<std::vector<RelState>> FrameFeatures::update(const msg::MocapFrame
             vs = v;
             have_sufferer = true;
         } else {
-            others.emplace_back(p, v);
+            others.push_back({&b.name(), p, v});
         }
     }
     if (!have_sufferer) return std::nullopt;
-    std::vector<RelState> x;
-    for (const auto& [p, v] : others) {
+    FrameNeighbours out;
+    out.sufferer_height_m = -ps[2];  // NED: d is minus the height above the floor
+    for (const auto& [name, p, v] : others) {
         const RelState r{p[0] - ps[0], p[1] - ps[1], p[2] - ps[2], v[0] - vs[0], v[1] - vs[1], v[2] - vs[2]};
         if (std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) > max_distance_m_) continue;
-        x.push_back(r);
-        if (x.size() == static_cast<std::size_t>(kMaxNeighbours)) break;
+        out.x.push_back(r);
+        out.names.push_back(*name);
+        if (out.x.size() == static_cast<std::size_t>(kMaxNeighbours)) break;
     }
-    return x;
+    return out;
 }
+
+OnlineBodies::OnlineBodies(const flight::Meta& meta) : sufferer_(meta.sufferer) {
+    const physics::PhysicsConfig defaults;  // a body meta.json does not describe: as on a recorded flight
+    source_.name = "online";
+    source_.sufferer = physics::vehicle_of(meta, meta.sufferer, defaults.sufferer.vehicle);
+    source_.neighbours = physics::neighbours_of(meta, defaults);
+    source_.flying = !meta.stand_height_m.has_value();
+    for (std::size_t j = 0; j < meta.neighbours.size() && j < kUnlisted; ++j)
+        index_[meta.neighbours[j]] = static_cast<std::uint8_t>(j);
+}
+
+Sample OnlineBodies::sample(const FrameNeighbours& f) const {
+    Sample s;
+    s.k = static_cast<int>(f.x.size());
+    s.height = f.sufferer_height_m;
+    for (std::size_t j = 0; j < f.x.size(); ++j) {
+        s.x[j] = f.x[j];
+        const auto it = index_.find(f.names[j]);
+        s.who[j] = it == index_.end() ? kUnlisted : it->second;
+    }
+    return s;
+}
+
+namespace {
+
+std::optional<OnlineBodies> bodies_from(const NodeOptions& o) {
+    if (o.vehicles_path.empty()) return std::nullopt;
+    return OnlineBodies(flight::read_meta(o.vehicles_path));
+}
+
+}  // namespace
 
 PredictorNode::PredictorNode(dds::Participant& p, const NodeOptions& o, const Clock& clock)
     : options_(o),
       clock_(clock),
       model_(load_model(o.model_path)),
-      features_(o.sufferer),
+      bodies_(bodies_from(o)),
+      features_(bodies_ ? bodies_->sufferer() : o.sufferer),
       writer_(p, dds::topics::wrench_prediction) {
     // Predictions are written from the reader's callback: wait for the required readers first.
     writer_.await_readers();
     reader_.emplace(p, dds::topics::mocap_frame,
                     [this](const msg::MocapFrame& f, const dds::SampleMeta&) { on_frame(f); });
-    log::info("predicting with ", model_->name(), " (", o.model_path, ") for '", o.sufferer, "'");
+    log::info("predicting with ", model_->name(), " (", o.model_path, ") for '",
+              bodies_ ? bodies_->sufferer() : o.sufferer, "'",
+              bodies_ ? log::cat(", each body as ", o.vehicles_path, " describes it") : std::string());
     watcher_ = std::thread([this] { watch(); });
 }
 
@@ -81,7 +122,7 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
         std::lock_guard lock(mutex_);
         model = model_;
     }
-    const Wrench6 w = model->predict(*x);
+    const Wrench6 w = predict(*model, *x);
     msg::WrenchPrediction out;
     out.header().stamp(frame.header().stamp());
     out.header().run_id(frame.header().run_id());
@@ -94,6 +135,11 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
     out.torque_nm().z(w[5]);
     out.input_age_s(static_cast<double>(clock_.now_ns() - dds::from_msg(frame.header().stamp())) * 1e-9);
     if (writer_.write(out)) ++published_;
+}
+
+Wrench6 PredictorNode::predict(const ForceModel& model, const FrameNeighbours& f) const {
+    if (!bodies_) return model.predict(f.x);
+    return model.predict(bodies_->sample(f), bodies_->source());
 }
 
 void PredictorNode::watch() {

@@ -19,17 +19,25 @@
 #include "dw/msg/Mocap.h"
 #include "dw/msg/Prediction.h"
 #include "flight/flight.hpp"
+#include "predictor/dataset.hpp"
 #include "predictor/model.hpp"
 
 namespace dw::predictor {
+
+// The neighbours of one frame: their states relative to the sufferer, and who they are.
+struct FrameNeighbours {
+    std::vector<RelState> x;
+    std::vector<std::string> names;  // x[j]'s rigid body
+    double sufferer_height_m = 0;    // above the floor
+};
 
 // Relative states from a stream of frames (no DDS: tests and benchmarks call it directly).
 class FrameFeatures {
 public:
     explicit FrameFeatures(std::string sufferer = flight::kSufferer, double max_distance_m = 3.0)
         : sufferer_(std::move(sufferer)), max_distance_m_(max_distance_m) {}
-    // The neighbours' relative states at this frame; empty if the sufferer is not tracked.
-    std::optional<std::vector<RelState>> update(const msg::MocapFrame& frame);
+    // The neighbours at this frame (at most kMaxNeighbours); nullopt if the sufferer is not tracked.
+    std::optional<FrameNeighbours> update(const msg::MocapFrame& frame);
 
 private:
     struct History {
@@ -44,7 +52,27 @@ private:
 struct NodeOptions {
     std::string model_path;
     std::string sufferer = flight::kSufferer;
+    // A flight's meta.json (downwash-flight/1) describing the lab's bodies: its sufferer, its
+    // neighbours and their parameters (mass, rotors, ...), which the models take per body as they do
+    // on a recorded flight. Empty: the bodies are not known (each model's defaults).
+    std::string vehicles_path;
     double reload_check_s = 0.5;
+};
+
+// The lab's bodies as a recorded flight's source describes them, for predicting per body online.
+class OnlineBodies {
+public:
+    explicit OnlineBodies(const flight::Meta& meta);
+    // The frame as a dataset sample of this source (a body not among meta.json's neighbours: unknown).
+    Sample sample(const FrameNeighbours& f) const;
+    const Source& source() const { return source_; }
+    const std::string& sufferer() const { return sufferer_; }
+
+private:
+    static constexpr std::uint8_t kUnlisted = 255;  // past every source's neighbours: parameters unknown
+    std::string sufferer_;
+    Source source_;
+    std::map<std::string, std::uint8_t> index_;  // neighbour name -> its place in source_.neighbours
 };
 
 class PredictorNode {
@@ -63,12 +91,14 @@ public:
 
 private:
     void on_frame(const msg::MocapFrame& frame);
+    Wrench6 predict(const ForceModel& model, const FrameNeighbours& f) const;
     void watch();
 
     NodeOptions options_;
     const Clock& clock_;
     mutable std::mutex mutex_;
     std::shared_ptr<const ForceModel> model_;
+    std::optional<OnlineBodies> bodies_;
     FrameFeatures features_;
     dds::Writer<msg::WrenchPrediction> writer_;
     std::optional<dds::Reader<msg::MocapFrame>> reader_;  // subscribed once the writer's readers are awaited

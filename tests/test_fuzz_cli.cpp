@@ -367,7 +367,7 @@ std::vector<Row> table() {
          true,
          false,
          {},
-         {{"--model", Role::in, ".json"}},
+         {{"--model", Role::in, ".json"}, {"--vehicles", Role::in, ".json", true}},
          {}},
         // ---- dw-explain
         {"explain",

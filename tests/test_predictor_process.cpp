@@ -13,7 +13,9 @@
 
 #include "dds/endpoint.hpp"
 #include "dds/time.hpp"
+#include "flight/flight.hpp"
 #include "predictor/model.hpp"
+#include "predictor/node.hpp"
 #include "support.hpp"
 #include "testkit/mocap.hpp"
 
@@ -37,6 +39,38 @@ LearntModel linear_model(const std::string& kind, float gain) {
     l.b = Eigen::VectorXf::Zero(6);
     m.phi.layers.push_back(l);
     return m;
+}
+
+// f_d = the sum of the neighbours' masses [kg] (an unknown one: 0, its training mean here).
+LearntModel mass_model() {
+    LearntModel m = linear_model("naive_linear", 0.0f);
+    m.phi.layers[0].w(2, kNeighbourMassFeature) = 1.0f;
+    return m;
+}
+
+// A lab's bodies as a flight's meta.json gives them: v1 the large vehicle, v2 the small one; the
+// sufferer on a stand (stand: true) or flying.
+std::string lab_meta(dw::test::TempDir& dir, bool stand) {
+    const auto path = dir.file("meta.json");
+    std::ofstream(path)
+        << R"({"format": "downwash-flight/1", "sufferer": "suff", "neighbours": ["v1", "v2"], "formation": "free",
+        "vehicles": {"suff": {"mass_kg": 0.032, "rotors": 4, "prop_radius_m": 0.0225, "motor_distance_m": 0.092},
+                     "v1": {"mass_kg": 0.067, "rotors": 4, "prop_radius_m": 0.033, "motor_distance_m": 0.12},
+                     "v2": {"mass_kg": 0.032, "rotors": 4, "prop_radius_m": 0.0225, "motor_distance_m": 0.092}})"
+        << (stand ? R"(, "stand": {"height_m": 1.4}})" : "}");
+    return path;
+}
+
+// v1 and v2 of lab_meta above the sufferer "suff", and v3, which meta.json does not describe.
+dw::msg::MocapFrame lab_frame(std::uint64_t n, double t_s) {
+    dw::msg::MocapFrame f;
+    f.header().stamp(dw::dds::to_msg(static_cast<dw::Nanos>(t_s * 1e9)));
+    f.frame_number(n);
+    dw::testkit::add_body(f, "suff", 0, 0, -1.0);
+    dw::testkit::add_body(f, "v1", 0.05, 0, -1.5);
+    dw::testkit::add_body(f, "v2", 0, 0.3, -1.6);
+    dw::testkit::add_body(f, "v3", -0.4, 0, -1.7);
+    return f;
 }
 
 dw::msg::MocapFrame frame(std::uint64_t n, double t_s, double e_offset) {
@@ -133,6 +167,68 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     EXPECT_NE(err.find("model swapped: now naive_linear"), std::string::npos) << err;
     EXPECT_NE(err.find("not swapped"), std::string::npos) << err;
     EXPECT_NE(dw::read_file(dir.file("node.out")).find("1 model swaps"), std::string::npos);
+}
+
+// Online, each body is what the lab's meta.json says it is, as on a recorded flight: the learnt
+// models see each neighbour's mass (a body meta.json does not list: unknown, the training mean),
+// the physics each vehicle's parameters and the flying sufferer's own height.
+TEST(PredictorOnline, EachBodyIsWhatTheLabsMetaJsonSaysItIs) {
+    dw::test::TempDir dir;
+    const dw::predictor::OnlineBodies bodies(dw::flight::read_meta(lab_meta(dir, false)));
+    EXPECT_EQ(bodies.sufferer(), "suff");
+    FrameFeatures features(bodies.sufferer());
+    const auto f = features.update(lab_frame(0, 1000.0));
+    ASSERT_TRUE(f.has_value());
+    ASSERT_EQ(f->names, (std::vector<std::string>{"v1", "v2", "v3"}));
+    EXPECT_DOUBLE_EQ(f->sufferer_height_m, 1.0);
+    const Sample s = bodies.sample(*f);
+    EXPECT_NEAR(mass_model().predict(s, bodies.source())[2], 0.067 + 0.032, 1e-6) << "v1 + v2 + v3 unknown (0)";
+    EXPECT_NEAR(mass_model().predict(f->x)[2], 0.0, 1e-6) << "no bodies known: every mass the training mean";
+    // The physics: v1 as the 67 g vehicle it is pushes otherwise than the configuration's default.
+    const PhysicsModel physics(dw::physics::PhysicsConfig{});
+    const double per_body = physics.predict(s, bodies.source())[2], bare = physics.predict(f->x)[2];
+    EXPECT_GT(std::abs(per_body - bare), 1e-4 * std::abs(bare)) << per_body << " vs " << bare;
+}
+
+// The same through the process: `dw-predictor run --vehicles meta.json`.
+TEST(PredictorProcess, TakesTheLabsBodiesFromAMetaJson) {
+    dw::test::TempDir dir;
+    const auto model = dir.file("model.json");
+    mass_model().save(model);
+    const auto cfg = node_config("predbodies");
+    dw::Subprocess node = start_node(dir, model, cfg, {"--vehicles", lab_meta(dir, true)});
+    dw::dds::Participant p(cfg, "test");
+    std::atomic<int> got{0};
+    std::atomic<double> last_fd{0};
+    dw::dds::Reader<dw::msg::WrenchPrediction> reader(p, dw::dds::topics::wrench_prediction,
+                                                      [&](const auto& w, const auto&) {
+                                                          last_fd = w.force_n().z();
+                                                          ++got;
+                                                      });
+    dw::dds::Writer<dw::msg::MocapFrame> writer(p, dw::dds::topics::mocap_frame);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms)) << dw::read_file(dir.file("node.err"));
+    ASSERT_TRUE(reader.wait_for_writers(1, 20000ms));
+    for (int i = 0; i < 90 && got.load() < 10; ++i) {
+        auto f = lab_frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0);
+        writer.write(f);
+        std::this_thread::sleep_for(std::chrono::microseconds(5556));
+    }
+    std::this_thread::sleep_for(300ms);
+    node.signal(SIGINT);
+    EXPECT_EQ(node.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("node.err"));
+    ASSERT_GT(got.load(), 0) << dw::read_file(dir.file("node.err"));
+    EXPECT_NEAR(last_fd.load(), 0.067 + 0.032, 1e-6);
+    EXPECT_NE(dw::read_file(dir.file("node.err")).find("for 'suff', each body as"), std::string::npos);
+    // A meta.json that is not one, and a sufferer named twice: one line each, exit 2.
+    std::ofstream(dir.file("bad.json")) << R"({"format": "downwash-flight/1", "sufferer": "suff", "neighbours": 3})";
+    for (const auto& extra : std::vector<std::vector<std::string>>{
+             {"--vehicles", dir.file("bad.json")}, {"--vehicles", dir.file("meta.json"), "--sufferer", "s"}}) {
+        std::vector<std::string> args{dw::test::bin("dw-predictor"), "run", "--model", model};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const auto r = dw::test::run(args, dir);
+        EXPECT_EQ(r.status, 2) << r.err;
+        EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    }
 }
 
 TEST(PredictorProcess, BadModelIsOneLineAndExit2) {
