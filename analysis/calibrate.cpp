@@ -13,6 +13,7 @@
 
 #include "analysis/calibration_report.hpp"
 #include "analysis/explain.hpp"
+#include "analysis/noise.hpp"
 #include "analysis/resimulation.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -384,6 +385,7 @@ AloneFlight measure_alone(const flight::Flight& f, const std::string& dir, const
     a.sd_f_d = std::sqrt(std::max(0.0, a.rms_f_d * a.rms_f_d - a.mean_f_d * a.mean_f_d));
     a.slope_per_v_d = line[1];
     a.rms_after_line = std::sqrt((Y - X * line).squaredNorm() / static_cast<double>(y.size()));
+    a.floor_differences = floor_from_differences(y);
     return a;
 }
 

@@ -64,6 +64,11 @@ struct AloneFlight {
     double mean_f_d = 0, rms_f_d = 0, sd_f_d = 0;
     double slope_per_v_d = 0;   // N per m/s
     double rms_after_line = 0;  // f_d's RMS once that line is taken away
+    // The explainer's noise floor where nobody is ever far (a swap's): successive differences'
+    // spread. sd_f_d over it is what a model exact on every sample (and on the residual's zero)
+    // would leave there, in such floors: the residual's own slow error, beyond its jitter.
+    double floor_differences = 0;
+    double exact_model_ratio() const { return sd_f_d / floor_differences; }
 };
 // Only the samples this high above the floor count: flights alone may fly low and touch the floor
 // (the Neural-Swarm ones did, with onboard ground-effect compensation: below 0.2 m their f_d

@@ -68,7 +68,9 @@ nlohmann::json to_json(const CalibrateResult& r) {
                          {"rms_f_d_n", a.rms_f_d},
                          {"sd_f_d_n", a.sd_f_d},
                          {"slope_f_d_per_v_d_n_s_per_m", a.slope_per_v_d},
-                         {"rms_f_d_after_line_n", a.rms_after_line}});
+                         {"rms_f_d_after_line_n", a.rms_after_line},
+                         {"noise_floor_from_differences_n", a.floor_differences},
+                         {"exact_model_f_d_over_that_floor", a.exact_model_ratio()}});
     return {{"format", "downwash-calibration/1"},
             {"calibration", r.calibrated.calibration},
             {"parameters", params},
@@ -99,13 +101,17 @@ std::string alone_section(const std::vector<AloneFlight>& alone) {
        << " m above the floor: lower, flights alone may touch it): its mean and RMS, and the least-squares line "
           "against the "
           "sufferer's own vertical velocity (v_d, + descending) — errors of the residual itself, which "
-          "the physics cannot be calibrated to remove.\n\n"
+          "the physics cannot be calibrated to remove. Where nobody is ever far (a swap), the explainer's noise "
+          "floor is the spread of successive differences: the last two columns are that floor here and the SD "
+          "over it, which is what a model exact on every sample would still leave, in such floors.\n\n"
        << "| flight | class | samples | mean f_d [N] | RMS f_d [N] | SD f_d [N] | slope [N per m/s of v_d] | RMS after "
-          "the line [N] |\n|---|---|---|---|---|---|---|---|\n";
+          "the line [N] | successive-difference floor [N] | SD over that floor |\n"
+          "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& a : alone)
         md << "| " << a.flight << " | " << a.vehicle_class << " | " << a.samples << " | " << fixed(a.mean_f_d, 4)
            << " | " << fixed(a.rms_f_d, 4) << " | " << fixed(a.sd_f_d, 4) << " | " << fixed(a.slope_per_v_d, 4) << " | "
-           << fixed(a.rms_after_line, 4) << " |\n";
+           << fixed(a.rms_after_line, 4) << " | " << fixed(a.floor_differences, 4) << " | "
+           << fixed(a.exact_model_ratio(), 2) << " |\n";
     md << "\n";
     return md.str();
 }

@@ -38,11 +38,15 @@ NoiseFloor floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, 
         } else {  // nobody is ever far: the spread of successive differences
             std::vector<double> residual;
             for (std::size_t i = 0; i < info.size(); ++i) residual.push_back(r.measured()[i][a] - pred[i][a]);
-            s[a] = sd_from_differences(residual);
+            s[a] = floor_from_differences(residual);
         }
         s[a] = std::max(s[a], kMinNoiseFloor);
     }
     return out;
+}
+
+double floor_from_differences(std::span<const double> residual) {
+    return std::max(sd_from_differences(residual), kMinNoiseFloor);
 }
 
 // Each sample's residual is divided by sqrt(sigma² + (2 I F)² + b²): the noise floor, the force

@@ -1,6 +1,7 @@
 #pragma once
 // What noise alone leaves in a recording, for the explainer: the noise floor per axis, the
 // residual's size against noise and turbulence, and how many samples count as independent.
+#include <span>
 #include <vector>
 
 #include "analysis/fit.hpp"
@@ -21,6 +22,8 @@ NoiseFloor floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, 
 inline constexpr double kTareSettle_s = 0.5;
 inline constexpr double kMinNoiseFloor = 1e-4;     // N or N·m
 inline constexpr std::size_t kMinFarSamples = 30;  // fewer far samples: the differences' spread
+// The floor from one axis's residual when nobody is ever far: its successive differences' spread.
+double floor_from_differences(std::span<const double> residual);
 
 // The residual's RMS over the blocks against what noise and turbulence alone explain, per measured
 // axis (0 where not measured); about 1 when the physics is right (see noise.cpp).
