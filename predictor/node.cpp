@@ -122,7 +122,13 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
         std::lock_guard lock(mutex_);
         model = model_;
     }
-    const Wrench6 w = predict(*model, *x);
+    Wrench6 w{};
+    try {
+        w = predict(*model, *x);
+    } catch (const std::exception& e) {  // a geometry the physics cannot take: that frame unpredicted, said once
+        if (!said_unpredicted_.exchange(true)) log::warn("a frame left unpredicted (said once): ", e.what());
+        return;
+    }
     msg::WrenchPrediction out;
     out.header().stamp(frame.header().stamp());
     out.header().run_id(frame.header().run_id());

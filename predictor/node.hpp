@@ -103,7 +103,7 @@ private:
     dds::Writer<msg::WrenchPrediction> writer_;
     std::optional<dds::Reader<msg::MocapFrame>> reader_;  // subscribed once the writer's readers are awaited
     std::atomic<std::uint64_t> published_{0}, reloads_{0};
-    std::atomic<bool> stop_{false};
+    std::atomic<bool> stop_{false}, said_unpredicted_{false};
     std::thread watcher_;
 };
 
