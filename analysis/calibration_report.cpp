@@ -1,6 +1,8 @@
 #include "analysis/calibration_report.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -25,6 +27,65 @@ constexpr int kMinPerCell = 5;
 
 std::string pairing_png(std::size_t i) { return log::cat("pairing_", i + 1, ".png"); }
 
+// What the calibration leaves, by how hard the calibrated physics pushes: the residual's spread
+// in bands of |calibrated f_d| [N]. A jet's turbulence (intensity I) scatters a push F by about
+// 2 I F, so the spread grows with the force; the least-squares line residual² = a + (2I)² F² says
+// how fast (a model of the geometry cannot remove that part: it differs at each pass).
+constexpr std::array<double, 5> kForceBands_n{0, 0.01, 0.03, 0.06, 1e9};
+struct ScatterBand {
+    std::size_t n = 0;
+    double rms = 0;  // residual (recorded - calibrated, less the pairing's median) [N]
+};
+struct Scatter {
+    std::array<ScatterBand, kForceBands_n.size() - 1> bands{};
+    double two_i = 0;  // the line's slope, as 2I (0 when it does not grow)
+};
+
+Scatter scatter_of(const PairingSamples& p) {
+    std::vector<double> residual;
+    for (const auto& r : p.rows) residual.push_back(r[2] - r[3]);
+    const double zero = residual.empty() ? 0.0 : median(residual);
+    Scatter out;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (std::size_t k = 0; k < p.rows.size(); ++k) {
+        const double f = std::abs(p.rows[k][3]), e = residual[k] - zero;
+        for (std::size_t b = 0; b + 1 < kForceBands_n.size(); ++b)
+            if (f >= kForceBands_n[b] && f < kForceBands_n[b + 1]) ++out.bands[b].n, out.bands[b].rms += e * e;
+        const double x = f * f, y = e * e;
+        sx += x, sy += y, sxx += x * x, sxy += x * y;
+    }
+    for (auto& b : out.bands) b.rms = b.n ? std::sqrt(b.rms / static_cast<double>(b.n)) : 0.0;
+    const double n = static_cast<double>(p.rows.size()), var = sxx - sx * sx / n;
+    if (n > 2 && var > 0) out.two_i = std::sqrt(std::max(0.0, (sxy - sx * sy / n) / var));
+    return out;
+}
+
+std::string band_name(std::size_t b) {
+    return b + 2 == kForceBands_n.size() ? log::cat("≥ ", kForceBands_n[b])
+                                         : log::cat(kForceBands_n[b], "-", kForceBands_n[b + 1]);
+}
+
+std::string scatter_section(const std::vector<PairingSamples>& pairings) {
+    std::ostringstream md;
+    md << "## What is left, by how hard the calibrated physics pushes\n\n"
+       << "The residual (recorded − calibrated f_d, less each pairing's median) where a neighbour is near, its "
+          "RMS [N] in bands of the calibrated |f_d| [N] (samples in brackets), and 2I from the least-squares line "
+          "residual² = a + (2I)² f_d²: a jet whose speed fluctuates by a turbulence intensity I scatters its push "
+          "by about 2 I f_d, which no function of where the neighbours are removes.\n\n| pairing |";
+    for (std::size_t b = 0; b + 1 < kForceBands_n.size(); ++b) md << " " << band_name(b) << " |";
+    md << " 2I |\n|---|";
+    for (std::size_t b = 0; b + 1 < kForceBands_n.size(); ++b) md << "---|";
+    md << "---|\n";
+    for (const auto& p : pairings) {
+        const Scatter s = scatter_of(p);
+        md << "| " << p.pairing << " |";
+        for (const auto& b : s.bands) md << " " << (b.n ? fixed(b.rms, 4) : std::string("–")) << " (" << b.n << ") |";
+        md << " " << fixed(s.two_i, 2) << " |\n";
+    }
+    md << "\n";
+    return md.str();
+}
+
 void write_pictures(const std::vector<PairingSamples>& pairings, const std::string& dir) {
     for (std::size_t i = 0; i < pairings.size(); ++i) {
         std::vector<plot::Heat> heats;
@@ -37,6 +98,18 @@ void write_pictures(const std::vector<PairingSamples>& pairings, const std::stri
         plot::render_heats(heats, "f_d, " + pairings[i].pairing, "nearest neighbour's horizontal offset [m]",
                            "height above the sufferer [m]", "N", (fs::path(dir) / pairing_png(i)).string());
     }
+}
+
+nlohmann::json scatter_json(const std::vector<PairingSamples>& pairings) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& p : pairings) {
+        const Scatter s = scatter_of(p);
+        nlohmann::json bands = nlohmann::json::array();
+        for (std::size_t b = 0; b < s.bands.size(); ++b)
+            bands.push_back({{"calibrated_f_d_n", band_name(b)}, {"samples", s.bands[b].n}, {"rms_n", s.bands[b].rms}});
+        out.push_back({{"pairing", p.pairing}, {"bands", bands}, {"two_i", s.two_i}});
+    }
+    return out;
 }
 
 nlohmann::json to_json(const CalibrateResult& r) {
@@ -153,7 +226,8 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
                                 " with its learnt discrepancy (", ratios.size(), " flights)")
                      : std::string())
        << ".\n\n";
-    md << alone_section(r.alone) << "## f_d by the nearest neighbour's position, per pairing\n\n";
+    md << alone_section(r.alone) << scatter_section(pairings)
+       << "## f_d by the nearest neighbour's position, per pairing\n\n";
     for (std::size_t i = 0; i < pairings.size(); ++i)
         md << "![" << pairings[i].pairing << "](" << pairing_png(i) << ")\n\n";
     return md.str();
@@ -166,7 +240,9 @@ void write_calibration(const std::vector<PairingSamples>& pairings, const Calibr
     const fs::path dir(o.out_dir);
     fs::create_directories(dir);
     write_pictures(pairings, o.out_dir);
-    write_file((dir / "calibration.json").string(), to_json(r).dump(2) + "\n");
+    nlohmann::json j = to_json(r);
+    j["residual_by_force"] = scatter_json(pairings);
+    write_file((dir / "calibration.json").string(), j.dump(2) + "\n");
     write_file((dir / kCalibrationReportFile).string(), markdown(pairings, r));
     write_file((dir / kCalibratedPhysicsFile).string(),
                "# " + r.calibrated.calibration + "\n" + physics::to_yaml(r.calibrated));
