@@ -27,42 +27,9 @@ constexpr int kMinPerCell = 5;
 
 std::string pairing_png(std::size_t i) { return log::cat("pairing_", i + 1, ".png"); }
 
-// What the calibration leaves, by how hard the calibrated physics pushes: the residual's spread
-// in bands of |calibrated f_d| [N]. A jet's turbulence (intensity I) scatters a push F by about
-// 2 I F, so the spread grows with the force; the least-squares line residual² = a + (2I)² F² says
-// how fast (a model of the geometry cannot remove that part: it differs at each pass).
-constexpr std::array<double, 5> kForceBands_n{0, 0.01, 0.03, 0.06, 1e9};
-struct ScatterBand {
-    std::size_t n = 0;
-    double rms = 0;  // residual (recorded - calibrated, less the pairing's median) [N]
-};
-struct Scatter {
-    std::array<ScatterBand, kForceBands_n.size() - 1> bands{};
-    double two_i = 0;  // the line's slope, as 2I (0 when it does not grow)
-};
-
-Scatter scatter_of(const PairingSamples& p) {
-    std::vector<double> residual;
-    for (const auto& r : p.rows) residual.push_back(r[2] - r[3]);
-    const double zero = residual.empty() ? 0.0 : median(residual);
-    Scatter out;
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (std::size_t k = 0; k < p.rows.size(); ++k) {
-        const double f = std::abs(p.rows[k][3]), e = residual[k] - zero;
-        for (std::size_t b = 0; b + 1 < kForceBands_n.size(); ++b)
-            if (f >= kForceBands_n[b] && f < kForceBands_n[b + 1]) ++out.bands[b].n, out.bands[b].rms += e * e;
-        const double x = f * f, y = e * e;
-        sx += x, sy += y, sxx += x * x, sxy += x * y;
-    }
-    for (auto& b : out.bands) b.rms = b.n ? std::sqrt(b.rms / static_cast<double>(b.n)) : 0.0;
-    const double n = static_cast<double>(p.rows.size()), var = sxx - sx * sx / n;
-    if (n > 2 && var > 0) out.two_i = std::sqrt(std::max(0.0, (sxy - sx * sy / n) / var));
-    return out;
-}
-
 std::string band_name(std::size_t b) {
-    return b + 2 == kForceBands_n.size() ? log::cat("≥ ", kForceBands_n[b])
-                                         : log::cat(kForceBands_n[b], "-", kForceBands_n[b + 1]);
+    return std::isinf(kForceBands_n[b + 1]) ? log::cat("≥ ", kForceBands_n[b])
+                                            : log::cat(kForceBands_n[b], "-", kForceBands_n[b + 1]);
 }
 
 std::string scatter_section(const std::vector<PairingSamples>& pairings) {
@@ -89,9 +56,11 @@ std::string scatter_section(const std::vector<PairingSamples>& pairings) {
 void write_pictures(const std::vector<PairingSamples>& pairings, const std::string& dir) {
     for (std::size_t i = 0; i < pairings.size(); ++i) {
         std::vector<plot::Heat> heats;
-        for (const auto& [column, title] : {std::pair{2, "recorded"}, {3, "calibrated"}, {4, "uncalibrated"}}) {
+        for (const auto& [column, title] : {std::pair{kRecordedColumn, "recorded"},
+                                            {kCalibratedColumn, "calibrated"},
+                                            {kBaseColumn, "uncalibrated"}}) {
             std::vector<std::array<double, 3>> s;
-            for (const auto& r : pairings[i].rows) s.push_back({r[0], r[1], r[static_cast<std::size_t>(column)]});
+            for (const auto& r : pairings[i].rows) s.push_back({r[kOffsetColumn], r[kAboveColumn], r[column]});
             heats.push_back(
                 plot::bin_heat(title, s, 0, kMaxOffset_m, 0, kMaxAbove_m, kOffsetCells, kAboveCells, kMinPerCell));
         }
@@ -106,7 +75,12 @@ nlohmann::json scatter_json(const std::vector<PairingSamples>& pairings) {
         const Scatter s = scatter_of(p);
         nlohmann::json bands = nlohmann::json::array();
         for (std::size_t b = 0; b < s.bands.size(); ++b)
-            bands.push_back({{"calibrated_f_d_n", band_name(b)}, {"samples", s.bands[b].n}, {"rms_n", s.bands[b].rms}});
+            bands.push_back(
+                {{"calibrated_f_d_from_n", kForceBands_n[b]},
+                 {"calibrated_f_d_to_n",
+                  std::isinf(kForceBands_n[b + 1]) ? nlohmann::json(nullptr) : nlohmann::json(kForceBands_n[b + 1])},
+                 {"samples", s.bands[b].n},
+                 {"rms_n", s.bands[b].rms}});
         out.push_back({{"pairing", p.pairing}, {"bands", bands}, {"two_i", s.two_i}});
     }
     return out;
@@ -234,6 +208,25 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
 }
 
 }  // namespace
+
+Scatter scatter_of(const PairingSamples& p) {
+    std::vector<double> residual;
+    for (const auto& r : p.rows) residual.push_back(r[kRecordedColumn] - r[kCalibratedColumn]);
+    const double zero = residual.empty() ? 0.0 : median(residual);
+    Scatter out;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (std::size_t k = 0; k < p.rows.size(); ++k) {
+        const double f = std::abs(p.rows[k][kCalibratedColumn]), e = residual[k] - zero;
+        for (std::size_t b = 0; b + 1 < kForceBands_n.size(); ++b)
+            if (f >= kForceBands_n[b] && f < kForceBands_n[b + 1]) ++out.bands[b].n, out.bands[b].rms += e * e;
+        const double x = f * f, y = e * e;
+        sx += x, sy += y, sxx += x * x, sxy += x * y;
+    }
+    for (auto& b : out.bands) b.rms = b.n ? std::sqrt(b.rms / static_cast<double>(b.n)) : 0.0;
+    const double n = static_cast<double>(p.rows.size()), var = sxx - sx * sx / n;
+    if (n > 2 && var > 0) out.two_i = std::sqrt(std::max(0.0, (sxy - sx * sy / n) / var));
+    return out;
+}
 
 void write_calibration(const std::vector<PairingSamples>& pairings, const CalibrateResult& r,
                        const CalibrateOptions& o) {

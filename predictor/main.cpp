@@ -311,7 +311,8 @@ struct OnlineCommand {
         heartbeat.set_state(dw::msg::PROC_RUNNING);
         while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
         std::cout << "published " << node.published() << " predictions, " << node.reloads() << " model swaps, "
-                  << node.frames_lost() << " mocap frames lost\n";
+                  << node.frames_lost() << " mocap frames lost, " << node.unpredicted()
+                  << " frames the model could not predict\n";
         return 0;
     }
 };

@@ -1,5 +1,6 @@
 #include "predictor/node.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -39,12 +40,13 @@ std::optional<FrameNeighbours> FrameFeatures::update(const msg::MocapFrame& fram
             ps = p;
             vs = v;
             have_sufferer = true;
-        } else {
+        } else if (is_neighbour(b.name())) {
             others.push_back({&b.name(), p, v});
         }
     }
     if (!have_sufferer) return std::nullopt;
     FrameNeighbours out;
+    out.t = t;
     out.sufferer_height_m = -ps[2];  // NED: d is minus the height above the floor
     for (const auto& [name, p, v] : others) {
         const RelState r{p[0] - ps[0], p[1] - ps[1], p[2] - ps[2], v[0] - vs[0], v[1] - vs[1], v[2] - vs[2]};
@@ -56,24 +58,35 @@ std::optional<FrameNeighbours> FrameFeatures::update(const msg::MocapFrame& fram
     return out;
 }
 
-OnlineBodies::OnlineBodies(const flight::Meta& meta) : sufferer_(meta.sufferer) {
-    const physics::PhysicsConfig defaults;  // a body meta.json does not describe: as on a recorded flight
+bool FrameFeatures::is_neighbour(const std::string& name) const {
+    return neighbours_.empty() || std::find(neighbours_.begin(), neighbours_.end(), name) != neighbours_.end();
+}
+
+OnlineBodies::OnlineBodies(const flight::Meta& meta, const std::string& path)
+    : sufferer_(meta.sufferer), neighbours_(meta.neighbours) {
+    if (neighbours_.size() > static_cast<std::size_t>(kMaxNeighbours))
+        throw InputError(
+            log::cat(path, ": neighbours: ", neighbours_.size(), " (the models take at most ", kMaxNeighbours, ")"));
+    std::vector<std::string> bodies = neighbours_;
+    bodies.push_back(sufferer_);
+    for (const auto& b : bodies)
+        if (!meta.vehicles.contains(b))
+            throw InputError(log::cat(path, ": vehicles: '", b, "' has no parameters (each body's are needed online)"));
     source_.name = "online";
-    source_.sufferer = physics::vehicle_of(meta, meta.sufferer, defaults.sufferer.vehicle);
-    source_.neighbours = physics::neighbours_of(meta, defaults);
+    source_.sufferer = physics::vehicle_of(meta, sufferer_, {});
+    source_.neighbours = physics::neighbours_of(meta, {});
     source_.flying = !meta.stand_height_m.has_value();
-    for (std::size_t j = 0; j < meta.neighbours.size() && j < kUnlisted; ++j)
-        index_[meta.neighbours[j]] = static_cast<std::uint8_t>(j);
+    for (std::size_t j = 0; j < neighbours_.size(); ++j) index_[neighbours_[j]] = static_cast<std::uint8_t>(j);
 }
 
 Sample OnlineBodies::sample(const FrameNeighbours& f) const {
     Sample s;
+    s.t = f.t;
     s.k = static_cast<int>(f.x.size());
     s.height = f.sufferer_height_m;
     for (std::size_t j = 0; j < f.x.size(); ++j) {
         s.x[j] = f.x[j];
-        const auto it = index_.find(f.names[j]);
-        s.who[j] = it == index_.end() ? kUnlisted : it->second;
+        s.who[j] = index_.at(f.names[j]);  // FrameFeatures keeps meta.json's neighbours only
     }
     return s;
 }
@@ -82,7 +95,7 @@ namespace {
 
 std::optional<OnlineBodies> bodies_from(const NodeOptions& o) {
     if (o.vehicles_path.empty()) return std::nullopt;
-    return OnlineBodies(flight::read_meta(o.vehicles_path));
+    return OnlineBodies(flight::read_meta(o.vehicles_path), o.vehicles_path);
 }
 
 }  // namespace
@@ -92,7 +105,8 @@ PredictorNode::PredictorNode(dds::Participant& p, const NodeOptions& o, const Cl
       clock_(clock),
       model_(load_model(o.model_path)),
       bodies_(bodies_from(o)),
-      features_(bodies_ ? bodies_->sufferer() : o.sufferer),
+      features_(bodies_ ? bodies_->sufferer() : o.sufferer,
+                bodies_ ? bodies_->neighbours() : std::vector<std::string>{}),
       writer_(p, dds::topics::wrench_prediction) {
     // Predictions are written from the reader's callback: wait for the required readers first.
     writer_.await_readers();
@@ -125,8 +139,8 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
     Wrench6 w{};
     try {
         w = predict(*model, *x);
-    } catch (const std::exception& e) {  // a geometry the physics cannot take: that frame unpredicted, said once
-        if (!said_unpredicted_.exchange(true)) log::warn("a frame left unpredicted (said once): ", e.what());
+    } catch (const InputError& e) {  // a geometry the physics cannot take: that frame unpredicted, counted
+        if (unpredicted_.fetch_add(1) == 0) log::warn("a frame left unpredicted (the first; counted): ", e.what());
         return;
     }
     msg::WrenchPrediction out;

@@ -28,14 +28,17 @@ namespace dw::predictor {
 struct FrameNeighbours {
     std::vector<RelState> x;
     std::vector<std::string> names;  // x[j]'s rigid body
+    double t = 0;                    // the frame's stamp [s]
     double sufferer_height_m = 0;    // above the floor
 };
 
 // Relative states from a stream of frames (no DDS: tests and benchmarks call it directly).
 class FrameFeatures {
 public:
-    explicit FrameFeatures(std::string sufferer = flight::kSufferer, double max_distance_m = 3.0)
-        : sufferer_(std::move(sufferer)), max_distance_m_(max_distance_m) {}
+    // neighbours: the bodies that count as neighbours (empty: every tracked body but the sufferer).
+    explicit FrameFeatures(std::string sufferer = flight::kSufferer, std::vector<std::string> neighbours = {},
+                           double max_distance_m = 3.0)
+        : sufferer_(std::move(sufferer)), neighbours_(std::move(neighbours)), max_distance_m_(max_distance_m) {}
     // The neighbours at this frame (at most kMaxNeighbours); nullopt if the sufferer is not tracked.
     std::optional<FrameNeighbours> update(const msg::MocapFrame& frame);
 
@@ -44,7 +47,9 @@ private:
         std::deque<std::pair<double, std::array<double, 3>>> p;  // (t, position), last ~30 ms
     };
     std::array<double, 3> velocity(History& h, double t, const std::array<double, 3>& p);
+    bool is_neighbour(const std::string& name) const;
     std::string sufferer_;
+    std::vector<std::string> neighbours_;
     double max_distance_m_;
     std::map<std::string, History> history_;
 };
@@ -59,25 +64,27 @@ struct NodeOptions {
     double reload_check_s = 0.5;
 };
 
-// The lab's bodies as a recorded flight's source describes them, for predicting per body online.
+// The lab's bodies as a recorded flight's source describes them, for predicting per body online:
+// only meta.json's neighbours count as neighbours, each with its parameters. Throws dw::InputError
+// naming the file when a body has no parameters there or there are more neighbours than the models take.
 class OnlineBodies {
 public:
-    explicit OnlineBodies(const flight::Meta& meta);
-    // The frame as a dataset sample of this source (a body not among meta.json's neighbours: unknown).
-    Sample sample(const FrameNeighbours& f) const;
+    OnlineBodies(const flight::Meta& meta, const std::string& path);
+    Sample sample(const FrameNeighbours& f) const;  // the frame as a dataset sample of this source
     const Source& source() const { return source_; }
     const std::string& sufferer() const { return sufferer_; }
+    const std::vector<std::string>& neighbours() const { return neighbours_; }
 
 private:
-    static constexpr std::uint8_t kUnlisted = 255;  // past every source's neighbours: parameters unknown
     std::string sufferer_;
+    std::vector<std::string> neighbours_;
     Source source_;
     std::map<std::string, std::uint8_t> index_;  // neighbour name -> its place in source_.neighbours
 };
 
 class PredictorNode {
 public:
-    // Throws dw::InputError if the first model cannot be loaded.
+    // Throws dw::InputError if the first model or the bodies' meta.json cannot be loaded.
     PredictorNode(dds::Participant& p, const NodeOptions& o, const Clock& clock);
     ~PredictorNode();
     PredictorNode(const PredictorNode&) = delete;
@@ -87,6 +94,8 @@ public:
     std::uint64_t reloads() const { return reloads_.load(); }
     // Mocap frames missing from the bridge's sequence since the first one received.
     std::uint64_t frames_lost() const { return reader_->lost(); }
+    // Frames the model could not predict (a geometry the physics cannot take), left unpublished.
+    std::uint64_t unpredicted() const { return unpredicted_.load(); }
     std::string model_name() const;
 
 private:
@@ -102,8 +111,8 @@ private:
     FrameFeatures features_;
     dds::Writer<msg::WrenchPrediction> writer_;
     std::optional<dds::Reader<msg::MocapFrame>> reader_;  // subscribed once the writer's readers are awaited
-    std::atomic<std::uint64_t> published_{0}, reloads_{0};
-    std::atomic<bool> stop_{false}, said_unpredicted_{false};
+    std::atomic<std::uint64_t> published_{0}, reloads_{0}, unpredicted_{0};
+    std::atomic<bool> stop_{false};
     std::thread watcher_;
 };
 

@@ -58,7 +58,8 @@ void draw_maps(const std::vector<const ForceModel*>& models, const Dataset& test
         for (const auto& s : test.samples) {
             if (s.k == 0) continue;
             const auto [h, a] = nearest(s);
-            xs.push_back({h, a, m ? m->predict(s, test.sources[static_cast<std::size_t>(s.source)])[2] : s.y[2]});
+            xs.push_back(
+                {h, a, m ? m->predict(s, test.sources[static_cast<std::size_t>(s.source)])[kFdAxis] : s.y[kFdAxis]});
         }
         return plot::bin_heat(title, xs, 0, off, lo, hi, nx, ny);
     };

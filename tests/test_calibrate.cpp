@@ -9,6 +9,7 @@
 #include <random>
 
 #include "analysis/calibrate.hpp"
+#include "analysis/calibration_report.hpp"
 #include "analysis/explain.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -190,6 +191,27 @@ TEST(Calibration, AVehicleAloneIsMeasuredNotFitted) {
     EXPECT_GT(a.rms_f_d, 0.01);
     for (auto& p : f.poses) p.p[2] = -0.1;  // low, where a flight alone may touch the floor: not counted
     EXPECT_THROW(dw::analysis::measure_alone(f, "alone", "a class"), dw::InputError);
+}
+
+// What is left by how hard the physics pushes: a residual that scatters by 2I x the push (a jet's
+// turbulence) gives that 2I and a spread that grows band by band; noise alone gives neither.
+TEST(Calibration, TheResidualsScatterByThePushGivesTheTurbulencesTwoI) {
+    auto scatter = [](double two_i) {
+        dw::analysis::PairingSamples p;
+        std::mt19937 rng(3);
+        std::uniform_real_distribution<double> push(0.0, 0.1);
+        std::normal_distribution<double> unit(0.0, 1.0);
+        for (int i = 0; i < 20000; ++i) {
+            const double f = push(rng), recorded = f + 0.005 * unit(rng) + two_i * f * unit(rng);
+            p.rows.push_back({0.1, 0.5, recorded, f, 2 * f});
+        }
+        return dw::analysis::scatter_of(p);
+    };
+    const auto turbulent = scatter(0.3), quiet = scatter(0.0);
+    EXPECT_NEAR(turbulent.two_i, 0.3, 0.03);
+    EXPECT_GT(turbulent.bands.back().rms, 2 * turbulent.bands.front().rms);
+    EXPECT_LT(quiet.two_i, 0.05);
+    EXPECT_NEAR(quiet.bands.back().rms, quiet.bands.front().rms, 0.001);
 }
 
 // What a model exact on every sample would leave, in the explainer's floor where nobody is ever far
