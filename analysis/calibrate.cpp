@@ -332,10 +332,20 @@ std::vector<PairingSamples> samples_by_pairing(const Calibration& cal, const std
     return out;
 }
 
-// The base with the calibrated classes, and the line that says where they came from.
-PhysicsConfig with_provenance(const PhysicsConfig& fitted, const PhysicsConfig& base, const std::string& on) {
+// The jets' turbulence intensity the residual shows: half the slope 2I of its spread against the
+// calibrated push, pooled over every pairing's near samples (0: the spread does not grow).
+double turbulence_intensity(const std::vector<PairingSamples>& pairings) {
+    PairingSamples all;
+    for (const auto& p : pairings) all.rows.insert(all.rows.end(), p.rows.begin(), p.rows.end());
+    return scatter_of(all).two_i / 2;
+}
+
+// The base with the calibrated classes and turbulence, and the line that says where they came from.
+PhysicsConfig with_provenance(const PhysicsConfig& fitted, const PhysicsConfig& base, double intensity,
+                              const std::string& on) {
     PhysicsConfig c = base;
     c.classes = fitted.classes;
+    if (intensity > 0) c.turbulence.enabled = true, c.turbulence.intensity = intensity;
     c.calibration = log::cat("dw-explain calibrate ", on, ", f_d where a neighbour is near");
     return c;
 }
@@ -399,6 +409,8 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     CalibrateResult R;
     const auto x0 = cal.start();
     const auto x = fit(cal, x0, flights_except(cal, std::nullopt), o.max_iterations, o, "every trial");
+    const auto pairings = samples_by_pairing(cal, x0, x, o);
+    R.turbulence_intensity = turbulence_intensity(pairings);
     std::vector<std::vector<double>> replicates;
     for (std::size_t t = 0; t < cal.trials().size(); ++t) {
         const auto& trial = cal.trials()[t];
@@ -414,7 +426,8 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         e.rmse_all = rmse(cal.residuals(x, own, false));
         e.rmse_heldout = rmse(cal.residuals(xt, own, false));
         if (o.explain_heldout)
-            explain_heldout(e, with_provenance(cal.config_of(xt), o.physics, "without " + trial.name), in);
+            explain_heldout(
+                e, with_provenance(cal.config_of(xt), o.physics, R.turbulence_intensity, "without " + trial.name), in);
         R.trials.push_back(e);
     }
     const auto sd = jackknife_sd(replicates);
@@ -425,10 +438,10 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
                                 std::min(x[p] + t * sd[p], cal.knob(p).upper)});
     R.alone = cal.alone();
     R.calibrated =
-        with_provenance(cal.config_of(x), o.physics,
+        with_provenance(cal.config_of(x), o.physics, R.turbulence_intensity,
                         log::cat("on ", cal.flights().size(), " flights of ", cal.trials().size(), " trials"));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    write_calibration(samples_by_pairing(cal, x0, x, o), R, in);
+    write_calibration(pairings, R, in);
     staged.commit();
     R.physics_path = (fs::path(o.out_dir) / kCalibratedPhysicsFile).string();
     R.report_path = (fs::path(o.out_dir) / kCalibrationReportFile).string();

@@ -81,6 +81,10 @@ struct CalibrateResult {
     std::vector<CalibratedParameter> parameters;
     std::vector<TrialError> trials;
     std::vector<AloneFlight> alone;
+    // The jets' turbulence intensity: half the slope 2I of the residual's spread against the
+    // calibrated push, pooled over every pairing (calibration_report.hpp, Scatter); written into
+    // the calibrated physics (turbulence enabled) when the spread grows with the push.
+    double turbulence_intensity = 0;
     std::string physics_path, report_path;  // in --out, once it is complete
     double seconds = 0;
 };

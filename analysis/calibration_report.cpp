@@ -32,7 +32,7 @@ std::string band_name(std::size_t b) {
                                             : log::cat(kForceBands_n[b], "-", kForceBands_n[b + 1]);
 }
 
-std::string scatter_section(const std::vector<PairingSamples>& pairings) {
+std::string scatter_section(const std::vector<PairingSamples>& pairings, double intensity) {
     std::ostringstream md;
     md << "## What is left, by how hard the calibrated physics pushes\n\n"
        << "The residual (recorded − calibrated f_d, less each pairing's median) where a neighbour is near, its "
@@ -49,7 +49,11 @@ std::string scatter_section(const std::vector<PairingSamples>& pairings) {
         for (const auto& b : s.bands) md << " " << (b.n ? fixed(b.rms, 4) : std::string("–")) << " (" << b.n << ") |";
         md << " " << fixed(s.two_i, 2) << " |\n";
     }
-    md << "\n";
+    md << "\nPooled over every pairing, 2I = " << fixed(2 * intensity, 2)
+       << ": the calibrated physics takes a turbulence "
+       << "intensity of " << fixed(intensity, 3)
+       << " (`turbulence`), which the explainer counts as noise where a jet pushes (its excess divides "
+          "each residual by √(σ² + (2 I f_d)²)).\n\n";
     return md.str();
 }
 
@@ -123,6 +127,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
             {"parameters", params},
             {"trials", trials},
             {"alone", alone},
+            {"turbulence_intensity", r.turbulence_intensity},
             {"seconds", r.seconds}};
 }
 
@@ -200,7 +205,7 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
                                 " with its learnt discrepancy (", ratios.size(), " flights)")
                      : std::string())
        << ".\n\n";
-    md << alone_section(r.alone) << scatter_section(pairings)
+    md << alone_section(r.alone) << scatter_section(pairings, r.turbulence_intensity)
        << "## f_d by the nearest neighbour's position, per pairing\n\n";
     for (std::size_t i = 0; i < pairings.size(); ++i)
         md << "![" << pairings[i].pairing << "](" << pairing_png(i) << ")\n\n";

@@ -298,6 +298,13 @@ TEST(RealCalibration, TheSharedTrialsLeftOutInTurnArePredictedBetterAndTheShippe
             EXPECT_NEAR(x, y, 1e-4 * std::abs(y) + 1e-9) << a.name << ": regenerate config/physics.crazyflie.yaml";
     }
     EXPECT_EQ(shipped.calibration, r.calibrated.calibration);
+    // The jets' turbulence the residual shows (pooled 2I 0.20: intensity 0.10), written as the
+    // calibrated physics' turbulence.
+    EXPECT_GT(r.turbulence_intensity, 0.05);
+    EXPECT_TRUE(r.calibrated.turbulence.enabled);
+    EXPECT_TRUE(shipped.turbulence.enabled);
+    EXPECT_NEAR(shipped.turbulence.intensity, r.turbulence_intensity, 1e-3)
+        << "regenerate config/physics.crazyflie.yaml";
 }
 
 // What the calibration fixed: explained against it, the shared flights no longer buy back a
