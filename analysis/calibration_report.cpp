@@ -32,7 +32,8 @@ std::string band_name(std::size_t b) {
                                             : log::cat(kForceBands_n[b], "-", kForceBands_n[b + 1]);
 }
 
-std::string scatter_section(const std::vector<PairingSamples>& pairings, double intensity) {
+std::string scatter_section(const std::vector<PairingSamples>& pairings, const std::vector<Scatter>& scatters,
+                            double intensity) {
     std::ostringstream md;
     md << "## What is left, by how hard the calibrated physics pushes\n\n"
        << "The residual (recorded − calibrated f_d, less each pairing's median) where a neighbour is near, its "
@@ -43,9 +44,9 @@ std::string scatter_section(const std::vector<PairingSamples>& pairings, double 
     md << " 2I |\n|---|";
     for (std::size_t b = 0; b + 1 < kForceBands_n.size(); ++b) md << "---|";
     md << "---|\n";
-    for (const auto& p : pairings) {
-        const Scatter s = scatter_of(p);
-        md << "| " << p.pairing << " |";
+    for (std::size_t i = 0; i < pairings.size(); ++i) {
+        const Scatter& s = scatters[i];
+        md << "| " << pairings[i].pairing << " |";
         for (const auto& b : s.bands) md << " " << (b.n ? fixed(b.rms, 4) : std::string("–")) << " (" << b.n << ") |";
         md << " " << fixed(s.two_i, 2) << " |\n";
     }
@@ -73,10 +74,10 @@ void write_pictures(const std::vector<PairingSamples>& pairings, const std::stri
     }
 }
 
-nlohmann::json scatter_json(const std::vector<PairingSamples>& pairings) {
+nlohmann::json scatter_json(const std::vector<PairingSamples>& pairings, const std::vector<Scatter>& scatters) {
     nlohmann::json out = nlohmann::json::array();
-    for (const auto& p : pairings) {
-        const Scatter s = scatter_of(p);
+    for (std::size_t i = 0; i < pairings.size(); ++i) {
+        const Scatter& s = scatters[i];
         nlohmann::json bands = nlohmann::json::array();
         for (std::size_t b = 0; b < s.bands.size(); ++b)
             bands.push_back(
@@ -85,7 +86,7 @@ nlohmann::json scatter_json(const std::vector<PairingSamples>& pairings) {
                   std::isinf(kForceBands_n[b + 1]) ? nlohmann::json(nullptr) : nlohmann::json(kForceBands_n[b + 1])},
                  {"samples", s.bands[b].n},
                  {"rms_n", s.bands[b].rms}});
-        out.push_back({{"pairing", p.pairing}, {"bands", bands}, {"two_i", s.two_i}});
+        out.push_back({{"pairing", pairings[i].pairing}, {"bands", bands}, {"two_i", s.two_i}});
     }
     return out;
 }
@@ -168,7 +169,8 @@ std::string alone_section(const std::vector<AloneFlight>& alone) {
     return md.str();
 }
 
-std::string markdown(const std::vector<PairingSamples>& pairings, const CalibrateResult& r) {
+std::string markdown(const std::vector<PairingSamples>& pairings, const std::vector<Scatter>& scatters,
+                     const CalibrateResult& r) {
     std::ostringstream md;
     md << "# Calibration\n\n"
        << r.calibrated.calibration << " (" << fixed(r.seconds, 1) << " s).\n\n"
@@ -205,7 +207,7 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const Calibrat
                                 " with its learnt discrepancy (", ratios.size(), " flights)")
                      : std::string())
        << ".\n\n";
-    md << alone_section(r.alone) << scatter_section(pairings, r.turbulence_intensity)
+    md << alone_section(r.alone) << scatter_section(pairings, scatters, r.turbulence_intensity)
        << "## f_d by the nearest neighbour's position, per pairing\n\n";
     for (std::size_t i = 0; i < pairings.size(); ++i)
         md << "![" << pairings[i].pairing << "](" << pairing_png(i) << ")\n\n";
@@ -238,10 +240,12 @@ void write_calibration(const std::vector<PairingSamples>& pairings, const Calibr
     const fs::path dir(o.out_dir);
     fs::create_directories(dir);
     write_pictures(pairings, o.out_dir);
+    std::vector<Scatter> scatters;  // per pairing, for the report and the JSON
+    for (const auto& p : pairings) scatters.push_back(scatter_of(p));
     nlohmann::json j = to_json(r);
-    j["residual_by_force"] = scatter_json(pairings);
+    j["residual_by_force"] = scatter_json(pairings, scatters);
     write_file((dir / "calibration.json").string(), j.dump(2) + "\n");
-    write_file((dir / kCalibrationReportFile).string(), markdown(pairings, r));
+    write_file((dir / kCalibrationReportFile).string(), markdown(pairings, scatters, r));
     write_file((dir / kCalibratedPhysicsFile).string(),
                "# " + r.calibrated.calibration + "\n" + physics::to_yaml(r.calibrated));
 }
