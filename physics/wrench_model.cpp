@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace dw::physics {
@@ -81,20 +82,76 @@ void WrenchModel::add_velocity(const Vec3& suf, const Producer& p, double weight
                  sc.uz.data());
 }
 
-void WrenchModel::add_velocity(const Vec3& suf, const double* cx, const double* cy, std::size_t n, const Producer& p,
-                               double weight, double* ux, double* uy, double* uz) const {
+namespace {
+
+// The Bauersfeld jet's speeds at depth s > 0 below its producer and squared distance r2 from its
+// axis, with one division: with c = c_half, xi = s/l + origin and q = 1 / (c² xi² + b r2) (b the
+// profile's), U_c / (1 + b r2 / (c xi)²)² = k_c c⁴ xi³ q², and the entrainment term
+// U_c w / (c xi) (d⁻² - d⁻¹/2) with d⁻¹ = c² xi² q becomes k_c w (c³ xi² q² - c q / 2) (jet.hpp).
+// Cells at s <= 0 get zero speeds (their gain is 0) from finite arithmetic: no branch in the
+// loop, so the compiler can take two cells at once.
+struct BauersfeldTerms {
+    Jet jet;                                       // a copy: nothing the loop writes can change it
+    double c2, axial, radial_q2, radial_q, delay;  // delay: τ(s) = delay x jet.descent_numerator(s)
+    BauersfeldTerms(const Jet& j, double delay_scale, bool radial)
+        : jet(j),
+          c2(j.c_half * j.c_half),
+          axial(j.k_centre * c2 * c2),
+          radial_q2(radial ? j.k_centre * j.k.width * c2 * j.c_half : 0.0),
+          radial_q(radial ? 0.5 * j.k_centre * j.k.width * j.c_half : 0.0),
+          delay(delay_scale > 0 ? delay_scale / (j.k.strength * j.u_hover) : 0.0) {}
+};
+
+}  // namespace
+
+void WrenchModel::add_velocity(const Vec3& suf, const double* __restrict cx, const double* __restrict cy, std::size_t n,
+                               const Producer& p, double weight, double* __restrict ux, double* __restrict uy,
+                               double* __restrict uz) const {
+    const Jet& jet = p.jet;
+    const double delay_scale =
+        config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
+    if (jet.model != JetModelKind::bauersfeld) {
+        add_velocity_jain(suf, cx, cy, n, p, weight, delay_scale, ux, uy, uz);
+        return;
+    }
+    const BauersfeldTerms t(jet, delay_scale, config_.radial_inflow);
+    const double ax = p.axis.x(), ay = p.axis.y(), az = p.axis.z();
+    const double vx = p.velocity.x(), vy = p.velocity.y(), vz = p.velocity.z();
+    const double ox = suf.x() - p.position.x(), oy = suf.y() - p.position.y(), oz = suf.z() - p.position.z();
+    const double gain = weight * p.gust;
+    for (std::size_t i = 0; i < n; ++i) {
+        double dx = ox + cx[i], dy = oy + cy[i], dz = oz;
+        const double s0 = std::max(dx * ax + dy * ay + dz * az, 0.0);
+        // The air at depth s left the producer τ(s) ago, when it was at p - v τ (wake_transport).
+        const double tau = t.delay * t.jet.descent_numerator(s0);
+        dx += vx * tau;
+        dy += vy * tau;
+        dz += vz * tau;
+        const double s_raw = dx * ax + dy * ay + dz * az;
+        const double g = s_raw > 0 ? gain : 0.0, s = std::max(s_raw, 0.0);
+        const double rx = dx - s * ax, ry = dy - s * ay, rz = dz - s * az;
+        const double r2 = rx * rx + ry * ry + rz * rz;
+        const double xi = s * t.jet.inv_l + t.jet.k.origin, c2xi2 = t.c2 * xi * xi;
+        const double q = 1.0 / std::max(c2xi2 + kProfileB * r2, std::numeric_limits<double>::min());
+        const double u_axial = g * t.axial * xi * xi * xi * q * q;
+        const double u_radial_over_r = g * (t.radial_q2 * xi * xi * q * q - t.radial_q * q);
+        ux[i] += u_axial * ax + u_radial_over_r * rx;
+        uy[i] += u_axial * ay + u_radial_over_r * ry;
+        uz[i] += u_axial * az + u_radial_over_r * rz;
+    }
+}
+
+void WrenchModel::add_velocity_jain(const Vec3& suf, const double* cx, const double* cy, std::size_t n,
+                                    const Producer& p, double weight, double delay_scale, double* ux, double* uy,
+                                    double* uz) const {
     const Jet& jet = p.jet;
     const double ax = p.axis.x(), ay = p.axis.y(), az = p.axis.z();
     const double ox = suf.x() - p.position.x(), oy = suf.y() - p.position.y(), oz = suf.z() - p.position.z();
     const double gain = weight * p.gust;
-    const double delay_scale =
-        config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
-    const bool radial = config_.radial_inflow;
     for (std::size_t i = 0; i < n; ++i) {
         double dx = ox + cx[i], dy = oy + cy[i], dz = oz;
         double s = dx * ax + dy * ay + dz * az;
         if (delay_scale > 0 && s > 0) {
-            // The air at depth s left the producer τ(s) ago, when it was at p - v τ.
             const double tau = delay_scale * jet.transport_delay(s);
             dx += p.velocity.x() * tau;
             dy += p.velocity.y() * tau;
@@ -103,23 +160,10 @@ void WrenchModel::add_velocity(const Vec3& suf, const double* cx, const double* 
         }
         if (s <= 0) continue;
         const double rx = dx - s * ax, ry = dy - s * ay, rz = dz - s * az;
-        const double r2 = rx * rx + ry * ry + rz * rz;
-        double u_axial, u_radial_over_r;
-        if (jet.model == JetModelKind::bauersfeld) {
-            const double xi = s * jet.inv_l + jet.k.origin;
-            const double uc = jet.k_centre / xi;
-            const double inv_rh = 1.0 / (jet.c_half * xi);
-            const double d = 1.0 + kProfileB * r2 * inv_rh * inv_rh;
-            const double inv_d = 1.0 / d;
-            u_axial = uc * inv_d * inv_d;
-            u_radial_over_r = radial ? uc * jet.k.width * inv_rh * (inv_d * inv_d - 0.5 * inv_d) : 0.0;
-        } else {
-            u_axial = jet.axial(std::sqrt(r2), s);
-            u_radial_over_r = 0.0;
-        }
-        ux[i] += gain * (u_axial * ax + u_radial_over_r * rx);
-        uy[i] += gain * (u_axial * ay + u_radial_over_r * ry);
-        uz[i] += gain * (u_axial * az + u_radial_over_r * rz);
+        const double u_axial = gain * jet.axial(std::sqrt(rx * rx + ry * ry + rz * rz), s);
+        ux[i] += u_axial * ax;
+        uy[i] += u_axial * ay;
+        uz[i] += u_axial * az;
     }
 }
 

@@ -71,6 +71,9 @@ private:
     // Adds weight x the producer's air velocity at base + (x[i], y[i], 0) for i < n.
     void add_velocity(const Vec3& base, const double* x, const double* y, std::size_t n, const Producer& p,
                       double weight, double* ux, double* uy, double* uz) const;
+    // The same for a Jain jet (cell by cell; the Bauersfeld loop above takes two cells at once).
+    void add_velocity_jain(const Vec3& base, const double* x, const double* y, std::size_t n, const Producer& p,
+                           double weight, double delay_scale, double* ux, double* uy, double* uz) const;
     void add_velocity(const Vec3& sufferer, const Producer& p, double weight, Scratch& s) const;
     Wrench drag(const Scratch& s) const;
     Wrench floor_bias(const Vec3& sufferer, std::span<const Producer> producers) const;
