@@ -23,8 +23,8 @@ namespace {
 // Work of one single-producer evaluation, counted from wrench_model.cpp: per planform cell the
 // velocity costs ~70 flops and one division (with the wake's transport delay, computed whether
 // enabled or not: the loop has no branch); the drag ~24 flops and a square root. The anchors are
-// scalar: the velocity loop takes two cells per instruction (SSE2), so the measured rate may pass
-// this roofline.
+// scalar: the velocity and drag loops take two cells per instruction (SSE2), or four where the
+// CPU has AVX2, so the measured rate may pass this roofline.
 constexpr double kFlopsPerCell = 94;
 constexpr double kDivsPerCell = 1;
 constexpr double kSqrtsPerCell = 1;

@@ -5,14 +5,26 @@
 #include <limits>
 #include <numeric>
 
+// x86-64: the physics' inner loops are also built for AVX2 (four doubles at once; no FMA, so every
+// value is the same) and the loader picks the build the CPU runs (GCC's function multiversioning).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DW_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define DW_VECTOR_CLONES
+#endif
+
 namespace dw::physics {
 
 struct WrenchModel::Scratch {
-    std::vector<double> ux, uy, uz;
+    std::vector<double> ux, uy, uz;  // the air at each cell
+    std::vector<double> fx, fy, fz;  // each cell's drag (WrenchModel::drag)
     void reset(std::size_t n) {
         ux.assign(n, 0.0);
         uy.assign(n, 0.0);
         uz.assign(n, 0.0);
+        fx.resize(n);
+        fy.resize(n);
+        fz.resize(n);
     }
 };
 
@@ -104,9 +116,10 @@ struct BauersfeldTerms {
 
 }  // namespace
 
-void WrenchModel::add_velocity(const Vec3& suf, const double* __restrict cx, const double* __restrict cy, std::size_t n,
-                               const Producer& p, double weight, double* __restrict ux, double* __restrict uy,
-                               double* __restrict uz) const {
+DW_VECTOR_CLONES void WrenchModel::add_velocity(const Vec3& suf, const double* __restrict cx,
+                                                const double* __restrict cy, std::size_t n, const Producer& p,
+                                                double weight, double* __restrict ux, double* __restrict uy,
+                                                double* __restrict uz) const {
     const Jet& jet = p.jet;
     const double delay_scale =
         config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
@@ -167,24 +180,38 @@ void WrenchModel::add_velocity_jain(const Vec3& suf, const double* cx, const dou
     }
 }
 
-Wrench WrenchModel::drag(const Scratch& sc) const {
+namespace {
+
+// Each cell's bluff-body drag from the air there (four cells at once with AVX2; drag() sums them).
+DW_VECTOR_CLONES void cell_drag(std::size_t n, const double* __restrict area, const double* __restrict ux,
+                                const double* __restrict uy, const double* __restrict uz, double half_rho_cd,
+                                double half_rho_clat, double* __restrict fx, double* __restrict fy,
+                                double* __restrict fz) {
+    for (std::size_t i = 0; i < n; ++i) {
+        fz[i] = half_rho_cd * area[i] * std::abs(uz[i]) * uz[i];
+        const double k = half_rho_clat * area[i] * std::sqrt(ux[i] * ux[i] + uy[i] * uy[i]);
+        fx[i] = k * ux[i];
+        fy[i] = k * uy[i];
+    }
+}
+
+}  // namespace
+
+Wrench WrenchModel::drag(Scratch& sc) const {
     const std::size_t n = planform_.size();
-    double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     const double* cx = planform_.x.data();
     const double* cy = planform_.y.data();
     const double* area = planform_.area.data();
+    cell_drag(n, area, sc.ux.data(), sc.uy.data(), sc.uz.data(), half_rho_cd_, half_rho_clat_, sc.fx.data(),
+              sc.fy.data(), sc.fz.data());
+    double fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        const double u_x = sc.ux[i], u_y = sc.uy[i], u_z = sc.uz[i];
-        const double fzi = half_rho_cd_ * area[i] * std::abs(u_z) * u_z;
-        const double uh = std::sqrt(u_x * u_x + u_y * u_y);
-        const double k = half_rho_clat_ * area[i] * uh;
-        const double fxi = k * u_x, fyi = k * u_y;
-        fx += fxi;
-        fy += fyi;
-        fz += fzi;
-        tx += cy[i] * fzi;
-        ty -= cx[i] * fzi;
-        tz += cx[i] * fyi - cy[i] * fxi;
+        fx += sc.fx[i];
+        fy += sc.fy[i];
+        fz += sc.fz[i];
+        tx += cy[i] * sc.fz[i];
+        ty -= cx[i] * sc.fz[i];
+        tz += cx[i] * sc.fy[i] - cy[i] * sc.fx[i];
     }
     if (config_.sufferer.thrust_loss) {
         const std::size_t rotors = planform_.rotor_centre.size();

@@ -75,7 +75,7 @@ private:
     void add_velocity_jain(const Vec3& base, const double* x, const double* y, std::size_t n, const Producer& p,
                            double weight, double delay_scale, double* ux, double* uy, double* uz) const;
     void add_velocity(const Vec3& sufferer, const Producer& p, double weight, Scratch& s) const;
-    Wrench drag(const Scratch& s) const;
+    Wrench drag(Scratch& s) const;  // s: the air at each cell, and room for each cell's force
     Wrench floor_bias(const Vec3& sufferer, std::span<const Producer> producers) const;
     Wrench buffeting(const Vec3& sufferer, std::span<const Producer> producers) const;
     Producer merged(std::span<const Producer> producers, const std::vector<int>& members) const;

@@ -156,6 +156,42 @@ TEST(Field, HoveringProducerIsAxisymmetric) {
     }
 }
 
+// The model's inner loop computes the profile in a rearranged form (one division per cell, no
+// branch, two or four cells at once): it must be the jet's own formulas (Jet::axial, Jet::radial),
+// on a tilted, moving producer, with the wake's transport delay and without, above and below it.
+TEST(Field, TheFastLoopIsTheJetsOwnFormulas) {
+    for (const bool delayed : {false, true}) {
+        SCOPED_TRACE(delayed ? "with the transport delay" : "without it");
+        PhysicsConfig c;
+        c.effects.wake_transport.enabled = delayed;
+        c.effects.wake_transport.delay_scale = 1.3;
+        const WrenchModel m(c);
+        Producer p = m.producer(Vec3(0.1, -0.2, -2.6), Vec3(0.8, -0.3, 0.1));
+        p.axis = Vec3(0.12, -0.08, 1.0).normalized();
+        const std::array<Producer, 1> ps{p};
+        int below = 0;
+        for (int k = 0; k < 200; ++k) {
+            const Vec3 x(0.9 * std::sin(1.7 * k), 0.9 * std::cos(2.3 * k), -2.6 + 2.4 * std::sin(0.37 * k + 1));
+            Vec3 d = x - p.position;
+            const double s0 = d.dot(p.axis);
+            if (delayed && s0 > 0) d += p.velocity * c.effects.wake_transport.delay_scale * p.jet.transport_delay(s0);
+            const double s = d.dot(p.axis);
+            const Vec3 radial = d - s * p.axis;
+            const double r = radial.norm();
+            Vec3 expect = Vec3::Zero();
+            if (s > 0) {
+                expect = p.jet.axial(r, s) * p.axis;
+                if (r > 0) expect += p.jet.radial(r, s) * radial / r;
+                ++below;
+            }
+            const Vec3 got = m.air_velocity(x, ps);
+            EXPECT_LE((got - expect).norm(), 1e-12 * (1 + expect.norm())) << "at " << x.transpose();
+        }
+        EXPECT_GT(below, 50);
+        EXPECT_LT(below, 190);
+    }
+}
+
 TEST(Field, TranslatingProducerIsOnlyMirrorSymmetric) {
     PhysicsConfig c;
     c.effects.wake_transport.enabled = true;
