@@ -63,7 +63,7 @@ double Jet::momentum_flux(double rho) const {
 double Jet::transport_delay(double s) const {
     if (s <= 0) return 0;
     if (model == JetModelKind::bauersfeld) {
-        return descent_numerator(s) / (k.strength * u_hover);
+        return descent_numerator(s) / descent_speed();
     }
     // ∫ dz (z - z0) / k for the Jain form (z - z0 clamped at 0.05 m near the pole).
     const double z = std::max(s - jain_z0, 0.05);

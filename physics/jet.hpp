@@ -46,8 +46,10 @@ struct Jet {
     double momentum_flux(double rho) const;
     // Time for the wake to descend s: ∫0^s dz / U_c(z) = (s²/(2l) + origin s) / (strength U_H) [s].
     double transport_delay(double s) const;
-    // Bauersfeld: that time's numerator, s²/(2l) + origin s [m] (inline: the physics' inner loop).
+    // Bauersfeld: that time's numerator, s²/(2l) + origin s [m], and denominator, strength U_H [m/s]
+    // (inline: the physics' inner loop).
     double descent_numerator(double s) const { return s * s * 0.5 * inv_l + k.origin * s; }
+    double descent_speed() const { return k.strength * u_hover; }
 };
 
 }  // namespace dw::physics

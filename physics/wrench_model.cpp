@@ -2,11 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 
-// x86-64: the physics' inner loops are also built for AVX2 (four doubles at once; no FMA, so every
-// value is the same) and the loader picks the build the CPU runs (GCC's function multiversioning).
+// x86-64: the physics' inner loops are also built for AVX2 (four doubles at once; no FMA, so each
+// value is the same whichever build runs) and the loader picks the one the CPU can run (GCC's
+// function multiversioning).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define DW_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
 #else
@@ -100,8 +100,10 @@ namespace {
 // axis, with one division: with c = c_half, xi = s/l + origin and q = 1 / (c² xi² + b r2) (b the
 // profile's), U_c / (1 + b r2 / (c xi)²)² = k_c c⁴ xi³ q², and the entrainment term
 // U_c w / (c xi) (d⁻² - d⁻¹/2) with d⁻¹ = c² xi² q becomes k_c w (c³ xi² q² - c q / 2) (jet.hpp).
-// Cells at s <= 0 get zero speeds (their gain is 0) from finite arithmetic: no branch in the
-// loop, so the compiler can take two cells at once.
+// Cells at s <= 0 get zero speeds (their gain is 0; q is at most 1 / kMinJetDenominator_m2, so
+// nothing overflows even at the jet's virtual origin): no branch in the loop, so the compiler can
+// take two or four cells at once.
+inline constexpr double kMinJetDenominator_m2 = 1e-18;
 struct BauersfeldTerms {
     Jet jet;                                       // a copy: nothing the loop writes can change it
     double c2, axial, radial_q2, radial_q, delay;  // delay: τ(s) = delay x jet.descent_numerator(s)
@@ -111,7 +113,7 @@ struct BauersfeldTerms {
           axial(j.k_centre * c2 * c2),
           radial_q2(radial ? j.k_centre * j.k.width * c2 * j.c_half : 0.0),
           radial_q(radial ? 0.5 * j.k_centre * j.k.width * j.c_half : 0.0),
-          delay(delay_scale > 0 ? delay_scale / (j.k.strength * j.u_hover) : 0.0) {}
+          delay(delay_scale > 0 ? delay_scale / j.descent_speed() : 0.0) {}
 };
 
 }  // namespace
@@ -129,7 +131,9 @@ DW_VECTOR_CLONES void WrenchModel::add_velocity(const Vec3& suf, const double* _
     }
     const BauersfeldTerms t(jet, delay_scale, config_.radial_inflow);
     const double ax = p.axis.x(), ay = p.axis.y(), az = p.axis.z();
-    const double vx = p.velocity.x(), vy = p.velocity.y(), vz = p.velocity.z();
+    // The producer's velocity matters only to the transport delay (a NaN one is harmless without it).
+    const Vec3 v = t.delay > 0 ? p.velocity : Vec3::Zero();
+    const double vx = v.x(), vy = v.y(), vz = v.z();
     const double ox = suf.x() - p.position.x(), oy = suf.y() - p.position.y(), oz = suf.z() - p.position.z();
     const double gain = weight * p.gust;
     for (std::size_t i = 0; i < n; ++i) {
@@ -145,7 +149,7 @@ DW_VECTOR_CLONES void WrenchModel::add_velocity(const Vec3& suf, const double* _
         const double rx = dx - s * ax, ry = dy - s * ay, rz = dz - s * az;
         const double r2 = rx * rx + ry * ry + rz * rz;
         const double xi = s * t.jet.inv_l + t.jet.k.origin, c2xi2 = t.c2 * xi * xi;
-        const double q = 1.0 / std::max(c2xi2 + kProfileB * r2, std::numeric_limits<double>::min());
+        const double q = 1.0 / std::max(c2xi2 + kProfileB * r2, kMinJetDenominator_m2);
         const double u_axial = g * t.axial * xi * xi * xi * q * q;
         const double u_radial_over_r = g * (t.radial_q2 * xi * xi * q * q - t.radial_q * q);
         ux[i] += u_axial * ax + u_radial_over_r * rx;

@@ -192,6 +192,45 @@ TEST(Field, TheFastLoopIsTheJetsOwnFormulas) {
     }
 }
 
+// The same over the sufferer's whole planform (the loops' two- and four-cell bodies, not only
+// their remainder): the wrench the model gives is each cell's drag in the jet's own air, with a
+// gust on the jet and without the entrainment term.
+TEST(Field, TheWholePlanformsWrenchIsEachCellsDragInTheJetsOwnAir) {
+    for (const bool radial : {true, false}) {
+        SCOPED_TRACE(radial ? "with entrainment" : "without");
+        PhysicsConfig c;
+        c.radial_inflow = radial;
+        c.sufferer.thrust_loss = false;  // drag alone
+        const WrenchModel m(c);
+        const auto& cells = m.planform();
+        const auto& suf = m.config().sufferer;
+        const double rho = m.config().air_density_kg_m3;
+        Producer p = m.producer(Vec3(0.12, 0.05, -2.4));
+        p.axis = Vec3(-0.1, 0.05, 1.0).normalized();
+        p.gust = 1.3;
+        const std::array<Producer, 1> ps{p};
+        const Vec3 centre(0, 0, -1.4);
+        Eigen::Matrix<double, 6, 1> expect = Eigen::Matrix<double, 6, 1>::Zero();
+        for (std::size_t i = 0; i < cells.size(); ++i) {
+            const Vec3 d = centre + Vec3(cells.x[i], cells.y[i], 0) - p.position;
+            const double s = d.dot(p.axis);
+            const Vec3 across = d - s * p.axis;
+            const double r = across.norm();
+            Vec3 u = p.jet.axial(r, s) * p.axis;
+            if (radial && r > 0) u += p.jet.radial(r, s) * across / r;
+            u *= p.gust;
+            const double fz = 0.5 * rho * suf.drag_coefficient * cells.area[i] * std::abs(u.z()) * u.z();
+            const double k = 0.5 * rho * suf.lateral_drag_coefficient * cells.area[i] * std::hypot(u.x(), u.y());
+            const Vec3 f(k * u.x(), k * u.y(), fz);
+            expect.head<3>() += f;
+            expect.tail<3>() += Vec3(cells.x[i], cells.y[i], 0).cross(f);
+        }
+        const auto got = m.evaluate(centre, ps);
+        EXPECT_GT(std::abs(expect[2]), 0.05);
+        EXPECT_LE((got - expect).norm(), 1e-12 * expect.norm()) << got.transpose() << " vs " << expect.transpose();
+    }
+}
+
 TEST(Field, TranslatingProducerIsOnlyMirrorSymmetric) {
     PhysicsConfig c;
     c.effects.wake_transport.enabled = true;
