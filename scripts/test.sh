@@ -30,6 +30,22 @@ fi
 select=(-LE full)
 [ "$full" = 1 ] && select=()
 status=0
+# The sanitizer stage's build (build-asan/) compiles beside the tests under SCHED_IDLE: the kernel
+# runs it only on a core no test wants this instant, and preempts it at once when one does (the
+# real-time labs mostly wait: CTest leaves about a third of the cores idle). nice 19 was not enough
+# (2026-11-27: beside it two fresh clones of three failed real-time claims; a nice-19 task still
+# gets its time slices against busy test threads, a SCHED_IDLE one does not).
+asan_log=$(mktemp)
+trap 'rm -f "$asan_log"' EXIT
+idle=(chrt --idle 0)
+chrt --idle 0 true 2>/dev/null || idle=(nice -n 19)
+command -v ionice >/dev/null && idle+=(ionice -c 3)
+"${idle[@]}" "$here/scripts/sanitize.sh" --build >"$asan_log" 2>&1 &
+asan_build=$!
+# The cores' idle share over CTest, what the sanitizer build could not use (/proc/stat's cpu line:
+# user, nice, system busy; idle, iowait not).
+cpu_ticks() { awk '/^cpu /{print $2 + $3 + $4, $5 + $6}' /proc/stat; }
+read -r busy0 idle0 < <(cpu_ticks)
 start=$SECONDS
 # Tests run side by side while the machine's CPU slots last (tests/CMakeLists.txt: what each takes;
 # build/resources.json: how many there are).
@@ -37,13 +53,17 @@ spec="$here/build/resources.json"
 slots=$(grep -o '"slots": [0-9]*' "$spec" | grep -o '[0-9]*$')
 ctest --test-dir "$here/build" --output-on-failure -j "$slots" --resource-spec-file "$spec" --timeout 900 \
   "${select[@]}" || status=$?
-echo "test.sh: ctest: $((SECONDS - start)) s"
-# The parser and unit tests again under AddressSanitizer + UBSan (build-asan/, issue 14).
-# After CTest, not beside it: built at nice 19 beside the tests (issue 40), it took the idle CPU
-# but the real-time tests lost margin (with it, a 2 s partition was once not waited out; the soak's
-# recorder memory slope failed with and without it: its queue grew on a busy disk, since mended).
+read -r busy1 idle1 < <(cpu_ticks)
+echo "test.sh: ctest: $((SECONDS - start)) s (cores idle $(((idle1 - idle0) * 100 / (busy1 - busy0 + idle1 - idle0 + 1))) %)"
+# The parser and unit tests again under AddressSanitizer + UBSan (build-asan/, issue 14), once their
+# build is done: the runs start DDS participants, so they follow CTest rather than share its slots.
 start=$SECONDS
-"$here/scripts/sanitize.sh" || status=1
+if wait $asan_build; then
+  echo "test.sh: sanitizer build: done beside the tests (waited $((SECONDS - start)) s more)"
+  "$here/scripts/sanitize.sh" --run || status=1
+else
+  cat "$asan_log"; echo "test.sh: the sanitizer build FAILED (its log above)"; status=1
+fi
 echo "test.sh: sanitizer stage: $((SECONDS - start)) s"
 # Processes killed by a failing test can leave Fast DDS shared-memory segments behind.
 command -v fastdds >/dev/null && fastdds shm clean >/dev/null 2>&1 || true
