@@ -566,9 +566,13 @@ processes:
                         {}});
     await_text(dir.file("run/logs/planner.log"), "flying 4 legs");
     std::this_thread::sleep_for(2s);
+    // How long the link was cut: 2 s, plus what the commands that cut and mend it take (on a busy
+    // machine a shell's start is not instant).
+    const auto cut_from = std::chrono::steady_clock::now();
     ASSERT_EQ(sh("ip -n " + hosts.b + " link set " + hosts.b + " down"), 0);
     std::this_thread::sleep_for(2s);
     ASSERT_EQ(sh("ip -n " + hosts.b + " link set " + hosts.b + " up"), 0);
+    const double cut_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - cut_from).count();
     sh("ip -n " + hosts.b + " route add 224.0.0.0/4 dev " + hosts.b);  // a link going down takes its routes
     sh("ip -n " + hosts.a + " route add 224.0.0.0/4 dev " + hosts.a);
     const auto status = lab.wait_for(300000ms);
@@ -590,9 +594,9 @@ processes:
     double longest = 0;
     for (std::size_t at = wrench.find(" ("); at != std::string::npos; at = wrench.find(" (", at + 1))
         longest = std::max(longest, std::stod(wrench.substr(at + 2)));
-    std::printf("stand/wrench gaps: %s\n", wrench.c_str());
+    std::printf("stand/wrench gaps: %s (the link cut for at most %.3f s)\n", wrench.c_str(), cut_s);
     EXPECT_GE(longest, 1.5) << wrench;
-    EXPECT_LE(longest, 4.0) << wrench;
+    EXPECT_LE(longest, cut_s + 2.0) << wrench << "; the link cut for at most " << cut_s << " s";
 }
 
 TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
