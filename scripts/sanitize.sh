@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
 # Builds the parser and unit test executables with AddressSanitizer + UndefinedBehaviorSanitizer in
-# build-asan/ (a separate build directory) and runs them. scripts/test.sh (CI) builds them beside
-# the main tests, at idle CPU priority, and runs them after. The process tests are left out: they
-# start the ordinary build's executables.
+# build-asan/ (a separate build directory) and runs them. scripts/test.sh (CI) calls it after the
+# main tests. The process tests are left out: they start the ordinary build's executables.
 #   scripts/sanitize.sh           configure, build, run
-#   scripts/sanitize.sh --build   configure and build only (scripts/test.sh builds beside CTest)
+#   scripts/sanitize.sh --build   configure and build only
 #   scripts/sanitize.sh --run     run only (after --build)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
