@@ -4,6 +4,7 @@
 // defined once here. Sources: ../shared/SPECS.md §3, docs/research/PX4_LINK.md.
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <ranges>
 #include <string>
@@ -105,6 +106,8 @@ Topic<T> px4_topic_spec(const std::string& name, std::string_view type) {
 }
 
 namespace px4 {
+// A field PX4 must ignore (a setpoint's unused terms, an odometry's unmeasured ones): NaN.
+inline constexpr float kUnset = std::numeric_limits<float>::quiet_NaN();
 // VehicleCommand.command (MAVLink MAV_CMD), as PX4's Commander handles them.
 inline constexpr std::uint32_t kCmdNavLand = 21;
 inline constexpr std::uint32_t kCmdDoSetMode = 176;

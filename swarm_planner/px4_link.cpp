@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <deque>
-#include <limits>
 #include <map>
 #include <mutex>
 
@@ -18,7 +17,6 @@ namespace {
 
 namespace px4 = dds::px4;
 using px4_msgs::msg::dds_::TrajectorySetpoint_;
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 // The message types of one PX4 version (the others are the same in every supported version).
 struct Types115 {
@@ -239,10 +237,10 @@ private:
             t.position()[k] = static_cast<float>(p[static_cast<int>(k)]);
             t.velocity()[k] = static_cast<float>(vel[static_cast<int>(k)]);
             t.acceleration()[k] = static_cast<float>(acc[static_cast<int>(k)]);
-            t.jerk()[k] = kNaN;
+            t.jerk()[k] = px4::kUnset;
         }
         t.yaw(static_cast<float>(f.yaw(sp.yaw_rad)));
-        t.yawspeed(kNaN);
+        t.yawspeed(px4::kUnset);
         return t;
     }
 
@@ -252,9 +250,9 @@ private:
         c.command(command);
         c.param1(p1);
         c.param2(p2);
-        c.param5(std::numeric_limits<double>::quiet_NaN());
-        c.param6(std::numeric_limits<double>::quiet_NaN());
-        c.param7(kNaN);
+        c.param5(px4::kUnset);
+        c.param6(px4::kUnset);
+        c.param7(px4::kUnset);
         c.target_system(static_cast<std::uint8_t>(v.cfg.system_id));  // PX4 ignores any other (but 0)
         c.target_component(px4::kAutopilotComponent);
         c.source_system(px4::kPlannerSystem);

@@ -1,7 +1,6 @@
 #include "swarm_planner/px4_odometry.hpp"
 
 #include <algorithm>
-#include <limits>
 
 #include "core/log.hpp"
 #include "core/numbers.hpp"
@@ -12,7 +11,6 @@ namespace {
 
 namespace px4 = dds::px4;
 using px4_msgs::msg::dds_::VehicleOdometry_;
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr std::size_t kLatencySamples = 500;  // odometry samples whose capture-to-send latency is logged
 
 }  // namespace
@@ -89,7 +87,7 @@ VehicleOdometry_ Px4OdometryFeed::odometry(const Vehicle& v, const msg::VehicleS
     for (std::size_t k = 0; k < 3; ++k) {
         m.position()[k] = static_cast<float>(p[static_cast<int>(k)]);
         m.velocity()[k] = static_cast<float>(vel[static_cast<int>(k)]);
-        m.angular_velocity()[k] = kNaN;
+        m.angular_velocity()[k] = px4::kUnset;
         m.position_variance()[k] = pv;
         m.orientation_variance()[k] = ov;
         m.velocity_variance()[k] = vv;
