@@ -41,14 +41,15 @@ asan_dir=""
 if [ -w /dev/shm ] && [ "$(df -Pk /dev/shm | awk 'NR == 2 {print $4}')" -gt $((4 * 1024 * 1024)) ]; then
   asan_dir=$(mktemp -d /dev/shm/dw-asan.XXXXXX)
   asan_log="$asan_dir.log"
-  trap 'rm -rf "$asan_dir" "$asan_log"' EXIT
-  cp "$(command -v true)" "$asan_dir/exec-check"
+  # On any exit: the build's process group stopped (it has its own session), its files removed.
+  trap '[ -n "${asan_build:-}" ] && kill -- -"$asan_build" 2>/dev/null; rm -rf "$asan_dir" "$asan_log"' EXIT
+  cp "$(type -P true)" "$asan_dir/exec-check"
   "$asan_dir/exec-check" 2>/dev/null || { rm -rf "$asan_dir"; asan_dir=""; }
 fi
 if [ -n "$asan_dir" ]; then
   idle=(chrt --idle 0)
   chrt --idle 0 true 2>/dev/null || idle=(nice -n 19)
-  DW_ASAN_BUILD="$asan_dir" "${idle[@]}" "$here/scripts/sanitize.sh" --build >"$asan_log" 2>&1 &
+  DW_ASAN_BUILD="$asan_dir" setsid "${idle[@]}" "$here/scripts/sanitize.sh" --build >"$asan_log" 2>&1 &
   asan_build=$!
 fi
 # The cores' idle share over CTest (/proc/stat's cpu line: user, nice, system busy; idle, iowait
