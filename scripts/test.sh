@@ -41,8 +41,9 @@ asan_dir=""
 if [ -w /dev/shm ] && [ "$(df -Pk /dev/shm | awk 'NR == 2 {print $4}')" -gt $((4 * 1024 * 1024)) ]; then
   asan_dir=$(mktemp -d /dev/shm/dw-asan.XXXXXX)
   asan_log="$asan_dir.log"
-  # On any exit: the build's process group stopped (it has its own session), its files removed.
-  trap '[ -n "${asan_build:-}" ] && kill -- -"$asan_build" 2>/dev/null; rm -rf "$asan_dir" "$asan_log"' EXIT
+  # On any exit: the build's process group stopped (it has its own session; long gone after a
+  # whole run, so a failed kill is no error: under set -e it would become the script's status).
+  trap 'if [ -n "${asan_build:-}" ]; then kill -- -"$asan_build" 2>/dev/null || true; fi; rm -rf "$asan_dir" "$asan_log"' EXIT
   cp "$(type -P true)" "$asan_dir/exec-check"
   "$asan_dir/exec-check" 2>/dev/null || { rm -rf "$asan_dir"; asan_dir=""; }
 fi
