@@ -33,11 +33,10 @@ Planform Planform::make(const SuffererParams& s) {
     const double R = s.vehicle.prop_radius_m;
     const double arm = 0.5 * s.vehicle.motor_distance_m;  // centre to motor
     const int rotors = s.vehicle.rotors;
-    auto add = [&](double x, double y, double a, int rotor) {
+    auto add = [&](double x, double y, double a) {
         p.x.push_back(x);
         p.y.push_back(y);
         p.area.push_back(a);
-        p.rotor.push_back(rotor);
     };
     for (int k = 0; k < rotors; ++k) {
         // X configuration: the first motor at 45° (front right).
@@ -47,28 +46,30 @@ Planform Planform::make(const SuffererParams& s) {
         p.rotor_area.push_back(M_PI * R * R);
         // Ring 0 is a centre disc; rings 1.. are annuli of equal width split into sectors.
         const double dr = R / s.disc_rings;
-        add(cx, cy, M_PI * dr * dr, k);
+        const std::size_t first = p.size();
+        add(cx, cy, M_PI * dr * dr);
         for (int ring = 1; ring < s.disc_rings; ++ring) {
             const double r0 = ring * dr, r1 = (ring + 1) * dr;
             const double rc = 2.0 / 3.0 * (r1 * r1 * r1 - r0 * r0 * r0) / (r1 * r1 - r0 * r0);  // centroid radius
             const double a = M_PI * (r1 * r1 - r0 * r0) / s.disc_sectors;
             for (int sec = 0; sec < s.disc_sectors; ++sec) {
                 const double th = 2 * M_PI * (sec + 0.5) / s.disc_sectors;
-                add(cx + rc * std::cos(th), cy + rc * std::sin(th), a, k);
+                add(cx + rc * std::cos(th), cy + rc * std::sin(th), a);
             }
         }
+        p.rotor_cells.push_back({first, p.size()});
         // The arm between the body and the disc.
         const double inner = 0.5 * s.body_size_m * std::sqrt(2.0), outer = arm - R;
         if (outer > inner && s.arm_width_m > 0) {
             const double mid = 0.5 * (inner + outer);
-            add(mid * std::cos(phi), mid * std::sin(phi), (outer - inner) * s.arm_width_m, -1);
+            add(mid * std::cos(phi), mid * std::sin(phi), (outer - inner) * s.arm_width_m);
         }
     }
     if (s.body_size_m > 0) {
         const double h = 0.25 * s.body_size_m;  // 2x2 cells
         const double a = 0.25 * s.body_size_m * s.body_size_m;
         for (double bx : {-h, h}) {
-            for (double by : {-h, h}) add(bx, by, a, -1);
+            for (double by : {-h, h}) add(bx, by, a);
         }
     }
     return p;
@@ -219,13 +220,11 @@ Wrench WrenchModel::drag(Scratch& sc) const {
     }
     if (config_.sufferer.thrust_loss) {
         const std::size_t rotors = planform_.rotor_centre.size();
-        std::array<double, flight::kMaxRotors> inflow{};  // area-weighted downward flow through each disc
-        for (std::size_t i = 0; i < n; ++i) {
-            const int r = planform_.rotor[i];
-            if (r >= 0) inflow[static_cast<std::size_t>(r)] += area[i] * sc.uz[i];
-        }
         for (std::size_t r = 0; r < rotors; ++r) {
-            const double dT = config_.sufferer.kv_omega_n_per_mps * inflow[r] / planform_.rotor_area[r];
+            double inflow = 0;  // area-weighted downward flow through the disc
+            for (std::size_t i = planform_.rotor_cells[r][0]; i < planform_.rotor_cells[r][1]; ++i)
+                inflow += area[i] * sc.uz[i];
+            const double dT = config_.sufferer.kv_omega_n_per_mps * inflow / planform_.rotor_area[r];
             fz += dT;
             tx += planform_.rotor_centre[r][1] * dT;
             ty -= planform_.rotor_centre[r][0] * dT;
