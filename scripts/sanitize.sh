@@ -1,22 +1,11 @@
 #!/usr/bin/env bash
 # Builds the parser and unit test executables with AddressSanitizer + UndefinedBehaviorSanitizer in
-# build-asan/ (a separate build directory; DW_ASAN_BUILD names another) and runs them.
-# scripts/test.sh (CI) builds them beside the main tests, at idle CPU priority, in memory, and runs
-# them after. The process tests are left out: they start the ordinary build's executables.
+# build-asan/ (a separate build directory) and runs them. scripts/test.sh (CI) calls it after the
+# main tests. The process tests are left out: they start the ordinary build's executables.
 #   scripts/sanitize.sh           configure, build, run
-#   scripts/sanitize.sh --build   configure and build only (scripts/test.sh builds beside CTest)
-#   scripts/sanitize.sh --run     run only (after --build)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
-stage=all
-case "${1:-}" in
-  "") ;;
-  --build) stage=build ;;
-  --run) stage=run ;;
-  -h|--help) sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-  *) echo "sanitize.sh: error: unknown option '$1' (known: --build, --run, --help)" >&2; exit 2 ;;
-esac
-build="${DW_ASAN_BUILD:-$here/build-asan}"
+build="$here/build-asan"
 # Each run is one process. Fast DDS 2.9 numbers the participants of a process 0, 1, 2, ... and
 # never reuses a number, while discovery on loopback reaches ids 0-31 (dds/config.cpp): a process
 # that has created 32 participants can no longer be discovered. The PX4 tests create 2-4 each, so
@@ -42,12 +31,9 @@ for run in "${runs[@]}"; do
   [[ " ${tests[*]} " == *" ${cmd[0]} "* ]] || tests+=("${cmd[0]}")
 done
 # -g1: line tables, all a sanitizer report needs for file:line; full -g made each file slower to build.
-if [ "$stage" != run ]; then
-  cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 -DDW_SANITIZE=ON \
-    -DDW_BUILD_PREDICTOR=OFF -DDW_BUILD_EXPLAINER=OFF -DDW_BUILD_BENCH=OFF >/dev/null
-  cmake --build "$build" -j "$(nproc)" --target "${tests[@]}"
-fi
-[ "$stage" = build ] && exit 0
+cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 -DDW_SANITIZE=ON \
+  -DDW_BUILD_PREDICTOR=OFF -DDW_BUILD_EXPLAINER=OFF -DDW_BUILD_BENCH=OFF >/dev/null
+cmake --build "$build" -j "$(nproc)" --target "${tests[@]}"
 # new_delete_type_mismatch=0: Debian's libfastrtps 2.9 deletes its StatisticsWriterImpl through a
 # base of another size (inside the library, at every participant's destruction; not the lab's code).
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1:new_delete_type_mismatch=0
