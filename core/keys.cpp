@@ -226,7 +226,8 @@ private:
         double x = 0;
         if (!n.IsScalar() || !YAML::convert<double>::decode(n, x))
             fail(n, key,
-                 n.IsScalar() ? log::cat("expected ", what, ", got '", n.Scalar(), "'") : log::cat("expected ", what));
+                 n.IsScalar() ? log::cat("expected ", what, ", got '", quote_bytes(n.Scalar(), kQuotedBytes), "'")
+                              : log::cat("expected ", what));
         if (!r.contains(x)) fail(n, key, range_problem(x, r));
         v = x;
     }

@@ -8,6 +8,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
+#include "core/text.hpp"
 
 namespace dw::lab {
 
@@ -75,7 +76,8 @@ std::vector<ResourceRow> read_resources(const std::string& path) {
                  {std::stod(rss), std::stod(cpu)},
                  std::stoull(lost)};
         } catch (const std::exception&) {
-            throw InputError(log::cat(path, ":", n, ": expected ", kResourceHeader, ", got '", line, "'"));
+            throw InputError(log::cat(path, ":", n, ": expected ", kResourceHeader, ", got '",
+                                      quote_bytes(line, kQuotedBytes), "'"));
         }
         rows.push_back(std::move(r));
     }

@@ -351,6 +351,10 @@ TEST(PhysicsConfig, ErrorsNameFileLineAndKey) {
     EXPECT_EQ(error("jet:\n  model: magic\n"),
               "p.yaml:2:10: jet.model: unknown jet model 'magic' (expected bauersfeld or jain)");
     EXPECT_EQ(error("stand:\n  rate_hz: fast\n"), "p.yaml:2:12: stand.rate_hz: expected a number, got 'fast'");
+    // A value that swallowed the lines after it (a plain scalar continued over them) is quoted cut
+    // short: the message stays one short line (FileFuzzFull.YamlConfiguration found 855 characters).
+    EXPECT_EQ(error("stand:\n  rate_hz: eighty hertz or so the datasheet says on a good day\n"),
+              "p.yaml:2:12: stand.rate_hz: expected a number, got 'eighty hertz or so the datasheet says on...'");
     EXPECT_EQ(error("air_density_kg_m3: 40\n"), "p.yaml:1:20: air_density_kg_m3: 40 is not in [0.5, 2]");
     EXPECT_NE(error("effects:\n  cell_crosstalk: {from: f_x}\n").find("unknown axis 'f_x'"), std::string::npos);
     EXPECT_NE(error("a: [1,\n").find("p.yaml:"), std::string::npos);
