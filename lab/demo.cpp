@@ -60,6 +60,7 @@ LaunchResult fly_one(const DemoOptions& o, const fs::path& run, const LabFile& l
                      const DemoFlight& f, const std::stop_token& stop) {
     dds::DdsConfig dds = o.dds;
     dds.ns = o.dds.ns + "_" + f.name;
+    dds.participant_id = dds::kAutoParticipantId;  // two launchers in one process cannot share a fixed id
     LaunchOptions lo;
     lo.run_dir = (run / ("lab-" + f.name)).string();
     lo.vars = {{"formation", f.formation},
@@ -103,16 +104,21 @@ std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& 
         step(static_cast<int>(k) + 1)
             .begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
                             " m over loopback DDS (stand, mocap and vehicles simulated)"));
-        flying.push_back(std::async(std::launch::async, [&, k] {
-            try {
-                return fly_one(o, run, lab, physics_path, flights[k], stop_all.get_token());
-            } catch (...) {
-                int none = -1;
-                first_failed.compare_exchange_strong(none, static_cast<int>(k));
-                stop_all.request_stop();
-                throw;
-            }
-        }));
+        try {
+            flying.push_back(std::async(std::launch::async, [&, k] {
+                try {
+                    return fly_one(o, run, lab, physics_path, flights[k], stop_all.get_token());
+                } catch (...) {
+                    int none = -1;
+                    first_failed.compare_exchange_strong(none, static_cast<int>(k));
+                    stop_all.request_stop();
+                    throw;
+                }
+            }));
+        } catch (...) {  // no thread for this flight: the ones flying stop before the error is thrown
+            stop_all.request_stop();
+            throw;
+        }
     }
     std::vector<LaunchResult> results;
     std::vector<std::exception_ptr> errors(flights.size());
