@@ -1,13 +1,11 @@
 #include "lab/demo.hpp"
 
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <future>
 #include <sstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -17,7 +15,6 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
-#include "dds/process_cli.hpp"
 #include "lab/lab_sim_yaml.hpp"
 #include "lab/launcher.hpp"
 #include "physics/config.hpp"
@@ -54,83 +51,43 @@ struct DemoFlight {
 // The effect the demo hides in the running lab: the stand agent's clock 0.1 s ahead of the others'.
 constexpr const char* kHiddenStandClockOffsetS = "0.1";
 
-// One experiment over loopback DDS in its own namespace (so that two fly at once), its recording
-// exported to a flight folder.
-LaunchResult fly_one(const DemoOptions& o, const fs::path& run, const LabFile& lab, const std::string& physics_path,
-                     const DemoFlight& f, const std::stop_token& stop) {
-    dds::DdsConfig dds = o.dds;
-    dds.ns = o.dds.ns + "_" + f.name;
-    dds.participant_id = dds::kAutoParticipantId;  // two launchers in one process cannot share a fixed id
-    LaunchOptions lo;
-    lo.run_dir = (run / ("lab-" + f.name)).string();
-    lo.vars = {{"formation", f.formation},
-               {"vehicles", f.vehicles},
-               {"legs", f.legs},
-               {"altitudes", f.altitudes},
-               {"speed", "0.5"},
-               {"physics", physics_path},
-               {"model", physics_path},
-               {"recording", "../recordings/" + f.name + ".mcap"},
-               {"run_id", "demo-" + f.name},
-               {"stand_clock_offset", f.stand_clock_offset}};
-    lo.dds_args = dds::child_args(dds, o.log_level);
-    lo.live = false;  // two launchers share the terminal: their status every 10 s, not redrawn
-    lo.say = [name = f.name](const std::string& s) { std::cerr << log::cat("dw-lab [", name, "]: ", s, "\n"); };
-    lo.stop = stop;
-    const auto r = launch(lab, lo, dds);
-    throw_if_stopped(stop, "the demo");
-    if (!r.succeeded())
-        throw RuntimeError(log::cat("the ", f.formation, " experiment ended ",
-                                    r.phase.empty() ? "without a state" : r.phase, " (status ", r.experiment_status,
-                                    "; logs in ", lo.run_dir, "/logs)"));
-    run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight",
-                 (run / "flights" / f.name).string()},
-                (run / "logs" / ("export-" + f.name + ".log")).string(), stop);
-    return r;
-}
-
-// 1-2. The experiments at once, every process separate, over loopback DDS. The first to fail stops
-// the others, and its error is the one thrown.
+// 1-2. Two experiments, every process separate, over loopback DDS; each recording exported to a flight.
 std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& run, const LabFile& lab,
                                           const std::string& physics_path, const std::vector<DemoFlight>& flights,
                                           const std::function<Step(int)>& step) {
-    fs::create_directories(run / "recordings");
-    std::stop_source stop_all;
-    const std::stop_callback forward(o.stop, [&] { stop_all.request_stop(); });
-    std::atomic<int> first_failed{-1};
-    std::vector<std::future<LaunchResult>> flying;
+    std::vector<LaunchResult> results;
     for (std::size_t k = 0; k < flights.size(); ++k) {
         const auto& f = flights[k];
         step(static_cast<int>(k) + 1)
             .begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
                             " m over loopback DDS (stand, mocap and vehicles simulated)"));
-        try {
-            flying.push_back(std::async(std::launch::async, [&, k] {
-                try {
-                    return fly_one(o, run, lab, physics_path, flights[k], stop_all.get_token());
-                } catch (...) {
-                    int none = -1;
-                    first_failed.compare_exchange_strong(none, static_cast<int>(k));
-                    stop_all.request_stop();
-                    throw;
-                }
-            }));
-        } catch (...) {  // no thread for this flight: the ones flying stop before the error is thrown
-            stop_all.request_stop();
-            throw;
-        }
+        LaunchOptions lo;
+        lo.run_dir = (run / ("lab-" + f.name)).string();
+        lo.vars = {{"formation", f.formation},
+                   {"vehicles", f.vehicles},
+                   {"legs", f.legs},
+                   {"altitudes", f.altitudes},
+                   {"speed", "0.5"},
+                   {"physics", physics_path},
+                   {"model", physics_path},
+                   {"recording", "../recordings/" + f.name + ".mcap"},
+                   {"run_id", "demo-" + f.name},
+                   {"stand_clock_offset", f.stand_clock_offset}};
+        fs::create_directories(run / "recordings");
+        lo.dds_args = o.dds_args;
+        lo.say = [](const std::string& s) { std::cerr << "dw-lab: " << s << "\n"; };
+        lo.stop = o.stop;
+        auto r = launch(lab, lo, o.dds);
+        throw_if_stopped(o.stop, "the demo");
+        if (!r.succeeded())
+            throw RuntimeError(log::cat("the ", f.formation, " experiment ended ",
+                                        r.phase.empty() ? "without a state" : r.phase, " (status ", r.experiment_status,
+                                        "; logs in ", lo.run_dir, "/logs)"));
+        results.push_back(r);
+        run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight",
+                     (run / "flights" / f.name).string()},
+                    (run / "logs" / ("export-" + f.name + ".log")).string(), o.stop);
     }
-    std::vector<LaunchResult> results;
-    std::vector<std::exception_ptr> errors(flights.size());
-    for (std::size_t k = 0; k < flying.size(); ++k) {
-        try {
-            results.push_back(flying[k].get());
-        } catch (...) {
-            errors[k] = std::current_exception();
-        }
-    }
-    throw_if_stopped(o.stop, "the demo");
-    if (first_failed >= 0) std::rethrow_exception(errors[static_cast<std::size_t>(first_failed.load())]);
     return results;
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // `dw-lab demo`: the whole lab in one command, simulated. Flies single-neighbour legs and a
-// Leader Follower K=3 experiment at once, each in its own DDS namespace, with every process
-// separate on loopback DDS (the lab file config/lab.sim.yaml), records MCAP, exports flight folders, trains and compares the models
+// Leader Follower K=3 experiment with every process separate on loopback DDS (the lab file
+// config/lab.sim.yaml), records MCAP, exports flight folders, trains and compares the models
 // (naive linear, learnt linear, Deep Sets), draws maps, then explains a "real" flight made with
 // a hidden effect — all into one run folder with an index.md.
 #include <stop_token>
@@ -15,11 +15,11 @@ namespace dw::lab {
 
 struct DemoOptions {
     std::string out_dir;
-    bool quick = false;              // fewer legs and epochs (the CI test)
-    int jobs = machine_cores();      // cores the study may use (dw-predictor study --jobs)
-    dds::DdsConfig dds;              // the launcher's; each experiment flies in its own namespace beside it
-    std::string log_level = "info";  // for every process
-    std::stop_token stop;            // every step and child stops: dw::Stopped
+    bool quick = false;                 // fewer legs and epochs (the CI test)
+    int jobs = machine_cores();         // cores the study may use (dw-predictor study --jobs)
+    std::vector<std::string> dds_args;  // for every process
+    dds::DdsConfig dds;                 // the launcher's own participant
+    std::stop_token stop;               // every step and child stops: dw::Stopped
 };
 
 // Returns the exit code (0 when every step succeeded).

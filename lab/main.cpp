@@ -99,7 +99,7 @@ int run(int argc, char** argv) {
     auto* demo = app.add_subcommand(
         "demo", "fly a simulated experiment end to end: recording, models, table, maps, explained mismatch");
     demo->add_option("--out", demo_o.out_dir, "run folder (default: runs/demo-<time>)");
-    demo->add_flag("--quick", demo_o.quick, "fewer legs and epochs (a smoke test, ~2 min)");
+    demo->add_flag("--quick", demo_o.quick, "fewer legs and epochs (a smoke test, ~3 min)");
     demo->add_option("--jobs", demo_o.jobs, "cores the study may use (default: every core)")
         ->check(dw::cli::in(dw::kJobsRange));
     RunCommand runc;
@@ -124,8 +124,8 @@ int run(int argc, char** argv) {
     if (runc.sub->count("--run-dir")) dw::require_output_dir(runc.run_dir, "--run-dir");
     if (demo->parsed()) {
         if (demo_o.out_dir.empty()) demo_o.out_dir = "runs/demo-" + stamp();
+        demo_o.dds_args = cli.dds_args();
         demo_o.dds = cli.dds();
-        demo_o.log_level = cli.base().log_level;
         demo_o.stop = dw::Shutdown::instance().token();
         return dw::lab::run_demo(demo_o);
     }
