@@ -22,12 +22,10 @@ void ProcessCli::parse(int argc, char** argv) {
     offset_clock_ = OffsetClock(SystemClock::instance(), from_seconds(clock_offset_s_));
 }
 
-std::vector<std::string> child_args(const DdsConfig& dds, const std::string& log_level) {
-    std::vector<std::string> a = to_args(dds);
-    a.insert(a.end(), {"--log-level", log_level});
+std::vector<std::string> ProcessCli::dds_args() const {
+    std::vector<std::string> a = to_args(dds_);
+    a.insert(a.end(), {"--log-level", base_.log_level});
     return a;
 }
-
-std::vector<std::string> ProcessCli::dds_args() const { return child_args(dds_, base_.log_level); }
 
 }  // namespace dw::dds

@@ -13,9 +13,6 @@ namespace dw::dds {
 
 inline constexpr Range kClockOffsetRange{-3600, 3600, "s"};
 
-// DDS settings and a log level as flags, to hand to a child process.
-std::vector<std::string> child_args(const DdsConfig& dds, const std::string& log_level);
-
 class ProcessCli {
 public:
     explicit ProcessCli(const std::string& description);

@@ -50,7 +50,8 @@ echo "test.sh: ctest: $((SECONDS - start)) s (cores idle $(((idle1 - idle0) * 10
 # 0.616 MB/min (limit 0.5) in one run of five (the build writes 1.1 GB beside it; not shown to be
 # the cause); in memory (/dev/shm) under SCHED_IDLE (2026-12-01, runs 60-61: 18.5-19.75 min in all,
 # the cores 99 % busy over CTest) it was reverted for a late SIGINT answer that run 63 then showed
-# without it (docs/BENCHMARKS.md, fifth pass): not shown to cost a claim; not yet tried again.
+# without it; tried again (2026-12-02, run 65) it slowed the tests themselves (CTest 701 s against
+# about 590) and a restarted recorder missed 1.31 s (limit 1 s) (docs/BENCHMARKS.md, sixth pass).
 start=$SECONDS
 "$here/scripts/sanitize.sh" || status=1
 echo "test.sh: sanitizer stage: $((SECONDS - start)) s"
