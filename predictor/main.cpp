@@ -160,6 +160,7 @@ struct TrainCommand {
         dw::require_writable_path(model_out, "--out");
         to.stop = dw::Shutdown::instance().token();
         Dataset d = load_all(data);
+        dw::throw_if_stopped(to.stop, "loading the data");                // before libtorch loads (~0.4 s)
         if (to.kind == "naive_linear") d = d.from_two_vehicle_flights();  // single-neighbour data only
         const Split s = split_by_leg(d);
         require_samples(d, s.train, "training");
