@@ -311,21 +311,25 @@ std::vector<double> fit(const Calibration& cal, std::vector<double> x, const std
     return x;
 }
 
-// Per pairing, every near sample: offset, height above, recorded, calibrated and base f_d.
+// A flight's near samples onto `s`: offset, height above, recorded f_d, and f_d as `p1` and `p0`
+// predict it (the calibrated and the uncalibrated physics).
+void add_rows(PairingSamples& s, const FlightData& fd, const std::vector<Wrench6>& p1, const std::vector<Wrench6>& p0) {
+    for (std::size_t k = 0; k < fd.rows.size(); ++k) {
+        const auto i = fd.rows[k];
+        s.rows.push_back({fd.offset[k], fd.above[k], fd.sim->measured()[i][kFdAxis], p1[i][kFdAxis], p0[i][kFdAxis]});
+    }
+}
+
+// Per pairing, every near sample (add_rows).
 std::vector<PairingSamples> samples_by_pairing(const Calibration& cal, const std::vector<double>& x0,
                                                const std::vector<double>& x, const CalibrateOptions& o) {
     std::map<std::string, PairingSamples> by;
     const auto base = cal.config_of(x0), fitted = cal.config_of(x);
     for (const auto& fd : cal.flights()) {
         throw_if_stopped(o.stop, "the calibration");
-        const auto p0 = fd.sim->recorded(base), p1 = fd.sim->recorded(fitted);
         auto& s = by[fd.pairing];
         s.pairing = fd.pairing;
-        for (std::size_t k = 0; k < fd.rows.size(); ++k) {
-            const auto i = fd.rows[k];
-            s.rows.push_back(
-                {fd.offset[k], fd.above[k], fd.sim->measured()[i][kFdAxis], p1[i][kFdAxis], p0[i][kFdAxis]});
-        }
+        add_rows(s, fd, fd.sim->recorded(fitted), fd.sim->recorded(base));
     }
     std::vector<PairingSamples> out;
     for (auto& [name, s] : by) out.push_back(std::move(s));
@@ -337,6 +341,22 @@ std::vector<PairingSamples> samples_by_pairing(const Calibration& cal, const std
 double turbulence_intensity(const std::vector<PairingSamples>& pairings) {
     PairingSamples all;
     for (const auto& p : pairings) all.rows.insert(all.rows.end(), p.rows.begin(), p.rows.end());
+    return scatter_of(all).two_i / 2;
+}
+
+// A fold's: measured on the residual its own calibration `xt` leaves on its own flights (the
+// trial it leaves out plays no part, as in its jets; the air along each flight is mostly still
+// cached from the fit).
+double fold_turbulence_intensity(const Calibration& cal, const std::vector<double>& xt,
+                                 const std::vector<std::size_t>& flights, const CalibrateOptions& o) {
+    PairingSamples all;
+    const auto fitted = cal.config_of(xt);
+    for (auto f : flights) {
+        throw_if_stopped(o.stop, "the calibration");
+        const auto& fd = cal.flights()[f];
+        const auto p = fd.sim->recorded(fitted);
+        add_rows(all, fd, p, p);
+    }
     return scatter_of(all).two_i / 2;
 }
 
@@ -414,7 +434,8 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     std::vector<std::vector<double>> replicates;
     for (std::size_t t = 0; t < cal.trials().size(); ++t) {
         const auto& trial = cal.trials()[t];
-        const auto xt = fit(cal, x, flights_except(cal, t), o.fold_iterations, o, "without " + trial.name);
+        const auto others = flights_except(cal, t);
+        const auto xt = fit(cal, x, others, o.fold_iterations, o, "without " + trial.name);
         replicates.push_back(xt);
         const auto& own = trial.flights;
         TrialError e;
@@ -425,9 +446,10 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         e.rmse_before = rmse(before);
         e.rmse_all = rmse(cal.residuals(x, own, false));
         e.rmse_heldout = rmse(cal.residuals(xt, own, false));
+        e.turbulence_intensity = fold_turbulence_intensity(cal, xt, others, o);
         if (o.explain_heldout)
             explain_heldout(
-                e, with_provenance(cal.config_of(xt), o.physics, R.turbulence_intensity, "without " + trial.name), in);
+                e, with_provenance(cal.config_of(xt), o.physics, e.turbulence_intensity, "without " + trial.name), in);
         R.trials.push_back(e);
     }
     const auto sd = jackknife_sd(replicates);

@@ -48,6 +48,10 @@ struct TrialError {
     std::vector<std::string> flights;
     std::size_t samples = 0;
     double rmse_before = 0, rmse_all = 0, rmse_heldout = 0;
+    // The jets' turbulence intensity of the calibration without this trial, measured on the residual
+    // it leaves on the other trials (0: the spread does not grow there, and the fold keeps the base's
+    // turbulence): what explain_heldout's explanation counts as noise where a jet pushes.
+    double turbulence_intensity = 0;
     // With explain_heldout, per flight: the explainer's held-out f_d error after its fit over its
     // noise floor, and what it accepted.
     std::vector<double> explained_ratio;

@@ -54,7 +54,8 @@ std::string scatter_section(const std::vector<PairingSamples>& pairings, const s
        << ": the calibrated physics takes a turbulence "
        << "intensity of " << fixed(intensity, 3)
        << " (`turbulence`), which the explainer counts as noise where a jet pushes (its excess divides "
-          "each residual by √(σ² + (2 I f_d)²)).\n\n";
+          "each residual by √(σ² + (2 I f_d)²)). Each trial left out gets the intensity of the other trials "
+          "(calibration.json, `turbulence_intensity_held_out`).\n\n";
     return md.str();
 }
 
@@ -108,6 +109,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
                           {"rmse_f_d_before_n", t.rmse_before},
                           {"rmse_f_d_all_trials_n", t.rmse_all},
                           {"rmse_f_d_held_out_n", t.rmse_heldout},
+                          {"turbulence_intensity_held_out", t.turbulence_intensity},
                           {"explained_f_d_over_noise_floor", t.explained_ratio},
                           {"with_discrepancy_f_d_over_noise_floor", t.discrepancy_ratio},
                           {"explained_by", t.explained_by}});

@@ -70,6 +70,42 @@ TEST(VehicleClasses, AClassGivesItsVehiclesItsJetAndItsSufferersDragAndThrustLos
     }
 }
 
+// A trial left out is predicted and explained by a calibration that did not see it: its jets, and
+// the turbulence its explanation counts as noise. One trial's flight is simulated with turbulent
+// jets, two without: pooled over the three the residual's spread grows with the push, but the
+// turbulent trial, left out, gets only the quiet trials' intensity.
+TEST(PhysicsCalibration, EachTrialLeftOutGetsTheTurbulenceOfTheOtherTrials) {
+    PhysicsConfig quiet;
+    quiet.turbulence.enabled = false;
+    quiet.stand.noise_n = 0.005;
+    PhysicsConfig turbulent = quiet;
+    turbulent.turbulence.enabled = true;
+    turbulent.turbulence.intensity = 0.3;
+    dw::test::TempDir dir;
+    dw::analysis::CalibrateOptions o;
+    for (int i = 0; i < 3; ++i) {
+        FlyOptions fo;
+        fo.grid.legs = 3;
+        fo.seed = 21 + static_cast<std::uint64_t>(i);
+        o.flights.push_back(dir.file("flight" + std::to_string(i)));
+        dw::flight::write_flight(simulate_flight(i == 0 ? turbulent : quiet, fo).flight, o.flights.back());
+    }
+    o.physics = quiet;
+    o.out_dir = dir.file("cal");
+    o.max_iterations = 5;
+    o.fold_iterations = 2;
+    const auto r = dw::analysis::calibrate(o);
+    // Quiet flights alone give I about 0.003 (2I 0.006-0.007: the test above).
+    constexpr double kQuiet = 0.02, kTurbulent = 0.05;
+    EXPECT_GT(r.turbulence_intensity, kTurbulent);
+    ASSERT_EQ(r.trials.size(), 3u);
+    for (const auto& t : r.trials) {
+        ASSERT_EQ(t.flights.size(), 1u) << t.trial;
+        if (t.flights[0] == o.flights[0]) EXPECT_LT(t.turbulence_intensity, kQuiet) << "the turbulent trial's own fold";
+        else EXPECT_GT(t.turbulence_intensity, kTurbulent) << t.trial << ": a fold with the turbulent trial";
+    }
+}
+
 // Flights simulated with a jet law other than the configuration's: calibrated from the published
 // coefficients, each is recovered inside its interval, and every trial left out is predicted
 // better than by the uncalibrated physics.
@@ -125,6 +161,8 @@ TEST(PhysicsCalibration, RecoversAJetLawHiddenInSimulatedFlightsAndPredictsTheTr
         const auto report =
             nlohmann::json::parse(dw::read_file(dir.file("cal/folds/" + t.trial + "/" + t.trial + "/report.json")));
         EXPECT_NE(report["physics_calibration"].get<std::string>().find("without " + t.trial), std::string::npos);
+        const PhysicsConfig fold = load_physics(dir.file("cal/folds/" + t.trial + "/physics.yaml"));
+        EXPECT_NEAR(fold.turbulence.enabled ? fold.turbulence.intensity : 0.0, t.turbulence_intensity, 1e-9) << t.trial;
     }
     const PhysicsConfig written = load_physics(r.physics_path);
     ASSERT_EQ(written.classes.size(), 1u);
