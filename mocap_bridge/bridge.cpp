@@ -1,5 +1,6 @@
 #include "mocap_bridge/bridge.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <optional>
@@ -9,6 +10,10 @@
 #include "dds/time.hpp"
 
 namespace dw::natnet {
+
+namespace {
+constexpr Nanos kKeepAlivePeriod_ns = 1'000'000'000;  // next_frame sends a keepalive about this often
+}  // namespace
 
 NatNetClient::NatNetClient(const ClientOptions& o)
     : options_(o), socket_(o.local_ip, 0), server_endpoint_(Endpoint::make(o.server_ip, o.command_port)) {}
@@ -54,23 +59,27 @@ ModelDef NatNetClient::request_modeldef() {
 }
 
 std::optional<NatNetClient::Received> NatNetClient::next_frame(int timeout_ms) {
-    const Nanos now = SystemClock::instance().monotonic_ns();
-    if (now - last_keepalive_ > 1'000'000'000) {
-        socket_.send_to(server_endpoint_, build_simple(kKeepAlive));
-        last_keepalive_ = now;
-    }
-    auto p = socket_.receive(timeout_ms);
-    if (!p) return std::nullopt;
-    Received r;
-    r.receive_wall_ns = SystemClock::instance().now_ns();
-    try {
-        if (message_id(*p) != kFrameOfData) return std::nullopt;
-        r.frame = parse_frame(payload(*p), server_.natnet);
-    } catch (const InputError& e) {
-        if (++malformed_ <= 5) log::warn("skipped a malformed NatNet packet: ", e.what());
-        return std::nullopt;
-    }
-    return r;
+    const auto& clock = SystemClock::instance();
+    const Nanos deadline = clock.monotonic_ns() + static_cast<Nanos>(timeout_ms) * 1'000'000;
+    Nanos now = clock.monotonic_ns();
+    do {  // until a frame or the deadline: a packet of another kind is not the end of the wait
+        if (now - last_keepalive_ > kKeepAlivePeriod_ns) {
+            socket_.send_to(server_endpoint_, build_simple(kKeepAlive));
+            last_keepalive_ = now;
+        }
+        auto p = socket_.receive(static_cast<int>(std::max<Nanos>(0, deadline - now) / 1'000'000));
+        if (!p) return std::nullopt;
+        const Nanos received = clock.now_ns();
+        try {
+            // Another kind: e.g. a second answer to model definitions asked again (request_modeldef
+            // asks again when the first answer is slow), or a server's message string.
+            if (message_id(*p) == kFrameOfData) return Received{parse_frame(payload(*p), server_.natnet), received};
+        } catch (const InputError& e) {
+            if (++malformed_ <= 5) log::warn("skipped a malformed NatNet packet: ", e.what());
+        }
+        now = clock.monotonic_ns();
+    } while (now < deadline);
+    return std::nullopt;
 }
 
 AxisMap AxisMap::parse(const std::string& text) {

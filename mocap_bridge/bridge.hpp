@@ -33,8 +33,8 @@ public:
         FrameOfData frame;
         Nanos receive_wall_ns = 0;
     };
-    // The next frame within timeout_ms (other packets are handled or ignored); keepalives are
-    // sent about once a second. Malformed packets are counted and skipped.
+    // The next frame within timeout_ms: packets of other kinds are ignored and malformed ones counted
+    // and skipped, and the wait goes on until the deadline. Keepalives are sent about once a second.
     std::optional<Received> next_frame(int timeout_ms);
     std::uint64_t malformed() const { return malformed_; }
     const ServerInfo& server() const { return server_; }

@@ -274,6 +274,42 @@ TEST(Bridge, EmulatorToNedWithHonestTimestampsAndDroppedFrames) {
     EXPECT_GT(conv.dropped(), 5u);
 }
 
+// request_modeldef asks again when an answer is slow (a busy server), so a second answer may come
+// after the first: next_frame waits past it for the frame (found under the sanitizer, eight test
+// processes on two cores). A server written here answers the model definitions twice, then streams.
+TEST(Bridge, ALateSecondAnswerToModelDefinitionsIsNotTheEndOfTheWaitForAFrame) {
+    UdpSocket server("127.0.0.1", 0);
+    std::thread serve([&server] {
+        Endpoint client;
+        ServerInfo info;
+        info.natnet = {4, 1};
+        for (int got = 0; got < 2;) {
+            const auto p = server.receive(5000, &client);
+            if (!p) return;
+            if (message_id(*p) == kConnect) server.send_to(client, build_server_info(info)), ++got;
+            if (message_id(*p) == kRequestModelDef) {
+                ModelDef m;
+                m.rigid_bodies.push_back({"v1", 1, -1, {}, {}, {}});
+                for (int answer = 0; answer < 2; ++answer) server.send_to(client, build_modeldef(m, info.natnet));
+                ++got;
+            }
+        }
+        FrameOfData f;
+        f.frame_number = 7;
+        f.bodies.push_back({1, {0.1f, 1.0f, 0.2f}, {0, 0, 0, 1}, 0, true});
+        server.send_to(client, build_frame(f, info.natnet));
+    });
+    ClientOptions co;
+    co.command_port = server.port();
+    NatNetClient client(co);
+    client.connect();
+    EXPECT_EQ(client.request_modeldef().rigid_bodies.size(), 1u);
+    const auto r = client.next_frame(5000);
+    serve.join();
+    ASSERT_TRUE(r.has_value()) << "the second model definitions ended the wait";
+    EXPECT_EQ(r->frame.frame_number, 7);
+}
+
 TEST(Bridge, TrackingLossIsFlaggedWithinOneFrameAndVelocityIsSaneRightAfter) {
     EmulatorOptions eo;
     eo.port = 0;
