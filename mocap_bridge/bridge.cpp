@@ -60,8 +60,8 @@ ModelDef NatNetClient::request_modeldef() {
 
 std::optional<NatNetClient::Received> NatNetClient::next_frame(int timeout_ms) {
     const auto& clock = SystemClock::instance();
-    const Nanos deadline = clock.monotonic_ns() + static_cast<Nanos>(timeout_ms) * 1'000'000;
     Nanos now = clock.monotonic_ns();
+    const Nanos deadline = now + static_cast<Nanos>(timeout_ms) * 1'000'000;
     do {  // until a frame or the deadline: a packet of another kind is not the end of the wait
         if (now - last_keepalive_ > kKeepAlivePeriod_ns) {
             socket_.send_to(server_endpoint_, build_simple(kKeepAlive));
