@@ -23,6 +23,15 @@ namespace frtps = eprosima::fastrtps::rtps;
 namespace {
 constexpr std::uint32_t kSocketBuffer = 4 * 1024 * 1024;             // large samples over UDP need it
 constexpr std::uint32_t kInitialPeersRange = kMaxParticipantId + 1;  // participants per host reachable
+// A participant's periodic announcement (and its lease: a peer silent this long is dropped).
+// A participant that joins late (a restarted process) is often answered only at its peers' next
+// periodic announcement (Fast DDS 2.9): a restarted recorder matched the stand's wrench writer after
+// 0.36-0.46 s (2 of 7 runs) at a 1 s period here, and lost 1.3 s of it in CI (limit 1 s); within
+// 0.25 s at a 0.2 s period (4 of 8 runs slow) and within 0.09 s at 0.25 s (6 runs), a busy loop
+// beside them (tests/test_lab.cpp, LabRun.ARecorderKilledMid...). Four announcements a second to
+// the 32 ports of a host is about a hundred small datagrams a second per participant on loopback.
+constexpr std::uint32_t kAnnouncementPeriod_ns = 250'000'000;
+constexpr std::int32_t kLease_s = 5;
 
 constexpr const char* kProfileWhat = "DDS profile";
 constexpr const char* kTransportWhat = "transport";
@@ -255,8 +264,9 @@ fdds::DomainParticipantQos participant_qos(const DdsConfig& c, const std::string
         builtin.discovery_config.m_DiscoveryServers.push_back(server);
     }
     // Lets a peer that vanishes without saying goodbye be dropped within a few seconds.
-    builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(5, 0);
-    builtin.discovery_config.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(1, 0);
+    builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(kLease_s, 0);
+    builtin.discovery_config.leaseDuration_announcementperiod =
+        eprosima::fastrtps::Duration_t(0, kAnnouncementPeriod_ns);
     if (!c.security.empty()) add_security(qos, c.security, c.identity.empty() ? name : c.identity);
     return qos;
 }
