@@ -28,32 +28,29 @@ if ! command -v npm >/dev/null; then
 fi
 (cd "$here/tests/js" && npm ci --no-audit --no-fund --loglevel=error)
 status=0
-# The cores' idle share over CTest (/proc/stat's cpu line: user, nice, system busy; idle, iowait
-# not): what the slots leave unused.
-cpu_ticks() { awk '/^cpu /{print $2 + $3 + $4, $5 + $6}' /proc/stat; }
-read -r busy0 idle0 < <(cpu_ticks)
-start=$SECONDS
 # Tests run side by side while the machine's CPU slots last (tests/CMakeLists.txt: what each takes;
 # build/resources.json: how many there are).
 spec="$here/build/resources.json"
 slots=$(grep -o '"slots": [0-9]*' "$spec" | grep -o '[0-9]*$')
-run_ctest() {
+# The cores' idle share over CTest (/proc/stat's cpu line: user, nice, system busy; idle, iowait
+# not): what the slots leave unused.
+cpu_ticks() { awk '/^cpu /{print $2 + $3 + $4, $5 + $6}' /proc/stat; }
+# One CTest pass (label, then the tests it selects): its time and the cores' idle share over it.
+ctest_pass() {
+  local label=$1 begin=$SECONDS busy0 idle0 busy1 idle1
+  shift
+  read -r busy0 idle0 < <(cpu_ticks)
   ctest --test-dir "$here/build" --output-on-failure -j "$slots" --resource-spec-file "$spec" --timeout 900 "$@" \
     || status=$?
+  read -r busy1 idle1 < <(cpu_ticks)
+  echo "test.sh: $label: $((SECONDS - begin)) s (cores idle $(((idle1 - idle0) * 100 / (busy1 - busy0 + idle1 - idle0 + 1))) %)"
 }
-idle_share() { echo $(((idle1 - idle0) * 100 / (busy1 - busy0 + idle1 - idle0 + 1))); }
-run_ctest -LE full
-read -r busy1 idle1 < <(cpu_ticks)
-echo "test.sh: ctest: $((SECONDS - start)) s (cores idle $(idle_share) %)"
+ctest_pass ctest -LE full
 # --full: the full-size twins after the default suite, not beside it. Started together (COST puts
 # the soak first), the soak's recorder grew 0.515 and 0.790 MB/min beside the full-size twins
 # (limit 0.5; 0.15-0.19 beside the default suite): the default part of --full is the default run.
 if [ "$full" = 1 ]; then
-  start=$SECONDS
-  read -r busy0 idle0 < <(cpu_ticks)
-  run_ctest -L full
-  read -r busy1 idle1 < <(cpu_ticks)
-  echo "test.sh: ctest (full-size twins): $((SECONDS - start)) s (cores idle $(idle_share) %)"
+  ctest_pass "ctest (full-size twins)" -L full
 fi
 # The parser and unit tests again under AddressSanitizer + UBSan (build-asan/, issue 14), after
 # CTest. Built beside it (issue 40), it took the idle CPU but cost real-time claims: at nice 19
