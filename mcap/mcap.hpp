@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <stop_token>
@@ -13,6 +14,10 @@
 #include <vector>
 
 namespace dw::mcap {
+
+namespace detail {
+class Compressor;
+}
 
 inline constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 
@@ -120,6 +125,7 @@ private:
     std::vector<std::tuple<std::uint64_t, std::uint64_t, std::string>> metadata_index_;
 
     std::string chunk_;  // uncompressed records of the open chunk
+    std::unique_ptr<detail::Compressor> compressor_;
     std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>>
         chunk_index_;  // channel -> (log_time, offset)
     std::uint64_t chunk_start_ = 0, chunk_end_ = 0;

@@ -29,24 +29,48 @@ std::string encode(const Channel& x) {
     return o.s;
 }
 
-std::string compress(Compression c, const std::string& in) {
-    if (c == Compression::zstd) {
-        std::string out(ZSTD_compressBound(in.size()), '\0');
-        const std::size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), 1);
+namespace {
+constexpr int kZstdLevel = 1;
+LZ4F_preferences_t lz4_preferences(std::size_t size) {
+    LZ4F_preferences_t prefs{};
+    prefs.frameInfo.contentSize = size;
+    return prefs;
+}
+std::size_t compress_bound(Compression c, std::size_t size) {
+    if (c == Compression::zstd) return ZSTD_compressBound(size);
+    const LZ4F_preferences_t prefs = lz4_preferences(size);
+    return c == Compression::lz4 ? LZ4F_compressFrameBound(size, &prefs) : 0;
+}
+}  // namespace
+
+Compressor::Compressor(Compression c, std::size_t max_input) : c_(c) {
+    if (c_ == Compression::zstd) {
+        zstd_ = ZSTD_createCCtx();
+        if (!zstd_) throw RuntimeError("zstd: cannot create a compression context");
+    }
+    // Sized and touched now (resize writes every byte; the capacity stays), and the context's
+    // workspace allocated by compressing as much once: resident from the start.
+    out_.resize(compress_bound(c_, max_input));
+    if (c_ != Compression::none) (*this)(std::string(max_input, '\0'));
+    out_.clear();
+}
+
+Compressor::~Compressor() { ZSTD_freeCCtx(zstd_); }
+
+const std::string& Compressor::operator()(const std::string& in) {
+    if (c_ == Compression::none) return in;
+    out_.resize(compress_bound(c_, in.size()));
+    std::size_t n = 0;
+    if (c_ == Compression::zstd) {
+        n = ZSTD_compressCCtx(zstd_, out_.data(), out_.size(), in.data(), in.size(), kZstdLevel);
         if (ZSTD_isError(n)) throw RuntimeError(log::cat("zstd: ", ZSTD_getErrorName(n)));
-        out.resize(n);
-        return out;
-    }
-    if (c == Compression::lz4) {
-        LZ4F_preferences_t prefs{};
-        prefs.frameInfo.contentSize = in.size();
-        std::string out(LZ4F_compressFrameBound(in.size(), &prefs), '\0');
-        const std::size_t n = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &prefs);
+    } else {
+        const LZ4F_preferences_t prefs = lz4_preferences(in.size());
+        n = LZ4F_compressFrame(out_.data(), out_.size(), in.data(), in.size(), &prefs);
         if (LZ4F_isError(n)) throw RuntimeError(log::cat("lz4: ", LZ4F_getErrorName(n)));
-        out.resize(n);
-        return out;
     }
-    return in;
+    out_.resize(n);
+    return out_;
 }
 
 std::vector<std::uint8_t> decompress(const std::string& compression, std::span<const std::uint8_t> in,

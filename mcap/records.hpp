@@ -13,6 +13,8 @@
 #include "core/log.hpp"
 #include "mcap/mcap.hpp"
 
+struct ZSTD_CCtx_s;
+
 namespace dw::mcap::detail {
 
 enum Op : std::uint8_t {
@@ -128,7 +130,25 @@ inline constexpr std::uint64_t kMaxRatio = 100;
 inline constexpr std::uint64_t kMaxSchemaBytes = 1ull << 20;
 inline constexpr std::uint64_t kMaxSchemaBytesInAll = 16ull << 20;
 
-std::string compress(Compression c, const std::string& in);
+// Chunk compression that keeps its state between chunks: one zstd context and one output buffer,
+// sized and touched for the largest chunk up front and reused. Compressing each chunk with a new
+// context and a new buffer allocated and freed a few hundred KB per chunk, in sizes that follow
+// the chunks; on a busy machine (late ticks, slow fdatasync: larger chunks) a recorder's memory
+// then rose after its warm-up (docs/BENCHMARKS.md, seventh pass).
+class Compressor {
+public:
+    Compressor(Compression c, std::size_t max_input);
+    ~Compressor();
+    Compressor(const Compressor&) = delete;
+    Compressor& operator=(const Compressor&) = delete;
+    // `in` compressed (Compression::none: `in` itself); valid until the next call.
+    const std::string& operator()(const std::string& in);
+
+private:
+    Compression c_;
+    ZSTD_CCtx_s* zstd_ = nullptr;  // zstd.h's ZSTD_CCtx
+    std::string out_;
+};
 // A compressed chunk's records (an uncompressed chunk's are read where they lie: chunk_records).
 std::vector<std::uint8_t> decompress(const std::string& compression, std::span<const std::uint8_t> in,
                                      std::uint64_t size, const In& where);

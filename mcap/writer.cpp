@@ -2,6 +2,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <functional>
 #include <tuple>
@@ -12,6 +13,24 @@
 namespace dw::mcap {
 
 using namespace detail;
+
+namespace {
+// Pending file bytes are written out at this size between timed flushes (memory stays bounded);
+// a compressed chunk body this large goes straight to the file instead of through the buffer.
+constexpr std::size_t kWriteBlock = 4u << 20;
+constexpr std::size_t kDirectBody = 64u << 10;
+// A chunk closes at the first message that takes it to chunk_size: room for one more message.
+// What is made resident up front is bounded (--chunk-size goes to 1 GiB): larger chunks grow as
+// they fill, as before.
+constexpr std::size_t kChunkSlack = 64u << 10;
+constexpr std::size_t kMaxResidentChunk = 8u << 20;
+std::size_t resident_chunk(const WriterOptions& o) { return std::min(o.chunk_size + kChunkSlack, kMaxResidentChunk); }
+// Reserves `n` bytes of `s` and writes them once, so they are resident from the start.
+void reserve_resident(std::string& s, std::size_t n) {
+    s.resize(n);
+    s.clear();
+}
+}  // namespace
 
 struct Writer::ChunkIndexEntry {
     std::uint64_t start_time, end_time, chunk_offset, chunk_length;
@@ -41,7 +60,15 @@ struct Writer::ChunkIndexEntry {
     }
 };
 
-Writer::Writer(const std::string& path, const WriterOptions& options) : path_(path), options_(options) {
+// The buffers a long recording reuses are sized for the largest chunk and touched here, so that a
+// busy machine's larger chunks do not raise the writer's memory after its start (seventh pass of
+// docs/BENCHMARKS.md: a soak's recorder rose 0.36-0.62 MB/min after its warm-up in fresh clones).
+Writer::Writer(const std::string& path, const WriterOptions& options)
+    : path_(path),
+      options_(options),
+      compressor_(std::make_unique<Compressor>(options.compression, resident_chunk(options))) {
+    reserve_resident(chunk_, resident_chunk(options_));
+    reserve_resident(buffer_, kWriteBlock + 2 * kDirectBody);  // a block, a small body, its message indexes
     fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd_ < 0) throw RuntimeError(log::cat("cannot create ", path, ": ", std::strerror(errno)));
     raw(kMagic, sizeof(kMagic));
@@ -133,9 +160,7 @@ void Writer::flush_if_due(std::int64_t now_ns) {
 
 void Writer::close_chunk() {
     if (chunk_.empty()) return;
-    std::string compressed;
-    if (options_.compression != Compression::none) compressed = compress(options_.compression, chunk_);
-    const std::string& body = options_.compression == Compression::none ? chunk_ : compressed;
+    const std::string& body = (*compressor_)(chunk_);
     ChunkIndexEntry e;
     e.start_time = chunk_start_;
     e.end_time = chunk_end_;
@@ -155,7 +180,7 @@ void Writer::close_chunk() {
     const std::uint64_t len = o.s.size() - 9 + body.size();
     std::memcpy(o.s.data() + 1, &len, 8);
     raw(o.s.data(), o.s.size());
-    if (body.size() >= (64u << 10)) {
+    if (body.size() >= kDirectBody) {
         // Large bodies go straight to the file: no copy through the buffer.
         write_out(buffer_.data(), buffer_.size());
         buffer_.clear();
@@ -183,7 +208,7 @@ void Writer::close_chunk() {
     chunk_indexes_.push_back(std::move(e));
     chunk_.clear();
     chunk_index_.clear();
-    if (buffer_.size() >= (4u << 20)) {  // keep memory bounded between timed flushes
+    if (buffer_.size() >= kWriteBlock) {
         write_out(buffer_.data(), buffer_.size());
         buffer_.clear();
     }
