@@ -133,8 +133,8 @@ inline constexpr std::uint64_t kMaxSchemaBytesInAll = 16ull << 20;
 // Chunk compression that keeps its state between chunks: one zstd context and one output buffer,
 // sized and touched for the largest chunk up front and reused. Compressing each chunk with a new
 // context and a new buffer allocated and freed a few hundred KB per chunk, in sizes that follow
-// the chunks; on a busy machine (late ticks, slow fdatasync: larger chunks) a recorder's memory
-// then rose after its warm-up (docs/BENCHMARKS.md, seventh pass).
+// the chunks; on a busy machine (late ticks, slow fdatasync: larger chunks) that is the suspected
+// reason a recorder's memory rose after its warm-up (docs/BENCHMARKS.md, seventh pass).
 class Compressor {
 public:
     Compressor(Compression c, std::size_t max_input);
