@@ -7,14 +7,22 @@
 #include <string_view>
 #include <vector>
 
+#include "core/numbers.hpp"
 #include "flight/flight.hpp"
 
 namespace dw::importer {
+
+// A thrust estimated from PWM lags the command: T_lag[i+1] = a T_lag[i] + (1 − a) T[i] per sample
+// (the Neural-Swarm authors' a = 0.84 at 100 Hz). Another a is for checking that choice on a lab's
+// own flights (docs/REAL.md measures it on vehicles flying alone).
+inline constexpr double kAuthorsThrustLag = 0.84;
+inline constexpr Range kThrustLagRange{0, 0.99};
 
 struct ImportOptions {
     std::string sufferer;                          // "" = the importer's default choice
     std::function<void(const std::string&)> warn;  // gaps, ground touches, steep tilts, damage
     std::stop_token stop;
+    double thrust_lag = kAuthorsThrustLag;  // a, above: 0 = no lag
 };
 
 class Importer {

@@ -42,6 +42,12 @@ int import_collection(const std::string& dir, const std::string& out, const dw::
     return failed ? 2 : 0;
 }
 
+void add_thrust_lag(CLI::App& sub, dw::importer::ImportOptions& o) {
+    sub.add_option("--thrust-lag", o.thrust_lag,
+                   "the thrust's first-order lag per sample, T_lag <- a T_lag + (1 - a) T (default: the authors' 0.84)")
+        ->check(dw::cli::in(dw::importer::kThrustLagRange));
+}
+
 int run(int argc, char** argv) {
     CLI::App app{"dw-import: bring another lab's flight logs into a flight folder (downwash-flight/1)"};
     dw::cli::BaseOptions base;
@@ -57,6 +63,7 @@ int run(int argc, char** argv) {
         sub->add_option("--out", out, "flight folder to write")->required();
         sub->add_option("--sufferer", o.sufferer,
                         "the vehicle whose residual force is the wrench (default: the lowest)");
+        add_thrust_lag(*sub, o);
         commands.emplace_back(sub, im);
     }
     std::string collection;
@@ -64,6 +71,7 @@ int run(int argc, char** argv) {
                                      "every trial of a Neural-Swarm collection folder, one flight folder each");
     whole->add_option("dir", collection, "the collection (e.g. .../datacollection21_06_16_2020)")->required();
     whole->add_option("--out", out, "folder for the flight folders (one per trial)")->required();
+    add_thrust_lag(*whole, o);
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     dw::require_output_dir(out, "--out");

@@ -27,7 +27,6 @@ constexpr double kG = 9.81;  // the authors' g for Fa and thrust_des
 // The authors' onboard interaction network's prediction of Fa_z (kFazField): the reference.
 constexpr const char* kFazSource =
     "the Neural-Swarm authors' onboard interaction network (ctrlFa.Faz, run on the vehicle in flight)";
-constexpr double kThrustLag = 0.84;       // T_lag[i+1] = 0.84 T_lag[i] + 0.16 T[i] (100 Hz)
 constexpr double kTareDistance_m = 0.35;  // Fa is tared where every neighbour is farther than this
 constexpr double kGap_s = 0.05;           // a longer pause between samples is reported
 constexpr double kSteepTilt_rad = 30.0 * M_PI / 180.0;
@@ -133,8 +132,8 @@ std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLo
         for (std::size_t k = 0; k < 3; ++k) f[k] = type.mass_kg * s.accel_mps2[i][k] - lag * ez[k];
         for (const double v : f) require_force(s, i, "the residual force", v);
         const double thrust = thrust_n(type, s.pwm[i], s.vbat_v[i]);
-        lag = kThrustLag * lag +
-              (1 - kThrustLag) * require_force(s, i, "the thrust of its PWM and battery voltage", thrust);
+        lag = o.thrust_lag * lag +
+              (1 - o.thrust_lag) * require_force(s, i, "the thrust of its PWM and battery voltage", thrust);
         fa.push_back(f);
         bool alone = true;
         for (const auto& n : others) {
@@ -198,6 +197,7 @@ void add_reference(flight::Flight& f, const VehicleLog& s, const ImportOptions& 
 }
 
 flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
+    require_in(o.thrust_lag, kThrustLagRange, "the thrust lag");
     std::map<std::string, int> seen;
     for (const auto& l : logs) {
         if (seen[l.name]++) throw InputError(log::cat(l.file, ": a second log of ", l.name, " in one trial"));
@@ -264,7 +264,7 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
             {"residual",
              {{"definition", "Fa = m a_imu - T_lag R e_z (the authors'), NED"},
               {"thrust", "per motor c00 + c10 p + c01 v + c20 p^2 + c11 v p gram-force, p = PWM, v = Vbat/4.2"},
-              {"thrust_lag", kThrustLag},
+              {"thrust_lag", o.thrust_lag},
               {"tare_n", {to_ned(tare)[0], to_ned(tare)[1], to_ned(tare)[2]}},
               {"tare_rule", "median Fa where every neighbour is > 0.35 m away horizontally"}}},
             {"clocks",
