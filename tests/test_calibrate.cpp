@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -229,6 +230,35 @@ TEST(Calibration, AVehicleAloneIsMeasuredNotFitted) {
     EXPECT_GT(a.rms_f_d, 0.01);
     for (auto& p : f.poses) p.p[2] = -0.1;  // low, where a flight alone may touch the floor: not counted
     EXPECT_THROW(dw::analysis::measure_alone(f, "alone", "a class"), dw::InputError);
+}
+
+// Issue 41 ("the residual's own lag where the source's thrust model leaves one"): flying alone,
+// a vehicle's residual is its own error, and the thrust's lag that the authors chose (0.84 per
+// sample) is where it spreads least off the floor (measured as calibrate reports a flight alone):
+// no lag, or a longer one, spreads it wider (docs/REAL.md measures 0-0.95). The lag used is in
+// meta.json; one outside [0, 0.99] is refused.
+TEST(RealCalibration, TheSourcesThrustLagIsWhereAVehicleAlonesResidualSpreadsLeast) {
+    REQUIRE_SHARED_DATA();
+    using namespace dw::importer;
+    std::map<std::string, std::vector<std::string>> by;
+    for (const auto& t : collection_trials(dw::test::kNeuralSwarm)) by[t.name] = t.logs;
+    for (const auto* alone : {"randomwalk_s_00", "randomwalk_l_01"}) {
+        SCOPED_TRACE(alone);
+        ASSERT_EQ(by[alone].size(), 1u);
+        std::map<double, double> spread;
+        for (double lag : {0.0, kAuthorsThrustLag, 0.95}) {
+            ImportOptions o;
+            o.thrust_lag = lag;
+            const auto f = neural_swarm_importer().import(by[alone], o);
+            EXPECT_EQ(nlohmann::json::parse(f.meta.extra_json)["residual"]["thrust_lag"].get<double>(), lag);
+            spread[lag] = dw::analysis::measure_alone(f, alone, "alone").sd_f_d;
+        }
+        EXPECT_LT(spread[kAuthorsThrustLag], spread[0.0]);
+        EXPECT_LT(spread[kAuthorsThrustLag], spread[0.95]);
+    }
+    ImportOptions bad;
+    bad.thrust_lag = 1.0;
+    EXPECT_THROW(neural_swarm_importer().import(by["randomwalk_s_00"], bad), dw::InputError);
 }
 
 // What is left by how hard the physics pushes: a residual that scatters by 2I x the push (a jet's

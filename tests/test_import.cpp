@@ -190,47 +190,6 @@ TEST(Import, AVehicleAloneIsAFlightWithoutNeighboursTaredOverItsWholeFlight) {
     EXPECT_NEAR(dw::median(fd), 0.0, 1e-9);  // the tare is the median of every sample
 }
 
-// Issue 41 ("the residual's own lag where the source's thrust model leaves one"): flying alone,
-// a vehicle's residual is its own error, and the thrust's lag that the authors chose (0.84 per
-// sample) is where it spreads least off the floor: no lag, or a longer one, spreads it wider
-// (docs/REAL.md measures 0-0.95). The lag used is in meta.json; one outside [0, 0.99] is refused.
-namespace {
-double spread_off_the_floor(const dw::flight::Flight& f) {
-    std::map<double, double> height;  // the sufferer's, by time (it is the flight's only body)
-    for (const auto& p : f.poses) height[p.t] = -p.p[2];
-    std::vector<double> fd;
-    for (const auto& w : f.wrench)
-        if (height.count(w.t) && height[w.t] >= 0.3) fd.push_back(w.w[2]);
-    double mean = 0, sq = 0;
-    for (double v : fd) mean += v / static_cast<double>(fd.size());
-    for (double v : fd) sq += (v - mean) * (v - mean);
-    return fd.size() > 100 ? std::sqrt(sq / static_cast<double>(fd.size())) : NAN;
-}
-}  // namespace
-
-TEST(Import, TheAuthorsThrustLagIsWhereAVehicleAlonesResidualSpreadsLeast) {
-    REQUIRE_SHARED_DATA();
-    std::map<std::string, std::vector<std::string>> by;
-    for (const auto& t : collection_trials(kData)) by[t.name] = t.logs;
-    for (const auto* alone : {"randomwalk_s_00", "randomwalk_l_01"}) {
-        SCOPED_TRACE(alone);
-        ASSERT_EQ(by[alone].size(), 1u);
-        std::map<double, double> spread;
-        for (double lag : {0.0, kAuthorsThrustLag, 0.95}) {
-            ImportOptions o;
-            o.thrust_lag = lag;
-            const auto f = neural_swarm_importer().import(by[alone], o);
-            EXPECT_EQ(nlohmann::json::parse(f.meta.extra_json)["residual"]["thrust_lag"].get<double>(), lag);
-            spread[lag] = spread_off_the_floor(f);
-        }
-        EXPECT_LT(spread[kAuthorsThrustLag], spread[0.0]);
-        EXPECT_LT(spread[kAuthorsThrustLag], spread[0.95]);
-    }
-    ImportOptions bad;
-    bad.thrust_lag = 1.0;
-    EXPECT_THROW(neural_swarm_importer().import(by["randomwalk_s_00"], bad), dw::InputError);
-}
-
 // Issue 41: a whole collection in one command — every trial found, the binary log preferred, the
 // logs named with their experiment (the same names recur across experiments), and the default
 // sufferer never the vehicle whose residual the authors say not to use.
