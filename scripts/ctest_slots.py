@@ -5,12 +5,13 @@ the slots each test reserves (`ctest --show-only=json-v1` of the same build), re
 test ran and prints the slots in use over time, the share of slot-seconds used, and the
 slot-seconds by class.
 
-  scripts/ctest_slots.py LOG [--build build] [--step 20]
+  scripts/ctest_slots.py LOG [--build build] [--step 20] [--pass N]
 
 --pass picks one CTest pass of a log with several (scripts/test.sh --full: 2, the full-size twins).
 A test starts when CTest prints its Start line and ends its duration later; CTest prints a Start
 line right after a test ends (when its slots come free), so a Start line's time is the latest end
-printed before it. Exit 2 on a missing log, a log with no test results or a build CTest cannot list.
+printed before it. The machine's slots are build/resources.json's. Exit 2 on a missing log, a log
+with no test results, or a build CTest cannot list or without resources.json.
 """
 import argparse
 import json
@@ -65,7 +66,9 @@ def main():
         with open(a.log, encoding="utf-8", errors="replace") as f:
             passes = passes_of(f.read().splitlines())
         slots = slots_of(a.build)
-    except (OSError, subprocess.CalledProcessError, json.JSONDecodeError) as e:
+        with open(f"{a.build}/resources.json", encoding="utf-8") as f:  # the machine's slots, as CTest had them
+            capacity = sum(int(c["slots"]) for node in json.load(f)["local"] for c in node["cpu"])
+    except (OSError, KeyError, ValueError, subprocess.CalledProcessError) as e:
         print(f"ctest_slots.py: error: {e}", file=sys.stderr)
         return 2
     if not 1 <= a.which <= len(passes) or a.step < 1:
@@ -74,7 +77,6 @@ def main():
         return 2
     runs = passes[a.which - 1]
     total = int(max(end for _, _, end in runs)) + 1
-    capacity = max(slots.values())  # a heavy test takes every slot
     used = [0] * total
     by_class = {}
     for name, start, end in runs:
