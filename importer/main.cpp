@@ -43,8 +43,10 @@ int import_collection(const std::string& dir, const std::string& out, const dw::
 }
 
 void add_thrust_lag(CLI::App& sub, dw::importer::ImportOptions& o) {
-    sub.add_option("--thrust-lag", o.thrust_lag,
-                   "the thrust's first-order lag per sample, T_lag <- a T_lag + (1 - a) T (default: the authors' 0.84)")
+    sub.add_option(
+           "--thrust-lag", o.thrust_lag,
+           dw::log::cat("the thrust's first-order lag per sample, T_lag <- a T_lag + (1 - a) T (default: the authors' ",
+                        dw::importer::kAuthorsThrustLag, ")"))
         ->check(dw::cli::in(dw::importer::kThrustLagRange));
 }
 

@@ -19,19 +19,15 @@ import re
 import subprocess
 import sys
 
+from test_cpu import ctest_listing
+
 START = re.compile(r"\s*Start\s+\d+: (\S+)")
 DONE = re.compile(r"\s*\d+/\d+ Test\s+#\d+: (\S+) .*?([0-9.]+) sec")
 
 
 def slots_of(build):
-    out = subprocess.run(["ctest", "--test-dir", build, "--show-only=json-v1"], check=True,
-                         capture_output=True, text=True).stdout
-    slots = {}
-    for t in json.loads(out)["tests"]:
-        props = {p["name"]: p["value"] for p in t.get("properties", [])}
-        groups = props.get("RESOURCE_GROUPS", [])
-        slots[t["name"].split(" ")[0]] = sum(int(r["slots"]) for g in groups for r in g["requirements"])
-    return slots
+    """Each test's slots by its name as the log prints it (without a parameter's " # GetParam() ...")."""
+    return {t["name"].split(" ")[0]: slots for t, _, slots in ctest_listing(build)}
 
 
 def passes_of(lines):

@@ -22,17 +22,24 @@ import sys
 import time
 
 
-def tests_of(build, include, exclude):
-    out = subprocess.run(["ctest", "--test-dir", build, "--show-only=json-v1", "-LE", "full"],
+def ctest_listing(build, *select):
+    """The tests CTest lists in `build` (select: ctest's own options, e.g. "-LE", "full"), each as
+    (its entry, its properties by name, the CPU slots it reserves: 0 when it reserves none).
+    scripts/ctest_slots.py reads the slots from here too."""
+    out = subprocess.run(["ctest", "--test-dir", build, "--show-only=json-v1", *select],
                          check=True, capture_output=True, text=True).stdout
-    listed = []
     for t in json.loads(out)["tests"]:
+        props = {p["name"]: p["value"] for p in t.get("properties", [])}
+        yield t, props, sum(int(r["slots"]) for g in props.get("RESOURCE_GROUPS", []) for r in g["requirements"])
+
+
+def tests_of(build, include, exclude):
+    listed = []
+    for t, props, slots in ctest_listing(build, "-LE", "full"):
         if include and not re.search(include, t["name"]):
             continue
         if exclude and re.search(exclude, t["name"]):
             continue
-        props = {p["name"]: p["value"] for p in t.get("properties", [])}
-        slots = sum(int(r["slots"]) for g in props.get("RESOURCE_GROUPS", []) for r in g["requirements"])
         listed.append({"name": t["name"], "command": t["command"], "cwd": props.get("WORKING_DIRECTORY", build),
                        "slots": slots or 1, "timeout": float(props.get("TIMEOUT", 900))})
     return listed
