@@ -262,7 +262,9 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
         nlohmann::json{
             {"source", source_of(logs)},
             {"residual",
-             {{"definition", "Fa = m a_imu - T_lag R e_z (the authors'), NED"},
+             {{"definition",
+               "Fa = m a_imu - T_lag R e_z (the authors' form; T_lag: T through a first-order lag, a = thrust_lag), "
+               "NED"},
               {"thrust", "per motor c00 + c10 p + c01 v + c20 p^2 + c11 v p gram-force, p = PWM, v = Vbat/4.2"},
               {"thrust_lag", o.thrust_lag},
               {"tare_n", {to_ned(tare)[0], to_ned(tare)[1], to_ned(tare)[2]}},

@@ -37,9 +37,15 @@ LZ4F_preferences_t lz4_preferences(std::size_t size) {
     return prefs;
 }
 std::size_t compress_bound(Compression c, std::size_t size) {
-    if (c == Compression::zstd) return ZSTD_compressBound(size);
-    const LZ4F_preferences_t prefs = lz4_preferences(size);
-    return c == Compression::lz4 ? LZ4F_compressFrameBound(size, &prefs) : 0;
+    switch (c) {
+        case Compression::zstd: return ZSTD_compressBound(size);
+        case Compression::lz4: {
+            const LZ4F_preferences_t prefs = lz4_preferences(size);
+            return LZ4F_compressFrameBound(size, &prefs);
+        }
+        case Compression::none: break;
+    }
+    return 0;
 }
 }  // namespace
 
