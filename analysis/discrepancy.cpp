@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 
 #include "core/log.hpp"
 #include "core/stats.hpp"
@@ -15,10 +16,25 @@ using flight::kAxes;
 namespace {
 
 constexpr int kBumps = kOffsetBumps * kHeightBumps;
-constexpr int kOwn = 7;                       // the constant and the sufferer's velocity and acceleration (n, e, d)
-constexpr double kDifference_s = 0.02;        // the acceleration: velocities this far apart
-constexpr int kGeometry = kOwn + 3 * kBumps;  // the bumps, then times the offset's n and e direction
+constexpr int kOwn = 6;                 // the sufferer's velocity and acceleration (n, e, d)
+constexpr double kDifference_s = 0.02;  // the acceleration: velocities this far apart
 constexpr double kHeightQuantiles[2] = {0.05, 0.95};
+
+// Where each group's columns are: [start, start + count), in kInputGroups' order.
+struct Layout {
+    std::array<int, kInputGroups.size()> start{}, count{};
+    int columns = 0;
+    int at(InputGroup g) const { return start[static_cast<std::size_t>(g)]; }
+};
+
+Layout layout_of(int drift_bumps) {
+    Layout l;
+    const std::array<int, kInputGroups.size()> counts{
+        1, 3 * kBumps, kOwn, drift_bumps + 6 * kGainDriftBumps, 6 * (1 + kPushBumps), 6, 6};
+    for (std::size_t g = 0; g < counts.size(); ++g)
+        l.start[g] = l.columns, l.count[g] = counts[g], l.columns += counts[g];
+    return l;
+}
 
 // The bumps' heights: evenly between the near samples' height quantiles (all samples' when none is near).
 struct Heights {
@@ -50,31 +66,51 @@ double bump(double x, double centre, double width) { return std::exp(-0.5 * std:
 
 // The drift's bumps over the flight's time: from its first sample on a block to its last.
 struct Drift {
-    double t0 = 0;
+    double t0 = 0, t1 = 0;
     int count = 0;
 };
 
 Drift drift_of(const ExplainData& d) {
     if (d.on_legs.empty()) return {};
     const double t0 = d.sim.stamps()[d.on_legs.front()], t1 = d.sim.stamps()[d.on_legs.back()];
-    return {t0, static_cast<int>(std::floor((t1 - t0) / kDriftSpacing_s)) + 2};
+    return {t0, t1, static_cast<int>(std::floor((t1 - t0) / kDriftSpacing_s)) + 2};
 }
 
-// Sample i's regressors: the geometry's (kGeometry), then the drift's.
-Eigen::RowVectorXd inputs_of(const ExplainData& d, std::size_t i, const Heights& h, const Drift& drift) {
-    Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(kGeometry + drift.count);
+// The model's prediction at sample i in noise floors, its norm (the push), and its rate of change.
+struct Push {
+    double top = 1;  // the near samples' kPushQuantile of the norm: the push bumps span [0, top]
+};
+
+double push_of(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i) {
+    double s = 0;
+    for (std::size_t a = 0; a < 6; ++a)
+        if (d.sim.measured_axes()[a]) s += std::pow(pred[i][a] / d.sigma[a], 2);
+    return std::sqrt(s);
+}
+
+Push push_scale(const ExplainData& d, const std::vector<Wrench6>& pred) {
+    std::vector<double> v;
+    for (auto i : d.on_legs)
+        if (d.info[i].near) v.push_back(push_of(d, pred, i));
+    if (v.empty()) return {};
+    std::sort(v.begin(), v.end());
+    return {std::max(v[static_cast<std::size_t>(kPushQuantile * static_cast<double>(v.size() - 1))], 1e-9)};
+}
+
+struct Context {
+    const ExplainData& d;
+    const std::vector<Wrench6>& pred;
+    Heights h;
+    Drift drift;
+    Push push;
+    Layout layout;
+};
+
+void geometry_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
+    const auto& d = c.d;
     const double t = d.sim.stamps()[i];
-    for (int k = 0; k < drift.count; ++k) row(kGeometry + k) = bump(t, drift.t0 + k * kDriftSpacing_s, kDriftSpacing_s);
     const auto s = d.sim.sufferer(t);
-    row(0) = 1;
-    if (d.sim.flying()) {
-        const auto v = d.sim.sufferer_velocity(t), ahead = d.sim.sufferer_velocity(t + kDifference_s),
-                   behind = d.sim.sufferer_velocity(t - kDifference_s);
-        for (std::size_t k = 0; k < 3; ++k) {
-            row(1 + static_cast<int>(k)) = v[k];
-            row(4 + static_cast<int>(k)) = (ahead[k] - behind[k]) / (2 * kDifference_s);
-        }
-    }
+    const int g = c.layout.at(InputGroup::geometry);
     for (int j = 0; j < d.sim.neighbours(); ++j) {
         const auto p = d.sim.position(j, t);
         const double dn = p[0] - s[0], de = p[1] - s[1], r = std::hypot(dn, de), above = s[2] - p[2];
@@ -82,13 +118,63 @@ Eigen::RowVectorXd inputs_of(const ExplainData& d, std::size_t i, const Heights&
         const double half = d.sim.near_radius(j) / (kOffsetBumps - 1);
         for (int a = 0; a < kOffsetBumps; ++a)
             for (int b = 0; b < kHeightBumps; ++b) {
-                const double phi = bump(r, a * half, half) * bump(above, h.lo + b * h.step, h.width);
-                const int k = kOwn + a * kHeightBumps + b;
+                const double phi = bump(r, a * half, half) * bump(above, c.h.lo + b * c.h.step, c.h.width);
+                const int k = g + a * kHeightBumps + b;
                 row(k) += phi;
                 row(k + kBumps) += phi * un;
                 row(k + 2 * kBumps) += phi * ue;
             }
     }
+}
+
+void own_motion_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
+    if (!c.d.sim.flying()) return;
+    const double t = c.d.sim.stamps()[i];
+    const auto v = c.d.sim.sufferer_velocity(t), ahead = c.d.sim.sufferer_velocity(t + kDifference_s),
+               behind = c.d.sim.sufferer_velocity(t - kDifference_s);
+    const int o = c.layout.at(InputGroup::own_motion);
+    for (int k = 0; k < 3; ++k) {
+        row(o + k) = v[static_cast<std::size_t>(k)];
+        row(o + 3 + k) =
+            (ahead[static_cast<std::size_t>(k)] - behind[static_cast<std::size_t>(k)]) / (2 * kDifference_s);
+    }
+}
+
+// The prediction's own inputs: per axis p, p × push bumps, p × time bumps (after the additive
+// drift's), dp/dt, p × direction.
+void prediction_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
+    const auto& d = c.d;
+    const double t = d.sim.stamps()[i], x = push_of(d, c.pred, i);
+    const std::size_t prev = i > 0 ? i - 1 : i, next = i + 1 < c.pred.size() ? i + 1 : i;
+    const double dt = d.sim.stamps()[next] - d.sim.stamps()[prev];
+    const double push_step = c.push.top / (kPushBumps - 1);
+    const double gain_step = (c.drift.t1 - c.drift.t0) / (kGainDriftBumps - 1);
+    const int ps = c.layout.at(InputGroup::push), ds = c.layout.at(InputGroup::drift) + c.drift.count,
+              rs = c.layout.at(InputGroup::rate), vs = c.layout.at(InputGroup::direction);
+    for (int a = 0; a < 6; ++a) {
+        const auto A = static_cast<std::size_t>(a);
+        if (!d.sim.measured_axes()[A]) continue;
+        const double p = c.pred[i][A];
+        row(ps + a * (1 + kPushBumps)) = p;
+        for (int k = 0; k < kPushBumps; ++k)
+            row(ps + a * (1 + kPushBumps) + 1 + k) = p * bump(x, k * push_step, push_step);
+        for (int k = 0; k < kGainDriftBumps; ++k)
+            row(ds + a * kGainDriftBumps + k) = gain_step > 0 ? p * bump(t, c.drift.t0 + k * gain_step, gain_step) : 0;
+        row(rs + a) = dt > 0 ? (c.pred[next][A] - c.pred[prev][A]) / dt : 0;
+        row(vs + a) = p * d.info[i].direction;
+    }
+}
+
+// Sample i's regressors, in the layout's order.
+Eigen::RowVectorXd inputs_of(const Context& c, std::size_t i) {
+    Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(c.layout.columns);
+    const double t = c.d.sim.stamps()[i];
+    row(c.layout.at(InputGroup::constant)) = 1;
+    const int dr = c.layout.at(InputGroup::drift);
+    for (int k = 0; k < c.drift.count; ++k) row(dr + k) = bump(t, c.drift.t0 + k * kDriftSpacing_s, kDriftSpacing_s);
+    geometry_inputs(c, i, row);
+    own_motion_inputs(c, i, row);
+    prediction_inputs(c, i, row);
     return row;
 }
 
@@ -99,17 +185,20 @@ struct Gram {
     Eigen::MatrixXd xx, xy;
 };
 
-// The folds' parts summed, but those of the folds `without`.
-Gram sum_without(const std::vector<Gram>& parts, std::size_t a, std::size_t b = SIZE_MAX) {
+// The folds' parts summed, but those of the folds `without`, on the columns `cols`.
+Gram sum_without(const std::vector<Gram>& parts, const std::vector<int>& cols, std::size_t a,
+                 std::size_t b = SIZE_MAX) {
+    const auto k = static_cast<Eigen::Index>(cols.size());
     Gram g;
-    g.xx = Eigen::MatrixXd::Zero(parts[0].xx.rows(), parts[0].xx.cols());
-    g.xy = Eigen::MatrixXd::Zero(parts[0].xy.rows(), parts[0].xy.cols());
-    for (std::size_t k = 0; k < parts.size(); ++k)
-        if (k != a && k != b) g.xx += parts[k].xx, g.xy += parts[k].xy;
+    g.xx = Eigen::MatrixXd::Zero(k, k);
+    g.xy = Eigen::MatrixXd::Zero(k, parts[0].xy.cols());
+    for (std::size_t f = 0; f < parts.size(); ++f)
+        if (f != a && f != b) g.xx += parts[f].xx(cols, cols), g.xy += parts[f].xy(cols, Eigen::all);
     return g;
 }
 
-// Ridge coefficients (one column per axis) at penalty lambda × the mean diagonal; the constant is not penalised.
+// Ridge coefficients (one column per axis) at penalty lambda × the mean diagonal; the constant (the
+// first column) is not penalised.
 Eigen::MatrixXd ridge(const Gram& g, double lambda) {
     Eigen::MatrixXd A = g.xx;
     const double l = lambda * A.trace() / static_cast<double>(A.cols());
@@ -119,17 +208,18 @@ Eigen::MatrixXd ridge(const Gram& g, double lambda) {
 
 // For each axis, the penalty of kRidgeGrid whose fits on all but one of the folds other than
 // `outer` predict the one left out best (nested blocked cross-validation: `outer` is never seen).
-std::vector<double> choose_penalty(const std::vector<Gram>& parts, std::size_t outer) {
+std::vector<double> choose_penalty(const std::vector<Gram>& parts, const std::vector<int>& cols, std::size_t outer) {
     const auto axes = static_cast<std::size_t>(parts[0].xy.cols());
     std::vector<double> best(axes, kRidgeGrid.front()), best_sse(axes, INFINITY);
     for (double lambda : kRidgeGrid) {
         std::vector<double> sse(axes, 0.0);
         for (std::size_t m = 0; m < parts.size(); ++m) {
             if (m == outer) continue;
-            const Eigen::MatrixXd c = ridge(sum_without(parts, outer, m), lambda);
+            const Eigen::MatrixXd c = ridge(sum_without(parts, cols, outer, m), lambda);
+            const Eigen::MatrixXd xx = parts[m].xx(cols, cols), xy = parts[m].xy(cols, Eigen::all);
             for (std::size_t a = 0; a < axes; ++a) {  // Σ(y − xc)² less Σy², which no penalty changes
                 const auto col = c.col(static_cast<Eigen::Index>(a));
-                sse[a] += col.dot(parts[m].xx * col) - 2 * col.dot(parts[m].xy.col(static_cast<Eigen::Index>(a)));
+                sse[a] += col.dot(xx * col) - 2 * col.dot(xy.col(static_cast<Eigen::Index>(a)));
             }
         }
         for (std::size_t a = 0; a < axes; ++a)
@@ -138,15 +228,9 @@ std::vector<double> choose_penalty(const std::vector<Gram>& parts, std::size_t o
     return best;
 }
 
-// Per held-out piece: squared residuals in noise floors, without and with the discrepancy.
-struct PieceScores {
-    std::map<int, AxisValues> before, after;
-    std::map<int, std::size_t> n;
-};
-
-// The candidates' rule (analysis/score.cpp) on the pieces: the most significant axis among those
-// whose held-out error falls by min_gain.
-void judge(Discrepancy& r, const PieceScores& s, const ExplainData& d, const ExplainOptions& o) {
+// The candidates' rule (analysis/score.cpp) on the pieces, per axis; the best axis is the most
+// significant among those whose held-out error falls by min_gain.
+void judge(Discrepancy& r, const PieceErrors& s, const ExplainData& d, const ExplainOptions& o) {
     double total_n = 0, best_t = -INFINITY;
     bool best_gains = false;
     for (const auto& [piece, k] : s.n) total_n += static_cast<double>(k);
@@ -161,37 +245,44 @@ void judge(Discrepancy& r, const PieceScores& s, const ExplainData& d, const Exp
         r.heldout_before[a] = std::sqrt(before / total_n) * d.sigma[a];
         r.heldout_after[a] = std::sqrt(after / total_n) * d.sigma[a];
         const double t = paired_z(diff), gain = before > 0 ? (before - after) / before : 0;
+        r.axis_t[a] = t, r.axis_gain[a] = gain;
         const bool gains = gain >= o.min_gain;
         if ((gains && !best_gains) || (gains == best_gains && t > best_t))
             best_t = t, best_gains = gains, r.best_axis = static_cast<int>(a), r.gain = gain;
     }
     r.t = best_t;
     r.significant = r.t >= o.min_t && r.gain >= o.min_gain;
-    r.note = log::cat("a discrepancy learnt from the geometry, the sufferer's motion and a slow drift (", r.inputs,
-                      " inputs per axis) removes ", std::round(r.gain * 1000) / 10, " % of the held-out ",
-                      kAxes[static_cast<std::size_t>(r.best_axis)], " error (z = ", std::round(r.t * 10) / 10, ")",
-                      r.significant ? ": part of what is left is repeatable" : ": what is left is not repeatable");
+    r.note = log::cat(
+        "a discrepancy learnt from the geometry, the model's own prediction, time and the sufferer's "
+        "motion (",
+        r.inputs, " inputs per axis) removes ", std::round(r.gain * 1000) / 10, " % of the held-out ",
+        kAxes[static_cast<std::size_t>(r.best_axis)], " error (z = ", std::round(r.t * 10) / 10, ")",
+        r.significant ? ": part of what is left is repeatable" : ": what is left is not repeatable");
 }
 
 // Per fold, its held-out samples' regressors (standardised over every sample, so that one penalty
 // suits every input) and residuals, with their normal equations' parts.
-std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds) {
-    const Heights h = heights_of(d);
+std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds, double intensity) {
     const Drift drift = drift_of(d);
+    const Context c{d, pred, heights_of(d), drift, push_scale(d, pred), layout_of(drift.count)};
     std::vector<Gram> parts;
-    Eigen::VectorXd sum_sq = Eigen::VectorXd::Zero(kGeometry + drift.count);
+    Eigen::VectorXd sum_sq = Eigen::VectorXd::Zero(c.layout.columns);
     for (const auto& test : folds.test) {
-        Gram g{Eigen::MatrixXd(static_cast<Eigen::Index>(test.size()), kGeometry + drift.count),
+        Gram g{Eigen::MatrixXd(static_cast<Eigen::Index>(test.size()), c.layout.columns),
                Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(test.size()), 6),
                test,
                {},
                {}};
         for (std::size_t r = 0; r < test.size(); ++r) {
             const auto row = static_cast<Eigen::Index>(r);
-            g.x.row(row) = inputs_of(d, test[r], h, drift);
+            // Each sample weighed by its noise: the floor and the turbulence that grows with the push
+            // (analysis/noise.hpp's excess), so that the near passes' scatter does not drown the rest.
+            const double turbulent = 2 * intensity * push_of(d, pred, test[r]);
+            const double w = 1 / std::sqrt(1 + turbulent * turbulent);
+            g.x.row(row) = w * inputs_of(c, test[r]);
             for (std::size_t a = 0; a < 6; ++a)
                 if (d.sim.measured_axes()[a])
-                    g.y(row, static_cast<Eigen::Index>(a)) = d.sim.measured()[test[r]][a] - pred[test[r]][a];
+                    g.y(row, static_cast<Eigen::Index>(a)) = w * (d.sim.measured()[test[r]][a] - pred[test[r]][a]);
         }
         sum_sq += g.x.colwise().squaredNorm().transpose();
         parts.push_back(std::move(g));
@@ -207,21 +298,17 @@ std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred,
     return parts;
 }
 
-}  // namespace
-
-Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
-                              const ExplainOptions& o) {
-    Discrepancy r;
-    const std::vector<Gram> parts = design(d, pred, folds);
-    r.inputs = static_cast<std::size_t>(parts[0].x.cols());
-    PieceScores s;
+// The discrepancy on the columns `cols`, cross-validated over the folds: its per-piece errors.
+PieceErrors cross_validate(const ExplainData& d, const Folds& folds, const std::vector<Gram>& parts,
+                           const std::vector<int>& cols) {
+    PieceErrors s;
     for (std::size_t k = 0; k < parts.size(); ++k) {
-        const auto lambda = choose_penalty(parts, k);
-        const Gram train = sum_without(parts, k);
+        const auto lambda = choose_penalty(parts, cols, k);
+        const Gram train = sum_without(parts, cols, k);
         Eigen::MatrixXd coef(train.xy.rows(), train.xy.cols());
         for (Eigen::Index a = 0; a < coef.cols(); ++a)
             coef.col(a) = ridge(train, lambda[static_cast<std::size_t>(a)]).col(a);
-        const Eigen::MatrixXd left = parts[k].y - parts[k].x * coef;  // the residual less the discrepancy
+        const Eigen::MatrixXd left = parts[k].y - parts[k].x(Eigen::all, cols) * coef;  // less the discrepancy
         for (std::size_t i = 0; i < parts[k].samples.size(); ++i) {
             const int piece = piece_of(d, folds, parts[k].samples[i]);
             ++s.n[piece];
@@ -232,8 +319,53 @@ Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& 
             }
         }
     }
+    return s;
+}
+
+double total(const std::map<int, AxisValues>& m, std::size_t a) {
+    double s = 0;
+    for (const auto& [piece, v] : m) s += v[a];
+    return s;
+}
+
+// What the discrepancy depends on: each group's own share of the held-out gain on the best axis —
+// the gain lost when that group's columns are left out — largest first.
+void explain_dependence(Discrepancy& r, const ExplainData& d, const Folds& folds, const std::vector<Gram>& parts,
+                        const PieceErrors& full) {
+    const Layout l = layout_of(static_cast<int>(parts[0].x.cols()) - layout_of(0).columns);
+    const auto a = static_cast<std::size_t>(r.best_axis);
+    const double before = total(full.before, a), gained = before - total(full.after, a);
+    if (!(gained > 0)) return;
+    for (std::size_t g = 1; g < kInputGroups.size(); ++g) {
+        if (l.count[g] == 0) continue;
+        std::vector<int> cols;
+        for (int k = 0; k < l.columns; ++k)
+            if (k < l.start[g] || k >= l.start[g] + l.count[g]) cols.push_back(k);
+        const double lost = total(cross_validate(d, folds, parts, cols).after, a) - total(full.after, a);
+        r.shares.emplace_back(kInputGroups[g].name, std::max(0.0, lost / gained));
+    }
+    std::sort(r.shares.begin(), r.shares.end(), [](const auto& x, const auto& y) { return x.second > y.second; });
+    if (r.shares.empty()) return;
+    r.depends_on = r.shares.front().first;
+    for (const auto& g : kInputGroups)
+        if (r.depends_on == g.name) r.sentence = g.sentence;
+}
+
+}  // namespace
+
+Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
+                              const ExplainOptions& o, bool dependence, PieceErrors* pieces) {
+    Discrepancy r;
+    const double intensity = o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0;
+    const std::vector<Gram> parts = design(d, pred, folds, intensity);
+    r.inputs = static_cast<std::size_t>(parts[0].x.cols());
+    std::vector<int> all(r.inputs);
+    std::iota(all.begin(), all.end(), 0);
+    const PieceErrors s = cross_validate(d, folds, parts, all);
     r.fitted = true;
     judge(r, s, d, o);
+    if (dependence && r.significant) explain_dependence(r, d, folds, parts, s);
+    if (pieces) *pieces = s;
     return r;
 }
 

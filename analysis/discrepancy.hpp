@@ -9,10 +9,12 @@
 // fitted on each fold's training blocks and judged on its held-out blocks by the candidates' rule
 // (the same pieces, the same z and gain).
 //
-// It names no physics and the effects are not chosen by it: it says how much of what is left is a
-// repeatable function of the geometry and the sufferer's motion — what a missing effect would be,
-// or a lab's own systematic error — and how much is not (noise, or what those inputs do not see).
+// It names no physics: it says how much of what is left is a repeatable function of these inputs —
+// what a missing effect would be, or a lab's own systematic error — and how much is not (noise, or
+// what those inputs do not see), and which group of inputs carries it. It is the yardstick a named
+// effect must meet (analysis/arbiter.hpp).
 #include <array>
+#include <map>
 #include <string>
 
 #include "analysis/explain.hpp"
@@ -34,14 +36,57 @@ inline constexpr double kDriftSpacing_s = 4.0;
 // each axis takes the one that predicts held-out blocks best within each fold's training blocks.
 inline constexpr std::array<double, 6> kRidgeGrid{1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
 
+// Besides the geometry, what the splits of analysis/splits.hpp name, as functions of the model's own
+// prediction p (per axis): p itself (a gain or a leak), p times bumps over how hard the air pushes
+// (kPushBumps over the predicted wrench's norm in noise floors, up to its near samples' 95th
+// percentile: a gain that changes with the push), p times bumps over the flight's time
+// (kGainDriftBumps: a gain that creeps), p's rate of change (a delay or a lag), and p times the
+// direction of travel.
+inline constexpr int kPushBumps = 4;
+inline constexpr int kGainDriftBumps = 3;
+inline constexpr double kPushQuantile = 0.95;
+
+// The groups of inputs, each with what it means when the discrepancy depends on it most (one list:
+// the columns are laid out in this order; the report's words come from here).
+enum class InputGroup { constant, geometry, own_motion, drift, push, rate, direction };
+struct InputGroupInfo {
+    InputGroup group;
+    const char* name;
+    const char* sentence;
+};
+inline constexpr std::array<InputGroupInfo, 7> kInputGroups{{
+    {InputGroup::constant, "constant", "a constant offset"},
+    {InputGroup::geometry, "geometry",
+     "depends on where the neighbours are (their horizontal offset and height above): the jet's shape or where "
+     "its wake goes (e.g. wakes that move sideways as they fall)"},
+    {InputGroup::own_motion, "own motion", "follows the sufferer's own velocity and acceleration"},
+    {InputGroup::drift, "time",
+     "changes over the flight: a drift (a zero or a gain that creeps while the flight goes on)"},
+    {InputGroup::push, "push",
+     "grows with the push, not in proportion to it: a gain that changes with the force (e.g. a sensor that stops "
+     "following large forces)"},
+    {InputGroup::rate, "rate of change", "follows how fast the force changes: a delay or a lag between force and pose"},
+    {InputGroup::direction, "direction of travel", "changes with the neighbours' direction of travel"},
+}};
+
 // How the report names it.
 inline constexpr const char* kDiscrepancyModel =
     "ridge regression, per axis, on Gaussian bumps over each neighbour's horizontal offset and height above the "
     "sufferer (summed over the neighbours, also times the offset's direction), a constant, the sufferer's own "
-    "velocity and acceleration, and bumps over the flight's time (a slow drift)";
+    "velocity and acceleration, bumps over the flight's time (a slow drift), and the model's own prediction: "
+    "itself, times bumps over the push, times bumps over time, times the direction of travel, and its rate of change";
 
-// Fills ExplainResult::discrepancy from the final model's prediction `pred`.
+// Per held-out piece (analysis/score.hpp's pieces): squared residuals in noise floors, without and
+// with the discrepancy, and the samples counted. Each sample is weighed by its noise — the floor and
+// the turbulence that grows with the predicted push, 1 / (1 + (2 I |p| / σ)²) — in the fit and here.
+struct PieceErrors {
+    std::map<int, AxisValues> before, after;
+    std::map<int, std::size_t> n;
+};
+
+// Fills ExplainResult::discrepancy from the model's prediction `pred` (with what it depends on when
+// `explain_dependence` and it is significant); its per-piece errors into `pieces` when given.
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
-                              const ExplainOptions& o);
+                              const ExplainOptions& o, bool explain_dependence = true, PieceErrors* pieces = nullptr);
 
 }  // namespace dw::analysis

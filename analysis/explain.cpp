@@ -6,6 +6,7 @@
 #include <mutex>
 #include <set>
 
+#include "analysis/arbiter.hpp"
 #include "analysis/discrepancy.hpp"
 #include "analysis/fit.hpp"
 #include "analysis/locate.hpp"
@@ -61,12 +62,14 @@ void conclude(ExplainResult& R, const ExplainData& d, const Baseline& base, cons
     // stand-in, or a residual beyond what noise and turbulence explain (the regions say where; on
     // their own they are many cells tested at once, not evidence).
     const bool excess = largest(R.excess_before) > o.detect_excess;
+    R.line_before = strongest_line(d, base_pred, intensity);
+    R.line_after = R.line_before.significant ? strongest_line(d, final_model.pred, intensity) : R.line_before;
     const bool any_stand_in =
         std::any_of(R.candidates.begin(), R.candidates.end(), [](const CandidateResult& c) { return c.stand_in; });
-    R.detected = !R.accepted.empty() || excess || any_stand_in;
+    R.detected = !R.accepted.empty() || excess || any_stand_in || R.line_before.significant;
     if (R.detected && R.regions.empty())  // found by its size or a stand-in: say where, with the weaker threshold
         R.regions = locate(d, base_pred, base.factor, o.weak_region_z, formation);
-    R.unexplained = largest(R.excess_after) > o.detect_excess || stand_in;
+    R.unexplained = largest(R.excess_after) > o.detect_excess || stand_in || R.line_after.significant;
 }
 
 }  // namespace
@@ -128,8 +131,10 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     // Screen, cross-validate and select; then the verdict.
     bool stand_in = false;
     const Folds folds = folds_of(d, o.folds);
-    const Baseline final_model = select_effects(R, d, base, folds, o, say, stand_in);
-    conclude(R, d, base, final_model, stand_in, o, f.meta.formation);
+    const Baseline selected = select_effects(R, d, base, folds, o, say, stand_in);
+    bool short_of_discrepancy = false;
+    const Baseline final_model = arbitrate(R, d, base, selected, folds, o, say, short_of_discrepancy);
+    conclude(R, d, base, final_model, stand_in || short_of_discrepancy, o, f.meta.formation);
     say("learning what is left as a function of the geometry");
     R.discrepancy = learn_discrepancy(d, final_model.pred, folds, o);
     say(log::cat("  ", R.discrepancy.note));

@@ -16,6 +16,8 @@
 #include "analysis/effects.hpp"
 #include "analysis/noise.hpp"
 #include "analysis/resimulation.hpp"
+#include "analysis/spectrum.hpp"
+#include "analysis/splits.hpp"
 #include "core/numbers.hpp"
 #include "flight/blocks.hpp"
 #include "flight/flight.hpp"
@@ -80,6 +82,14 @@ struct Shift {          // the time shift that best aligns recording and simulat
     std::size_t samples = 0;
 };
 
+// An accepted effect that fell short of the discrepancy (the arbiter, analysis/arbiter.hpp): what it
+// removes of its axis's held-out error and what a discrepancy learnt without it removes.
+struct ShortOfDiscrepancy {
+    int axis = 2;
+    double effect_gain = 0, discrepancy_gain = 0;
+    double z = 0;  // the discrepancy's advantage over the pieces
+};
+
 struct CandidateResult {
     Effect effect;
     std::vector<double> values, lo, hi;  // estimates and 95 % intervals
@@ -91,8 +101,9 @@ struct CandidateResult {
     double total_ratio = 1;  // held-out error after / before, all axes (normalised)
     bool accepted = false;
     bool stand_in = false;  // it passed the held-out test, but its value changes across the flight
-    // The stand-in check's largest z over the parameters (low- minus high-pass fit over its spread),
-    // when the check was made.
+    // The one-value check (analysis/splits.hpp), when it was made: the axis it moves along most.
+    std::optional<SplitMove> one_value;
+    // Its largest z over the axes and parameters (the difference between the parts over its spread).
     std::optional<double> stand_in_z;
     // The held-out pieces that carry the best axis's evidence, counted by weight: (Σ|d|)² / Σd². The
     // sum over pieces cannot exceed its square root, whatever the data.
@@ -102,18 +113,28 @@ struct CandidateResult {
     int round = 0;                               // forward-selection round it was scored in
     std::map<int, double> heldout_pieces;        // per held-out piece: normalised squared error after, all axes
     std::vector<std::string> indistinguishable;  // accepted alternatives the held-out data cannot tell from it
+    std::optional<ShortOfDiscrepancy> short_of;  // refused by the arbiter: it leaves structure the discrepancy models
 };
 
-// What the accepted effects leave, learnt as a function of the geometry (analysis/discrepancy.hpp).
+// What the accepted effects leave, learnt as a function of the geometry, the predicted push, time,
+// the direction of travel and the force's rate of change (analysis/discrepancy.hpp).
 struct Discrepancy {
     bool fitted = false;     // false: too few samples for its inputs (note says why)
     std::size_t inputs = 0;  // regressors per axis
     AxisValues heldout_before{},
-        heldout_after{};  // the final model's residual RMS on the held-out samples, without and with it
-    double t = 0;         // held-out z over pieces, best axis
+        heldout_after{};               // the final model's residual RMS on the held-out samples, without and with it
+    AxisValues axis_t{}, axis_gain{};  // per axis: held-out z and fraction of the error removed
+    double t = 0;                      // held-out z over pieces, best axis
     int best_axis = 2;
     double gain = 0;           // fraction of that axis's held-out error removed
     bool significant = false;  // t >= min_t and gain >= min_gain, as for a candidate
+    bool significant_on(std::size_t a, double min_t, double min_gain) const {
+        return axis_t[a] >= min_t && axis_gain[a] >= min_gain;
+    }
+    // What it depends on, when significant: each group of inputs' own share of the held-out gain on
+    // the best axis (the gain lost without it), largest first, and the largest's words.
+    std::vector<std::pair<std::string, double>> shares;
+    std::string depends_on, sentence;
     std::string note;
 };
 
@@ -135,6 +156,8 @@ struct ExplainResult {
     double seconds = 0;
     std::size_t resimulations = 0;  // predictions of the whole flight the fits paid for (analysis/fit.hpp)
     Discrepancy discrepancy;        // what is left after the accepted effects, learnt
+    // The strongest line in the residual's spectrum before the fit and after it (analysis/spectrum.hpp).
+    SpectralLine line_before, line_after;
 };
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);

@@ -115,9 +115,6 @@ std::pair<std::vector<double>, std::vector<double>> Fit::solve(std::vector<doubl
     return {x, se};
 }
 
-// Step of the numerical derivatives below, as a fraction of a parameter's range.
-constexpr double kSensitivityStep = 1e-3;
-
 // The tare's own noise: a stand zeroes its recording over its first samples, so their noise,
 // averaged, is an offset shared by every sample and every fold — neither the jackknife over folds
 // nor the covariance sees it, and an effect that looks partly like an offset (a floor bias, a

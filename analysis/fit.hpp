@@ -63,6 +63,10 @@ private:
     std::vector<std::pair<std::vector<double>, std::vector<Wrench6>>> cache_;
 };
 
+// Step of the numerical derivatives outside Ceres (the tare's spread, the split refits), as a
+// fraction of a parameter's search range.
+inline constexpr double kSensitivityStep = 1e-3;
+
 // The tare's own noise in each of the effect's parameters at v (see fit.cpp), for tare_samples
 // averaged samples.
 std::vector<double> tare_spread(const ExplainData& d, Fit& fit, const Effect& e, const std::vector<double>& v,

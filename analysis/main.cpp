@@ -9,6 +9,7 @@
 #include "analysis/coverage.hpp"
 #include "analysis/explain.hpp"
 #include "analysis/proof.hpp"
+#include "analysis/unnamed.hpp"
 #include "core/cli.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -61,6 +62,25 @@ void prepare(Options& o, const Progress& progress) {
     o.stop = dw::Shutdown::instance().token();
 }
 
+// The options the simulated studies share: --out, --null-seeds, --jobs, --cases.
+template <class Options>
+void add_study_options(CLI::App* sub, Options& o, std::string& cases, const std::string& case_list,
+                       const char* out_help) {
+    sub->add_option("--out", o.out_dir, out_help)->required();
+    sub->add_option("--null-seeds", o.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
+    sub->add_option("--jobs", o.jobs, kJobsHelp)->check(dw::cli::in(dw::kJobsRange));
+    sub->add_option("--cases", cases, case_list + " (default: all)");
+}
+
+// A simulated study run: its table printed, its verdict a pass or a runtime failure.
+template <class Options, class Run>
+int run_study(Options& o, const std::string& cases, const Progress& progress, Run run) {
+    prepare(o, progress);
+    o.cases = split_list(cases);
+    const auto r = run(o);
+    return finish(r.table_path, r.pass, kProofVerdict);
+}
+
 // `dw-explain proof`: simulated flights with hidden effects.
 struct ProofCommand {
     CLI::App* sub = nullptr;
@@ -71,17 +91,29 @@ struct ProofCommand {
         sub = app.add_subcommand("proof",
                                  "simulate flights with hidden effects (in-process, as dw-sim fly does), explain them, "
                                  "check what was found");
-        sub->add_option("--out", options.out_dir, "output folder (flights, reports, proof.md)")->required();
-        sub->add_option("--null-seeds", options.null_seeds, "null flights (noise only)")->check(dw::cli::in({0, 100}));
-        sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(dw::kJobsRange));
-        sub->add_option("--cases", cases, dw::analysis::proof_case_list() + " (default: all)");
+        add_study_options(sub, options, cases, dw::analysis::proof_case_list(),
+                          "output folder (flights, reports, proof.md)");
     }
-    int run(const Progress& progress) {
-        prepare(options, progress);
-        options.cases = split_list(cases);
-        const auto r = dw::analysis::run_proof(options);
-        return finish(r.table_path, r.pass, kProofVerdict);
+    int run(const Progress& progress) { return run_study(options, cases, progress, dw::analysis::run_proof); }
+};
+
+// `dw-explain unnamed`: simulated flights with mismatches the vocabulary has no word for.
+struct UnnamedCommand {
+    CLI::App* sub = nullptr;
+    dw::analysis::UnnamedOptions options;
+    std::string cases;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand("unnamed",
+                                 "simulate flights with mismatches no effect of the vocabulary names, explain them, "
+                                 "check each is detected, nothing named for it and what is left modelled");
+        add_study_options(sub, options, cases, dw::analysis::unnamed_case_list(),
+                          "output folder (flights, reports, unnamed.md)");
+        sub->add_option("--legs", options.legs, "legs per flight")
+            ->check(dw::cli::in({5, 1000}))
+            ->capture_default_str();
     }
+    int run(const Progress& progress) { return run_study(options, cases, progress, dw::analysis::run_unnamed); }
 };
 
 // `dw-explain real-proof`: effects concealed in recorded flights.
@@ -245,6 +277,8 @@ int run(int argc, char** argv) {
     app.add_flag("--quiet", quiet, "no progress");
     ProofCommand proof;
     proof.add(app);
+    UnnamedCommand unnamed;
+    unnamed.add(app);
     RealProofCommand real_proof;
     real_proof.add(app);
     CoverageCommand coverage;
@@ -260,6 +294,7 @@ int run(int argc, char** argv) {
     if (coverage.sub->parsed()) return coverage.run(progress);
     if (calibrate.sub->parsed()) return calibrate.run(explain.physics_path, progress);
     if (proof.sub->parsed()) return proof.run(progress);
+    if (unnamed.sub->parsed()) return unnamed.run(progress);
     return explain.run(progress);
 }
 

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "analysis/explain.hpp"
+#include "analysis/study.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
@@ -221,14 +222,9 @@ ProofRow null_row(int clean, int total) {
 }  // namespace
 
 ProofResult run_proof(const ProofOptions& o) {
-    std::mutex m;
-    auto say = [&](const std::string& s) {
-        std::lock_guard lock(m);
-        if (o.progress) o.progress(s);
-    };
+    StudyProgress say(o.progress);
     const auto known = case_names();
-    for (const auto& n : o.cases)
-        if (!find_name(known, n)) throw InputError("--cases: " + unknown_name_problem("case", n, known));
+    require_known_cases(o.cases, known);
     if (wanted_null(o) && o.null_seeds < 1)
         throw InputError("--null-seeds: the null case needs at least 1 flight (or leave it out with --cases)");
     StagedFolder staged(o.out_dir);  // the flights, reports and proof.md appear together, or not at all

@@ -253,6 +253,71 @@ std::string measured_clock_text(const std::optional<MeasuredClock>& measured, co
         ". The explainer's clock_offset: ", fitted, ".\n\n");
 }
 
+// One candidate's entry in report.json.
+json candidate_json(const CandidateResult& c, const std::optional<MeasuredClock>& measured) {
+    json j{{"effect", c.effect.name},
+           {"params", params_json(c, false)},
+           {"ci95", params_json(c, true)},
+           {"heldout_rmse_before", axes_json(c.heldout_before)},
+           {"heldout_rmse_after", axes_json(c.heldout_after)},
+           {"delta_bic", c.delta_bic},
+           {"accepted", c.accepted},
+           {"heldout_z", c.t},
+           {"note", c.note}};
+    if (!c.indistinguishable.empty()) j["indistinguishable_from"] = c.indistinguishable;
+    if (c.stand_in) j["stands_in"] = true;
+    if (c.stand_in_z) j["stand_in_z"] = *c.stand_in_z;
+    if (const auto& m = c.one_value)
+        j["one_value"] = {{"axis", split_info(m->axis).name},
+                          {"param", m->param},
+                          {"low", m->low},
+                          {"high", m->high},
+                          {"z", m->z},
+                          {"threshold", m->threshold},
+                          {"tests", m->tested},
+                          {"moved", m->moved}};
+    if (const auto& s = c.short_of)
+        j["short_of_discrepancy"] = {{"axis", kAxes[static_cast<std::size_t>(s->axis)]},
+                                     {"effect_gain", s->effect_gain},
+                                     {"discrepancy_gain", s->discrepancy_gain},
+                                     {"structure_z", s->z}};
+    if (c.too_few_pieces)
+        j["not_identifiable"] = {{"evidence_pieces", c.evidence_pieces},
+                                 {"why", "its held-out evidence sits in too few pieces"}};
+    if (measured && c.effect.name == physics::kClockOffsetEffect) j["measured"] = {{"offset_s", measured->offset_s}};
+    return j;
+}
+
+json discrepancy_json(const Discrepancy& g) {
+    json j{{"model", kDiscrepancyModel},
+           {"learnt", g.fitted},
+           {"inputs", g.inputs},
+           {"heldout_rmse_before", axes_json(g.heldout_before)},
+           {"heldout_rmse_after", axes_json(g.heldout_after)},
+           {"axis", kAxes[static_cast<std::size_t>(g.best_axis)]},
+           {"heldout_z", g.fitted ? g.t : 0.0},
+           {"gain", g.gain},
+           {"significant", g.significant},
+           {"note", g.note}};
+    if (g.significant && !g.depends_on.empty()) {
+        json shares = json::object();
+        for (const auto& [name, share] : g.shares) shares[name] = share;
+        j["depends_on"] = g.depends_on;
+        j["shares"] = shares;
+        j["sentence"] = g.sentence;
+    }
+    return j;
+}
+
+json line_json(const SpectralLine& l) {
+    return json{{"axis", kAxes[static_cast<std::size_t>(l.axis)]},
+                {"hz", l.hz},
+                {"power_over_local", l.ratio},
+                {"false_alarm", l.false_alarm},
+                {"searched", l.lines},
+                {"significant", l.significant}};
+}
+
 // report.json: the machine-readable contract (FLIGHT_FORMAT.md, explain report).
 json report_json(const ExplainResult& r, const ExplainOptions& o, const std::optional<MeasuredClock>& measured) {
     json j;
@@ -260,36 +325,19 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     json regions = json::array();
     for (const auto& g : r.regions)
         regions.push_back({{"axis", g.axis}, {"where", g.where}, {"mean_residual", g.mean_residual}, {"z", g.z}});
-    j["mismatch"] = {{"detected", r.detected},
-                     {"noise_floor", axes_json(r.noise_floor)},
-                     {"regions", regions},
-                     {"excess",
-                      {{"before", axes_json(r.excess_before)},
-                       {"after", axes_json(r.excess_after)},
-                       {"threshold", o.detect_excess}}}};
+    j["mismatch"] = {
+        {"detected", r.detected},
+        {"noise_floor", axes_json(r.noise_floor)},
+        {"regions", regions},
+        {"excess",
+         {{"before", axes_json(r.excess_before)},
+          {"after", axes_json(r.excess_after)},
+          {"threshold", o.detect_excess}}},
+        {"spectrum",
+         {{"before", line_json(r.line_before)}, {"after", line_json(r.line_after)}, {"alpha", kLineAlpha}}}};
     json cands = json::array();
-    for (const auto& e : o.candidates) {  // each effect once: its accepted (final) or latest score
-        const CandidateResult* final = final_result(r, e.name);
-        if (!final) continue;
-        const auto& c = *final;
-        cands.push_back({{"effect", e.name},
-                         {"params", params_json(c, false)},
-                         {"ci95", params_json(c, true)},
-                         {"heldout_rmse_before", axes_json(c.heldout_before)},
-                         {"heldout_rmse_after", axes_json(c.heldout_after)},
-                         {"delta_bic", c.delta_bic},
-                         {"accepted", c.accepted},
-                         {"heldout_z", c.t},
-                         {"note", c.note}});
-        if (!c.indistinguishable.empty()) cands.back()["indistinguishable_from"] = c.indistinguishable;
-        if (c.stand_in) cands.back()["stands_in"] = true;
-        if (c.stand_in_z) cands.back()["stand_in_z"] = *c.stand_in_z;
-        if (c.too_few_pieces)
-            cands.back()["not_identifiable"] = {{"evidence_pieces", c.evidence_pieces},
-                                                {"why", "its held-out evidence sits in too few pieces"}};
-        if (measured && e.name == physics::kClockOffsetEffect)
-            cands.back()["measured"] = {{"offset_s", measured->offset_s}};
-    }
+    for (const auto& e : o.candidates)  // each effect once: its accepted (final) or latest score
+        if (const CandidateResult* c = final_result(r, e.name)) cands.push_back(candidate_json(*c, measured));
     j["candidates"] = cands;
     if (measured)
         j["clock_offset_measured"] = {{"offset_s", measured->offset_s},
@@ -300,17 +348,7 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     j["unexplained"] = r.unexplained;
     j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)},
                 {"heldout_rmse_after", axes_json(r.heldout_after)}};
-    const Discrepancy& g = r.discrepancy;
-    j["discrepancy"] = {{"model", kDiscrepancyModel},
-                        {"learnt", g.fitted},
-                        {"inputs", g.inputs},
-                        {"heldout_rmse_before", axes_json(g.heldout_before)},
-                        {"heldout_rmse_after", axes_json(g.heldout_after)},
-                        {"axis", kAxes[static_cast<std::size_t>(g.best_axis)]},
-                        {"heldout_z", g.fitted ? g.t : 0.0},
-                        {"gain", g.gain},
-                        {"significant", g.significant},
-                        {"note", g.note}};
+    j["discrepancy"] = discrepancy_json(r.discrepancy);
     j["physics_out"] = "physics.yaml";
     if (!o.physics.calibration.empty()) j["physics_calibration"] = o.physics.calibration;
     j["cross_validation"] = {

@@ -36,6 +36,47 @@ double t975(int dof) {
     return dof >= 1 && dof <= 10 ? table[static_cast<std::size_t>(dof - 1)] : kZ95 + 2.5 / std::max(dof, 1);
 }
 
+namespace {
+
+// The regularised incomplete beta function I_x(a, b) by its continued fraction (modified Lentz),
+// on the side where the fraction converges fast.
+double incomplete_beta(double x, double a, double b) {
+    if (x <= 0) return 0;
+    if (x >= 1) return 1;
+    if (x > (a + 1) / (a + b + 2)) return 1 - incomplete_beta(1 - x, b, a);
+    constexpr double kTiny = 1e-300, kEps = 1e-14;
+    constexpr int kMaxTerms = 300;
+    const auto guard = [](double v) { return std::abs(v) < kTiny ? kTiny : v; };
+    const double front =
+        std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x)) / a;
+    double c = 1, d = 1 / guard(1 - (a + b) * x / (a + 1)), h = d;
+    for (int m = 1; m <= kMaxTerms; ++m) {
+        const double even = m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m));
+        d = 1 / guard(1 + even * d), c = guard(1 + even / c), h *= d * c;
+        const double odd = -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1));
+        d = 1 / guard(1 + odd * d), c = guard(1 + odd / c);
+        h *= d * c;
+        if (std::abs(d * c - 1) < kEps) break;
+    }
+    return front * h;
+}
+
+}  // namespace
+
+double t_tail_two_sided(double t, int dof) {
+    const double nu = std::max(dof, 1);
+    return incomplete_beta(nu / (nu + t * t), nu / 2, 0.5);
+}
+
+double t_two_sided(double p, int dof) {
+    double lo = 0, hi = 1e6;  // the tail falls from 1 at 0; bisect
+    for (int k = 0; k < 200 && hi - lo > 1e-9 * hi; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (t_tail_two_sided(mid, dof) > p ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
 std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates) {
     const double G = static_cast<double>(replicates.size());
     std::vector<double> out;

@@ -26,6 +26,12 @@ inline constexpr double kZ95 = 1.96;
 // Two-sided 95 % quantile of Student's t with dof degrees of freedom (a jackknife's intervals).
 double t975(int dof);
 
+// The two-sided tail of Student's t with dof degrees of freedom, P(|T| > t) (from the regularised
+// incomplete beta function), and its inverse: the t whose two-sided tail is p (0 < p < 1). A test
+// repeated m times at a family-wise level alpha uses t_two_sided(alpha / m, dof) (Bonferroni).
+double t_tail_two_sided(double t, int dof);
+double t_two_sided(double p, int dof);
+
 // The spread of a jackknife over its replicates (each with one group left out):
 // sqrt((G - 1) / G * sum (x - mean)²), per parameter.
 std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates);

@@ -92,6 +92,18 @@ TEST(Stats, EffectiveCountCountsThePiecesThatCarryTheEvidence) {
     EXPECT_LT(dw::paired_z(swap), std::sqrt(dw::effective_count(swap)));
 }
 
+// Student's t: the tail from the incomplete beta function, and its inverse, against published
+// tables (two-sided 5 % and 0.1 %) and the t975 table the jackknife intervals use.
+TEST(Stats, StudentTQuantilesMatchTheTables) {
+    EXPECT_NEAR(dw::t_two_sided(0.05, 1), 12.706, 1e-3);
+    EXPECT_NEAR(dw::t_two_sided(0.05, 9), 2.262, 1e-3);
+    EXPECT_NEAR(dw::t_two_sided(0.001, 9), 4.781, 1e-3);
+    EXPECT_NEAR(dw::t_two_sided(0.05, 30), 2.042, 1e-3);
+    for (int dof = 1; dof <= 10; ++dof) EXPECT_NEAR(dw::t_two_sided(0.05, dof), dw::t975(dof), 1e-3) << dof;
+    EXPECT_NEAR(dw::t_tail_two_sided(2.262, 9), 0.05, 1e-4);
+    EXPECT_NEAR(dw::t_tail_two_sided(0, 5), 1.0, 1e-12);
+}
+
 // The robust summaries the explainer, the calibration and the importer share (one rule each).
 TEST(Stats, MedianAndTheNoiseOfSuccessiveDifferences) {
     EXPECT_DOUBLE_EQ(dw::median({3, 1, 2}), 2.0);
