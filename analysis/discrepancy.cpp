@@ -29,8 +29,8 @@ struct Layout {
 
 Layout layout_of(int drift_bumps) {
     Layout l;
-    const std::array<int, kInputGroups.size()> counts{
-        1, 3 * kBumps, kOwn, drift_bumps + 6 * kGainDriftBumps, 6 * (1 + kPushBumps), 6, 6};
+    const std::array<int, kInputGroups.size()> counts{1, 3 * kBumps,      kOwn, drift_bumps + 6 * kGainDriftPowers,
+                                                      6, 6 * kPushPowers, 6,    6};
     for (std::size_t g = 0; g < counts.size(); ++g)
         l.start[g] = l.columns, l.count[g] = counts[g], l.columns += counts[g];
     return l;
@@ -78,7 +78,7 @@ Drift drift_of(const ExplainData& d) {
 
 // The model's prediction at sample i in noise floors, its norm (the push), and its rate of change.
 struct Push {
-    double top = 1;  // the near samples' kPushQuantile of the norm: the push bumps span [0, top]
+    double top = 1;  // the near samples' kPushQuantile of the norm: x = norm / top
 };
 
 double push_of(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i) {
@@ -140,26 +140,24 @@ void own_motion_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row)
     }
 }
 
-// The prediction's own inputs: per axis p, p × push bumps, p × time bumps (after the additive
-// drift's), dp/dt, p × direction.
+// The prediction's own inputs: per axis p, p × powers of the push and of time (after the additive
+// drift's bumps), dp/dt, p × direction.
 void prediction_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
     const auto& d = c.d;
-    const double t = d.sim.stamps()[i], x = push_of(d, c.pred, i);
+    const double t = d.sim.stamps()[i], x = push_of(d, c.pred, i) / c.push.top;
+    const double half = 0.5 * (c.drift.t1 - c.drift.t0), tau = half > 0 ? (t - c.drift.t0) / half - 1 : 0;
     const std::size_t prev = i > 0 ? i - 1 : i, next = i + 1 < c.pred.size() ? i + 1 : i;
     const double dt = d.sim.stamps()[next] - d.sim.stamps()[prev];
-    const double push_step = c.push.top / (kPushBumps - 1);
-    const double gain_step = (c.drift.t1 - c.drift.t0) / (kGainDriftBumps - 1);
-    const int ps = c.layout.at(InputGroup::push), ds = c.layout.at(InputGroup::drift) + c.drift.count,
-              rs = c.layout.at(InputGroup::rate), vs = c.layout.at(InputGroup::direction);
+    const int gs = c.layout.at(InputGroup::gain), ps = c.layout.at(InputGroup::push),
+              ds = c.layout.at(InputGroup::drift) + c.drift.count, rs = c.layout.at(InputGroup::rate),
+              vs = c.layout.at(InputGroup::direction);
     for (int a = 0; a < 6; ++a) {
         const auto A = static_cast<std::size_t>(a);
         if (!d.sim.measured_axes()[A]) continue;
         const double p = c.pred[i][A];
-        row(ps + a * (1 + kPushBumps)) = p;
-        for (int k = 0; k < kPushBumps; ++k)
-            row(ps + a * (1 + kPushBumps) + 1 + k) = p * bump(x, k * push_step, push_step);
-        for (int k = 0; k < kGainDriftBumps; ++k)
-            row(ds + a * kGainDriftBumps + k) = gain_step > 0 ? p * bump(t, c.drift.t0 + k * gain_step, gain_step) : 0;
+        row(gs + a) = p;
+        for (int k = 0; k < kPushPowers; ++k) row(ps + a * kPushPowers + k) = p * std::pow(x, k + 1);
+        for (int k = 0; k < kGainDriftPowers; ++k) row(ds + a * kGainDriftPowers + k) = p * std::pow(tau, k + 1);
         row(rs + a) = dt > 0 ? (c.pred[next][A] - c.pred[prev][A]) / dt : 0;
         row(vs + a) = p * d.info[i].direction;
     }
@@ -262,7 +260,8 @@ void judge(Discrepancy& r, const PieceErrors& s, const ExplainData& d, const Exp
 
 // Per fold, its held-out samples' regressors (standardised over every sample, so that one penalty
 // suits every input) and residuals, with their normal equations' parts.
-std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds, double intensity) {
+std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds, double intensity,
+                         const std::vector<Wrench6>& weigh_by) {
     const Drift drift = drift_of(d);
     const Context c{d, pred, heights_of(d), drift, push_scale(d, pred), layout_of(drift.count)};
     std::vector<Gram> parts;
@@ -277,7 +276,7 @@ std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred,
             const auto row = static_cast<Eigen::Index>(r);
             // Each sample weighed by its noise: the floor and the turbulence that grows with the push
             // (analysis/noise.hpp's excess), so that the near passes' scatter does not drown the rest.
-            const double turbulent = 2 * intensity * push_of(d, pred, test[r]);
+            const double turbulent = 2 * intensity * push_of(d, weigh_by, test[r]);
             const double w = 1 / std::sqrt(1 + turbulent * turbulent);
             g.x.row(row) = w * inputs_of(c, test[r]);
             for (std::size_t a = 0; a < 6; ++a)
@@ -354,18 +353,21 @@ void explain_dependence(Discrepancy& r, const ExplainData& d, const Folds& folds
 }  // namespace
 
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
-                              const ExplainOptions& o, bool dependence, PieceErrors* pieces) {
+                              const ExplainOptions& o, const DiscrepancyRun& run) {
     Discrepancy r;
     const double intensity = o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0;
-    const std::vector<Gram> parts = design(d, pred, folds, intensity);
-    r.inputs = static_cast<std::size_t>(parts[0].x.cols());
-    std::vector<int> all(r.inputs);
-    std::iota(all.begin(), all.end(), 0);
-    const PieceErrors s = cross_validate(d, folds, parts, all);
+    const std::vector<Gram> parts = design(d, pred, folds, intensity, run.weigh_by ? *run.weigh_by : pred);
+    const Layout l = layout_of(static_cast<int>(parts[0].x.cols()) - layout_of(0).columns);
+    std::vector<int> cols;
+    for (std::size_t g = 0; g < kInputGroups.size(); ++g)
+        if (std::find(run.without.begin(), run.without.end(), kInputGroups[g].group) == run.without.end())
+            for (int k = 0; k < l.count[g]; ++k) cols.push_back(l.start[g] + k);
+    r.inputs = cols.size();
+    const PieceErrors s = cross_validate(d, folds, parts, cols);
     r.fitted = true;
     judge(r, s, d, o);
-    if (dependence && r.significant) explain_dependence(r, d, folds, parts, s);
-    if (pieces) *pieces = s;
+    if (run.explain_dependence && r.significant) explain_dependence(r, d, folds, parts, s);
+    if (run.pieces) *run.pieces = s;
     return r;
 }
 

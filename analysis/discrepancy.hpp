@@ -16,6 +16,7 @@
 #include <array>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "analysis/explain.hpp"
 #include "analysis/fit.hpp"
@@ -37,24 +38,24 @@ inline constexpr double kDriftSpacing_s = 4.0;
 inline constexpr std::array<double, 6> kRidgeGrid{1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
 
 // Besides the geometry, what the splits of analysis/splits.hpp name, as functions of the model's own
-// prediction p (per axis): p itself (a gain or a leak), p times bumps over how hard the air pushes
-// (kPushBumps over the predicted wrench's norm in noise floors, up to its near samples' 95th
-// percentile: a gain that changes with the push), p times bumps over the flight's time
-// (kGainDriftBumps: a gain that creeps), p's rate of change (a delay or a lag), and p times the
+// prediction p (per axis): p itself (a gain or a leak), p times powers of how hard the air pushes
+// (x: the predicted wrench's norm in noise floors over its near samples' kPushQuantile; x and x²:
+// a gain that changes with the push), p times powers of the flight's time (τ from −1 to 1 over the
+// flight; τ and τ²: a gain that creeps), p's rate of change (a delay or a lag), and p times the
 // direction of travel.
-inline constexpr int kPushBumps = 4;
-inline constexpr int kGainDriftBumps = 3;
+inline constexpr int kPushPowers = 2;
+inline constexpr int kGainDriftPowers = 2;
 inline constexpr double kPushQuantile = 0.95;
 
 // The groups of inputs, each with what it means when the discrepancy depends on it most (one list:
 // the columns are laid out in this order; the report's words come from here).
-enum class InputGroup { constant, geometry, own_motion, drift, push, rate, direction };
+enum class InputGroup { constant, geometry, own_motion, drift, gain, push, rate, direction };
 struct InputGroupInfo {
     InputGroup group;
     const char* name;
     const char* sentence;
 };
-inline constexpr std::array<InputGroupInfo, 7> kInputGroups{{
+inline constexpr std::array<InputGroupInfo, 8> kInputGroups{{
     {InputGroup::constant, "constant", "a constant offset"},
     {InputGroup::geometry, "geometry",
      "depends on where the neighbours are (their horizontal offset and height above): the jet's shape or where "
@@ -62,6 +63,7 @@ inline constexpr std::array<InputGroupInfo, 7> kInputGroups{{
     {InputGroup::own_motion, "own motion", "follows the sufferer's own velocity and acceleration"},
     {InputGroup::drift, "time",
      "changes over the flight: a drift (a zero or a gain that creeps while the flight goes on)"},
+    {InputGroup::gain, "gain", "is proportional to the force: a gain or a leak between axes"},
     {InputGroup::push, "push",
      "grows with the push, not in proportion to it: a gain that changes with the force (e.g. a sensor that stops "
      "following large forces)"},
@@ -74,7 +76,7 @@ inline constexpr const char* kDiscrepancyModel =
     "ridge regression, per axis, on Gaussian bumps over each neighbour's horizontal offset and height above the "
     "sufferer (summed over the neighbours, also times the offset's direction), a constant, the sufferer's own "
     "velocity and acceleration, bumps over the flight's time (a slow drift), and the model's own prediction: "
-    "itself, times bumps over the push, times bumps over time, times the direction of travel, and its rate of change";
+    "itself, times powers of the push and of time, times the direction of travel, and its rate of change";
 
 // Per held-out piece (analysis/score.hpp's pieces): squared residuals in noise floors, without and
 // with the discrepancy, and the samples counted. Each sample is weighed by its noise — the floor and
@@ -85,8 +87,15 @@ struct PieceErrors {
 };
 
 // Fills ExplainResult::discrepancy from the model's prediction `pred` (with what it depends on when
-// `explain_dependence` and it is significant); its per-piece errors into `pieces` when given.
+// `explain_dependence` and it is significant); its per-piece errors into `pieces` when given. The
+// samples' noise weights follow `weigh_by`'s push (default: pred's).
+struct DiscrepancyRun {
+    bool explain_dependence = true;
+    std::vector<InputGroup> without;  // groups of inputs left out (the arbiter's yardsticks)
+    PieceErrors* pieces = nullptr;
+    const std::vector<Wrench6>* weigh_by = nullptr;
+};
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
-                              const ExplainOptions& o, bool explain_dependence = true, PieceErrors* pieces = nullptr);
+                              const ExplainOptions& o, const DiscrepancyRun& run = {});
 
 }  // namespace dw::analysis

@@ -72,6 +72,72 @@ void conclude(ExplainResult& R, const ExplainData& d, const Baseline& base, cons
     R.unexplained = largest(R.excess_after) > o.detect_excess || stand_in || R.line_after.significant;
 }
 
+// Forward selection, then the arbiter; an effect it refuses is left out and the selection made again
+// (each refusal removes a candidate, so this ends). stand_in: a stand-in was seen on the way.
+Baseline select_and_arbitrate(ExplainResult& R, const ExplainData& d, const Baseline& base, const Folds& folds,
+                              const ExplainOptions& o, const Progress& say, bool& stand_in) {
+    std::vector<Effect> candidates = o.candidates;
+    bool any_refused = false;
+    for (;;) {
+        R.accepted.clear();
+        const Baseline selected = select_effects(R, d, base, folds, candidates, o, say, stand_in);
+        const auto refused = arbitrate(R, d, base, selected, folds, o, say);
+        if (refused.empty()) {
+            stand_in = stand_in || any_refused;
+            return selected;
+        }
+        any_refused = true;
+        std::erase_if(candidates, [&](const Effect& e) {
+            return std::find(refused.begin(), refused.end(), e.name) != refused.end();
+        });
+        say(log::cat("selecting again without ", log::join(refused)));
+    }
+}
+
+// The time shift that best aligns recording and simulation over the flight: the shift table's
+// median, weighted by samples.
+double located_shift(const std::vector<Shift>& shifts) {
+    std::vector<Shift> v = shifts;
+    std::sort(v.begin(), v.end(), [](const Shift& a, const Shift& b) { return a.shift_s < b.shift_s; });
+    std::size_t total = 0, run = 0;
+    for (const auto& x : v) total += x.samples;
+    for (const auto& x : v)
+        if ((run += x.samples) * 2 >= total) return x.shift_s;
+    return 0;
+}
+
+// The members of c's family that the flight also supports: those the held-out data cannot tell
+// from it in its round, and those that passed the held-out test anywhere in the explanation but were
+// refused as stand-ins (their value moved across the flight, or they fell short of the
+// discrepancy) — they explain the same shift in another way.
+std::vector<std::string> also_supported(const ExplainResult& R, const CandidateResult& c) {
+    std::vector<std::string> out = c.family_alike;
+    const auto* family = c.effect.type->family();
+    for (const auto& m : R.candidates)
+        if (family && m.effect.type->family() == family && m.effect.name != c.effect.name && m.stand_in &&
+            std::find(out.begin(), out.end(), m.effect.name) == out.end())
+            out.push_back(m.effect.name);
+    return out;
+}
+
+// Accepted effects that the flight cannot tell from other members of their family: the family named.
+std::vector<FamilyVerdict> families_of(const ExplainResult& R) {
+    std::vector<FamilyVerdict> out;
+    for (const auto& c : R.accepted) {
+        const auto others = also_supported(R, c);
+        if (others.empty()) continue;
+        FamilyVerdict v{c.effect.type->family(), {c.effect.name}, located_shift(R.shifts), {}};
+        v.members.insert(v.members.end(), others.begin(), others.end());
+        const std::vector<std::string> first(v.members.begin(), v.members.end() - 1);
+        v.sentence =
+            log::cat(v.family->shared, " of ", std::round(v.shared_value * 1000) / 1000,
+                     " s (the located shift): ", log::join(first), " or ", v.members.back(),
+                     " — this flight cannot tell which; ", c.effect.name, " is kept for its lower held-out error");
+        out.push_back(std::move(v));
+    }
+    return out;
+}
+
 }  // namespace
 
 void validate(const ExplainOptions& o) {
@@ -131,10 +197,9 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     // Screen, cross-validate and select; then the verdict.
     bool stand_in = false;
     const Folds folds = folds_of(d, o.folds);
-    const Baseline selected = select_effects(R, d, base, folds, o, say, stand_in);
-    bool short_of_discrepancy = false;
-    const Baseline final_model = arbitrate(R, d, base, selected, folds, o, say, short_of_discrepancy);
-    conclude(R, d, base, final_model, stand_in || short_of_discrepancy, o, f.meta.formation);
+    const Baseline final_model = select_and_arbitrate(R, d, base, folds, o, say, stand_in);
+    conclude(R, d, base, final_model, stand_in, o, f.meta.formation);
+    R.families = families_of(R);
     say("learning what is left as a function of the geometry");
     R.discrepancy = learn_discrepancy(d, final_model.pred, folds, o);
     say(log::cat("  ", R.discrepancy.note));

@@ -82,12 +82,13 @@ struct Shift {          // the time shift that best aligns recording and simulat
     std::size_t samples = 0;
 };
 
-// An accepted effect that fell short of the discrepancy (the arbiter, analysis/arbiter.hpp): what it
-// removes of its axis's held-out error and what a discrepancy learnt without it removes.
+// An accepted effect refused by the arbiter (analysis/arbiter.hpp): on the axis where it fell short,
+// the fractions of the held-out error (weighed by the noise) that the model with it removes, that a
+// discrepancy learnt without any effect removes, and that the model with a discrepancy on top removes.
 struct ShortOfDiscrepancy {
     int axis = 2;
-    double effect_gain = 0, discrepancy_gain = 0;
-    double z = 0;  // the discrepancy's advantage over the pieces
+    double effect_gain = 0, discrepancy_gain = 0, together_gain = 0;
+    double z = 0;  // the evidence that the effect adds to the discrepancy (held-out pieces)
 };
 
 struct CandidateResult {
@@ -97,7 +98,9 @@ struct CandidateResult {
     double delta_bic = 0;
     double t = 0;  // held-out z over pieces, best axis: the larger of signed ranks and Σd/√Σd²
     int best_axis = 2;
-    double gain = 0;         // fraction of that axis's held-out MSE removed
+    double gain = 0;  // fraction of that axis's held-out MSE removed
+    // Per axis: its held-out z and the fraction removed (on the pieces where it moves the prediction).
+    AxisValues axis_t{}, axis_gain{};
     double total_ratio = 1;  // held-out error after / before, all axes (normalised)
     bool accepted = false;
     bool stand_in = false;  // it passed the held-out test, but its value changes across the flight
@@ -113,7 +116,19 @@ struct CandidateResult {
     int round = 0;                               // forward-selection round it was scored in
     std::map<int, double> heldout_pieces;        // per held-out piece: normalised squared error after, all axes
     std::vector<std::string> indistinguishable;  // accepted alternatives the held-out data cannot tell from it
+    // Members of its family (EffectType::family) scored in its round, accepted or not, that the
+    // held-out data cannot tell from it.
+    std::vector<std::string> family_alike;
     std::optional<ShortOfDiscrepancy> short_of;  // refused by the arbiter: it leaves structure the discrepancy models
+};
+
+// A family of effects the flight cannot separate, named together with what its members share: the
+// located time shift for the delay family (the median of the shift table, weighted by samples).
+struct FamilyVerdict {
+    const physics::EffectFamily* family = nullptr;
+    std::vector<std::string> members;  // the accepted one first
+    double shared_value = 0;           // the delay family: seconds
+    std::string sentence;
 };
 
 // What the accepted effects leave, learnt as a function of the geometry, the predicted push, time,
@@ -154,8 +169,9 @@ struct ExplainResult {
     std::size_t samples = 0, legs = 0;                   // samples in blocks, blocks holding samples
     flight::BlockKind blocks = flight::BlockKind::legs;  // what the cross-validation blocks are
     double seconds = 0;
-    std::size_t resimulations = 0;  // predictions of the whole flight the fits paid for (analysis/fit.hpp)
-    Discrepancy discrepancy;        // what is left after the accepted effects, learnt
+    std::size_t resimulations = 0;        // predictions of the whole flight the fits paid for (analysis/fit.hpp)
+    Discrepancy discrepancy;              // what is left after the accepted effects, learnt
+    std::vector<FamilyVerdict> families;  // accepted effects the flight cannot tell from their family
     // The strongest line in the residual's spectrum before the fit and after it (analysis/spectrum.hpp).
     SpectralLine line_before, line_after;
 };

@@ -261,6 +261,7 @@ struct ExplainCommand {
         for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
         if (!r.detected) return "no mismatch";
         if (by.empty()) return "mismatch found, not explained";
+        for (const auto& v : r.families) by += "; " + v.sentence;
         return "explained by: " + by + (r.unexplained ? " (a residual remains unexplained)" : "");
     }
 };

@@ -99,6 +99,8 @@ bool check_missing(ProofRow& row, const ExplainResult& r, const Truth& t) {
 // A row's verdict: every truth found with its value inside the interval and the held-out error
 // reduced, and nothing claimed that was not hidden. A row that fails only because the flight could
 // not decide its truths, fitted right, is marked not identifiable.
+bool family_named(const ExplainResult& r, const std::vector<Truth>& truth);
+
 void check(ProofRow& row, const ExplainResult& r, const std::vector<Truth>& truth) {
     for (const auto& a : r.accepted) row.found += (row.found.empty() ? "" : ", ") + a.effect.name;
     if (row.found.empty()) row.found = "(none)";
@@ -136,10 +138,42 @@ void check(ProofRow& row, const ExplainResult& r, const std::vector<Truth>& trut
             row.why += a.effect.name + " claimed but not hidden. ";
         }
     row.not_identifiable = missing > 0 && undecidable == missing && row.covered && !other_failure;
+    row.family_named = !row.pass && family_named(r, truth);
+}
+
+// Whether every truth not accepted as itself is in a family the report names, and every effect
+// accepted but not hidden is a member of such a family.
+bool family_named(const ExplainResult& r, const std::vector<Truth>& truth) {
+    const auto in_named_family = [&](const std::string& effect, const std::string& with) {
+        return std::any_of(r.families.begin(), r.families.end(), [&](const FamilyVerdict& v) {
+            const auto has = [&](const std::string& n) {
+                return std::find(v.members.begin(), v.members.end(), n) != v.members.end();
+            };
+            return has(effect) && has(with);
+        });
+    };
+    bool any = false;
+    for (const auto& t : truth) {
+        if (std::any_of(r.accepted.begin(), r.accepted.end(),
+                        [&](const CandidateResult& a) { return a.effect.name == t.effect; }))
+            continue;
+        const bool named = std::any_of(r.accepted.begin(), r.accepted.end(), [&](const CandidateResult& a) {
+            return in_named_family(t.effect, a.effect.name);
+        });
+        if (!named) return false;
+        any = true;
+    }
+    for (const auto& a : r.accepted)
+        if (std::none_of(truth.begin(), truth.end(), [&](const Truth& t) {
+                return t.effect == a.effect.name || in_named_family(t.effect, a.effect.name);
+            }))
+            return false;
+    return any;
 }
 
 std::string verdict(const ProofRow& r) {
     if (r.pass) return "pass";
+    if (r.family_named) return "its family named (this flight cannot tell the members apart): " + r.why;
     return (r.not_identifiable ? "fitted right, not identifiable from this flight: " : "FAIL: ") + r.why;
 }
 
@@ -434,8 +468,9 @@ ProofResult run_real_proof(const RealProofOptions& o) {
         }
     }
     require_recovered_somewhere(R.rows);
-    R.pass = !R.rows.empty() &&
-             std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) { return r.pass || r.not_identifiable; });
+    R.pass = !R.rows.empty() && std::all_of(R.rows.begin(), R.rows.end(), [](const ProofRow& r) {
+        return r.pass || r.not_identifiable || r.family_named;
+    });
     std::string skipped;
     if (!R.skipped.empty())
         skipped = log::cat("\nNot proved on (", kNoNeighbourSkipped, "): ", log::join(R.skipped), ".\n");

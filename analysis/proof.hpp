@@ -31,6 +31,9 @@ struct ProofRow {
     // Not accepted only because the flight cannot carry the held-out test (too few pieces hold its
     // evidence: CandidateResult::too_few_pieces), and fitted right.
     bool not_identifiable = false;
+    // Not accepted as itself, but its family named (ExplainResult::families): the flight could not
+    // tell the members apart, and the report says so — never another member alone.
+    bool family_named = false;
 };
 
 struct ProofResult {

@@ -280,7 +280,8 @@ json candidate_json(const CandidateResult& c, const std::optional<MeasuredClock>
         j["short_of_discrepancy"] = {{"axis", kAxes[static_cast<std::size_t>(s->axis)]},
                                      {"effect_gain", s->effect_gain},
                                      {"discrepancy_gain", s->discrepancy_gain},
-                                     {"structure_z", s->z}};
+                                     {"together_gain", s->together_gain},
+                                     {"adds_z", s->z}};  // together: the model and the discrepancy on top
     if (c.too_few_pieces)
         j["not_identifiable"] = {{"evidence_pieces", c.evidence_pieces},
                                  {"why", "its held-out evidence sits in too few pieces"}};
@@ -345,6 +346,14 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     json by = json::array();
     for (const auto& c : r.accepted) by.push_back(c.effect.name);
     j["explained_by"] = by;
+    json families = json::array();
+    for (const auto& v : r.families)
+        families.push_back({{"family", v.family->name},
+                            {"shared", v.family->shared},
+                            {"members", v.members},
+                            {"value", v.shared_value},
+                            {"sentence", v.sentence}});
+    j["families"] = families;
     j["unexplained"] = r.unexplained;
     j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)},
                 {"heldout_rmse_after", axes_json(r.heldout_after)}};
@@ -400,6 +409,7 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
         md << "**"
            << (r.unexplained ? " — and a significant residual remains unexplained (see the maps after the fit)." : ".")
            << "\n\n";
+        for (const auto& v : r.families) md << "**A family this flight cannot separate: " << v.sentence << ".**\n\n";
         for (const auto& c : r.accepted) md << paragraph(c, who) << alternatives(c) << "\n\n";
     }
 }

@@ -62,6 +62,7 @@ void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const E
         const double t = paired_z(d);
         const double gain = before > 0 ? (before - after) / before : 0;
         const bool gains = gain >= o.min_gain;
+        c.axis_t[a] = t, c.axis_gain[a] = gain;
         if ((gains && !best_gains) || (gains == best_gains && t > best_t)) {
             best_t = t;
             best_gains = gains;

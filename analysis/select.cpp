@@ -32,20 +32,36 @@ void stand_in_check(CandidateResult& c, const ExplainData& d, const Baseline& b)
     c.stand_in = true;
 }
 
-// The other accepted candidates of a round that the held-out data cannot tell from the best one:
-// per piece, how much more error the other leaves than the best, not significantly positive.
+// Whether the held-out data cannot tell c from best: per piece, how much more error c leaves than
+// best, not significantly positive.
+bool cannot_tell(const CandidateResult& best, const CandidateResult& c, double min_t) {
+    std::vector<double> d;
+    for (const auto& [piece, err] : best.heldout_pieces)
+        if (const auto it = c.heldout_pieces.find(piece); it != c.heldout_pieces.end()) d.push_back(it->second - err);
+    return paired_z(d) < min_t;
+}
+
+// The other accepted candidates of a round that the held-out data cannot tell from the best one.
 // (A first-order lag looks like a clock offset of about tau on forces that change slowly.)
 std::vector<std::string> indistinguishable(const CandidateResult& best, const std::vector<CandidateResult>& round,
                                            double min_t) {
     std::vector<std::string> out;
-    for (const auto& c : round) {
-        if (!c.accepted || c.effect.name == best.effect.name) continue;
-        std::vector<double> d;
-        for (const auto& [piece, err] : best.heldout_pieces)
-            if (const auto it = c.heldout_pieces.find(piece); it != c.heldout_pieces.end())
-                d.push_back(it->second - err);
-        if (paired_z(d) < min_t) out.push_back(c.effect.name);
-    }
+    for (const auto& c : round)
+        if (c.accepted && c.effect.name != best.effect.name && cannot_tell(best, c, min_t))
+            out.push_back(c.effect.name);
+    return out;
+}
+
+// The members of best's family scored in the round (accepted or not, but cross-validated) that the
+// held-out data cannot tell from it.
+std::vector<std::string> family_alike(const CandidateResult& best, const std::vector<CandidateResult>& round,
+                                      double min_t) {
+    std::vector<std::string> out;
+    const auto* family = best.effect.type->family();
+    for (const auto& c : round)
+        if (family && c.effect.name != best.effect.name && c.effect.type->family() == family &&
+            !c.heldout_pieces.empty() && cannot_tell(best, c, min_t))
+            out.push_back(c.effect.name);
     return out;
 }
 
@@ -95,6 +111,7 @@ void refit_together(ExplainResult& R, const ExplainData& d, const Folds& folds, 
         if (again.accepted) {
             again.heldout_before = R.accepted[k].heldout_before;
             again.indistinguishable = R.accepted[k].indistinguishable;
+            again.family_alike = R.accepted[k].family_alike;
             again.stand_in_z = R.accepted[k].stand_in_z;  // checked in its round, not again
             again.one_value = R.accepted[k].one_value;
             if (again.one_value) again.note += again.one_value->note;
@@ -107,9 +124,10 @@ void refit_together(ExplainResult& R, const ExplainData& d, const Folds& folds, 
 
 // Forward selection from the base model: rounds until nothing more is accepted; returns the final model.
 Baseline select_effects(ExplainResult& R, const ExplainData& d, const Baseline& base, const Folds& folds,
-                        const ExplainOptions& o, const Progress& say, bool& stand_in) {
+                        const std::vector<Effect>& candidates, const ExplainOptions& o, const Progress& say,
+                        bool& stand_in) {
     Baseline current = base;
-    std::vector<Effect> remaining = o.candidates;
+    std::vector<Effect> remaining = candidates;
     stand_in = false;
     for (int round = 1; round <= o.max_effects && !remaining.empty(); ++round) {
         Round r = select_round(d, current, folds, remaining, round, o, say);
@@ -119,6 +137,7 @@ Baseline select_effects(ExplainResult& R, const ExplainData& d, const Baseline& 
         const CandidateResult& best = r.scored[*r.best];
         R.accepted.push_back(best);
         R.accepted.back().indistinguishable = indistinguishable(best, r.scored, o.min_t);
+        R.accepted.back().family_alike = family_alike(best, r.scored, o.min_t);
         physics::PhysicsConfig next = current.physics;
         best.effect.apply(next, best.values);
         current = baseline_of(d, next);

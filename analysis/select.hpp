@@ -13,9 +13,10 @@ namespace dw::analysis {
 
 using Progress = std::function<void(const std::string&)>;
 
-// Every score into R.candidates, the accepted effects into R.accepted; returns the final model.
-// stand_in: the last round saw a candidate that predicts better only as a stand-in.
+// From `candidates`: every score into R.candidates, the accepted effects into R.accepted; returns
+// the final model. stand_in: the last round saw a candidate that predicts better only as a stand-in.
 Baseline select_effects(ExplainResult& R, const ExplainData& d, const Baseline& base, const Folds& folds,
-                        const ExplainOptions& o, const Progress& say, bool& stand_in);
+                        const std::vector<Effect>& candidates, const ExplainOptions& o, const Progress& say,
+                        bool& stand_in);
 
 }  // namespace dw::analysis

@@ -44,7 +44,7 @@ struct Case {
     std::function<void(physics::PhysicsConfig&)> air;  // what the air and the stand do (may be empty)
     Recording recording;                               // what happens to the recording after (may be empty)
     std::function<void(physics::GridOptions&)> grid;   // the flight's grid (may be empty)
-    std::vector<std::string> truly;                    // effects of the vocabulary that truly are in it
+    std::vector<std::string> truly;  // effects of the vocabulary that truly are in it (several: a family to name)
     std::uint64_t seed = 1;
 };
 
@@ -259,10 +259,15 @@ std::string names_of(const std::vector<CandidateResult>& v) {
 
 UnnamedRow row_of(const Case& c, const ExplainResult& r) {
     UnnamedRow row{c.name, c.formation, c.along, c.hidden, r.detected, r.unexplained, names_of(r.accepted)};
-    for (const auto& k : r.candidates)
-        if (k.stand_in && k.one_value)
-            row.stand_ins += (row.stand_ins.empty() ? "" : "; ") + k.effect.name + " moves along " +
-                             split_info(k.one_value->axis).name;
+    for (const auto& v : r.families) row.accepted += log::cat(" (", v.sentence, ")");
+    for (const auto& k : r.candidates) {
+        std::string why;
+        if (k.short_of) why = log::cat(" falls short of the discrepancy on ", flight::kAxes[k.short_of->axis]);
+        else if (k.stand_in && k.one_value) why = log::cat(" moves along ", split_info(k.one_value->axis).name);
+        const std::string item = k.effect.name + why;
+        if (!why.empty() && row.stand_ins.find(item) == std::string::npos)
+            row.stand_ins += (row.stand_ins.empty() ? "" : "; ") + item;
+    }
     const auto& g = r.discrepancy;
     const auto a = static_cast<std::size_t>(g.best_axis);
     row.discrepancy =
@@ -276,6 +281,8 @@ UnnamedRow row_of(const Case& c, const ExplainResult& r) {
             row.why += k.effect.name + " accepted. ";
         }
     if (!g.fitted) row.pass = false, row.why += "no discrepancy learnt. ";
+    if (c.truly.size() > 1 && !r.accepted.empty() && r.families.empty())  // a family: never one member alone
+        row.pass = false, row.why += "one member of the family named alone. ";
     return row;
 }
 

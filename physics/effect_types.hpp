@@ -28,6 +28,15 @@ namespace dw::physics {
 // The effect the lab's time service measures live (dds/clock_sync.hpp): its name is the contract's.
 inline constexpr const char* kClockOffsetEffect = "clock_offset";
 
+// Effects that explain the same change of the recording against the poses, which a flight may be
+// unable to separate: when the explainer cannot tell its members apart it names the family and what
+// they share, never one member alone. Each effect type says which family it belongs to.
+struct EffectFamily {
+    const char* name;
+    const char* shared;  // in the report's words
+};
+inline constexpr EffectFamily kDelayFamily{"delay", "a delay between force and pose"};
+
 struct EffectParameter {
     std::string name, unit;
     double config_min = 0, config_max = 0;  // what a configuration may say
@@ -92,6 +101,8 @@ public:
     virtual bool applies(int neighbours, bool flying) const;
     // Whether it acts between two axes chosen before the fit (AxisPair).
     virtual bool has_axes() const { return false; }
+    // The family of effects it may be indistinguishable from (nullptr: none).
+    virtual const EffectFamily* family() const { return nullptr; }
     // The report's JSON gives the parameters as one array under this key ("" : one key each).
     virtual std::string grouped_key() const { return ""; }
 

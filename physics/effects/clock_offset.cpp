@@ -11,6 +11,7 @@ class ClockOffset final : public OneNumber<DW_FIELD(clock_offset)> {
 public:
     ClockOffset() : OneNumber(&Effects::clock_offset, &DW_FIELD(clock_offset)::offset_s) {}
     std::string name() const override { return kClockOffsetEffect; }
+    const EffectFamily* family() const override { return &kDelayFamily; }
     std::vector<EffectParameter> parameters() const override {
         return {{"offset_s", "s", -10, 10, -0.5, 0.5, range(-0.3, 0.3, 25), 0.0}};
     }

@@ -12,6 +12,7 @@ class SensorLag final : public OneNumber<DW_FIELD(sensor_lag)> {
 public:
     SensorLag() : OneNumber(&Effects::sensor_lag, &DW_FIELD(sensor_lag)::tau_s) {}
     std::string name() const override { return "sensor_lag"; }
+    const EffectFamily* family() const override { return &kDelayFamily; }
     std::vector<EffectParameter> parameters() const override {
         return {{"tau_s", "s", 0, 10, 0.0, 0.5, range(0.0, 0.3, 13), 0.0}};
     }

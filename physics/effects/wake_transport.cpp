@@ -11,6 +11,7 @@ class WakeTransport final : public OneNumber<DW_FIELD(wake_transport)> {
 public:
     WakeTransport() : OneNumber(&Effects::wake_transport, &DW_FIELD(wake_transport)::delay_scale) {}
     std::string name() const override { return "wake_transport"; }
+    const EffectFamily* family() const override { return &kDelayFamily; }
     std::vector<EffectParameter> parameters() const override {
         return {{"delay_scale", "", 0, 10, 0.0, 5.0, range(0.0, 3.0, 7), 1.0}};
     }
