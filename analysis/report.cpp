@@ -473,11 +473,15 @@ void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOption
     for (std::size_t a = 0; a < 6; ++a)
         md << "| " << kAxes[a] << " | " << fixed(r.heldout_before[a], 4) << " | " << fixed(r.heldout_after[a], 4)
            << " | " << fixed(r.discrepancy.heldout_after[a], 4) << " |\n";
-    md << "\n**What is left, learnt** (`discrepancy` in report.json; it names no physics and chose no effect): "
+    md << "\n**What is left, learnt** (`discrepancy` in report.json; it names no physics, and it is the yardstick "
+          "every accepted effect met: docs/EXPLAINER.md): "
        << kDiscrepancyModel << ", fitted on each fold's training blocks. " << r.discrepancy.note
        << ". Its held-out error before it is the fitted model's residual on the same samples ("
        << kAxes[static_cast<std::size_t>(r.discrepancy.best_axis)] << " "
        << fixed(r.discrepancy.heldout_before[static_cast<std::size_t>(r.discrepancy.best_axis)], 4) << ").\n";
+    if (!r.discrepancy.sentence.empty())
+        md << "\nWhat it depends on most (the held-out gain lost without each group of its inputs): it "
+           << r.discrepancy.sentence << ".\n";
 }
 
 }  // namespace
