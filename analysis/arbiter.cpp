@@ -16,12 +16,6 @@ using flight::kAxes;
 
 namespace {
 
-double sum(const std::map<int, AxisValues>& m, std::size_t a) {
-    double s = 0;
-    for (const auto& [piece, v] : m) s += v[a];
-    return s;
-}
-
 // The inputs of the discrepancy that are effect e's own linearisation, which its yardstick leaves
 // out — else the discrepancy would match e by being it: a rate of change for the delay family, a
 // gain for the effects at the stand's calibration (a scale, a leak).
@@ -36,12 +30,12 @@ std::vector<InputGroup> own_linearisation(const Effect& e) {
 // effect removes (`yard`), and what the model and the yardstick on top of it remove together
 // (`on_top`); z: the evidence, piece by piece, that the last beats the second.
 ShortOfDiscrepancy compare(const PieceErrors& yard, const PieceErrors& on_top, std::size_t a) {
-    const double before = sum(yard.before, a);
+    const double before = total(yard.before, a);
     ShortOfDiscrepancy s{static_cast<int>(a)};
     if (!(before > 0)) return s;
-    s.effect_gain = 1 - sum(on_top.before, a) / before;
-    s.discrepancy_gain = 1 - sum(yard.after, a) / before;
-    s.together_gain = 1 - sum(on_top.after, a) / before;
+    s.effect_gain = 1 - total(on_top.before, a) / before;
+    s.discrepancy_gain = 1 - total(yard.after, a) / before;
+    s.together_gain = 1 - total(on_top.after, a) / before;
     std::vector<double> d;
     for (const auto& [piece, after] : yard.after)
         d.push_back((after[a] - on_top.after.at(piece)[a]) / static_cast<double>(yard.n.at(piece)));

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numeric>
 
 #include "core/log.hpp"
 #include "core/stats.hpp"
@@ -321,12 +320,6 @@ PieceErrors cross_validate(const ExplainData& d, const Folds& folds, const std::
     return s;
 }
 
-double total(const std::map<int, AxisValues>& m, std::size_t a) {
-    double s = 0;
-    for (const auto& [piece, v] : m) s += v[a];
-    return s;
-}
-
 // What the discrepancy depends on: each group's own share of the held-out gain on the best axis —
 // the gain lost when that group's columns are left out — largest first.
 void explain_dependence(Discrepancy& r, const ExplainData& d, const Folds& folds, const std::vector<Gram>& parts,
@@ -351,6 +344,12 @@ void explain_dependence(Discrepancy& r, const ExplainData& d, const Folds& folds
 }
 
 }  // namespace
+
+double total(const std::map<int, AxisValues>& pieces, std::size_t a) {
+    double s = 0;
+    for (const auto& [piece, v] : pieces) s += v[a];
+    return s;
+}
 
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
                               const ExplainOptions& o, const DiscrepancyRun& run) {

@@ -85,6 +85,8 @@ struct PieceErrors {
     std::map<int, AxisValues> before, after;
     std::map<int, std::size_t> n;
 };
+// The sum over pieces on axis a (of PieceErrors::before or ::after).
+double total(const std::map<int, AxisValues>& pieces, std::size_t a);
 
 // Fills ExplainResult::discrepancy from the model's prediction `pred` (with what it depends on when
 // `explain_dependence` and it is significant); its per-piece errors into `pieces` when given. The

@@ -188,13 +188,11 @@ std::optional<AxisTest> test_axis(const ExplainData& d, const Linearised& L, con
     return t;
 }
 
-std::string round_to(double x, double digits) { return fixed(x, static_cast<int>(digits)); }
-
 std::string moved_note(const SplitMove& m, const SplitAxisInfo& a) {
     const bool grows = m.high > m.low;
-    return log::cat("; but ", m.param, " ", grows ? "grows" : "falls", " from ", round_to(m.low, 3), " ", a.low, " to ",
-                    round_to(m.high, 3), " ", a.high, " (", a.name, ": z = ", std::round(m.z * 10) / 10,
-                    ", beyond the ", std::round(m.threshold * 10) / 10, " that ", m.tested, " splits at a family-wise ",
+    return log::cat("; but ", m.param, " ", grows ? "grows" : "falls", " from ", fixed(m.low, 3), " ", a.low, " to ",
+                    fixed(m.high, 3), " ", a.high, " (", a.name, ": z = ", std::round(m.z * 10) / 10, ", beyond the ",
+                    std::round(m.threshold * 10) / 10, " that ", m.tested, " splits at a family-wise ",
                     kSplitAlpha * 100,
                     " % allow): one value does not fit the flight, so the effect stands in for something else — not "
                     "accepted");
