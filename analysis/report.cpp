@@ -211,10 +211,16 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
 }
 
 // The stand's clock against the mocap's as the lab's time service measured it while recording
-// (meta.json extra, dw-recorder export), if it did; and whether the stamps are still as recorded.
+// (meta.json extra, dw-recorder export), if it did; whether the stamps are still as recorded; and
+// the stand's own pipeline delay where the stand measured one. The explainer's clock_offset is
+// the time between a force and the pose behind it beyond what the resimulation models (the
+// chips' sample-and-hold): the clock's offset plus that delay.
 struct MeasuredClock {
     double offset_s = 0;
     bool raw_stamps = true;
+    std::optional<double> pipeline_delay_s;
+    // What a fitted clock_offset should estimate: the offset left in these stamps plus the delay.
+    double expected_s() const { return (raw_stamps ? offset_s : 0.0) + pipeline_delay_s.value_or(0.0); }
 };
 std::optional<MeasuredClock> measured_clock(const flight::Flight& f) {
     const json extra = json::parse(f.meta.extra_json, nullptr, false);
@@ -222,8 +228,11 @@ std::optional<MeasuredClock> measured_clock(const flight::Flight& f) {
         !extra[flight::kMeasuredClockOffsetKey].is_number())
         return std::nullopt;
     const auto raw = extra.find("raw_stamps");
-    return MeasuredClock{extra[flight::kMeasuredClockOffsetKey].get<double>(),
-                         raw == extra.end() || !raw->is_boolean() || raw->get<bool>()};
+    MeasuredClock m{extra[flight::kMeasuredClockOffsetKey].get<double>(),
+                    raw == extra.end() || !raw->is_boolean() || raw->get<bool>(), std::nullopt};
+    const auto delay = extra.find(flight::kStandPipelineDelayKey);
+    if (delay != extra.end() && delay->is_number()) m.pipeline_delay_s = delay->get<double>();
+    return m;
 }
 
 // What the report says of an effect: its accepted (final, refitted) result, else its latest score.
@@ -236,21 +245,33 @@ const CandidateResult* final_result(const ExplainResult& r, const std::string& e
     return found;
 }
 
-// "Measured live: ... Fitted: ..." — the time service beside the explainer, when there is a measurement.
+// "Measured live: ... Fitted: ..." — the time service and the stand's delay beside the explainer.
 std::string measured_clock_text(const std::optional<MeasuredClock>& measured, const ExplainResult& r) {
     if (!measured) return "";
+    const MeasuredClock& m = *measured;
     std::string fitted = "not fitted (not a candidate)";
-    if (const auto* c = final_result(r, physics::kClockOffsetEffect))
+    if (const auto* c = final_result(r, physics::kClockOffsetEffect)) {
+        const double e = m.expected_s();
+        const bool holds = c->lo[0] <= e && e <= c->hi[0];
         fitted = log::cat(fixed(c->values[0], 4), " s [", fixed(c->lo[0], 4), ", ", fixed(c->hi[0], 4), "], ",
-                          c->accepted ? "accepted" : "not accepted");
+                          c->accepted ? "accepted" : "not accepted",
+                          c->lo[0] == c->hi[0] ? ""
+                          : holds              ? log::cat("; its interval holds the ", fixed(e, 4), " s measured")
+                                  : log::cat("; ", fixed(std::min(std::abs(e - c->lo[0]), std::abs(e - c->hi[0])), 4),
+                                             " s outside its interval: a delay neither measurement sees"));
+    }
+    const std::string delay =
+        m.pipeline_delay_s ? log::cat("; the stand measured its own pipeline delay, ", fixed(*m.pipeline_delay_s, 4),
+                                      " s (a simulated stand: the simulated air acts on the poses it is given, "
+                                      "which arrive late)")
+                           : "; the stand measured no pipeline delay of its own (a real stand's air has none)";
     return log::cat(
-        "**Clock offset, measured beside fitted.** The lab's time service measured the stand's clock against the "
-        "mocap's "
-        "while recording: ",
-        fixed(measured->offset_s, 4), " s",
-        measured->raw_stamps ? " (these stamps are as recorded)"
-                             : " (already taken out of these stamps by the export: expect a fit near 0)",
-        ". The explainer's clock_offset: ", fitted, ".\n\n");
+        "**Clock offset, measured beside fitted.** The explainer's clock_offset is the time between a force and the "
+        "pose behind it beyond what the resimulation models (the chips' sample-and-hold): the stand's clock against "
+        "the mocap's plus the stand's own pipeline delay. The lab's time service measured the clock while recording: ",
+        fixed(m.offset_s, 4), " s",
+        m.raw_stamps ? " (these stamps are as recorded)" : " (already taken out of these stamps by the export)", delay,
+        ". Together ", fixed(m.expected_s(), 4), " s. The explainer's clock_offset: ", fitted, ".\n\n");
 }
 
 // One candidate's entry in report.json.
@@ -285,7 +306,8 @@ json candidate_json(const CandidateResult& c, const std::optional<MeasuredClock>
     if (c.too_few_pieces)
         j["not_identifiable"] = {{"evidence_pieces", c.evidence_pieces},
                                  {"why", "its held-out evidence sits in too few pieces"}};
-    if (measured && c.effect.name == physics::kClockOffsetEffect) j["measured"] = {{"offset_s", measured->offset_s}};
+    if (measured && c.effect.name == physics::kClockOffsetEffect)
+        j["measured"] = {{"offset_s", measured->offset_s}, {"expected_s", measured->expected_s()}};
     return j;
 }
 
@@ -340,9 +362,12 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     for (const auto& e : o.candidates)  // each effect once: its accepted (final) or latest score
         if (const CandidateResult* c = final_result(r, e.name)) cands.push_back(candidate_json(*c, measured));
     j["candidates"] = cands;
-    if (measured)
+    if (measured) {
         j["clock_offset_measured"] = {{"offset_s", measured->offset_s},
-                                      {"by", "the lab's time service (processes/status clock_offset_s, median)"}};
+                                      {"by", "the lab's time service (processes/status clock_offset_s, median)"},
+                                      {"expected_s", measured->expected_s()}};
+        if (measured->pipeline_delay_s) j["clock_offset_measured"]["pipeline_delay_s"] = *measured->pipeline_delay_s;
+    }
     json by = json::array();
     for (const auto& c : r.accepted) by.push_back(c.effect.name);
     j["explained_by"] = by;

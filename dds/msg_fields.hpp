@@ -42,7 +42,8 @@ void fields(const msg::StandStatus& m, V& v) {
     v("header", m.header()), v("state", m.state()), v("fault_cells", m.fault_cells()), v("message", m.message()),
         v("sample_rate_hz", m.sample_rate_hz()), v("samples_published", m.samples_published()),
         v("samples_discarded", m.samples_discarded()), v("spikes_rejected", m.spikes_rejected()),
-        v("tare_offset_counts", m.tare_offset_counts()), v("last_tare", m.last_tare());
+        v("tare_offset_counts", m.tare_offset_counts()), v("last_tare", m.last_tare()),
+        v("pipeline_delay_s", m.pipeline_delay_s());
 }
 template <class V>
 void fields(const msg::RigidBody& m, V& v) {

@@ -103,6 +103,10 @@ const char* to_string(PoseSource s);
 // against the mocap's as the lab's time service measured it live, in seconds, in the sense of the
 // clock_offset effect (a force at mocap time t stamped t + offset).
 inline constexpr const char* kMeasuredClockOffsetKey = "clock_offset_measured_s";
+// meta.json extra key beside it: the stand's own pipeline delay as the stand measured it live
+// (StandStatus.pipeline_delay_s, median), in seconds — what the stand's wrench stamps lag the
+// forces beyond the chips' sample-and-hold; absent where the stand did not measure one.
+inline constexpr const char* kStandPipelineDelayKey = "stand_pipeline_delay_s";
 
 // The sufferer's rigid-body name unless a flight or an option names another.
 inline constexpr const char* kSufferer = "sufferer";

@@ -90,7 +90,8 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
     FrameOfData f;
     f.frame_number = number;
     for (std::size_t i = 0; i < options_.names.size(); ++i) {
-        const BodyPose p = options_.motion(static_cast<int>(i), t);
+        // The pose at mid-exposure, the instant the frame's timing says it was captured.
+        const BodyPose p = options_.motion(static_cast<int>(i), t - options_.latency_s);
         RigidBody b;
         b.id = static_cast<std::int32_t>(i + 1);
         b.tracking_valid = true;

@@ -79,7 +79,9 @@ BodyPose SimSource::pose(int body, double t) {
     }
     const auto& s = vehicles_[static_cast<std::size_t>(body - 1)].state();
     BodyPose p;
-    p.ned = {s.position.x(), s.position.y(), s.position.z()};
+    // The dynamics step at their own rate: the pose at t itself, carried on from the last step.
+    const physics::Vec3 at = s.position + s.velocity * (t - t_);
+    p.ned = {at.x(), at.y(), at.z()};
     if (fault_active(names_[static_cast<std::size_t>(body)], SimFault::Kind::jump)) p.ned[0] += kJumpDistance_m;
     p.q_ned = {s.orientation.w(), s.orientation.x(), s.orientation.y(), s.orientation.z()};
     return p;

@@ -78,6 +78,7 @@ void fill(msg::StandStatus& m, std::uint64_t i) {
     for (std::size_t c = 0; c < 8; ++c)
         m.tare_offset_counts()[c] = 1000.5 * static_cast<double>(c) - static_cast<double>(i);
     m.last_tare(time_of(i, -1'000'000'000));
+    m.pipeline_delay_s(i % 2 ? -1.0 : 0.0071);
 }
 
 void fill(msg::MocapFrame& m, std::uint64_t i) {

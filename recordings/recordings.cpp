@@ -44,12 +44,14 @@ std::string producer_of(const dds::Topic<T>& spec) {
 
 // Each process's clock offsets as its heartbeats stated them (measured ones only).
 using Offsets = std::map<std::string, std::vector<double>>;
+double median(std::vector<double> v) {  // v not empty
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
 std::optional<double> median_offset(const Offsets& offsets, const std::string& process) {
     const auto it = offsets.find(process);
     if (it == offsets.end() || it->second.empty()) return std::nullopt;
-    auto v = it->second;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
+    return median(it->second);
 }
 
 // What the lab's time service measured, for meta.json's extra: each producer's median offset and,
@@ -183,7 +185,8 @@ struct PoseRow {
 };
 // What one pass over a recording finds besides its rows.
 struct Found {
-    Offsets offsets;  // per process: the time service's measured clock offsets
+    Offsets offsets;                      // per process: the time service's measured clock offsets
+    std::vector<double> pipeline_delays;  // the stand's measured pipeline delays (its status)
     std::string formation = "free";
     bool estimated_poses = false;  // a mocap frame carried the vehicles' own estimates (PX4), not motion capture
     std::size_t tared_rows = 0, untared_rows = 0;  // stand/wrench samples after and before the stand's first tare
@@ -231,6 +234,10 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
     } else if (suffix == topics::experiment_plan.suffix) {
         msg::ExperimentPlan p;
         if (deserialize(m.data, p)) found.formation = p.formation();
+    } else if (suffix == topics::stand_status.suffix) {
+        msg::StandStatus st;
+        if (deserialize(m.data, st) && std::isfinite(st.pipeline_delay_s()) && st.pipeline_delay_s() >= 0)
+            found.pipeline_delays.push_back(st.pipeline_delay_s());
     } else if (suffix == topics::process_status.suffix) {
         msg::ProcessStatus st;
         if (deserialize(m.data, st) && st.clock_uncertainty_s() >= 0 && std::isfinite(st.clock_offset_s()))
@@ -320,6 +327,7 @@ flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& fo
     nlohmann::json extra{
         {"source", path}, {"epoch_unix_s", c.epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
     extra.update(measured_clocks(c.stand_measured, c.mocap_measured, c.stand, c.mocap));
+    if (!found.pipeline_delays.empty()) extra[flight::kStandPipelineDelayKey] = median(found.pipeline_delays);
     extra.update(tare_note(found, path));
     m.extra_json = extra.dump();
     return m;

@@ -131,6 +131,7 @@ msg::StandStatus StandAgent::status() const {
     s.spikes_rejected(spikes_);
     for (int c = 0; c < kChips; ++c) s.tare_offset_counts()[static_cast<std::size_t>(c)] = zero_[c];
     s.last_tare(dds::to_msg(last_tare_ns_));
+    s.pipeline_delay_s(-1);  // not measured: the runner sets it where a simulated stand measures it
     return s;
 }
 

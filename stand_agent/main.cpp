@@ -106,7 +106,8 @@ int run(int argc, char** argv) {
     std::unique_ptr<dw::stand::Hx711Lines> lines;
     std::unique_ptr<dw::stand::PhysicsSource> source;
     if (sim) {
-        source = std::make_unique<dw::stand::PhysicsSource>(participant, physics);
+        // The simulated world keeps the host's time, as the simulated motion capture stamps in.
+        source = std::make_unique<dw::stand::PhysicsSource>(participant, physics, dw::SystemClock::instance());
         lines = emulated_lines(*source, physics, noise_n);
         dw::log::info("simulated stand: emulated HX711 bank driven by the physics and rt/", cli.dds().ns,
                       "/mocap/frame");
@@ -120,7 +121,9 @@ int run(int argc, char** argv) {
     }
     dw::stand::Hx711Driver driver(*lines, dopt);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
-    const auto n = dw::stand::run_agent(participant, driver, agent, {realtime, dw::Shutdown::instance().token()});
+    dw::stand::RunOptions ro{realtime, dw::Shutdown::instance().token(), {}};
+    if (source) ro.pipeline_delay_s = [&source] { return source->take_air_lag_s(); };
+    const auto n = dw::stand::run_agent(participant, driver, agent, ro);
     dw::log::info("published ", n, " wrench samples");
     return 0;
 }

@@ -8,10 +8,12 @@
 #include <cstring>
 
 #include "core/log.hpp"
+#include "dds/time.hpp"
 
 namespace dw::stand {
 
-PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, std::string sufferer)
+PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, const Clock& world,
+                             std::string sufferer)
     : physics_(physics),
       chain_(physics_.effects),
       sensor_(chain_),
@@ -19,6 +21,7 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
       model_(physics),
       stand_(physics.stand),
       sufferer_name_(std::move(sufferer)),
+      world_(world),
       sufferer_(0, 0, -physics.stand.height_m),
       reader_(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) {
           std::vector<physics::Producer> ps;
@@ -39,13 +42,25 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
           std::lock_guard lock(mutex_);
           producers_ = std::move(ps);
           sufferer_ = suf;
+          pose_stamp_ns_ = dds::from_msg(f.header().stamp());
       }) {}
 
 double PhysicsSource::force(int chip, Nanos t) {
     std::lock_guard lock(mutex_);
+    if (chip == 0 && pose_stamp_ns_ > 0) {  // once per conversion round: how old the poses felt are
+        lag_sum_s_ += to_seconds(world_.now_ns() - (world_.monotonic_ns() - t) - pose_stamp_ns_);
+        ++lag_n_;
+    }
     physics::Wrench6 read = sensor_.read(to_seconds(t), physics::to_wrench6(model_.evaluate(sufferer_, producers_)));
     chain_.calibration(read);
     return stand_.wrench_to_cells(physics::to_wrench(read))[chip];
+}
+
+double PhysicsSource::take_air_lag_s() {
+    std::lock_guard lock(mutex_);
+    const double mean = lag_n_ ? lag_sum_s_ / static_cast<double>(lag_n_) : -1.0;
+    lag_sum_s_ = 0, lag_n_ = 0;
+    return mean;
 }
 
 double sim_clock_delay_s(const physics::PhysicsConfig& physics) {
@@ -84,6 +99,7 @@ std::uint64_t run_agent(dds::Participant& p, Hx711Driver& driver, StandAgent& ag
         const Nanos now = p.clock().monotonic_ns();
         if (out.status_changed || now - last_status > 1'000'000'000) {
             msg::StandStatus st = agent.status();
+            if (o.pipeline_delay_s) st.pipeline_delay_s(o.pipeline_delay_s());
             status.write(st);
             if (out.status_changed) {
                 if (st.state() == msg::STAND_FAULT) log::error("stand: ", st.message());

@@ -3,6 +3,7 @@
 // status; tares on the CALIBRATE experiment command. In simulation the emulated bank's load
 // cells feel the physics of the neighbours seen on the mocap topic.
 #include <atomic>
+#include <functional>
 #include <mutex>
 #include <stop_token>
 #include <vector>
@@ -25,8 +26,15 @@ namespace dw::stand {
 // recorded wrench, which the cells cannot carry, and is not applied.
 class PhysicsSource {
 public:
-    PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, std::string sufferer = flight::kSufferer);
-    double force(int chip, Nanos t);  // callable from the bank (any thread)
+    // `world`: the simulated world's time, the one the motion capture stamps its poses in (the
+    // host's clock on one machine; not the agent's, whose error may be simulated).
+    PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& physics, const Clock& world,
+                  std::string sufferer = flight::kSufferer);
+    double force(int chip, Nanos t);  // callable from the bank (any thread); t: the world's monotonic time
+    // How far behind the poses it is given the simulated air acted since the last call, mean [s]:
+    // a conversion's time less the capture stamp of the latest mocap frame (the motion capture's
+    // latency, the transit, the frame's hold). A real stand has no such lag. < 0: no conversion yet.
+    double take_air_lag_s();
 
 private:
     physics::PhysicsConfig physics_;  // before the chain, which reads its effects
@@ -36,7 +44,11 @@ private:
     physics::WrenchModel model_;
     physics::StandModel stand_;
     std::string sufferer_name_;
+    const Clock& world_;
     std::mutex mutex_;
+    Nanos pose_stamp_ns_ = 0;  // the latest mocap frame's capture stamp (world realtime)
+    double lag_sum_s_ = 0;
+    std::size_t lag_n_ = 0;
     physics::Vec3 sufferer_;
     std::vector<physics::Producer> producers_;
     dds::Reader<msg::MocapFrame> reader_;
@@ -49,6 +61,9 @@ double sim_clock_delay_s(const physics::PhysicsConfig& physics);
 struct RunOptions {
     bool realtime = false;  // SCHED_FIFO + mlockall for the sampling thread
     std::stop_token stop;   // sampling ends when it is requested
+    // The stand's pipeline delay for its status (StandStatus.pipeline_delay_s), where it is
+    // measured: a simulated stand's PhysicsSource::take_air_lag_s. Unset: not measured.
+    std::function<double()> pipeline_delay_s;
 };
 
 // Samples until o.stop is requested. Returns the number of wrench samples published.
