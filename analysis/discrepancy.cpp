@@ -28,8 +28,8 @@ struct Layout {
 
 Layout layout_of(int drift_bumps) {
     Layout l;
-    const std::array<int, kInputGroups.size()> counts{1, 3 * kBumps,      kOwn, drift_bumps + 6 * kGainDriftPowers,
-                                                      6, 6 * kPushPowers, 6,    6};
+    const std::array<int, kInputGroups.size()> counts{
+        1, 3 * kBumps, kOwn, drift_bumps + 6 * kGainDriftPowers, 6, 6 * kPushPowers, 6, 6, 6};
     for (std::size_t g = 0; g < counts.size(); ++g)
         l.start[g] = l.columns, l.count[g] = counts[g], l.columns += counts[g];
     return l;
@@ -140,7 +140,7 @@ void own_motion_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row)
 }
 
 // The prediction's own inputs: per axis p, p × powers of the push and of time (after the additive
-// drift's bumps), dp/dt, p × direction.
+// drift's bumps), dp/dt, p × direction, p × the shared push.
 void prediction_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
     const auto& d = c.d;
     const double t = d.sim.stamps()[i], x = push_of(d, c.pred, i) / c.push.top;
@@ -149,7 +149,7 @@ void prediction_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row)
     const double dt = d.sim.stamps()[next] - d.sim.stamps()[prev];
     const int gs = c.layout.at(InputGroup::gain), ps = c.layout.at(InputGroup::push),
               ds = c.layout.at(InputGroup::drift) + c.drift.count, rs = c.layout.at(InputGroup::rate),
-              vs = c.layout.at(InputGroup::direction);
+              vs = c.layout.at(InputGroup::direction), ss = c.layout.at(InputGroup::sharing);
     for (int a = 0; a < 6; ++a) {
         const auto A = static_cast<std::size_t>(a);
         if (!d.sim.measured_axes()[A]) continue;
@@ -159,6 +159,7 @@ void prediction_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row)
         for (int k = 0; k < kGainDriftPowers; ++k) row(ds + a * kGainDriftPowers + k) = p * std::pow(tau, k + 1);
         row(rs + a) = dt > 0 ? (c.pred[next][A] - c.pred[prev][A]) / dt : 0;
         row(vs + a) = p * d.info[i].direction;
+        row(ss + a) = p * d.info[i].shared;
     }
 }
 

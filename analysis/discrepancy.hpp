@@ -41,21 +41,21 @@ inline constexpr std::array<double, 6> kRidgeGrid{1e-4, 1e-3, 1e-2, 1e-1, 1.0, 1
 // prediction p (per axis): p itself (a gain or a leak), p times powers of how hard the air pushes
 // (x: the predicted wrench's norm in noise floors over its near samples' kPushQuantile; x and x²:
 // a gain that changes with the push), p times powers of the flight's time (τ from −1 to 1 over the
-// flight; τ and τ²: a gain that creeps), p's rate of change (a delay or a lag), and p times the
-// direction of travel.
+// flight; τ and τ²: a gain that creeps), p's rate of change (a delay or a lag), p times the
+// direction of travel, and p times how much of the push several jets share (SampleInfo::shared).
 inline constexpr int kPushPowers = 2;
 inline constexpr int kGainDriftPowers = 2;
 inline constexpr double kPushQuantile = 0.95;
 
 // The groups of inputs, each with what it means when the discrepancy depends on it most (one list:
 // the columns are laid out in this order; the report's words come from here).
-enum class InputGroup { constant, geometry, own_motion, drift, gain, push, rate, direction };
+enum class InputGroup { constant, geometry, own_motion, drift, gain, push, rate, direction, sharing };
 struct InputGroupInfo {
     InputGroup group;
     const char* name;
     const char* sentence;
 };
-inline constexpr std::array<InputGroupInfo, 8> kInputGroups{{
+inline constexpr std::array<InputGroupInfo, 9> kInputGroups{{
     {InputGroup::constant, "constant", "a constant offset"},
     {InputGroup::geometry, "geometry",
      "depends on where the neighbours are (their horizontal offset and height above): the jet's shape or where "
@@ -69,6 +69,9 @@ inline constexpr std::array<InputGroupInfo, 8> kInputGroups{{
      "following large forces)"},
     {InputGroup::rate, "rate of change", "follows how fast the force changes: a delay or a lag between force and pose"},
     {InputGroup::direction, "direction of travel", "changes with the neighbours' direction of travel"},
+    {InputGroup::sharing, "shared push",
+     "grows where several jets share the push: the jets combine otherwise than by adding their pushes (e.g. their "
+     "velocities add before the drag)"},
 }};
 
 // How the report names it.
@@ -76,7 +79,8 @@ inline constexpr const char* kDiscrepancyModel =
     "ridge regression, per axis, on Gaussian bumps over each neighbour's horizontal offset and height above the "
     "sufferer (summed over the neighbours, also times the offset's direction), a constant, the sufferer's own "
     "velocity and acceleration, bumps over the flight's time (a slow drift), and the model's own prediction: "
-    "itself, times powers of the push and of time, times the direction of travel, and its rate of change";
+    "itself, times powers of the push and of time, times the direction of travel, times how much of the push "
+    "several jets share, and its rate of change";
 
 // Per held-out piece (analysis/score.hpp's pieces): squared residuals in noise floors, without and
 // with the discrepancy, and the samples counted. Each sample is weighed by its noise — the floor and

@@ -72,11 +72,35 @@ void conclude(ExplainResult& R, const ExplainData& d, const Baseline& base, cons
     R.unexplained = largest(R.excess_after) > o.detect_excess || stand_in || R.line_after.significant;
 }
 
+// The time shift that best aligns recording and simulation over the flight: the shift table's
+// median, weighted by samples.
+double located_shift(const std::vector<Shift>& shifts) {
+    std::vector<Shift> v = shifts;
+    std::sort(v.begin(), v.end(), [](const Shift& a, const Shift& b) { return a.shift_s < b.shift_s; });
+    std::size_t total = 0, run = 0;
+    for (const auto& x : v) total += x.samples;
+    for (const auto& x : v)
+        if ((run += x.samples) * 2 >= total) return x.shift_s;
+    return 0;
+}
+
+// The candidates, each family member's grid of starting points joined by its reading of the
+// family's quantity (the delay family's: the located shift), so that every member's fit can
+// converge from the family's best shift whatever its own grid.
+std::vector<Effect> with_family_starts(std::vector<Effect> candidates, double shift_s) {
+    for (auto& e : candidates) {
+        const auto v = e.type->family() ? e.type->from_family_quantity(shift_s) : std::nullopt;
+        if (!v || v->size() != 1 || e.params.size() != 1) continue;
+        e.params[0].grid.push_back(std::clamp((*v)[0], e.params[0].fit_min, e.params[0].fit_max));
+    }
+    return candidates;
+}
+
 // Forward selection, then the arbiter; an effect it refuses is left out and the selection made again
 // (each refusal removes a candidate, so this ends). stand_in: a stand-in was seen on the way.
 Baseline select_and_arbitrate(ExplainResult& R, const ExplainData& d, const Baseline& base, const Folds& folds,
                               const ExplainOptions& o, const Progress& say, bool& stand_in) {
-    std::vector<Effect> candidates = o.candidates;
+    std::vector<Effect> candidates = with_family_starts(o.candidates, located_shift(R.shifts));
     bool any_refused = false;
     for (;;) {
         R.accepted.clear();
@@ -94,29 +118,28 @@ Baseline select_and_arbitrate(ExplainResult& R, const ExplainData& d, const Base
     }
 }
 
-// The time shift that best aligns recording and simulation over the flight: the shift table's
-// median, weighted by samples.
-double located_shift(const std::vector<Shift>& shifts) {
-    std::vector<Shift> v = shifts;
-    std::sort(v.begin(), v.end(), [](const Shift& a, const Shift& b) { return a.shift_s < b.shift_s; });
-    std::size_t total = 0, run = 0;
-    for (const auto& x : v) total += x.samples;
-    for (const auto& x : v)
-        if ((run += x.samples) * 2 >= total) return x.shift_s;
-    return 0;
-}
-
 // The members of c's family that the flight also supports: those the held-out data cannot tell
 // from it in its round, and those that passed the held-out test anywhere in the explanation but were
 // refused as stand-ins (their value moved across the flight, or they fell short of the
-// discrepancy) — they explain the same shift in another way.
-std::vector<std::string> also_supported(const ExplainResult& R, const CandidateResult& c) {
-    std::vector<std::string> out = c.family_alike;
+// discrepancy) — they explain the same shift in another way. Once the flight is shown unable to
+// separate some members, those that passed the held-out test in c's round join them ("less well").
+struct Supported {
+    std::vector<std::string> alike, less_well;
+};
+Supported also_supported(const ExplainResult& R, const CandidateResult& c) {
+    Supported out{c.family_alike, {}};
     const auto* family = c.effect.type->family();
+    const auto listed = [&](const std::string& n) {
+        return std::find(out.alike.begin(), out.alike.end(), n) != out.alike.end() ||
+               std::find(out.less_well.begin(), out.less_well.end(), n) != out.less_well.end();
+    };
     for (const auto& m : R.candidates)
         if (family && m.effect.type->family() == family && m.effect.name != c.effect.name && m.stand_in &&
-            std::find(out.begin(), out.end(), m.effect.name) == out.end())
-            out.push_back(m.effect.name);
+            !listed(m.effect.name))
+            out.alike.push_back(m.effect.name);
+    if (out.alike.empty()) return out;
+    for (const auto& n : c.family_passed)
+        if (!listed(n)) out.less_well.push_back(n);
     return out;
 }
 
@@ -125,14 +148,20 @@ std::vector<FamilyVerdict> families_of(const ExplainResult& R) {
     std::vector<FamilyVerdict> out;
     for (const auto& c : R.accepted) {
         const auto others = also_supported(R, c);
-        if (others.empty()) continue;
+        if (others.alike.empty()) continue;
         FamilyVerdict v{c.effect.type->family(), {c.effect.name}, located_shift(R.shifts), {}};
-        v.members.insert(v.members.end(), others.begin(), others.end());
+        v.members.insert(v.members.end(), others.alike.begin(), others.alike.end());
         const std::vector<std::string> first(v.members.begin(), v.members.end() - 1);
-        v.sentence =
-            log::cat(v.family->shared, " of ", std::round(v.shared_value * 1000) / 1000,
-                     " s (the located shift): ", log::join(first), " or ", v.members.back(),
-                     " — this flight cannot tell which; ", c.effect.name, " is kept for its lower held-out error");
+        const std::string less_well =
+            others.less_well.empty()
+                ? ""
+                : log::cat(" (", log::join(others.less_well), " also passed the held-out test: it explains the shift ",
+                           "less well here)");
+        v.members.insert(v.members.end(), others.less_well.begin(), others.less_well.end());
+        v.sentence = log::cat(v.family->shared, " of ", std::round(v.shared_value * 1000) / 1000,
+                              " s (the located shift): ", log::join(first), " or ", v.members[first.size()],
+                              " — this flight cannot tell which; ", c.effect.name,
+                              " is kept for its lower held-out error", less_well);
         out.push_back(std::move(v));
     }
     return out;
@@ -178,7 +207,9 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         throw InputError(log::cat("poses.csv: ", blocks.blocks.size(), " cross-validation blocks (",
                                   flight::to_string(blocks.kind), ") in the flight; cross-validation needs at least ",
                                   o.folds));
-    const auto info = describe(sim, blocks);
+    auto info = describe(sim, blocks);
+    const auto shared = sim.shared_push(o.physics);
+    for (std::size_t i = 0; i < info.size(); ++i) info[i].shared = shared[i];
     say(log::cat("simulating the recorded flight: ", sim.stamps().size(), " wrench samples, ", sim.neighbours(),
                  " neighbours, ", blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
     auto base_pred = sim.recorded(o.physics);

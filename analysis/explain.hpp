@@ -119,6 +119,8 @@ struct CandidateResult {
     // Members of its family (EffectType::family) scored in its round, accepted or not, that the
     // held-out data cannot tell from it.
     std::vector<std::string> family_alike;
+    // Members of its family that passed the held-out test in its round on their own, fitting less well.
+    std::vector<std::string> family_passed;
     std::optional<ShortOfDiscrepancy> short_of;  // refused by the arbiter: it leaves structure the discrepancy models
 };
 

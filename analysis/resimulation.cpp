@@ -138,9 +138,8 @@ bool Resimulation::near(const physics::Vec3& suf, const std::vector<physics::Pro
     return false;
 }
 
-std::vector<Wrench6> Resimulation::buffeting_sigma(const physics::PhysicsConfig& c) const {
-    std::vector<Wrench6> out(stamps_.size(), Wrench6{});
-    if (!c.turbulence.enabled || c.turbulence.lateral_intensity <= 0 || n_ == 0) return out;
+void Resimulation::at_stamps(const physics::PhysicsConfig& c, const AtStamp& f) const {
+    if (n_ == 0) return;
     const physics::PhysicsConfig flow = flow_of(c);
     const physics::WrenchModel model(flow);
     const std::vector<physics::Jet> jets = jets_of(flow);
@@ -149,8 +148,33 @@ std::vector<Wrench6> Resimulation::buffeting_sigma(const physics::PhysicsConfig&
         const double x = std::round((stamps_[k] - t0_) / dt_);
         const auto i = static_cast<std::size_t>(std::clamp(x, 0.0, static_cast<double>(n_ - 1)));
         const physics::Vec3 suf = producers_at(i, model, jets, physics::Vec3::Zero(), ps);
-        out[k] = physics::to_wrench6(model.buffeting_sigma(suf, ps, c.turbulence.lateral_intensity));
+        f(k, suf, model, ps);
     }
+}
+
+std::vector<Wrench6> Resimulation::buffeting_sigma(const physics::PhysicsConfig& c) const {
+    std::vector<Wrench6> out(stamps_.size(), Wrench6{});
+    if (!c.turbulence.enabled || c.turbulence.lateral_intensity <= 0) return out;
+    at_stamps(c, [&](std::size_t k, const physics::Vec3& suf, const physics::WrenchModel& model,
+                     const std::vector<physics::Producer>& ps) {
+        out[k] = physics::to_wrench6(model.buffeting_sigma(suf, ps, c.turbulence.lateral_intensity));
+    });
+    return out;
+}
+
+std::vector<double> Resimulation::shared_push(const physics::PhysicsConfig& c) const {
+    std::vector<double> out(stamps_.size(), 0.0);
+    if (bodies_.neighbours.size() < 2) return out;
+    at_stamps(c, [&](std::size_t k, const physics::Vec3& suf, const physics::WrenchModel& model,
+                     const std::vector<physics::Producer>& ps) {
+        if (!near(suf, ps)) return;
+        double sum = 0, strongest = 0;
+        for (const auto& p : ps) {
+            const double push = model.evaluate(suf, std::span<const physics::Producer>(&p, 1)).head<3>().norm();
+            sum += push, strongest = std::max(strongest, push);
+        }
+        if (sum > 0 && std::isfinite(sum)) out[k] = 1.0 - strongest / sum;
+    });
     return out;
 }
 

@@ -10,6 +10,7 @@
 // of mocap time (cached), so fitting the recording-side effects (time shifts, lag, scale,
 // crosstalk) costs no new physics.
 #include <array>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -40,6 +41,9 @@ public:
     // At every wrench stamp, the standard deviation per axis of the lateral buffeting c's
     // turbulence gives (zero without turbulence): noise the mean flow cannot predict.
     std::vector<Wrench6> buffeting_sigma(const physics::PhysicsConfig& c) const;
+    // At every wrench stamp, how much of the push is shared: 1 − the strongest neighbour's share of
+    // the sum of each neighbour's push alone (the norm of its force), 0 with one jet or none.
+    std::vector<double> shared_push(const physics::PhysicsConfig& c) const;
 
     const std::vector<double>& stamps() const { return stamps_; }       // wrench.csv t
     const std::vector<Wrench6>& measured() const { return measured_; }  // wrench.csv values
@@ -68,6 +72,11 @@ private:
     physics::Vec3 producers_at(std::size_t i, const physics::WrenchModel& model, const std::vector<physics::Jet>& jets,
                                const physics::Vec3& offset, std::vector<physics::Producer>& ps) const;
     bool near(const physics::Vec3& sufferer, const std::vector<physics::Producer>& ps) const;
+    // f(k, the sufferer, the model, the producers) at every wrench stamp k, for c's flow (no
+    // position error: where the neighbours were recorded).
+    using AtStamp = std::function<void(std::size_t, const physics::Vec3&, const physics::WrenchModel&,
+                                       const std::vector<physics::Producer>&)>;
+    void at_stamps(const physics::PhysicsConfig& c, const AtStamp& f) const;
     // The flying sufferer's own forces on the grid: the chain's stage sufferer at its recorded states.
     std::vector<Wrench6> own_forces(const physics::PhysicsConfig& c, const physics::RecordingChain& chain) const;
     struct GridState {  // the recorded states at one grid time
@@ -100,6 +109,7 @@ struct SampleInfo {
     double speed = 0;
     double leg_fraction = 0;  // 0..1 through the leg
     bool near = false;        // a neighbour within its near radius horizontally (physics/bodies.hpp)
+    double shared = 0;        // Resimulation::shared_push: 0 where one jet pushes, up to 1 − 1/K where K share it
 };
 std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks);
 

@@ -65,6 +65,18 @@ std::vector<std::string> family_alike(const CandidateResult& best, const std::ve
     return out;
 }
 
+// The members of best's family that passed the held-out test in its round on their own: they
+// explain the same shift, less well on this flight (which member fits a flight best is not always
+// its cause: a flight's own structure beside the shift can favour another member).
+std::vector<std::string> family_passed(const CandidateResult& best, const std::vector<CandidateResult>& round) {
+    std::vector<std::string> out;
+    const auto* family = best.effect.type->family();
+    for (const auto& c : round)
+        if (family && c.effect.name != best.effect.name && c.effect.type->family() == family && c.accepted)
+            out.push_back(c.effect.name);
+    return out;
+}
+
 // One forward-selection round: every remaining candidate scored; the accepted one with the lowest
 // held-out error that is one value for the whole flight (not a stand-in), if any.
 struct Round {
@@ -112,6 +124,7 @@ void refit_together(ExplainResult& R, const ExplainData& d, const Folds& folds, 
             again.heldout_before = R.accepted[k].heldout_before;
             again.indistinguishable = R.accepted[k].indistinguishable;
             again.family_alike = R.accepted[k].family_alike;
+            again.family_passed = R.accepted[k].family_passed;
             again.stand_in_z = R.accepted[k].stand_in_z;  // checked in its round, not again
             again.one_value = R.accepted[k].one_value;
             if (again.one_value) again.note += again.one_value->note;
@@ -138,6 +151,7 @@ Baseline select_effects(ExplainResult& R, const ExplainData& d, const Baseline& 
         R.accepted.push_back(best);
         R.accepted.back().indistinguishable = indistinguishable(best, r.scored, o.min_t);
         R.accepted.back().family_alike = family_alike(best, r.scored, o.min_t);
+        R.accepted.back().family_passed = family_passed(best, r.scored);
         physics::PhysicsConfig next = current.physics;
         best.effect.apply(next, best.values);
         current = baseline_of(d, next);

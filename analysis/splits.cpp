@@ -26,6 +26,7 @@ double key_of(SplitAxis a, const ExplainData& d, const std::vector<Wrench6>& wit
         case SplitAxis::height: return s.h;
         case SplitAxis::separation: return s.offset;
         case SplitAxis::direction: return s.direction;
+        case SplitAxis::company: return s.shared;
         case SplitAxis::push: break;
     }
     double push = 0;  // the model's predicted wrench, in noise floors
@@ -46,8 +47,10 @@ std::optional<std::array<Rows, 2>> parts_along(const SplitAxisInfo& a, const Exp
         std::vector<double> k;
         Rows rows;
         for (auto i : near) {
+            // The push, and how it is shared, only where the model predicts one.
+            const bool of_the_push = a.axis == SplitAxis::push || a.axis == SplitAxis::company;
+            if (of_the_push && key_of(SplitAxis::push, d, with, i) < kMeasurablePush) continue;
             const double x = key_of(a.axis, d, with, i);
-            if (a.axis == SplitAxis::push && x < kMeasurablePush) continue;
             k.push_back(x), rows.push_back(i);
         }
         if (k.size() < 2 * kMinPartSamples) return std::nullopt;
@@ -55,6 +58,7 @@ std::optional<std::array<Rows, 2>> parts_along(const SplitAxisInfo& a, const Exp
         std::sort(sorted.begin(), sorted.end());
         const double low = sorted[sorted.size() / 3], high = sorted[2 * sorted.size() / 3];
         if (a.ratio_rule && !(high >= kSpanRatio * low)) return std::nullopt;
+        if (a.axis == SplitAxis::company && high < kMinSharedSpan) return std::nullopt;
         for (std::size_t r = 0; r < rows.size(); ++r) {
             if (k[r] < low) parts[0].push_back(rows[r]);
             if (k[r] >= high) parts[1].push_back(rows[r]);

@@ -2,7 +2,8 @@
 // One value along every axis the flight spans. An effect of the vocabulary is one value for the
 // whole flight — a clock offset, a gain, a lag — so, fitted again on parts of the flight split
 // along each axis it spans (time, the predicted push, the neighbours' height and horizontal
-// separation, the direction of travel), it must take the same value in every part. An effect
+// separation, the direction of travel, how much of the push several jets share), it must take
+// the same value in every part. An effect
 // standing in for something the vocabulary does not name (a drift, a sensor that stops following
 // large forces, wakes that move sideways as they fall) takes values that move along one of them.
 //
@@ -26,7 +27,7 @@
 
 namespace dw::analysis {
 
-enum class SplitAxis { time, push, height, separation, direction };
+enum class SplitAxis { time, push, height, separation, direction, company };
 
 struct SplitAxisInfo {
     SplitAxis axis;
@@ -36,18 +37,23 @@ struct SplitAxisInfo {
 };
 
 // The axes, in the order they are tested and reported.
-inline constexpr std::array<SplitAxisInfo, 5> kSplitAxes{{
+inline constexpr std::array<SplitAxisInfo, 6> kSplitAxes{{
     {SplitAxis::time, "time", "early", "late", false},
     {SplitAxis::push, "predicted push", "where the push is weak", "where it is strong", true},
     {SplitAxis::height, "neighbour height", "on the lowest passes", "on the highest passes", true},
     {SplitAxis::separation, "horizontal separation", "close by", "farther out", true},
     {SplitAxis::direction, "direction of travel", "on -E legs", "on +E legs", false},
+    // How the jets combine: a sum of single-neighbour pushes keeps one value whether one jet pushes or several share.
+    {SplitAxis::company, "shared push", "where one jet pushes", "where several share the push", false},
 }};
 
 inline constexpr int kSplitGroups = 10;              // blocked jackknife groups: block % this
 inline constexpr double kSplitAlpha = 0.015;         // family-wise, over every axis and parameter tested
 inline constexpr std::size_t kMinPartSamples = 100;  // a part with fewer samples is not tested
 inline constexpr double kSpanRatio = 1.5;            // a flight at one height cannot show a dependence on it
+// The shared push (analysis/resimulation.hpp) is spanned only when its highest third reaches this:
+// a second jet carries at least a fifth of the push there.
+inline constexpr double kMinSharedSpan = 0.2;
 // The push is split among the near samples where the model predicts at least this push (noise
 // floors, RMS over the axes): where it predicts none, no effect can be measured.
 inline constexpr double kMeasurablePush = 1.0;

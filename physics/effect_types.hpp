@@ -103,6 +103,9 @@ public:
     virtual bool has_axes() const { return false; }
     // The family of effects it may be indistinguishable from (nullptr: none).
     virtual const EffectFamily* family() const { return nullptr; }
+    // Its parameters for the family's shared quantity (the delay family's: the shift between force
+    // and pose, s), where one reading of it is this effect's; the explainer starts its fit there too.
+    virtual std::optional<std::vector<double>> from_family_quantity(double) const { return std::nullopt; }
     // The report's JSON gives the parameters as one array under this key ("" : one key each).
     virtual std::string grouped_key() const { return ""; }
 

@@ -12,6 +12,9 @@ public:
     ClockOffset() : OneNumber(&Effects::clock_offset, &DW_FIELD(clock_offset)::offset_s) {}
     std::string name() const override { return kClockOffsetEffect; }
     const EffectFamily* family() const override { return &kDelayFamily; }
+    std::optional<std::vector<double>> from_family_quantity(double shift_s) const override {
+        return std::vector<double>{shift_s};  // the stamps run late by the shift itself
+    }
     std::vector<EffectParameter> parameters() const override {
         return {{"offset_s", "s", -10, 10, -0.5, 0.5, range(-0.3, 0.3, 25), 0.0}};
     }

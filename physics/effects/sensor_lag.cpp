@@ -13,6 +13,10 @@ public:
     SensorLag() : OneNumber(&Effects::sensor_lag, &DW_FIELD(sensor_lag)::tau_s) {}
     std::string name() const override { return "sensor_lag"; }
     const EffectFamily* family() const override { return &kDelayFamily; }
+    std::optional<std::vector<double>> from_family_quantity(double shift_s) const override {
+        if (shift_s <= 0) return std::nullopt;  // a lag cannot make the force early
+        return std::vector<double>{shift_s};    // a first-order lag delays a slow signal by its time constant
+    }
     std::vector<EffectParameter> parameters() const override {
         return {{"tau_s", "s", 0, 10, 0.0, 0.5, range(0.0, 0.3, 13), 0.0}};
     }
