@@ -321,21 +321,39 @@ PieceErrors cross_validate(const ExplainData& d, const Folds& folds, const std::
     return s;
 }
 
+// Whether columns [start, start + count) hold any input (a flight over a stand has no own motion,
+// a flight with one neighbour no shared push).
+bool any_input(const std::vector<Gram>& parts, int start, int count) {
+    for (const auto& g : parts)
+        if (g.x.middleCols(start, count).squaredNorm() > 0) return true;
+    return false;
+}
+
 // What the discrepancy depends on: each group's own share of the held-out gain on the best axis —
-// the gain lost when that group's columns are left out — largest first.
+// the gain lost when that group's columns are left out — largest first; and each group's nested
+// z, for the detection by structure.
 void explain_dependence(Discrepancy& r, const ExplainData& d, const Folds& folds, const std::vector<Gram>& parts,
-                        const PieceErrors& full) {
+                        const PieceErrors& full, const ExplainOptions& o) {
     const Layout l = layout_of(static_cast<int>(parts[0].x.cols()) - layout_of(0).columns);
     const auto a = static_cast<std::size_t>(r.best_axis);
     const double before = total(full.before, a), gained = before - total(full.after, a);
     if (!(gained > 0)) return;
+    const double threshold = normal_upper(kStructureAlpha / static_cast<double>(kInputGroups.size() - 1));
     for (std::size_t g = 1; g < kInputGroups.size(); ++g) {
-        if (l.count[g] == 0) continue;
+        if (l.count[g] == 0 || !any_input(parts, l.start[g], l.count[g])) continue;
         std::vector<int> cols;
         for (int k = 0; k < l.columns; ++k)
             if (k < l.start[g] || k >= l.start[g] + l.count[g]) cols.push_back(k);
-        const double lost = total(cross_validate(d, folds, parts, cols).after, a) - total(full.after, a);
+        const PieceErrors without = cross_validate(d, folds, parts, cols);
+        const double lost = total(without.after, a) - total(full.after, a);
         r.shares.emplace_back(kInputGroups[g].name, std::max(0.0, lost / gained));
+        std::vector<double> diff;
+        for (const auto& [piece, after] : full.after)
+            diff.push_back((without.after.at(piece)[a] - after[a]) / static_cast<double>(full.n.at(piece)));
+        const double z = paired_z(diff);
+        r.group_z.emplace_back(kInputGroups[g].name, z);
+        if (z >= threshold && lost / before >= o.min_gain && !r.structured)
+            r.structured = true, r.structured_by = kInputGroups[g].name;
     }
     std::sort(r.shares.begin(), r.shares.end(), [](const auto& x, const auto& y) { return x.second > y.second; });
     if (r.shares.empty()) return;
@@ -366,7 +384,7 @@ Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& 
     const PieceErrors s = cross_validate(d, folds, parts, cols);
     r.fitted = true;
     judge(r, s, d, o);
-    if (run.explain_dependence && r.significant) explain_dependence(r, d, folds, parts, s);
+    if (run.explain_dependence && r.significant) explain_dependence(r, d, folds, parts, s, o);
     if (run.pieces) *run.pieces = s;
     return r;
 }

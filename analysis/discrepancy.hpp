@@ -74,6 +74,17 @@ inline constexpr std::array<InputGroupInfo, 9> kInputGroups{{
      "velocities add before the drag)"},
 }};
 
+// Detection by structure. A discrepancy that removes a share of the held-out error is not yet a
+// mismatch: every simulated flight carries some structure the resimulation does not have (the
+// chips' sample-and-hold approximated by one delay, the turbulence's mean bias), spread thinly over
+// many inputs, none of which adds to the others. A mismatch with a shape — one that changes with the
+// direction of travel, the time, the push — sits in one group of inputs, which then adds to all the
+// others: its nested held-out z (the discrepancy without the group against the whole, piece by
+// piece, on the best axis) beyond kStructureZ, with min_gain of the error removed by it alone. The
+// level is a normal tail of kStructureAlpha over the groups tested (Bonferroni); null flights stay
+// clean (docs/EXPLAINER.md has their values).
+inline constexpr double kStructureAlpha = 0.015;
+
 // How the report names it.
 inline constexpr const char* kDiscrepancyModel =
     "ridge regression, per axis, on Gaussian bumps over each neighbour's horizontal offset and height above the "

@@ -234,6 +234,11 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     say("learning what is left as a function of the geometry");
     R.discrepancy = learn_discrepancy(d, final_model.pred, folds, o);
     say(log::cat("  ", R.discrepancy.note));
+    if (R.discrepancy.structured) {  // detection by structure: what is left has a shape
+        R.detected = R.unexplained = true;
+        say(log::cat("  what is left has a shape: it depends on ", R.discrepancy.structured_by,
+                     " beyond every other input"));
+    }
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     R.resimulations = d.resimulations + 1;  // and the base model's, before the data
     say(log::cat("done: ", R.resimulations, " resimulations of the flight in ", std::round(R.seconds * 10) / 10, " s"));

@@ -152,6 +152,13 @@ struct Discrepancy {
     // the best axis (the gain lost without it), largest first, and the largest's words.
     std::vector<std::pair<std::string, double>> shares;
     std::string depends_on, sentence;
+    // Detection by structure: per group of inputs, the evidence over held-out pieces that it adds to
+    // the others (the nested test on the best axis: the discrepancy without the group against the
+    // whole). `structured`: some group adds beyond what any group adds on null flights
+    // (analysis/discrepancy.hpp, kStructureZ) and removes min_gain of the error on its own.
+    std::vector<std::pair<std::string, double>> group_z;
+    bool structured = false;
+    std::string structured_by;
     std::string note;
 };
 

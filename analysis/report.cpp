@@ -328,6 +328,10 @@ json discrepancy_json(const Discrepancy& g) {
         j["depends_on"] = g.depends_on;
         j["shares"] = shares;
         j["sentence"] = g.sentence;
+        json z = json::object();
+        for (const auto& [name, value] : g.group_z) z[name] = value;
+        j["structure"] = {{"group_z", z}, {"structured", g.structured}};
+        if (g.structured) j["structure"]["by"] = g.structured_by;
     }
     return j;
 }

@@ -77,6 +77,15 @@ double t_two_sided(double p, int dof) {
     return 0.5 * (lo + hi);
 }
 
+double normal_upper(double p) {
+    double lo = -40, hi = 40;  // the tail falls from 1 to 0; bisect
+    for (int k = 0; k < 200 && hi - lo > 1e-12; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (0.5 * std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
 std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates) {
     const double G = static_cast<double>(replicates.size());
     std::vector<double> out;

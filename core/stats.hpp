@@ -32,6 +32,10 @@ double t975(int dof);
 double t_tail_two_sided(double t, int dof);
 double t_two_sided(double p, int dof);
 
+// The normal distribution's upper-tail quantile: the z with P(Z > z) = p (0 < p < 1). A one-sided
+// test repeated m times at a family-wise level alpha uses normal_upper(alpha / m).
+double normal_upper(double p);
+
 // The spread of a jackknife over its replicates (each with one group left out):
 // sqrt((G - 1) / G * sum (x - mean)²), per parameter.
 std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates);

@@ -102,6 +102,9 @@ TEST(Stats, StudentTQuantilesMatchTheTables) {
     for (int dof = 1; dof <= 10; ++dof) EXPECT_NEAR(dw::t_two_sided(0.05, dof), dw::t975(dof), 1e-3) << dof;
     EXPECT_NEAR(dw::t_tail_two_sided(2.262, 9), 0.05, 1e-4);
     EXPECT_NEAR(dw::t_tail_two_sided(0, 5), 1.0, 1e-12);
+    EXPECT_NEAR(dw::normal_upper(0.025), 1.95996, 1e-4);
+    EXPECT_NEAR(dw::normal_upper(0.001), 3.09023, 1e-4);
+    EXPECT_NEAR(dw::normal_upper(0.5), 0.0, 1e-9);
 }
 
 // The robust summaries the explainer, the calibration and the importer share (one rule each).
