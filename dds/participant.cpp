@@ -153,6 +153,24 @@ fdds::Topic& Participant::find_or_create_topic(const std::string& name,
     return *topic;
 }
 
+std::shared_ptr<Refusals> Participant::refusals() {
+    auto r = std::make_shared<Refusals>();
+    r->first = [this](const std::string& type, const std::string& what) {
+        report_problem(log::cat("a malformed ", type, " sample refused (", what,
+                                "): it does not decode; this process goes on, and further ones are counted"));
+    };
+    std::lock_guard lock(refusals_mutex_);
+    refusals_.push_back(r);
+    return r;
+}
+
+std::uint64_t Participant::refused_samples() const {
+    std::lock_guard lock(refusals_mutex_);
+    std::uint64_t n = 0;
+    for (const auto& r : refusals_) n += r->refused.load();
+    return n;
+}
+
 std::shared_ptr<EndpointStats> Participant::add_endpoint(const std::string& topic, bool outgoing) {
     auto stats = std::make_shared<EndpointStats>();
     stats->topic = topic;

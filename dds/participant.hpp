@@ -17,6 +17,7 @@
 
 #include "core/clock.hpp"
 #include "dds/config.hpp"
+#include "dds/guarded.hpp"
 #include "dds/topics.hpp"
 
 namespace dw::dds {
@@ -49,8 +50,9 @@ public:
 
     template <class T>
     eprosima::fastdds::dds::Topic& topic(const Topic<T>& spec) {
-        return find_or_create_topic(topic_name(spec.suffix), [] {
-            return eprosima::fastdds::dds::TypeSupport(new typename PubSubOf<T>::type());
+        // Every type decoded through dds/guarded.hpp: a malformed sample is refused, not fatal.
+        return find_or_create_topic(topic_name(spec.suffix), [this] {
+            return eprosima::fastdds::dds::TypeSupport(new Guarded<typename PubSubOf<T>::type>(refusals()));
         });
     }
 
@@ -62,6 +64,8 @@ public:
     void report_problem(const std::string& line);
     void on_problem(std::function<void(const std::string&)> hook);
     std::uint64_t problem_count() const { return problems_; }
+    // Samples refused because they do not decode (dds/guarded.hpp), over every type.
+    std::uint64_t refused_samples() const;
 
     // The names in `processes` (participant names: recorder, predictor, ...) that own none of the
     // `matched` readers (a writer's matched subscriptions).
@@ -73,7 +77,8 @@ public:
     std::string identity_of(const eprosima::fastdds::dds::InstanceHandle_t& endpoint) const;
 
 private:
-    class Discovery;  // remembers each discovered participant's name and identity
+    std::shared_ptr<Refusals> refusals();  // one per type made: the first refusal said as a problem
+    class Discovery;                       // remembers each discovered participant's name and identity
     eprosima::fastdds::dds::Topic& find_or_create_topic(
         const std::string& name, const std::function<eprosima::fastdds::dds::TypeSupport()>& make_type);
 
@@ -87,6 +92,8 @@ private:
     std::vector<std::weak_ptr<EndpointStats>> endpoints_;
     std::vector<std::function<void(const std::string&)>> hooks_;
     std::atomic<std::uint64_t> problems_{0};
+    mutable std::mutex refusals_mutex_;  // not mutex_: types are made while it is held
+    std::vector<std::shared_ptr<Refusals>> refusals_;
     std::unique_ptr<Discovery> discovery_;
 };
 

@@ -400,3 +400,56 @@ TEST(Heartbeat, ReportsEndpointRates) {
     EXPECT_DOUBLE_EQ(s.rates()[0].rate_hz(), 80.0);
     EXPECT_EQ(s.rates()[0].samples(), 80u);
 }
+
+// Issue 70: a sample whose CDR encapsulation id is unknown made the generated type's deserialize
+// throw on Fast DDS's listener thread, and the reading process aborted. Every type is now decoded
+// through dds/guarded.hpp: the malformed sample is refused, said once, counted, and the reader
+// goes on with the next.
+namespace {
+// The real type (same name, same type information) whose every other sample goes out with an
+// encapsulation id no CDR reader knows.
+class EveryOtherMalformed final : public dw::msg::ExperimentCommandPubSubType {
+public:
+    bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
+        if (!ExperimentCommandPubSubType::serialize(data, payload)) return false;
+        if (written_++ % 2 == 1) payload->data[0] = payload->data[1] = 0x77;
+        return true;
+    }
+
+private:
+    std::atomic<int> written_{0};
+};
+}  // namespace
+
+TEST(Endpoints, AMalformedSampleIsRefusedAndTheReaderGoesOn) {
+    Participant a(test_config(), "hostile");
+    Participant b(test_config(), "reader");
+    std::vector<std::string> problems;
+    std::mutex m;
+    b.on_problem([&](const std::string& line) {
+        std::lock_guard lock(m);
+        problems.push_back(line);
+    });
+    // The hostile writer's topic exists before the lab's code asks for it: its type is the one above.
+    eprosima::fastdds::dds::TypeSupport evil(new EveryOtherMalformed());
+    ASSERT_EQ(evil.register_type(&a.native()), eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK);
+    ASSERT_NE(a.native().create_topic(a.topic_name(topics::experiment_command.suffix), evil.get_type_name(),
+                                      eprosima::fastdds::dds::TOPIC_QOS_DEFAULT),
+              nullptr);
+    std::atomic<int> got{0};
+    dw::dds::Reader<dw::msg::ExperimentCommand> reader(
+        b, topics::experiment_command, [&](const dw::msg::ExperimentCommand&, const dw::dds::SampleMeta&) { ++got; });
+    dw::dds::Writer<dw::msg::ExperimentCommand> writer(a, topics::experiment_command);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
+    for (std::uint64_t i = 0; i < 10; ++i) {
+        auto c = dw::probe::make_sample<dw::msg::ExperimentCommand>(i);
+        ASSERT_TRUE(writer.write(c));
+        std::this_thread::sleep_for(5ms);
+    }
+    EXPECT_TRUE(eventually([&] { return got.load() == 5 && b.refused_samples() == 5; }))
+        << got.load() << " delivered, " << b.refused_samples() << " refused";
+    std::lock_guard lock(m);
+    ASSERT_EQ(problems.size(), 1u);  // said once, then counted
+    EXPECT_NE(problems[0].find("malformed dw::msg::ExperimentCommand sample refused"), std::string::npos)
+        << problems[0];
+}
