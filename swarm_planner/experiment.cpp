@@ -116,6 +116,7 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
     if (o_.run_id.empty()) o_.run_id = log::cat("run-", p.clock().now_ns() / 1'000'000'000);
     if (o_.px4.vehicles.empty()) o_.px4 = default_px4_options(plan_.vehicles);
     link_ = make_link(o_.link, p, plan_.vehicles, o_.run_id, o_.px4);
+    link_->set_fence(plan_.options.fence);  // the last gate: nothing outside the room reaches a vehicle
 }
 
 void Experiment::publish_state(msg::ExperimentPhase phase, int leg, double progress, const std::string& message) {

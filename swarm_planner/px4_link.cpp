@@ -69,10 +69,11 @@ public:
                       : log::cat("by ", name_of(kOdometryByNames, o.odometry)));
     }
 
-    void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) override {
+    void deliver(const std::vector<std::optional<physics::Setpoint>>& sps, Nanos now_ns) override {
         const auto us = static_cast<std::uint64_t>(now_ns / 1000);
         const Nanos mono = p_.clock().monotonic_ns();
         for (std::size_t i = 0; i < sps.size() && i < vehicles_.size(); ++i) {
+            if (!sps[i]) continue;  // the last gate let nothing through for it
             Vehicle& v = vehicles_[i];
             typename Types::Mode mode;  // proof of life, with every setpoint (PX4 wants > 2 Hz)
             mode.timestamp(us);
@@ -80,7 +81,7 @@ public:
             mode.velocity(true);
             mode.acceleration(true);
             v.mode->write_as_is(mode);
-            v.traj->write_as_is(trajectory(v.frame, sps[i], us));
+            v.traj->write_as_is(trajectory(v.frame, *sps[i], us));
             if (v.stream_last_ns == 0 || to_seconds(mono - v.stream_last_ns) > kStreamGapS) v.stream_since_ns = mono;
             v.stream_last_ns = mono;
         }

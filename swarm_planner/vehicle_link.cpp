@@ -12,25 +12,53 @@ LinkKind parse_link(std::string_view name, std::string_view option) {
     throw InputError(log::cat(option, ": ", unknown_name_problem("vehicle link", name, kLinkNames)));
 }
 
+void VehicleLink::send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) {
+    passed_.resize(sps.size());
+    said_.resize(sps.size(), false);
+    std::vector<std::optional<physics::Setpoint>> out(sps.size());
+    for (std::size_t i = 0; i < sps.size(); ++i) {
+        const bool finite = is_finite(sps[i]);
+        if (finite && fence_.contains(sps[i].position, 0.0)) {
+            out[i] = passed_[i] = sps[i];
+            continue;
+        }
+        ++refused_;
+        if (passed_[i]) {
+            out[i] = *passed_[i];
+            out[i]->velocity = out[i]->acceleration = physics::Vec3::Zero();
+        }
+        if (!said_[i]) {
+            said_[i] = true;
+            const auto& x = sps[i].position;
+            log::error("vehicle link: vehicle ", i + 1, "'s setpoint refused at the last gate (",
+                       finite ? log::cat("outside the geofence: ", x.x(), ", ", x.y(), ", ", x.z()) : "not finite",
+                       "); it ", passed_[i] ? "holds its last setpoint that passed" : "is sent nothing");
+        }
+    }
+    deliver(out, now_ns);
+}
+
 SimLink::SimLink(dds::Participant& p, std::vector<std::string> vehicles, std::string run_id)
     : vehicles_(std::move(vehicles)), run_id_(std::move(run_id)), writer_(p, dds::topics::vehicle_setpoint) {}
 
-void SimLink::send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) {
-    for (std::size_t i = 0; i < sps.size(); ++i) {
+void SimLink::deliver(const std::vector<std::optional<physics::Setpoint>>& gated, Nanos now_ns) {
+    for (std::size_t i = 0; i < gated.size(); ++i) {
+        if (!gated[i]) continue;
+        const physics::Setpoint& sp = *gated[i];
         msg::VehicleSetpoint m;
         m.header().stamp(dds::to_msg(now_ns));
         m.header().run_id(run_id_);
         m.vehicle_id(vehicles_[i]);
-        m.position_m().x(sps[i].position.x());
-        m.position_m().y(sps[i].position.y());
-        m.position_m().z(sps[i].position.z());
-        m.velocity_mps().x(sps[i].velocity.x());
-        m.velocity_mps().y(sps[i].velocity.y());
-        m.velocity_mps().z(sps[i].velocity.z());
-        m.acceleration_mps2().x(sps[i].acceleration.x());
-        m.acceleration_mps2().y(sps[i].acceleration.y());
-        m.acceleration_mps2().z(sps[i].acceleration.z());
-        m.yaw_rad(sps[i].yaw_rad);
+        m.position_m().x(sp.position.x());
+        m.position_m().y(sp.position.y());
+        m.position_m().z(sp.position.z());
+        m.velocity_mps().x(sp.velocity.x());
+        m.velocity_mps().y(sp.velocity.y());
+        m.velocity_mps().z(sp.velocity.z());
+        m.acceleration_mps2().x(sp.acceleration.x());
+        m.acceleration_mps2().y(sp.acceleration.y());
+        m.acceleration_mps2().z(sp.acceleration.z());
+        m.yaw_rad(sp.yaw_rad);
         writer_.write(m);
     }
 }

@@ -11,6 +11,7 @@
 
 #include "dds/endpoint.hpp"
 #include "physics/vehicle.hpp"
+#include "swarm_planner/plan.hpp"
 #include "swarm_planner/px4_config.hpp"
 
 namespace dw::planner {
@@ -22,10 +23,16 @@ struct ArmProgress {
     std::string reason;  // refused: why, in one line
 };
 
+// Every link sends through one last gate (issue 70): whatever the planner computed, a setpoint that
+// is not finite or lies outside the geofence never reaches a vehicle. That vehicle gets instead
+// the last setpoint of its own that passed, at rest (no velocity, no acceleration), or nothing at
+// all if none has passed yet; each vehicle's first refusal is said as an error line.
 class VehicleLink {
 public:
     virtual ~VehicleLink() = default;
-    virtual void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) = 0;
+    void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns);
+    void set_fence(const Geofence& fence) { fence_ = fence; }  // default: the default room
+    std::uint64_t refused() const { return refused_; }         // setpoints the gate stopped
     // Advances arming (mode, arm, confirmation, retries); the setpoint stream goes on meanwhile.
     virtual ArmProgress arm() { return {ArmProgress::State::ready, ""}; }
     // In flight: why the vehicles no longer follow this link (a PX4 failsafe), if so.
@@ -43,6 +50,16 @@ public:
     virtual std::optional<std::string> still_flying() { return std::nullopt; }
     // How long a landing may take to be confirmed.
     virtual double land_timeout_s() const { return 0; }
+
+protected:
+    // Each vehicle's setpoint after the gate; nothing for a vehicle none of whose setpoints passed.
+    virtual void deliver(const std::vector<std::optional<physics::Setpoint>>& sps, Nanos now_ns) = 0;
+
+private:
+    Geofence fence_;
+    std::vector<std::optional<physics::Setpoint>> passed_;  // per vehicle: the last that passed
+    std::vector<bool> said_;
+    std::uint64_t refused_ = 0;
 };
 
 enum class LinkKind { sim, px4 };
@@ -53,9 +70,9 @@ LinkKind parse_link(std::string_view name, std::string_view option);
 class SimLink final : public VehicleLink {
 public:
     SimLink(dds::Participant& p, std::vector<std::string> vehicles, std::string run_id);
-    void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) override;
 
 private:
+    void deliver(const std::vector<std::optional<physics::Setpoint>>& sps, Nanos now_ns) override;
     std::vector<std::string> vehicles_;
     std::string run_id_;
     dds::Writer<msg::VehicleSetpoint> writer_;

@@ -7,6 +7,7 @@
 #include "core/errors.hpp"
 #include "swarm_planner/picture.hpp"
 #include "swarm_planner/plan.hpp"
+#include "swarm_planner/vehicle_link.hpp"
 #include <cmath>
 
 #include "support.hpp"
@@ -133,4 +134,58 @@ TEST(PlannerHardening, ChecksStopWhenAsked) {
     EXPECT_THROW(check(p, stop.get_token()), dw::Stopped);
     EXPECT_THROW(coverage(p, stop.get_token()), dw::Stopped);
     EXPECT_FALSE(check(p));
+}
+
+// Issue 70: the last gate before every command sits in the vehicle link, whatever the planner
+// computed. A setpoint that is not finite or lies outside the room never reaches a vehicle: it
+// holds its last setpoint that passed, at rest, or is sent nothing if none has passed.
+namespace {
+class RecordingLink final : public VehicleLink {
+public:
+    std::vector<std::vector<std::optional<dw::physics::Setpoint>>> delivered;
+
+private:
+    void deliver(const std::vector<std::optional<dw::physics::Setpoint>>& sps, dw::Nanos) override {
+        delivered.push_back(sps);
+    }
+};
+dw::physics::Setpoint at(double n, double e, double d) {
+    dw::physics::Setpoint s;
+    s.position = {n, e, d};
+    s.velocity = {0.5, 0, 0};
+    return s;
+}
+}  // namespace
+
+TEST(VehicleLinkGate, NothingNonFiniteOrOutsideTheRoomReachesAVehicle) {
+    RecordingLink link;  // the default room: N ±2, E ±3, D -4..0
+    const double nan = std::nan("");
+    // v1 starts outside the room (a parked pose 50 m away), v2 with a NaN: neither gets anything.
+    link.send({at(50, 0, -1), at(nan, 0, -1)}, 0);
+    ASSERT_EQ(link.delivered.size(), 1u);
+    EXPECT_FALSE(link.delivered[0][0].has_value());
+    EXPECT_FALSE(link.delivered[0][1].has_value());
+    // Inside the room both pass as computed.
+    link.send({at(0, 1, -1), at(1, -1, -1.5)}, 1);
+    ASSERT_TRUE(link.delivered[1][0] && link.delivered[1][1]);
+    EXPECT_DOUBLE_EQ(link.delivered[1][0]->velocity.x(), 0.5);
+    // Then 5 m below the floor, 1e300 m away, an infinite yaw: each holds its last, at rest.
+    auto yaw = at(0, 0, -1);
+    yaw.yaw_rad = INFINITY;
+    for (const auto& bad : {at(0, 0, 5), at(1e300, 0, -1), yaw}) {
+        link.send({bad, at(1, -1, -1.5)}, 2);
+        const auto& got = link.delivered.back();
+        ASSERT_TRUE(got[0].has_value());
+        EXPECT_TRUE(got[0]->position.isApprox(dw::physics::Vec3(0, 1, -1)));
+        EXPECT_TRUE(got[0]->velocity.isZero());
+        EXPECT_TRUE(got[0]->acceleration.isZero());
+        EXPECT_DOUBLE_EQ(got[1]->velocity.x(), 0.5);  // the other vehicle is untouched
+    }
+    EXPECT_EQ(link.refused(), 5u);
+    // A fence of the lab's own: what the default room allows may be outside it.
+    Geofence small;
+    small.n_min = -0.5, small.n_max = 0.5;
+    link.set_fence(small);
+    link.send({at(0, 1, -1), at(1, -1, -1.5)}, 3);
+    EXPECT_TRUE(link.delivered.back()[1]->velocity.isZero());  // v2 held at rest, not sent to N = 1
 }
