@@ -143,6 +143,14 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
         if (unpredicted_.fetch_add(1) == 0) log::warn("a frame left unpredicted (the first; counted): ", e.what());
         return;
     }
+    // Never a non-finite prediction on the wire (issue 70): a NaN body, or a model whose weights
+    // overflow, leaves that frame unpredicted.
+    if (!std::all_of(w.begin(), w.end(), [](double v) { return std::isfinite(v); })) {
+        if (unpredicted_.fetch_add(1) == 0)
+            log::warn("a frame left unpredicted (the first; counted): ", model->name(),
+                      " gave a non-finite wrench for it (a non-finite body position, or the model's weights)");
+        return;
+    }
     msg::WrenchPrediction out;
     out.header().stamp(frame.header().stamp());
     out.header().run_id(frame.header().run_id());
