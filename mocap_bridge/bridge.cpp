@@ -143,8 +143,14 @@ double FrameConverter::camera_time_s(const FrameOfData& f, Nanos receive_wall_ns
     return receive;
 }
 
-FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos receive_wall_ns) {
+FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos receive_wall_ns, bool* refused) {
     Output out;
+    if (refused) *refused = false;
+    if (!std::isfinite(f.timestamp_s)) {  // no clock to estimate velocities or staleness on
+        ++implausible_;
+        if (refused) *refused = true;
+        return out;
+    }
     if (last_frame_ >= 0 && f.frame_number > last_frame_ + 1)
         dropped_ += static_cast<std::uint64_t>(f.frame_number - last_frame_ - 1);
     last_frame_ = f.frame_number;
@@ -191,7 +197,31 @@ std::optional<std::array<double, 3>> slope(const std::vector<std::pair<double, s
 
 }  // namespace
 
-msg::RigidBody FrameConverter::lab_body(const RigidBody& b) const {
+namespace {
+
+bool finite(const RigidBody& b) {
+    const auto ok = [](float x) { return std::isfinite(x); };
+    return std::all_of(b.position.begin(), b.position.end(), ok) &&
+           std::all_of(b.orientation.begin(), b.orientation.end(), ok) && std::isfinite(b.mean_error);
+}
+
+bool plausible(const RigidBody& b) {
+    if (!finite(b)) return false;
+    double q = 0;
+    for (float x : b.orientation) q += static_cast<double>(x) * x;
+    return q > 0.25 &&  // a quaternion that normalises
+           std::all_of(b.position.begin(), b.position.end(), [](float x) { return std::abs(x) <= kMaxPositionM; });
+}
+
+}  // namespace
+
+msg::RigidBody FrameConverter::lab_body(const RigidBody& in) {
+    RigidBody b = in;
+    if (b.tracking_valid ? !plausible(b) : !finite(b)) {  // passed on as lost: no pose, as Motive sends one
+        ++implausible_;
+        b = RigidBody{};
+        b.id = in.id;
+    }
     const auto& ax = options_.axes;
     msg::RigidBody r;
     auto it = names_.find(b.id);

@@ -64,6 +64,10 @@ struct BridgeOptions {
     double reset_gap_s = 0.05;        // a longer gap restarts a body's estimator
 };
 
+// No lab room is this large: a body reported farther from the origin (Motive sends ±3.4e38 when
+// its solver is confused) is garbage, as is a non-finite position, orientation or error.
+inline constexpr double kMaxPositionM = 100.0;
+
 class FrameConverter {
 public:
     FrameConverter(const BridgeOptions& o, const ServerInfo& server, const ModelDef& models);
@@ -71,8 +75,12 @@ public:
         msg::MocapFrame frame;
         std::vector<msg::VehicleState> states;
     };
-    Output convert(const FrameOfData& f, Nanos receive_wall_ns);
+    // Nothing non-finite or implausible enters the lab (issue 70): such a body is passed on as lost
+    // (tracking not valid, no pose) and counted; a frame whose clock is not finite is refused whole
+    // (`refused`: nothing to publish).
+    Output convert(const FrameOfData& f, Nanos receive_wall_ns, bool* refused = nullptr);
     std::uint64_t dropped() const { return dropped_; }
+    std::uint64_t implausible() const { return implausible_; }  // bodies and frames refused
 
 private:
     struct Track {
@@ -81,7 +89,7 @@ private:
     };
     double camera_time_s(const FrameOfData& f, Nanos receive_wall_ns);
     // A body in the lab's names and NED axes.
-    msg::RigidBody lab_body(const RigidBody& b) const;
+    msg::RigidBody lab_body(const RigidBody& b);
     // Its vehicle state at camera time tc: the pose (held through a loss) and the velocity over the recent samples.
     msg::VehicleState vehicle_state(const msg::RigidBody& r, const msg::Time& stamp, double tc);
 
@@ -92,6 +100,7 @@ private:
     double last_camera_s_ = -1;  // Motive's frame clock of the last frame
     std::int32_t last_frame_ = -1;
     std::uint64_t dropped_ = 0;
+    std::uint64_t implausible_ = 0;
     double clock_offset_s_ = 0;  // clock-sync mode: host wall time - server ticks
     bool have_offset_ = false;
 };

@@ -88,7 +88,9 @@ int bridge_natnet(dw::dds::ProcessCli& cli, NatNetArgs a, bool simulated_source)
     while (!dw::Shutdown::instance().requested()) {
         auto r = natnet.next_frame(100);
         if (!r) continue;
-        auto out = converter.convert(r->frame, r->receive_wall_ns);
+        bool refused = false;
+        auto out = converter.convert(r->frame, r->receive_wall_ns, &refused);
+        if (refused) continue;
         frames.write(out.frame);
         for (auto& s : out.states) {
             states.write(s);
@@ -97,7 +99,8 @@ int bridge_natnet(dw::dds::ProcessCli& cli, NatNetArgs a, bool simulated_source)
         ++n;
     }
     dw::log::info("bridged ", n, " frames; ", converter.dropped(), " dropped by the network or server; ",
-                  natnet.malformed(), " malformed packets skipped");
+                  natnet.malformed(), " malformed packets skipped; ", converter.implausible(),
+                  " non-finite or implausible bodies and frames refused");
     return 0;
 }
 

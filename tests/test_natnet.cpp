@@ -349,3 +349,54 @@ TEST(Bridge, TrackingLossIsFlaggedWithinOneFrameAndVelocityIsSaneRightAfter) {
     }
     EXPECT_NEAR(lost_frames, 90, 3);  // 0.5 s at 180 Hz
 }
+
+// Issue 70: what Motive sends is checked before it enters the lab. A body at NaN or at ±3.4e38,
+// or with a quaternion that does not normalise, is passed on as lost (no pose, no velocity) and
+// counted; a frame whose clock is NaN is refused whole; the plausible bodies beside them pass.
+TEST(Bridge, NonFiniteOrAbsurdBodiesNeverEnterTheLab) {
+    ServerInfo server;
+    server.clock_frequency = 1'000'000;
+    ModelDef models;
+    for (int id = 1; id <= 4; ++id) models.rigid_bodies.push_back({"v" + std::to_string(id), id, -1, {}});
+    FrameConverter conv({}, server, models);
+    auto body = [](int id, float x) {
+        RigidBody b;
+        b.id = id;
+        b.position = {x, 1.0f, 0.5f};
+        b.tracking_valid = true;
+        return b;
+    };
+    for (int n = 0; n < 6; ++n) {
+        FrameOfData f;
+        f.frame_number = n + 1;
+        f.timestamp_s = n / 180.0;
+        f.transmit = f.mid_exposure = static_cast<std::uint64_t>(1000 + n * 5556);
+        const float huge = n % 2 ? 3.4e38f : -3.4e38f;  // alternating, as a confused solver sends
+        f.bodies = {body(1, 0.1f * static_cast<float>(n)), body(2, std::nanf("")), body(3, huge), body(4, 0.2f)};
+        f.bodies[3].orientation = {0, 0, 0, 0};
+        const auto out = conv.convert(f, 1'700'000'000'000'000'000 + n * 5'556'000);
+        ASSERT_EQ(out.frame.bodies().size(), 4u);
+        EXPECT_TRUE(out.frame.bodies()[0].tracking_valid());
+        for (std::size_t k = 1; k < 4; ++k) {
+            SCOPED_TRACE(k);
+            EXPECT_FALSE(out.frame.bodies()[k].tracking_valid());
+            EXPECT_FALSE(out.states[k].tracking_valid());
+        }
+        for (const auto& s : out.states)
+            for (double v : {s.position_m().x(), s.position_m().y(), s.position_m().z(), s.velocity_mps().x(),
+                             s.velocity_mps().y(), s.velocity_mps().z()})
+                EXPECT_TRUE(std::isfinite(v));
+        for (const auto& b : out.frame.bodies())
+            for (double v : {b.position_m().x(), b.position_m().y(), b.position_m().z(), b.orientation().w()})
+                EXPECT_TRUE(std::isfinite(v));
+    }
+    EXPECT_EQ(conv.implausible(), 18u);
+    FrameOfData nan_clock;
+    nan_clock.frame_number = 7;
+    nan_clock.timestamp_s = std::nan("");
+    nan_clock.bodies = {body(1, 0.5f)};
+    bool refused = false;
+    conv.convert(nan_clock, 1'700'000'000'100'000'000, &refused);
+    EXPECT_TRUE(refused);
+    EXPECT_EQ(conv.implausible(), 19u);
+}

@@ -330,7 +330,7 @@ TEST(PredictorProcess, WithoutItsTrainingModuleItStillServesAndTrainingIsOneLine
 TEST(PredictorOnline, NeverPublishesANonFiniteWrench) {
     dw::test::TempDir dir;
     const auto model = dir.file("huge.json");
-    auto huge = linear_model("learnt_linear", 9e29f);  // about the largest weight a model file may hold
+    auto huge = linear_model("learnt_linear", 9e29f);       // about the largest weight a model file may hold
     for (int k = 0; k < 3; ++k) huge.input_std[k] = 1e-9f;  // the offsets / 1e-9 x 9e29: beyond float's range
     huge.save(model);
     const auto cfg = node_config("nonfinite");
@@ -349,7 +349,7 @@ TEST(PredictorOnline, NeverPublishesANonFiniteWrench) {
     ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
     for (int i = 0; i < 30; ++i) {
         auto f = frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0, 0.0);  // every offset overflows
-        if (i % 3 == 1) f.bodies()[1].position_m().x(std::nan(""));             // and a NaN body
+        if (i % 3 == 1) f.bodies()[1].position_m().x(std::nan(""));              // and a NaN body
         writer.write(f);
         std::this_thread::sleep_for(5ms);
     }
