@@ -8,6 +8,7 @@
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "dds/time.hpp"
+#include "physics/vehicle.hpp"
 
 namespace dw::natnet {
 
@@ -205,12 +206,15 @@ bool finite(const RigidBody& b) {
            std::all_of(b.orientation.begin(), b.orientation.end(), ok) && std::isfinite(b.mean_error);
 }
 
+// Beyond physics::kMaxPlausiblePositionM of the origin a body is garbage, as is a non-finite
+// position, orientation or error.
 bool plausible(const RigidBody& b) {
     if (!finite(b)) return false;
     double q = 0;
     for (float x : b.orientation) q += static_cast<double>(x) * x;
     return q > 0.25 &&  // a quaternion that normalises
-           std::all_of(b.position.begin(), b.position.end(), [](float x) { return std::abs(x) <= kMaxPositionM; });
+           std::all_of(b.position.begin(), b.position.end(),
+                       [](float x) { return std::abs(x) <= dw::physics::kMaxPlausiblePositionM; });
 }
 
 }  // namespace

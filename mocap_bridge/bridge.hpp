@@ -64,10 +64,6 @@ struct BridgeOptions {
     double reset_gap_s = 0.05;        // a longer gap restarts a body's estimator
 };
 
-// No lab room is this large: a body reported farther from the origin (Motive sends ±3.4e38 when
-// its solver is confused) is garbage, as is a non-finite position, orientation or error.
-inline constexpr double kMaxPositionM = 100.0;
-
 class FrameConverter {
 public:
     FrameConverter(const BridgeOptions& o, const ServerInfo& server, const ModelDef& models);

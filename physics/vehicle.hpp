@@ -45,6 +45,12 @@ struct Setpoint {
     double yaw_rad = 0;
 };
 
+// What a measured pose or velocity in the lab's frame can be: no lab room is larger, no multirotor
+// over a stand faster. Beyond them a value from a wire is garbage (Motive sends ±3.4e38 when its
+// solver is confused; 1e39 m is finite as a double but +inf as PX4's float).
+inline constexpr double kMaxPlausiblePositionM = 100.0;
+inline constexpr double kMaxPlausibleSpeedMps = 50.0;
+
 // Every component finite: what may drive a vehicle, simulated or real.
 inline bool is_finite(const Setpoint& sp) {
     return sp.position.allFinite() && sp.velocity.allFinite() && sp.acceleration.allFinite() &&

@@ -86,7 +86,7 @@ VehicleOdometry_ Px4OdometryFeed::odometry(const Vehicle& v, const msg::VehicleS
     m.q() = {ql.w(), ql.x(), ql.y(), ql.z()};
     for (std::size_t k = 0; k < 3; ++k) {
         m.position()[k] = static_cast<float>(p[static_cast<int>(k)]);
-        m.velocity()[k] = static_cast<float>(vel[static_cast<int>(k)]);
+        m.velocity()[k] = usable_velocity(vel) ? static_cast<float>(vel[static_cast<int>(k)]) : px4::kUnset;
         m.angular_velocity()[k] = px4::kUnset;
         m.position_variance()[k] = pv;
         m.orientation_variance()[k] = ov;

@@ -661,3 +661,20 @@ TEST(Px4Settings, EachMistakeInTheFileIsOneLineWhereItIs) {
                 "version: unknown PX4 version '1.13' (expected 1.14, 1.15 or 1.16; other releases are not supported)"),
         std::string::npos);
 }
+
+// Issue 70: a vehicle state at x = 1e39 m (finite as a double, +inf as PX4's float) or a
+// velocity of +inf never reaches PX4's estimator: such a pose is not sent, such a velocity is sent
+// as unknown (PX4's NaN).
+TEST(Px4Odometry, AbsurdPosesAreNotSentAndAbsurdVelocitiesAreSentAsUnknown) {
+    using dw::planner::usable_pose;
+    using dw::planner::usable_velocity;
+    const Eigen::Quaterniond level = Eigen::Quaterniond::Identity();
+    EXPECT_TRUE(usable_pose({1.0, -2.0, -1.2}, level));
+    EXPECT_FALSE(usable_pose({1e39, 0, -1}, level));
+    EXPECT_FALSE(usable_pose({0, 3.4e38, -1}, level));
+    EXPECT_FALSE(usable_pose({0, 0, std::nan("")}, level));
+    EXPECT_FALSE(usable_pose({0, 0, -1}, Eigen::Quaterniond(0, 0, 0, 0)));
+    EXPECT_TRUE(usable_velocity({0.5, 0, -0.1}));
+    EXPECT_FALSE(usable_velocity({INFINITY, 0, 0}));
+    EXPECT_FALSE(usable_velocity({0, 1e20, 0}));
+}
