@@ -322,6 +322,10 @@ std::optional<std::string> Experiment::find_parked(std::vector<physics::Vec3>& p
         const auto it = seen_.find(plan_.vehicles[v]);
         if (it == seen_.end() || !it->second.tracking)  // never take off from an unknown pose
             return "vehicle " + plan_.vehicles[v] + " is not seen by the motion capture";
+        const physics::Vec3& x = it->second.position;  // nor from outside the room (issue 70)
+        if (!plan_.options.fence.contains(x, kFenceTolerance_m))
+            return log::cat("vehicle ", plan_.vehicles[v], " is parked outside the geofence, at (", x.x(), ", ", x.y(),
+                            ", ", x.z(), "): no setpoint is sent to it");
     }
     return std::nullopt;
 }

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "dds/endpoint.hpp"
+#include "dds/heartbeat.hpp"
 #include "flight/flight.hpp"
 #include "mcap/mcap.hpp"
 #include "support.hpp"
@@ -282,4 +283,45 @@ TEST(Experiment, ThePlannerFliesPx4OnItsOwnEstimateWithNoMotionCapture) {
     double highest = 0;
     for (const auto& p : f.poses) highest = std::min(highest, p.p[2]);
     EXPECT_NEAR(highest, -2.7, 0.15);
+}
+
+// Issue 70: one vehicle state outside the room used to become the vehicle's parked pose, and
+// hundreds of setpoints 50 m away were streamed to it before the geofence abort. A vehicle parked
+// outside the geofence now aborts the experiment on the ground, and nothing is sent to it.
+TEST(Experiment, AVehicleParkedOutsideTheRoomAbortsOnTheGroundWithNothingSent) {
+    Lab lab("expparked");
+    lab.start("dw-stand-agent", {"run", "--sim"}, "stand.log");
+    lab.start("dw-recorder", {"record", "--out", lab.dir.file("exp.mcap"), "--quiet", "--no-fsync"}, "rec.log");
+    dw::dds::Participant p(lab.cfg, "mocap_bridge");  // a hostile one, in the bridge's place
+    dw::dds::Heartbeat heartbeat(p);
+    heartbeat.set_state(dw::msg::PROC_RUNNING);
+    std::mutex m;
+    std::vector<dw::msg::VehicleSetpoint> sent;
+    dw::dds::Reader<dw::msg::VehicleSetpoint> spr(p, dw::dds::topics::vehicle_setpoint,
+                                                  [&](const auto& s, const auto&) {
+                                                      std::lock_guard lock(m);
+                                                      sent.push_back(s);
+                                                  });
+    dw::dds::Writer<dw::msg::VehicleState> states(p, dw::dds::topics::vehicle_state);
+    std::atomic<bool> done{false};
+    std::jthread feed([&] {
+        while (!done) {  // v1 "parked" 50 m north, on the floor, tracked
+            dw::msg::VehicleState s;
+            s.vehicle_id("v1");
+            s.tracking_valid(true);
+            s.position_m().x(50.0);
+            s.orientation().w(1.0);
+            states.write(s);
+            std::this_thread::sleep_for(20ms);
+        }
+    });
+    auto& planner =
+        lab.start("dw-planner", {"run", "--formation", "single", "--legs", "2", "--altitudes", "0.5"}, "planner.log");
+    const auto status = planner.wait_for(120000ms);
+    done = true;
+    const std::string log = lab.log("planner.log");
+    EXPECT_EQ(status, std::optional<int>(1)) << log;
+    EXPECT_NE(log.find("vehicle v1 is parked outside the geofence, at (50, 0, 0)"), std::string::npos) << log;
+    std::lock_guard lock(m);
+    EXPECT_TRUE(sent.empty()) << sent.size() << " setpoints sent, the first at N = " << sent.front().position_m().x();
 }
