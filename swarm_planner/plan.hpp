@@ -24,6 +24,9 @@ struct Geofence {
     double d_min = -4.0, d_max = 0.0;  // ceiling 4 m above the floor (D = 0): a Stack at 1.3 m
                                        // puts its upper vehicle 3.2 m up
     double margin_m = 0.2;
+    // What a measured or commanded position may stray beyond the fence before it counts as outside:
+    // hover noise on the floor or at a wall, a vehicle parked on the floor (D a little above 0).
+    static constexpr double kTolerance_m = 0.1;
     // True only when x is finite and inside the fence grown by `grow_m` (negative: shrunk).
     bool contains(const physics::Vec3& x, double grow_m) const;
 };

@@ -18,7 +18,7 @@ void VehicleLink::send(const std::vector<physics::Setpoint>& sps, Nanos now_ns) 
     std::vector<std::optional<physics::Setpoint>> out(sps.size());
     for (std::size_t i = 0; i < sps.size(); ++i) {
         const bool finite = is_finite(sps[i]);
-        if (finite && fence_.contains(sps[i].position, 0.0)) {
+        if (finite && fence_.contains(sps[i].position, Geofence::kTolerance_m)) {
             out[i] = passed_[i] = sps[i];
             continue;
         }
