@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 
+#include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/stats.hpp"
 
@@ -75,49 +77,62 @@ Drift drift_of(const ExplainData& d) {
     return {t0, t1, static_cast<int>(std::floor((t1 - t0) / kDriftSpacing_s)) + 2};
 }
 
-// The model's prediction at sample i in noise floors, its norm (the push), and its rate of change.
-struct Push {
-    double top = 1;  // the near samples' kPushQuantile of the norm: x = norm / top
-};
-
-double push_of(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i) {
+// The model's prediction at sample i in noise floors: its norm, the push.
+double push_of(const Resimulation& sim, const AxisValues& sigma, const std::vector<Wrench6>& pred, std::size_t i) {
     double s = 0;
     for (std::size_t a = 0; a < 6; ++a)
-        if (d.sim.measured_axes()[a]) s += std::pow(pred[i][a] / d.sigma[a], 2);
+        if (sim.measured_axes()[a]) s += std::pow(pred[i][a] / sigma[a], 2);
     return std::sqrt(s);
 }
 
-Push push_scale(const ExplainData& d, const std::vector<Wrench6>& pred) {
+// The push that counts as 1: the near samples' kPushQuantile of the norm.
+double push_top(const ExplainData& d, const std::vector<Wrench6>& pred) {
     std::vector<double> v;
     for (auto i : d.on_legs)
-        if (d.info[i].near) v.push_back(push_of(d, pred, i));
-    if (v.empty()) return {};
+        if (d.info[i].near) v.push_back(push_of(d.sim, d.sigma, pred, i));
+    if (v.empty()) return 1;
     std::sort(v.begin(), v.end());
-    return {std::max(v[static_cast<std::size_t>(kPushQuantile * static_cast<double>(v.size() - 1))], 1e-9)};
+    return std::max(v[static_cast<std::size_t>(kPushQuantile * static_cast<double>(v.size() - 1))], 1e-9);
+}
+
+// The frame the inputs are measured in: learnt from one flight, kept with the discrepancy so that
+// it means the same on another (physics::LearntDiscrepancy).
+struct Frame {
+    Heights h;
+    Drift drift;
+    double top = 1;
+    AxisValues sigma{};
+};
+
+Frame frame_of(const ExplainData& d, const std::vector<Wrench6>& pred) {
+    return {heights_of(d), drift_of(d), push_top(d, pred), d.sigma};
+}
+
+Frame frame_of(const physics::LearntDiscrepancy& m) {
+    return {{m.height_lo_m, m.height_step_m, m.height_width_m}, {m.t0_s, m.t1_s, m.drift_bumps}, m.push_top, m.sigma};
 }
 
 struct Context {
-    const ExplainData& d;
+    const Resimulation& sim;
+    const std::vector<SampleInfo>& info;
     const std::vector<Wrench6>& pred;
-    Heights h;
-    Drift drift;
-    Push push;
+    Frame f;
     Layout layout;
 };
 
 void geometry_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
-    const auto& d = c.d;
-    const double t = d.sim.stamps()[i];
-    const auto s = d.sim.sufferer(t);
+    const auto& sim = c.sim;
+    const double t = sim.stamps()[i];
+    const auto s = sim.sufferer(t);
     const int g = c.layout.at(InputGroup::geometry);
-    for (int j = 0; j < d.sim.neighbours(); ++j) {
-        const auto p = d.sim.position(j, t);
+    for (int j = 0; j < sim.neighbours(); ++j) {
+        const auto p = sim.position(j, t);
         const double dn = p[0] - s[0], de = p[1] - s[1], r = std::hypot(dn, de), above = s[2] - p[2];
         const double un = r > 0 ? dn / r : 0, ue = r > 0 ? de / r : 0;
-        const double half = d.sim.near_radius(j) / (kOffsetBumps - 1);
+        const double half = sim.near_radius(j) / (kOffsetBumps - 1);
         for (int a = 0; a < kOffsetBumps; ++a)
             for (int b = 0; b < kHeightBumps; ++b) {
-                const double phi = bump(r, a * half, half) * bump(above, c.h.lo + b * c.h.step, c.h.width);
+                const double phi = bump(r, a * half, half) * bump(above, c.f.h.lo + b * c.f.h.step, c.f.h.width);
                 const int k = g + a * kHeightBumps + b;
                 row(k) += phi;
                 row(k + kBumps) += phi * un;
@@ -127,10 +142,10 @@ void geometry_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
 }
 
 void own_motion_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
-    if (!c.d.sim.flying()) return;
-    const double t = c.d.sim.stamps()[i];
-    const auto v = c.d.sim.sufferer_velocity(t), ahead = c.d.sim.sufferer_velocity(t + kDifference_s),
-               behind = c.d.sim.sufferer_velocity(t - kDifference_s);
+    if (!c.sim.flying()) return;
+    const double t = c.sim.stamps()[i];
+    const auto v = c.sim.sufferer_velocity(t), ahead = c.sim.sufferer_velocity(t + kDifference_s),
+               behind = c.sim.sufferer_velocity(t - kDifference_s);
     const int o = c.layout.at(InputGroup::own_motion);
     for (int k = 0; k < 3; ++k) {
         row(o + k) = v[static_cast<std::size_t>(k)];
@@ -142,34 +157,36 @@ void own_motion_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row)
 // The prediction's own inputs: per axis p, p × powers of the push and of time (after the additive
 // drift's bumps), dp/dt, p × direction, p × the shared push.
 void prediction_inputs(const Context& c, std::size_t i, Eigen::RowVectorXd& row) {
-    const auto& d = c.d;
-    const double t = d.sim.stamps()[i], x = push_of(d, c.pred, i) / c.push.top;
-    const double half = 0.5 * (c.drift.t1 - c.drift.t0), tau = half > 0 ? (t - c.drift.t0) / half - 1 : 0;
+    const auto& sim = c.sim;
+    const double t = sim.stamps()[i], x = push_of(sim, c.f.sigma, c.pred, i) / c.f.top;
+    const auto& drift = c.f.drift;
+    const double half = 0.5 * (drift.t1 - drift.t0), tau = half > 0 ? (t - drift.t0) / half - 1 : 0;
     const std::size_t prev = i > 0 ? i - 1 : i, next = i + 1 < c.pred.size() ? i + 1 : i;
-    const double dt = d.sim.stamps()[next] - d.sim.stamps()[prev];
+    const double dt = sim.stamps()[next] - sim.stamps()[prev];
     const int gs = c.layout.at(InputGroup::gain), ps = c.layout.at(InputGroup::push),
-              ds = c.layout.at(InputGroup::drift) + c.drift.count, rs = c.layout.at(InputGroup::rate),
+              ds = c.layout.at(InputGroup::drift) + drift.count, rs = c.layout.at(InputGroup::rate),
               vs = c.layout.at(InputGroup::direction), ss = c.layout.at(InputGroup::sharing);
     for (int a = 0; a < 6; ++a) {
         const auto A = static_cast<std::size_t>(a);
-        if (!d.sim.measured_axes()[A]) continue;
+        if (!sim.measured_axes()[A]) continue;
         const double p = c.pred[i][A];
         row(gs + a) = p;
         for (int k = 0; k < kPushPowers; ++k) row(ps + a * kPushPowers + k) = p * std::pow(x, k + 1);
         for (int k = 0; k < kGainDriftPowers; ++k) row(ds + a * kGainDriftPowers + k) = p * std::pow(tau, k + 1);
         row(rs + a) = dt > 0 ? (c.pred[next][A] - c.pred[prev][A]) / dt : 0;
-        row(vs + a) = p * d.info[i].direction;
-        row(ss + a) = p * d.info[i].shared;
+        row(vs + a) = p * c.info[i].direction;
+        row(ss + a) = p * c.info[i].shared;
     }
 }
 
 // Sample i's regressors, in the layout's order.
 Eigen::RowVectorXd inputs_of(const Context& c, std::size_t i) {
     Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(c.layout.columns);
-    const double t = c.d.sim.stamps()[i];
+    const double t = c.sim.stamps()[i];
     row(c.layout.at(InputGroup::constant)) = 1;
     const int dr = c.layout.at(InputGroup::drift);
-    for (int k = 0; k < c.drift.count; ++k) row(dr + k) = bump(t, c.drift.t0 + k * kDriftSpacing_s, kDriftSpacing_s);
+    const auto& drift = c.f.drift;
+    for (int k = 0; k < drift.count; ++k) row(dr + k) = bump(t, drift.t0 + k * kDriftSpacing_s, kDriftSpacing_s);
     geometry_inputs(c, i, row);
     own_motion_inputs(c, i, row);
     prediction_inputs(c, i, row);
@@ -259,11 +276,18 @@ void judge(Discrepancy& r, const PieceErrors& s, const ExplainData& d, const Exp
 }
 
 // Per fold, its held-out samples' regressors (standardised over every sample, so that one penalty
-// suits every input) and residuals, with their normal equations' parts.
-std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds, double intensity,
-                         const std::vector<Wrench6>& weigh_by) {
-    const Drift drift = drift_of(d);
-    const Context c{d, pred, heights_of(d), drift, push_scale(d, pred), layout_of(drift.count)};
+// suits every input: column k times scale(k)) and residuals, with their normal equations' parts.
+struct Design {
+    std::vector<Gram> parts;
+    Eigen::VectorXd scale;
+    Frame frame;
+    Layout layout;
+};
+
+Design design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds, double intensity,
+              const std::vector<Wrench6>& weigh_by) {
+    const Frame frame = frame_of(d, pred);
+    const Context c{d.sim, d.info, pred, frame, layout_of(frame.drift.count)};
     std::vector<Gram> parts;
     Eigen::VectorXd sum_sq = Eigen::VectorXd::Zero(c.layout.columns);
     for (const auto& test : folds.test) {
@@ -276,7 +300,7 @@ std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred,
             const auto row = static_cast<Eigen::Index>(r);
             // Each sample weighed by its noise: the floor and the turbulence that grows with the push
             // (analysis/noise.hpp's excess), so that the near passes' scatter does not drown the rest.
-            const double turbulent = 2 * intensity * push_of(d, weigh_by, test[r]);
+            const double turbulent = 2 * intensity * push_of(d.sim, d.sigma, weigh_by, test[r]);
             const double w = 1 / std::sqrt(1 + turbulent * turbulent);
             g.x.row(row) = w * inputs_of(c, test[r]);
             for (std::size_t a = 0; a < 6; ++a)
@@ -294,7 +318,30 @@ std::vector<Gram> design(const ExplainData& d, const std::vector<Wrench6>& pred,
         g.xx = g.x.transpose() * g.x;
         g.xy = g.x.transpose() * g.y;
     }
-    return parts;
+    return {std::move(parts), scale, frame, c.layout};
+}
+
+// The discrepancy on every input fitted on every fold (each axis at the penalty its
+// cross-validation over the folds chooses), in the inputs' own units, with its frame.
+physics::LearntDiscrepancy model_of(const Design& ds, const Discrepancy& r) {
+    std::vector<int> cols(static_cast<std::size_t>(ds.layout.columns));
+    std::iota(cols.begin(), cols.end(), 0);
+    const auto lambda = choose_penalty(ds.parts, cols, SIZE_MAX);
+    const Gram all = sum_without(ds.parts, cols, SIZE_MAX);
+    physics::LearntDiscrepancy m;
+    m.rows = 6, m.inputs = cols.size();
+    m.coefficients.assign(m.rows * m.inputs, 0.0);
+    for (std::size_t a = 0; a < 6; ++a) {
+        const Eigen::VectorXd coef = ridge(all, lambda[a]).col(static_cast<Eigen::Index>(a));
+        for (std::size_t k = 0; k < m.inputs; ++k)
+            m.coefficients[a * m.inputs + k] =
+                coef(static_cast<Eigen::Index>(k)) * ds.scale(static_cast<Eigen::Index>(k));
+    }
+    const Frame& f = ds.frame;
+    m.height_lo_m = f.h.lo, m.height_step_m = f.h.step, m.height_width_m = f.h.width;
+    m.t0_s = f.drift.t0, m.t1_s = f.drift.t1, m.drift_bumps = f.drift.count;
+    m.push_top = f.top, m.sigma = f.sigma, m.heldout_gain = r.gain;
+    return m;
 }
 
 // The discrepancy on the columns `cols`, cross-validated over the folds: its per-piece errors.
@@ -332,9 +379,10 @@ bool any_input(const std::vector<Gram>& parts, int start, int count) {
 // What the discrepancy depends on: each group's own share of the held-out gain on the best axis —
 // the gain lost when that group's columns are left out — largest first; and each group's nested
 // z, for the detection by structure.
-void explain_dependence(Discrepancy& r, const ExplainData& d, const Folds& folds, const std::vector<Gram>& parts,
+void explain_dependence(Discrepancy& r, const ExplainData& d, const Folds& folds, const Design& ds,
                         const PieceErrors& full, const ExplainOptions& o) {
-    const Layout l = layout_of(static_cast<int>(parts[0].x.cols()) - layout_of(0).columns);
+    const Layout& l = ds.layout;
+    const std::vector<Gram>& parts = ds.parts;
     const auto a = static_cast<std::size_t>(r.best_axis);
     const double before = total(full.before, a), gained = before - total(full.after, a);
     if (!(gained > 0)) return;
@@ -374,19 +422,39 @@ Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& 
                               const ExplainOptions& o, const DiscrepancyRun& run) {
     Discrepancy r;
     const double intensity = o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0;
-    const std::vector<Gram> parts = design(d, pred, folds, intensity, run.weigh_by ? *run.weigh_by : pred);
-    const Layout l = layout_of(static_cast<int>(parts[0].x.cols()) - layout_of(0).columns);
+    const Design ds = design(d, pred, folds, intensity, run.weigh_by ? *run.weigh_by : pred);
+    const Layout& l = ds.layout;
     std::vector<int> cols;
     for (std::size_t g = 0; g < kInputGroups.size(); ++g)
         if (std::find(run.without.begin(), run.without.end(), kInputGroups[g].group) == run.without.end())
             for (int k = 0; k < l.count[g]; ++k) cols.push_back(l.start[g] + k);
     r.inputs = cols.size();
-    const PieceErrors s = cross_validate(d, folds, parts, cols);
+    const PieceErrors s = cross_validate(d, folds, ds.parts, cols);
     r.fitted = true;
     judge(r, s, d, o);
-    if (run.explain_dependence && r.significant) explain_dependence(r, d, folds, parts, s, o);
+    if (run.explain_dependence && r.significant) explain_dependence(r, d, folds, ds, s, o);
     if (run.pieces) *run.pieces = s;
+    if (run.model) *run.model = model_of(ds, r);
     return r;
+}
+
+std::vector<Wrench6> discrepancy_at(const physics::LearntDiscrepancy& m, const Resimulation& sim,
+                                    const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred) {
+    const Context c{sim, info, pred, frame_of(m), layout_of(m.drift_bumps)};
+    if (m.rows != 6 || m.inputs != static_cast<std::size_t>(c.layout.columns))
+        throw InputError(log::cat("discrepancy: coefficients: ", m.rows, " rows of ", m.inputs,
+                                  " inputs, where this build's discrepancy has 6 rows of ", c.layout.columns, " (for ",
+                                  m.drift_bumps,
+                                  " drift bumps): learnt by another version — explain the flight again"));
+    const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> coef(
+        m.coefficients.data(), 6, static_cast<Eigen::Index>(m.inputs));
+    std::vector<Wrench6> out(pred.size(), Wrench6{});
+    for (std::size_t i = 0; i < pred.size(); ++i) {
+        const Eigen::VectorXd w = coef * inputs_of(c, i).transpose();
+        for (std::size_t a = 0; a < 6; ++a)
+            if (sim.measured_axes()[a]) out[i][a] = w(static_cast<Eigen::Index>(a));
+    }
+    return out;
 }
 
 }  // namespace dw::analysis

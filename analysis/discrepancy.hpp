@@ -111,8 +111,15 @@ struct DiscrepancyRun {
     std::vector<InputGroup> without;  // groups of inputs left out (the arbiter's yardsticks)
     PieceErrors* pieces = nullptr;
     const std::vector<Wrench6>* weigh_by = nullptr;
+    physics::LearntDiscrepancy* model = nullptr;  // given: the discrepancy fitted on every block, to carry
 };
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
                               const ExplainOptions& o, const DiscrepancyRun& run = {});
+
+// A learnt discrepancy's correction at every wrench stamp of a flight (resimulated as `sim`, its
+// samples described as `info`) whose model predicts `pred` there. Throws dw::InputError when m's
+// inputs are not this build's.
+std::vector<Wrench6> discrepancy_at(const physics::LearntDiscrepancy& m, const Resimulation& sim,
+                                    const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred);
 
 }  // namespace dw::analysis

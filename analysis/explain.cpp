@@ -199,6 +199,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     };
     ExplainResult R;
     R.formation = f.meta.formation;
+    if (!o.physics.discrepancy.empty()) say("the configuration's learnt discrepancy is not used: this explains anew");
     // Resimulation.
     const Resimulation sim(f, o.physics);
     const auto blocks = flight::find_blocks(f, o.folds, physics::encounter_radii(f.meta, o.physics));
@@ -232,8 +233,16 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     conclude(R, d, base, final_model, stand_in, o, f.meta.formation);
     R.families = families_of(R);
     say("learning what is left as a function of the geometry");
-    R.discrepancy = learn_discrepancy(d, final_model.pred, folds, o);
+    physics::LearntDiscrepancy model;
+    DiscrepancyRun run;
+    run.model = &model;
+    R.discrepancy = learn_discrepancy(d, final_model.pred, folds, o, run);
     say(log::cat("  ", R.discrepancy.note));
+    R.fitted.discrepancy.clear();     // the explainer learns its own, never uses one it is given
+    if (R.discrepancy.significant) {  // repeatable: the fitted physics carries it (dw-sim replay applies it)
+        model.flight = log::cat("a ", f.meta.formation, " flight of ", f.wrench.size(), " wrench samples");
+        R.fitted.discrepancy.push_back(std::move(model));
+    }
     if (R.discrepancy.structured) {  // detection by structure: what is left has a shape
         R.detected = R.unexplained = true;
         say(log::cat("  what is left has a shape: it depends on ", R.discrepancy.structured_by,

@@ -387,6 +387,7 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
     j["fit"] = {{"heldout_rmse_before", axes_json(r.heldout_before)},
                 {"heldout_rmse_after", axes_json(r.heldout_after)}};
     j["discrepancy"] = discrepancy_json(r.discrepancy);
+    j["discrepancy"]["in_physics_file"] = !r.fitted.discrepancy.empty();
     j["physics_out"] = "physics.yaml";
     if (!o.physics.calibration.empty()) j["physics_calibration"] = o.physics.calibration;
     j["cross_validation"] = {
@@ -561,7 +562,11 @@ void write_report(const flight::Flight& f, const ExplainResult& r, const Explain
     md << "\n## Figures\n\n"
        << figures_md
        << "The fitted physics: [physics.yaml](physics.yaml) (the simulator's configuration with the accepted effects "
-          "on).\n";
+          "on"
+       << (r.fitted.discrepancy.empty()
+               ? ").\n"
+               : ", and the learnt discrepancy: `dw-sim replay --flight <this flight> --physics physics.yaml --out "
+                 "<folder>` shows how much closer it brings the simulation to the recording).\n");
     write_file((fs::path(dir) / "report.md").string(), md.str());
     staged.commit();
 }

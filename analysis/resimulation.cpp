@@ -71,6 +71,7 @@ physics::PhysicsConfig flow_part(const physics::PhysicsConfig& c) {
     for (const auto* t : physics::effect_types())  // the recording's view and the sufferer's own forces
         if (!t->changes_flow()) t->clear(f.effects);
     f.turbulence.enabled = false;  // the mean flow
+    f.discrepancy.clear();         // a correction to the recording, not the air
     return f;
 }
 

@@ -30,6 +30,7 @@ struct UnnamedRow {
     std::string accepted;     // effects the explainer accepted ("" for none)
     std::string stand_ins;    // effects refused, and why in short
     std::string discrepancy;  // its held-out improvement and what it depends on
+    std::string unseen;       // the fitted physics replayed on an unseen flight of the case ("–": none carried)
     bool pass = false;
     std::string why;
     double seconds = 0;

@@ -132,6 +132,31 @@ void effect_keys(KeyVisitor& k, Effects& e) {
     k.section("effects", each, "no such effect");
 }
 
+// discrepancy: the learnt discrepancy, when dw-explain carried one (a list of none or one).
+void discrepancy_keys(KeyVisitor& k, PhysicsConfig& c) {
+    constexpr Range kAny{-1e12, 1e12};
+    std::size_t count = c.discrepancy.size();
+    k.list("discrepancy", count, [&](KeyVisitor& item, std::size_t i) {
+        if (c.discrepancy.size() <= i) c.discrepancy.resize(i + 1);
+        LearntDiscrepancy& x = c.discrepancy[i];
+        item.text("flight", x.flight);
+        item.number("heldout_gain", x.heldout_gain, {-1e3, 1});
+        item.number("height_lo_m", x.height_lo_m, {-100, 100});
+        item.number("height_step_m", x.height_step_m, {0, 100});
+        item.number("height_width_m", x.height_width_m, {1e-6, 100});
+        item.number("t0_s", x.t0_s, {-1e9, 1e9});
+        item.number("t1_s", x.t1_s, {-1e9, 1e9});
+        item.integer("drift_bumps", x.drift_bumps, {0, 100000});
+        item.number("push_top", x.push_top, {1e-12, 1e12});
+        item.numbers("sigma", x.sigma, {1e-12, 1e6}, "expected six noise floors, one per axis");
+        item.matrix("coefficients", x.coefficients, x.rows, x.inputs, kAny);
+        item.require(x.rows == 6, "coefficients", "expected six rows, one per axis");
+        item.require(x.t1_s >= x.t0_s, "t1_s", "must not be before t0_s");
+    });
+    if (count > 1) k.require(false, "discrepancy", "expected at most one");
+    c.discrepancy.resize(count);
+}
+
 void physics_keys(KeyVisitor& k, PhysicsConfig& c) {
     k.constant("format", kFormat);
     k.number("air_density_kg_m3", c.air_density_kg_m3, {0.5, 2.0});
@@ -142,6 +167,7 @@ void physics_keys(KeyVisitor& k, PhysicsConfig& c) {
     noise_keys(k, c);
     effect_keys(k, c.effects);
     class_keys(k, c);
+    discrepancy_keys(k, c);
 }
 
 }  // namespace

@@ -155,6 +155,23 @@ struct VehicleClass {
     double kv_omega_n_per_mps = 0.1;
 };
 
+// A learnt discrepancy carried in a fitted physics file (dw-explain writes it; analysis/discrepancy.hpp
+// defines its inputs and evaluates it; dw-sim fly and replay add it to the recorded wrench). It is
+// not physics this library computes: a correction to the recorded wrench, linear in inputs the
+// analysis derives from a flight — the neighbours' geometry, the sufferer's motion, time and the
+// model's own prediction — with the frame those inputs were scaled in when it was learnt.
+struct LearntDiscrepancy {
+    std::string flight;                // where it was learnt (free text)
+    std::vector<double> coefficients;  // rows: the six axes; columns: the inputs, in analysis's order
+    std::size_t rows = 0, inputs = 0;
+    double height_lo_m = 0, height_step_m = 0, height_width_m = 1;  // the geometry's height bumps
+    double t0_s = 0, t1_s = 0;                                      // the flight's time, for the drift
+    int drift_bumps = 0;
+    double push_top = 1;                            // the push that counts as 1 (noise floors)
+    std::array<double, 6> sigma{1, 1, 1, 1, 1, 1};  // the noise floors the push is measured in
+    double heldout_gain = 0;  // on the flight it was learnt on, cross-validated: the best axis's share removed
+};
+
 struct PhysicsConfig {
     double air_density_kg_m3 = 1.225;
     double gravity_m_s2 = 9.81;
@@ -171,7 +188,8 @@ struct PhysicsConfig {
     MocapParams mocap;
     Effects effects;
     std::vector<VehicleClass> classes;
-    std::string calibration;  // where the classes came from (the calibration's own line), "" if none
+    std::string calibration;                     // where the classes came from (the calibration's own line), "" if none
+    std::vector<LearntDiscrepancy> discrepancy;  // none, or the one dw-explain learnt
 };
 
 // The class whose vehicle parameters v matches (each within 1e-6 relative), or nullptr.

@@ -91,6 +91,29 @@ TEST(SimCli, BadInputIsOneLineAndExit2) {
     expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single"}, d), "--out is required");
 }
 
+// dw-sim replay: a flight's wrench as the physics predicts it along its poses; the RMS against the
+// recording on its blocks printed; a discrepancy this build cannot evaluate is one line and exit 2.
+TEST(SimCli, ReplayPrintsHowCloseThePhysicsComesAndRefusesAForeignDiscrepancy) {
+    TempDir d;
+    ASSERT_EQ(
+        run({bin("dw-sim"), "fly", "--formation", "single", "--legs", "6", "--quiet", "--out", d.file("f")}, d).status,
+        0);
+    const auto r = run({bin("dw-sim"), "replay", "--flight", d.file("f"), "--out", d.file("r")}, d);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("physics alone:"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("with the discrepancy"), std::string::npos) << r.out;
+    EXPECT_EQ(dw::read_file(d.file("f/poses.csv")), dw::read_file(d.file("r/poses.csv")));
+    EXPECT_NE(dw::read_file(d.file("f/wrench.csv")), dw::read_file(d.file("r/wrench.csv")));
+    write(d.file("p.yaml"),
+          "discrepancy:\n  - {flight: x, heldout_gain: 0.1, height_lo_m: 0, height_step_m: 0.1, height_width_m: 0.1, "
+          "t0_s: 0, t1_s: 1, drift_bumps: 2, push_top: 1, sigma: [1, 1, 1, 1, 1, 1], coefficients: [[1], [1], [1], "
+          "[1], [1], [1]]}\n");
+    expect_one_line_exit_2(
+        run({bin("dw-sim"), "replay", "--flight", d.file("f"), "--physics", d.file("p.yaml"), "--out", d.file("s")}, d),
+        "discrepancy: coefficients: 6 rows of 1 inputs");
+    expect_one_line_exit_2(run({bin("dw-sim"), "replay", "--flight", d.file("none"), "--out", d.file("s")}, d), "none");
+}
+
 TEST(SimCli, SameInputsAndSeedGiveTheSameBytes) {
     TempDir d;
     for (const char* out : {"a", "b"}) {

@@ -341,7 +341,23 @@ TEST(PhysicsConfig, RoundTripsThroughYaml) {
     c.effects.position_offset = {true, {0.01, -0.02, 0.03}};
     c.jet_model = JetModelKind::jain;
     c.aggregation = Aggregation::velocity_superposition;
-    EXPECT_EQ(to_yaml(parse_physics(to_yaml(c), "x.yaml")), to_yaml(c));
+    LearntDiscrepancy m;
+    m.flight = "a test";
+    m.rows = 6, m.inputs = 2, m.coefficients = {1, -2, 3e-5, 4, 5, 6, 7, 8, 9, 10, 11, -12.5};
+    m.t0_s = 1, m.t1_s = 9, m.drift_bumps = 3, m.sigma = {0.04, 0.04, 0.06, 0.004, 0.004, 0.006};
+    c.discrepancy = {m};
+    const PhysicsConfig back = parse_physics(to_yaml(c), "x.yaml");
+    EXPECT_EQ(to_yaml(back), to_yaml(c));
+    ASSERT_EQ(back.discrepancy.size(), 1u);
+    EXPECT_EQ(back.discrepancy[0].coefficients, m.coefficients);
+    EXPECT_EQ(back.discrepancy[0].inputs, 2u);
+}
+
+TEST(PhysicsConfig, ALearntDiscrepancyMustHaveSixRows) {
+    EXPECT_EQ(error("discrepancy:\n  - {flight: x, heldout_gain: 0.1, height_lo_m: 0, height_step_m: 0.1, "
+                    "height_width_m: 0.1, t0_s: 0, t1_s: 1, drift_bumps: 2, push_top: 1, sigma: [1, 1, 1, 1, 1, 1], "
+                    "coefficients: [[1, 2], [3, 4]]}\n"),
+              "p.yaml:2:181: discrepancy[0].coefficients: expected six rows, one per axis");
 }
 
 TEST(PhysicsConfig, ErrorsNameFileLineAndKey) {
