@@ -242,6 +242,7 @@ void Experiment::land_safely(const std::string& why) {
     log::error("ABORT: ", why);
     reason_ = why;
     publish_state(msg::PHASE_LANDING, leg_, 0, "aborting: " + why + " — holding, then landing");
+    link_->begin_descent();  // from here on no vehicle is sent above where it is (VehicleLink)
     const auto hold = last_;
     fly(
         o_.hold_s, [&](double) { return hold; }, msg::PHASE_LANDING, false);
@@ -386,6 +387,7 @@ msg::ExperimentPhase Experiment::run() {
         return msg::PHASE_ABORTED;
     }
     legs_flown_ = static_cast<int>(plan_.reference.legs().size());
+    link_->begin_descent();
     std::vector<physics::Vec3> from(k);
     for (std::size_t v = 0; v < k; ++v) from[v] = plan_.setpoint(v, plan_.duration_s()).position;
     fly(

@@ -60,7 +60,8 @@ struct AckSeen {
 template <class Types>
 class Px4Link final : public VehicleLink {
 public:
-    Px4Link(dds::Participant& p, const Px4Options& o) : p_(p), o_(o) {
+    Px4Link(dds::Participant& p, const Px4Options& o, const std::string& run_id)
+        : p_(p), o_(o), record_(p, names_of(o), run_id) {
         for (std::size_t i = 0; i < o.vehicles.size(); ++i) add_vehicle(o.vehicles[i]);
         if (o.odometry == OdometryBy::planner) odometry_ = std::make_unique<Px4OdometryFeed>(p, o, true);
         log::info("PX4 link (", dds::px4_version(o.version).name, "): ", o.vehicles.size(), " vehicles, odometry ",
@@ -85,6 +86,18 @@ public:
             if (v.stream_last_ns == 0 || to_seconds(mono - v.stream_last_ns) > kStreamGapS) v.stream_since_ns = mono;
             v.stream_last_ns = mono;
         }
+        record_.write(sps, now_ns);  // what was commanded, in the lab's frame, for the recording
+    }
+
+    // PX4's own estimate of where the vehicle is, through the frame the link commands in: an abort
+    // never sends it above that, whatever the lab's poses say.
+    std::optional<double> down_of(std::size_t i) override {
+        if (i >= vehicles_.size()) return std::nullopt;
+        std::lock_guard lock(mutex_);
+        const auto& e = vehicles_[i].estimate;
+        if (e.seen_ns == 0 || !(to_seconds(p_.clock().monotonic_ns() - e.seen_ns) <= kPositionFreshS))
+            return std::nullopt;
+        return e.lab_d;
     }
 
     ArmProgress arm() override {
@@ -169,7 +182,13 @@ private:
         std::unique_ptr<dds::Writer<typename Types::Command>> cmd;
         std::unique_ptr<dds::Reader<typename Types::Status>> status;
         std::unique_ptr<dds::Reader<typename Types::Ack>> ack;
-        StatusSeen st;                                  // under mutex_
+        std::unique_ptr<dds::Reader<px4_msgs::msg::dds_::VehicleOdometry_>> odometry;
+        std::string odometry_name;
+        StatusSeen st;  // under mutex_
+        struct {
+            double lab_d = 0;                           // PX4's estimated D, in the lab's frame through `frame`
+            Nanos seen_ns = 0;                          // monotonic; 0 = never
+        } estimate;                                     // under mutex_
         AckSeen last_ack;                               // under mutex_
         Nanos stream_since_ns = 0, stream_last_ns = 0;  // the planner's setpoints, monotonic (planner's thread)
         Step step = Step::await_status;                 // arming: the planner's thread only
@@ -227,6 +246,7 @@ private:
                 vp->last_ack = {a.command(), a.result(), p_.clock().monotonic_ns()};
             },
             latest);
+        add_estimate_reader(v);
         by_name_[cfg.name] = &v;
     }
 
@@ -402,6 +422,28 @@ private:
                         "reason is only on the vehicle (QGroundControl, the PX4 console)");
     }
 
+    // fmu/out/vehicle_odometry (PX4's default dds_topics.yaml bridges it): PX4's estimate, for the
+    // descent's gate. A pose in another frame than NED, or not finite, is not used.
+    void add_estimate_reader(Vehicle& v) {
+        using Odometry = px4_msgs::msg::dds_::VehicleOdometry_;
+        v.odometry_name = dds::px4_topic(v.cfg.ns, "out", "vehicle_odometry");
+        Vehicle* vp = &v;
+        v.odometry = std::make_unique<dds::Reader<Odometry>>(
+            p_, dds::px4_topic_spec<Odometry>(v.odometry_name, "px4_msgs::msg::dds_::VehicleOdometry_"),
+            [this, vp](const Odometry& m, const dds::SampleMeta&) {
+                const physics::Vec3 local(m.position()[0], m.position()[1], m.position()[2]);
+                if (m.pose_frame() != px4::kFrameNed || !local.allFinite()) return;
+                std::lock_guard lock(mutex_);
+                vp->estimate = {vp->frame.lab_point(local).z(), p_.clock().monotonic_ns()};
+            });
+    }
+
+    static std::vector<std::string> names_of(const Px4Options& o) {
+        std::vector<std::string> out;
+        for (const auto& v : o.vehicles) out.push_back(v.name);
+        return out;
+    }
+
     void refuse(Vehicle& v, const std::string& why) {
         v.step = Step::refused;
         v.refusal = why;
@@ -413,14 +455,15 @@ private:
     std::deque<Vehicle> vehicles_;  // stable addresses: callbacks and specs refer to them
     std::map<std::string, Vehicle*> by_name_;
     std::unique_ptr<Px4OdometryFeed> odometry_;  // odometry: planner
+    SetpointWriter record_;
 };
 
 }  // namespace
 
-std::unique_ptr<VehicleLink> make_px4_link(dds::Participant& p, const Px4Options& o) {
-    if (o.version == dds::Px4Version::v1_14) return std::make_unique<Px4Link<Types114>>(p, o);
-    if (o.version == dds::Px4Version::v1_16) return std::make_unique<Px4Link<Types116>>(p, o);
-    return std::make_unique<Px4Link<Types115>>(p, o);
+std::unique_ptr<VehicleLink> make_px4_link(dds::Participant& p, const Px4Options& o, const std::string& run_id) {
+    if (o.version == dds::Px4Version::v1_14) return std::make_unique<Px4Link<Types114>>(p, o, run_id);
+    if (o.version == dds::Px4Version::v1_16) return std::make_unique<Px4Link<Types116>>(p, o, run_id);
+    return std::make_unique<Px4Link<Types115>>(p, o, run_id);
 }
 
 }  // namespace dw::planner

@@ -9,7 +9,9 @@
 //   vehicle_status (nav_state OFFBOARD, arming_state ARMED), retried, refused in one line with
 //   PX4's answer (vehicle_command_ack) when there is one;
 // - in flight: vehicle_status leaving OFFBOARD, disarming, a failsafe or silence is an abort reason;
-// - landing: NAV_LAND.
+// - landing: NAV_LAND; from an abort or a landing on, no setpoint above where PX4's own estimate
+//   (fmu/out/vehicle_odometry) puts the vehicle (VehicleLink's descent);
+// - what it sent, in the lab's frame, on vehicles/setpoint for the recording.
 // The message layouts follow the configured PX4 version (dds/px4.hpp).
 #include <memory>
 
@@ -17,6 +19,6 @@
 
 namespace dw::planner {
 
-std::unique_ptr<VehicleLink> make_px4_link(dds::Participant& p, const Px4Options& o);
+std::unique_ptr<VehicleLink> make_px4_link(dds::Participant& p, const Px4Options& o, const std::string& run_id);
 
 }  // namespace dw::planner

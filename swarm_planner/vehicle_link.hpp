@@ -3,7 +3,9 @@
 // vehicles/setpoint topic, which the simulated vehicles follow) and `px4` (PX4 through its
 // uXRCE-DDS bridge: swarm_planner/px4_link.hpp).
 #include <array>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -27,10 +29,18 @@ struct ArmProgress {
 // is not finite or lies outside the geofence never reaches a vehicle. That vehicle gets instead
 // the last setpoint of its own that passed, at rest (no velocity, no acceleration), or nothing at
 // all if none has passed yet; each vehicle's first refusal is said as an error line.
+//
+// From begin_descent() on — every abort, every landing — the gate lets each vehicle only go down
+// (issue 69): no setpoint's D is above where the vehicle is, as the link itself knows it in the
+// frame it commands in (down_of: PX4's own estimate for PX4, whatever the lab's frames say), nor
+// above the D last delivered to it; a velocity or acceleration that points up is dropped. Below
+// the floor is allowed then: that is where a landing ends.
 class VehicleLink {
 public:
     virtual ~VehicleLink() = default;
     void send(const std::vector<physics::Setpoint>& sps, Nanos now_ns);
+    void begin_descent() { descending_ = true; }
+    bool descending() const { return descending_; }
     void set_fence(const Geofence& fence) { fence_ = fence; }  // default: the default room
     std::uint64_t refused() const { return refused_; }         // setpoints the gate stopped
     // Advances arming (mode, arm, confirmation, retries); the setpoint stream goes on meanwhile.
@@ -54,12 +64,22 @@ public:
 protected:
     // Each vehicle's setpoint after the gate; nothing for a vehicle none of whose setpoints passed.
     virtual void deliver(const std::vector<std::optional<physics::Setpoint>>& sps, Nanos now_ns) = 0;
+    // Where vehicle i (the plan's order) is, down (NED D in the lab's frame, as this link knows it
+    // through the frame it commands in); nullopt when it does not know it (now).
+    virtual std::optional<double> down_of(std::size_t i) = 0;
 
 private:
+    // Whether sp may pass: finite and inside the fence (in descent, the floor not counted).
+    bool admissible(const physics::Setpoint& sp) const;
+    // In descent: sp no higher than vehicle i is or was last sent, and nothing pointing up.
+    physics::Setpoint only_down(std::size_t i, physics::Setpoint sp);
+
     Geofence fence_;
     std::vector<std::optional<physics::Setpoint>> passed_;  // per vehicle: the last that passed
+    std::vector<std::optional<double>> delivered_d_;        // per vehicle: the D last delivered
     std::vector<bool> said_;
     std::uint64_t refused_ = 0;
+    bool descending_ = false;
 };
 
 enum class LinkKind { sim, px4 };
@@ -67,15 +87,45 @@ inline constexpr const char* kLinkNames[] = {"sim", "px4"};  // LinkKind's value
 // "px4" -> LinkKind::px4; anything else: InputError naming `option` and the known names.
 LinkKind parse_link(std::string_view name, std::string_view option);
 
+// What the lab commands, on vehicles/setpoint in the lab's frame: the simulated vehicles follow
+// it, and with any link it is the record of what was sent (the recorder keeps it).
+class SetpointWriter {
+public:
+    SetpointWriter(dds::Participant& p, std::vector<std::string> vehicles, std::string run_id);
+    void write(const std::vector<std::optional<physics::Setpoint>>& gated, Nanos now_ns);
+
+private:
+    std::vector<std::string> vehicles_;
+    std::string run_id_;
+    dds::Writer<msg::VehicleSetpoint> writer_;
+};
+
+// Each of the plan's vehicles' latest D from vehicles/state (the lab's frame), while fresh.
+class VehicleHeights {
+public:
+    VehicleHeights(dds::Participant& p, const std::vector<std::string>& vehicles);
+    std::optional<double> down_of(std::size_t i) const;
+
+private:
+    dds::Participant& p_;
+    std::vector<std::string> vehicles_;
+    mutable std::mutex mutex_;
+    std::map<std::string, std::pair<double, Nanos>> latest_;  // D, when (monotonic)
+    dds::Reader<msg::VehicleState> reader_;
+};
+// How old a vehicle's position may be and still say where it is (for the descent's gate).
+inline constexpr double kPositionFreshS = 0.5;
+
+// The simulated vehicles: the setpoints on vehicles/setpoint, where they are from vehicles/state.
 class SimLink final : public VehicleLink {
 public:
     SimLink(dds::Participant& p, std::vector<std::string> vehicles, std::string run_id);
 
 private:
     void deliver(const std::vector<std::optional<physics::Setpoint>>& sps, Nanos now_ns) override;
-    std::vector<std::string> vehicles_;
-    std::string run_id_;
-    dds::Writer<msg::VehicleSetpoint> writer_;
+    std::optional<double> down_of(std::size_t i) override { return heights_.down_of(i); }
+    SetpointWriter writer_;
+    VehicleHeights heights_;
 };
 
 // The link of that kind for the plan's vehicles (`px4`: with these PX4 settings).

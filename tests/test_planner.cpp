@@ -143,11 +143,13 @@ namespace {
 class RecordingLink final : public VehicleLink {
 public:
     std::vector<std::vector<std::optional<dw::physics::Setpoint>>> delivered;
+    std::vector<std::optional<double>> down;  // where each vehicle is, as the link knows it
 
 private:
     void deliver(const std::vector<std::optional<dw::physics::Setpoint>>& sps, dw::Nanos) override {
         delivered.push_back(sps);
     }
+    std::optional<double> down_of(std::size_t i) override { return i < down.size() ? down[i] : std::nullopt; }
 };
 dw::physics::Setpoint at(double n, double e, double d) {
     dw::physics::Setpoint s;
@@ -188,4 +190,45 @@ TEST(VehicleLinkGate, NothingNonFiniteOrOutsideTheRoomReachesAVehicle) {
     link.set_fence(small);
     link.send({at(0, 1, -1), at(1, -1, -1.5)}, 3);
     EXPECT_TRUE(link.delivered.back()[1]->velocity.isZero());  // v2 held at rest, not sent to N = 1
+}
+
+// Issue 69: from an abort or a landing on, the gate lets a vehicle only go down. The lab's frame and
+// the link's disagree on purpose (PX4's origin 2.6 m off the floor): the planner descends "to the
+// floor" at D = 0, which for the link is far above the vehicle. No setpoint is delivered above where
+// the link knows the vehicle is, nor above what it was last sent; nothing that lifts.
+TEST(VehicleLinkGate, InDescentNoVehicleIsSentAboveWhereItIsWhateverTheFramesSay) {
+    RecordingLink link;
+    link.send({at(0, 0, -1.5), at(1, 0, -1.0)}, 0);  // in flight: as computed
+    EXPECT_DOUBLE_EQ(link.delivered.back()[0]->position.z(), -1.5);
+    link.begin_descent();
+    // v1: the link sees it at D = -1.2 (lower than its setpoint: it lags on a climb); holding the
+    // planner's last setpoint would lift it — it is held where it is. v2: its estimate unknown.
+    link.down = {-1.2, std::nullopt};
+    auto up = at(0, 0, -2.6);
+    up.velocity = {0, 0, -0.4};
+    up.acceleration = {0, 0, -1};
+    link.send({up, at(1, 0, -1.4)}, 1);
+    const auto& a = link.delivered.back();
+    EXPECT_DOUBLE_EQ(a[0]->position.z(), -1.2);
+    EXPECT_DOUBLE_EQ(a[0]->velocity.z(), 0);
+    EXPECT_DOUBLE_EQ(a[0]->acceleration.z(), 0);
+    EXPECT_DOUBLE_EQ(a[1]->position.z(), -1.0);  // unknown: never above what it was last sent
+    // As each comes down, the ratchet follows; a descent the planner computes passes as computed.
+    link.down = {-0.9, -0.95};
+    link.send({at(0, 0, -1.5), at(1, 0, -0.5)}, 2);
+    EXPECT_DOUBLE_EQ(link.delivered.back()[0]->position.z(), -0.9);
+    EXPECT_DOUBLE_EQ(link.delivered.back()[1]->position.z(), -0.5);
+    EXPECT_DOUBLE_EQ(link.delivered.back()[1]->velocity.x(), 0.5);
+    // The estimate jumps up (a reset): the last delivered D still holds it down.
+    link.down = {-3.0, -3.0};
+    link.send({at(0, 0, -2.0), at(1, 0, -2.0)}, 3);
+    EXPECT_DOUBLE_EQ(link.delivered.back()[0]->position.z(), -0.9);
+    EXPECT_DOUBLE_EQ(link.delivered.back()[1]->position.z(), -0.5);
+    // Below the floor is where a landing ends (the frames disagree): allowed, not refused.
+    link.down = {2.6, 2.6};
+    link.send({at(0, 0, 0), at(1, 0, 0)}, 4);
+    EXPECT_DOUBLE_EQ(link.delivered.back()[0]->position.z(), 2.6);
+    EXPECT_EQ(link.refused(), 0u);
+    for (const auto& step : link.delivered)
+        for (const auto& sp : step) EXPECT_TRUE(sp.has_value());
 }

@@ -92,7 +92,7 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     capture(px4side, in("offboard_control_mode"), "OffboardControlMode", mode);
     capture(px4side, in("vehicle_command"), "VehicleCommand", cmd);
     capture(px4side, in("vehicle_visual_odometry"), "VehicleOdometry", odom);
-    auto link = dw::planner::make_px4_link(lab, o);
+    auto link = dw::planner::make_px4_link(lab, o, "test");
     dw::dds::Writer<dw::msg::VehicleState> mocap(lab, dw::dds::topics::vehicle_state);
     dw::physics::Setpoint sp;
     sp.position = dw::physics::Vec3(0.2, -0.3, -1.9);
@@ -289,7 +289,7 @@ TEST(Px4Refusals, CommandsForAnotherSystemGoUnansweredAndArmingIsRefusedInOneLin
     Px4Lab lab("px4sysid", Px4Version::v1_15, 1);
     const auto plan = short_plan("single");
     lab.start(plan, [](auto& o) { o.system_id = 5; });  // the planner believes it is 2
-    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options, "test");
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
     EXPECT_NE(a.reason.find("no answer from PX4 system 2"), std::string::npos) << a.reason;
@@ -307,7 +307,7 @@ TEST(Px4Refusals, OffboardWithoutASetpointStreamIsRefused) {
     lab.options.attempts = 1;
     const auto plan = short_plan("single");
     lab.start(plan);
-    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options, "test");
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, false);
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
     EXPECT_NE(a.reason.find("refused to switch to OFFBOARD: TEMPORARILY_REJECTED after 1 tries"), std::string::npos)
@@ -326,7 +326,7 @@ TEST(Px4Refusals, OffboardWithoutALocalPositionIsRefused) {
     lab.options.odometry = dw::planner::OdometryBy::off;  // nothing feeds the motion capture to PX4's estimator
     const auto plan = short_plan("single");
     lab.start(plan);
-    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options, "test");
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
     EXPECT_NE(a.reason.find("TEMPORARILY_REJECTED"), std::string::npos) << a.reason;
@@ -345,7 +345,7 @@ TEST(Px4Refusals, StatusWithoutACommandReaderIsRefusedInOneLine) {
     lab.options.status_timeout_s = 1.0;
     const auto plan = short_plan("single");
     lab.start(plan, [](auto& o) { o.reads_commands = false; });
-    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options, "test");
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
     ASSERT_EQ(a.state, dw::planner::ArmProgress::State::refused);
     EXPECT_NE(a.reason.find("PX4 publishes vehicle_status but nothing reads"), std::string::npos) << a.reason;
@@ -482,7 +482,7 @@ TEST(Px4TakeOff, SpoolUpThenAVerticalClimbRampThenTheSetpoints) {
     Px4Lab lab("px4tko", Px4Version::v1_15, 1);
     const auto plan = short_plan("single");
     lab.start(plan);
-    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options, "test");
     const dw::physics::Vec3 parked = lab.vehicles[0]->lab_position();
     dw::physics::Setpoint hold;
     hold.position = parked;
@@ -610,7 +610,7 @@ TEST(Px4Odometry, FedWheneverTrackedTheEstimatorIsReadyBeforeAnyoneArms) {
     dw::planner::Px4OdometryFeed feed(lab.lab, lab.options, true);
     ASSERT_TRUE(eventually([&] { return lab.vehicles[0]->report().local_position; }))
         << "the simulated EKF2 never warmed up on the feed";
-    auto link = dw::planner::make_px4_link(lab.lab, lab.options);
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options, "test");
     const auto a = arm(*link, lab.lab, {plan.setpoint(0, 0)}, true);
     EXPECT_EQ(a.state, dw::planner::ArmProgress::State::ready) << a.reason;
     for (const auto& e : lab.vehicles[0]->report().events) EXPECT_EQ(e.find("REJECTED"), std::string::npos) << e;
