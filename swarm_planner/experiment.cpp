@@ -169,12 +169,24 @@ std::optional<std::string> Experiment::tracking_fault(std::size_t i, double err)
     if (i >= held_.size()) held_.resize(plan_.vehicles.size(), true);
     if (!held_[i]) {
         std::string how;
-        held_[i] = err <= o_.tracking_error_m && link_->following(i, how);
+        held_[i] = err <= o_.tracking_error_m && link_->following(i, how) && !on_the_ground(i);
         return std::nullopt;
     }
     if (!(err <= o_.tracking_error_m))
-        return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint");
+        return log::cat("tracking error of ", plan_.vehicles[i], ": ", err, " m from its setpoint (bound ",
+                        o_.tracking_error_m, " m, ", o_.tracking_bound_source, ")");
     return std::nullopt;
+}
+
+std::optional<double> Experiment::height_of(std::size_t i) {
+    const auto it = seen_.find(plan_.vehicles[i]);
+    if (it == seen_.end() || !it->second.tracking) return std::nullopt;
+    return -it->second.position.z();
+}
+
+bool Experiment::on_the_ground(std::size_t i) {
+    const auto h = height_of(i);
+    return !h || !(*h >= kAirborneHeight_m);
 }
 
 std::optional<std::string> Experiment::settle(const std::vector<physics::Setpoint>& first) {
@@ -189,14 +201,19 @@ std::optional<std::string> Experiment::settle(const std::vector<physics::Setpoin
             std::string how;
             if (held_[i]) continue;
             const bool follows = link_->following(i, how);
-            lagging.push_back(log::cat(plan_.vehicles[i], " (", follows ? "farther than the bound" : how, ")"));
+            std::lock_guard lock(mutex_);
+            if (follows && on_the_ground(i))  // airborne by evidence: the pose source's, not PX4's word
+                how = log::cat("on the ground by the poses: ", fixed(height_of(i).value_or(0.0), 2),
+                               " m above the floor, though the link says it flies");
+            else if (follows) how = "farther than the bound";
+            lagging.push_back(log::cat(plan_.vehicles[i], " (", how, ")"));
         }
         if (lagging.empty()) return std::nullopt;
         const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (waited >= o_.takeoff_settle_s)
             return log::cat("take-off not completed ", fixed(waited, 1),
                             " s after the take-off curve: ", log::join(lagging), " (tracking bound ",
-                            o_.tracking_error_m, " m)");
+                            o_.tracking_error_m, " m, ", o_.tracking_bound_source, ")");
         ticker.wait();
     }
 }

@@ -24,6 +24,8 @@ inline constexpr Range kRejoinGraceRange{0, 60, "s"};
 inline constexpr Range kTrackingBoundRange{0.05, 5, "m"};
 inline constexpr Range kTakeoffTimeRange{1, 60, "s"};
 inline constexpr Range kTakeoffSettleRange{0, 120, "s"};
+// A vehicle counts as airborne once the pose source measures it this far above the floor.
+inline constexpr double kAirborneHeight_m = 0.15;
 
 struct RunOptions {
     std::vector<std::string> wait_for{"stand_agent", "mocap_bridge", "recorder"};
@@ -37,8 +39,9 @@ struct RunOptions {
     double land_s = 4;
     double hold_s = 1;
     double mocap_timeout_s = 0.2;
-    double tracking_error_m = 0.3;  // in flight, farther than this from the setpoint aborts
-    double rejoin_grace_s = 0;      // a required process lost aborts unless it is back within this
+    double tracking_error_m = 0.3;                      // in flight, farther than this from the setpoint aborts
+    std::string tracking_bound_source = "the default";  // where it came from, for the abort's words
+    double rejoin_grace_s = 0;                          // a required process lost aborts unless it is back within this
     std::string run_id;
     LinkKind link = LinkKind::sim;
     Px4Options px4;        // --vehicles px4: per-vehicle settings (none: the defaults)
@@ -66,6 +69,11 @@ private:
     // The tracking bound of vehicle i at error `err`: why it is broken, if so. A vehicle is held to it
     // from when it first meets it under position control (PX4: airborne, its take-off ramp over).
     std::optional<std::string> tracking_fault(std::size_t i, double err);
+    // Vehicle i's height above the floor by the pose source (under mutex_); nullopt: not tracked.
+    std::optional<double> height_of(std::size_t i);
+    // Airborne by evidence (issue 69): not until the poses put it kAirborneHeight_m above the floor,
+    // whatever PX4's land detector says (under mutex_).
+    bool on_the_ground(std::size_t i);
     // After the take-off curve: holds the first setpoints until every vehicle meets the tracking
     // bound, at most takeoff_settle_s; else why not.
     std::optional<std::string> settle(const std::vector<physics::Setpoint>& first);

@@ -98,6 +98,7 @@ int run(int argc, char** argv) {
     const auto p = dw::planner::make_plan(o);
     if (const auto v = dw::planner::check(p, stop)) throw dw::InputError("infeasible plan: " + v->what);
     if (runc->parsed()) {
+        ro.tracking_bound_source = runc->count("--tracking-bound") > 0 ? "set by --tracking-bound" : "the default";
         ro.link = dw::planner::parse_link(link, "--vehicles");
         if (runc->count("--px4") > 0) {  // given: "" is a missing file, not "no file"
             if (ro.link != dw::planner::LinkKind::px4) throw dw::InputError("--px4: only with --vehicles px4");

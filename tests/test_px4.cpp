@@ -524,6 +524,39 @@ TEST(Px4TakeOff, SpoolUpThenAVerticalClimbRampThenTheSetpoints) {
         EXPECT_NE(std::find(events.begin(), events.end(), e), events.end()) << e;
 }
 
+// Issue 69, point 4: an abort only goes down, whatever the frames say. PX4's local origin sits
+// 2.6 m above the floor (its GPS/baro origin, as a real SITL showed), which the lab's settings do not
+// know: the lab's "floor" (D = 0) is 2.6 m above the vehicle in PX4's frame. From an abort on, the
+// link holds each vehicle no higher than PX4's own estimate puts it: armed and in OFFBOARD with the
+// lab asking for D = 0, it stays on the ground (without the gate it would climb 2.6 m after its
+// spool-up); then a landing setpoint below it passes, and NAV_LAND.
+TEST(Px4Abort, AnAbortNeverLiftsAVehicleWhenTheFramesDisagree) {
+    Px4Lab lab("px4abort", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single");
+    constexpr double kOriginAboveFloor_m = 2.6;
+    lab.start(plan, [&](dw::px4sim::SimulatedPx4Options& o) {
+        o.frame.origin.z() -= kOriginAboveFloor_m;  // PX4's frame, not the settings file's
+        o.position_source = dw::px4sim::PositionSource::onboard;
+    });
+    auto link = dw::planner::make_px4_link(lab.lab, lab.options, "test");
+    const dw::physics::Vec3 parked = lab.vehicles[0]->lab_position();
+    dw::physics::Setpoint floor;  // "to the floor", in the lab's frame
+    floor.position = dw::physics::Vec3(parked.x(), parked.y(), 0.0);
+    std::this_thread::sleep_for(3500ms);  // the estimator's warm-up: PX4's estimate is there
+    link->begin_descent();                // e.g. an operator's abort as the vehicles arm
+    ASSERT_EQ(arm(*link, lab.lab, {floor}, true).state, dw::planner::ArmProgress::State::ready);
+    double highest = parked.z();
+    for (int i = 0; i < 200; ++i) {  // 4 s: past the spool-up and the take-off ramp's start
+        link->send({floor}, lab.lab.clock().now_ns());
+        std::this_thread::sleep_for(20ms);
+        highest = std::min(highest, lab.vehicles[0]->lab_position().z());
+    }
+    EXPECT_GT(highest, parked.z() - 0.02) << "lifted to D = " << highest << " in an abort";
+    link->land();
+    const auto events = lab.vehicles[0]->report().events;
+    EXPECT_EQ(std::find(events.begin(), events.end(), "take-off: climb ramp started"), events.end());
+}
+
 // Issue 42, point 4: a PX4 on its own sensors (GPS, SITL's ground truth) has a local position
 // after its estimator's warm-up without any visual odometry, and publishes its estimate on
 // fmu/out/vehicle_odometry in its local frame (here PX4's north is the lab's east, its origin 1 m N
