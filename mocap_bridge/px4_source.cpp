@@ -13,9 +13,10 @@ namespace {
 namespace px4 = dds::px4;
 
 using px4_msgs::msg::dds_::VehicleOdometry_;
-constexpr double kMaxPublishDelayS = 1.0;    // timestamp - timestamp_sample beyond this: not an age
-constexpr std::int32_t kSuffererBodyId = 0;  // the stand's sufferer; vehicles are 1, 2, ...
-constexpr float kUnknownResidual = -1.0f;    // an estimate has no marker error
+constexpr double kMaxPublishDelayS = 1.0;       // timestamp - timestamp_sample beyond this: not an age
+constexpr std::int32_t kSuffererBodyId = 0;     // the stand's sufferer; vehicles are 1, 2, ...
+constexpr float kUnknownResidual = -1.0f;       // an estimate has no marker error
+constexpr std::uint64_t kSayUntiedEvery = 500;  // estimates (5 s at PX4's rate) between the untied lines
 
 physics::Vec3 vec(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
 
@@ -45,7 +46,7 @@ msg::RigidBody body(const std::string& name, std::int32_t id, const physics::Vec
 
 }  // namespace
 
-Px4PoseSource::Px4PoseSource(dds::Participant& p, Px4SourceOptions o) : p_(p), o_(std::move(o)) {
+Px4PoseSource::Px4PoseSource(dds::Participant& p, Px4SourceOptions o) : p_(p), o_(std::move(o)), armed_(p, o_.px4) {
     for (const auto& cfg : o_.px4.vehicles) {
         Vehicle& v = vehicles_.emplace_back();
         v.cfg = cfg;
@@ -73,7 +74,17 @@ void Px4PoseSource::on_odometry(Vehicle& v, const VehicleOdometry_& m) {
     // The estimate's age when PX4 published it, on PX4's own clock (both stamps are PX4's).
     const double age_s = (static_cast<double>(m.timestamp()) - static_cast<double>(m.timestamp_sample())) * 1e-6;
     const Nanos age = age_s >= 0 && age_s <= kMaxPublishDelayS ? static_cast<Nanos>(age_s * 1e9) : 0;
-    const planner::LocalFrame f = planner::local_frame(v.cfg);
+    planner::LocalFrame f = planner::local_frame(v.cfg);
+    if (o_.px4.ground == planner::GroundFrom::estimate) {  // not posed until its frame is tied to the floor
+        const auto armed = armed_.armed(v.cfg.name);
+        v.tie.add(to_seconds(now), x, vel, armed && !*armed);
+        if (!v.tie.tied()) {
+            if (++v.untied % kSayUntiedEvery == 0) log::warn(v.cfg.name, ": not posed yet: ", v.tie.describe());
+            return;
+        }
+        if (!v.tie_said) v.tie_said = true, log::info(v.cfg.name, ": ", v.tie.describe());
+        f.origin.z() = -*v.tie.floor_d();
+    }
     Estimate e;
     e.position = f.lab_point(x);
     e.velocity = m.velocity_frame() == px4::kFrameNed && vel.allFinite() ? f.lab_vector(vel) : physics::Vec3::Zero();

@@ -17,6 +17,8 @@
 #include "dds/endpoint.hpp"
 #include "dds/px4.hpp"
 #include "physics/wrench_model.hpp"
+#include "swarm_planner/ground_tie.hpp"
+#include "swarm_planner/px4_status.hpp"
 #include "swarm_planner/px4_config.hpp"
 
 namespace dw::natnet {
@@ -53,6 +55,9 @@ private:
         planner::Px4Vehicle cfg;
         std::string topic;  // stable: the reader's spec views it
         std::optional<Estimate> latest;
+        planner::GroundTie tie;  // px4.ground estimate: where its floor is
+        bool tie_said = false;
+        std::uint64_t untied = 0;  // estimates received before the tie
         std::unique_ptr<dds::Reader<px4_msgs::msg::dds_::VehicleOdometry_>> reader;
     };
     void on_odometry(Vehicle& v, const px4_msgs::msg::dds_::VehicleOdometry_& m);
@@ -60,6 +65,7 @@ private:
 
     dds::Participant& p_;
     Px4SourceOptions o_;
+    planner::Px4ArmedWatch armed_;  // ground: estimate ties only while disarmed
     mutable std::mutex mutex_;
     std::deque<Vehicle> vehicles_;  // stable addresses: the callbacks refer to them
     std::uint64_t frames_ = 0, received_ = 0, rejected_ = 0;

@@ -157,7 +157,7 @@ std::optional<std::string> Experiment::fault(const std::vector<physics::Setpoint
         if (!(age <= o_.mocap_timeout_s))
             return log::cat("mocap lost: no pose of ", plan_.vehicles[i], " for ", age > 1e8 ? 0.0 : age, " s");
         const auto& x = it->second.position;
-        if (!plan_.options.fence.contains(x, Geofence::kTolerance_m)) {
+        if (!plan_.options.fence.holds_measured(x)) {
             return log::cat("geofence breach by ", plan_.vehicles[i], " at (", x.x(), ", ", x.y(), ", ", x.z(), ")");
         }
         if (auto f = tracking_fault(i, (x - sps[i].position).norm())) return f;
@@ -340,9 +340,10 @@ std::optional<std::string> Experiment::find_parked(std::vector<physics::Vec3>& p
         if (it == seen_.end() || !it->second.tracking)  // never take off from an unknown pose
             return "vehicle " + plan_.vehicles[v] + " is not seen by the motion capture";
         const physics::Vec3& x = it->second.position;  // nor from outside the room (issue 70)
-        if (!plan_.options.fence.contains(x, Geofence::kTolerance_m))
+        if (!plan_.options.fence.holds_measured(x))
             return log::cat("vehicle ", plan_.vehicles[v], " is parked outside the geofence, at (", x.x(), ", ", x.y(),
                             ", ", x.z(), "): no setpoint is sent to it");
+        parked[v] = plan_.options.fence.on_floor(x);  // seen a little below the floor, it sits on it
     }
     return std::nullopt;
 }

@@ -1,5 +1,6 @@
 #include "swarm_planner/plan.hpp"
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -20,6 +21,12 @@ physics::Setpoint Plan::setpoint(std::size_t vehicle, double t) const {
 bool Geofence::contains(const physics::Vec3& x, double grow_m) const {
     return x.x() >= n_min - grow_m && x.x() <= n_max + grow_m && x.y() >= e_min - grow_m && x.y() <= e_max + grow_m &&
            x.z() >= d_min - grow_m && x.z() <= d_max + grow_m;
+}
+
+physics::Vec3 Geofence::on_floor(const physics::Vec3& x) const { return {x.x(), x.y(), std::min(x.z(), d_max)}; }
+
+bool Geofence::holds_measured(const physics::Vec3& x) const {
+    return x.z() <= d_max + kMeasuredBelowFloor_m && contains(on_floor(x), kTolerance_m);
 }
 
 Plan make_plan(const PlanOptions& o) {

@@ -29,6 +29,13 @@ struct Geofence {
     static constexpr double kTolerance_m = 0.1;
     // True only when x is finite and inside the fence grown by `grow_m` (negative: shrunk).
     bool contains(const physics::Vec3& x, double grow_m) const;
+    // A measured position (mocap, PX4's estimate): inside the fence grown by kTolerance_m, where up to
+    // kMeasuredBelowFloor_m below the floor counts as on it — nothing flies through a floor, and an
+    // estimate on GPS and barometer wanders by tenths of a metre (a v1.15 SITL: 0.1-0.3 m).
+    static constexpr double kMeasuredBelowFloor_m = 0.5;
+    bool holds_measured(const physics::Vec3& x) const;
+    // x on the floor when it is measured below it.
+    physics::Vec3 on_floor(const physics::Vec3& x) const;
 };
 
 struct PlanOptions {

@@ -46,6 +46,9 @@ void px4_keys(KeyVisitor& k, Px4Options& o) {
     k.number("land_timeout_s", o.land_timeout_s, kLandTimeoutRange);
     k.number("estimator_timeout_s", o.estimator_timeout_s, kEstimatorTimeoutRange);
     k.number("takeoff_ramp_s", o.takeoff_ramp_s, kTakeoffRampRange);
+    k.enumeration("ground", o.ground, kGroundFromNames, "ground");
+    k.require(o.ground != GroundFrom::estimate || o.odometry == OdometryBy::off, "ground",
+              "estimate needs odometry: off (a PX4 fed the lab's odometry already works in the lab's frame)");
     k.require(k.has("vehicles"), "vehicles", "expected a mapping from each of the plan's vehicles to its PX4 settings");
     std::set<int> ids;
     const auto vehicles = [&](KeyVisitor& vs) {

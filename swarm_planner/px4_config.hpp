@@ -51,6 +51,13 @@ struct Px4Vehicle {
 enum class OdometryBy { planner, bridge, off };
 inline constexpr const char* kOdometryByNames[] = {"planner", "bridge", "off"};  // OdometryBy's values in order
 
+// Where each PX4 local frame's floor is: `file` — its origin_m says it (a PX4 on the lab's visual
+// odometry, whose estimator works in the lab's frame); `estimate` — PX4's own estimate on the ground
+// (a PX4 on its own sensors: its origin is where its GPS and barometer put it, metres off the floor,
+// and it moves between boots), tied once by swarm_planner/ground_tie.hpp; origin_m then gives N, E.
+enum class GroundFrom { file, estimate };
+inline constexpr const char* kGroundFromNames[] = {"file", "estimate"};  // GroundFrom's values in order
+
 struct Px4Options {
     dds::Px4Version version = dds::Px4Version::v1_15;
     OdometryBy odometry = OdometryBy::planner;
@@ -64,7 +71,8 @@ struct Px4Options {
     double land_timeout_s = 30.0;       // after NAV_LAND, PX4 must report every vehicle disarmed within this
     double estimator_timeout_s = 30.0;  // before OFFBOARD, the wait for PX4's pre-flight checks to pass
     double takeoff_ramp_s = 3.0;        // PX4's MPC_TKO_RAMP_T: after lift-off, no tracking bound for this long
-    std::vector<Px4Vehicle> vehicles;   // in the plan's order
+    GroundFrom ground = GroundFrom::file;
+    std::vector<Px4Vehicle> vehicles;  // in the plan's order
 };
 
 // Where a vehicle's PX4 local frame sits in the lab: local = Rz(-heading) (lab - origin), both NED.

@@ -10,6 +10,7 @@
 #include "core/numbers.hpp"
 #include "dds/px4.hpp"
 #include "dds/time.hpp"
+#include "swarm_planner/ground_tie.hpp"
 #include "swarm_planner/px4_odometry.hpp"
 
 namespace dw::planner {
@@ -82,7 +83,7 @@ public:
             mode.velocity(true);
             mode.acceleration(true);
             v.mode->write_as_is(mode);
-            v.traj->write_as_is(trajectory(v.frame, *sps[i], us));
+            v.traj->write_as_is(trajectory(frame_of(v), *sps[i], us));
             if (v.stream_last_ns == 0 || to_seconds(mono - v.stream_last_ns) > kStreamGapS) v.stream_since_ns = mono;
             v.stream_last_ns = mono;
         }
@@ -185,6 +186,7 @@ private:
         std::unique_ptr<dds::Reader<px4_msgs::msg::dds_::VehicleOdometry_>> odometry;
         std::string odometry_name;
         StatusSeen st;  // under mutex_
+        GroundTie tie;  // ground: estimate (under mutex_)
         struct {
             double lab_d = 0;                           // PX4's estimated D, in the lab's frame through `frame`
             Nanos seen_ns = 0;                          // monotonic; 0 = never
@@ -315,6 +317,13 @@ private:
                 // A real PX4's EKF2 needs seconds of visual odometry (yaw alignment, then position)
                 // before it arms: asked sooner, it refused three times (issue 42). Past the timeout
                 // the link asks anyway, so PX4's own refusal (and its reason) is what the operator sees.
+                // A frame that must be tied to the floor (ground: estimate) is never armed untied.
+                if (auto untied = untied_ground(v)) {
+                    if (waited > o_.estimator_timeout_s)
+                        refuse(v, log::cat("not armed: ", *untied, " after ", fixed(waited, 1),
+                                           " s, so its frame cannot be tied to the lab's floor"));
+                    return;
+                }
                 if (s.preflight_ok) return ask(v, Step::offboard, now, true);
                 if (waited > o_.estimator_timeout_s) {
                     log::warn(v.cfg.name, ": PX4 system ", v.cfg.system_id, "'s pre-flight checks still fail after ",
@@ -333,6 +342,7 @@ private:
                                               px4::nav_state_name(s.nav), s.failsafe ? " (failsafe)" : ""));
                 if (s.arming == px4::kArmed) {
                     v.step = Step::ready;
+                    say_tie(v);
                     log::info(v.cfg.name, ": PX4 system ", v.cfg.system_id, " armed in OFFBOARD");
                     return;
                 }
@@ -346,11 +356,30 @@ private:
         }
     }
 
+    // ground: estimate — why vehicle v's frame is not tied to the floor yet (nullopt: it is, or
+    // the file places it).
+    std::optional<std::string> untied_ground(Vehicle& v) {
+        if (o_.ground != GroundFrom::estimate) return std::nullopt;
+        std::lock_guard lock(mutex_);
+        if (v.tie.tied()) return std::nullopt;
+        return v.tie.describe();
+    }
+
+    // The tie as it stands when the vehicle arms: what the lab flies on.
+    void say_tie(Vehicle& v) {
+        if (o_.ground != GroundFrom::estimate) return;
+        std::lock_guard lock(mutex_);
+        log::info(v.cfg.name, ": at arming, ", v.tie.describe());
+    }
+
     void await_estimator(Vehicle& v, Nanos now) {
         v.step = Step::await_estimator;
         v.step_since = now;
-        log::info(v.cfg.name, ": waiting for PX4 system ", v.cfg.system_id,
-                  "'s pre-flight checks (its estimator's local position from the visual odometry)");
+        log::info(
+            v.cfg.name, ": waiting for PX4 system ", v.cfg.system_id, "'s pre-flight checks (its estimator's ",
+            o_.odometry == OdometryBy::off ? "local position from its own sensors"
+                                           : "local position from the visual odometry",
+            o_.ground == GroundFrom::estimate ? ", and its estimate still on the ground to tie it to the floor)" : ")");
     }
 
     // Sends the command of `step` (a first try when `first`).
@@ -431,11 +460,24 @@ private:
         v.odometry = std::make_unique<dds::Reader<Odometry>>(
             p_, dds::px4_topic_spec<Odometry>(v.odometry_name, "px4_msgs::msg::dds_::VehicleOdometry_"),
             [this, vp](const Odometry& m, const dds::SampleMeta&) {
-                const physics::Vec3 local(m.position()[0], m.position()[1], m.position()[2]);
+                const physics::Vec3 local(m.position()[0], m.position()[1], m.position()[2]),
+                    vel(m.velocity()[0], m.velocity()[1], m.velocity()[2]);
                 if (m.pose_frame() != px4::kFrameNed || !local.allFinite()) return;
                 std::lock_guard lock(mutex_);
-                vp->estimate = {vp->frame.lab_point(local).z(), p_.clock().monotonic_ns()};
+                const Nanos now = p_.clock().monotonic_ns();
+                if (o_.ground == GroundFrom::estimate) {  // only while PX4 says disarmed
+                    const bool was = vp->tie.tied();
+                    vp->tie.add(to_seconds(now), local, vel, vp->st.seen_ns != 0 && vp->st.arming != px4::kArmed);
+                    if (vp->tie.tied()) vp->frame.origin.z() = -*vp->tie.floor_d();
+                    if (vp->tie.tied() && !was) log::info(vp->cfg.name, ": ", vp->tie.describe());
+                }
+                vp->estimate = {vp->frame.lab_point(local).z(), now};
             });
+    }
+
+    LocalFrame frame_of(const Vehicle& v) {
+        std::lock_guard lock(mutex_);
+        return v.frame;
     }
 
     static std::vector<std::string> names_of(const Px4Options& o) {
