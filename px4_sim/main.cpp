@@ -2,6 +2,7 @@
 // uXRCE-DDS topics and Commander rules, each vehicle also playing its motion capture — so that
 // `dw-planner run --vehicles px4` can be tried on one machine. Not a flight simulator: each
 // vehicle closes on its setpoint at a fixed rate.
+#include <optional>
 #include <iostream>
 
 #include "core/cli.hpp"
@@ -18,6 +19,7 @@
 namespace {
 
 constexpr dw::Range kLoseAfterRange{0, 3600, "s"};
+constexpr dw::Range kOriginAboveFloorRange{-100, 100, "m"};
 constexpr double kParkedNorth_m = -1.5, kParkedEast0_m = -2.0,
                  kParkedSpacing_m = 1.0;  // in a row at the fence's south side
 
@@ -40,10 +42,12 @@ std::unique_ptr<dw::natnet::NatNetEmulator> motion_capture(
     return std::make_unique<dw::natnet::NatNetEmulator>(o);
 }
 
-// What the simulated PX4s are told to do wrong (0 s: never).
+// What the simulated PX4s are told to do wrong (0 s: never), and where their origin is (unset: as
+// PX4 does it, SimulatedPx4Options).
 struct Faults {
     std::string refuse_arm;
     double lose_after = 0, kill_after = 0, low_battery_after = 0;
+    std::optional<double> origin_above_floor;
 };
 
 std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::Participant& lab,
@@ -67,6 +71,7 @@ std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::P
         if (faults.lose_after > 0) o.lose_offboard_after_s = faults.lose_after;
         if (faults.kill_after > 0) o.kill_after_s = faults.kill_after;
         if (faults.low_battery_after > 0) o.low_battery_after_s = faults.low_battery_after;
+        o.origin_above_floor_m = faults.origin_above_floor;
         sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));
         std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID "
                   << v.system_id << ", topics " << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;
@@ -108,6 +113,12 @@ int run(int argc, char** argv) {
     app.add_flag("--no-motion-capture", no_motion_capture,
                  "play no motion capture at all (neither vehicles/state nor NatNet): the lab's poses come from PX4's "
                  "estimate (dw-mocap-bridge --source px4)");
+    double origin_above_floor = 0;
+    app.add_option("--origin-above-floor", origin_above_floor,
+                   dw::log::cat("where each PX4's local origin is, above the floor [m] (default: as PX4 does it — ",
+                                dw::px4sim::kOnboardOriginAboveFloor_m,
+                                " m on its own sensors, where GPS and barometer put it; 0 on vision)"))
+        ->check(dw::cli::in(kOriginAboveFloorRange));
     app.add_option("--physics", physics_file,
                    "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
     cli.parse(argc, argv);
@@ -123,7 +134,8 @@ int run(int argc, char** argv) {
                                                  : dw::planner::load_px4_options(px4_file, names);
     dw::dds::Participant lab(cli.dds(), "px4_sim", cli.clock());
     dw::dds::Heartbeat heartbeat(lab);  // the planner and dw-lab wait for it (--wait-for px4_sim)
-    Faults faults{refuse_arm, lose_after, kill_after, low_battery_after};
+    Faults faults{refuse_arm, lose_after, kill_after, low_battery_after, std::nullopt};
+    if (app.count("--origin-above-floor") > 0) faults.origin_above_floor = origin_above_floor;
     const auto sims = start_vehicles(lab, cli, options, faults, natnet_port == 0 && !no_motion_capture, source);
     const auto mocap = natnet_port == 0 ? nullptr : motion_capture(natnet_port, stand_height_m, names, sims);
     if (mocap) std::cout << "motion capture: emulated NatNet server on 127.0.0.1:" << mocap->port() << std::endl;

@@ -55,6 +55,9 @@ SimulatedPx4::SimulatedPx4(dds::Participant& lab, const dds::DdsConfig& px4_side
       states_(o_.publish_state ? std::make_unique<dds::Writer<msg::VehicleState>>(lab, dds::topics::vehicle_state)
                                : nullptr),
       px4_(px4_side, "px4_" + o_.vehicle) {
+    const bool onboard = o_.position_source == PositionSource::onboard;
+    o_.frame.origin.z() -= o_.origin_above_floor_m.value_or(onboard ? kOnboardOriginAboveFloor_m : 0.0);
+    wander_m_ = o_.estimate_wander_m.value_or(onboard ? kOnboardWander_m : 0.0);
     s_->x = o_.frame.point(o_.parked);
     s_->boot_ns = lab_.clock().monotonic_ns();
     s_->ground_z = s_->x.z();
@@ -355,7 +358,7 @@ void SimulatedPx4::publish_estimate(const physics::Vec3& local_velocity) {
         std::lock_guard lock(mutex_);
         if (!local_position(lab_.clock().monotonic_ns())) return;
         const auto now_us = static_cast<double>(lab_.clock().now_ns() / 1000);
-        const auto& x = s_->x;
+        const physics::Vec3 x = s_->x + wander(lab_.clock().monotonic_ns());
         Values v{{"timestamp", {now_us}},
                  {"timestamp_sample", {now_us}},
                  {"pose_frame", {px4::kFrameNed}},
@@ -367,6 +370,12 @@ void SimulatedPx4::publish_estimate(const physics::Vec3& local_velocity) {
         bytes = encode(msg_def(Msg::vehicle_odometry, o_.version), v);
     }
     px4_.publish(dds::px4_topic(o_.ns, "out", "vehicle_odometry"), type_name("VehicleOdometry"), bytes);
+}
+
+// The estimate's error: a slow wander (what a barometer and GPS do), from boot.
+physics::Vec3 SimulatedPx4::wander(Nanos mono) const {
+    const double phase = 2 * M_PI * to_seconds(mono - s_->boot_ns) / kWanderPeriod_s;
+    return wander_m_ * physics::Vec3(0.5 * std::sin(phase), 0, std::sin(phase));
 }
 
 void SimulatedPx4::loop(std::stop_token stop) {

@@ -44,6 +44,10 @@ namespace dw::px4sim {
 enum class PositionSource { vision, onboard };
 inline constexpr const char* kPositionSourceNames[] = {"vision", "onboard"};  // PositionSource's values in order
 
+inline constexpr double kOnboardOriginAboveFloor_m = 1.7;
+inline constexpr double kOnboardWander_m = 0.1;
+inline constexpr double kWanderPeriod_s = 20.0;
+
 struct SimulatedPx4Options {
     dds::Px4Version version = dds::Px4Version::v1_15;
     std::string ns;                                // its client's -n ("" = rt/fmu/...)
@@ -56,6 +60,12 @@ struct SimulatedPx4Options {
     double position_timeout_s = 0.5;               // visual odometry older than this: no local position
     double ekf_warmup_s = 3.0;                     // EKF2: continuous odometry this long before a local position
     PositionSource position_source = PositionSource::vision;
+    // Issue 69: a PX4 on its own sensors (a v1.15.4 SITL) has its local origin where GPS and barometer
+    // put it, metres off the floor, and its estimate wanders. By default as PX4 does it: on the onboard
+    // source, the origin kOnboardOriginAboveFloor_m above the floor and the estimate wandering by
+    // kOnboardWander_m (D; half of it in N) over kWanderPeriod_s; on vision, neither.
+    std::optional<double> origin_above_floor_m;
+    std::optional<double> estimate_wander_m;
     std::string refuse_arm;                       // non-empty: a pre-arm check that fails (arming DENIED)
     std::optional<double> lose_offboard_after_s;  // after arming it hears no more offboard stream
     std::optional<double> lose_vision_after_s;    // after arming no more visual odometry reaches its estimator
@@ -96,6 +106,8 @@ public:
     physics::Vec3 lab_position() const;
 
 private:
+    physics::Vec3 wander(Nanos mono) const;  // under mutex_
+    double wander_m_ = 0;
     struct State;
     bool link_cut(Nanos mono) const;        // under mutex_
     bool local_position(Nanos mono) const;  // under mutex_: EKF2 has one (fresh odometry, warmed up)

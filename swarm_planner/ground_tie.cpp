@@ -17,6 +17,7 @@ void GroundTie::add(double t_s, const physics::Vec3& local, const physics::Vec3&
     while (!window_.empty() && window_.front().t < t_s - kGroundWindow_s) window_.pop_front();
     if (window_.size() < kGroundMinSamples || window_.back().t - window_.front().t < 0.9 * kGroundWindow_s) return;
     std::vector<double> d;
+    judged_ = true;
     fastest_ = 0;
     for (const auto& s : window_) d.push_back(s.d), fastest_ = std::max(fastest_, s.speed);
     std::sort(d.begin(), d.end());
@@ -26,9 +27,9 @@ void GroundTie::add(double t_s, const physics::Vec3& local, const physics::Vec3&
 
 std::string GroundTie::describe() const {
     if (floor_d_)
-        return log::cat("PX4's origin is ", fixed(*floor_d_, 2), " m above the floor (its estimate on the ground, still for ",
-                        kGroundWindow_s, " s)");
-    if (window_.size() < kGroundMinSamples) return "no steady estimate on the ground yet";
+        return log::cat("PX4's origin is ", fixed(*floor_d_, 2),
+                        " m above the floor (its estimate on the ground, still for ", kGroundWindow_s, " s)");
+    if (!judged_) return log::cat("no steady estimate on the ground yet (it is watched for ", kGroundWindow_s, " s)");
     return log::cat("its estimate on the ground is not steady: D spread ", fixed(spread_, 2), " m, speed up to ",
                     fixed(fastest_, 2), " m/s over ", kGroundWindow_s, " s (needs within ", kGroundSteady_m, " m and ",
                     kGroundStill_mps, " m/s)");

@@ -40,6 +40,7 @@ private:
     std::deque<Sample> window_;
     std::optional<double> floor_d_;
     double spread_ = 0, fastest_ = 0;  // the last full window's, for describe()
+    bool judged_ = false;              // a full window has been judged
 };
 
 }  // namespace dw::planner

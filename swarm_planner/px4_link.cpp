@@ -311,7 +311,8 @@ private:
                 else if (waited > o_.status_timeout_s)
                     refuse(v, log::cat("no vehicle_status from PX4 on ", v.status_name, " in ", waited,
                                        " s (is the Agent running on domain ", p_.config().domain,
-                                       ", and the vehicle's uXRCE-DDS client started with -n ", v.cfg.ns, "?)"));
+                                       ", and the vehicle's uXRCE-DDS client started with -n ", v.cfg.ns, "? ",
+                                       discovery_hint(), ")"));
                 return;
             case Step::await_estimator:
                 // A real PX4's EKF2 needs seconds of visual odometry (yaw alignment, then position)
@@ -354,6 +355,15 @@ private:
             case Step::ready:
             case Step::refused: return;
         }
+    }
+
+    // What PX4's Agent must announce for this lab's profile to hear it (docs/OPERATOR.md, PX4 SITL).
+    std::string discovery_hint() const {
+        if (p_.config().profile == dds::Profile::local)
+            return "The lab's local profile hears only 127.0.0.1: on the Agent's host, set PX4's UXRCE_DDS_PTCFG 1 "
+                   "(localhost) and restart its uxrce_dds_client";
+        return "With UXRCE_DDS_PTCFG 1 (localhost) PX4 is heard only by the local profile: keep it 0 for this "
+               "profile";
     }
 
     // ground: estimate — why vehicle v's frame is not tied to the floor yet (nullopt: it is, or

@@ -22,12 +22,10 @@ Px4ArmedWatch::Px4ArmedWatch(dds::Participant& p, const Px4Options& o) {
     topics_.reserve(o.vehicles.size());
     for (const auto& v : o.vehicles) {
         topics_.push_back(dds::px4_topic(v.ns, "out", dds::px4_version(o.version).status_topic));
-        if (o.version == dds::Px4Version::v1_14)
-            watch<px4_msgs_v114::msg::dds_::VehicleStatus_>(p, v, topics_.back());
+        if (o.version == dds::Px4Version::v1_14) watch<px4_msgs_v114::msg::dds_::VehicleStatus_>(p, v, topics_.back());
         else if (o.version == dds::Px4Version::v1_16)
             watch<px4_msgs_v116::msg::dds_::VehicleStatus_>(p, v, topics_.back());
-        else
-            watch<px4_msgs::msg::dds_::VehicleStatus_>(p, v, topics_.back());
+        else watch<px4_msgs::msg::dds_::VehicleStatus_>(p, v, topics_.back());
     }
 }
 

@@ -26,7 +26,7 @@ private:
 
     mutable std::mutex mutex_;
     std::map<std::string, bool> armed_;
-    std::vector<std::string> topics_;           // stable: the specs view them
+    std::vector<std::string> topics_;             // stable: the specs view them
     std::vector<std::shared_ptr<void>> readers_;  // one per vehicle, of the version's status type
 };
 

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "core/errors.hpp"
+#include "swarm_planner/ground_tie.hpp"
 #include "swarm_planner/picture.hpp"
 #include "swarm_planner/plan.hpp"
 #include "swarm_planner/vehicle_link.hpp"
@@ -231,4 +232,41 @@ TEST(VehicleLinkGate, InDescentNoVehicleIsSentAboveWhereItIsWhateverTheFramesSay
     EXPECT_EQ(link.refused(), 0u);
     for (const auto& step : link.delivered)
         for (const auto& sp : step) EXPECT_TRUE(sp.has_value());
+}
+
+// Issue 69, point 3: a PX4 on its own sensors has its origin metres off the floor, and its estimate
+// wanders on the ground. The tie is the latest still window's median D while PX4 says disarmed,
+// frozen from the arming on; an estimate that moves too much is not tied, and says why.
+TEST(GroundTie, TheFloorIsTheStillEstimateOnTheGroundFrozenAtArming) {
+    using dw::planner::GroundTie;
+    GroundTie tie;
+    const dw::physics::Vec3 still = dw::physics::Vec3::Zero();
+    double t = 0;
+    const auto feed = [&](double seconds, double d, double drift_mps, bool disarmed, double wobble = 0.02) {
+        for (const double end = t + seconds; t < end; t += 0.01)
+            tie.add(t, {0.1, -0.2, d + drift_mps * t + wobble * std::sin(40 * t)}, still, disarmed);
+    };
+    feed(1.0, 1.6, 0, true);
+    EXPECT_FALSE(tie.tied()) << "not before a whole window";
+    EXPECT_NE(tie.describe().find("no steady estimate"), std::string::npos) << tie.describe();
+    feed(2.0, 1.6, 0, true);
+    ASSERT_TRUE(tie.tied());
+    EXPECT_NEAR(*tie.floor_d(), 1.6, 0.03);
+    EXPECT_NE(tie.describe().find("1.60 m above the floor"), std::string::npos) << tie.describe();
+    // It drifts while it waits (a barometer): the tie follows the latest still window...
+    feed(4.0, 1.6 - 0.02 * 3, 0.02, true);
+    const double at_arming = *tie.floor_d();
+    EXPECT_GT(at_arming, 1.62);
+    // ... and is frozen once armed: a climb of 2 m is not the floor.
+    feed(3.0, at_arming - 2.0, 0, false);
+    EXPECT_DOUBLE_EQ(*tie.floor_d(), at_arming);
+    // An estimate that jumps about on the ground is not tied.
+    GroundTie shaky;
+    for (double u = 0; u < 4; u += 0.01) shaky.add(u, {0, 0, 1.0 + 0.4 * std::sin(3 * u)}, still, true);
+    EXPECT_FALSE(shaky.tied());
+    EXPECT_NE(shaky.describe().find("not steady"), std::string::npos) << shaky.describe();
+    // Nor one that moves (carried, or climbing).
+    GroundTie moving;
+    for (double u = 0; u < 4; u += 0.01) moving.add(u, {0, 0, 1.0}, {0, 0, -1.0}, true);
+    EXPECT_FALSE(moving.tied());
 }

@@ -18,6 +18,7 @@
 #include "dds/heartbeat.hpp"
 #include "flight/flight.hpp"
 #include "mcap/mcap.hpp"
+#include "px4_sim/simulated_px4.hpp"
 #include "support.hpp"
 
 using namespace std::chrono_literals;
@@ -246,7 +247,8 @@ TEST(Experiment, ThePlannerFliesPx4VehiclesFromItsSettingsFileAndReportsARefusal
 TEST(Experiment, ThePlannerFliesPx4OnItsOwnEstimateWithNoMotionCapture) {
     Lab lab("exppxe");
     const std::string settings = lab.dir.file("px4.yaml");
-    std::ofstream(settings) << "odometry: off\nvehicles:\n  v1: {namespace: " << lab.cfg.ns << "_a, system_id: 1}\n"
+    std::ofstream(settings) << "odometry: off\nground: estimate\nvehicles:\n  v1: {namespace: " << lab.cfg.ns
+                            << "_a, system_id: 1}\n"
                             << "  v2: {namespace: " << lab.cfg.ns
                             << "_b, system_id: 2, origin_m: [0.5, -1, 0], heading_deg: 30}\n";
     auto& sim = lab.start(
@@ -285,6 +287,51 @@ TEST(Experiment, ThePlannerFliesPx4OnItsOwnEstimateWithNoMotionCapture) {
     double highest = 0;
     for (const auto& p : f.poses) highest = std::min(highest, p.p[2]);
     EXPECT_NEAR(highest, -2.7, 0.15);
+}
+
+// Issue 69: the lab file flown against PX4's own SITL (config/lab.px4sitl.yaml), here with
+// dw-px4-sim playing the two PX4s as the SITL behaved: on their own sensors, each origin 1.7 m above
+// the floor, a wandering estimate. Each frame is tied to the floor from the estimate on the ground
+// (the planner and the bridge say so), both vehicles fly every leg to DONE, and what the link sent
+// is in the recording.
+TEST(Experiment, TheSitlLabFileFliesSimulatedPx4sWhoseOriginIsOffTheFloor) {
+    Lab lab("expsitl");
+    const std::string config = std::string(DW_SOURCE_DIR) + "/config/";
+    auto& sim = lab.start("dw-px4-sim",
+                          {"--vehicles", "v1,v2", "--px4", config + "px4.sitl.yaml", "--position-source", "onboard",
+                           "--no-motion-capture"},
+                          "sim.log");
+    auto& run = lab.start("dw-lab",
+                          {"run", "--lab", config + "lab.px4sitl.yaml", "--run-dir", lab.dir.file("run"), "--var",
+                           "px4=" + config + "px4.sitl.yaml", "--var", "physics=" + config + "physics.example.yaml"},
+                          "lab.log");
+    ASSERT_EQ(run.wait_for(240000ms), std::optional<int>(0))
+        << lab.log("lab.log") << dw::read_file(lab.dir.file("run/logs/planner.log")) << lab.log("sim.log");
+    const std::string planner = dw::read_file(lab.dir.file("run/logs/planner.log"));
+    const std::string bridge = dw::read_file(lab.dir.file("run/logs/mocap_bridge.log"));
+    EXPECT_NE(planner.find("DONE: 2 of 2 legs flown"), std::string::npos) << planner;
+    // Each tie where the simulated origin is, within the estimate's wander.
+    const auto tied_at = [](const std::string& log, const std::string& said) {
+        const auto at = log.find(said);
+        return at == std::string::npos ? -1.0 : std::stod(log.substr(at + said.size()));
+    };
+    for (const std::string v : {"v1", "v2"}) {
+        EXPECT_NEAR(tied_at(planner, v + ": at arming, PX4's origin is "), dw::px4sim::kOnboardOriginAboveFloor_m,
+                    2 * dw::px4sim::kOnboardWander_m)
+            << planner;
+        EXPECT_NEAR(tied_at(bridge, v + ": PX4's origin is "), dw::px4sim::kOnboardOriginAboveFloor_m,
+                    2 * dw::px4sim::kOnboardWander_m)
+            << bridge;
+    }
+    sim.signal(SIGINT);
+    ASSERT_EQ(sim.wait_for(20000ms), std::optional<int>(0)) << lab.log("sim.log");
+    const auto info =
+        dw::test::run({dw::test::bin("dw-recorder"), "info", lab.dir.file("run/recording.mcap")}, lab.dir);
+    const auto at = info.out.find("/vehicles/setpoint ");
+    ASSERT_NE(at, std::string::npos) << info.out;
+    EXPECT_EQ(info.out.substr(at, info.out.find('\n', at) - at).find("recorded 0,"), std::string::npos)
+        << "what the PX4 link sent is not in the recording:\n"
+        << info.out;
 }
 
 // Issue 70: one vehicle state outside the room used to become the vehicle's parked pose, and

@@ -574,6 +574,8 @@ TEST(Px4Estimate, APx4OnItsOwnSensorsIsPosedInTheLabFromItsEstimate) {
     o.frame = dw::planner::local_frame(v);
     o.parked = dw::physics::Vec3(-1.5, 0.5, 0);
     o.position_source = dw::px4sim::PositionSource::onboard;
+    o.origin_above_floor_m = 0;  // here its origin on the floor and its estimate exact: the frames alone
+    o.estimate_wander_m = 0;
     o.ekf_warmup_s = 2;
     o.publish_state = false;
     dw::natnet::Px4SourceOptions so;
@@ -614,6 +616,36 @@ TEST(Px4Estimate, APx4OnItsOwnSensorsIsPosedInTheLabFromItsEstimate) {
     EXPECT_TRUE(out.states[0].tracking_valid());
     EXPECT_LT(out.states[0].staleness_s(), so.stale_s);
     EXPECT_EQ(source.rejected(), 0u);
+}
+
+// Issue 69, point 3: as a real PX4 on its own sensors, the simulated one has its origin 1.7 m above
+// the floor and an estimate that wanders. With `ground: estimate` the pose source ties its frame to
+// the floor from the estimate on the ground while PX4 says disarmed: the parked vehicle is posed on
+// the floor (within the wander), where the file's frame alone would put it 1.7 m below it.
+TEST(Px4Estimate, APx4WhoseOriginIsOffTheFloorIsTiedToItByItsEstimateOnTheGround) {
+    const auto cfg = loopback("px4tie");
+    dw::dds::Participant lab(cfg, "bridge");
+    const dw::planner::Px4Vehicle v{"v1", "px4_1", 1, dw::physics::Vec3(0, 0, 0), 0};
+    dw::px4sim::SimulatedPx4Options o;
+    o.ns = v.ns;
+    o.frame = dw::planner::local_frame(v);
+    o.parked = dw::physics::Vec3(-1.5, 0.5, 0);
+    o.position_source = dw::px4sim::PositionSource::onboard;  // the defaults: origin off the floor, wander
+    o.ekf_warmup_s = 1;
+    o.publish_state = false;
+    dw::natnet::Px4SourceOptions so;
+    so.px4.vehicles = {v};
+    so.px4.odometry = dw::planner::OdometryBy::off;
+    so.px4.ground = dw::planner::GroundFrom::estimate;
+    dw::natnet::Px4PoseSource source(lab, so);
+    dw::px4sim::SimulatedPx4 sim(lab, cfg, o);
+    dw::msg::RigidBody b;
+    ASSERT_TRUE(eventually([&] {
+        b = source.frame(lab.clock().now_ns()).frame.bodies().at(0);
+        return b.tracking_valid();
+    })) << "never posed: its frame was not tied";
+    EXPECT_NEAR(b.position_m().z(), 0.0, 2 * dw::px4sim::kOnboardWander_m);
+    EXPECT_NEAR(b.position_m().x(), -1.5, 2 * dw::px4sim::kOnboardWander_m);
 }
 
 // Issue 42: a PX4 flying on vision that loses it (no visual odometry reaches its estimator 6 s
