@@ -260,6 +260,11 @@ void Experiment::land_safely(const std::string& why) {
     reason_ = why;
     publish_state(msg::PHASE_LANDING, leg_, 0, "aborting: " + why + " — holding, then landing");
     link_->begin_descent();  // from here on no vehicle is sent above where it is (VehicleLink)
+    // In a take-off, PX4's climb ramp goes on whatever the setpoints say (a real SITL rose 0.7 m after
+    // an abort held it): a vehicle not yet under the tracking bound is landed by PX4 at once.
+    const bool taking_off = held_.size() < plan_.vehicles.size() ||
+                            std::any_of(held_.begin(), held_.end(), [](bool held) { return !held; });
+    if (taking_off) link_->land();
     const auto hold = last_;
     fly(
         o_.hold_s, [&](double) { return hold; }, msg::PHASE_LANDING, false);
@@ -421,6 +426,16 @@ msg::ExperimentPhase Experiment::run() {
         reason_ = "landing not confirmed: " + *up;
         log::error(reason_);
         publish_state(msg::PHASE_ABORTED, leg_, 1.0, log::cat("ABORTED: ", legs_flown_, " legs flown; ", reason_));
+        return msg::PHASE_ABORTED;
+    }
+    if (abort_requested_) {  // an abort during the landing: already going down, it goes on; the run says so
+        {
+            std::lock_guard lock(mutex_);
+            reason_ = abort_reason_ + " during the landing (the landing went on)";
+        }
+        log::error("ABORT: ", reason_);
+        publish_state(msg::PHASE_ABORTED, leg_, 1.0,
+                      log::cat("ABORTED: ", reason_, "; ", legs_flown_, " legs flown; every vehicle landed"));
         return msg::PHASE_ABORTED;
     }
     publish_state(msg::PHASE_DONE, leg_, 1.0, log::cat("DONE: ", legs_flown_, " legs flown; every vehicle landed"));
