@@ -48,6 +48,7 @@ struct Faults {
     std::string refuse_arm;
     double lose_after = 0, kill_after = 0, low_battery_after = 0;
     std::optional<double> origin_above_floor;
+    bool land_detector_fooled = false;
 };
 
 std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::Participant& lab,
@@ -72,6 +73,7 @@ std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::P
         if (faults.kill_after > 0) o.kill_after_s = faults.kill_after;
         if (faults.low_battery_after > 0) o.low_battery_after_s = faults.low_battery_after;
         o.origin_above_floor_m = faults.origin_above_floor;
+        o.land_detector_fooled = faults.land_detector_fooled;
         sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));
         std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID "
                   << v.system_id << ", topics " << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;
@@ -119,6 +121,10 @@ int run(int argc, char** argv) {
                                 dw::px4sim::kOnboardOriginAboveFloor_m,
                                 " m on its own sensors, where GPS and barometer put it; 0 on vision)"))
         ->check(dw::cli::in(kOriginAboveFloorRange));
+    bool fooled = false;
+    app.add_flag("--land-detector-fooled", fooled,
+                 "each PX4's land detector says airborne as its take-off ramp starts while the vehicle never leaves "
+                 "the ground (as a real v1.15.4 SITL did)");
     app.add_option("--physics", physics_file,
                    "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
     cli.parse(argc, argv);
@@ -136,6 +142,7 @@ int run(int argc, char** argv) {
     dw::dds::Heartbeat heartbeat(lab);  // the planner and dw-lab wait for it (--wait-for px4_sim)
     Faults faults{refuse_arm, lose_after, kill_after, low_battery_after, std::nullopt};
     if (app.count("--origin-above-floor") > 0) faults.origin_above_floor = origin_above_floor;
+    faults.land_detector_fooled = fooled;
     const auto sims = start_vehicles(lab, cli, options, faults, natnet_port == 0 && !no_motion_capture, source);
     const auto mocap = natnet_port == 0 ? nullptr : motion_capture(natnet_port, stand_height_m, names, sims);
     if (mocap) std::cout << "motion capture: emulated NatNet server on 127.0.0.1:" << mocap->port() << std::endl;

@@ -276,6 +276,14 @@ void SimulatedPx4::follow(double dt, Nanos mono) {
         s.ramp_ns = mono;
         event("take-off: climb ramp started");
     }
+    if (o_.land_detector_fooled) {  // says airborne, never lifts
+        if (s.takeoff_us == 0) {
+            s.takeoff_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
+            s.status_changed = true;
+            event("airborne (land detector)");
+        }
+        return;
+    }
     const double ramped = to_seconds(mono - s.ramp_ns);
     if (ramped >= o_.mpc_tko_ramp_t_s && s.takeoff_us != 0) {
         s.x += (target - s.x) * std::min(1.0, kFollowRate * dt);

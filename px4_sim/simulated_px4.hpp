@@ -66,6 +66,9 @@ struct SimulatedPx4Options {
     // kOnboardWander_m (D; half of it in N) over kWanderPeriod_s; on vision, neither.
     std::optional<double> origin_above_floor_m;
     std::optional<double> estimate_wander_m;
+    // Its land detector says airborne as the take-off ramp starts while the vehicle never leaves the
+    // ground (a v1.15.4 SITL's ground truth stayed on the ground while takeoff_time was set).
+    bool land_detector_fooled = false;
     std::string refuse_arm;                       // non-empty: a pre-arm check that fails (arming DENIED)
     std::optional<double> lose_offboard_after_s;  // after arming it hears no more offboard stream
     std::optional<double> lose_vision_after_s;    // after arming no more visual odometry reaches its estimator

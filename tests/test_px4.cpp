@@ -370,6 +370,23 @@ TEST(Px4Refusals, ARefusedArmAbortsTheExperimentBeforeTakeOff) {
     EXPECT_NE(lab.vehicles[0]->report().nav_state, px4::kNavAutoLand);
 }
 
+// Issue 69, point 5: airborne by evidence. PX4's land detector says airborne (takeoff_time set)
+// while the vehicle never leaves the ground, as on a real SITL: the take-off is not taken as done,
+// and the abort says what the poses show instead of "farther than the bound".
+TEST(Px4TakeOff, ALandDetectorThatSaysAirborneOnTheGroundIsNotBelieved) {
+    Px4Lab lab("px4fooled", Px4Version::v1_15, 1);
+    const auto plan = short_plan("single");
+    lab.start(plan, [](auto& o) { o.land_detector_fooled = true; });
+    auto ro = lab.run_options();
+    ro.takeoff_settle_s = 4;
+    dw::planner::Experiment e(lab.lab, plan, ro);
+    EXPECT_EQ(e.run(), dw::msg::PHASE_ABORTED);
+    EXPECT_NE(e.reason().find("v1 (on the ground by the poses: "), std::string::npos) << e.reason();
+    EXPECT_NE(e.reason().find("though the link says it flies"), std::string::npos) << e.reason();
+    const auto events = lab.vehicles[0]->report().events;
+    EXPECT_NE(std::find(events.begin(), events.end(), "airborne (land detector)"), events.end());
+}
+
 // PX4 1.14's dds_topics.yaml has no vehicle_command_ack (read from its release sources:
 // docs/research/PX4_LINK.md §7): a refused arm is never answered on DDS. The link still refuses
 // after its tries, and says where the reason is; with the ack added on the vehicle, PX4's answer.
