@@ -208,9 +208,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         throw InputError(log::cat("poses.csv: ", blocks.blocks.size(), " cross-validation blocks (",
                                   flight::to_string(blocks.kind), ") in the flight; cross-validation needs at least ",
                                   o.folds));
-    auto info = describe(sim, blocks);
-    const auto shared = sim.shared_push(o.physics);
-    for (std::size_t i = 0; i < info.size(); ++i) info[i].shared = shared[i];
+    const auto info = describe(sim, blocks, o.physics);
     say(log::cat("simulating the recorded flight: ", sim.stamps().size(), " wrench samples, ", sim.neighbours(),
                  " neighbours, ", blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
     auto base_pred = sim.recorded(o.physics);

@@ -12,9 +12,7 @@ namespace dw::analysis {
 Replay replay(const flight::Flight& f, const physics::PhysicsConfig& c) {
     const Resimulation sim(f, c);
     const auto blocks = flight::find_blocks(f, ExplainOptions{}.folds, physics::encounter_radii(f.meta, c));
-    auto info = describe(sim, blocks);
-    const auto shared = sim.shared_push(c);
-    for (std::size_t i = 0; i < info.size(); ++i) info[i].shared = shared[i];
+    const auto info = describe(sim, blocks, c);
     Replay r;
     r.physics = sim.recorded(c);
     r.discrepancy = c.discrepancy.empty() ? std::vector<Wrench6>(r.physics.size(), Wrench6{})
@@ -22,6 +20,12 @@ Replay replay(const flight::Flight& f, const physics::PhysicsConfig& c) {
     for (const auto& s : info) r.on_blocks.push_back(s.leg >= 0);
     r.measured_axes = sim.measured_axes();
     return r;
+}
+
+std::vector<Wrench6> Replay::with_discrepancy() const {
+    auto w = physics;
+    add(w, discrepancy);
+    return w;
 }
 
 flight::AxisValues rms_on_blocks(const flight::Flight& f, const Replay& r, const std::vector<Wrench6>& w) {

@@ -17,6 +17,8 @@ struct Replay {
     std::vector<Wrench6> discrepancy;  // the same length; zero without one
     std::vector<bool> on_blocks;       // the samples in the flight's cross-validation blocks
     std::array<bool, 6> measured_axes{};
+    // physics + discrepancy, sample by sample.
+    std::vector<Wrench6> with_discrepancy() const;
 };
 // Throws dw::InputError when the flight cannot be resimulated or the discrepancy is not this build's.
 Replay replay(const flight::Flight& f, const physics::PhysicsConfig& c);

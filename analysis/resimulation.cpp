@@ -236,6 +236,13 @@ std::size_t Resimulation::tare_samples(const physics::PhysicsConfig& c) const {
     return n;
 }
 
+std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks, const physics::PhysicsConfig& c) {
+    auto info = describe(r, blocks);
+    const auto shared = r.shared_push(c);
+    for (std::size_t i = 0; i < info.size(); ++i) info[i].shared = shared[i];
+    return info;
+}
+
 std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks) {
     std::vector<SampleInfo> out(r.stamps().size());
     flight::BlockCursor block(blocks.blocks);

@@ -112,6 +112,8 @@ struct SampleInfo {
     double shared = 0;        // Resimulation::shared_push: 0 where one jet pushes, up to 1 − 1/K where K share it
 };
 std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks);
+// describe() with each sample's shared push under physics c (Resimulation::shared_push) filled in.
+std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks, const physics::PhysicsConfig& c);
 
 // The vertical-separation bands residuals are located and drawn in.
 struct Band {

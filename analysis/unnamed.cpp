@@ -275,8 +275,7 @@ Unseen on_unseen_flight(const Case& c, const ExplainResult& r, const std::string
     if (r.fitted.discrepancy.empty()) return u;
     const auto f = fly_case(&c, c.seed + kUnseenSeed, dir, "unseen_flight", o);
     const Replay rp = replay(f, r.fitted);
-    auto with = rp.physics;
-    add(with, rp.discrepancy);
+    const auto with = rp.with_discrepancy();
     u.carried = true;
     u.axis = static_cast<std::size_t>(r.discrepancy.best_axis);
     u.without = rms_on_blocks(f, rp, rp.physics)[u.axis];

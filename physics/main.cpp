@@ -110,11 +110,10 @@ struct ReplayCommand {
         const auto physics = physics_from(physics_path);
         const auto recorded = dw::flight::read_flight(flight_dir);
         const auto r = dw::analysis::replay(recorded, physics);
-        auto with = r.physics;
+        const auto with = r.with_discrepancy();  // the physics alone when there is none
         std::cout << "the replay against the recording, RMS on its blocks:\n  physics alone:        "
                   << rms_line(dw::analysis::rms_on_blocks(recorded, r, r.physics), r) << "\n";
         if (!physics.discrepancy.empty()) {
-            dw::analysis::add(with, r.discrepancy);
             std::cout << "  with the discrepancy: " << rms_line(dw::analysis::rms_on_blocks(recorded, r, with), r)
                       << "\n";
         }

@@ -376,8 +376,7 @@ TEST(ExplainUnnamed, AZeroThatCreepsIsNotNamedAndItsDiscrepancyCarriesToAnUnseen
     ASSERT_EQ(fitted.discrepancy.size(), 1u);
     const auto unseen = dw::flight::read_flight(dir.file("u/creeping_zero/unseen_flight"));
     const auto rp = dw::analysis::replay(unseen, fitted);
-    auto with = rp.physics;
-    dw::analysis::add(with, rp.discrepancy);
+    const auto with = rp.with_discrepancy();
     const auto a = static_cast<std::size_t>(dw::physics::axis_index(j["discrepancy"]["axis"].get<std::string>()));
     EXPECT_LT(dw::analysis::rms_on_blocks(unseen, rp, with)[a], dw::analysis::rms_on_blocks(unseen, rp, rp.physics)[a]);
     // Without the discrepancy, replay and simulation agree: the replay is the resimulation.

@@ -19,6 +19,7 @@
 #include "flight/flight.hpp"
 #include "mcap/mcap.hpp"
 #include "px4_sim/simulated_px4.hpp"
+#include "collected.hpp"
 #include "support.hpp"
 
 using namespace std::chrono_literals;
@@ -344,13 +345,7 @@ TEST(Experiment, AVehicleParkedOutsideTheRoomAbortsOnTheGroundWithNothingSent) {
     dw::dds::Participant p(lab.cfg, "mocap_bridge");  // a hostile one, in the bridge's place
     dw::dds::Heartbeat heartbeat(p);
     heartbeat.set_state(dw::msg::PROC_RUNNING);
-    std::mutex m;
-    std::vector<dw::msg::VehicleSetpoint> sent;
-    dw::dds::Reader<dw::msg::VehicleSetpoint> spr(p, dw::dds::topics::vehicle_setpoint,
-                                                  [&](const auto& s, const auto&) {
-                                                      std::lock_guard lock(m);
-                                                      sent.push_back(s);
-                                                  });
+    dw::test::Collected<dw::msg::VehicleSetpoint> setpoints(p, dw::dds::topics::vehicle_setpoint);
     dw::dds::Writer<dw::msg::VehicleState> states(p, dw::dds::topics::vehicle_state);
     std::atomic<bool> done{false};
     std::jthread feed([&] {
@@ -371,6 +366,6 @@ TEST(Experiment, AVehicleParkedOutsideTheRoomAbortsOnTheGroundWithNothingSent) {
     const std::string log = lab.log("planner.log");
     EXPECT_EQ(status, std::optional<int>(1)) << log;
     EXPECT_NE(log.find("vehicle v1 is parked outside the geofence, at (50, 0, 0)"), std::string::npos) << log;
-    std::lock_guard lock(m);
+    const auto sent = setpoints.samples();
     EXPECT_TRUE(sent.empty()) << sent.size() << " setpoints sent, the first at N = " << sent.front().position_m().x();
 }

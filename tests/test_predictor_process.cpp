@@ -17,6 +17,7 @@
 #include "flight/flight.hpp"
 #include "predictor/model.hpp"
 #include "predictor/node.hpp"
+#include "collected.hpp"
 #include "support.hpp"
 #include "testkit/mocap.hpp"
 
@@ -115,16 +116,10 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     const auto cfg = node_config("pred");
     dw::Subprocess node = start_node(dir, model, cfg);
     dw::dds::Participant p(cfg, "test");
-    std::mutex m;
-    std::vector<dw::msg::WrenchPrediction> got;
-    dw::dds::Reader<dw::msg::WrenchPrediction> reader(p, dw::dds::topics::wrench_prediction,
-                                                      [&](const auto& s, const auto&) {
-                                                          std::lock_guard lock(m);
-                                                          got.push_back(s);
-                                                      });
+    dw::test::Collected<dw::msg::WrenchPrediction> predictions(p, dw::dds::topics::wrench_prediction);
     dw::dds::Writer<dw::msg::MocapFrame> writer(p, dw::dds::topics::mocap_frame);
     ASSERT_TRUE(writer.wait_for_readers(1, 20000ms)) << dw::read_file(dir.file("node.err"));
-    ASSERT_TRUE(reader.wait_for_writers(1, 20000ms));
+    ASSERT_TRUE(predictions.reader().wait_for_writers(1, 20000ms));
     auto send = [&](int from, int count) {
         for (int i = from; i < from + count; ++i) {
             auto f = frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0, -1.0 + 0.5 * i / 180.0);
@@ -135,7 +130,7 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     send(0, 180);
     std::this_thread::sleep_for(300ms);
     {
-        std::lock_guard lock(m);
+        const auto got = predictions.samples();
         EXPECT_GE(got.size(), 175u);  // best effort on loopback: one per frame
         ASSERT_FALSE(got.empty());
         const auto& last = got.back();
@@ -157,15 +152,12 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     std::ofstream(dir.file("broken")) << "{ not json";
     std::filesystem::rename(dir.file("broken"), model);
     std::this_thread::sleep_for(1500ms);
-    {
-        std::lock_guard lock(m);
-        got.clear();
-    }
+    predictions.clear();
     send(180, 90);
     std::this_thread::sleep_for(300ms);
     node.signal(SIGINT);
     EXPECT_EQ(node.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("node.err"));
-    std::lock_guard lock(m);
+    const auto got = predictions.samples();
     ASSERT_FALSE(got.empty());
     EXPECT_EQ(got.back().model_name(), "naive_linear");
     EXPECT_NEAR(got.back().force_n().z(), 2 * 2 * (-2.7 + 1.4), 1e-5);
@@ -335,13 +327,7 @@ TEST(PredictorOnline, NeverPublishesANonFiniteWrench) {
     huge.save(model);
     const auto cfg = node_config("nonfinite");
     dw::dds::Participant p(cfg, "test");
-    std::mutex m;
-    std::vector<dw::msg::WrenchPrediction> got;
-    dw::dds::Reader<dw::msg::WrenchPrediction> reader(p, dw::dds::topics::wrench_prediction,
-                                                      [&](const auto& s, const auto&) {
-                                                          std::lock_guard lock(m);
-                                                          got.push_back(s);
-                                                      });
+    dw::test::Collected<dw::msg::WrenchPrediction> predictions(p, dw::dds::topics::wrench_prediction);
     NodeOptions o;
     o.model_path = model;
     PredictorNode node(p, o, dw::SystemClock::instance());
@@ -355,7 +341,7 @@ TEST(PredictorOnline, NeverPublishesANonFiniteWrench) {
     }
     std::this_thread::sleep_for(300ms);
     EXPECT_GE(node.unpredicted(), 25u);  // best effort on loopback; each frame is non-finite one way
-    std::lock_guard lock(m);
+    const auto got = predictions.samples();
     for (const auto& w : got)
         for (double v : {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
                          w.torque_nm().z()})
