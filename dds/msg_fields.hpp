@@ -68,6 +68,11 @@ void fields(const msg::VehicleSetpoint& m, V& v) {
         v("velocity_mps", m.velocity_mps()), v("acceleration_mps2", m.acceleration_mps2()), v("yaw_rad", m.yaw_rad());
 }
 template <class V>
+void fields(const msg::VehicleCommandSent& m, V& v) {
+    v("header", m.header()), v("vehicle_id", m.vehicle_id()), v("command", m.command()), v("name", m.name()),
+        v("param1", m.param1()), v("param2", m.param2()), v("target_system", m.target_system());
+}
+template <class V>
 void fields(const msg::Leg& m, V& v) {
     v("index", m.index()), v("start_m", m.start_m()), v("end_m", m.end_m()), v("speed_mps", m.speed_mps()),
         v("relative_altitude_m", m.relative_altitude_m());

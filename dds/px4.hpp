@@ -112,6 +112,17 @@ inline constexpr float kUnset = std::numeric_limits<float>::quiet_NaN();
 inline constexpr std::uint32_t kCmdNavLand = 21;
 inline constexpr std::uint32_t kCmdDoSetMode = 176;
 inline constexpr std::uint32_t kCmdArmDisarm = 400;
+inline constexpr std::array<std::pair<std::uint32_t, std::string_view>, 3> kCommandNames{{
+    {kCmdNavLand, "NAV_LAND"},
+    {kCmdDoSetMode, "DO_SET_MODE"},
+    {kCmdArmDisarm, "COMPONENT_ARM_DISARM"},
+}};
+// A command's MAV_CMD name, or "MAV_CMD <n>" for one the lab does not send.
+inline std::string command_name(std::uint32_t c) {
+    for (const auto& [v, n] : kCommandNames)
+        if (v == c) return std::string(n);
+    return "MAV_CMD " + std::to_string(c);
+}
 inline constexpr float kModeFlagCustom = 1.0f;          // DO_SET_MODE param1: custom main mode in param2
 inline constexpr float kCustomMainModeOffboard = 6.0f;  // PX4_CUSTOM_MAIN_MODE_OFFBOARD
 // Commander answers commands for its own MAV_SYS_ID / MAV_COMP_ID, or for 0 ("every").

@@ -32,6 +32,7 @@ DW_PUBSUB(StandStatus);
 DW_PUBSUB(MocapFrame);
 DW_PUBSUB(VehicleState);
 DW_PUBSUB(VehicleSetpoint);
+DW_PUBSUB(VehicleCommandSent);
 DW_PUBSUB(ExperimentPlan);
 DW_PUBSUB(ExperimentCommand);
 DW_PUBSUB(ExperimentState);
@@ -123,6 +124,17 @@ inline constexpr Topic<VehicleSetpoint> vehicle_setpoint{
     Protection::encrypt,
     "moves real multirotors over a person-sized stand: no one outside the lab may read or write it",
     true};
+inline constexpr Topic<VehicleCommandSent> vehicle_command{
+    "vehicles/command",
+    QosProfile::command,
+    "dw::msg::VehicleCommandSent",
+    "every command the lab sent to a vehicle's autopilot: mode, arm, land (keyed by vehicle_id)",
+    "Vehicle",
+    Roles(Role::planner),
+    Role::recorder | Role::operator_,
+    Protection::encrypt,
+    "what the lab asked of its vehicles, and when: no one outside the lab may read or forge it",
+    true};
 inline constexpr Topic<ExperimentPlan> experiment_plan{
     "experiment/plan",
     QosProfile::state,
@@ -203,6 +215,7 @@ constexpr void for_each(F&& f) {
     f(mocap_frame);
     f(vehicle_state);
     f(vehicle_setpoint);
+    f(vehicle_command);
     f(experiment_plan);
     f(experiment_command);
     f(experiment_state);

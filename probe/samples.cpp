@@ -5,6 +5,7 @@
 
 #include "core/log.hpp"
 #include "dds/names.hpp"
+#include "dds/px4.hpp"
 
 namespace dw::probe {
 namespace {
@@ -121,6 +122,17 @@ void fill(msg::VehicleSetpoint& m, std::uint64_t i) {
     m.yaw_rad(wave(i, 3.14159));
 }
 
+void fill(msg::VehicleCommandSent& m, std::uint64_t i) {
+    static constexpr std::uint32_t kCommands[] = {dds::px4::kCmdDoSetMode, dds::px4::kCmdArmDisarm,
+                                                  dds::px4::kCmdNavLand};
+    m.vehicle_id(vehicle(i));
+    m.command(kCommands[i % 3]);
+    m.name(dds::px4::command_name(m.command()));
+    m.param1(static_cast<float>(i % 2));
+    m.param2(static_cast<float>(i % 7));
+    m.target_system(static_cast<std::uint32_t>(1 + i % 3));
+}
+
 void fill(msg::ExperimentPlan& m, std::uint64_t i) {
     static const char* kFormations[] = {"single", "side_by_side", "leader_follower", "stack", "hybrid", "free"};
     m.name(log::cat("plan-", i));
@@ -227,6 +239,10 @@ std::string summary(const msg::VehicleState& m) {
 }
 std::string summary(const msg::VehicleSetpoint& m) {
     return log::cat(m.vehicle_id(), "  pos ", fmt3(m.position_m()), " m  yaw ", m.yaw_rad(), " rad");
+}
+std::string summary(const msg::VehicleCommandSent& m) {
+    return log::cat(m.vehicle_id(), "  ", m.name(), " (", m.param1(), ", ", m.param2(), ") to system ",
+                    m.target_system());
 }
 std::string summary(const msg::ExperimentPlan& m) {
     return log::cat("'", m.name(), "'  ", m.formation(), "  ", m.vehicles().size(), " vehicles  ", m.legs().size(),

@@ -20,6 +20,7 @@ namespace {
 
 constexpr dw::Range kLoseAfterRange{0, 3600, "s"};
 constexpr dw::Range kOriginAboveFloorRange{-100, 100, "m"};
+constexpr dw::Range kTimeJumpEveryRange{0, 3600, "s"};
 constexpr double kParkedNorth_m = -1.5, kParkedEast0_m = -2.0,
                  kParkedSpacing_m = 1.0;  // in a row at the fence's south side
 
@@ -49,6 +50,7 @@ struct Faults {
     double lose_after = 0, kill_after = 0, low_battery_after = 0;
     std::optional<double> origin_above_floor;
     bool land_detector_fooled = false;
+    double time_jump_every = dw::px4sim::kTimeJumpEvery_s;
 };
 
 std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::Participant& lab,
@@ -74,6 +76,7 @@ std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::P
         if (faults.low_battery_after > 0) o.low_battery_after_s = faults.low_battery_after;
         o.origin_above_floor_m = faults.origin_above_floor;
         o.land_detector_fooled = faults.land_detector_fooled;
+        o.time_jump_every_s = faults.time_jump_every;
         sims.push_back(std::make_unique<dw::px4sim::SimulatedPx4>(lab, cli.dds(), o));
         std::cout << v.name << ": simulated PX4 " << dw::dds::px4_version(options.version).name << ", MAV_SYS_ID "
                   << v.system_id << ", topics " << dw::dds::px4_topic(v.ns, "in", "...") << std::endl;
@@ -81,28 +84,49 @@ std::vector<std::unique_ptr<dw::px4sim::SimulatedPx4>> start_vehicles(dw::dds::P
     return sims;
 }
 
+// What PX4 does wrong or differently, each option into its field of `f`; the origin's option is
+// read after parsing (unset: as PX4 does it).
+void add_fault_options(CLI::App& app, Faults& f, double& origin_above_floor) {
+    app.add_option("--refuse-arm", f.refuse_arm, "a pre-arm check that fails: every ARM is DENIED with this reason");
+    app.add_option("--lose-offboard-after", f.lose_after,
+                   "seconds after arming when the offboard stream stops reaching them (0 = never)")
+        ->check(dw::cli::in(kLoseAfterRange));
+    app.add_option("--kill-after", f.kill_after,
+                   dw::log::cat("seconds after arming when the kill switch is thrown; PX4 disarms ",
+                                dw::px4sim::SimulatedPx4Options{}.com_kill_disarm_s, " s later (0 = never)"))
+        ->check(dw::cli::in(kLoseAfterRange));
+    app.add_option("--low-battery-after", f.low_battery_after,
+                   "seconds after arming when the battery reaches its failsafe level: PX4 lands (0 = never)")
+        ->check(dw::cli::in(kLoseAfterRange));
+    app.add_option("--origin-above-floor", origin_above_floor,
+                   dw::log::cat("where each PX4's local origin is, above the floor [m] (default: as PX4 does it — ",
+                                dw::px4sim::kOnboardOriginAboveFloor_m,
+                                " m on its own sensors, where GPS and barometer put it; 0 on vision)"))
+        ->check(dw::cli::in(kOriginAboveFloorRange));
+    app.add_flag("--land-detector-fooled", f.land_detector_fooled,
+                 "each PX4's land detector says airborne as its take-off ramp starts while the vehicle never leaves "
+                 "the ground (as a real v1.15.4 SITL did)");
+    app.add_option(
+           "--time-jump-every", f.time_jump_every,
+           dw::log::cat("each PX4's time synchroniser resets this often [s] (0: never; default ",
+                        dw::px4sim::kTimeJumpEvery_s, ", as a real v1.15.4 SITL did): for ", dw::px4sim::kTimeResync_s,
+                        " s its outgoing stamps are its boot time and incoming ones read as now"))
+        ->check(dw::cli::in(kTimeJumpEveryRange));
+}
+
 int run(int argc, char** argv) {
     dw::dds::ProcessCli cli(
         "dw-px4-sim: simulated PX4 vehicles (uXRCE-DDS topics, Commander rules) for dw-planner --vehicles px4");
     CLI::App& app = cli.app();
     std::vector<std::string> names{"v1"};
-    std::string px4_file, refuse_arm;
-    double lose_after = 0, kill_after = 0, low_battery_after = 0;
+    std::string px4_file;
     std::uint16_t natnet_port = 0;
     std::string physics_file;
+    Faults faults;
+    double origin_above_floor = 0;
     app.add_option("--vehicles", names, "the plan's vehicles, comma-separated (each a PX4)")->delimiter(',');
     app.add_option("--px4", px4_file, "the planner's PX4 settings file (version, namespaces, MAV_SYS_IDs, frames)");
-    app.add_option("--refuse-arm", refuse_arm, "a pre-arm check that fails: every ARM is DENIED with this reason");
-    app.add_option("--lose-offboard-after", lose_after,
-                   "seconds after arming when the offboard stream stops reaching them (0 = never)")
-        ->check(dw::cli::in(kLoseAfterRange));
-    app.add_option("--kill-after", kill_after,
-                   dw::log::cat("seconds after arming when the kill switch is thrown; PX4 disarms ",
-                                dw::px4sim::SimulatedPx4Options{}.com_kill_disarm_s, " s later (0 = never)"))
-        ->check(dw::cli::in(kLoseAfterRange));
-    app.add_option("--low-battery-after", low_battery_after,
-                   "seconds after arming when the battery reaches its failsafe level: PX4 lands (0 = never)")
-        ->check(dw::cli::in(kLoseAfterRange));
+    add_fault_options(app, faults, origin_above_floor);
     app.add_option("--natnet-port", natnet_port,
                    "play the motion capture as an emulated NatNet server on 127.0.0.1:PORT for dw-mocap-bridge "
                    "(0 = publish vehicles/state directly)")
@@ -115,16 +139,6 @@ int run(int argc, char** argv) {
     app.add_flag("--no-motion-capture", no_motion_capture,
                  "play no motion capture at all (neither vehicles/state nor NatNet): the lab's poses come from PX4's "
                  "estimate (dw-mocap-bridge --source px4)");
-    double origin_above_floor = 0;
-    app.add_option("--origin-above-floor", origin_above_floor,
-                   dw::log::cat("where each PX4's local origin is, above the floor [m] (default: as PX4 does it — ",
-                                dw::px4sim::kOnboardOriginAboveFloor_m,
-                                " m on its own sensors, where GPS and barometer put it; 0 on vision)"))
-        ->check(dw::cli::in(kOriginAboveFloorRange));
-    bool fooled = false;
-    app.add_flag("--land-detector-fooled", fooled,
-                 "each PX4's land detector says airborne as its take-off ramp starts while the vehicle never leaves "
-                 "the ground (as a real v1.15.4 SITL did)");
     app.add_option("--physics", physics_file,
                    "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
     cli.parse(argc, argv);
@@ -140,9 +154,7 @@ int run(int argc, char** argv) {
                                                  : dw::planner::load_px4_options(px4_file, names);
     dw::dds::Participant lab(cli.dds(), "px4_sim", cli.clock());
     dw::dds::Heartbeat heartbeat(lab);  // the planner and dw-lab wait for it (--wait-for px4_sim)
-    Faults faults{refuse_arm, lose_after, kill_after, low_battery_after, std::nullopt};
     if (app.count("--origin-above-floor") > 0) faults.origin_above_floor = origin_above_floor;
-    faults.land_detector_fooled = fooled;
     const auto sims = start_vehicles(lab, cli, options, faults, natnet_port == 0 && !no_motion_capture, source);
     const auto mocap = natnet_port == 0 ? nullptr : motion_capture(natnet_port, stand_height_m, names, sims);
     if (mocap) std::cout << "motion capture: emulated NatNet server on 127.0.0.1:" << mocap->port() << std::endl;

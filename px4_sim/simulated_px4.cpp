@@ -43,6 +43,7 @@ struct SimulatedPx4::State {
     Nanos odometry_ns = 0;        // the last odometry EKF2 would accept
     Nanos odometry_since_ns = 0;  // the start of its unbroken run (EKF2's warm-up counts from it)
     Nanos boot_ns = 0;            // monotonic: when it started (an onboard warm-up counts from it)
+    bool was_synced = true;       // its time synchroniser, at the last step
     bool status_changed = true;
     std::vector<std::vector<std::uint8_t>> acks;  // to publish from the loop
     Report report;
@@ -110,18 +111,34 @@ bool SimulatedPx4::link_cut(Nanos mono) const {
     return s_->armed && o_.lose_offboard_after_s && to_seconds(mono - s_->armed_ns) > *o_.lose_offboard_after_s;
 }
 
+bool SimulatedPx4::synced(Nanos mono) const {
+    if (o_.time_jump_every_s <= 0) return true;
+    const double t = to_seconds(mono - s_->boot_ns);
+    return t < o_.time_jump_every_s || std::fmod(t, o_.time_jump_every_s) >= o_.time_resync_s;
+}
+
+std::uint64_t SimulatedPx4::boot_us() const {
+    return std::max<std::uint64_t>(1, static_cast<std::uint64_t>((lab_.clock().monotonic_ns() - s_->boot_ns) / 1000));
+}
+
+double SimulatedPx4::stamp_out_us() const {
+    const Nanos mono = lab_.clock().monotonic_ns();
+    return static_cast<double>(synced(mono) ? lab_.clock().now_ns() / 1000 : (mono - s_->boot_ns) / 1000);
+}
+
+std::uint64_t SimulatedPx4::stamp_in_us(double stamp) const {
+    const auto now_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
+    if (stamp == 0 || stamp >= static_cast<double>(now_us) || !synced(lab_.clock().monotonic_ns())) return now_us;
+    return static_cast<std::uint64_t>(stamp);
+}
+
 void SimulatedPx4::on_mode(std::span<const std::uint8_t> b) {
     const auto v = decode_or_count(Msg::offboard_control_mode, b);
     if (!v) return;
     const Nanos mono = lab_.clock().monotonic_ns();
-    const auto now_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
     std::lock_guard lock(mutex_);
     if (link_cut(mono)) return;
-    // PX4's ucdr rule for an incoming timestamp: 0 = now, else at most now.
-    const double stamp = value(*v, "timestamp");
-    const std::uint64_t ts = stamp == 0                             ? now_us
-                             : stamp >= static_cast<double>(now_us) ? now_us
-                                                                    : static_cast<std::uint64_t>(stamp);
+    const std::uint64_t ts = stamp_in_us(value(*v, "timestamp"));
     if (s_->last_mode_ns == 0 || to_seconds(mono - s_->last_mode_ns) > o_.com_of_loss_t_s) s_->stream_since_ns = mono;
     s_->last_mode_ns = mono;
     s_->last_mode_us = ts;
@@ -183,7 +200,7 @@ void SimulatedPx4::on_command(std::span<const std::uint8_t> b) {
     const auto result = commander(*v, why);
     event(log::cat("command ", value(*v, "command"), ": ", px4::ack_result_name(static_cast<std::uint8_t>(result)),
                    why.empty() ? "" : " (" + why + ")"));
-    Values ack{{"timestamp", {static_cast<double>(lab_.clock().now_ns() / 1000)}},
+    Values ack{{"timestamp", {stamp_out_us()}},
                {"command", {value(*v, "command")}},
                {"result", {static_cast<double>(result)}},
                {"target_system", {value(*v, "source_system")}},
@@ -278,7 +295,7 @@ void SimulatedPx4::follow(double dt, Nanos mono) {
     }
     if (o_.land_detector_fooled) {  // says airborne, never lifts
         if (s.takeoff_us == 0) {
-            s.takeoff_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
+            s.takeoff_us = boot_us();
             s.status_changed = true;
             event("airborne (land detector)");
         }
@@ -297,7 +314,7 @@ void SimulatedPx4::follow(double dt, Nanos mono) {
     }
     s.x.z() = std::min(s.ground_z, s.x.z() + up * dt);
     if (s.takeoff_us == 0 && s.x.z() < s.ground_z - kGroundTolerance) {
-        s.takeoff_us = static_cast<std::uint64_t>(lab_.clock().now_ns() / 1000);
+        s.takeoff_us = boot_us();
         s.status_changed = true;
         event("airborne (land detector)");
     }
@@ -335,7 +352,7 @@ void SimulatedPx4::publish_status() {
         std::lock_guard lock(mutex_);
         const auto& s = *s_;
         const double armed = s.armed ? px4::kArmed : 1.0;  // 1: STANDBY (1.14) or DISARMED (1.15+)
-        Values v{{"timestamp", {static_cast<double>(lab_.clock().now_ns() / 1000)}},
+        Values v{{"timestamp", {stamp_out_us()}},
                  {"arming_state", {armed}},
                  {"takeoff_time", {static_cast<double>(s.takeoff_us)}},
                  {"nav_state", {static_cast<double>(s.nav)}},
@@ -365,7 +382,7 @@ void SimulatedPx4::publish_estimate(const physics::Vec3& local_velocity) {
     {
         std::lock_guard lock(mutex_);
         if (!local_position(lab_.clock().monotonic_ns())) return;
-        const auto now_us = static_cast<double>(lab_.clock().now_ns() / 1000);
+        const double now_us = stamp_out_us();
         const physics::Vec3 x = s_->x + wander(lab_.clock().monotonic_ns());
         Values v{{"timestamp", {now_us}},
                  {"timestamp_sample", {now_us}},
@@ -411,6 +428,8 @@ void SimulatedPx4::loop(std::stop_token stop) {
             st.armed(s_->armed);
             st.airborne(s_->x.z() < s_->ground_z - kGroundTolerance);
             const Nanos mono = lab_.clock().monotonic_ns();
+            if (s_->was_synced && !synced(mono)) event("time jump detected. Resetting time synchroniser.");
+            s_->was_synced = synced(mono);
             status_due =
                 s_->status_changed || !s_->acks.empty() || to_seconds(mono - last_status) >= o_.status_period_s;
             if (status_due) last_status = mono;

@@ -47,6 +47,11 @@ inline constexpr const char* kPositionSourceNames[] = {"vision", "onboard"};  //
 inline constexpr double kOnboardOriginAboveFloor_m = 1.7;
 inline constexpr double kOnboardWander_m = 0.1;
 inline constexpr double kWanderPeriod_s = 20.0;
+// PX4's time synchroniser (lib/timesync/Timesync.cpp) resets on a "time jump" and reconverges; a
+// v1.15.4 SITL logged "time jump detected. Resetting time synchroniser." again and again. These
+// are the double's: a reset this often, unsynchronised this long (chosen, not measured).
+inline constexpr double kTimeJumpEvery_s = 12.0;
+inline constexpr double kTimeResync_s = 3.0;
 
 struct SimulatedPx4Options {
     dds::Px4Version version = dds::Px4Version::v1_15;
@@ -69,6 +74,13 @@ struct SimulatedPx4Options {
     // Its land detector says airborne as the take-off ramp starts while the vehicle never leaves the
     // ground (a v1.15.4 SITL's ground truth stayed on the ground while takeoff_time was set).
     bool land_detector_fooled = false;
+    // Time jumps: every time_jump_every_s (0: never) its synchroniser resets for time_resync_s. PX4's
+    // client adds the synchroniser's offset to its outgoing timestamp and timestamp_sample and
+    // subtracts it from incoming ones (clamped to now); while unsynchronised the offset is 0, so its
+    // stamps are its boot time and whatever the lab stamps reads as now (Tools/msg/templates/ucdr).
+    // takeoff_time is never adjusted: always boot time. On by default, as PX4 did.
+    double time_jump_every_s = kTimeJumpEvery_s;
+    double time_resync_s = kTimeResync_s;
     std::string refuse_arm;                       // non-empty: a pre-arm check that fails (arming DENIED)
     std::optional<double> lose_offboard_after_s;  // after arming it hears no more offboard stream
     std::optional<double> lose_vision_after_s;    // after arming no more visual odometry reaches its estimator
@@ -112,8 +124,12 @@ private:
     physics::Vec3 wander(Nanos mono) const;  // under mutex_
     double wander_m_ = 0;
     struct State;
-    bool link_cut(Nanos mono) const;        // under mutex_
-    bool local_position(Nanos mono) const;  // under mutex_: EKF2 has one (fresh odometry, warmed up)
+    bool link_cut(Nanos mono) const;  // under mutex_
+    bool synced(Nanos mono) const;    // its time synchroniser has converged (no time jump being recovered from)
+    double stamp_out_us() const;      // an outgoing timestamp, as its client writes it
+    std::uint64_t stamp_in_us(double stamp) const;  // an incoming one, as its modules read it (this host's realtime µs)
+    std::uint64_t boot_us() const;                  // its own clock: µs since it booted
+    bool local_position(Nanos mono) const;          // under mutex_: EKF2 has one (fresh odometry, warmed up)
     void on_mode(std::span<const std::uint8_t> b);
     void on_trajectory(std::span<const std::uint8_t> b);
     void on_odometry(std::span<const std::uint8_t> b);

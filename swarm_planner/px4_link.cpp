@@ -62,7 +62,7 @@ template <class Types>
 class Px4Link final : public VehicleLink {
 public:
     Px4Link(dds::Participant& p, const Px4Options& o, const std::string& run_id)
-        : p_(p), o_(o), record_(p, names_of(o), run_id) {
+        : p_(p), o_(o), record_(p, names_of(o), run_id), run_id_(run_id), commands_(p, dds::topics::vehicle_command) {
         for (std::size_t i = 0; i < o.vehicles.size(); ++i) add_vehicle(o.vehicles[i]);
         if (o.odometry == OdometryBy::planner) odometry_ = std::make_unique<Px4OdometryFeed>(p, o, true);
         log::info("PX4 link (", dds::px4_version(o.version).name, "): ", o.vehicles.size(), " vehicles, odometry ",
@@ -283,6 +283,20 @@ private:
         c.confirmation(0);
         c.from_external(true);
         v.cmd->write_as_is(c);
+        record(v, c);
+    }
+
+    void record(const Vehicle& v, const typename Types::Command& c) {
+        msg::VehicleCommandSent m;
+        m.header().stamp(dds::to_msg(p_.clock().now_ns()));
+        m.header().run_id(run_id_);
+        m.vehicle_id(v.cfg.name);
+        m.command(c.command());
+        m.name(px4::command_name(c.command()));
+        m.param1(c.param1());
+        m.param2(c.param2());
+        m.target_system(c.target_system());
+        commands_.write(m);
     }
 
     StatusSeen status_of(const Vehicle& v) {
@@ -508,6 +522,8 @@ private:
     std::map<std::string, Vehicle*> by_name_;
     std::unique_ptr<Px4OdometryFeed> odometry_;  // odometry: planner
     SetpointWriter record_;
+    std::string run_id_;
+    dds::Writer<msg::VehicleCommandSent> commands_;  // each command as sent, for the recording
 };
 
 }  // namespace

@@ -333,6 +333,21 @@ TEST(Experiment, TheSitlLabFileFliesSimulatedPx4sWhoseOriginIsOffTheFloor) {
     EXPECT_EQ(info.out.substr(at, info.out.find('\n', at) - at).find("recorded 0,"), std::string::npos)
         << "what the PX4 link sent is not in the recording:\n"
         << info.out;
+    // Every command sent is recorded, and exported: each vehicle's mode change, arming and landing.
+    const auto exported = dw::test::run(
+        {dw::test::bin("dw-recorder"), "export", lab.dir.file("run/recording.mcap"), "--csv", lab.dir.file("csv")},
+        lab.dir);
+    ASSERT_EQ(exported.status, 0) << exported.err;
+    std::ifstream csv(lab.dir.file("csv/vehicles_command.csv"));
+    std::map<std::string, int> sent;  // "v1 NAV_LAND" -> how many
+    for (std::string line; std::getline(csv, line);)
+        for (const std::string v : {"v1", "v2"})
+            for (const char* c : {"DO_SET_MODE", "COMPONENT_ARM_DISARM", "NAV_LAND"})
+                if (line.find("," + v + ",") != std::string::npos && line.find(c) != std::string::npos)
+                    ++sent[v + " " + c];
+    for (const std::string v : {"v1", "v2"})
+        for (const char* c : {"DO_SET_MODE", "COMPONENT_ARM_DISARM", "NAV_LAND"})
+            EXPECT_GE(sent[v + " " + c], 1) << v << " " << c << " is not in vehicles_command.csv";
 }
 
 // Issue 70: one vehicle state outside the room used to become the vehicle's parked pose, and

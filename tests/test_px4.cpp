@@ -665,6 +665,56 @@ TEST(Px4Estimate, APx4WhoseOriginIsOffTheFloorIsTiedToItByItsEstimateOnTheGround
     EXPECT_NEAR(b.position_m().x(), -1.5, 2 * dw::px4sim::kOnboardWander_m);
 }
 
+// Issue 69, point 7: a real PX4's time synchroniser resets on a "time jump" (a v1.15.4 SITL did,
+// again and again); until it reconverges, its client stamps what it sends with its boot time, not
+// the Agent host's clock. The pose source uses only the difference of PX4's two stamps, so its
+// vehicle stays posed and fresh through every reset.
+TEST(Px4TimeJump, ThePoseSourceKeepsAVehiclePosedWhilePx4StampsWithItsBootTime) {
+    const auto cfg = loopback("px4jump");
+    dw::dds::Participant lab(cfg, "bridge");
+    dw::px4sim::RawParticipant px4side(cfg, "observer");
+    const dw::planner::Px4Vehicle v{"v1", "px4_1", 1, dw::physics::Vec3(0, 0, 0), 0};
+    Captured odom;
+    capture(px4side, dw::dds::px4_topic(v.ns, "out", "vehicle_odometry"), "VehicleOdometry", odom);
+    dw::px4sim::SimulatedPx4Options o;
+    o.ns = v.ns;
+    o.frame = dw::planner::local_frame(v);
+    o.position_source = dw::px4sim::PositionSource::onboard;
+    o.origin_above_floor_m = 0;
+    o.estimate_wander_m = 0;
+    o.ekf_warmup_s = 0.2;
+    o.publish_state = false;
+    o.time_jump_every_s = 1.0;
+    o.time_resync_s = 0.5;
+    dw::natnet::Px4SourceOptions so;
+    so.px4.vehicles = {v};
+    dw::natnet::Px4PoseSource source(lab, so);
+    dw::px4sim::SimulatedPx4 sim(lab, cfg, o);
+    ASSERT_TRUE(eventually([&] { return source.frame(lab.clock().now_ns()).states.at(0).tracking_valid(); }));
+    int lost = 0, polls = 0;
+    for (const auto end = std::chrono::steady_clock::now() + 3s; std::chrono::steady_clock::now() < end; ++polls) {
+        const auto out = source.frame(lab.clock().now_ns());
+        if (!out.states.at(0).tracking_valid() || !(out.states.at(0).staleness_s() < so.stale_s)) ++lost;
+        std::this_thread::sleep_for(20ms);
+    }
+    EXPECT_EQ(lost, 0) << "of " << polls << " polls";
+    // It did jump: some stamps were PX4's boot time (seconds since it started), some the host's clock.
+    std::size_t boot = 0, host = 0;
+    {
+        std::lock_guard lock(odom.m);
+        for (const auto& b : odom.samples) {
+            const double t = dw::px4sim::value(
+                dw::px4sim::decode(dw::px4sim::msg_def(Msg::vehicle_odometry, Px4Version::v1_15), b), "timestamp");
+            (t * 1e-6 < 3600 ? boot : host) += 1;
+        }
+    }
+    EXPECT_GT(boot, 10u);
+    EXPECT_GT(host, 10u);
+    const auto events = sim.report().events;
+    EXPECT_NE(std::find(events.begin(), events.end(), "time jump detected. Resetting time synchroniser."),
+              events.end());
+}
+
 // Issue 42: a PX4 flying on vision that loses it (no visual odometry reaches its estimator 6 s
 // after arming) has no position left: its failsafe is a blind land (DESCEND). The planner aborts
 // with PX4's reason, and the run ends only once PX4 has landed and disarmed.
