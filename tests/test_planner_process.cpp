@@ -16,9 +16,11 @@
 
 #include "dds/endpoint.hpp"
 #include "dds/heartbeat.hpp"
+#include "flight/csv.hpp"
 #include "flight/flight.hpp"
 #include "mcap/mcap.hpp"
 #include "px4_sim/simulated_px4.hpp"
+#include "swarm_planner/plan.hpp"
 #include "collected.hpp"
 #include "support.hpp"
 
@@ -348,6 +350,24 @@ TEST(Experiment, TheSitlLabFileFliesSimulatedPx4sWhoseOriginIsOffTheFloor) {
     for (const std::string v : {"v1", "v2"})
         for (const char* c : {"DO_SET_MODE", "COMPONENT_ARM_DISARM", "NAV_LAND"})
             EXPECT_GE(sent[v + " " + c], 1) << v << " " << c << " is not in vehicles_command.csv";
+    // The setpoints read back: in the lab's frame, each inside the room (the default geofence).
+    dw::flight::csv::CsvReader spcsv(dw::read_file(lab.dir.file("csv/vehicles_setpoint.csv")), "vehicles_setpoint.csv");
+    std::vector<std::string_view> fields;
+    ASSERT_TRUE(spcsv.next(fields));
+    const std::vector<std::string> columns(fields.begin(), fields.end());
+    const auto col = [&](const std::string& name) {
+        return static_cast<std::size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin());
+    };
+    const std::size_t n = col("position_m.x"), e = col("position_m.y"), d = col("position_m.z");
+    ASSERT_LT(std::max({n, e, d}), columns.size());
+    std::size_t rows = 0;
+    for (; spcsv.next(fields); ++rows) {
+        const auto at = [&](std::size_t i) { return std::stod(std::string(fields.at(i))); };
+        EXPECT_TRUE(dw::planner::Geofence{}.contains(dw::physics::Vec3(at(n), at(e), at(d)),
+                                                     dw::planner::Geofence::kTolerance_m))
+            << at(n) << " " << at(e) << " " << at(d);
+    }
+    EXPECT_GT(rows, 100u);
 }
 
 // Issue 70: one vehicle state outside the room used to become the vehicle's parked pose, and
