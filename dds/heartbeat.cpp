@@ -129,40 +129,40 @@ std::optional<PeerEvent> PeerTable::observe(const msg::ProcessStatus& status, st
 }
 
 std::optional<PeerEvent> PeerTable::writer_gone(std::uint64_t writer_key, const std::string& why) {
-    for (auto& [name, peer] : peers_) {
-        if (peer.alive && peer.writer_key == writer_key) {
-            peer.alive = false;
-            return PeerEvent{PeerEvent::Kind::lost, name, why};
-        }
-    }
-    return std::nullopt;
+    std::optional<PeerEvent> out;
+    peers_.for_each([&](const std::string& name, Peer& peer) {
+        if (out || !peer.alive || peer.writer_key != writer_key) return;
+        peer.alive = false;
+        out = PeerEvent{PeerEvent::Kind::lost, name, why};
+    });
+    return out;
 }
 
 std::vector<PeerEvent> PeerTable::expire(Nanos now) {
     std::vector<PeerEvent> out;
-    for (auto& [name, peer] : peers_) {
+    peers_.for_each([&](const std::string& name, Peer& peer) {
         const Nanos limit = from_seconds(3.0 * peer.status.period_s());
         if (peer.alive && now - peer.last_seen > limit) {
             peer.alive = false;
             out.push_back(
                 {PeerEvent::Kind::lost, name, log::cat("no heartbeat for ", to_seconds(now - peer.last_seen), " s")});
         }
-    }
+    });
     return out;
 }
 
 std::vector<std::string> PeerTable::alive() const {
     std::vector<std::string> out;
-    for (const auto& [name, peer] : peers_) {
+    peers_.for_each([&](const std::string& name, const Peer& peer) {
         if (peer.alive) out.push_back(name);
-    }
+    });
     return out;
 }
 
 std::optional<msg::ProcessStatus> PeerTable::last(const std::string& process) const {
-    auto it = peers_.find(process);
-    if (it == peers_.end()) return std::nullopt;
-    return it->second.status;
+    const Peer* peer = peers_.find(process);
+    if (!peer) return std::nullopt;
+    return peer->status;
 }
 
 PeerMonitor::PeerMonitor(Participant& p, Handler on_event)
@@ -230,8 +230,8 @@ std::optional<msg::ProcessStatus> PeerMonitor::last(const std::string& process) 
 
 std::string PeerMonitor::identity(const std::string& process) const {
     std::lock_guard lock(mutex_);
-    const auto it = identities_.find(process);
-    return it == identities_.end() ? std::string() : it->second;
+    const std::string* identity = identities_.find(process);
+    return identity ? *identity : std::string();
 }
 
 bool PeerMonitor::wait_for(const std::vector<std::string>& processes, std::chrono::milliseconds timeout,

@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/bounded_map.hpp"
 #include "dds/clock_sync.hpp"
 #include "dds/endpoint.hpp"
 
@@ -59,6 +60,10 @@ struct PeerEvent {
     std::string reason;
 };
 
+// Processes a heartbeat table remembers: a lab runs a dozen; a writer inventing process names
+// every heartbeat makes the least recently heard forgotten, never memory without bound.
+inline constexpr std::size_t kMaxPeers = 256;
+
 // The peer bookkeeping, apart from DDS so it can be driven by tests with a manual clock.
 class PeerTable {
 public:
@@ -79,7 +84,7 @@ private:
         std::uint64_t writer_key = 0;
         bool alive = false;
     };
-    std::map<std::string, Peer> peers_;
+    BoundedMap<std::string, Peer> peers_{kMaxPeers};
 };
 
 class PeerMonitor {
@@ -110,7 +115,7 @@ private:
     std::condition_variable cv_;
     bool stop_ = false;
     PeerTable table_;
-    std::map<std::string, std::string> identities_;  // process -> identity of its last heartbeat
+    BoundedMap<std::string, std::string> identities_{kMaxPeers};  // process -> identity of its last heartbeat
     Reader<msg::ProcessStatus> reader_;
     std::thread thread_;
 };

@@ -252,6 +252,13 @@ msg::RigidBody FrameConverter::lab_body(const RigidBody& in) {
     return r;
 }
 
+FrameConverter::Held FrameConverter::held() const {
+    Held h;
+    h.bodies = tracks_.size();
+    tracks_.for_each([&](std::int32_t, const Track& t) { h.samples += t.recent.size(); });
+    return h;
+}
+
 msg::VehicleState FrameConverter::vehicle_state(const msg::RigidBody& r, const msg::Time& stamp, double tc) {
     Track& tr = tracks_[r.id()];
     msg::VehicleState s;
@@ -262,7 +269,8 @@ msg::VehicleState FrameConverter::vehicle_state(const msg::RigidBody& r, const m
         if (tr.last_valid_s >= 0 && tc - tr.last_valid_s > options_.reset_gap_s)
             tr.recent.clear();  // back after a loss
         tr.recent.emplace_back(tc, std::array<double, 3>{r.position_m().x(), r.position_m().y(), r.position_m().z()});
-        while (tr.recent.size() > 2 && tc - tr.recent.front().first > options_.velocity_window_s)
+        while (tr.recent.size() > 2 &&
+               (tc - tr.recent.front().first > options_.velocity_window_s || tr.recent.size() > kMaxRecentSamples))
             tr.recent.erase(tr.recent.begin());
         tr.last_valid_s = tc;
         s.position_m(r.position_m());

@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "core/bounded_map.hpp"
 #include "core/clock.hpp"
+#include "flight/flight.hpp"
 #include "dw/msg/Mocap.h"
 #include "dw/msg/Vehicle.h"
 #include "mocap_bridge/natnet.hpp"
@@ -56,6 +58,10 @@ struct AxisMap {
     int det() const;                                // +1 for a rotation, -1 for a reflection of the axes
 };
 
+// A body's recent samples for its velocity: at most this many whatever the clock does (the window,
+// 0.03 s, holds 6 at Motive's 180 Hz; a Motive whose clock stands still never ages one out).
+inline constexpr std::size_t kMaxRecentSamples = 64;
+
 struct BridgeOptions {
     AxisMap axes;
     std::map<std::string, std::string> names;  // rigid-body name -> vehicle name
@@ -77,6 +83,11 @@ public:
     Output convert(const FrameOfData& f, Nanos receive_wall_ns, bool* refused = nullptr);
     std::uint64_t dropped() const { return dropped_; }
     std::uint64_t implausible() const { return implausible_; }  // bodies and frames refused
+    // What it holds per body, for the bound on memory: bodies tracked, velocity samples over all.
+    struct Held {
+        std::size_t bodies = 0, samples = 0;
+    };
+    Held held() const;
 
 private:
     struct Track {
@@ -92,7 +103,8 @@ private:
     BridgeOptions options_;
     ServerInfo server_;
     std::map<std::int32_t, std::string> names_;
-    std::map<std::int32_t, Track> tracks_;
+    // At most flight::kMaxBodies: a Motive that sends a new id every frame forgets the oldest.
+    BoundedMap<std::int32_t, Track> tracks_{flight::kMaxBodies};
     double last_camera_s_ = -1;  // Motive's frame clock of the last frame
     std::int32_t last_frame_ = -1;
     std::uint64_t dropped_ = 0;

@@ -36,6 +36,7 @@ SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names,
           sp.yaw_rad = s.yaw_rad();
           // A simulated vehicle, like a real one, must never be driven by a non-finite setpoint.
           if (!physics::is_finite(sp)) return;
+          if (std::find(names_.begin(), names_.end(), s.vehicle_id()) == names_.end()) return;  // not simulated here
           std::lock_guard lock(mutex_);
           if (fault_ && s.vehicle_id() == fault_->vehicle && !fault_clock_start_) fault_clock_start_ = t_;
           if (fault_active(s.vehicle_id(), SimFault::Kind::stuck)) return;  // it no longer follows

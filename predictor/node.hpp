@@ -13,6 +13,7 @@
 #include <string>
 #include <thread>
 
+#include "core/bounded_map.hpp"
 #include "core/clock.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/participant.hpp"
@@ -41,6 +42,7 @@ public:
         : sufferer_(std::move(sufferer)), neighbours_(std::move(neighbours)), max_distance_m_(max_distance_m) {}
     // The neighbours at this frame (at most kMaxNeighbours); nullopt if the sufferer is not tracked.
     std::optional<FrameNeighbours> update(const msg::MocapFrame& frame);
+    std::size_t bodies_remembered() const { return history_.size(); }  // at most flight::kMaxBodies
 
 private:
     struct History {
@@ -51,7 +53,8 @@ private:
     std::string sufferer_;
     std::vector<std::string> neighbours_;
     double max_distance_m_;
-    std::map<std::string, History> history_;
+    // At most flight::kMaxBodies names: frames full of new names forget the oldest.
+    BoundedMap<std::string, History> history_{flight::kMaxBodies};
 };
 
 struct NodeOptions {

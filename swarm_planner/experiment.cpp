@@ -82,6 +82,9 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
       commands_(p, dds::topics::experiment_command),
       states_(p, dds::topics::vehicle_state,
               [this](const msg::VehicleState& s, const dds::SampleMeta&) {
+                  // Only the plan's vehicles: a name invented every sample must not grow seen_.
+                  if (std::find(plan_.vehicles.begin(), plan_.vehicles.end(), s.vehicle_id()) == plan_.vehicles.end())
+                      return;
                   std::lock_guard lock(mutex_);
                   auto& v = seen_[s.vehicle_id()];
                   const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());

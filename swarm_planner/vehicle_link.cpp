@@ -93,6 +93,7 @@ VehicleHeights::VehicleHeights(dds::Participant& p, const std::vector<std::strin
       reader_(p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) {
           const double d = s.position_m().z();
           if (!std::isfinite(d)) return;
+          if (std::find(vehicles_.begin(), vehicles_.end(), s.vehicle_id()) == vehicles_.end()) return;  // not ours
           std::lock_guard lock(mutex_);
           latest_[s.vehicle_id()] = {d, p_.clock().monotonic_ns()};
       }) {}

@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/bounded_map.hpp"
 #include "core/errors.hpp"
 #include "core/parallel.hpp"
 #include "core/stats.hpp"
@@ -127,4 +128,21 @@ TEST(Stats, HuberCostIsQuadraticInsideAndLinearOutside) {
     EXPECT_DOUBLE_EQ(dw::huber_cost(9.0, 3.0), 9.0);             // continuous at the edge
     EXPECT_DOUBLE_EQ(dw::ar1_independent_fraction(0.0), 1.0);
     EXPECT_NEAR(dw::ar1_independent_fraction(0.9), 0.1 / 1.9, 1e-12);
+}
+
+// A map whose keys come from the network holds at most its capacity; the least recently used key
+// is the one forgotten.
+TEST(BoundedMap, HoldsItsCapacityAndForgetsTheLeastRecentlyUsed) {
+    dw::BoundedMap<int, int> m(3);
+    m[1] = 10, m[2] = 20, m[3] = 30;
+    m[1] += 1;  // 1 used again: 2 is now the least recent
+    m[4] = 40;  // makes room: 2 forgotten
+    EXPECT_EQ(m.size(), 3u);
+    EXPECT_EQ(m.find(2), nullptr);
+    ASSERT_NE(m.find(1), nullptr);
+    EXPECT_EQ(*m.find(1), 11);
+    EXPECT_EQ(m.forgotten(), 1u);
+    for (int k = 100; k < 10000; ++k) m[k] = k;
+    EXPECT_EQ(m.size(), 3u);
+    EXPECT_EQ(m.forgotten(), 1u + 9900u);
 }

@@ -336,6 +336,27 @@ TEST(PeerTable, AppearsThenExpiresAfterThreePeriods) {
     EXPECT_EQ(back->kind, dw::dds::PeerEvent::Kind::appeared);
 }
 
+// Issue 70: heartbeats that invent a process name each time are remembered up to kMaxPeers;
+// a peer that keeps beating is never the one forgotten.
+TEST(PeerTable, InventedProcessNamesAreBoundedAndTheLivePeerKept) {
+    dw::dds::PeerTable t;
+    dw::msg::ProcessStatus real;
+    real.process("stand_agent");
+    real.period_s(0.5);
+    real.state(dw::msg::PROC_RUNNING);
+    const dw::Nanos t0 = 1'000'000'000;
+    for (int i = 0; i < 5000; ++i) {
+        dw::msg::ProcessStatus fake = real;
+        fake.process("fake" + std::to_string(i));
+        t.observe(fake, 7, t0 + i);
+        if (i % 100 == 0) t.observe(real, 42, t0 + i);
+    }
+    const auto alive = t.alive();
+    EXPECT_LE(alive.size(), dw::dds::kMaxPeers);
+    EXPECT_NE(std::find(alive.begin(), alive.end(), "stand_agent"), alive.end());
+    EXPECT_TRUE(t.last("stand_agent").has_value());
+}
+
 TEST(PeerTable, WriterGoneAndStoppingEndAPeerAtOnce) {
     dw::dds::PeerTable t;
     dw::msg::ProcessStatus s;

@@ -350,6 +350,43 @@ TEST(Bridge, TrackingLossIsFlaggedWithinOneFrameAndVelocityIsSaneRightAfter) {
     EXPECT_NEAR(lost_frames, 90, 3);  // 0.5 s at 180 Hz
 }
 
+// Issue 70: a Motive that sends new rigid-body ids every frame grew the bridge by 608 MB in 25 s,
+// and one whose clock stood still by 228 MB: each body's velocity samples were aged out by that
+// clock only. The bridge now tracks at most flight::kMaxBodies bodies (the least recently seen
+// forgotten) and keeps at most kMaxRecentSamples per body, while the bodies in use keep their
+// velocity.
+TEST(Bridge, NewIdsEveryFrameOrAFrozenClockHoldBoundedMemory) {
+    ServerInfo server;
+    server.clock_frequency = 1'000'000;
+    FrameConverter conv({}, server, ModelDef{});
+    auto body = [](int id, float x) {
+        RigidBody b;
+        b.id = id;
+        b.position = {x, 1.0f, 0.5f};
+        b.orientation = {0, 0, 0, 1};
+        b.tracking_valid = true;
+        return b;
+    };
+    constexpr int kFrames = 4000, kNewPerFrame = 8;
+    for (int n = 0; n < kFrames; ++n) {
+        FrameOfData f;
+        f.frame_number = n + 1;
+        f.timestamp_s = n < kFrames / 2 ? n / 180.0 : kFrames / 360.0;  // then the clock stands still
+        f.transmit = f.mid_exposure = static_cast<std::uint64_t>(1000 + n * 5556);
+        f.bodies.push_back(body(1, 0.01f * static_cast<float>(n)));  // the one vehicle flying, every frame
+        for (int k = 0; k < kNewPerFrame; ++k) f.bodies.push_back(body(1000 + n * kNewPerFrame + k, 0.5f));
+        const auto out = conv.convert(f, 1'700'000'000'000'000'000 + static_cast<std::int64_t>(n) * 5'556'000);
+        if (n == kFrames / 2 - 1) {
+            EXPECT_NEAR(out.states.at(0).velocity_mps().x(), 1.8, 1e-3) << "the vehicle in use lost its velocity";
+        }
+    }
+    const auto held = conv.held();
+    EXPECT_LE(held.bodies, dw::flight::kMaxBodies);
+    ASSERT_GT(held.bodies, 0u);
+    // One sample per body seen once, and the vehicle's window, however long the clock stood still.
+    EXPECT_LE(held.samples, held.bodies - 1 + kMaxRecentSamples);
+}
+
 // Issue 70: what Motive sends is checked before it enters the lab. A body at NaN or at ±3.4e38,
 // or with a quaternion that does not normalise, is passed on as lost (no pose, no velocity) and
 // counted; a frame whose clock is NaN is refused whole; the plausible bodies beside them pass.

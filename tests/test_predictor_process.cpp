@@ -167,6 +167,25 @@ TEST(PredictorProcess, PredictsAtTheMocapRateAndSwapsModelsWithoutRestart) {
     EXPECT_NE(dw::read_file(dir.file("node.out")).find("1 model swaps"), std::string::npos);
 }
 
+// Issue 70: frames full of new body names grew the predictor from 62 to 458 MB. It remembers at
+// most flight::kMaxBodies bodies (the least recently seen forgotten), and the ones flying keep
+// their velocities.
+TEST(PredictorOnline, FramesFullOfNewNamesHoldBoundedMemory) {
+    FrameFeatures features("suff", {"v1", "v2"});
+    constexpr int kFrames = 2000, kNewPerFrame = 4;
+    std::optional<FrameNeighbours> f;
+    for (int n = 0; n < kFrames; ++n) {
+        auto frame = lab_frame(static_cast<std::uint64_t>(n), 1000.0 + n / 180.0);
+        for (int k = 0; k < kNewPerFrame; ++k)
+            dw::testkit::add_body(frame, "x" + std::to_string(n * kNewPerFrame + k), 1, 1, -1);
+        f = features.update(frame);
+    }
+    EXPECT_LE(features.bodies_remembered(), dw::flight::kMaxBodies);
+    EXPECT_GE(features.bodies_remembered(), 3u);
+    ASSERT_TRUE(f.has_value());
+    EXPECT_EQ(f->names, (std::vector<std::string>{"v1", "v2"}));
+}
+
 // Online, each body is what the lab's meta.json says it is, as on a recorded flight: only its
 // neighbours count (v3, tracked but not listed, does not), the learnt models see each one's mass,
 // the physics each vehicle's parameters and the flying sufferer's own height.
