@@ -12,6 +12,8 @@ std::array<float, 3> ned_to_motive(const std::array<double, 3>& n) {
 }
 
 namespace {
+constexpr std::int32_t kFirstInventedId = 100000;  // new_ids_per_frame: ids from here on, never reused
+
 BodyPose default_motion(int body, double t) {
     BodyPose p;
     if (body == 0) {
@@ -106,6 +108,14 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
         }  // a lost body: zeros, as Motive sends
         f.bodies.push_back(b);
     }
+    for (int k = 0; k < options_.new_ids_per_frame; ++k) {
+        RigidBody b;
+        b.id = kFirstInventedId + number * options_.new_ids_per_frame + k;
+        b.tracking_valid = true;
+        b.position = {0.1f, 1.0f, 0.2f};
+        b.orientation = {0, 0, 0, 1};
+        f.bodies.push_back(b);
+    }
     const Nanos now = SystemClock::instance().monotonic_ns();
     const auto ticks =
         static_cast<std::uint64_t>(static_cast<double>(now) * 1e-9 * static_cast<double>(options_.clock_frequency));
@@ -113,7 +123,7 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
     f.mid_exposure =
         ticks - static_cast<std::uint64_t>(options_.latency_s * static_cast<double>(options_.clock_frequency));
     f.data_received = f.mid_exposure + options_.clock_frequency / 500;
-    f.timestamp_s = t;
+    f.timestamp_s = options_.frozen_clock ? 0.0 : t;
     return build_frame(f, options_.version, options_.other_sections);
 }
 

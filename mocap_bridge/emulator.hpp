@@ -36,6 +36,10 @@ struct EmulatorOptions {
     std::vector<TrackingLoss> losses;
     std::vector<std::string> names{flight::kSufferer, "v1", "v2", "v3"};
     bool other_sections = true;  // marker sets, skeletons, assets, ... to skip
+    // A hostile Motive (issue 70): this many more bodies every frame, each with an id never sent
+    // before and in no model definition; and a frame clock (the frame's timestamp) that stands still.
+    int new_ids_per_frame = 0;
+    bool frozen_clock = false;
     std::uint64_t seed = 1;
     // Where body i is at time t (seconds since start); default: the sufferer on the stand and
     // the others circling above it.
