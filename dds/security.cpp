@@ -13,6 +13,7 @@
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "dds/openssl.hpp"
+#include "dds/security_documents.hpp"
 
 namespace dw::dds {
 
@@ -32,6 +33,15 @@ Cert read_cert(const std::string& path) {
     ERR_clear_error();
     if (!x) refuse(path, "not a PEM certificate");
     return x;
+}
+
+// A certificate's subject as a grant's subject_name gives it (RFC 2253: "CN=planner").
+std::string subject_of(const Cert& cert) {
+    Bio out(BIO_new(BIO_s_mem()));
+    X509_NAME_print_ex(out.get(), X509_get_subject_name(cert.get()), 0, XN_FLAG_RFC2253);
+    char* bytes = nullptr;
+    const long n = BIO_get_mem_data(out.get(), &bytes);
+    return std::string(bytes, static_cast<std::size_t>(n));
 }
 
 // Fast DDS takes file URIs: file:// and the absolute path.
@@ -55,10 +65,14 @@ void check_identity(const KeystorePaths& k, const std::string& identity) {
     const Key key(PEM_read_bio_PrivateKey(bio_of(key_text).get(), nullptr, nullptr, nullptr));
     if (!key || X509_check_private_key(cert.get(), key.get()) != 1)
         refuse(k.key(identity), "not the private key of cert.pem");
-    for (const auto& doc : {k.governance(), k.permissions(identity)})
-        if (!verify_signed(doc, k.ca_cert()))
+    std::string governance, permissions;
+    for (const auto& [doc, content] : {std::pair{k.governance(), &governance}, {k.permissions(identity), &permissions}})
+        if (!verify_signed(doc, k.ca_cert(), content))
             refuse(doc, "its signature does not verify against the keystore's CA (tampered, or from another keystore)");
     ERR_clear_error();
+    // What was signed must also be what Fast DDS can read: a signed `<dds/>` crashed it.
+    check_governance(governance, k.governance());
+    check_permissions(permissions, k.permissions(identity), subject_of(cert), std::chrono::system_clock::now());
 }
 
 }  // namespace

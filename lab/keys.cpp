@@ -44,6 +44,8 @@ int keys_create(const KeysOptions& o, std::ostream& out) {
             << "/ca.cert.pem (its key: private/ca.key.pem, keep it off the lab machines)\n";
     for (const auto& n : r.created) out << "created identity " << n << "\n";
     for (const auto& n : r.kept) out << "kept identity " << n << " (already there)\n";
+    if (r.refreshed_governance) out << "signed the governance again: the lab's topics changed\n";
+    for (const auto& n : r.refreshed) out << "signed the permissions of " << n << " again: its role's topics changed\n";
     return 0;
 }
 

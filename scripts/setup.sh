@@ -9,7 +9,7 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 
 packages=(
   build-essential cmake ninja-build pkg-config git
-  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
+  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools libtinyxml2-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libeigen3-dev
   libzstd-dev liblz4-dev libisal-dev zlib1g-dev libgpiod-dev libopencv-dev libssl-dev
   libtorch-dev libceres-dev

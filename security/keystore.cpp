@@ -128,6 +128,12 @@ std::chrono::system_clock::time_point not_after(X509* x) {
     return std::chrono::system_clock::from_time_t(timegm(&tm));
 }
 
+std::chrono::system_clock::time_point not_before(X509* x) {
+    std::tm tm{};
+    if (!ASN1_TIME_to_tm(X509_get0_notBefore(x), &tm)) return {};
+    return std::chrono::system_clock::from_time_t(timegm(&tm));
+}
+
 struct Ca {
     Cert cert;
     Key key;
@@ -147,12 +153,25 @@ Ca ensure_ca(const dds::KeystorePaths& have, const dds::KeystorePaths& k, int da
 void make_identity(const dds::KeystorePaths& k, const Ca& ca, const IdentityRequest& id, int days) {
     Key key = new_key();
     Cert cert = make_cert(id.name, key.get(), ca.cert.get(), ca.key.get(), days);
-    const auto now = std::chrono::system_clock::now();
-    const std::string permissions = permissions_xml({id.name, id.role, now, now + std::chrono::hours(24) * days});
+    // Valid as long as the certificate: a re-run (refresh_permissions) derives the same document.
+    const std::string permissions = permissions_xml({id.name, id.role, not_before(cert.get()), not_after(cert.get())});
     write_file(k.key(id.name), pem(key.get()), kPrivate);
     write_file(k.permissions_xml(id.name), permissions);
     write_file(k.permissions(id.name), smime_sign(permissions, ca.cert.get(), ca.key.get()));
     write_file(k.cert(id.name), pem(cert.get()));  // last: an identity with a certificate is whole
+}
+
+// A kept identity's permissions as its role's topics are now (dds/topics.hpp: a topic added since
+// the keystore was made), over its certificate's validity; true when they changed and were signed again.
+bool refresh_permissions(const dds::KeystorePaths& have, const dds::KeystorePaths& k, const Ca& ca,
+                         const IdentityRequest& id) {
+    const Cert cert = read_cert(have.cert(id.name));
+    const std::string now = permissions_xml({id.name, id.role, not_before(cert.get()), not_after(cert.get())});
+    std::error_code ec;
+    if (fs::exists(have.permissions_xml(id.name), ec) && read_file(have.permissions_xml(id.name)) == now) return false;
+    write_file(k.permissions_xml(id.name), now);
+    write_file(k.permissions(id.name), smime_sign(now, ca.cert.get(), ca.key.get()));
+    return true;
 }
 
 void check(const KeystoreOptions& o) {
@@ -179,14 +198,16 @@ KeystoreResult create_keystore(const KeystoreOptions& o) {
     const dds::KeystorePaths k{staged.path()};
     KeystoreResult r;
     const Ca ca = ensure_ca(have, k, o.days, r.new_ca);
-    if (r.new_ca || !fs::exists(have.governance())) {
-        const std::string g = governance_xml();
+    const std::string g = governance_xml();
+    if (r.new_ca || !fs::exists(have.governance()) || read_file(have.governance_xml()) != g) {
+        r.refreshed_governance = !r.new_ca && fs::exists(have.governance());
         write_file(k.governance_xml(), g);
         write_file(k.governance(), smime_sign(g, ca.cert.get(), ca.key.get()));
     }
     for (const auto& id : o.identities) {
         if (fs::exists(have.cert(id.name))) {
             r.kept.push_back(id.name);
+            if (refresh_permissions(have, k, ca, id)) r.refreshed.push_back(id.name);
             continue;
         }
         make_identity(k, ca, id, o.days);
@@ -194,6 +215,13 @@ KeystoreResult create_keystore(const KeystoreOptions& o) {
     }
     staged.commit();
     return r;
+}
+
+void sign_document(const std::string& dir, const std::string& text, const std::string& path) {
+    const dds::KeystorePaths k{dir};
+    const Cert cert = read_cert(k.ca_cert());
+    const Key key = read_key(k.ca_key());
+    write_file(path, smime_sign(text, cert.get(), key.get()));
 }
 
 KeystoreListing list_keystore(const std::string& dir) {

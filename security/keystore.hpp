@@ -3,7 +3,8 @@
 // and permissions CA in one, ECDSA P-256), one identity per lab process (certificate + private key,
 // written 0600), the signed governance and each identity's signed permissions (S/MIME, as Fast
 // DDS and ROS 2's SROS2 read them). Re-running adds what is missing and never replaces an
-// existing identity.
+// existing identity (its certificate and key); it signs its permissions again, and the governance,
+// when the lab's topics have changed since (dds/topics.hpp), so that a keystore follows them.
 #include <chrono>
 #include <string>
 #include <vector>
@@ -25,6 +26,9 @@ struct KeystoreOptions {
 
 struct KeystoreResult {
     std::vector<std::string> created, kept;  // identities
+    // Kept identities whose permissions were signed again: their role's topics changed since.
+    std::vector<std::string> refreshed;
+    bool refreshed_governance = false;  // the same for the governance (a topic added)
     bool new_ca = false;
 };
 
@@ -43,6 +47,10 @@ struct KeystoreListing {
     std::vector<IdentityStatus> identities;
 };
 KeystoreListing list_keystore(const std::string& dir);
+
+// Signs `text` with the keystore's CA into `path`, as governance and permissions are signed (S/MIME).
+// Throws dw::InputError when the keystore has no readable CA.
+void sign_document(const std::string& dir, const std::string& text, const std::string& path);
 
 // The default identities: one per lab role, named as the role.
 std::vector<IdentityRequest> role_identities();

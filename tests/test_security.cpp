@@ -21,6 +21,7 @@
 #include <atomic>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <filesystem>
+#include <regex>
 #include <fstream>
 #include <mutex>
 #include <thread>
@@ -130,8 +131,45 @@ TEST(Keystore, RerunningKeepsEveryIdentityAndAddsTheMissingOne) {
     EXPECT_EQ(r.kept.size(), dw::dds::kRoles.size());
     ASSERT_EQ(r.created, std::vector<std::string>{"second_operator"});
     EXPECT_EQ(dw::read_file(k.cert("planner"), "cert"), before);
+    EXPECT_TRUE(r.refreshed.empty()) << "nothing changed: nothing signed again";
+    EXPECT_FALSE(r.refreshed_governance);
     o.identities = {{"../escape", dw::dds::Role::operator_}};
     EXPECT_THROW(dw::security::create_keystore(o), dw::InputError);
+}
+
+// A keystore made before a topic existed (vehicles/command, issue 69): a re-run of `dw-lab keys
+// create` signs the governance and the permissions of the roles that use the topic again, and the
+// planner may then publish it; nothing else changes.
+TEST(Keystore, ARerunSignsAgainWhatTheLabsTopicsChanged) {
+    dw::test::TempDir dir;
+    const std::string copy = dir.file("keys");
+    std::filesystem::copy(keystore(), copy, std::filesystem::copy_options::recursive);
+    const dw::dds::KeystorePaths k{copy};
+    const auto drop = [](std::string text) {  // as it was before vehicles/command
+        for (std::size_t at; (at = text.find("vehicles/command")) != std::string::npos;) {
+            const std::size_t from = text.rfind('\n', at), to = text.find('\n', at);
+            text.erase(from, to - from);
+        }
+        return text;
+    };
+    const std::string planner = dw::read_file(k.permissions_xml("planner")),
+                      stand = dw::read_file(k.permissions_xml("stand_agent"));
+    ASSERT_NE(planner.find("vehicles/command"), std::string::npos);
+    dw::write_file(k.permissions_xml("planner"), drop(planner));
+    dw::security::sign_document(copy, drop(planner), k.permissions("planner"));
+    dw::write_file(k.governance_xml(), drop(dw::read_file(k.governance_xml())));
+    dw::security::sign_document(copy, drop(dw::read_file(k.governance_xml())), k.governance());
+    dw::security::KeystoreOptions o;
+    o.dir = copy;
+    o.identities = dw::security::role_identities();
+    const auto r = dw::security::create_keystore(o);
+    EXPECT_TRUE(r.refreshed_governance);
+    EXPECT_EQ(r.refreshed, std::vector<std::string>{"planner"});
+    EXPECT_EQ(dw::read_file(k.permissions_xml("planner")), planner);
+    EXPECT_EQ(dw::read_file(k.permissions_xml("stand_agent")), stand);
+    std::string content;
+    ASSERT_TRUE(dw::dds::verify_signed(k.permissions("planner"), k.ca_cert(), &content));
+    EXPECT_NE(content.find("vehicles/command"), std::string::npos);
 }
 
 TEST(Keystore, ATamperedPermissionsFileDoesNotVerify) {
@@ -416,6 +454,69 @@ TEST(SecureDds, ATamperedOrMismatchedKeystoreIsRefusedNamingTheFile) {
                                std::filesystem::copy_options::overwrite_existing);
     std::filesystem::copy_file(k.key("planner"), k.key("predictor"), std::filesystem::copy_options::overwrite_existing);
     refused(k.key("predictor"));  // another identity's key
+}
+
+// Issue 70: a permissions file signed by the lab's own CA but holding `<dds/>` crashed every process
+// that started with it (SIGSEGV inside Fast DDS, nothing on stderr). What the CA signed is now
+// checked before Fast DDS reads it: each malformed document is one error naming the file and line.
+TEST(SecureDds, ASignedButMalformedDocumentIsRefusedBeforeFastDdsReadsIt) {
+    dw::test::TempDir dir;
+    const std::string copy = dir.file("keys");
+    std::filesystem::copy(keystore(), copy, std::filesystem::copy_options::recursive);
+    const dw::dds::KeystorePaths k{copy};
+    const std::string good = dw::read_file(k.permissions_xml("predictor"));
+    auto c = secure("predictor");
+    c.security = copy;
+    const auto refusal = [&](const std::string& doc, const std::string& text) -> std::string {
+        dw::security::sign_document(copy, text, doc);
+        try {
+            Participant p(c, "predictor");
+        } catch (const dw::InputError& e) {
+            return e.what();
+        }
+        return "joined";
+    };
+    const auto replaced = [&](const std::string& from, const std::string& to) {
+        std::string t = good;
+        const auto at = t.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        return at == std::string::npos ? t : t.replace(at, from.size(), to);
+    };
+    const std::string perm = k.permissions("predictor");
+    const std::vector<std::pair<std::string, std::string>> cases{
+        {"<dds/>", "has no <permissions>"},
+        {"<dds><permissions/></dds>", "has no <grant>"},
+        {"not xml at all <", "not well-formed XML"},
+        {replaced("<default>DENY</default>", "<default>MAYBE</default>"), "<default> is 'MAYBE'"},
+        {replaced("rt/*/mocap/frame", "rt/*/nocap/frame"), "topic 'rt/*/nocap/frame' names no lab topic"},
+        {replaced("CN=predictor", "CN=planner"), "no <grant> for this identity"},
+        {std::regex_replace(good, std::regex("<not_after>[^<]*</not_after>"),
+                            "<not_after>1999-01-01T00:00:00</not_after>"),
+         "not valid now"},
+        {replaced("<not_before>", "<not_before>soon"), "expected a date and time"},
+    };
+    for (const auto& [text, expected] : cases) {
+        const std::string what = refusal(perm, text);
+        EXPECT_NE(what.find(perm), std::string::npos) << what;
+        EXPECT_NE(what.find(expected), std::string::npos) << what << "\n  expected: " << expected;
+    }
+    dw::security::sign_document(copy, good, perm);
+    EXPECT_EQ(refusal(perm, good), "joined") << "the keystore's own permissions, signed again";
+    const std::string gov = dw::read_file(k.governance_xml());
+    EXPECT_NE(refusal(k.governance(), "<dds/>").find("has no <domain_access_rules>"), std::string::npos);
+    std::string bad = gov;
+    bad.replace(bad.find("<rtps_protection_kind>") + 22, 7, "LOUDLY");
+    EXPECT_NE(refusal(k.governance(), bad).find("<rtps_protection_kind> is 'LOUDLY"), std::string::npos);
+    // As a process: one line naming the file, exit 2 (it was a SIGSEGV).
+    dw::security::sign_document(copy, gov, k.governance());
+    dw::security::sign_document(copy, "<dds/>", perm);
+    const auto r = dw::test::run(
+        {dw::test::bin("dw-probe"), "--domain", std::to_string(c.domain), "--transport", "udp", "--security", copy,
+         "--identity", "predictor", "echo", "stand/wrench", "--timeout", "1", "--quiet"},
+        dir);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find(perm), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
 
 namespace {
