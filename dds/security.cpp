@@ -62,7 +62,11 @@ void check_identity(const KeystorePaths& k, const std::string& identity) {
     if (X509_cmp_current_time(X509_get0_notAfter(cert.get())) < 0)
         refuse(k.cert(identity), "expired (dw-lab keys list; make a new identity)");
     const std::string key_text = read_file(k.key(identity), "--security");
-    const Key key(PEM_read_bio_PrivateKey(bio_of(key_text).get(), nullptr, nullptr, nullptr));
+    if (is_encrypted_key(key_text))
+        refuse(k.key(identity),
+               "an encrypted private key: the lab's keys are not encrypted (no one is there to type a "
+               "passphrase); make the identity again with dw-lab keys create");
+    const Key key = read_private_key(key_text);
     if (!key || X509_check_private_key(cert.get(), key.get()) != 1)
         refuse(k.key(identity), "not the private key of cert.pem");
     std::string governance, permissions;

@@ -32,8 +32,8 @@ struct Doc {
     const std::string& path;
 
     [[noreturn]] void refuse(const XMLElement* at, const std::string& what) const {
-        throw InputError(log::cat("--security: ", path, at ? log::cat(": line ", at->GetLineNum()) : std::string(),
-                                  ": ", what));
+        throw InputError(
+            log::cat("--security: ", path, at ? log::cat(": line ", at->GetLineNum()) : std::string(), ": ", what));
     }
     const XMLElement* child(const XMLElement* e, const char* name) const {
         const XMLElement* c = e->FirstChildElement(name);
@@ -66,7 +66,8 @@ struct Doc {
         const std::string t = text(e);
         std::tm tm{};
         const char* end = strptime(t.c_str(), kTimeFormat, &tm);
-        if (!end) refuse(e, log::cat("<", e->Name(), "> is '", t, "' (expected a date and time, e.g. 2026-12-06T10:00:00)"));
+        if (!end)
+            refuse(e, log::cat("<", e->Name(), "> is '", t, "' (expected a date and time, e.g. 2026-12-06T10:00:00)"));
         return timegm(&tm);
     }
 };
@@ -76,9 +77,8 @@ const XMLElement* section(const Doc& d, tinyxml2::XMLDocument& x, const std::str
     if (x.Parse(xml.data(), xml.size()) != tinyxml2::XML_SUCCESS) {
         std::string why = x.ErrorName();  // "XML_ERROR_MISMATCHED_ELEMENT": "mismatched element"
         why = why.substr(why.rfind("XML_ERROR_") == 0 ? 10 : 0);
-        std::transform(why.begin(), why.end(), why.begin(), [](unsigned char ch) {
-            return ch == '_' ? ' ' : static_cast<char>(std::tolower(ch));
-        });
+        std::transform(why.begin(), why.end(), why.begin(),
+                       [](unsigned char ch) { return ch == '_' ? ' ' : static_cast<char>(std::tolower(ch)); });
         d.refuse(nullptr, log::cat("line ", x.ErrorLineNum(), ": not well-formed XML (", why, ")"));
     }
     const XMLElement* root = x.RootElement();
@@ -123,7 +123,8 @@ void check_rule(const Doc& d, const XMLElement* rule) {
         const std::string_view name = e->Name();
         if (name == "domains") continue;
         if (name != "publish" && name != "subscribe" && name != "relay")
-            d.refuse(e, log::cat("<", rule->Name(), "> holds <", name, "> (expected <publish>, <subscribe> or <relay>)"));
+            d.refuse(e,
+                     log::cat("<", rule->Name(), "> holds <", name, "> (expected <publish>, <subscribe> or <relay>)"));
         const XMLElement* topics = d.child(e, "topics");
         const XMLElement* topic = d.child(topics, "topic");
         for (; topic; topic = topic->NextSiblingElement("topic")) {
@@ -177,7 +178,8 @@ void check_governance(const std::string& xml, const std::string& path) {
         for (const char* k : {"discovery_protection_kind", "liveliness_protection_kind", "rtps_protection_kind"})
             d.one_of(d.child(r, k), kProtectionKinds);
         const XMLElement* topics = d.child(r, "topic_access_rules");
-        for (const XMLElement* t = topics->FirstChildElement("topic_rule"); t; t = t->NextSiblingElement("topic_rule")) {
+        for (const XMLElement* t = topics->FirstChildElement("topic_rule"); t;
+             t = t->NextSiblingElement("topic_rule")) {
             d.text(d.child(t, "topic_expression"));
             for (const char* b : {"enable_discovery_protection", "enable_liveliness_protection",
                                   "enable_read_access_control", "enable_write_access_control"})

@@ -105,8 +105,8 @@ Cert read_cert(const std::string& path) {
 
 Key read_key(const std::string& path) {
     const std::string text = read_file(path, "private key");
-    Bio b(BIO_new_mem_buf(text.data(), static_cast<int>(text.size())));
-    Key k(PEM_read_bio_PrivateKey(b.get(), nullptr, nullptr, nullptr));
+    if (is_encrypted_key(text)) throw InputError(log::cat(path, ": an encrypted private key (the lab's are not)"));
+    Key k = read_private_key(text);
     if (!k) throw InputError(log::cat(path, ": not a PEM private key"));
     return k;
 }

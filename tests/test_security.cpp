@@ -519,6 +519,32 @@ TEST(SecureDds, ASignedButMalformedDocumentIsRefusedBeforeFastDdsReadsIt) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
 
+// Issue 70: an encrypted key.pem made OpenSSL prompt for its passphrase on the terminal, and the
+// process waited there past SIGINT. It is now refused at once, naming the file.
+TEST(SecureDds, AnEncryptedPrivateKeyIsRefusedWithoutAskingForAPassphrase) {
+    dw::test::TempDir dir;
+    const std::string copy = dir.file("keys");
+    std::filesystem::copy(keystore(), copy, std::filesystem::copy_options::recursive);
+    const dw::dds::KeystorePaths k{copy};
+    const dw::ssl::Key key = dw::ssl::read_private_key(dw::read_file(k.key("predictor")));
+    ASSERT_TRUE(key);
+    dw::ssl::Bio out(BIO_new(BIO_s_mem()));
+    char pass[] = "secret";
+    ASSERT_EQ(PEM_write_bio_PKCS8PrivateKey(out.get(), key.get(), EVP_aes_256_cbc(), pass, 6, nullptr, nullptr), 1);
+    char* bytes = nullptr;
+    const long n = BIO_get_mem_data(out.get(), &bytes);
+    dw::write_file(k.key("predictor"), std::string(bytes, static_cast<std::size_t>(n)));
+    auto c = secure("predictor");
+    c.security = copy;
+    try {
+        Participant p(c, "predictor");
+        ADD_FAILURE() << "joined with an encrypted key";
+    } catch (const dw::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(k.key("predictor")), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("encrypted"), std::string::npos) << e.what();
+    }
+}
+
 namespace {
 
 // Every UDP datagram on the loopback interface while it is open (an AF_PACKET socket: root or
