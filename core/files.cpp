@@ -68,8 +68,22 @@ void require_write_access(const fs::path& dir, const std::string& path, std::str
 }
 }  // namespace
 
+void require_replaceable(const std::string& path, std::string_view what) {
+    std::error_code ec;
+    const char* kind = nullptr;
+    switch (fs::symlink_status(path, ec).type()) {
+        case fs::file_type::fifo: kind = "a FIFO"; break;
+        case fs::file_type::character:
+        case fs::file_type::block: kind = "a device node"; break;
+        case fs::file_type::socket: kind = "a socket"; break;
+        default: return;
+    }
+    throw InputError(log::cat(what, " ", path, ": is ", kind, "; an output replaces only a regular file"));
+}
+
 void require_writable_path(const std::string& path, std::string_view what) {
     if (path.empty()) throw InputError(log::cat(what, ": no path given"));
+    require_replaceable(path, what);
     std::error_code ec;
     if (fs::is_directory(path, ec))
         throw InputError(log::cat(what, " ", path, ": is a directory, expected a file name"));
@@ -95,6 +109,7 @@ void require_output_dir(const std::string& path, std::string_view what) {
 
 AtomicFile::AtomicFile(std::string path, unsigned mode)
     : path_(std::move(path)), tmp_(log::cat(path_, ".tmp-", ::getpid())) {
+    require_replaceable(path_, "output");
     const fs::path parent = fs::path(path_).parent_path();
     std::error_code ec;
     if (!parent.empty() && !fs::exists(parent, ec) && !fs::create_directories(parent, ec)) {

@@ -19,6 +19,11 @@ bool present(const std::string& path);
 // Throws dw::InputError unless `path` is an existing regular file that can be opened for reading.
 void require_readable_file(const std::string& path, std::string_view what);
 
+// Throws dw::InputError when something other than a regular file or a symbolic link is at `path`
+// (a FIFO, a device node, a socket): an output replaces only a file (as root, `--out /dev/null`
+// would have replaced the device; a FIFO held the writer past SIGINT). Nothing there is fine.
+void require_replaceable(const std::string& path, std::string_view what);
+
 // Writes `content` to `path` atomically (temporary + rename), making missing folders. Throws
 // dw::RuntimeError naming the path and the system's reason; no file is left at `path` or beside
 // it on failure.

@@ -71,6 +71,17 @@ void process_keys(KeyVisitor& k, ProcessSpec& p, const LabFile& lab) {
     k.flag("experiment", p.experiment);
 }
 
+// What a process writes: the value of its `--out` (as written, before the variables: two processes
+// naming the same text name the same file on the same host).
+std::optional<std::string> output_of(const ProcessSpec& p) {
+    constexpr std::string_view kOut = "--out";
+    for (std::size_t i = 0; i < p.run.size(); ++i) {
+        if (p.run[i] == kOut && i + 1 < p.run.size()) return p.run[i + 1];
+        if (p.run[i].rfind(std::string(kOut) + "=", 0) == 0) return p.run[i].substr(kOut.size() + 1);
+    }
+    return std::nullopt;
+}
+
 // Every key of a lab file, declared once (core/keys.hpp).
 void lab_keys(KeyVisitor& k, LabFile& lab) {
     k.required_constant("format", kFormat);
@@ -79,11 +90,16 @@ void lab_keys(KeyVisitor& k, LabFile& lab) {
     k.require(k.has("processes"), "processes", "expected a non-empty list");
     std::size_t count = lab.processes.size();
     std::set<std::string> names;
+    std::map<std::pair<std::string, std::string>, std::string> outputs;  // (host, --out) -> process
     k.list("processes", count, [&](KeyVisitor& item, std::size_t i) {
         if (lab.processes.size() <= i) lab.processes.resize(i + 1);
         ProcessSpec& p = lab.processes[i];
         process_keys(item, p, lab);
         item.require(names.insert(p.name).second, "name", "'" + p.name + "' is used twice");
+        if (const auto out = output_of(p)) {
+            const auto [at, fresh] = outputs.emplace(std::pair{p.host, *out}, p.name);
+            item.require(fresh, "run", "--out '" + *out + "' is also " + at->second + "'s: two writers, one file");
+        }
     });
     k.require(count > 0, "processes", "expected a non-empty list");
     const auto experiments = std::ranges::count_if(lab.processes, [](const ProcessSpec& p) { return p.experiment; });

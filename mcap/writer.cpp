@@ -71,6 +71,7 @@ Writer::Writer(const std::string& path, const WriterOptions& options)
     // A block and a small chunk's body and indexes; a large chunk's message indexes may grow it, once
     // (the recorder writes its buffer out at each timed flush, long before it holds a block).
     reserve_resident(buffer_, kWriteBlock + 2 * kDirectBody);
+    require_replaceable(path, "recording");
     fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd_ < 0) throw RuntimeError(log::cat("cannot create ", path, ": ", std::strerror(errno)));
     raw(kMagic, sizeof(kMagic));

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "probe/samples.hpp"
+#include "core/errors.hpp"
 #include "support.hpp"
 #include "testkit/recording.hpp"
 
@@ -302,4 +303,23 @@ TEST(Issue17, AFullDiskIsOneLineExit1AndNoPartialFile) {
                                               "--legs", "5", "--jobs", "1", "--out", "@/coverage"},
                                              "size=16k", d),
                                     1, "No space left on device", {});
+}
+
+// Issue 70: an output naming a FIFO or a device node was replaced by a regular file (as root,
+// `--out /dev/null` would have replaced the device), and `record --out FIFO` waited for a reader
+// past SIGINT. Outputs now replace only regular files: one line, exit 2, the node left as it was.
+TEST(Outputs, AFifoOrADeviceNodeIsNeverReplaced) {
+    TempDir d;
+    const std::string fifo = d.file("pipe");
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--out", fifo}, d), "is a FIFO");
+    expect_one_line_exit_2(run({bin("dw-recorder"), "record", "--out", fifo, "--domain", domain(), "--quiet"}, d),
+                           "is a FIFO");
+    expect_one_line_exit_2(run({bin("dw-planner"), "plan", "--formation", "single", "--out", "/dev/null"}, d),
+                           "is a device node");
+    EXPECT_TRUE(fs::is_fifo(fifo));
+    EXPECT_TRUE(fs::is_character_file("/dev/null"));
+    EXPECT_THROW(dw::write_file(fifo, "x"), dw::InputError);
+    EXPECT_THROW(dw::AtomicFile a(fifo), dw::InputError);
+    EXPECT_EQ(temporaries(d.file("")), "");
 }

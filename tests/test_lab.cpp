@@ -108,6 +108,14 @@ TEST(LabFile, ReadsTheSimulatedLabAndNamesWhereItIsWrong) {
     EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - name: a\n    host: mars\n    run: [dw-probe]\n")
                   .find("'mars' is not under hosts"),
               std::string::npos);
+    // Issue 70: two recorders writing one file.
+    EXPECT_NE(error_of("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-recorder, record, --out, r.mcap]}\n"
+                       "  - {name: b, run: [dw-recorder, record, --out, r.mcap]}\n")
+                  .find("processes[1].run: --out 'r.mcap' is also a's: two writers, one file"),
+              std::string::npos)
+        << error_of(
+               "format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-recorder, record, --out, r.mcap]}\n"
+               "  - {name: b, run: [dw-recorder, record, --out, r.mcap]}\n");
     EXPECT_NE(
         error_of("format: downwash-lab/1\nprocesses:\n  - {name: a, run: [dw-probe]}\n  - {name: a, run: [dw-probe]}\n")
             .find("used twice"),
