@@ -33,6 +33,10 @@ inline constexpr std::chrono::milliseconds kBestEffortDrain{500};
 
 namespace detail {
 // Under DDS Security the likely reason an endpoint is refused: the identity's permissions.
+// Sequence numbers a writer may plausibly skip: kSeqSlack, plus kMaxSeqRate a second since its last
+// sample arrived (no lab writer publishes at 100 kHz).
+inline constexpr double kSeqSlack = 1000;
+inline constexpr double kMaxSeqRate = 100'000;
 inline std::string denied_hint(const Participant& p, const char* verb) {
     if (p.config().security.empty()) return "";
     return " (under DDS Security: identity '" + (p.config().identity.empty() ? p.process() : p.config().identity) +
@@ -274,7 +278,7 @@ private:
             meta.reception_time_ns = info.reception_timestamp.to_ns();
             meta.writer = info.publication_handle;
             if constexpr (requires(T & s) { s.header().seq(); }) {
-                meta.missing_before = account(meta.writer, sample_.header().seq());
+                meta.missing_before = account(meta.writer, sample_.header().seq(), meta.reception_time_ns);
             } else {  // another system's type (PX4's): no sequence to account
                 stats_->samples.fetch_add(1, std::memory_order_relaxed);
             }
@@ -298,18 +302,24 @@ private:
             qos_mismatch_line(name_, spec_.type_name, true, describe(qos_), s.last_policy_id, s.total_count));
     }
 
-    // Returns how many of the writer's sequence numbers were skipped before this one.
-    std::uint64_t account(const eprosima::fastdds::dds::InstanceHandle_t& writer, std::uint64_t seq) {
+    // Returns how many of the writer's sequence numbers were skipped before this one. A jump no
+    // writer could have made since its last sample (more than kMaxSeqRate a second, kSeqSlack at
+    // least) is a sequence number from a garbled sample (issue 70: a garbage word counted 1.8e19
+    // samples lost), not a loss: it is not counted and does not move what comes next.
+    std::uint64_t account(const eprosima::fastdds::dds::InstanceHandle_t& writer, std::uint64_t seq, Nanos now_ns) {
         stats_->samples.fetch_add(1, std::memory_order_relaxed);
         // Most topics have one writer: skip the map lookup while the writer stays the same.
         if (next_ == nullptr || !(last_writer_ == writer)) {
-            auto [it, first] = next_seq_.try_emplace(writer, seq);
+            auto [it, first] = next_seq_.try_emplace(writer, NextSeq{seq, now_ns});
             last_writer_ = writer;
             next_ = &it->second;
         }
-        const std::uint64_t missing = seq > *next_ ? seq - *next_ : 0;
+        const double since_s = std::max(0.0, to_seconds(now_ns - next_->at_ns));
+        const double plausible = detail::kSeqSlack + detail::kMaxSeqRate * since_s;
+        const std::uint64_t missing = seq > next_->seq ? seq - next_->seq : 0;
+        if (static_cast<double>(missing) > plausible) return 0;
         stats_->lost.fetch_add(missing, std::memory_order_relaxed);
-        if (seq >= *next_) *next_ = seq + 1;
+        if (seq >= next_->seq) *next_ = {seq + 1, now_ns};
         return missing;
     }
     void writer_gone(const eprosima::fastdds::dds::InstanceHandle_t& handle) {
@@ -332,9 +342,13 @@ private:
     T sample_;  // reused: take_next_sample fills it, no allocation per sample for fixed types
     std::atomic<int> matched_{0};
     // Next expected header.seq per writer; listener thread only.
-    std::map<eprosima::fastdds::dds::InstanceHandle_t, std::uint64_t> next_seq_;
+    struct NextSeq {
+        std::uint64_t seq = 0;  // the header.seq expected next
+        Nanos at_ns = 0;        // when the last counted one arrived
+    };
+    std::map<eprosima::fastdds::dds::InstanceHandle_t, NextSeq> next_seq_;
     eprosima::fastdds::dds::InstanceHandle_t last_writer_;
-    std::uint64_t* next_ = nullptr;
+    NextSeq* next_ = nullptr;
     std::mutex mutex_;
     WriterGone on_writer_gone_;
 };

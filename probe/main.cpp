@@ -12,6 +12,7 @@
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/names.hpp"
+#include "probe/hostile.hpp"
 #include "probe/probe.hpp"
 
 namespace {
@@ -130,6 +131,31 @@ struct CommandCommand {
     }
 };
 
+struct HostileCommand {
+    CLI::App* sub = nullptr;
+    std::vector<std::string> topics;
+    dw::probe::HostileOptions options;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand("hostile",
+                                 "test tool: publish malformed samples on lab topics (bad encapsulation, truncated; "
+                                 "absurd words on the sensor topics that command nothing)");
+        sub->add_option("topics", topics, "topic suffixes (stand/wrench), full names, or all (default)");
+        sub->add_option("--rate", options.rate_hz, "rounds per second (one sample per topic each)")
+            ->check(dw::cli::in({0.1, 1e4, "Hz"}));
+        sub->add_option("--seconds", options.seconds, "stop after this long (0 = until stopped)")
+            ->check(dw::cli::in(dw::kTimeoutRange));
+        sub->add_option("--seed", options.seed, "random seed (which words, how much is cut)")
+            ->check(dw::cli::in(dw::kSeedRange));
+    }
+    int run(const dw::dds::DdsConfig& cfg) {
+        for (const auto& t : dw::dds::select_topics(topics, cfg.ns)) options.topics.push_back(t);
+        options.stop = dw::Shutdown::instance().token();
+        dw::probe::run_hostile(cfg, options, std::cout);
+        return 0;
+    }
+};
+
 // `dw-probe list`: every lab topic with its type and QoS.
 int list_topics(const std::string& ns) {
     dw::dds::topics::for_each([&](const auto& spec) {
@@ -152,10 +178,13 @@ int run(int argc, char** argv) {
     echo.add(app);
     CommandCommand command;
     command.add(app);
+    HostileCommand hostile;
+    hostile.add(app);
 
     cli.parse(argc, argv);
     const dw::dds::DdsConfig& dds_config = cli.dds();
     if (list->parsed()) return list_topics(dds_config.ns);
+    if (hostile.sub->parsed()) return hostile.run(dds_config);
     if (command.sub->parsed()) command.check();
     if (pub.sub->parsed()) pub.check(dds_config.ns);
     if (echo.sub->parsed()) echo.check(dds_config.ns);

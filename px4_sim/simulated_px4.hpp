@@ -33,7 +33,7 @@
 #include <vector>
 
 #include "dds/endpoint.hpp"
-#include "px4_sim/raw.hpp"
+#include "dds/raw.hpp"
 #include "px4_sim/wire.hpp"
 #include "swarm_planner/px4_config.hpp"
 
@@ -152,7 +152,7 @@ private:
     mutable std::mutex mutex_;
     std::unique_ptr<State> s_;
     std::unique_ptr<dds::Writer<msg::VehicleState>> states_;  // when o_.publish_state
-    RawParticipant px4_;
+    dds::RawParticipant px4_;
     std::jthread thread_;
 };
 

@@ -149,6 +149,13 @@ TEST(Endpoints, WriterNumbersSamplesAndReaderCountsGaps) {
     ASSERT_TRUE(eventually([&] { return n == 3; }));
     EXPECT_EQ(reader.lost(), 3u);
     EXPECT_EQ(reader.received(), 3u);
+    // Issue 70: a garbled sequence number (a garbage word) is no loss, and the next counts from 5.
+    c.header().seq(std::uint64_t{1} << 60);
+    ASSERT_TRUE(writer.native().write(&c));
+    c.header().seq(6);
+    ASSERT_TRUE(writer.native().write(&c));
+    ASSERT_TRUE(eventually([&] { return n == 5; }));
+    EXPECT_EQ(reader.lost(), 3u);
 }
 
 TEST(Endpoints, QosMismatchIsReportedOnBothSidesInOneLine) {

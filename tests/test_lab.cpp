@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <sstream>
 #include <thread>
 #include <nlohmann/json.hpp>
@@ -27,6 +28,8 @@
 #include "lab/soak.hpp"
 #include "mcap/mcap.hpp"
 #include "recordings/recordings.hpp"
+#include "dds/endpoint.hpp"
+#include "swarm_planner/plan.hpp"
 #include "support.hpp"
 
 using namespace std::chrono_literals;
@@ -744,4 +747,71 @@ TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
     EXPECT_EQ(j["recorder_lost"].get<std::uint64_t>(), 0u);
     for (const char* png : {"soak/soak_rss.png", "soak/soak_cpu.png"})
         EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
+}
+
+// Issue 70, the hostile-wire suite: the simulated lab flies while `dw-probe hostile` publishes
+// malformed samples on every lab topic, with each topic's own QoS (an unknown encapsulation, cut
+// short, and on the sensor topics that command nothing absurd words: NaN, ±inf, 1e300). Every
+// process survives (each stops with status 0), the experiment ends DONE or ABORTED with a reason,
+// and nothing the planner sends a vehicle is non-finite or outside the room (read on
+// vehicles/setpoint, where the simulated vehicles read it).
+TEST(HostileWire, TheLabUnderMalformedSamplesOnEveryTopicSendsNoAbsurdCommand) {
+    dw::test::TempDir dir;
+    std::ofstream(dir.file("lab.yaml")) << R"(format: downwash-lab/1
+processes:
+  - name: stand_agent
+    run: [dw-stand-agent, run, --sim]
+  - name: mocap_bridge
+    run: [dw-mocap-bridge, --sim, --sim-vehicles, v1]
+  - name: recorder
+    run: [dw-recorder, record, --out, "{run_dir}/exp.mcap", --quiet, --no-fsync]
+  - name: predictor
+    run: [dw-predictor, run, --model, ")" + std::string(DW_SOURCE_DIR) +
+                                               R"(/config/physics.example.yaml"]
+  - name: planner
+    run: [dw-planner, run, --formation, single, --legs, "2", --altitudes, "0.5", --speed, "1.0"]
+    experiment: true
+)";
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = "hostile" + std::to_string(::getpid());
+    dw::dds::Participant watcher(cfg, "watcher");
+    std::mutex m;
+    std::vector<dw::msg::VehicleSetpoint> sent;
+    dw::dds::Reader<dw::msg::VehicleSetpoint> setpoints(
+        watcher, dw::dds::topics::vehicle_setpoint, [&](const dw::msg::VehicleSetpoint& s, const dw::dds::SampleMeta&) {
+            std::lock_guard lock(m);
+            sent.push_back(s);
+        });
+    const std::vector<std::string> dds{"--domain", std::to_string(cfg.domain), "--namespace", cfg.ns};
+    std::vector<std::string> lab_argv{bin("dw-lab"),        "run",       "--lab",
+                                      dir.file("lab.yaml"), "--run-dir", dir.file("run")};
+    lab_argv.insert(lab_argv.end(), dds.begin(), dds.end());
+    dw::Subprocess lab({lab_argv, dir.file("lab.out"), dir.file("lab.err"), {}});
+    std::vector<std::string> hostile_argv{bin("dw-probe"), "hostile", "--rate", "20"};
+    hostile_argv.insert(hostile_argv.begin() + 1, dds.begin(), dds.end());
+    dw::Subprocess hostile({hostile_argv, dir.file("hostile.out"), dir.file("hostile.err"), {}});
+    const auto status = lab.wait_for(300000ms);
+    hostile.signal(SIGINT);
+    EXPECT_EQ(hostile.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("hostile.err"));
+    ASSERT_TRUE(status) << "dw-lab did not end";
+    const std::string out = dw::read_file(dir.file("lab.out")), err = dw::read_file(dir.file("lab.err"));
+    const bool done = out.find("DONE: 2 of 2 legs") != std::string::npos;
+    EXPECT_TRUE(done || err.find("ABORTED") != std::string::npos) << out << err;
+    for (const char* p : {"stand_agent", "mocap_bridge", "recorder", "predictor"})
+        EXPECT_NE(err.find(std::string("stopped ") + p + " (status 0)"), std::string::npos)
+            << p << " did not survive:\n"
+            << err;
+    EXPECT_NE(err.find("planner ended with status " + std::string(done ? "0" : "1")), std::string::npos) << err;
+    EXPECT_NE(dw::read_file(dir.file("hostile.out")).find("stand/wrench garbage"), std::string::npos);
+    std::lock_guard lock(m);
+    ASSERT_GT(sent.size(), 100u);
+    const dw::planner::Geofence room;
+    for (const auto& s : sent) {
+        const dw::physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
+        ASSERT_TRUE(room.contains(x, dw::planner::Geofence::kTolerance_m) && std::isfinite(s.yaw_rad()))
+            << "sent " << x.transpose() << " yaw " << s.yaw_rad() << "\n"
+            << err;
+    }
+    std::printf("%s%zu setpoints checked; %s\n", out.c_str(), sent.size(), done ? "DONE" : "ABORTED");
 }

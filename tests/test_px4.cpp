@@ -16,7 +16,7 @@
 #include "core/errors.hpp"
 #include "dds/time.hpp"
 #include "mocap_bridge/px4_source.hpp"
-#include "px4_sim/raw.hpp"
+#include "dds/raw.hpp"
 #include "px4_sim/simulated_px4.hpp"
 #include "px4_sim/wire.hpp"
 #include "support.hpp"
@@ -62,7 +62,7 @@ struct Captured {
     }
 };
 
-void capture(dw::px4sim::RawParticipant& px4side, const std::string& topic, const std::string& type, Captured& c) {
+void capture(dw::dds::RawParticipant& px4side, const std::string& topic, const std::string& type, Captured& c) {
     px4side.subscribe(topic, "px4_msgs::msg::dds_::" + type + "_", [&c](std::span<const std::uint8_t> b) {
         std::lock_guard lock(c.m);
         c.samples.emplace_back(b.begin(), b.end());
@@ -80,7 +80,7 @@ TEST_P(Px4Wire, TheLinksBytesDecodeByPx4sOwnDefinitions) {
     const auto cfg = loopback("px4wire" + std::string(dw::dds::px4_version(version).name).substr(2));
     Captured traj, mode, cmd, odom;  // outlive the callbacks that fill them
     dw::dds::Participant lab(cfg, "planner");
-    dw::px4sim::RawParticipant px4side(cfg, "px4");
+    dw::dds::RawParticipant px4side(cfg, "px4");
     dw::planner::Px4Options o;
     o.version = version;
     o.odometry_hz = 0;
@@ -582,7 +582,7 @@ TEST(Px4Abort, AnAbortNeverLiftsAVehicleWhenTheFramesDisagree) {
 TEST(Px4Estimate, APx4OnItsOwnSensorsIsPosedInTheLabFromItsEstimate) {
     const auto cfg = loopback("px4est");
     dw::dds::Participant lab(cfg, "bridge");
-    dw::px4sim::RawParticipant px4side(cfg, "observer");
+    dw::dds::RawParticipant px4side(cfg, "observer");
     const dw::planner::Px4Vehicle v{"v1", "px4_1", 1, dw::physics::Vec3(1, 2, 0), std::numbers::pi / 2};
     Captured odom;
     capture(px4side, dw::dds::px4_topic(v.ns, "out", "vehicle_odometry"), "VehicleOdometry", odom);
@@ -672,7 +672,7 @@ TEST(Px4Estimate, APx4WhoseOriginIsOffTheFloorIsTiedToItByItsEstimateOnTheGround
 TEST(Px4TimeJump, ThePoseSourceKeepsAVehiclePosedWhilePx4StampsWithItsBootTime) {
     const auto cfg = loopback("px4jump");
     dw::dds::Participant lab(cfg, "bridge");
-    dw::px4sim::RawParticipant px4side(cfg, "observer");
+    dw::dds::RawParticipant px4side(cfg, "observer");
     const dw::planner::Px4Vehicle v{"v1", "px4_1", 1, dw::physics::Vec3(0, 0, 0), 0};
     Captured odom;
     capture(px4side, dw::dds::px4_topic(v.ns, "out", "vehicle_odometry"), "VehicleOdometry", odom);

@@ -1,9 +1,10 @@
 #pragma once
-// PX4's side of its DDS topics, as bytes: a plain Fast DDS participant whose readers and writers
-// carry serialized payloads under PX4's type names (px4_msgs::msg::dds_::<Type>_) with PX4's
-// QoS (fmu/in readers BEST_EFFORT VOLATILE KEEP_LAST; fmu/out writers TRANSIENT_LOCAL
-// BEST_EFFORT, each created when it first publishes, as PX4's client does). The bytes are read
-// and written with px4_sim/wire.hpp, never with the lab's generated types.
+// DDS topics as bytes: a plain Fast DDS participant whose readers and writers carry serialized
+// payloads, as they are, under any type name. By default with PX4's QoS (fmu/in readers
+// BEST_EFFORT VOLATILE KEEP_LAST; fmu/out writers TRANSIENT_LOCAL BEST_EFFORT, each created when it
+// first publishes, as PX4's client does): PX4's side of its topics, whose bytes px4_sim/wire.hpp
+// reads and writes. With a lab topic's QoS: malformed samples on the lab's own topics
+// (probe/hostile.hpp), which no generated type would write.
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -16,9 +17,19 @@
 #include <string>
 #include <vector>
 
+#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
+#include <optional>
+
 #include "dds/config.hpp"
 
-namespace dw::px4sim {
+namespace dw::dds {
+
+// How a raw topic's writer is made (on its first publish): PX4's QoS unless given; a keyed type for
+// a keyed topic (a keyless writer matches no keyed reader), every sample under one key.
+struct RawWriterSpec {
+    std::optional<eprosima::fastdds::dds::DataWriterQos> qos;
+    bool keyed = false;
+};
 
 class RawParticipant {
 public:
@@ -31,13 +42,14 @@ public:
     // Every sample on `topic` (a full name: rt/...), its payload with the encapsulation, on a Fast DDS thread.
     void subscribe(const std::string& topic, const std::string& type_name, OnBytes on_bytes);
     // Publishes the payload (encapsulation included) on `topic`.
-    bool publish(const std::string& topic, const std::string& type_name, const std::vector<std::uint8_t>& payload);
+    bool publish(const std::string& topic, const std::string& type_name, const std::vector<std::uint8_t>& payload,
+                 const RawWriterSpec& spec = {});
     // The readers of the lab matched on `topic` now (0 if it was never published).
     int matched_readers(const std::string& topic);
 
 private:
     class Listener;
-    eprosima::fastdds::dds::Topic* topic(const std::string& name, const std::string& type_name);
+    eprosima::fastdds::dds::Topic* topic(const std::string& name, const std::string& type_name, bool keyed = false);
 
     eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
     eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
@@ -47,4 +59,4 @@ private:
     std::map<std::string, eprosima::fastdds::dds::DataWriter*> writers_;
 };
 
-}  // namespace dw::px4sim
+}  // namespace dw::dds

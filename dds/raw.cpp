@@ -1,4 +1,4 @@
-#include "px4_sim/raw.hpp"
+#include "dds/raw.hpp"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -11,12 +11,12 @@
 #include "core/errors.hpp"
 #include "dds/participant.hpp"
 
-namespace dw::px4sim {
+namespace dw::dds {
 namespace fdds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastrtps::rtps;
 
 namespace {
-constexpr std::uint32_t kMaxPayload = 1024;  // bytes: every PX4 message the lab uses is far smaller
+constexpr std::uint32_t kMaxPayload = 65536;  // bytes: a PX4 message, or a lab sample (probe/hostile.hpp)
 constexpr int kReaderDepth = 16;
 
 struct RawSample {
@@ -26,10 +26,10 @@ struct RawSample {
 // A type that carries the serialized payload as it is, under PX4's type name.
 class RawType final : public fdds::TopicDataType {
 public:
-    explicit RawType(const std::string& name) {
+    RawType(const std::string& name, bool keyed) {
         setName(name.c_str());
         m_typeSize = kMaxPayload;
-        m_isGetKeyDefined = false;
+        m_isGetKeyDefined = keyed;
     }
     bool serialize(void* data, rtps::SerializedPayload_t* payload) override {
         const auto& b = static_cast<RawSample*>(data)->bytes;
@@ -48,7 +48,13 @@ public:
     }
     void* createData() override { return new RawSample(); }
     void deleteData(void* data) override { delete static_cast<RawSample*>(data); }
-    bool getKey(void*, rtps::InstanceHandle_t*, bool) override { return false; }
+    // A keyed topic's samples all under one key (zero): what they are is not read here.
+    bool getKey(void*, rtps::InstanceHandle_t* handle, bool) override {
+        if (!m_isGetKeyDefined) return false;
+        *handle = rtps::InstanceHandle_t();
+        handle->value[0] = 1;  // defined, and the same for every sample
+        return true;
+    }
 };
 }  // namespace
 
@@ -83,10 +89,10 @@ RawParticipant::~RawParticipant() {
     fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }
 
-fdds::Topic* RawParticipant::topic(const std::string& name, const std::string& type_name) {
+fdds::Topic* RawParticipant::topic(const std::string& name, const std::string& type_name, bool keyed) {
     if (auto* t = participant_->find_topic(name, {0, 0})) return t;
     if (participant_->find_type(type_name).empty())
-        fdds::TypeSupport(new RawType(type_name)).register_type(participant_);
+        fdds::TypeSupport(new RawType(type_name, keyed)).register_type(participant_);
     auto* t = participant_->create_topic(name, type_name, fdds::TOPIC_QOS_DEFAULT);
     if (t == nullptr) throw RuntimeError("cannot create topic " + name);
     return t;
@@ -106,7 +112,7 @@ void RawParticipant::subscribe(const std::string& name, const std::string& type_
 }
 
 bool RawParticipant::publish(const std::string& name, const std::string& type_name,
-                             const std::vector<std::uint8_t>& payload) {
+                             const std::vector<std::uint8_t>& payload, const RawWriterSpec& spec) {
     fdds::DataWriter* w = nullptr;
     {
         std::lock_guard lock(mutex_);
@@ -117,7 +123,8 @@ bool RawParticipant::publish(const std::string& name, const std::string& type_na
             q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
             q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
             q.history().depth = 1;
-            slot = publisher_->create_datawriter(topic(name, type_name), q);
+            if (spec.qos) q = *spec.qos;
+            slot = publisher_->create_datawriter(topic(name, type_name, spec.keyed), q);
             if (slot == nullptr) throw RuntimeError("cannot create a writer on " + name);
         }
         w = slot;
@@ -135,4 +142,4 @@ int RawParticipant::matched_readers(const std::string& name) {
     return st.current_count;
 }
 
-}  // namespace dw::px4sim
+}  // namespace dw::dds
