@@ -16,7 +16,7 @@ namespace dw::probe {
 
 namespace {
 
-constexpr std::size_t kHeaderBytes = 4;   // the CDR encapsulation: id (2 bytes) and options
+constexpr std::size_t kHeaderBytes = 4;    // the CDR encapsulation: id (2 bytes) and options
 constexpr std::uint8_t kUnknownId = 0x77;  // encapsulation 0x7777: no CDR reader knows it
 constexpr int kGarbageEvery = 4;           // about one 8-byte word in this many replaced
 
@@ -77,7 +77,8 @@ HostileCounts run_hostile(const dds::DdsConfig& cfg, const HostileOptions& o, st
     const auto period = std::chrono::duration<double>(1.0 / o.rate_hz);
     const auto start = std::chrono::steady_clock::now();
     for (std::uint64_t round = 0; !o.stop.stop_requested(); ++round) {
-        if (o.seconds > 0 && std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(o.seconds)) break;
+        if (o.seconds > 0 && std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(o.seconds))
+            break;
         dds::topics::for_each([&](const auto& t) {
             if (!wanted(t.suffix)) return;
             using T = typename std::decay_t<decltype(t)>::type;
@@ -88,8 +89,8 @@ HostileCounts run_hostile(const dds::DdsConfig& cfg, const HostileOptions& o, st
                         corrupt(serialized(make_sample<T>(round)), c, rng), spec);
             ++sent[log::cat(t.suffix, " ", kCorruptionNames[static_cast<std::size_t>(c)])];
         });
-        std::this_thread::sleep_until(
-            start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(static_cast<double>(round + 1) * period));
+        std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                  static_cast<double>(round + 1) * period));
     }
     for (const auto& [what, n] : sent) out << what << ": " << n << "\n";
     return sent;

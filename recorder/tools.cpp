@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "core/errors.hpp"
+#include "core/shutdown.hpp"
 #include "core/log.hpp"
 #include "dds/endpoint.hpp"
 #include "mcap/mcap.hpp"
@@ -88,8 +89,10 @@ ReplayStats replay(const std::string& path, dds::Participant& p, const ReplayOpt
     auto publish = [&](const Pending& it) {
         if (!start) start = std::chrono::steady_clock::now(), t0 = it.log_time;
         const auto offset = it.log_time > t0 ? it.log_time - t0 : 0;
-        std::this_thread::sleep_until(
-            *start + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(offset) / o.speed)));
+        const auto due =
+            *start + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(offset) / o.speed));
+        // A recording's gap (an hour without samples) is waited out, but a stop ends the wait at once.
+        if (dw::wait_for(o.stop, due - std::chrono::steady_clock::now())) throw Stopped("the replay");
         if (writers.at(it.channel)->publish(it.data)) ++sent;
     };
     mcap::Handlers h;

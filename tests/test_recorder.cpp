@@ -769,3 +769,37 @@ TEST(Export, AStreamedExportThatFailsLeavesNoFolder) {
     }
     EXPECT_FALSE(std::filesystem::exists(dir.file("out")));
 }
+
+// Issue 70: `replay` of a recording with an hour between two samples slept through SIGINT. The
+// wait for the next sample's time now ends at once when stopped.
+TEST(Recorder, AReplayStopsDuringAnHoursGapInTheRecording) {
+    TempDir dir;
+    const std::string file = dir.file("gap.mcap");
+    {
+        dw::mcap::WriterOptions wo;
+        wo.fsync = false;
+        dw::mcap::Writer w(file, wo);
+        const auto s = w.add_schema("dw::msg::WrenchStamped", "omgidl", "");
+        const auto c = w.add_channel("rt/lab/stand/wrench", s, "cdr", {});
+        dw::msg::WrenchStamped m;
+        dw::msg::WrenchStampedPubSubType support;
+        eprosima::fastrtps::rtps::SerializedPayload_t p(support.getSerializedSizeProvider(&m)());
+        support.serialize(&m, &p);
+        const std::uint64_t t0 = 1'700'000'000'000'000'000, hour = 3600'000'000'000;
+        for (std::uint64_t t : {t0, t0 + hour}) w.write({c, 0, t, t, {p.data, p.length}}, 0);
+        w.close();
+    }
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = "gap" + std::to_string(::getpid());
+    dw::dds::Participant p(cfg, "replay");
+    std::stop_source stop;
+    dw::recorder::ReplayOptions o;
+    o.stop = stop.get_token();
+    std::jthread stopper([&] {
+        std::this_thread::sleep_for(1s);
+        stop.request_stop();
+    });
+    const auto r = dw::recorder::replay(file, p, o);  // returns only if the stop ended the hour's wait
+    EXPECT_EQ(r.sent, 1u);
+}
