@@ -50,6 +50,10 @@ struct Setpoint {
 // solver is confused; 1e39 m is finite as a double but +inf as PX4's float).
 inline constexpr double kMaxPlausiblePositionM = 100.0;
 inline constexpr double kMaxPlausibleSpeedMps = 50.0;
+// A position from a wire that can be a measurement: finite and within kMaxPlausiblePositionM.
+inline bool plausible_position(const Eigen::Vector3d& x) {
+    return x.allFinite() && x.cwiseAbs().maxCoeff() <= kMaxPlausiblePositionM;
+}
 
 // Every component finite: what may drive a vehicle, simulated or real.
 inline bool is_finite(const Setpoint& sp) {

@@ -88,7 +88,15 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
                   std::lock_guard lock(mutex_);
                   auto& v = seen_[s.vehicle_id()];
                   const physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
-                  v.tracking = s.tracking_valid() && x.allFinite();  // a NaN pose is no pose
+                  // Garbage (NaN, 1e300) is no measurement (issue 70): dropped, counted; the last pose
+                  // stands and ages, so a vehicle sending only garbage is "mocap lost" in time.
+                  if (!physics::plausible_position(x)) {
+                      if (v.implausible++ == 0)
+                          log::warn(s.vehicle_id(), ": a vehicle state at ", x.transpose(),
+                                    " is no measurement: dropped (so are any more)");
+                      return;
+                  }
+                  v.tracking = s.tracking_valid();
                   if (v.tracking) {
                       v.position = x;
                       v.seen_ns = p_.clock().monotonic_ns();

@@ -61,6 +61,7 @@ private:
         physics::Vec3 position = physics::Vec3::Zero();
         Nanos seen_ns = 0;
         bool tracking = false;
+        std::uint64_t implausible = 0;  // states dropped as garbage (physics::plausible_position)
     };
     void publish_state(msg::ExperimentPhase phase, int leg, double progress, const std::string& message);
     // Sends the setpoints unless one is not finite: then nothing is sent and the reason returned.

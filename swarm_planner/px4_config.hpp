@@ -101,8 +101,7 @@ inline LocalFrame local_frame(const Px4Vehicle& v) { return {v.origin, v.heading
 // to be normalised (a unit quaternion sent as floats, or a damaged one, still passes).
 inline constexpr double kMinQuaternionNorm = 0.5;
 inline bool usable_pose(const physics::Vec3& x, const Eigen::Quaterniond& q) {
-    return x.allFinite() && x.cwiseAbs().maxCoeff() <= physics::kMaxPlausiblePositionM && q.coeffs().allFinite() &&
-           q.norm() > kMinQuaternionNorm;
+    return physics::plausible_position(x) && q.coeffs().allFinite() && q.norm() > kMinQuaternionNorm;
 }
 // A velocity PX4 may be given; otherwise it is sent as unknown (PX4's NaN), never as inf.
 inline bool usable_velocity(const physics::Vec3& v) {

@@ -92,7 +92,7 @@ VehicleHeights::VehicleHeights(dds::Participant& p, const std::vector<std::strin
       vehicles_(vehicles),
       reader_(p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) {
           const double d = s.position_m().z();
-          if (!std::isfinite(d)) return;
+          if (!physics::plausible_position(physics::Vec3(s.position_m().x(), s.position_m().y(), d))) return;
           if (std::find(vehicles_.begin(), vehicles_.end(), s.vehicle_id()) == vehicles_.end()) return;  // not ours
           std::lock_guard lock(mutex_);
           latest_[s.vehicle_id()] = {d, p_.clock().monotonic_ns()};

@@ -810,3 +810,29 @@ TEST(Px4Odometry, AbsurdPosesAreNotSentAndAbsurdVelocitiesAreSentAsUnknown) {
     EXPECT_FALSE(usable_velocity({INFINITY, 0, 0}));
     EXPECT_FALSE(usable_velocity({0, 1e20, 0}));
 }
+
+// Issue 70: a vehicle state from the wire that is no measurement (1e300, NaN) is dropped where the
+// planner reads it: the descent gate keeps the last height that was one.
+TEST(VehicleHeightsWire, GarbageStatesAreNoHeight) {
+    const auto cfg = loopback("heights");
+    dw::dds::Participant lab(cfg, "planner");
+    dw::dds::Participant bridge(cfg, "mocap_bridge");
+    dw::planner::VehicleHeights heights(lab, {"v1"});
+    dw::dds::Writer<dw::msg::VehicleState> w(bridge, dw::dds::topics::vehicle_state);
+    ASSERT_TRUE(w.wait_for_readers(1, 20000ms));
+    dw::msg::VehicleState s;
+    s.vehicle_id("v1");
+    s.position_m().z(-1.0);
+    w.write(s);
+    ASSERT_TRUE(eventually([&] { return heights.down_of(0) == std::optional<double>(-1.0); }));
+    for (double garbage : {1e300, -1e300, std::nan("")}) {
+        s.position_m().z(garbage);
+        w.write(s);
+        s.position_m().z(0.5);
+        s.position_m().x(garbage);
+        w.write(s);
+        s.position_m().x(0);
+    }
+    std::this_thread::sleep_for(200ms);
+    EXPECT_EQ(heights.down_of(0), std::optional<double>(-1.0));
+}
