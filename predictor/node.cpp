@@ -9,6 +9,7 @@
 #include "core/log.hpp"
 #include "dds/time.hpp"
 #include "physics/bodies.hpp"
+#include "physics/vehicle.hpp"
 
 namespace dw::predictor {
 
@@ -33,7 +34,10 @@ std::optional<FrameNeighbours> FrameFeatures::update(const msg::MocapFrame& fram
     };
     std::vector<Other> others;
     for (const auto& b : frame.bodies()) {
-        if (!b.tracking_valid()) continue;
+        // A body that is no measurement (issue 70: NaN or 1e300 from a wire) is not there.
+        if (!b.tracking_valid() ||
+            !physics::plausible_position(Eigen::Vector3d(b.position_m().x(), b.position_m().y(), b.position_m().z())))
+            continue;
         const std::array<double, 3> p{b.position_m().x(), b.position_m().y(), b.position_m().z()};
         const auto v = velocity(history_[b.name()], t, p);
         if (b.name() == sufferer_) {

@@ -9,6 +9,7 @@
 
 #include "core/log.hpp"
 #include "dds/time.hpp"
+#include "physics/vehicle.hpp"
 
 namespace dw::stand {
 
@@ -28,11 +29,12 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
           physics::Vec3 suf = sufferer_;
           for (const auto& b : f.bodies()) {
               const physics::Vec3 pos(b.position_m().x(), b.position_m().y(), b.position_m().z());
+              // A body that is no measurement (issue 70: NaN or 1e300 from a wire) is not felt.
+              if (!b.tracking_valid() || !physics::plausible_position(pos)) continue;
               if (b.name() == sufferer_name_) {
                   suf = pos;
                   continue;
               }
-              if (!b.tracking_valid()) continue;
               physics::Producer pr = model_.producer(pos - position_error_);  // reported = true + error
               const Eigen::Quaterniond q(b.orientation().w(), b.orientation().x(), b.orientation().y(),
                                          b.orientation().z());

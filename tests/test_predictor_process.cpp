@@ -184,6 +184,15 @@ TEST(PredictorOnline, FramesFullOfNewNamesHoldBoundedMemory) {
     EXPECT_GE(features.bodies_remembered(), 3u);
     ASSERT_TRUE(f.has_value());
     EXPECT_EQ(f->names, (std::vector<std::string>{"v1", "v2"}));
+    // A neighbour that is no measurement (NaN, 1e300 from a wire) is not there; nor is a sufferer.
+    auto frame = lab_frame(kFrames, 1000.0 + kFrames / 180.0);
+    frame.bodies()[1].position_m().x(1e300);
+    frame.bodies()[2].position_m().y(std::nan(""));
+    f = features.update(frame);
+    ASSERT_TRUE(f.has_value());
+    EXPECT_TRUE(f->names.empty());
+    frame.bodies()[0].position_m().z(std::nan(""));
+    EXPECT_FALSE(features.update(frame).has_value());
 }
 
 // Online, each body is what the lab's meta.json says it is, as on a recorded flight: only its

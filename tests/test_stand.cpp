@@ -14,6 +14,10 @@
 #include "stand_agent/emulated_bank.hpp"
 #include "stand_agent/gpiod_lines.hpp"
 #include "stand_agent/hx711.hpp"
+#include "stand_agent/runner.hpp"
+#include "dds/endpoint.hpp"
+#include <thread>
+#include <tuple>
 #include "support.hpp"
 
 using namespace dw::stand;
@@ -338,5 +342,46 @@ TEST(Gpio, NoGpioHereFailsCleanly) {
         GTEST_SKIP() << "this machine has GPIO";
     } catch (const dw::RuntimeError& e) {
         EXPECT_NE(std::string(e.what()).find("cannot open GPIO chip gpiochip0"), std::string::npos) << e.what();
+    }
+}
+
+// Issue 70: the simulated stand feels the bodies of the motion capture. A body that is no
+// measurement (NaN, 1e300 from a wire), the sufferer's own included, is not felt: what the chips
+// read stays finite.
+TEST(StandPhysicsSource, BodiesThatAreNoMeasurementAreNotFelt) {
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = "standsrc" + std::to_string(::getpid());
+    dw::dds::Participant stand(cfg, "stand_agent"), bridge(cfg, "mocap_bridge");
+    dw::stand::PhysicsSource source(stand, dw::physics::PhysicsConfig{}, dw::SystemClock::instance());
+    dw::dds::Writer<dw::msg::MocapFrame> w(bridge, dw::dds::topics::mocap_frame);
+    ASSERT_TRUE(w.wait_for_readers(1, std::chrono::seconds(20)));
+    const auto frame = [](double suffer_d, double v1_n) {
+        dw::msg::MocapFrame f;
+        for (auto [name, n, d] : {std::tuple{"sufferer", 0.0, suffer_d}, std::tuple{"v1", v1_n, -2.0}}) {
+            dw::msg::RigidBody b;
+            b.name(name);
+            b.position_m().x(n);
+            b.position_m().z(d);
+            b.orientation().w(1);
+            b.tracking_valid(true);
+            f.bodies().push_back(b);
+        }
+        return f;
+    };
+    const auto felt = [&] {
+        double sum = 0;
+        for (int chip = 0; chip < 8; ++chip) sum += source.force(chip, dw::SystemClock::instance().monotonic_ns());
+        return sum;
+    };
+    auto good = frame(-1.4, 0.0);
+    w.write(good);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ASSERT_TRUE(std::isfinite(felt()));
+    for (double garbage : {std::nan(""), 1e300}) {
+        auto bad = frame(garbage, garbage);
+        w.write(bad);
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        EXPECT_TRUE(std::isfinite(felt())) << garbage;
     }
 }
