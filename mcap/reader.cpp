@@ -112,9 +112,16 @@ ChunkRecords chunk_records(In& in) {
 
 // The next offset after `from` where a whole chunk with a matching (non-zero) CRC starts, or the
 // file's size: where a salvaging read resumes after a record whose header is damaged.
-std::uint64_t next_sound_chunk(std::span<const std::uint8_t> file, std::uint64_t from) {
+// `progress(q)` is called every kScanReportEvery candidates tried, so that a stop (the handlers'
+// on_progress may throw) ends a scan through a file full of false chunk headers, each of which
+// can claim the rest of the file (issue 70: `recover` on such a file ignored SIGINT).
+constexpr std::uint64_t kScanReportEvery = 64;
+std::uint64_t next_sound_chunk(std::span<const std::uint8_t> file, std::uint64_t from,
+                               const std::function<void(std::uint64_t)>& progress) {
+    std::uint64_t tried = 0;
     for (std::uint64_t q = from; q + 9 < file.size(); ++q) {
         if (file[q] != kChunk) continue;
+        if (progress && ++tried % kScanReportEvery == 0) progress(q);
         std::uint64_t len = 0;
         std::memcpy(&len, file.data() + q + 1, 8);
         if (len > file.size() - q - 9 || len < 8 * 3 + 4 + 4 + 8) continue;
@@ -213,7 +220,9 @@ private:
                                    ") of ", len, " bytes runs past the end of the file (truncated)");
             if (mode_ == ReadMode::strict) throw InputError(problem);
             note(problem);
-            const std::uint64_t next = next_sound_chunk(file_, pos + 1);
+            const std::uint64_t next = next_sound_chunk(file_, pos + 1, [&](std::uint64_t q) {
+                if (h_.on_progress) h_.on_progress(q, file_.size());
+            });
             if (next == file_.size()) return kDone;
             ++r_.skipped_regions;
             return next;

@@ -8,6 +8,7 @@
 #include <random>
 #include <sys/resource.h>
 #include <algorithm>
+#include <thread>
 #include <zlib.h>
 
 #include "core/errors.hpp"
@@ -425,4 +426,40 @@ TEST(McapRecover, StopsWhenAskedAndLeavesNoOutput) {
     o.fsync = false;
     EXPECT_THROW(recover(d.file("full.mcap"), d.file("fixed.mcap"), o, stop.get_token()), dw::Stopped);
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(d.file("")), std::filesystem::directory_iterator()), 1);
+}
+
+// Issue 70: `recover` on a file full of false chunk headers (each claiming the rest of the file,
+// with a CRC to check it by) ignored SIGINT: the scan for the next sound chunk decompressed and
+// checked every candidate without a word. It now reports as it scans, and a stop ends it.
+TEST(McapRecover, AStopEndsAScanThroughFalseChunkHeaders) {
+    dw::test::TempDir dir;
+    const std::string in = dir.file("fake.mcap");
+    constexpr std::size_t kSize = 16 << 20, kEvery = 64;
+    std::vector<std::uint8_t> bytes(kSize, 0x5a);
+    const std::uint8_t magic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
+    std::copy(std::begin(magic), std::end(magic), bytes.begin());
+    bytes[8] = 0;  // an invalid first record: the salvage scan starts here
+    for (std::size_t q = 16; q + 64 < kSize; q += kEvery) {
+        bytes[q] = 0x06;  // a chunk
+        const std::uint64_t len = kSize - q - 9;
+        std::memcpy(&bytes[q + 1], &len, 8);
+        const std::uint64_t size = len - 40;  // start, end, uncompressed size
+        std::memcpy(&bytes[q + 9 + 16], &size, 8);
+        const std::uint32_t crc = 0xdeadbeef;
+        std::memcpy(&bytes[q + 9 + 24], &crc, 4);
+        const std::uint32_t no_compression = 0;  // compression "": the records are the rest
+        std::memcpy(&bytes[q + 9 + 28], &no_compression, 4);
+        std::memcpy(&bytes[q + 9 + 32], &size, 8);  // the records' length: every byte to the end, CRC'd
+    }
+    std::ofstream(in, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    std::stop_source stop;
+    std::jthread stopper([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+        stop.request_stop();
+    });
+    dw::mcap::WriterOptions wo;
+    wo.fsync = false;
+    EXPECT_THROW(dw::mcap::recover(in, dir.file("out.mcap"), wo, stop.get_token()), dw::Stopped);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out.mcap")));
 }
