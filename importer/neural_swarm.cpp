@@ -286,7 +286,7 @@ public:
         std::vector<VehicleLog> logs;
         for (const auto& file : files) {
             throw_if_stopped(o.stop, "the import");
-            logs.push_back(read_neural_swarm_log(file));
+            logs.push_back(read_neural_swarm_log(file, o.stop));
         }
         return to_flight(std::move(logs), o);
     }

@@ -5,6 +5,7 @@
 // aligned at their first samples, as the authors do.
 #include <array>
 #include <cstdint>
+#include <stop_token>
 #include <string>
 #include <vector>
 
@@ -36,8 +37,8 @@ struct VehicleLog {
 inline constexpr const char* kFazField = "ctrlFa.Faz";
 
 // Reads a CSV log (`*.csv`) or a binary log (no extension). Throws dw::InputError with the file,
-// the line or byte offset and the problem.
-VehicleLog read_neural_swarm_log(const std::string& path);
+// the line or byte offset and the problem; dw::Stopped when `stop` is requested.
+VehicleLog read_neural_swarm_log(const std::string& path, const std::stop_token& stop = {});
 
 // A Crazyflie of the collection: mass, arm, propeller and the PWM/voltage thrust map.
 struct CrazyflieType {

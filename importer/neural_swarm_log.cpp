@@ -66,7 +66,11 @@ std::vector<std::string_view> split(std::string_view line) {
     }
 }
 
-VehicleLog read_csv(const std::string& path, VehicleLog log) {
+// A stop is honoured every this many lines, records or resynchronisation offsets (issue 70: a log
+// with a 10 MB garbage tail was resynchronised byte by byte, each try a checksum, past SIGINT).
+constexpr std::size_t kStopCheckEvery = 4096;
+
+VehicleLog read_csv(const std::string& path, VehicleLog log, const std::stop_token& stop) {
     const std::string text = read_file(path, "log");
     std::size_t pos = 0, line_no = 0;
     auto next_line = [&](std::string_view& line) {
@@ -90,7 +94,8 @@ VehicleLog read_csv(const std::string& path, VehicleLog log) {
         at[c] = static_cast<std::size_t>(it - header.begin());
     }
     double first_us = NAN;
-    while (next_line(line)) {
+    for (std::size_t n = 0; next_line(line); ++n) {
+        if (n % kStopCheckEvery == 0) throw_if_stopped(stop, "the import");
         if (line.empty()) continue;
         const auto f = split(line);
         if (f.size() != header.size())
@@ -207,7 +212,7 @@ std::vector<Field> binary_header(const std::string& path, const std::string& byt
     return fields;
 }
 
-VehicleLog read_binary(const std::string& path, VehicleLog log) {
+VehicleLog read_binary(const std::string& path, VehicleLog log, const std::stop_token& stop) {
     log.binary = true;
     const std::string bytes = read_file(path, "log");
     std::size_t pos = 0;
@@ -227,14 +232,15 @@ VehicleLog read_binary(const std::string& path, VehicleLog log) {
     const auto faz = std::find_if(fields.begin(), fields.end(), [](const Field& f) { return f.name == kFazField; });
     const auto* b = reinterpret_cast<const std::uint8_t*>(bytes.data());
     double first_us = NAN;
-    while (pos < bytes.size()) {
+    for (std::size_t n = 0; pos < bytes.size(); ++n) {
+        if (n % kStopCheckEvery == 0) throw_if_stopped(stop, "the import");
         const std::size_t k = b[pos], size = 1 + k * record;
         if (pos + size + 4 > bytes.size() || !checksum_ok(b + pos, size)) {
             ++log.damaged_blocks;  // skip to the next offset where a whole block checks out
             std::size_t next = pos + 1;
             while (next < bytes.size() && !(next + 1 + b[next] * record + 4 <= bytes.size() && b[next] > 0 &&
                                             checksum_ok(b + next, 1 + b[next] * record)))
-                ++next;
+                if (++next % kStopCheckEvery == 0) throw_if_stopped(stop, "the import");
             pos = next;
             continue;
         }
@@ -273,13 +279,13 @@ std::string VehicleLog::where(std::size_t sample) const {
     return binary ? log::cat(file, ": byte ", origin[sample]) : log::cat(file, ":", origin[sample]);
 }
 
-VehicleLog read_neural_swarm_log(const std::string& path) {
+VehicleLog read_neural_swarm_log(const std::string& path, const std::stop_token& stop) {
     VehicleLog log;
     log.file = path;
     const fs::path p(path);
     log.name = p.stem().string().substr(0, p.stem().string().find('_'));  // cf50_01 -> cf50
     (void)crazyflie_type(log.name);
-    log = p.extension() == ".csv" ? read_csv(path, std::move(log)) : read_binary(path, std::move(log));
+    log = p.extension() == ".csv" ? read_csv(path, std::move(log), stop) : read_binary(path, std::move(log), stop);
     if (log.t_s.empty()) throw InputError(log::cat(path, ": no samples"));
     for (std::size_t i = 1; i < log.t_s.size(); ++i) {
         if (!(log.t_s[i] > log.t_s[i - 1]))
