@@ -8,10 +8,11 @@
 #include "core/clock.hpp"
 #include "core/config.hpp"
 #include "dds/config.hpp"
+#include "dds/time.hpp"
 
 namespace dw::dds {
 
-inline constexpr Range kClockOffsetRange{-3600, 3600, "s"};
+inline constexpr Range kClockOffsetRange{-kMaxClockOffsetS, kMaxClockOffsetS, "s"};
 
 class ProcessCli {
 public:

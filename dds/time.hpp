@@ -5,6 +5,10 @@
 
 namespace dw::dds {
 
+// The widest clock error between two lab processes: what --clock-offset may simulate, and beyond
+// which a measured offset on the wire is no measurement.
+inline constexpr double kMaxClockOffsetS = 3600;
+
 inline msg::Time to_msg(Nanos t) {
     msg::Time m;
     Nanos sec = t / 1'000'000'000;

@@ -240,7 +240,8 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
             found.pipeline_delays.push_back(st.pipeline_delay_s());
     } else if (suffix == topics::process_status.suffix) {
         msg::ProcessStatus st;
-        if (deserialize(m.data, st) && st.clock_uncertainty_s() >= 0 && std::isfinite(st.clock_offset_s()))
+        if (deserialize(m.data, st) && st.clock_uncertainty_s() >= 0 &&
+            std::abs(st.clock_offset_s()) <= dds::kMaxClockOffsetS)  // no measurement beyond (1e300, NaN)
             found.offsets[st.process()].push_back(st.clock_offset_s());
     }
 }

@@ -501,6 +501,19 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
             }
             put(cm, f, dw::msg::MocapFramePubSubType());
         }
+        // Issue 70: the stand's heartbeats say its clock is right (offset 0), and garbled ones say
+        // 1e300 — the majority, which would have been the median the export corrected the stand's
+        // stamps by. No measurement beyond dds::kMaxClockOffsetS is taken.
+        const auto cs =
+            w.add_channel("rt/lab/processes/status", w.add_schema("dw::msg::ProcessStatus", "omgidl", ""), "cdr", {});
+        for (double offset : {0.0, 1e300, 1e300}) {
+            dw::msg::ProcessStatus st;
+            st.header().stamp(dw::dds::to_msg(epoch));
+            st.process("stand_agent");
+            st.clock_offset_s(offset);
+            st.clock_uncertainty_s(0.001);
+            put(cs, st, dw::msg::ProcessStatusPubSubType());
+        }
         w.close();
     }
     dw::recordings::export_flight(file, dir.file("flight"), {});
