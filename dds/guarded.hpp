@@ -4,7 +4,8 @@
 // generated code does not catch) — on Fast DDS's listener thread, where nothing above can catch
 // it: the reading process aborted (issue 70). Here it is caught: the sample is refused (Fast DDS
 // drops a sample its type cannot deserialize and goes on with the next), counted for the type,
-// and said once.
+// and said once. So is a sample that decodes but whose header stamp is no time (nanosec at or
+// beyond a second: every reader's arithmetic on stamps assumes it below).
 #include <fastdds/rtps/common/SerializedPayload.h>
 
 #include <atomic>
@@ -29,14 +30,25 @@ public:
     explicit Guarded(std::shared_ptr<Refusals> refusals) : refusals_(std::move(refusals)) {}
     bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
         try {
-            return PubSub::deserialize(payload, data);
+            if (!PubSub::deserialize(payload, data)) return false;
+            using T = typename PubSub::type;
+            if constexpr (requires(T & m) { m.header().stamp().nanosec(); }) {
+                if (static_cast<T*>(data)->header().stamp().nanosec() >= kNanosPerSecond)
+                    return refuse("its header stamp's nanosec is a second or more");
+            }
+            return true;
         } catch (const std::exception& e) {
-            if (refusals_->refused.fetch_add(1) == 0 && refusals_->first) refusals_->first(this->getName(), e.what());
-            return false;
+            return refuse(e.what());
         }
     }
 
 private:
+    static constexpr std::uint32_t kNanosPerSecond = 1'000'000'000;
+    bool refuse(const std::string& what) {
+        if (refusals_->refused.fetch_add(1) == 0 && refusals_->first) refusals_->first(this->getName(), what);
+        return false;
+    }
+
     std::shared_ptr<Refusals> refusals_;
 };
 

@@ -157,7 +157,7 @@ std::shared_ptr<Refusals> Participant::refusals() {
     auto r = std::make_shared<Refusals>();
     r->first = [this](const std::string& type, const std::string& what) {
         report_problem(log::cat("a malformed ", type, " sample refused (", what,
-                                "): it does not decode; this process goes on, and further ones are counted"));
+                                "); this process goes on, and further ones are counted"));
     };
     std::lock_guard lock(refusals_mutex_);
     refusals_.push_back(r);

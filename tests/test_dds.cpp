@@ -449,6 +449,27 @@ private:
 };
 }  // namespace
 
+// Issue 70: a sample that decodes but whose header stamp is no time (nanosec a second or more)
+// was accepted; every reader's arithmetic on stamps assumes nanosec below a second. It is refused
+// where samples are decoded, like one that does not decode.
+TEST(Endpoints, ASampleWhoseStampIsNoTimeIsRefused) {
+    Participant a(test_config(), "writer");
+    Participant b(test_config(), "reader");
+    std::atomic<int> got{0};
+    dw::dds::Reader<dw::msg::ExperimentCommand> reader(
+        b, topics::experiment_command, [&](const dw::msg::ExperimentCommand&, const dw::dds::SampleMeta&) { ++got; });
+    dw::dds::Writer<dw::msg::ExperimentCommand> writer(a, topics::experiment_command);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
+    auto c = dw::probe::make_sample<dw::msg::ExperimentCommand>(0);
+    c.header().stamp().nanosec(1'500'000'000);
+    ASSERT_TRUE(writer.native().write(&c));
+    c.header().stamp().nanosec(999'999'999);
+    c.header().seq(1);
+    ASSERT_TRUE(writer.native().write(&c));
+    EXPECT_TRUE(eventually([&] { return got.load() == 1 && b.refused_samples() == 1; }))
+        << got.load() << " delivered, " << b.refused_samples() << " refused";
+}
+
 TEST(Endpoints, AMalformedSampleIsRefusedAndTheReaderGoesOn) {
     Participant a(test_config(), "hostile");
     Participant b(test_config(), "reader");
