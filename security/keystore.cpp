@@ -199,7 +199,8 @@ KeystoreResult create_keystore(const KeystoreOptions& o) {
     KeystoreResult r;
     const Ca ca = ensure_ca(have, k, o.days, r.new_ca);
     const std::string g = governance_xml();
-    if (r.new_ca || !fs::exists(have.governance()) || read_file(have.governance_xml()) != g) {
+    if (r.new_ca || !fs::exists(have.governance()) || !fs::exists(have.governance_xml()) ||
+        read_file(have.governance_xml()) != g) {
         r.refreshed_governance = !r.new_ca && fs::exists(have.governance());
         write_file(k.governance_xml(), g);
         write_file(k.governance(), smime_sign(g, ca.cert.get(), ca.key.get()));
