@@ -32,11 +32,11 @@ inline constexpr std::chrono::milliseconds kMatchSettle{100};
 inline constexpr std::chrono::milliseconds kBestEffortDrain{500};
 
 namespace detail {
-// Under DDS Security the likely reason an endpoint is refused: the identity's permissions.
 // Sequence numbers a writer may plausibly skip: kSeqSlack, plus kMaxSeqRate a second since its last
 // sample arrived (no lab writer publishes at 100 kHz).
 inline constexpr double kSeqSlack = 1000;
 inline constexpr double kMaxSeqRate = 100'000;
+// Under DDS Security the likely reason an endpoint is refused: the identity's permissions.
 inline std::string denied_hint(const Participant& p, const char* verb) {
     if (p.config().security.empty()) return "";
     return " (under DDS Security: identity '" + (p.config().identity.empty() ? p.process() : p.config().identity) +

@@ -122,16 +122,18 @@ std::string smime_sign(const std::string& text, X509* cert, EVP_PKEY* key) {
     return bio_text(out.get());
 }
 
-std::chrono::system_clock::time_point not_after(X509* x) {
+// A certificate's validity bound as a time point (the epoch if it cannot be read).
+std::chrono::system_clock::time_point time_of(const ASN1_TIME* t) {
     std::tm tm{};
-    if (!ASN1_TIME_to_tm(X509_get0_notAfter(x), &tm)) return {};
+    if (!ASN1_TIME_to_tm(t, &tm)) return {};
     return std::chrono::system_clock::from_time_t(timegm(&tm));
 }
+std::chrono::system_clock::time_point not_after(X509* x) { return time_of(X509_get0_notAfter(x)); }
 
-std::chrono::system_clock::time_point not_before(X509* x) {
-    std::tm tm{};
-    if (!ASN1_TIME_to_tm(X509_get0_notBefore(x), &tm)) return {};
-    return std::chrono::system_clock::from_time_t(timegm(&tm));
+// An identity's permissions, valid as long as its certificate: a re-run (refresh_permissions)
+// derives the same document for the same role and topics.
+std::string permissions_of(const IdentityRequest& id, X509* cert) {
+    return permissions_xml({id.name, id.role, time_of(X509_get0_notBefore(cert)), not_after(cert)});
 }
 
 struct Ca {
@@ -153,8 +155,7 @@ Ca ensure_ca(const dds::KeystorePaths& have, const dds::KeystorePaths& k, int da
 void make_identity(const dds::KeystorePaths& k, const Ca& ca, const IdentityRequest& id, int days) {
     Key key = new_key();
     Cert cert = make_cert(id.name, key.get(), ca.cert.get(), ca.key.get(), days);
-    // Valid as long as the certificate: a re-run (refresh_permissions) derives the same document.
-    const std::string permissions = permissions_xml({id.name, id.role, not_before(cert.get()), not_after(cert.get())});
+    const std::string permissions = permissions_of(id, cert.get());
     write_file(k.key(id.name), pem(key.get()), kPrivate);
     write_file(k.permissions_xml(id.name), permissions);
     write_file(k.permissions(id.name), smime_sign(permissions, ca.cert.get(), ca.key.get()));
@@ -166,7 +167,7 @@ void make_identity(const dds::KeystorePaths& k, const Ca& ca, const IdentityRequ
 bool refresh_permissions(const dds::KeystorePaths& have, const dds::KeystorePaths& k, const Ca& ca,
                          const IdentityRequest& id) {
     const Cert cert = read_cert(have.cert(id.name));
-    const std::string now = permissions_xml({id.name, id.role, not_before(cert.get()), not_after(cert.get())});
+    const std::string now = permissions_of(id, cert.get());
     std::error_code ec;
     if (fs::exists(have.permissions_xml(id.name), ec) && read_file(have.permissions_xml(id.name)) == now) return false;
     write_file(k.permissions_xml(id.name), now);
