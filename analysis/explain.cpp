@@ -143,13 +143,55 @@ Supported also_supported(const ExplainResult& R, const CandidateResult& c) {
     return out;
 }
 
-// Accepted effects that the flight cannot tell from other members of their family: the family named.
-std::vector<FamilyVerdict> families_of(const ExplainResult& R) {
+// The push of the accepted model as a multiple of the plain model's: the least-squares ratio over the
+// samples on legs, in noise floors.
+double push_multiple(const ExplainData& d, const std::vector<Wrench6>& plain, const std::vector<Wrench6>& with) {
+    double xy = 0, xx = 0;
+    for (auto i : d.on_legs)
+        for (std::size_t a = 0; a < 6; ++a) {
+            if (!d.sim.measured_axes()[a]) continue;
+            const double x = plain[i][a] / d.sigma[a], y = with[i][a] / d.sigma[a];
+            xy += x * y, xx += x * x;
+        }
+    return xx > 0 ? xy / xx : 1.0;
+}
+
+// The other members of c's family that this flight cannot be told from c by its design: an accepted
+// gain of the whole push, on a flight where jets share the push wherever it is measured, is any
+// member of its family that acts on the flight (how jets combine shows the same there).
+std::vector<std::string> unseparated_by_design(const ExplainResult& R, const CandidateResult& c,
+                                               const Resimulation& sim) {
+    std::vector<std::string> out;
+    if (!c.effect.type->gain_of_the_push() || sim.neighbours() < 2 || R.one_jet.measured == 0 || R.one_jet.enough())
+        return out;
+    for (const auto* t : physics::effect_types())
+        if (t != c.effect.type && t->family() == c.effect.type->family() && t->applies(sim.neighbours(), sim.flying()))
+            out.push_back(t->name());
+    return out;
+}
+
+std::string by_design_words(const OneJetPart& j) {
+    return log::cat(": jets share the push wherever it is measured (one jet alone in ", j.alone, " of ", j.measured,
+                    " samples, fewer than the ", kMinPartSamples, " a split needs; the others carry ",
+                    fixed(j.median_share * 100, 0),
+                    " % of it at the median), and a gain of the whole push shows "
+                    "alone only where one jet pushes alone: fly one neighbour alone over the stand to separate them");
+}
+
+// Accepted effects that the flight cannot tell from other members of their family: the family named,
+// with what its members share (the delay family: the located shift; the push family: the gain's value,
+// or push_multiple when another member is kept).
+std::vector<FamilyVerdict> families_of(const ExplainResult& R, const Resimulation& sim, double push) {
     std::vector<FamilyVerdict> out;
     for (const auto& c : R.accepted) {
-        const auto others = also_supported(R, c);
+        auto others = also_supported(R, c);
+        const auto by_design = unseparated_by_design(R, c, sim);
+        for (const auto& n : by_design)
+            if (std::find(others.alike.begin(), others.alike.end(), n) == others.alike.end()) others.alike.push_back(n);
         if (others.alike.empty()) continue;
-        FamilyVerdict v{c.effect.type->family(), {c.effect.name}, located_shift(R.shifts), {}};
+        const auto* family = c.effect.type->family();
+        const double gain = c.effect.type->gain_of_the_push() ? c.values.at(0) : push;
+        FamilyVerdict v{family, {c.effect.name}, family == &physics::kPushFamily ? gain : located_shift(R.shifts), {}};
         v.members.insert(v.members.end(), others.alike.begin(), others.alike.end());
         const std::vector<std::string> first(v.members.begin(), v.members.end() - 1);
         const std::string less_well =
@@ -158,10 +200,10 @@ std::vector<FamilyVerdict> families_of(const ExplainResult& R) {
                 : log::cat(" (", log::join(others.less_well), " also passed the held-out test: it explains the shift ",
                            "less well here)");
         v.members.insert(v.members.end(), others.less_well.begin(), others.less_well.end());
-        v.sentence = log::cat(v.family->shared, " of ", std::round(v.shared_value * 1000) / 1000,
-                              " s (the located shift): ", log::join(first), " or ", v.members[first.size()],
-                              " — this flight cannot tell which; ", c.effect.name,
-                              " is kept for its lower held-out error", less_well);
+        const std::string why = by_design.empty() ? "" : by_design_words(R.one_jet);
+        v.sentence = log::cat(family->shared, " of ", std::round(v.shared_value * 1000) / 1000, family->unit, ": ",
+                              log::join(first), " or ", v.members[first.size()], " — this flight cannot tell which",
+                              why, "; ", c.effect.name, " is kept for its lower held-out error", less_well);
         out.push_back(std::move(v));
     }
     return out;
@@ -229,7 +271,8 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     const Folds folds = folds_of(d, o.folds);
     const Baseline final_model = select_and_arbitrate(R, d, base, folds, o, say, stand_in);
     conclude(R, d, base, final_model, stand_in, o, f.meta.formation);
-    R.families = families_of(R);
+    if (sim.neighbours() >= 2) R.one_jet = one_jet_part(d, final_model.pred);
+    R.families = families_of(R, sim, push_multiple(d, base.pred, final_model.pred));
     say("learning what is left as a function of the geometry");
     physics::LearntDiscrepancy model;
     DiscrepancyRun run;

@@ -129,7 +129,7 @@ struct CandidateResult {
 struct FamilyVerdict {
     const physics::EffectFamily* family = nullptr;
     std::vector<std::string> members;  // the accepted one first
-    double shared_value = 0;           // the delay family: seconds
+    double shared_value = 0;           // the delay family: seconds; the push family: × the single jets' sum
     std::string sentence;
 };
 
@@ -181,6 +181,7 @@ struct ExplainResult {
     std::size_t resimulations = 0;        // predictions of the whole flight the fits paid for (analysis/fit.hpp)
     Discrepancy discrepancy;              // what is left after the accepted effects, learnt
     std::vector<FamilyVerdict> families;  // accepted effects the flight cannot tell from their family
+    OneJetPart one_jet;                   // where one jet pushes alone (a flight with two neighbours or more)
     // The strongest line in the residual's spectrum before the fit and after it (analysis/spectrum.hpp).
     SpectralLine line_before, line_after;
 };

@@ -35,6 +35,13 @@ double key_of(SplitAxis a, const ExplainData& d, const std::vector<Wrench6>& wit
     return std::sqrt(push);
 }
 
+Rows near_samples(const ExplainData& d) {
+    Rows near;
+    for (auto i : d.on_legs)
+        if (d.info[i].near) near.push_back(i);
+    return near;
+}
+
 // The two parts of the near samples along axis a: the lowest and the highest third (the two
 // directions of travel), or nothing when the flight does not span the axis.
 std::optional<std::array<Rows, 2>> parts_along(const SplitAxisInfo& a, const ExplainData& d,
@@ -214,11 +221,22 @@ const SplitAxisInfo& split_info(SplitAxis a) {
     return *std::find_if(kSplitAxes.begin(), kSplitAxes.end(), [a](const SplitAxisInfo& x) { return x.axis == a; });
 }
 
+OneJetPart one_jet_part(const ExplainData& d, const std::vector<Wrench6>& with) {
+    OneJetPart out;
+    std::vector<double> shares;
+    for (auto i : near_samples(d)) {
+        if (key_of(SplitAxis::push, d, with, i) < kMeasurablePush) continue;
+        shares.push_back(d.info[i].shared);
+        if (d.info[i].shared < kOneJetShare) ++out.alone;
+    }
+    out.measured = shares.size();
+    if (!shares.empty()) out.median_share = median(shares);
+    return out;
+}
+
 std::optional<SplitMove> one_value_check(const ExplainData& d, const physics::PhysicsConfig& current, const Effect& e,
                                          const std::vector<double>& values, double factor) {
-    Rows near;
-    for (auto i : d.on_legs)
-        if (d.info[i].near) near.push_back(i);
+    const Rows near = near_samples(d);
     if (near.size() < 2 * kMinPartSamples) return std::nullopt;
     Fit fit(d, current, e);
     const double intensity = current.turbulence.enabled ? current.turbulence.intensity : 0.0;

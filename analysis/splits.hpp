@@ -54,9 +54,24 @@ inline constexpr double kSpanRatio = 1.5;            // a flight at one height c
 // The shared push (analysis/resimulation.hpp) is spanned only when its highest third reaches this:
 // a second jet carries at least a fifth of the push there.
 inline constexpr double kMinSharedSpan = 0.2;
+// "One jet pushes alone": the other jets carry less than this share of the push. Jets that do not
+// add as forces differ from the sum by far more than their share (velocities that add: a second jet
+// with 1 % of the push makes it 20 % larger), so a flight's least shared third is not one jet.
+inline constexpr double kOneJetShare = 0.01;
 // The push is split among the near samples where the model predicts at least this push (noise
 // floors, RMS over the axes): where it predicts none, no effect can be measured.
 inline constexpr double kMeasurablePush = 1.0;
+
+// Where one jet pushes alone: the near samples with a measurable
+// push whose other jets carry less than kOneJetShare of it. A gain of the whole push is told from
+// how jets combine only there (physics::kPushFamily).
+struct OneJetPart {
+    std::size_t measured = 0;  // near samples with a measurable push
+    std::size_t alone = 0;     // of them, where one jet pushes alone
+    double median_share = 0;   // the share the other jets carry, at the median of the measured
+    bool enough() const { return alone >= kMinPartSamples; }
+};
+OneJetPart one_jet_part(const ExplainData& d, const std::vector<Wrench6>& with);
 
 // The split along which the effect's value moves most (largest t), and whether beyond the threshold.
 struct SplitMove {

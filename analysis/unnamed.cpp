@@ -194,7 +194,9 @@ std::vector<Case> air_cases() {
          [](PhysicsConfig& c) { c.aggregation = physics::Aggregation::velocity_superposition; },
          {},
          {},
-         {},
+         // jet_merging's meaning is "the aggregate is not the sum of single jets": this is one such
+         // aggregate. Where the jets always share the push, a gain of it is its family too (kPushFamily).
+         {"force_scale", "jet_merging"},
          38},
         {"jain_jet",
          "single",

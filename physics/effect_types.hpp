@@ -34,8 +34,12 @@ inline constexpr const char* kClockOffsetEffect = "clock_offset";
 struct EffectFamily {
     const char* name;
     const char* shared;  // in the report's words
+    const char* unit;    // after the shared quantity's value
 };
-inline constexpr EffectFamily kDelayFamily{"delay", "a delay between force and pose"};
+inline constexpr EffectFamily kDelayFamily{"delay", "a delay between force and pose", " s (the located shift)"};
+// A gain of the whole push, and jets that do not add as forces: both make the push a multiple of
+// the single jets' sum wherever jets share it; a gain shows alone only where one jet pushes alone.
+inline constexpr EffectFamily kPushFamily{"push", "a push", " × the sum of the single jets' pushes"};
 
 struct EffectParameter {
     std::string name, unit;
@@ -106,6 +110,9 @@ public:
     // Its parameters for the family's shared quantity (the delay family's: the shift between force
     // and pose, s), where one reading of it is this effect's; the explainer starts its fit there too.
     virtual std::optional<std::vector<double>> from_family_quantity(double) const { return std::nullopt; }
+    // Whether it is a gain of the whole push, told from the rest of its family only on samples where
+    // one jet pushes alone (its value is then the family's shared quantity).
+    virtual bool gain_of_the_push() const { return false; }
     // The report's JSON gives the parameters as one array under this key ("" : one key each).
     virtual std::string grouped_key() const { return ""; }
 

@@ -13,6 +13,8 @@ public:
     std::string name() const override { return "force_scale"; }
     std::vector<EffectParameter> parameters() const override { return {{"scale", "", 0, 10, 0.3, 3.0, {}, 1.0}}; }
     Stage stage() const override { return Stage::calibration; }
+    const EffectFamily* family() const override { return &kPushFamily; }
+    bool gain_of_the_push() const override { return true; }
     void on_calibration(const Effects& e, Wrench6& w, const Wrench6&) const override {
         for (auto& v : w) v *= e.force_scale.scale;
     }

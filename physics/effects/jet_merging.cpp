@@ -14,6 +14,7 @@ public:
         return {{"contraction", "", 0.05, 2, 0.05, 1.0, range(0.2, 1.0, 5), 0.8}};
     }
     bool changes_flow() const override { return true; }
+    const EffectFamily* family() const override { return &kPushFamily; }
     bool applies(int neighbours, bool) const override { return neighbours >= 2; }
     void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
         e.jet_merging.enabled = on;
