@@ -99,7 +99,9 @@ std::string trial_key(const flight::Flight& f, const std::string& dir) {
     std::set<std::string> logs;
     for (const auto& l : j["source"]["logs"])
         if (l.is_string()) logs.insert(l.get<std::string>());
-    return j["source"].value("collection", std::string()) + " " + log::join(logs, "+");
+    const auto collection = j["source"].find("collection");
+    const bool named = collection != j["source"].end() && collection->is_string();
+    return (named ? collection->get<std::string>() : std::string()) + " " + log::join(logs, "+");
 }
 
 }  // namespace

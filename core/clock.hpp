@@ -9,6 +9,10 @@ namespace dw {
 // Nanoseconds since the Unix epoch (wall time, what goes into message stamps).
 using Nanos = std::int64_t;
 
+// The widest clock error between two lab processes: what --clock-offset may simulate, and beyond
+// which a measured offset or delay (on the wire, in a flight's meta.json) is no measurement.
+inline constexpr double kMaxClockOffsetS = 3600;
+
 class Clock {
 public:
     virtual ~Clock() = default;

@@ -18,12 +18,18 @@
 namespace dw {
 namespace fs = std::filesystem;
 
-void require_readable_file(const std::string& path, std::string_view what) {
+fs::file_status input_status(const std::string& path, std::string_view what) {
     std::error_code ec;
     const auto status = fs::status(path, ec);
-    if (path.empty()) throw InputError(log::cat(what, ": no file given"));
     if (ec && ec != std::errc::no_such_file_or_directory)  // a symbolic link loop, a path through a file
         throw InputError(log::cat(what, " ", path, ": cannot read: ", ec.message()));
+    return status;
+}
+
+void require_readable_file(const std::string& path, std::string_view what) {
+    if (path.empty()) throw InputError(log::cat(what, ": no file given"));
+    const auto status = input_status(path, what);
+    std::error_code ec;
     if (!fs::exists(status)) {
         const bool dangling = fs::is_symlink(fs::symlink_status(path, ec));
         throw InputError(log::cat(what, " ", path, dangling ? ": a symbolic link to no file" : ": no such file"));

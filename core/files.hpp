@@ -3,6 +3,7 @@
 // unreadable is one clear dw::InputError; an output is written to a temporary file beside it,
 // checked, and renamed into place, so a failure (full disk, unwritable folder, a stop request)
 // leaves no half-written file behind.
+#include <filesystem>
 #include <string>
 #include <string_view>
 
@@ -16,6 +17,10 @@ std::string read_file(const std::string& path);
 // Whether anything is at `path`, a dangling or looping symbolic link included: an optional input
 // that is present is read (and refused if broken), never skipped.
 bool present(const std::string& path);
+// What is at an input `path` (following symbolic links; not_found when nothing is): a path the
+// system cannot resolve (a symbolic link loop, a path through a file, no permission to look) is one
+// dw::InputError naming `what` and the path, never the filesystem library's text (exit 1).
+std::filesystem::file_status input_status(const std::string& path, std::string_view what);
 // Throws dw::InputError unless `path` is an existing regular file that can be opened for reading.
 void require_readable_file(const std::string& path, std::string_view what);
 

@@ -5,9 +5,7 @@
 
 namespace dw::dds {
 
-// The widest clock error between two lab processes: what --clock-offset may simulate, and beyond
-// which a measured offset on the wire is no measurement.
-inline constexpr double kMaxClockOffsetS = 3600;
+using dw::kMaxClockOffsetS;  // core/clock.hpp
 
 inline msg::Time to_msg(Nanos t) {
     msg::Time m;

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "core/clock.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
@@ -135,6 +136,7 @@ public:
         read_wrench_source(m);
         read_pose_source(m);
         read_reference(m);
+        read_measured_timing();
         json extra = json::object();
         for (const auto& [k, v] : j_.items())
             if (std::find(kMetaKeys.begin(), kMetaKeys.end(), k) == kMetaKeys.end()) extra[k] = v;
@@ -177,6 +179,16 @@ private:
                 fail("neighbours", log::cat("'", name, "' is listed twice (its force would count twice)"));
             }
             m.neighbours.push_back(name);
+        }
+    }
+    // The lab's measured clock offset and the stand's pipeline delay, kept among the extra keys,
+    // must be times a lab could measure (a 1e300 s offset was printed in full by the explainer).
+    void read_measured_timing() const {
+        const Range offset{-kMaxClockOffsetS, kMaxClockOffsetS, "s"}, delay{0, kMaxClockOffsetS, "s"};
+        for (const auto& [key, range] : {std::pair{kMeasuredClockOffsetKey, offset}, {kStandPipelineDelayKey, delay}}) {
+            if (!j_.contains(key)) continue;
+            if (!j_[key].is_number()) fail(key, "not a number");
+            if (!range.contains(j_[key].get<double>())) fail(key, range_problem(j_[key].get<double>(), range));
         }
     }
     void read_vehicles(Meta& m) const {
@@ -364,9 +376,10 @@ std::vector<Leg> read_legs(const fs::path& root) {
 
 Flight read_flight(const std::string& dir) {
     const fs::path root(dir);
-    std::error_code ec;
-    if (!fs::is_directory(root, ec))
-        throw InputError(log::cat(dir, ": not a flight folder (", ec ? ec.message() : "no such directory", ")"));
+    const auto status = input_status(dir, "flight folder");
+    if (!fs::is_directory(status))
+        throw InputError(log::cat(dir, ": not a flight folder (",
+                                  fs::exists(status) ? "not a directory" : "no such directory", ")"));
     Flight f;
     f.meta = read_meta(root / "meta.json");
     read_wrench(root, f);

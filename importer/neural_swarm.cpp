@@ -312,7 +312,8 @@ std::string collection_of(const std::vector<std::string>& log_files) {
 
 std::vector<CollectionTrial> collection_trials(const std::string& dir) {
     std::error_code ec;
-    if (!fs::is_directory(dir, ec)) throw InputError(log::cat(dir, ": not a folder of Neural-Swarm experiments"));
+    if (!fs::is_directory(input_status(dir, "collection")))
+        throw InputError(log::cat(dir, ": not a folder of Neural-Swarm experiments"));
     std::map<std::string, std::map<std::string, fs::path>> trials;  // name -> vehicle -> log
     for (const auto& experiment : fs::directory_iterator(dir, ec)) {
         if (!experiment.is_directory(ec)) continue;

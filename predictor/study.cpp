@@ -290,7 +290,7 @@ RegimesFiles write_regimes(const std::vector<RegimeRow>& rows, const std::string
 
 RegimesFiles regimes_of_study(const std::string& study_dir, const RegimeOptions& o, std::stop_token stop) {
     const fs::path dir(study_dir), flights = dir / "flights", models = dir / "models";
-    if (!fs::is_directory(flights))
+    if (!fs::is_directory(input_status(flights.string(), "study flights")))
         throw InputError(log::cat(study_dir, ": no flights/ folder (not a dw-predictor study's output)"));
     Dataset all;
     std::vector<fs::path> folders;

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -154,15 +155,17 @@ struct ExportCommand {
         if (cmd->count("--flight")) dw::require_output_dir(flight_dir, "--flight");
         if (cmd->count("--csv")) dw::require_output_dir(csv_dir, "--csv");
         if (flight_dir.empty() && csv_dir.empty()) throw dw::InputError("export: give --flight DIR and/or --csv DIR");
+        // Both appear, or neither: the flight folder is staged until the CSV is written.
+        std::optional<dw::StagedFolder> flight;
         if (!flight_dir.empty()) {
             ex.stop = dw::Shutdown::instance().token();
-            dw::recordings::export_flight(file, flight_dir, ex);
-            std::cout << "flight folder: " << flight_dir << "\n";
+            flight.emplace(flight_dir);
+            dw::recordings::export_flight(file, flight->path(), ex);
         }
-        if (!csv_dir.empty()) {
-            dw::recordings::export_csv(file, csv_dir, dw::Shutdown::instance().token());
-            std::cout << "CSV per topic: " << csv_dir << "\n";
-        }
+        if (!csv_dir.empty()) dw::recordings::export_csv(file, csv_dir, dw::Shutdown::instance().token());
+        if (flight) flight->commit();
+        if (flight) std::cout << "flight folder: " << flight_dir << "\n";
+        if (!csv_dir.empty()) std::cout << "CSV per topic: " << csv_dir << "\n";
         return 0;
     }
 };

@@ -236,7 +236,8 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
         if (deserialize(m.data, p)) found.formation = p.formation();
     } else if (suffix == topics::stand_status.suffix) {
         msg::StandStatus st;
-        if (deserialize(m.data, st) && std::isfinite(st.pipeline_delay_s()) && st.pipeline_delay_s() >= 0)
+        if (deserialize(m.data, st) && std::isfinite(st.pipeline_delay_s()) && st.pipeline_delay_s() >= 0 &&
+            st.pipeline_delay_s() <= dds::kMaxClockOffsetS)
             found.pipeline_delays.push_back(st.pipeline_delay_s());
     } else if (suffix == topics::process_status.suffix) {
         msg::ProcessStatus st;
@@ -458,8 +459,9 @@ ExportStats export_flight(const std::string& path, const std::string& dir, const
 
 flight::Flight read_flight_or_recording(const std::string& path, const ExportOptions& o) {
     namespace fs = std::filesystem;
-    if (fs::is_directory(path)) return flight::read_flight(path);
-    if (!fs::exists(path)) throw InputError(log::cat(path, ": no such flight folder or recording"));
+    const auto status = input_status(path, "flight folder or recording");
+    if (fs::is_directory(status)) return flight::read_flight(path);
+    if (!fs::exists(status)) throw InputError(log::cat(path, ": no such flight folder or recording"));
     if (fs::path(path).extension() != ".mcap")
         throw InputError(log::cat(path, ": not a flight folder or an .mcap recording"));
     return flight_from_recording(path, o);

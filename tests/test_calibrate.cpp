@@ -191,9 +191,13 @@ TEST(PhysicsCalibration, OneTrialIsRefusedInOneLine) {
     FlyOptions fo;
     fo.formation = "single";
     fo.grid.legs = 5;
-    dw::flight::write_flight(simulate_flight(PhysicsConfig{}, fo).flight, dir.file("one"));
+    auto f = simulate_flight(PhysicsConfig{}, fo).flight;
+    // Issue 70: a source whose collection is not a string is no name (the JSON library's own
+    // "type must be string" was the line).
+    f.meta.extra_json = R"({"source": {"collection": 5, "logs": ["a.csv"]}})";
+    dw::flight::write_flight(f, dir.file("one"));
     dw::analysis::CalibrateOptions o;
-    o.flights = {dir.file("one")};
+    o.flights = {dir.file("one"), dir.file("one")};
     o.out_dir = dir.file("cal");
     try {
         dw::analysis::calibrate(o);

@@ -91,6 +91,27 @@ TEST(SimCli, BadInputIsOneLineAndExit2) {
     expect_one_line_exit_2(run({bin("dw-sim"), "fly", "--formation", "single"}, d), "--out is required");
 }
 
+// Issue 70: an input that is a symbolic link loop is bad input — one line naming it, exit 2 — in
+// every tool that reads a flight folder, a recording or a collection (dw-explain said the
+// filesystem library's "filesystem error: status: ..." and exited 1).
+TEST(Cli, AnInputThatIsASymbolicLinkLoopIsOneLineAndExit2) {
+    TempDir d;
+    std::filesystem::create_symlink(d.file("b"), d.file("a"));
+    std::filesystem::create_symlink(d.file("a"), d.file("b"));
+    const std::string loop = d.file("a");
+    const std::vector<std::vector<std::string>> commands{
+        {bin("dw-explain"), "--real", loop, "--out", d.file("o1")},
+        {bin("dw-explain"), "--quiet", "calibrate", "--flights", loop, "--out", d.file("o2")},
+        {bin("dw-sim"), "replay", "--flight", loop, "--out", d.file("o3")},
+        {bin("dw-recorder"), "export", loop, "--flight", d.file("o4")},
+        {bin("dw-import"), "neural-swarm-collection", loop, "--out", d.file("o5")},
+    };
+    for (const auto& c : commands) {
+        SCOPED_TRACE(c[0] + " " + c[1]);
+        expect_one_line_exit_2(run(c, d), "Too many levels of symbolic links");
+    }
+}
+
 // dw-sim replay: a flight's wrench as the physics predicts it along its poses; the RMS against the
 // recording on its blocks printed; a discrepancy this build cannot evaluate is one line and exit 2.
 TEST(SimCli, ReplayPrintsHowCloseThePhysicsComesAndRefusesAForeignDiscrepancy) {

@@ -229,6 +229,14 @@ TEST(FlightFolder, HostileNumbersAndNestingInMetaAndLegsAreOneLocatedLine) {
         {"\"mass_kg\": 0.7", "\"mass_kg\": 1e400", "meta.json: not valid JSON:"},
         {"\"formation\"", std::string(100000, '[') + std::string(100000, ']') + ", \"x\"",
          "nests deeper than 64 levels"},
+        // Issue 70: the lab's measured timing, kept among the extra keys, is a time a lab could
+        // measure (the explainer printed a 1e300 s clock offset in full, 300 digits).
+        {"\"formation\"", "\"clock_offset_measured_s\": 1e300, \"formation\"",
+         "field 'clock_offset_measured_s': 1e+300 is not in [-3600, 3600] s"},
+        {"\"formation\"", "\"clock_offset_measured_s\": \"0.1\", \"formation\"",
+         "field 'clock_offset_measured_s': not a number"},
+        {"\"formation\"", "\"stand_pipeline_delay_s\": -0.5, \"formation\"",
+         "field 'stand_pipeline_delay_s': -0.5 is not in [0, 3600] s"},
     };
     for (const auto& c : cases) {
         const std::string e = with(c.from, c.to);

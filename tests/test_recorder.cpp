@@ -514,8 +514,24 @@ TEST(Recorder, ExportsAFlightFolderFromTheLabsTopics) {
             st.clock_uncertainty_s(0.001);
             put(cs, st, dw::msg::ProcessStatusPubSubType());
         }
+        // And another lab's status beside it: a topic the flight does not read, whose CSV name is
+        // the first one's (below: the CSV export refuses it).
+        const auto other =
+            w.add_channel("rt/labB/processes/status", w.add_schema("dw::msg::ProcessStatus", "omgidl", ""), "cdr", {});
+        dw::msg::ProcessStatus st;
+        st.header().stamp(dw::dds::to_msg(epoch));
+        st.process("elsewhere");
+        put(other, st, dw::msg::ProcessStatusPubSubType());
         w.close();
     }
+    // Issue 70: an export whose CSV fails after its flight folder was made leaves neither (the flight
+    // folder stayed).
+    const auto failed =
+        dw::test::run({bin("dw-recorder"), "export", file, "--flight", dir.file("f2"), "--csv", dir.file("c2")}, dir);
+    EXPECT_EQ(failed.status, 2) << failed.err;
+    EXPECT_NE(failed.err.find("would both be written to processes_status.csv"), std::string::npos) << failed.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("f2")));
+    EXPECT_FALSE(std::filesystem::exists(dir.file("c2")));
     dw::recordings::export_flight(file, dir.file("flight"), {});
     const auto f = dw::flight::read_flight(dir.file("flight"));
     ASSERT_EQ(f.wrench.size(), sim.wrench.size());
