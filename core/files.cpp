@@ -180,6 +180,10 @@ void AtomicFile::commit() {
 StagedFolder::StagedFolder(const std::string& dir) : dir_(dir) {
     std::error_code ec;
     made_dir_ = !fs::exists(dir_, ec);
+    // The highest folder this makes: a failure removes what it made, parents included.
+    for (fs::path p = fs::absolute(dir_, ec); made_dir_ && !p.empty() && !fs::exists(p, ec) && p != p.parent_path();
+         p = p.parent_path())
+        made_top_ = p.string();
     staging_ = (fs::path(dir_) / log::cat(".staging-", ::getpid())).string();
     fs::remove_all(staging_, ec);  // a staging folder of a killed process with this pid
     if (!fs::create_directories(staging_, ec) || ec)
@@ -189,7 +193,11 @@ StagedFolder::StagedFolder(const std::string& dir) : dir_(dir) {
 StagedFolder::~StagedFolder() {
     std::error_code ec;
     fs::remove_all(staging_, ec);
-    if (!committed_ && made_dir_) fs::remove(dir_, ec);  // only if empty: nothing else was put there
+    if (committed_ || !made_dir_) return;
+    for (fs::path p = fs::absolute(dir_, ec); !p.empty(); p = p.parent_path()) {
+        if (!fs::remove(p, ec)) break;  // only if empty: nothing else was put there
+        if (p.string() == made_top_ || p == p.parent_path()) break;
+    }
 }
 
 void StagedFolder::commit() {

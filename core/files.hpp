@@ -63,7 +63,7 @@ private:
 // A multi-file output (a flight folder, a report, a keystore) whole or not at all: its files are
 // written under path() (a staging folder inside `dir`, .staging-<pid>) and moved into `dir` by
 // commit(), each by a rename. Destroyed before commit() (an error, a stop), it removes the staging
-// folder, and `dir` too when it made it. Throws dw::RuntimeError naming the folder.
+// folder, and `dir` too when it made it (with the parents it made for it). Throws dw::RuntimeError naming the folder.
 class StagedFolder {
 public:
     explicit StagedFolder(const std::string& dir);
@@ -76,7 +76,7 @@ public:
     void commit();
 
 private:
-    std::string dir_, staging_;
+    std::string dir_, staging_, made_top_;
     bool made_dir_ = false, committed_ = false;
 };
 

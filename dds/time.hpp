@@ -1,11 +1,19 @@
 #pragma once
 // Conversions between the lab's nanosecond time and the wire's Time (sec, nanosec).
+#include <cmath>
+
 #include "core/clock.hpp"
 #include "dw/msg/Common.h"
 
 namespace dw::dds {
 
 using dw::kMaxClockOffsetS;  // core/clock.hpp
+
+// Whether a stamp from a wire can be a time on this clock: within the widest clock error of `now`
+// (further off it is a garbled or forged word, and never reaches a vehicle as a capture time).
+inline bool stamp_in_time(Nanos stamp, Nanos now) {
+    return std::abs(static_cast<double>(stamp - now)) * 1e-9 <= kMaxClockOffsetS;
+}
 
 inline msg::Time to_msg(Nanos t) {
     msg::Time m;

@@ -209,12 +209,10 @@ bool finite(const RigidBody& b) {
 // Beyond physics::kMaxPlausiblePositionM of the origin a body is garbage, as is a non-finite
 // position, orientation or error.
 bool plausible(const RigidBody& b) {
-    if (!finite(b)) return false;
-    double q = 0;
-    for (float x : b.orientation) q += static_cast<double>(x) * x;
-    return q > 0.25 &&  // a quaternion that normalises
-           std::all_of(b.position.begin(), b.position.end(),
-                       [](float x) { return std::abs(x) <= dw::physics::kMaxPlausiblePositionM; });
+    const auto& p = b.position;
+    const auto& q = b.orientation;
+    return finite(b) && dw::physics::plausible_orientation(Eigen::Vector4f(q[0], q[1], q[2], q[3]).cast<double>()) &&
+           dw::physics::plausible_position(Eigen::Vector3f(p[0], p[1], p[2]).cast<double>());
 }
 
 }  // namespace

@@ -64,6 +64,9 @@ void Px4PoseSource::on_odometry(Vehicle& v, const VehicleOdometry_& m) {
     const physics::Vec3 x = vec(m.position()), vel = vec(m.velocity());
     const Eigen::Quaterniond q(m.q()[0], m.q()[1], m.q()[2], m.q()[3]);
     const bool ok = m.pose_frame() == px4::kFrameNed && planner::usable_pose(x, q);
+    // A velocity beyond what a multirotor can fly (a finite 1e30 m/s carried the pose 1e28 m on) is
+    // unknown: the pose is held, not carried, and that sample cannot show the vehicle at rest.
+    const bool moving_known = m.velocity_frame() == px4::kFrameNed && planner::usable_velocity(vel);
     std::lock_guard lock(mutex_);
     if (!ok) {
         if (rejected_++ == 0)
@@ -77,7 +80,7 @@ void Px4PoseSource::on_odometry(Vehicle& v, const VehicleOdometry_& m) {
     planner::LocalFrame f = planner::local_frame(v.cfg);
     if (o_.px4.ground == planner::GroundFrom::estimate) {  // not posed until its frame is tied to the floor
         const auto armed = armed_.armed(v.cfg.name);
-        v.tie.add(to_seconds(now), x, vel, armed && !*armed);
+        if (moving_known) v.tie.add(to_seconds(now), x, vel, armed && !*armed);
         if (!v.tie.tied()) {
             if (++v.untied % kSayUntiedEvery == 0) log::warn(v.cfg.name, ": not posed yet: ", v.tie.describe());
             return;
@@ -87,7 +90,7 @@ void Px4PoseSource::on_odometry(Vehicle& v, const VehicleOdometry_& m) {
     }
     Estimate e;
     e.position = f.lab_point(x);
-    e.velocity = m.velocity_frame() == px4::kFrameNed && vel.allFinite() ? f.lab_vector(vel) : physics::Vec3::Zero();
+    e.velocity = moving_known ? f.lab_vector(vel) : physics::Vec3::Zero();
     e.attitude = f.lab_attitude(q.normalized());
     e.captured_ns = now - age;
     v.latest = e;

@@ -1,12 +1,14 @@
 #pragma once
 // Simulated vehicles that follow position/velocity setpoints with realistic lag, overshoot and
 // hover noise, plus the random processes the simulator uses.
+#include <array>
 #include <cmath>
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <random>
 
 #include "physics/config.hpp"
+#include "physics/plausible.hpp"
 #include "physics/wrench_model.hpp"
 
 namespace dw::physics {
@@ -44,16 +46,6 @@ struct Setpoint {
     Vec3 acceleration = Vec3::Zero();
     double yaw_rad = 0;
 };
-
-// What a measured pose or velocity in the lab's frame can be: no lab room is larger, no multirotor
-// over a stand faster. Beyond them a value from a wire is garbage (Motive sends ±3.4e38 when its
-// solver is confused; 1e39 m is finite as a double but +inf as PX4's float).
-inline constexpr double kMaxPlausiblePositionM = 100.0;
-inline constexpr double kMaxPlausibleSpeedMps = 50.0;
-// A position from a wire that can be a measurement: finite and within kMaxPlausiblePositionM.
-inline bool plausible_position(const Eigen::Vector3d& x) {
-    return x.allFinite() && x.cwiseAbs().maxCoeff() <= kMaxPlausiblePositionM;
-}
 
 // Every component finite: what may drive a vehicle, simulated or real.
 inline bool is_finite(const Setpoint& sp) {

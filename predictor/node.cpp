@@ -147,12 +147,13 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
         if (unpredicted_.fetch_add(1) == 0) log::warn("a frame left unpredicted (the first; counted): ", e.what());
         return;
     }
-    // Never a non-finite prediction on the wire (issue 70): a NaN body, or a model whose weights
-    // overflow, leaves that frame unpredicted.
-    if (!std::all_of(w.begin(), w.end(), [](double v) { return std::isfinite(v); })) {
+    // Never a prediction on the wire that a stand could not measure (issue 70): a NaN body, or a
+    // model whose weights overflow, leaves that frame unpredicted.
+    if (!physics::plausible_wrench(w)) {
         if (unpredicted_.fetch_add(1) == 0)
             log::warn("a frame left unpredicted (the first; counted): ", model->name(),
-                      " gave a non-finite wrench for it (a non-finite body position, or the model's weights)");
+                      " gave a wrench for it that is not finite or beyond ", physics::kMaxPlausibleForceN, " N or ",
+                      physics::kMaxPlausibleTorqueNm, " N·m (a body's position, or the model's weights)");
         return;
     }
     msg::WrenchPrediction out;

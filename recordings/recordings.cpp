@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <limits>
 #include <queue>
@@ -16,6 +17,7 @@
 #include "core/shutdown.hpp"
 #include "dds/msg_json.hpp"
 #include "dds/time.hpp"
+#include "physics/plausible.hpp"
 
 namespace dw::recordings {
 namespace {
@@ -23,16 +25,6 @@ namespace {
 // How far behind a topic's latest stamp the flight export still puts a row in order (a producer's
 // stamps arrive in order but for jitter; a clock stepping back further makes the export sort in memory).
 constexpr double kReorderWindowS = 2.0;
-
-// A recorded value the flight cannot carry (NaN, inf) is the recording's fault: named there.
-template <std::size_t N>
-void require_finite(const std::array<double, N>& v, const std::string& path, std::string_view topic,
-                    std::uint64_t message) {
-    for (double x : v) {
-        if (!std::isfinite(x))
-            throw InputError(log::cat(path, ": ", topic, " message ", message, " carries a non-finite value"));
-    }
-}
 
 // The process that stamps a topic (the lab's processes are named after their roles).
 template <class T>
@@ -189,6 +181,7 @@ struct Found {
     std::vector<double> pipeline_delays;  // the stand's measured pipeline delays (its status)
     std::string formation = "free";
     bool estimated_poses = false;  // a mocap frame carried the vehicles' own estimates (PX4), not motion capture
+    std::map<std::string, std::size_t> left_out;   // per topic suffix: rows that are no measurement (measurement())
     std::size_t tared_rows = 0, untared_rows = 0;  // stand/wrench samples after and before the stand's first tare
     // Whether a wrench row goes into the flight. FLIGHT_FORMAT's wrench.csv is tared: the samples a
     // stand published before its first tare carry the hover thrust (several newtons) and are left
@@ -201,10 +194,25 @@ struct RowHandlers {
     std::function<void(PoseRow&&)> pose;
 };
 
+// Whether a row can be a measurement (physics/plausible.hpp; a stamp within the widest clock error of
+// when the recorder received it): what is not — a garbled or forged sample on the wire — is left
+// out of the flight and counted, never the end of the export (one such sample in an hour's
+// recording refused the whole flight).
+bool stamped_in_time(double t, std::uint64_t log_time_ns) {
+    return std::abs(t - static_cast<double>(log_time_ns) * 1e-9) <= dds::kMaxClockOffsetS;
+}
+bool measurement(const WrenchRow& r, std::uint64_t log_time_ns) {
+    return stamped_in_time(r.t, log_time_ns) && physics::plausible_wrench(r.w);
+}
+bool measurement(const PoseRow& r, std::uint64_t log_time_ns) {
+    return stamped_in_time(r.t, log_time_ns) && physics::plausible_position(Eigen::Vector3d(r.p[0], r.p[1], r.p[2])) &&
+           physics::plausible_orientation(Eigen::Vector4d(r.q[0], r.q[1], r.q[2], r.q[3]));
+}
+
 // One recorded message: its rows to the handlers, the plan's formation and the clock measurements
 // into `found`; other topics are passed over.
 void read_message(Found& found, const RowHandlers& rows, const std::string& suffix, const mcap::Message& m,
-                  const std::string& path, std::uint64_t read) {
+                  const std::string& path) {
     namespace topics = dds::topics;
     auto undecodable = [&] { return InputError(log::cat(path, ": a ", suffix, " message does not decode")); };
     if (suffix == topics::stand_wrench.suffix) {
@@ -214,7 +222,10 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
                     {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
                      w.torque_nm().z()},
                     w.tared()};
-        require_finite(r.w, path, suffix, read);
+        if (!measurement(r, m.log_time)) {
+            ++found.left_out[suffix];
+            return;
+        }
         ++(r.tared ? found.tared_rows : found.untared_rows);
         rows.wrench(std::move(r));
     } else if (suffix == topics::mocap_frame.suffix) {
@@ -227,9 +238,8 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
                       b.name(),
                       {b.position_m().x(), b.position_m().y(), b.position_m().z()},
                       {b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z()}};
-            require_finite(r.p, path, suffix, read);
-            require_finite(r.q, path, suffix, read);
-            rows.pose(std::move(r));
+            if (measurement(r, m.log_time)) rows.pose(std::move(r));
+            else ++found.left_out[suffix];
         }
     } else if (suffix == topics::experiment_plan.suffix) {
         msg::ExperimentPlan p;
@@ -256,7 +266,7 @@ Found read_rows(const std::string& path, const ExportOptions& o, const RowHandle
     std::uint64_t read = 0;
     h.on_message = [&](const mcap::Message& m) {
         if (++read % kStopCheckEvery == 0) throw_if_stopped(o.stop, "the export");
-        read_message(found, rows, topic_suffix(l.channels.at(m.channel_id).topic), m, path, read);
+        read_message(found, rows, topic_suffix(l.channels.at(m.channel_id).topic), m, path);
     };
     require_sound(mcap::read_file(path, h), path);
     return found;
@@ -291,6 +301,20 @@ std::array<double, 4> normalised(const std::array<double, 4>& q) {
     double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if (norm == 0) norm = 1;
     return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+}
+
+// meta.json's word on the rows that are no measurement, said once per topic on stderr too.
+nlohmann::json left_out_note(const Found& found, const std::string& path) {
+    if (found.left_out.empty()) return nlohmann::json::object();
+    nlohmann::json counts = nlohmann::json::object();
+    for (const auto& [suffix, n] : found.left_out) {
+        log::warn(path, ": left out ", n, " ", suffix, " rows that are no measurement (not finite, beyond ",
+                  physics::kMaxPlausiblePositionM, " m, ", physics::kMaxPlausibleForceN, " N or ",
+                  physics::kMaxPlausibleTorqueNm, " N·m, a quaternion that does not normalise, or stamped more than ",
+                  dds::kMaxClockOffsetS, " s from when they were recorded)");
+        counts[suffix] = n;
+    }
+    return {{"rows_left_out", counts}};
 }
 
 // meta.json's word on the samples from before the stand's tare, said once on stderr too.
@@ -331,6 +355,7 @@ flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& fo
     extra.update(measured_clocks(c.stand_measured, c.mocap_measured, c.stand, c.mocap));
     if (!found.pipeline_delays.empty()) extra[flight::kStandPipelineDelayKey] = median(found.pipeline_delays);
     extra.update(tare_note(found, path));
+    extra.update(left_out_note(found, path));
     m.extra_json = extra.dump();
     return m;
 }

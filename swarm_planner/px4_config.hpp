@@ -97,11 +97,9 @@ struct LocalFrame {
 };
 inline LocalFrame local_frame(const Px4Vehicle& v) { return {v.origin, v.heading_rad}; }
 
-// A pose LocalFrame can carry between the lab and PX4: finite, its quaternion far enough from zero
-// to be normalised (a unit quaternion sent as floats, or a damaged one, still passes).
-inline constexpr double kMinQuaternionNorm = 0.5;
+// A pose LocalFrame can carry between the lab and PX4: a plausible position and orientation.
 inline bool usable_pose(const physics::Vec3& x, const Eigen::Quaterniond& q) {
-    return physics::plausible_position(x) && q.coeffs().allFinite() && q.norm() > kMinQuaternionNorm;
+    return physics::plausible_position(x) && physics::plausible_orientation(q.coeffs());
 }
 // A velocity PX4 may be given; otherwise it is sent as unknown (PX4's NaN), never as inf.
 inline bool usable_velocity(const physics::Vec3& v) {

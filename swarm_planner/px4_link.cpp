@@ -1,5 +1,6 @@
 #include "swarm_planner/px4_link.hpp"
 
+#include <atomic>
 #include <algorithm>
 #include <deque>
 #include <map>
@@ -185,8 +186,9 @@ private:
         std::unique_ptr<dds::Reader<typename Types::Ack>> ack;
         std::unique_ptr<dds::Reader<px4_msgs::msg::dds_::VehicleOdometry_>> odometry;
         std::string odometry_name;
-        StatusSeen st;  // under mutex_
-        GroundTie tie;  // ground: estimate (under mutex_)
+        StatusSeen st;                                  // under mutex_
+        GroundTie tie;                                  // ground: estimate (under mutex_)
+        std::atomic<std::uint64_t> absurd_odometry{0};  // PX4 estimates that are no pose (usable_pose), dropped
         struct {
             double lab_d = 0;                           // PX4's estimated D, in the lab's frame through `frame`
             Nanos seen_ns = 0;                          // monotonic; 0 = never
@@ -476,7 +478,10 @@ private:
     }
 
     // fmu/out/vehicle_odometry (PX4's default dds_topics.yaml bridges it): PX4's estimate, for the
-    // descent's gate. A pose in another frame than NED, or not finite, is not used.
+    // descent's gate. A pose in another frame than NED, or one that is no pose (not finite, beyond
+    // the room's plausible bounds: physics/plausible.hpp), is not used — dropped, counted, said once;
+    // a velocity that is not usable cannot show the vehicle at rest, so that sample does not tie
+    // the ground.
     void add_estimate_reader(Vehicle& v) {
         using Odometry = px4_msgs::msg::dds_::VehicleOdometry_;
         v.odometry_name = dds::px4_topic(v.cfg.ns, "out", "vehicle_odometry");
@@ -486,10 +491,17 @@ private:
             [this, vp](const Odometry& m, const dds::SampleMeta&) {
                 const physics::Vec3 local(m.position()[0], m.position()[1], m.position()[2]),
                     vel(m.velocity()[0], m.velocity()[1], m.velocity()[2]);
-                if (m.pose_frame() != px4::kFrameNed || !local.allFinite()) return;
+                if (m.pose_frame() != px4::kFrameNed) return;
+                if (!physics::plausible_position(local)) {
+                    if (vp->absurd_odometry.fetch_add(1) == 0)
+                        log::warn(vp->cfg.name, ": ", vp->odometry_name,
+                                  " gave a position that is no pose (not finite or beyond ",
+                                  physics::kMaxPlausiblePositionM, " m): dropped (the first; counted)");
+                    return;
+                }
                 std::lock_guard lock(mutex_);
                 const Nanos now = p_.clock().monotonic_ns();
-                if (o_.ground == GroundFrom::estimate) {  // only while PX4 says disarmed
+                if (o_.ground == GroundFrom::estimate && usable_velocity(vel)) {  // only while PX4 says disarmed
                     const bool was = vp->tie.tied();
                     vp->tie.add(to_seconds(now), local, vel, vp->st.seen_ns != 0 && vp->st.arming != px4::kArmed);
                     if (vp->tie.tied()) vp->frame.origin.z() = -*vp->tie.floor_d();

@@ -38,6 +38,14 @@ void Px4OdometryFeed::on_state(const msg::VehicleState& s) {
     const Eigen::Quaterniond q(s.orientation().w(), s.orientation().x(), s.orientation().y(), s.orientation().z());
     const bool valid = s.tracking_valid() && usable_pose(x, q);
     std::lock_guard lock(mutex_);
+    // Its stamp becomes the estimator's capture time: one that is no time here is not sent, and
+    // does not end the vehicle's tracking either (a forged sample must not start a failsafe).
+    if (!dds::stamp_in_time(dds::from_msg(s.header().stamp()), p_.clock().now_ns())) {
+        if (untimely_++ == 0)
+            log::warn(v.topic, ": a state of ", s.vehicle_id(), " stamped more than ", kMaxClockOffsetS,
+                      " s from this clock is not sent (the first; counted)");
+        return;
+    }
     if (!valid) {
         v.tracking = false;
         return;

@@ -48,6 +48,7 @@ private:
     std::deque<Vehicle> vehicles_;  // stable addresses
     std::map<std::string, Vehicle*, std::less<>> by_name_;
     std::vector<double> latencies_ms_;
+    std::uint64_t untimely_ = 0;  // states whose stamp is no time here (dds::stamp_in_time): not sent
     std::unique_ptr<dds::Reader<msg::VehicleState>> states_;  // last: its callback uses the rest
 };
 

@@ -376,3 +376,26 @@ TEST(PredictorOnline, NeverPublishesANonFiniteWrench) {
             EXPECT_TRUE(std::isfinite(v));
     EXPECT_TRUE(got.empty());
 }
+// ... nor a finite wrench no stand could measure (physics::plausible_wrench): a model whose weights
+// are large but finite predicts 1e7 N for every frame, and none of it reaches the wire.
+TEST(PredictorOnline, NeverPublishesAWrenchNoStandCouldMeasure) {
+    dw::test::TempDir dir;
+    const auto model = dir.file("large.json");
+    linear_model("learnt_linear", 1e8f).save(model);  // 1e8 x the offsets (0.3-0.5 m): 1e7 N
+    const auto cfg = node_config("implausible");
+    dw::dds::Participant p(cfg, "test");
+    dw::test::Collected<dw::msg::WrenchPrediction> predictions(p, dw::dds::topics::wrench_prediction);
+    NodeOptions o;
+    o.model_path = model;
+    PredictorNode node(p, o, dw::SystemClock::instance());
+    dw::dds::Writer<dw::msg::MocapFrame> writer(p, dw::dds::topics::mocap_frame);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
+    for (int i = 0; i < 30; ++i) {
+        auto f = frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0, 0.3);
+        writer.write(f);
+        std::this_thread::sleep_for(5ms);
+    }
+    std::this_thread::sleep_for(300ms);
+    EXPECT_GE(node.unpredicted(), 25u);  // best effort on loopback
+    EXPECT_TRUE(predictions.samples().empty());
+}

@@ -715,6 +715,48 @@ TEST(Px4TimeJump, ThePoseSourceKeepsAVehiclePosedWhilePx4StampsWithItsBootTime) 
               events.end());
 }
 
+// Issue 70: PX4's odometry is a wire like any other. An estimate at 1e30 m is no pose (dropped), and
+// a finite velocity of 1e30 m/s is unknown: the pose is held, never carried to the frame's stamp by
+// it (it carried the vehicle 1e28 m away), and the vehicle's state stays finite and in the room.
+TEST(Px4Estimate, AbsurdOdometryNeverCarriesAPoseOutOfTheRoom) {
+    const auto cfg = loopback("px4absurd");
+    dw::dds::Participant lab(cfg, "bridge");
+    dw::dds::RawParticipant px4side(cfg, "hostile");
+    const dw::planner::Px4Vehicle v{"v1", "px4_1", 1, dw::physics::Vec3(0, 0, 0), 0};
+    dw::natnet::Px4SourceOptions so;
+    so.px4.vehicles = {v};
+    dw::natnet::Px4PoseSource source(lab, so);
+    const auto topic = dw::dds::px4_topic(v.ns, "out", "vehicle_odometry");
+    const auto& def = dw::px4sim::msg_def(Msg::vehicle_odometry, Px4Version::v1_15);
+    auto publish = [&](double x, double vn) {
+        const double now_us = static_cast<double>(lab.clock().now_ns()) * 1e-3;
+        px4side.publish(topic, "px4_msgs::msg::dds_::VehicleOdometry_",
+                        dw::px4sim::encode(def, {{"timestamp", {now_us}},
+                                                 {"timestamp_sample", {now_us}},
+                                                 {"pose_frame", {1}},
+                                                 {"position", {x, 0.5, -1.0}},
+                                                 {"q", {1, 0, 0, 0}},
+                                                 {"velocity_frame", {1}},
+                                                 {"velocity", {vn, 0, 0}}}));
+    };
+    ASSERT_TRUE(eventually([&] {
+        publish(1.0, 1e30);
+        publish(1e30, 0.0);
+        return source.frame(lab.clock().now_ns()).states.at(0).tracking_valid();
+    }));
+    for (int i = 0; i < 20; ++i) {
+        publish(1e30, 1e30);
+        std::this_thread::sleep_for(10ms);
+        const auto out = source.frame(lab.clock().now_ns());
+        const auto& b = out.frame.bodies().at(0);
+        const dw::physics::Vec3 p(b.position_m().x(), b.position_m().y(), b.position_m().z());
+        EXPECT_TRUE(dw::physics::plausible_position(p)) << p.transpose();
+        EXPECT_NEAR(p.x(), 1.0, 1e-6) << "held where PX4 last put it";
+        const auto& st = out.states.at(0);
+        EXPECT_TRUE(std::isfinite(st.velocity_mps().x()));
+    }
+}
+
 // Issue 42: a PX4 flying on vision that loses it (no visual odometry reaches its estimator 6 s
 // after arming) has no position left: its failsafe is a blind land (DESCEND). The planner aborts
 // with PX4's reason, and the run ends only once PX4 has landed and disarmed.
@@ -809,6 +851,56 @@ TEST(Px4Odometry, AbsurdPosesAreNotSentAndAbsurdVelocitiesAreSentAsUnknown) {
     EXPECT_TRUE(usable_velocity({0.5, 0, -0.1}));
     EXPECT_FALSE(usable_velocity({INFINITY, 0, 0}));
     EXPECT_FALSE(usable_velocity({0, 1e20, 0}));
+}
+
+// Issue 70: a vehicle state's stamp becomes EKF2's capture time (timestamp_sample). A state stamped
+// a day from this clock (a garbled word, a forgery) is not sent and does not end the vehicle's
+// tracking; the good states around it are sent as before.
+TEST(Px4Odometry, AStateStampedFarFromThisClockIsNotSent) {
+    const auto cfg = loopback("px4stamp");
+    dw::dds::Participant lab(cfg, "planner");
+    dw::dds::Participant hostile(cfg, "mocap_bridge");
+    dw::dds::RawParticipant px4side(cfg, "px4");
+    dw::planner::Px4Options o;
+    o.vehicles = {dw::planner::Px4Vehicle{"v1", "px4_1", 1, dw::physics::Vec3(0, 0, 0), 0}};
+    o.odometry_hz = 0;  // every state
+    Captured sent;
+    capture(px4side, dw::dds::px4_topic("px4_1", "in", "vehicle_visual_odometry"), "VehicleOdometry", sent);
+    dw::planner::Px4OdometryFeed feed(lab, o, true);
+    dw::dds::Writer<dw::msg::VehicleState> states(hostile, dw::dds::topics::vehicle_state);
+    ASSERT_TRUE(states.wait_for_readers(1, 20000ms));
+    auto state = [&](double day_off) {
+        dw::msg::VehicleState s;
+        s.vehicle_id("v1");
+        s.tracking_valid(true);
+        s.position_m().z(-1.0);
+        s.orientation().w(1.0);
+        s.header().stamp(dw::dds::to_msg(lab.clock().now_ns() + static_cast<dw::Nanos>(day_off * 86400e9)));
+        return s;
+    };
+    auto good = state(0);
+    ASSERT_TRUE(eventually([&] {
+        states.write(good);
+        return sent.size() > 0;
+    }));
+    const auto before = sent.size();
+    for (int i = 0; i < 20; ++i) {
+        auto s = state(i % 2 ? 1.0 : -1.0);
+        states.write(s);
+        std::this_thread::sleep_for(5ms);
+    }
+    std::this_thread::sleep_for(200ms);
+    EXPECT_EQ(sent.size(), before) << "a state a day off was sent to PX4";
+    const auto& def = dw::px4sim::msg_def(Msg::vehicle_odometry, Px4Version::v1_15);
+    const auto last = sent.last();
+    const auto reset = dw::px4sim::value(dw::px4sim::decode(def, last), "reset_counter");
+    good = state(0);
+    ASSERT_TRUE(eventually([&] {
+        states.write(good);
+        return sent.size() > before;
+    }));
+    EXPECT_EQ(dw::px4sim::value(dw::px4sim::decode(def, sent.last()), "reset_counter"), reset)
+        << "tracking was not lost: no reset";
 }
 
 // Issue 70: a vehicle state from the wire that is no measurement (1e300, NaN) is dropped where the
