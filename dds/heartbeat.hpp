@@ -62,7 +62,7 @@ struct PeerEvent {
 
 // Processes a heartbeat table remembers: a lab runs a dozen; a writer inventing process names
 // every heartbeat makes the least recently heard forgotten, never memory without bound.
-inline constexpr std::size_t kMaxPeers = 256;
+inline constexpr std::size_t kMaxPeers = kMaxInstances;  // the heartbeat topic's instances (dds/qos.hpp)
 
 // The peer bookkeeping, apart from DDS so it can be driven by tests with a manual clock.
 class PeerTable {

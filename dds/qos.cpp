@@ -32,6 +32,14 @@ Shape shape_of(QosProfile p, const QosOverrides& o) {
 const eprosima::fastrtps::Duration_t kLease(2, 0);
 const eprosima::fastrtps::Duration_t kAnnounce(0, 500'000'000);
 
+// At most kMaxInstances instances of `depth` samples each.
+template <class Q>
+void limit_instances(Q& q, int depth) {
+    q.resource_limits().max_instances = kMaxInstances;
+    q.resource_limits().max_samples_per_instance = depth;
+    q.resource_limits().max_samples = kMaxInstances * depth;
+}
+
 template <class Q>
 std::string describe_common(const Q& q) {
     return log::cat(q.reliability().kind == fdds::RELIABLE_RELIABILITY_QOS ? "RELIABLE" : "BEST_EFFORT", " ",
@@ -59,6 +67,7 @@ fdds::DataWriterQos writer_qos(QosProfile p, const QosOverrides& o) {
     q.durability().kind = s.transient_local ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS : fdds::VOLATILE_DURABILITY_QOS;
     q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
     q.history().depth = s.depth;
+    limit_instances(q, s.depth);
     // Synchronous publishing: the sample is handed to the transport in write() (lowest latency).
     q.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
     if (s.liveliness) {
@@ -76,6 +85,7 @@ fdds::DataReaderQos reader_qos(QosProfile p, const QosOverrides& o) {
     q.durability().kind = s.transient_local ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS : fdds::VOLATILE_DURABILITY_QOS;
     q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
     q.history().depth = s.depth;
+    limit_instances(q, s.depth);
     if (s.liveliness) {
         q.liveliness().kind = fdds::AUTOMATIC_LIVELINESS_QOS;
         q.liveliness().lease_duration = kLease;

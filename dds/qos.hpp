@@ -17,6 +17,12 @@ enum class QosProfile {
                 // (its writers are TRANSIENT_LOCAL BEST_EFFORT: they match); never awaits the lab's readers
 };
 
+// Instances a keyed topic holds (its reader and its writer): the widest keyed set of a lab, its
+// processes (the heartbeat, kMaxPeers) or vehicles. Fast DDS's default is 10: an eleventh process's
+// heartbeat, or a vehicle after a writer's ten invented ids, was refused. Each instance keeps its
+// profile's depth, so a topic holds at most kMaxInstances × depth samples.
+inline constexpr int kMaxInstances = 256;
+
 // Deliberate deviations from a profile (tools and tests).
 struct QosOverrides {
     std::optional<bool> reliable;

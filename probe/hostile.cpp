@@ -7,10 +7,12 @@
 #include <thread>
 
 #include "core/log.hpp"
+#include "dds/px4.hpp"
 #include "dds/qos.hpp"
 #include "dds/raw.hpp"
 #include "dds/topics.hpp"
 #include "probe/samples.hpp"
+#include "px4_sim/wire.hpp"
 
 namespace dw::probe {
 
@@ -46,6 +48,45 @@ std::vector<Corruption> corruptions_for(const Spec& t) {
     return {Corruption::encapsulation, Corruption::truncated, Corruption::garbage};
 }
 
+// PX4's output topics the lab reads: what a PX4 client sends (zeros but its frames), corrupted as
+// the lab's own are. Odometry is a sensor: absurd words too (PX4 estimating 1e300 m). Status and
+// acks state and answer: a decodable forgery is for DDS Security to keep out, so only the
+// undecodable kinds.
+struct Px4Output {
+    px4sim::Msg msg;
+    const char* type;  // px4_msgs::msg::dds_::<this>_
+    bool sensor;
+    std::string_view topic(const dds::Px4VersionInfo& v) const {
+        switch (msg) {
+            case px4sim::Msg::vehicle_status: return v.status_topic;
+            case px4sim::Msg::vehicle_command_ack: return v.ack_topic;
+            default: return "vehicle_odometry";
+        }
+    }
+};
+constexpr std::array<Px4Output, 3> kPx4Outputs{{{px4sim::Msg::vehicle_odometry, "VehicleOdometry", true},
+                                                {px4sim::Msg::vehicle_status, "VehicleStatus", false},
+                                                {px4sim::Msg::vehicle_command_ack, "VehicleCommandAck", false}}};
+constexpr dds::Px4Version kPx4Version = dds::Px4Version::v1_15;
+
+// One round on every PX4 output topic of namespace ns.
+void px4_round(dds::RawParticipant& raw, const std::string& ns, std::uint64_t round, std::mt19937_64& rng,
+               HostileCounts& sent) {
+    const auto& version = dds::px4_version(kPx4Version);
+    for (const auto& out : kPx4Outputs) {
+        const std::vector<Corruption> kinds =
+            out.sensor ? std::vector{Corruption::encapsulation, Corruption::truncated, Corruption::garbage}
+                       : std::vector{Corruption::encapsulation, Corruption::truncated};
+        const Corruption c = kinds[round % kinds.size()];
+        const std::string topic = dds::px4_topic(ns, "out", out.topic(version));
+        const auto bytes =
+            px4sim::encode(px4sim::msg_def(out.msg, kPx4Version),
+                           {{"pose_frame", {dds::px4::kFrameNed}}, {"velocity_frame", {dds::px4::kFrameNed}}});
+        raw.publish(topic, log::cat("px4_msgs::msg::dds_::", out.type, "_"), corrupt(bytes, c, rng));
+        ++sent[log::cat(topic, " ", kCorruptionNames[static_cast<std::size_t>(c)])];
+    }
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> corrupt(std::vector<std::uint8_t> b, Corruption c, std::mt19937_64& rng) {
@@ -72,7 +113,8 @@ HostileCounts run_hostile(const dds::DdsConfig& cfg, const HostileOptions& o, st
     std::mt19937_64 rng(o.seed);
     HostileCounts sent;
     const auto wanted = [&](std::string_view suffix) {
-        return o.topics.empty() || std::find(o.topics.begin(), o.topics.end(), suffix) != o.topics.end();
+        return o.lab_topics &&
+               (o.topics.empty() || std::find(o.topics.begin(), o.topics.end(), suffix) != o.topics.end());
     };
     const auto period = std::chrono::duration<double>(1.0 / o.rate_hz);
     const auto start = std::chrono::steady_clock::now();
@@ -89,6 +131,7 @@ HostileCounts run_hostile(const dds::DdsConfig& cfg, const HostileOptions& o, st
                         corrupt(serialized(make_sample<T>(round)), c, rng), spec);
             ++sent[log::cat(t.suffix, " ", kCorruptionNames[static_cast<std::size_t>(c)])];
         });
+        for (const auto& ns : o.px4_namespaces) px4_round(raw, ns, round, rng, sent);
         std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                   static_cast<double>(round + 1) * period));
     }

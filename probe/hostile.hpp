@@ -32,8 +32,12 @@ std::vector<std::uint8_t> corrupt(std::vector<std::uint8_t> good, Corruption c, 
 
 struct HostileOptions {
     std::vector<std::string> topics;  // suffixes; empty: every lab topic
-    double rate_hz = 20;              // rounds per second, one sample per topic each
-    double seconds = 0;               // 0: until stopped
+    // PX4 clients' namespaces whose output topics (odometry, status, ack; v1.15's layout) get the
+    // same corruptions; empty: none.
+    std::vector<std::string> px4_namespaces;
+    bool lab_topics = true;  // false: PX4's output topics only
+    double rate_hz = 20;     // rounds per second, one sample per topic each
+    double seconds = 0;      // 0: until stopped
     std::uint64_t seed = 1;
     std::stop_token stop;
 };

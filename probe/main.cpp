@@ -147,6 +147,10 @@ struct HostileCommand {
             ->check(dw::cli::in(dw::kTimeoutRange));
         sub->add_option("--seed", options.seed, "random seed (which words, how much is cut)")
             ->check(dw::cli::in(dw::kSeedRange));
+        sub->add_option("--px4", options.px4_namespaces,
+                        "PX4 namespaces (px4_1,...) whose output topics (vehicle_odometry, vehicle_status, "
+                        "vehicle_command_ack; v1.15) get the same")
+            ->delimiter(',');
     }
     int run(const dw::dds::DdsConfig& cfg) {
         for (const auto& t : dw::dds::select_topics(topics, cfg.ns)) options.topics.push_back(t);

@@ -194,18 +194,14 @@ struct RowHandlers {
     std::function<void(PoseRow&&)> pose;
 };
 
-// Whether a row can be a measurement (physics/plausible.hpp; a stamp within the widest clock error of
-// when the recorder received it): what is not — a garbled or forged sample on the wire — is left
-// out of the flight and counted, never the end of the export (one such sample in an hour's
-// recording refused the whole flight).
-bool stamped_in_time(double t, std::uint64_t log_time_ns) {
-    return std::abs(t - static_cast<double>(log_time_ns) * 1e-9) <= dds::kMaxClockOffsetS;
-}
-bool measurement(const WrenchRow& r, std::uint64_t log_time_ns) {
-    return stamped_in_time(r.t, log_time_ns) && physics::plausible_wrench(r.w);
-}
-bool measurement(const PoseRow& r, std::uint64_t log_time_ns) {
-    return stamped_in_time(r.t, log_time_ns) && physics::plausible_position(Eigen::Vector3d(r.p[0], r.p[1], r.p[2])) &&
+// Whether a row can be a measurement (physics/plausible.hpp): what is not — a garbled or forged
+// sample on the wire — is left out of the flight and counted, never the end of the export (one such
+// sample in an hour's recording refused the whole flight). Its stamp is not judged here: a
+// recording's stamps may be another time's (a replay recorded, a probe's), and a stray one is found
+// where the flight is read (its samples per second).
+bool measurement(const WrenchRow& r) { return physics::plausible_wrench(r.w); }
+bool measurement(const PoseRow& r) {
+    return physics::plausible_position(Eigen::Vector3d(r.p[0], r.p[1], r.p[2])) &&
            physics::plausible_orientation(Eigen::Vector4d(r.q[0], r.q[1], r.q[2], r.q[3]));
 }
 
@@ -222,7 +218,7 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
                     {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
                      w.torque_nm().z()},
                     w.tared()};
-        if (!measurement(r, m.log_time)) {
+        if (!measurement(r)) {
             ++found.left_out[suffix];
             return;
         }
@@ -238,7 +234,7 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
                       b.name(),
                       {b.position_m().x(), b.position_m().y(), b.position_m().z()},
                       {b.orientation().w(), b.orientation().x(), b.orientation().y(), b.orientation().z()}};
-            if (measurement(r, m.log_time)) rows.pose(std::move(r));
+            if (measurement(r)) rows.pose(std::move(r));
             else ++found.left_out[suffix];
         }
     } else if (suffix == topics::experiment_plan.suffix) {
@@ -310,8 +306,7 @@ nlohmann::json left_out_note(const Found& found, const std::string& path) {
     for (const auto& [suffix, n] : found.left_out) {
         log::warn(path, ": left out ", n, " ", suffix, " rows that are no measurement (not finite, beyond ",
                   physics::kMaxPlausiblePositionM, " m, ", physics::kMaxPlausibleForceN, " N or ",
-                  physics::kMaxPlausibleTorqueNm, " N·m, a quaternion that does not normalise, or stamped more than ",
-                  dds::kMaxClockOffsetS, " s from when they were recorded)");
+                  physics::kMaxPlausibleTorqueNm, " N·m, or a quaternion that does not normalise)");
         counts[suffix] = n;
     }
     return {{"rows_left_out", counts}};

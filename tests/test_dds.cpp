@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include "dds/endpoint.hpp"
@@ -213,6 +214,44 @@ TEST(Endpoints, LatchedStateReachesALateReader) {
     std::lock_guard lock(m);
     ASSERT_EQ(got.size(), 1u);
     EXPECT_EQ(got[0], dw::probe::make_sample<dw::msg::ExperimentState>(4));
+}
+
+// Issue 70: a keyed topic holds as many instances as the lab can have (dds::kMaxInstances), not
+// Fast DDS's default ten: after a writer invented twelve vehicle ids (or in a lab of more than ten
+// processes on the heartbeat topic), the real vehicle's state still reaches the reader.
+TEST(Endpoints, AKeyedTopicHoldsMoreThanTenInstancesAndNoMore) {
+    Participant a(test_config(), "writer");
+    Participant b(test_config(), "reader");
+    std::mutex m;
+    std::set<std::string> got;
+    dw::dds::Reader<dw::msg::VehicleState> reader(b, topics::vehicle_state,
+                                                  [&](const dw::msg::VehicleState& s, const dw::dds::SampleMeta&) {
+                                                      std::lock_guard lock(m);
+                                                      got.insert(s.vehicle_id());
+                                                  });
+    dw::dds::Writer<dw::msg::VehicleState> writer(a, topics::vehicle_state);
+    ASSERT_TRUE(writer.wait_for_readers(1, 20000ms));
+    auto state = [](const std::string& id) {
+        dw::msg::VehicleState s;
+        s.vehicle_id(id);
+        return s;
+    };
+    for (int i = 0; i < 12; ++i) {
+        auto s = state("invented" + std::to_string(i));
+        writer.write(s);
+        std::this_thread::sleep_for(2ms);
+    }
+    auto real = state("v1");
+    EXPECT_TRUE(eventually([&] {
+        writer.write(real);
+        std::lock_guard lock(m);
+        return got.count("v1") == 1;
+    })) << "the 13th instance never arrived";
+    std::lock_guard lock(m);
+    EXPECT_GE(got.size(), 12u);  // best effort on loopback: all but a rare loss
+    const auto q = dw::dds::reader_qos(dw::dds::QosProfile::state);
+    EXPECT_EQ(q.resource_limits().max_instances, dw::dds::kMaxInstances);  // and a cap, documented
+    EXPECT_EQ(q.resource_limits().max_samples, dw::dds::kMaxInstances * q.history().depth);
 }
 
 // A process that awaits the recorder's readers (issue 19).

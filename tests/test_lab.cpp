@@ -16,6 +16,7 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <span>
 #include <sstream>
 #include <thread>
 #include <nlohmann/json.hpp>
@@ -29,6 +30,10 @@
 #include "mcap/mcap.hpp"
 #include "recordings/recordings.hpp"
 #include "dds/endpoint.hpp"
+#include "dds/px4.hpp"
+#include "swarm_planner/px4_config.hpp"
+#include "px4_sim/wire.hpp"
+#include "dds/raw.hpp"
 #include "swarm_planner/plan.hpp"
 #include "support.hpp"
 
@@ -310,6 +315,77 @@ TEST(LabRun, FliesThePx4LabFileWithSimulatedPx4sAndTheirMotionCapture) {
     std::printf("f_d near %.4f N (%zu samples), far %.4f N (%zu): %.1f standard errors\n", near.mean(), near.n,
                 far.mean(), far.n, (near.mean() - far.mean()) / se);
     EXPECT_GT(near.mean() - far.mean(), 5 * se) << "the stand never felt the vehicles";
+}
+
+// Issue 70, the hostile-wire suite's full-size twin (--full): the PX4 lab file flies while `dw-probe
+// hostile` publishes malformed samples on every lab topic and on each PX4's output topics (an
+// unknown encapsulation, cut short; PX4's odometry also with NaN, ±inf and 1e300 words). Every
+// process survives, the experiment ends DONE or ABORTED with a reason, and every trajectory setpoint
+// read on the vehicles' own topics (fmu/in/trajectory_setpoint, where PX4 reads it) is finite and,
+// through each vehicle's frame, inside the room.
+TEST(HostileWireFull, ThePx4LabUnderMalformedSamplesOnItsAndPx4sTopicsSendsNoAbsurdSetpoint) {
+    dw::test::TempDir dir;
+    const std::string physics = std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml";
+    const std::string px4_file = std::string(DW_SOURCE_DIR) + "/config/px4.sim.yaml";
+    const std::uint16_t port = free_udp_port();
+    ASSERT_NE(port, 0);
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = "hostilepx4" + std::to_string(::getpid());
+    const auto px4 = dw::planner::load_px4_options(px4_file, {"v1", "v2"});
+    dw::dds::RawParticipant watcher(cfg, "watcher");
+    std::mutex m;
+    std::vector<std::string> absurd;
+    std::size_t checked = 0;
+    const dw::planner::Geofence room;
+    const auto& def = dw::px4sim::msg_def(dw::px4sim::Msg::trajectory_setpoint, dw::dds::Px4Version::v1_15);
+    for (const auto& v : px4.vehicles)
+        watcher.subscribe(dw::dds::px4_topic(v.ns, "in", "trajectory_setpoint"),
+                          "px4_msgs::msg::dds_::TrajectorySetpoint_", [&, v](std::span<const std::uint8_t> b) {
+                              const auto t = dw::px4sim::decode(def, b);
+                              const auto at = [&](const char* f) {
+                                  const auto& x = t.at(f);
+                                  return dw::physics::Vec3(x[0], x[1], x[2]);
+                              };
+                              const auto lab = dw::planner::local_frame(v).lab_point(at("position"));
+                              std::lock_guard lock(m);
+                              ++checked;
+                              if (!at("velocity").allFinite() || !at("acceleration").allFinite() ||
+                                  !room.contains(lab, dw::planner::Geofence::kTolerance_m))
+                                  absurd.push_back(v.name + " at " + std::to_string(lab.x()) + "," +
+                                                   std::to_string(lab.y()) + "," + std::to_string(lab.z()));
+                          });
+    const std::vector<std::string> dds{"--domain", std::to_string(cfg.domain), "--namespace", cfg.ns};
+    std::vector<std::string> lab_argv{bin("dw-lab"), "run",
+                                      "--lab",       std::string(DW_SOURCE_DIR) + "/config/lab.px4sim.yaml",
+                                      "--run-dir",   dir.file("run"),
+                                      "--var",       "legs=4",
+                                      "--var",       "physics=" + physics,
+                                      "--var",       "model=" + physics,
+                                      "--var",       "natnet_port=" + std::to_string(port),
+                                      "--var",       "px4=" + px4_file};
+    lab_argv.insert(lab_argv.end(), dds.begin(), dds.end());
+    dw::Subprocess lab({lab_argv, dir.file("lab.out"), dir.file("lab.err"), {}});
+    std::vector<std::string> hostile_argv{bin("dw-probe"), "hostile", "--rate", "50", "--px4", "v1,v2"};
+    hostile_argv.insert(hostile_argv.begin() + 1, dds.begin(), dds.end());
+    dw::Subprocess hostile({hostile_argv, dir.file("hostile.out"), dir.file("hostile.err"), {}});
+    const auto status = lab.wait_for(600000ms);
+    hostile.signal(SIGINT);
+    EXPECT_EQ(hostile.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("hostile.err"));
+    ASSERT_TRUE(status) << "dw-lab did not end";
+    const std::string out = dw::read_file(dir.file("lab.out")), err = dw::read_file(dir.file("lab.err"));
+    const bool done = out.find("DONE: 4 of 4 legs") != std::string::npos;
+    EXPECT_TRUE(done || err.find("ABORTED") != std::string::npos) << out << err;
+    for (const char* p : {"stand_agent", "px4_sim", "mocap_bridge", "recorder", "predictor"})
+        EXPECT_NE(err.find(std::string("stopped ") + p + " (status 0)"), std::string::npos)
+            << p << " did not survive:\n"
+            << err;
+    const std::string sent_kinds = dw::read_file(dir.file("hostile.out"));
+    EXPECT_NE(sent_kinds.find("fmu/out/vehicle_odometry garbage"), std::string::npos) << sent_kinds;
+    std::lock_guard lock(m);
+    EXPECT_GT(checked, 100u);
+    EXPECT_TRUE(absurd.empty()) << absurd.size() << " absurd setpoints, the first " << absurd.front() << "\n" << err;
+    std::printf("%s%zu PX4 setpoints checked; %s\n", out.c_str(), checked, done ? "DONE" : "ABORTED");
 }
 
 TEST(LabRun, TheLabProfileWantsAKeystoreOrAnExplicitInsecure) {
