@@ -201,9 +201,11 @@ std::vector<FamilyVerdict> families_of(const ExplainResult& R, const Resimulatio
                            "less well here)");
         v.members.insert(v.members.end(), others.less_well.begin(), others.less_well.end());
         const std::string why = by_design.empty() ? "" : by_design_words(R.one_jet);
+        const std::string kept = by_design.empty() ? " is kept for its lower held-out error"
+                                                   : " is kept as the family's reading (it passed the held-out test)";
         v.sentence = log::cat(family->shared, " of ", std::round(v.shared_value * 1000) / 1000, family->unit, ": ",
                               log::join(first), " or ", v.members[first.size()], " — this flight cannot tell which",
-                              why, "; ", c.effect.name, " is kept for its lower held-out error", less_well);
+                              why, "; ", c.effect.name, kept, less_well);
         out.push_back(std::move(v));
     }
     return out;

@@ -781,7 +781,8 @@ TEST(Px4Estimate, MalformedPx4OutputsAreSurvivedAndNeverPoseAVehicleOutsideTheRo
     std::jthread hostile([&] { dw::probe::run_hostile(cfg, h, counts); });
     const dw::planner::Geofence room;
     for (const auto end = std::chrono::steady_clock::now() + 1s; std::chrono::steady_clock::now() < end;) {
-        for (const auto& b : source.frame(lab.clock().now_ns()).frame.bodies())
+        const auto out = source.frame(lab.clock().now_ns());  // not a temporary in the range: it outlives the loop
+        for (const auto& b : out.frame.bodies())
             if (b.tracking_valid())
                 EXPECT_TRUE(room.contains(dw::physics::Vec3(b.position_m().x(), b.position_m().y(), b.position_m().z()),
                                           dw::planner::Geofence::kTolerance_m));
