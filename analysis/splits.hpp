@@ -62,9 +62,9 @@ inline constexpr double kOneJetShare = 0.01;
 // floors, RMS over the axes): where it predicts none, no effect can be measured.
 inline constexpr double kMeasurablePush = 1.0;
 
-// Where one jet pushes alone: the near samples with a measurable
-// push whose other jets carry less than kOneJetShare of it. A gain of the whole push is told from
-// how jets combine only there (physics::kPushFamily).
+// Where one jet pushes alone: the near samples with a measurable push whose other jets carry less
+// than kOneJetShare of it. A gain of the whole push is told from how jets combine only there
+// (physics::kPushFamily).
 struct OneJetPart {
     std::size_t measured = 0;  // near samples with a measurable push
     std::size_t alone = 0;     // of them, where one jet pushes alone

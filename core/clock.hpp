@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <mutex>
 
+#include "core/numbers.hpp"
+
 namespace dw {
 
 // Nanoseconds since the Unix epoch (wall time, what goes into message stamps).
@@ -12,6 +14,9 @@ using Nanos = std::int64_t;
 // The widest clock error between two lab processes: what --clock-offset may simulate, and beyond
 // which a measured offset or delay (on the wire, in a flight's meta.json) is no measurement.
 inline constexpr double kMaxClockOffsetS = 3600;
+// A measured (or simulated) clock offset, and a process's own pipeline delay: what can be a time.
+inline constexpr Range kClockOffsetRange{-kMaxClockOffsetS, kMaxClockOffsetS, "s"};
+inline constexpr Range kPipelineDelayRange{0, kMaxClockOffsetS, "s"};
 
 class Clock {
 public:

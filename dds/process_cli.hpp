@@ -12,7 +12,7 @@
 
 namespace dw::dds {
 
-inline constexpr Range kClockOffsetRange{-kMaxClockOffsetS, kMaxClockOffsetS, "s"};
+using dw::kClockOffsetRange;  // core/clock.hpp
 
 class ProcessCli {
 public:

@@ -184,8 +184,8 @@ private:
     // The lab's measured clock offset and the stand's pipeline delay, kept among the extra keys,
     // must be times a lab could measure (a 1e300 s offset was printed in full by the explainer).
     void read_measured_timing() const {
-        const Range offset{-kMaxClockOffsetS, kMaxClockOffsetS, "s"}, delay{0, kMaxClockOffsetS, "s"};
-        for (const auto& [key, range] : {std::pair{kMeasuredClockOffsetKey, offset}, {kStandPipelineDelayKey, delay}}) {
+        for (const auto& [key, range] :
+             {std::pair{kMeasuredClockOffsetKey, kClockOffsetRange}, {kStandPipelineDelayKey, kPipelineDelayRange}}) {
             if (!j_.contains(key)) continue;
             if (!j_[key].is_number()) fail(key, "not a number");
             if (!range.contains(j_[key].get<double>())) fail(key, range_problem(j_[key].get<double>(), range));

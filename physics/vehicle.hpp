@@ -1,7 +1,6 @@
 #pragma once
 // Simulated vehicles that follow position/velocity setpoints with realistic lag, overshoot and
 // hover noise, plus the random processes the simulator uses.
-#include <array>
 #include <cmath>
 #include <Eigen/Geometry>
 #include <cstdint>

@@ -9,7 +9,7 @@
 #include "core/log.hpp"
 #include "dds/time.hpp"
 #include "physics/bodies.hpp"
-#include "physics/vehicle.hpp"
+#include "physics/plausible.hpp"
 
 namespace dw::predictor {
 

@@ -163,8 +163,10 @@ struct ExportCommand {
             dw::recordings::export_flight(file, flight->path(), ex);
         }
         if (!csv_dir.empty()) dw::recordings::export_csv(file, csv_dir, dw::Shutdown::instance().token());
-        if (flight) flight->commit();
-        if (flight) std::cout << "flight folder: " << flight_dir << "\n";
+        if (flight) {
+            flight->commit();
+            std::cout << "flight folder: " << flight_dir << "\n";
+        }
         if (!csv_dir.empty()) std::cout << "CSV per topic: " << csv_dir << "\n";
         return 0;
     }

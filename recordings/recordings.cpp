@@ -242,13 +242,12 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
         if (deserialize(m.data, p)) found.formation = p.formation();
     } else if (suffix == topics::stand_status.suffix) {
         msg::StandStatus st;
-        if (deserialize(m.data, st) && std::isfinite(st.pipeline_delay_s()) && st.pipeline_delay_s() >= 0 &&
-            st.pipeline_delay_s() <= dds::kMaxClockOffsetS)
+        if (deserialize(m.data, st) && kPipelineDelayRange.contains(st.pipeline_delay_s()))
             found.pipeline_delays.push_back(st.pipeline_delay_s());
     } else if (suffix == topics::process_status.suffix) {
         msg::ProcessStatus st;
         if (deserialize(m.data, st) && st.clock_uncertainty_s() >= 0 &&
-            std::abs(st.clock_offset_s()) <= dds::kMaxClockOffsetS)  // no measurement beyond (1e300, NaN)
+            kClockOffsetRange.contains(st.clock_offset_s()))  // no measurement beyond (1e300, NaN)
             found.offsets[st.process()].push_back(st.clock_offset_s());
     }
 }

@@ -259,26 +259,32 @@ std::pair<Moments, Moments> f_d_near_and_far(const dw::flight::Flight& f, double
     }
     return {near, far};
 }
+
+// `dw-lab run` of the shipped PX4 lab file (config/lab.px4sim.yaml) with `legs` legs, the example
+// physics, the simulated PX4s' settings file and their emulated Motive on `natnet_port`.
+std::vector<std::string> px4_lab_argv(const dw::test::TempDir& dir, int legs, std::uint16_t natnet_port) {
+    const std::string config = std::string(DW_SOURCE_DIR) + "/config/";
+    return {bin("dw-lab"), "run",
+            "--lab",       config + "lab.px4sim.yaml",
+            "--run-dir",   dir.file("run"),
+            "--var",       "legs=" + std::to_string(legs),
+            "--var",       "physics=" + config + "physics.example.yaml",
+            "--var",       "model=" + config + "physics.example.yaml",
+            "--var",       "natnet_port=" + std::to_string(natnet_port),
+            "--var",       "px4=" + config + "px4.sim.yaml"};
+}
 }  // namespace
 
 // Issue 20: the shipped PX4 lab file flown end to end — the planner drives simulated PX4s over
 // PX4's topics, the real NatNet client reads their emulated motion capture, the stand feels them.
 TEST(LabRun, FliesThePx4LabFileWithSimulatedPx4sAndTheirMotionCapture) {
     dw::test::TempDir dir;
-    const std::string physics = std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml";
     const std::uint16_t port = free_udp_port();
     ASSERT_NE(port, 0);
-    const auto r = dw::test::run({bin("dw-lab"), "run",
-                                  "--lab",       std::string(DW_SOURCE_DIR) + "/config/lab.px4sim.yaml",
-                                  "--run-dir",   dir.file("run"),
-                                  "--var",       "legs=2",
-                                  "--var",       "physics=" + physics,
-                                  "--var",       "model=" + physics,
-                                  "--var",       "natnet_port=" + std::to_string(port),
-                                  "--var",       "px4=" + std::string(DW_SOURCE_DIR) + "/config/px4.sim.yaml",
-                                  "--domain",    std::to_string(dw::test::test_domain()),
-                                  "--namespace", "labpx4" + std::to_string(::getpid())},
-                                 dir, 300000ms);
+    auto argv = px4_lab_argv(dir, 2, port);
+    argv.insert(argv.end(), {"--domain", std::to_string(dw::test::test_domain()), "--namespace",
+                             "labpx4" + std::to_string(::getpid())});
+    const auto r = dw::test::run(argv, dir, 300000ms);
     ASSERT_EQ(r.status, 0) << r.err << "\nplanner log:\n" << dw::read_file(dir.file("run/logs/planner.log"));
     EXPECT_NE(r.out.find("DONE: 2 of 2 legs"), std::string::npos) << r.out;
     const std::string planner = dw::read_file(dir.file("run/logs/planner.log"));
@@ -317,6 +323,46 @@ TEST(LabRun, FliesThePx4LabFileWithSimulatedPx4sAndTheirMotionCapture) {
     EXPECT_GT(near.mean() - far.mean(), 5 * se) << "the stand never felt the vehicles";
 }
 
+namespace {
+// Issue 70, the hostile-wire suite: `lab_argv` (dw-lab run ...) flown while `dw-probe hostile
+// <probe_args>` publishes malformed samples, both with the DDS options `dds`; the probe is stopped
+// once the lab ends. Checks what every such run must show: the probe stops cleanly, the lab ends
+// DONE (`done_line` on its stdout) or ABORTED with a reason, and each of `survivors` stops with
+// status 0.
+struct HostileRun {
+    bool ended = false, done = false;
+    std::string out, err, probe_out;
+};
+HostileRun fly_under_hostile_probe(const dw::test::TempDir& dir, std::vector<std::string> lab_argv,
+                                   const std::vector<std::string>& probe_args, const std::vector<std::string>& dds,
+                                   std::chrono::milliseconds timeout, const std::string& done_line,
+                                   const std::vector<const char*>& survivors) {
+    lab_argv.insert(lab_argv.end(), dds.begin(), dds.end());
+    dw::Subprocess lab({lab_argv, dir.file("lab.out"), dir.file("lab.err"), {}});
+    std::vector<std::string> probe_argv{bin("dw-probe")};
+    probe_argv.insert(probe_argv.end(), dds.begin(), dds.end());
+    probe_argv.push_back("hostile");
+    probe_argv.insert(probe_argv.end(), probe_args.begin(), probe_args.end());
+    dw::Subprocess hostile({probe_argv, dir.file("hostile.out"), dir.file("hostile.err"), {}});
+    const auto status = lab.wait_for(timeout);
+    hostile.signal(SIGINT);
+    EXPECT_EQ(hostile.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("hostile.err"));
+    HostileRun r;
+    r.ended = status.has_value();
+    if (!r.ended) return r;
+    r.out = dw::read_file(dir.file("lab.out"));
+    r.err = dw::read_file(dir.file("lab.err"));
+    r.probe_out = dw::read_file(dir.file("hostile.out"));
+    r.done = r.out.find(done_line) != std::string::npos;
+    EXPECT_TRUE(r.done || r.err.find("ABORTED") != std::string::npos) << r.out << r.err;
+    for (const char* p : survivors)
+        EXPECT_NE(r.err.find(std::string("stopped ") + p + " (status 0)"), std::string::npos)
+            << p << " did not survive:\n"
+            << r.err;
+    return r;
+}
+}  // namespace
+
 // Issue 70, the hostile-wire suite's full-size twin (--full): the PX4 lab file flies while `dw-probe
 // hostile` publishes malformed samples on every lab topic and on each PX4's output topics (an
 // unknown encapsulation, cut short; PX4's odometry also with NaN, ±inf and 1e300 words). Every
@@ -325,7 +371,6 @@ TEST(LabRun, FliesThePx4LabFileWithSimulatedPx4sAndTheirMotionCapture) {
 // through each vehicle's frame, inside the room.
 TEST(HostileWireFull, ThePx4LabUnderMalformedSamplesOnItsAndPx4sTopicsSendsNoAbsurdSetpoint) {
     dw::test::TempDir dir;
-    const std::string physics = std::string(DW_SOURCE_DIR) + "/config/physics.example.yaml";
     const std::string px4_file = std::string(DW_SOURCE_DIR) + "/config/px4.sim.yaml";
     const std::uint16_t port = free_udp_port();
     ASSERT_NE(port, 0);
@@ -356,36 +401,17 @@ TEST(HostileWireFull, ThePx4LabUnderMalformedSamplesOnItsAndPx4sTopicsSendsNoAbs
                                                    std::to_string(lab.y()) + "," + std::to_string(lab.z()));
                           });
     const std::vector<std::string> dds{"--domain", std::to_string(cfg.domain), "--namespace", cfg.ns};
-    std::vector<std::string> lab_argv{bin("dw-lab"), "run",
-                                      "--lab",       std::string(DW_SOURCE_DIR) + "/config/lab.px4sim.yaml",
-                                      "--run-dir",   dir.file("run"),
-                                      "--var",       "legs=4",
-                                      "--var",       "physics=" + physics,
-                                      "--var",       "model=" + physics,
-                                      "--var",       "natnet_port=" + std::to_string(port),
-                                      "--var",       "px4=" + px4_file};
-    lab_argv.insert(lab_argv.end(), dds.begin(), dds.end());
-    dw::Subprocess lab({lab_argv, dir.file("lab.out"), dir.file("lab.err"), {}});
-    std::vector<std::string> hostile_argv{bin("dw-probe"), "hostile", "--rate", "50", "--px4", "v1,v2"};
-    hostile_argv.insert(hostile_argv.begin() + 1, dds.begin(), dds.end());
-    dw::Subprocess hostile({hostile_argv, dir.file("hostile.out"), dir.file("hostile.err"), {}});
-    const auto status = lab.wait_for(600000ms);
-    hostile.signal(SIGINT);
-    EXPECT_EQ(hostile.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("hostile.err"));
-    ASSERT_TRUE(status) << "dw-lab did not end";
-    const std::string out = dw::read_file(dir.file("lab.out")), err = dw::read_file(dir.file("lab.err"));
-    const bool done = out.find("DONE: 4 of 4 legs") != std::string::npos;
-    EXPECT_TRUE(done || err.find("ABORTED") != std::string::npos) << out << err;
-    for (const char* p : {"stand_agent", "px4_sim", "mocap_bridge", "recorder", "predictor"})
-        EXPECT_NE(err.find(std::string("stopped ") + p + " (status 0)"), std::string::npos)
-            << p << " did not survive:\n"
-            << err;
-    const std::string sent_kinds = dw::read_file(dir.file("hostile.out"));
-    EXPECT_NE(sent_kinds.find("fmu/out/vehicle_odometry garbage"), std::string::npos) << sent_kinds;
+
+    const auto run = fly_under_hostile_probe(dir, px4_lab_argv(dir, 4, port), {"--rate", "50", "--px4", "v1,v2"}, dds,
+                                             600000ms, "DONE: 4 of 4 legs",
+                                             {"stand_agent", "px4_sim", "mocap_bridge", "recorder", "predictor"});
+    ASSERT_TRUE(run.ended) << "dw-lab did not end";
+    EXPECT_NE(run.probe_out.find("fmu/out/vehicle_odometry garbage"), std::string::npos) << run.probe_out;
     std::lock_guard lock(m);
     EXPECT_GT(checked, 100u);
-    EXPECT_TRUE(absurd.empty()) << absurd.size() << " absurd setpoints, the first " << absurd.front() << "\n" << err;
-    std::printf("%s%zu PX4 setpoints checked; %s\n", out.c_str(), checked, done ? "DONE" : "ABORTED");
+    EXPECT_TRUE(absurd.empty()) << absurd.size() << " absurd setpoints, the first " << absurd.front() << "\n"
+                                << run.err;
+    std::printf("%s%zu PX4 setpoints checked; %s\n", run.out.c_str(), checked, run.done ? "DONE" : "ABORTED");
 }
 
 TEST(LabRun, TheLabProfileWantsAKeystoreOrAnExplicitInsecure) {
@@ -860,26 +886,13 @@ processes:
             sent.push_back(s);
         });
     const std::vector<std::string> dds{"--domain", std::to_string(cfg.domain), "--namespace", cfg.ns};
-    std::vector<std::string> lab_argv{bin("dw-lab"),        "run",       "--lab",
-                                      dir.file("lab.yaml"), "--run-dir", dir.file("run")};
-    lab_argv.insert(lab_argv.end(), dds.begin(), dds.end());
-    dw::Subprocess lab({lab_argv, dir.file("lab.out"), dir.file("lab.err"), {}});
-    std::vector<std::string> hostile_argv{bin("dw-probe"), "hostile", "--rate", "20"};
-    hostile_argv.insert(hostile_argv.begin() + 1, dds.begin(), dds.end());
-    dw::Subprocess hostile({hostile_argv, dir.file("hostile.out"), dir.file("hostile.err"), {}});
-    const auto status = lab.wait_for(300000ms);
-    hostile.signal(SIGINT);
-    EXPECT_EQ(hostile.wait_for(20000ms), std::optional<int>(0)) << dw::read_file(dir.file("hostile.err"));
-    ASSERT_TRUE(status) << "dw-lab did not end";
-    const std::string out = dw::read_file(dir.file("lab.out")), err = dw::read_file(dir.file("lab.err"));
-    const bool done = out.find("DONE: 2 of 2 legs") != std::string::npos;
-    EXPECT_TRUE(done || err.find("ABORTED") != std::string::npos) << out << err;
-    for (const char* p : {"stand_agent", "mocap_bridge", "recorder", "predictor"})
-        EXPECT_NE(err.find(std::string("stopped ") + p + " (status 0)"), std::string::npos)
-            << p << " did not survive:\n"
-            << err;
-    EXPECT_NE(err.find("planner ended with status " + std::string(done ? "0" : "1")), std::string::npos) << err;
-    EXPECT_NE(dw::read_file(dir.file("hostile.out")).find("stand/wrench garbage"), std::string::npos);
+    const auto run = fly_under_hostile_probe(
+        dir, {bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run")}, {"--rate", "20"}, dds,
+        300000ms, "DONE: 2 of 2 legs", {"stand_agent", "mocap_bridge", "recorder", "predictor"});
+    ASSERT_TRUE(run.ended) << "dw-lab did not end";
+    EXPECT_NE(run.err.find("planner ended with status " + std::string(run.done ? "0" : "1")), std::string::npos)
+        << run.err;
+    EXPECT_NE(run.probe_out.find("stand/wrench garbage"), std::string::npos);
     std::lock_guard lock(m);
     ASSERT_GT(sent.size(), 100u);
     const dw::planner::Geofence room;
@@ -887,7 +900,7 @@ processes:
         const dw::physics::Vec3 x(s.position_m().x(), s.position_m().y(), s.position_m().z());
         ASSERT_TRUE(room.contains(x, dw::planner::Geofence::kTolerance_m) && std::isfinite(s.yaw_rad()))
             << "sent " << x.transpose() << " yaw " << s.yaw_rad() << "\n"
-            << err;
+            << run.err;
     }
-    std::printf("%s%zu setpoints checked; %s\n", out.c_str(), sent.size(), done ? "DONE" : "ABORTED");
+    std::printf("%s%zu setpoints checked; %s\n", run.out.c_str(), sent.size(), run.done ? "DONE" : "ABORTED");
 }
