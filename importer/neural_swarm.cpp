@@ -121,8 +121,8 @@ double require_force(const VehicleLog& s, std::size_t i, const char* what, doubl
 
 // Fa = m a_imu − T_lag R e_z (world, z up), tared where no neighbour is near (a vehicle alone:
 // over its whole flight). Returns the tare.
-std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLog>& others, const ImportOptions& o,
-                                std::vector<std::array<double, 3>>& fa) {
+std::array<double, 3> residuals(const VehicleLog& s, const std::vector<const VehicleLog*>& others,
+                                const ImportOptions& o, std::vector<std::array<double, 3>>& fa) {
     const auto& type = crazyflie_type(s.name);
     double lag = thrust_n(type, s.pwm.front(), s.vbat_v.front());
     std::array<std::vector<double>, 3> far;
@@ -137,7 +137,7 @@ std::array<double, 3> residuals(const VehicleLog& s, const std::vector<VehicleLo
         fa.push_back(f);
         bool alone = true;
         for (const auto& n : others) {
-            const auto p = position_at(n, s.t_s[i]);
+            const auto p = position_at(*n, s.t_s[i]);
             alone = alone && std::hypot(p[0] - s.position_m[i][0], p[1] - s.position_m[i][1]) > kTareDistance_m;
         }
         if (alone)
@@ -219,9 +219,9 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     }
     const auto it = std::find_if(logs.begin(), logs.end(), [&](const VehicleLog& l) { return l.name == sufferer; });
     if (it == logs.end()) throw InputError(log::cat("--sufferer: no log of '", sufferer, "' among the inputs"));
-    std::vector<VehicleLog> others;
+    std::vector<const VehicleLog*> others;
     for (const auto& l : logs)
-        if (l.name != sufferer) others.push_back(l);
+        if (l.name != sufferer) others.push_back(&l);
 
     flight::Flight f;
     f.meta.sufferer = sufferer;
@@ -236,13 +236,6 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
         f.wrench.push_back({it->t_s[i], {ned[0], ned[1], ned[2], 0, 0, 0}});
     }
     add_reference(f, *it, o);
-    struct Pose {
-        double t;
-        std::uint16_t body;
-        std::array<double, 3> p;
-        std::array<double, 4> q;
-    };
-    std::vector<Pose> poses;
     for (const auto& l : logs) {
         const auto& type = crazyflie_type(l.name);
         const std::uint16_t body = f.body_index(l.name);
@@ -253,11 +246,11 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
             throw_if_stopped(o.stop, "the import");
             const auto& q = l.quat_xyzw[i];
             const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-            poses.push_back({l.t_s[i], body, to_ned(l.position_m[i]), {q[3] / n, q[0] / n, -q[1] / n, -q[2] / n}});
+            f.poses.push_back({l.t_s[i], body, to_ned(l.position_m[i]), {q[3] / n, q[0] / n, -q[1] / n, -q[2] / n}});
         }
     }
-    std::stable_sort(poses.begin(), poses.end(), [](const Pose& a, const Pose& b) { return a.t < b.t; });
-    for (const auto& p : poses) f.poses.push_back({p.t, p.body, p.p, p.q});
+    std::stable_sort(f.poses.begin(), f.poses.end(),
+                     [](const flight::PoseSample& a, const flight::PoseSample& b) { return a.t < b.t; });
     f.meta.extra_json =
         nlohmann::json{
             {"source", source_of(logs)},
@@ -284,9 +277,11 @@ public:
     }
     flight::Flight import(const std::vector<std::string>& files, const ImportOptions& o) const override {
         std::vector<VehicleLog> logs;
+        std::size_t samples = 0;
         for (const auto& file : files) {
             throw_if_stopped(o.stop, "the import");
-            logs.push_back(read_neural_swarm_log(file, o.stop));
+            logs.push_back(read_neural_swarm_log(file, o.stop, kMaxTrialSamples - samples));
+            samples += logs.back().t_s.size();
         }
         return to_flight(std::move(logs), o);
     }

@@ -37,8 +37,10 @@ struct VehicleLog {
 inline constexpr const char* kFazField = "ctrlFa.Faz";
 
 // Reads a CSV log (`*.csv`) or a binary log (no extension). Throws dw::InputError with the file,
-// the line or byte offset and the problem; dw::Stopped when `stop` is requested.
-VehicleLog read_neural_swarm_log(const std::string& path, const std::stop_token& stop = {});
+// the line or byte offset and the problem (also past `max_samples`, what is left of the trial's
+// kMaxTrialSamples); dw::Stopped when `stop` is requested.
+VehicleLog read_neural_swarm_log(const std::string& path, const std::stop_token& stop = {},
+                                 std::size_t max_samples = kMaxTrialSamples);
 
 // A Crazyflie of the collection: mass, arm, propeller and the PWM/voltage thrust map.
 struct CrazyflieType {

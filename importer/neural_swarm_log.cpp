@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "core/errors.hpp"
@@ -70,16 +71,30 @@ std::vector<std::string_view> split(std::string_view line) {
 // with a 10 MB garbage tail was resynchronised byte by byte, each try a checksum, past SIGINT).
 constexpr std::size_t kStopCheckEvery = 4096;
 
-VehicleLog read_csv(const std::string& path, VehicleLog log, const std::stop_token& stop) {
-    const std::string text = read_file(path, "log");
-    std::size_t pos = 0, line_no = 0;
+struct Limits {
+    std::stop_token stop;
+    std::size_t max_samples;  // what is left of the trial's kMaxTrialSamples
+};
+
+// What a trial may hold is spent (kMaxTrialSamples): `where` is the file and line or byte.
+void require_room(const VehicleLog& log, const Limits& limits, const std::string& where) {
+    if (log.t_s.size() < limits.max_samples) return;
+    throw InputError(log::cat(where, ": more than ", kMaxTrialSamples,
+                              " samples in one trial, what an import holds in memory: split the log"));
+}
+
+VehicleLog read_csv(const std::string& path, VehicleLog log, const Limits& limits) {
+    require_readable_file(path, "log");
+    std::ifstream in(path, std::ios::binary);  // line by line: a log is never held whole
+    std::string buffer;
+    std::size_t line_no = 0;
     auto next_line = [&](std::string_view& line) {
-        if (pos >= text.size()) return false;
-        auto end = text.find('\n', pos);
-        if (end == std::string::npos) end = text.size();
-        line = std::string_view(text).substr(pos, end - pos);
+        if (!std::getline(in, buffer)) {
+            if (in.bad()) throw InputError(log::cat(path, ":", line_no + 1, ": cannot read the log"));
+            return false;
+        }
+        line = buffer;
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        pos = end + 1;
         ++line_no;
         return true;
     };
@@ -95,7 +110,7 @@ VehicleLog read_csv(const std::string& path, VehicleLog log, const std::stop_tok
     }
     double first_us = NAN;
     for (std::size_t n = 0; next_line(line); ++n) {
-        if (n % kStopCheckEvery == 0) throw_if_stopped(stop, "the import");
+        if (n % kStopCheckEvery == 0) throw_if_stopped(limits.stop, "the import");
         if (line.empty()) continue;
         const auto f = split(line);
         if (f.size() != header.size())
@@ -112,6 +127,7 @@ VehicleLog read_csv(const std::string& path, VehicleLog log, const std::stop_tok
                 throw InputError(log::cat(path, ":", line_no, ": column ", kCsvColumns[c], ": ",
                                           range_problem(v[c], kCsvRanges[c])));
         }
+        require_room(log, limits, log::cat(path, ":", line_no));
         if (std::isnan(first_us)) first_us = v[0];
         log.origin.push_back(line_no);
         log.t_s.push_back((v[0] - first_us) * 1e-6);
@@ -212,8 +228,12 @@ std::vector<Field> binary_header(const std::string& path, const std::string& byt
     return fields;
 }
 
-VehicleLog read_binary(const std::string& path, VehicleLog log, const std::stop_token& stop) {
+VehicleLog read_binary(const std::string& path, VehicleLog log, const Limits& limits) {
     log.binary = true;
+    require_readable_file(path, "log");
+    if (std::error_code ec; fs::file_size(path, ec) > kMaxBinaryLogBytes && !ec)
+        throw InputError(log::cat(path, ": ", fs::file_size(path, ec), " bytes, more than a binary log may hold (",
+                                  kMaxBinaryLogBytes, "): split the log"));
     const std::string bytes = read_file(path, "log");
     std::size_t pos = 0;
     const auto fields = binary_header(path, bytes, pos);
@@ -233,14 +253,14 @@ VehicleLog read_binary(const std::string& path, VehicleLog log, const std::stop_
     const auto* b = reinterpret_cast<const std::uint8_t*>(bytes.data());
     double first_us = NAN;
     for (std::size_t n = 0; pos < bytes.size(); ++n) {
-        if (n % kStopCheckEvery == 0) throw_if_stopped(stop, "the import");
+        if (n % kStopCheckEvery == 0) throw_if_stopped(limits.stop, "the import");
         const std::size_t k = b[pos], size = 1 + k * record;
         if (pos + size + 4 > bytes.size() || !checksum_ok(b + pos, size)) {
             ++log.damaged_blocks;  // skip to the next offset where a whole block checks out
             std::size_t next = pos + 1;
             while (next < bytes.size() && !(next + 1 + b[next] * record + 4 <= bytes.size() && b[next] > 0 &&
                                             checksum_ok(b + next, 1 + b[next] * record)))
-                if (++next % kStopCheckEvery == 0) throw_if_stopped(stop, "the import");
+                if (++next % kStopCheckEvery == 0) throw_if_stopped(limits.stop, "the import");
             pos = next;
             continue;
         }
@@ -253,6 +273,7 @@ VehicleLog read_binary(const std::string& path, VehicleLog log, const std::stop_
                                               quote_bytes(f.name, kQuotedBytes), "': ", range_problem(value, range)));
                 return value;
             };
+            require_room(log, limits, log::cat(path, ": byte ", pos + 1 + r * record));
             if (std::isnan(first_us)) first_us = v(tick, kTimeUsRange);
             log.origin.push_back(pos + 1 + r * record);
             log.t_s.push_back((v(tick, kTimeUsRange) - first_us) * 1e-6);
@@ -279,13 +300,14 @@ std::string VehicleLog::where(std::size_t sample) const {
     return binary ? log::cat(file, ": byte ", origin[sample]) : log::cat(file, ":", origin[sample]);
 }
 
-VehicleLog read_neural_swarm_log(const std::string& path, const std::stop_token& stop) {
+VehicleLog read_neural_swarm_log(const std::string& path, const std::stop_token& stop, std::size_t max_samples) {
     VehicleLog log;
     log.file = path;
     const fs::path p(path);
     log.name = p.stem().string().substr(0, p.stem().string().find('_'));  // cf50_01 -> cf50
     (void)crazyflie_type(log.name);
-    log = p.extension() == ".csv" ? read_csv(path, std::move(log), stop) : read_binary(path, std::move(log), stop);
+    log = p.extension() == ".csv" ? read_csv(path, std::move(log), {stop, max_samples})
+                                  : read_binary(path, std::move(log), {stop, max_samples});
     if (log.t_s.empty()) throw InputError(log::cat(path, ": no samples"));
     for (std::size_t i = 1; i < log.t_s.size(); ++i) {
         if (!(log.t_s[i] > log.t_s[i - 1]))

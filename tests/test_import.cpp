@@ -15,7 +15,10 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include <sys/resource.h>
+
 #include "core/errors.hpp"
+#include "core/log.hpp"
 #include "core/stats.hpp"
 #include "flight/flight.hpp"
 #include "importer/neural_swarm.hpp"
@@ -260,4 +263,55 @@ TEST(Import, AStopEndsTheScanThroughAGarbageTail) {
         stop.request_stop();
     });
     EXPECT_THROW(read_neural_swarm_log(d.file("cf50_01"), stop.get_token()), dw::Stopped);
+}
+
+namespace {
+// A CSV log of `samples` rows of a vehicle hovering at 1 m (every column the importer reads).
+void write_hover_log(const std::string& path, std::size_t samples) {
+    std::ofstream out(path);
+    out << "# time[ms],x[m],y[m],z[m],ax[m/s^2],ay[m/s^2],az[m/s^2],qx,qy,qz,qw,u1[PWM],u2[PWM],u3[PWM],u4[PWM],"
+           "Vbat[V],vx[m/s],vz[m/s]\n";
+    for (std::size_t i = 0; i < samples; ++i) out << i * 10000 << ",0,0,1,0,0,9.8,0,0,0,1,0.5,0.5,0.5,0.5,4,0,0\n";
+}
+
+double children_peak_mb() {
+    rusage u{};
+    ::getrusage(RUSAGE_CHILDREN, &u);
+    return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
+// docs/HOSTILE_INPUT.md's figure for an import at kMaxTrialSamples (measured: 363 MB).
+constexpr double kImportPeakMb = 512;
+}  // namespace
+
+// Issue 70: a 10-million-row log peaked at 3.9 GB. A trial is now capped at kMaxTrialSamples: the
+// next sample is refused naming its line, whatever follows it, and a trial at the cap imports
+// within the documented peak.
+TEST(Import, ATrialPastItsCapIsRefusedAtItsLineAndMemoryStaysUnderItsFigure) {
+    using dw::test::bin;
+    dw::test::TempDir d;
+    fs::create_directories(d.file("c/e"));
+    write_hover_log(d.file("c/e/cf50_01.csv"), kMaxTrialSamples + 1);
+    const auto past =
+        dw::test::run({bin("dw-import"), "neural-swarm", d.file("c/e/cf50_01.csv"), "--out", d.file("o1")}, d);
+    dw::test::expect_one_line_exit_2(past, dw::log::cat("cf50_01.csv:", kMaxTrialSamples + 2, ": more than ",
+                                                        kMaxTrialSamples, " samples in one trial"));
+    EXPECT_FALSE(fs::exists(d.file("o1")));
+    write_hover_log(d.file("c/e/cf50_01.csv"), kMaxTrialSamples);
+    const auto at =
+        dw::test::run({bin("dw-import"), "neural-swarm", d.file("c/e/cf50_01.csv"), "--out", d.file("o2")}, d);
+    EXPECT_EQ(at.status, 0) << at.err;
+    EXPECT_EQ(dw::flight::read_flight(d.file("o2")).wrench.size(), kMaxTrialSamples);
+    EXPECT_LT(children_peak_mb(), kImportPeakMb);
+    // Two logs share the cap: the second is refused where the trial's budget ends.
+    write_hover_log(d.file("c/e/cf51_01.csv"), 2);
+    const auto two = dw::test::run(
+        {bin("dw-import"), "neural-swarm", d.file("c/e/cf50_01.csv"), d.file("c/e/cf51_01.csv"), "--out", d.file("o3")},
+        d);
+    dw::test::expect_one_line_exit_2(two, "cf51_01.csv:2: more than");
+    // A binary log is read whole: past kMaxBinaryLogBytes it is refused before it is read.
+    { std::ofstream(d.file("c/e/cf52_01")); }
+    fs::resize_file(d.file("c/e/cf52_01"), kMaxBinaryLogBytes + 1);
+    const auto binary =
+        dw::test::run({bin("dw-import"), "neural-swarm", d.file("c/e/cf52_01"), "--out", d.file("o4")}, d);
+    dw::test::expect_one_line_exit_2(binary, "more than a binary log may hold");
 }
