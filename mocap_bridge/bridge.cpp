@@ -147,7 +147,7 @@ double FrameConverter::camera_time_s(const FrameOfData& f, Nanos receive_wall_ns
 FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos receive_wall_ns, bool* refused) {
     Output out;
     if (refused) *refused = false;
-    if (!std::isfinite(f.timestamp_s)) {  // no clock to estimate velocities or staleness on
+    if (!kMotiveClockRange.contains(f.timestamp_s)) {  // no clock to estimate velocities or staleness on
         ++implausible_;
         if (refused) *refused = true;
         return out;
@@ -172,6 +172,10 @@ FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos recei
     m.dropped_frames(static_cast<std::uint32_t>(dropped_));
     for (const auto& b : f.bodies) {
         m.bodies().push_back(lab_body(b));
+        if (!names_.contains(b.id)) {
+            ++undefined_;
+            continue;
+        }
         out.states.push_back(vehicle_state(m.bodies().back(), m.header().stamp(), tc));
     }
     return out;

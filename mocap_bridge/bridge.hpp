@@ -58,6 +58,11 @@ struct AxisMap {
     int det() const;                                // +1 for a rotation, -1 for a reflection of the axes
 };
 
+// Motive's frame clock (FrameOfData::timestamp_s) is seconds since the software started: a frame
+// stamped outside this is refused whole like a non-finite one (issue 70: a frame at 3.4e38 s, then
+// one at -3.4e38 s, looked like a Motive restart and reset every body's estimator).
+inline constexpr Range kMotiveClockRange{0, 1e9, "s"};  // 31 years of uptime
+
 // A body's recent samples for its velocity: at most this many whatever the clock does (the window,
 // 0.03 s, holds 6 at Motive's 180 Hz; a Motive whose clock stands still never ages one out).
 inline constexpr std::size_t kMaxRecentSamples = 64;
@@ -78,11 +83,14 @@ public:
         std::vector<msg::VehicleState> states;
     };
     // Nothing non-finite or implausible enters the lab (issue 70): such a body is passed on as lost
-    // (tracking not valid, no pose) and counted; a frame whose clock is not finite is refused whole
+    // (tracking not valid, no pose) and counted; a frame whose clock is not in kMotiveClockRange is refused whole
     // (`refused`: nothing to publish).
     Output convert(const FrameOfData& f, Nanos receive_wall_ns, bool* refused = nullptr);
     std::uint64_t dropped() const { return dropped_; }
     std::uint64_t implausible() const { return implausible_; }  // bodies and frames refused
+    // Bodies whose id no model definition gave (issue 70: a Motive inventing ids every frame): in
+    // the frame, but no vehicle state (vehicles/state is keyed by vehicle, kMaxInstances of them).
+    std::uint64_t undefined() const { return undefined_; }
     // What it holds per body, for the bound on memory: bodies tracked, velocity samples over all.
     struct Held {
         std::size_t bodies = 0, samples = 0;
@@ -109,6 +117,7 @@ private:
     std::int32_t last_frame_ = -1;
     std::uint64_t dropped_ = 0;
     std::uint64_t implausible_ = 0;
+    std::uint64_t undefined_ = 0;
     double clock_offset_s_ = 0;  // clock-sync mode: host wall time - server ticks
     bool have_offset_ = false;
 };

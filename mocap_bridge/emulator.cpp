@@ -12,7 +12,7 @@ std::array<float, 3> ned_to_motive(const std::array<double, 3>& n) {
 }
 
 namespace {
-constexpr std::int32_t kFirstInventedId = 100000;  // new_ids_per_frame: ids from here on, never reused
+constexpr std::int32_t kFirstInventedId = 100000;  // Hostility::new_ids_per_frame: ids from here on, never reused
 
 BodyPose default_motion(int body, double t) {
     BodyPose p;
@@ -108,9 +108,9 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
         }  // a lost body: zeros, as Motive sends
         f.bodies.push_back(b);
     }
-    for (int k = 0; k < options_.new_ids_per_frame; ++k) {
+    for (int k = 0; k < options_.hostile.new_ids_per_frame; ++k) {
         RigidBody b;
-        b.id = kFirstInventedId + number * options_.new_ids_per_frame + k;
+        b.id = kFirstInventedId + number * options_.hostile.new_ids_per_frame + k;
         b.tracking_valid = true;
         b.position = {0.1f, 1.0f, 0.2f};
         b.orientation = {0, 0, 0, 1};
@@ -123,8 +123,32 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
     f.mid_exposure =
         ticks - static_cast<std::uint64_t>(options_.latency_s * static_cast<double>(options_.clock_frequency));
     f.data_received = f.mid_exposure + options_.clock_frequency / 500;
-    f.timestamp_s = options_.frozen_clock ? 0.0 : t;
+    f.timestamp_s = options_.hostile.frozen_clock ? 0.0 : t;
     return build_frame(f, options_.version, options_.other_sections);
+}
+
+std::vector<std::uint8_t> NatNetEmulator::hostile_packet(std::int32_t number, double t, std::mt19937_64& rng) {
+    auto packet = frame(number, t);
+    switch ((number / kHostileEvery) % 3) {
+        case 0:  // cut short, anywhere after the message id
+            packet.resize(2 + rng() % (packet.size() - 2));
+            return packet;
+        case 1: {  // oversized: the largest UDP datagram, the frame's counts and sizes garbage
+            packet.resize(kMaxDatagramBytes);
+            for (std::size_t i = 8; i < packet.size(); ++i) packet[i] = static_cast<std::uint8_t>(rng());
+            return packet;
+        }
+        default: {  // the named bodies tracked at an absurd place, at an absurd time
+            constexpr std::array<float, 5> kAbsurd = {NAN, INFINITY, -INFINITY, 3.4e38f, -3.4e38f};
+            const float v = kAbsurd[static_cast<std::size_t>(number / kHostileEvery / 3) % kAbsurd.size()];
+            FrameOfData f;
+            f.frame_number = number;
+            for (std::size_t i = 0; i < options_.names.size(); ++i)
+                f.bodies.push_back({static_cast<std::int32_t>(i + 1), {v, v, v}, {v, v, v, v}, v, true});
+            f.timestamp_s = v;
+            return build_frame(f, options_.version, options_.other_sections);
+        }
+    }
 }
 
 void NatNetEmulator::loop() {
@@ -156,6 +180,9 @@ void NatNetEmulator::loop() {
         }
         for (const auto& c : to) socket_.send_to(c, packet);
         if (!to.empty()) ++sent_;
+        if (!options_.hostile.packets || number % kHostileEvery != 0) continue;
+        const auto hostile = hostile_packet(number, t, rng);
+        for (const auto& c : to) socket_.send_to(c, hostile);
     }
 }
 

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <functional>
 #include <mutex>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -25,6 +26,19 @@ struct TrackingLoss {
     double start_s = 0, duration_s = 0;
 };
 
+// A hostile Motive (issue 70): this many more bodies every frame, each with an id never sent before
+// and in no model definition; a frame clock (the frame's timestamp) that stands still; and every
+// kHostileEvery frames one more packet, each kind in turn: a frame cut short, an oversized one (the
+// largest datagram, its counts garbage), and a frame whose bodies (the named ones, tracked) and
+// timestamp are NaN, ±inf or ±3.4e38.
+struct Hostility {
+    int new_ids_per_frame = 0;
+    bool frozen_clock = false;
+    bool packets = false;
+};
+inline constexpr Range kNewIdsPerFrameRange{0, 100, "bodies"};
+inline constexpr std::int32_t kHostileEvery = 5;  // at 180 Hz, 36 hostile packets a second
+
 struct EmulatorOptions {
     std::string ip = "127.0.0.1";
     std::uint16_t port = 1510;  // command port; 0 = any free port
@@ -36,10 +50,7 @@ struct EmulatorOptions {
     std::vector<TrackingLoss> losses;
     std::vector<std::string> names{flight::kSufferer, "v1", "v2", "v3"};
     bool other_sections = true;  // marker sets, skeletons, assets, ... to skip
-    // A hostile Motive (issue 70): this many more bodies every frame, each with an id never sent
-    // before and in no model definition; and a frame clock (the frame's timestamp) that stands still.
-    int new_ids_per_frame = 0;
-    bool frozen_clock = false;
+    Hostility hostile;
     std::uint64_t seed = 1;
     // Where body i is at time t (seconds since start); default: the sufferer on the stand and
     // the others circling above it.
@@ -59,6 +70,7 @@ private:
     void loop();
     void handle(const std::vector<std::uint8_t>& packet, const Endpoint& from);
     std::vector<std::uint8_t> frame(std::int32_t number, double t);
+    std::vector<std::uint8_t> hostile_packet(std::int32_t number, double t, std::mt19937_64& rng);
 
     EmulatorOptions options_;
     UdpSocket socket_;

@@ -6,6 +6,7 @@
 #include "core/log.hpp"
 #include "core/shutdown.hpp"
 #include "mocap_bridge/emulator.hpp"
+#include "mocap_bridge/hostile_cli.hpp"
 
 int main(int argc, char** argv) {
     return dw::cli::run_main("dw-natnet-emulator", [&] {
@@ -27,10 +28,7 @@ int main(int argc, char** argv) {
         app.add_option("--lose-at", lose_at, "... at this time [s]")->check(dw::cli::in(dw::kTimeoutRange));
         app.add_option("--lose-for", lose_for, "... for this long [s]")->check(dw::cli::in(dw::kTimeoutRange));
         app.add_option("--seed", o.seed, "random seed (drops)")->check(dw::cli::in(dw::kSeedRange));
-        app.add_option("--new-ids-per-frame", o.new_ids_per_frame,
-                       "hostile: this many more bodies every frame, each with an id never sent before")
-            ->check(dw::cli::in({0, 100, "bodies"}));
-        app.add_flag("--frozen-clock", o.frozen_clock, "hostile: every frame's timestamp the same");
+        dw::natnet::add_hostility_options(app, o.hostile, "");
         dw::cli::parse(app, argc, argv);
         dw::log::set_level(dw::log::parse_level(base.log_level));
         if (version == "3.0") o.version = {3, 0};

@@ -9,6 +9,7 @@
 #include "dds/endpoint.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/process_cli.hpp"
+#include "mocap_bridge/hostile_cli.hpp"
 #include "mocap_bridge/bridge.hpp"
 #include "mocap_bridge/px4_source.hpp"
 #include "mocap_bridge/sim_source.hpp"
@@ -37,6 +38,7 @@ struct NatNetArgs {
     std::vector<std::string> name_map;
     dw::natnet::ClientOptions client;
     double sim_rate = 180.0;
+    dw::natnet::Hostility sim_hostile;            // a hostile Motive behind the sim source (tests, issue 70)
     std::optional<dw::planner::Px4Options> feed;  // --feed-px4: the motion capture into each PX4's estimator
 };
 
@@ -67,7 +69,7 @@ int bridge_natnet(dw::dds::ProcessCli& cli, NatNetArgs a, bool simulated_source)
         std::vector<std::string> names{dw::flight::kSufferer};
         std::stringstream in(a.sim_vehicles);
         for (std::string v; std::getline(in, v, ',');) names.push_back(v);
-        simulated = std::make_unique<dw::natnet::SimSource>(participant, names, a.sim_rate, fault);
+        simulated = std::make_unique<dw::natnet::SimSource>(participant, names, a.sim_rate, fault, a.sim_hostile);
         a.client.server_ip = "127.0.0.1";
         a.client.local_ip = "127.0.0.1";
         a.client.command_port = simulated->port();
@@ -100,7 +102,8 @@ int bridge_natnet(dw::dds::ProcessCli& cli, NatNetArgs a, bool simulated_source)
     }
     dw::log::info("bridged ", n, " frames; ", converter.dropped(), " dropped by the network or server; ",
                   natnet.malformed(), " malformed packets skipped; ", converter.implausible(),
-                  " non-finite or implausible bodies and frames refused");
+                  " non-finite or implausible bodies and frames refused; ", converter.undefined(),
+                  " bodies of no model definition left out of vehicles/state");
     return 0;
 }
 
@@ -148,6 +151,7 @@ int run(int argc, char** argv) {
                    "sim: KIND:VEHICLE:AFTER_S — the vehicle stops following its setpoints (stuck) or mocap "
                    "reports it 10 m away (jump), AFTER_S after its first setpoint (fault tests)");
     app.add_option("--sim-rate", a.sim_rate, "sim: camera rate [Hz]")->check(dw::cli::in({1, 1000, "Hz"}));
+    dw::natnet::add_hostility_options(app, a.sim_hostile, "sim-");
     app.add_option("--px4-vehicles", px4_vehicles,
                    "px4 and --feed-px4: the vehicles, comma-separated (the plan's names)")
         ->delimiter(',');

@@ -24,7 +24,7 @@ SimFault parse_sim_fault(const std::string& text) {
 }
 
 SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz,
-                     std::optional<SimFault> fault)
+                     std::optional<SimFault> fault, const Hostility& hostile)
     : names_(names),
       fault_(std::move(fault)),
       reader_(p, dds::topics::vehicle_setpoint, [this](const msg::VehicleSetpoint& s, const dds::SampleMeta&) {
@@ -56,6 +56,7 @@ SimSource::SimSource(dds::Participant& p, const std::vector<std::string>& names,
     o.rate_hz = rate_hz;
     o.names = names_;
     o.motion = [this](int body, double t) { return pose(body, t); };
+    o.hostile = hostile;
     emulator_ = std::make_unique<NatNetEmulator>(o);
 }
 

@@ -33,7 +33,7 @@ SimFault parse_sim_fault(const std::string& text);
 class SimSource {
 public:
     SimSource(dds::Participant& p, const std::vector<std::string>& names, double rate_hz,
-              std::optional<SimFault> fault = {});
+              std::optional<SimFault> fault = {}, const Hostility& hostile = {});
     std::uint16_t port() const { return emulator_->port(); }
 
 private:

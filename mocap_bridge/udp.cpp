@@ -61,7 +61,7 @@ std::optional<std::vector<std::uint8_t>> UdpSocket::receive(int timeout_ms, Endp
     pollfd p{fd_, POLLIN, 0};
     const int r = ::poll(&p, 1, timeout_ms);
     if (r <= 0) return std::nullopt;
-    std::vector<std::uint8_t> buf(65536);
+    std::vector<std::uint8_t> buf(kMaxDatagramBytes);
     sockaddr_in src{};
     socklen_t len = sizeof(src);
     const ssize_t n = ::recvfrom(fd_, buf.data(), buf.size(), 0, reinterpret_cast<sockaddr*>(&src), &len);

@@ -12,7 +12,8 @@
 
 namespace dw::natnet {
 
-inline constexpr Range kPortRange{0, 65535};  // a UDP port (0 = any free one where allowed)
+inline constexpr Range kPortRange{0, 65535};             // a UDP port (0 = any free one where allowed)
+inline constexpr std::size_t kMaxDatagramBytes = 65507;  // the largest UDP payload over IPv4
 
 struct Endpoint {
     sockaddr_in addr{};

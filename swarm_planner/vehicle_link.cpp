@@ -91,6 +91,9 @@ VehicleHeights::VehicleHeights(dds::Participant& p, const std::vector<std::strin
     : p_(p),
       vehicles_(vehicles),
       reader_(p, dds::topics::vehicle_state, [this](const msg::VehicleState& s, const dds::SampleMeta&) {
+          // A lost body's state holds a pose it was seen at, or none (zeros): no height (issue 70: a
+          // lost state at D = 0 made a landing vehicle's gate drop its setpoint 1.4 m to the floor).
+          if (!s.tracking_valid()) return;
           const double d = s.position_m().z();
           if (!physics::plausible_position(physics::Vec3(s.position_m().x(), s.position_m().y(), d))) return;
           if (std::find(vehicles_.begin(), vehicles_.end(), s.vehicle_id()) == vehicles_.end()) return;  // not ours

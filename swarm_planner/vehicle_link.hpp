@@ -100,7 +100,7 @@ private:
     dds::Writer<msg::VehicleSetpoint> writer_;
 };
 
-// Each of the plan's vehicles' latest D from vehicles/state (the lab's frame), while fresh.
+// Each of the plan's vehicles' latest tracked D from vehicles/state (the lab's frame), while fresh.
 class VehicleHeights {
 public:
     VehicleHeights(dds::Participant& p, const std::vector<std::string>& vehicles);

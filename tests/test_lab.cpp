@@ -851,20 +851,56 @@ TEST(LabSoak, ThreeMinutesOfTheSimulatedLabKeepMemoryFlatAndLoseNothing) {
         EXPECT_GT(std::filesystem::file_size(dir.file(png)), 1000u) << png;
 }
 
-// Issue 70, the hostile-wire suite: the simulated lab flies while `dw-probe hostile` publishes
-// malformed samples on every lab topic, with each topic's own QoS (an unknown encapsulation, cut
-// short, and on the sensor topics that command nothing absurd words: NaN, ±inf, 1e300). Every
-// process survives (each stops with status 0), the experiment ends DONE or ABORTED with a reason,
-// and nothing the planner sends a vehicle is non-finite or outside the room (read on
-// vehicles/setpoint, where the simulated vehicles read it).
-TEST(HostileWire, TheLabUnderMalformedSamplesOnEveryTopicSendsNoAbsurdCommand) {
+namespace {
+std::string proc_text(const std::filesystem::path& p) {  // "" once the process is gone
+    std::ifstream in(p);
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+// The largest resident set (VmHWM, MB) of the running process whose command line holds every one of
+// `words`, sampled until `stop`; 0 if none was seen.
+double peak_rss_mb_while(const std::vector<std::string>& words, const std::stop_token& stop) {
+    double peak = 0;
+    while (!stop.stop_requested()) {
+        std::error_code ec;
+        for (const auto& e : std::filesystem::directory_iterator("/proc", ec)) {
+            std::string cmdline = proc_text(e.path() / "cmdline");
+            std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+            if (cmdline.empty() || !std::all_of(words.begin(), words.end(), [&](const std::string& w) {
+                    return cmdline.find(w) != std::string::npos;
+                }))
+                continue;
+            std::istringstream status(proc_text(e.path() / "status"));
+            for (std::string line; std::getline(status, line);)
+                if (line.rfind("VmHWM:", 0) == 0) peak = std::max(peak, std::stod(line.substr(6)) / 1024.0);
+        }
+        std::this_thread::sleep_for(200ms);
+    }
+    return peak;
+}
+
+// The bridge's resident memory under a hostile Motive (docs/HOSTILE_INPUT.md; measured 2026-12-06:
+// see the figure there).
+constexpr double kBridgePeakMb = 150;
+
+// Issue 70, the hostile-wire suite: the simulated lab flies (its mocap bridge started with
+// `bridge_args` more) while `dw-probe hostile` publishes malformed samples on every lab topic, with
+// each topic's own QoS (an unknown encapsulation, cut short, and on the sensor topics that command
+// nothing absurd words: NaN, ±inf, 1e300). Every process survives (each stops with status 0), the
+// experiment ends DONE or ABORTED with a reason, nothing the planner sends a vehicle is non-finite
+// or outside the room (read on vehicles/setpoint, where the simulated vehicles read it), and the
+// bridge's memory stays under kBridgePeakMb.
+void fly_the_hostile_lab(const std::string& bridge_args) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("lab.yaml")) << R"(format: downwash-lab/1
 processes:
   - name: stand_agent
     run: [dw-stand-agent, run, --sim]
   - name: mocap_bridge
-    run: [dw-mocap-bridge, --sim, --sim-vehicles, v1]
+    run: [dw-mocap-bridge, --sim, --sim-vehicles, v1)" +
+                                               bridge_args + R"(]
   - name: recorder
     run: [dw-recorder, record, --out, "{run_dir}/exp.mcap", --quiet, --no-fsync]
   - name: predictor
@@ -885,14 +921,23 @@ processes:
             std::lock_guard lock(m);
             sent.push_back(s);
         });
+    std::stop_source stop_watching;
+    double bridge_peak_mb = 0;
+    std::jthread memory([&] {
+        bridge_peak_mb = peak_rss_mb_while({"dw-mocap-bridge", cfg.ns}, stop_watching.get_token());
+    });
     const std::vector<std::string> dds{"--domain", std::to_string(cfg.domain), "--namespace", cfg.ns};
     const auto run = fly_under_hostile_probe(
         dir, {bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run")}, {"--rate", "20"}, dds,
         300000ms, "DONE: 2 of 2 legs", {"stand_agent", "mocap_bridge", "recorder", "predictor"});
+    stop_watching.request_stop();
+    memory.join();
     ASSERT_TRUE(run.ended) << "dw-lab did not end";
     EXPECT_NE(run.err.find("planner ended with status " + std::string(run.done ? "0" : "1")), std::string::npos)
         << run.err;
     EXPECT_NE(run.probe_out.find("stand/wrench garbage"), std::string::npos);
+    EXPECT_GT(bridge_peak_mb, 0) << "the bridge was never seen running";
+    EXPECT_LT(bridge_peak_mb, kBridgePeakMb);
     std::lock_guard lock(m);
     ASSERT_GT(sent.size(), 100u);
     const dw::planner::Geofence room;
@@ -902,5 +947,16 @@ processes:
             << "sent " << x.transpose() << " yaw " << s.yaw_rad() << "\n"
             << run.err;
     }
-    std::printf("%s%zu setpoints checked; %s\n", run.out.c_str(), sent.size(), run.done ? "DONE" : "ABORTED");
+    std::printf("%s%zu setpoints checked, the bridge's peak %.0f MB; %s\n", run.out.c_str(), sent.size(),
+                bridge_peak_mb, run.done ? "DONE" : "ABORTED");
+}
+}  // namespace
+
+TEST(HostileWire, TheLabUnderMalformedSamplesOnEveryTopicSendsNoAbsurdCommand) { fly_the_hostile_lab(""); }
+
+// ... and under a hostile Motive too (its emulated NatNet server, the same client a real Motive
+// meets): ten new rigid-body ids every frame, a frozen frame clock, and every fifth frame one more
+// packet cut short, oversized, or of NaN, ±inf and ±3.4e38 bodies and timestamp.
+TEST(HostileWire, TheLabUnderAHostileMotiveAndMalformedSamplesSendsNoAbsurdCommand) {
+    fly_the_hostile_lab(", --sim-new-ids-per-frame, \"10\", --sim-frozen-clock, --sim-hostile-packets");
 }

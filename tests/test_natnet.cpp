@@ -358,7 +358,9 @@ TEST(Bridge, TrackingLossIsFlaggedWithinOneFrameAndVelocityIsSaneRightAfter) {
 TEST(Bridge, NewIdsEveryFrameOrAFrozenClockHoldBoundedMemory) {
     ServerInfo server;
     server.clock_frequency = 1'000'000;
-    FrameConverter conv({}, server, ModelDef{});
+    ModelDef models;
+    models.rigid_bodies.push_back({"v1", 1, -1, {}});
+    FrameConverter conv({}, server, models);
     auto body = [](int id, float x) {
         RigidBody b;
         b.id = id;
@@ -380,6 +382,9 @@ TEST(Bridge, NewIdsEveryFrameOrAFrozenClockHoldBoundedMemory) {
             EXPECT_NEAR(out.states.at(0).velocity_mps().x(), 1.8, 1e-3) << "the vehicle in use lost its velocity";
         }
     }
+    // The invented ids are in the frames, but no model definition gave them: no vehicle state, no
+    // track (before, each became an instance of vehicles/state: past DDS's 256 the writes failed).
+    EXPECT_EQ(conv.undefined(), static_cast<std::uint64_t>(kFrames) * kNewPerFrame);
     const auto held = conv.held();
     EXPECT_LE(held.bodies, dw::flight::kMaxBodies);
     ASSERT_GT(held.bodies, 0u);
@@ -436,4 +441,24 @@ TEST(Bridge, NonFiniteOrAbsurdBodiesNeverEnterTheLab) {
     conv.convert(nan_clock, 1'700'000'000'100'000'000, &refused);
     EXPECT_TRUE(refused);
     EXPECT_EQ(conv.implausible(), 19u);
+    // A clock that is finite but no Motive's (3.4e38 s, then -3.4e38 s) is refused too: before, the
+    // second looked like Motive restarting, every estimator was reset, and a lost body's next state
+    // had no pose at all (zeros: D = 0, the floor).
+    for (const double absurd : {3.4e38, -3.4e38, -1.0}) {
+        FrameOfData f;
+        f.frame_number = 8;
+        f.timestamp_s = absurd;
+        f.bodies = {body(1, 0.5f)};
+        refused = false;
+        conv.convert(f, 1'700'000'000'100'000'000, &refused);
+        EXPECT_TRUE(refused) << absurd;
+    }
+    FrameOfData lost;
+    lost.frame_number = 9;
+    lost.timestamp_s = 7 / 180.0;
+    lost.bodies = {body(1, 0.5f)};
+    lost.bodies[0].tracking_valid = false;
+    const auto held = conv.convert(lost, 1'700'000'000'100'000'000);
+    EXPECT_NEAR(held.states.at(0).position_m().x(), 0.5, 1e-6) << "body 1's last pose was forgotten";
+    EXPECT_EQ(conv.implausible(), 22u);
 }

@@ -952,8 +952,8 @@ TEST(Px4Odometry, AStateStampedFarFromThisClockIsNotSent) {
         << "tracking was not lost: no reset";
 }
 
-// Issue 70: a vehicle state from the wire that is no measurement (1e300, NaN) is dropped where the
-// planner reads it: the descent gate keeps the last height that was one.
+// Issue 70: a vehicle state from the wire that is no measurement (1e300, NaN, or a body lost) is
+// dropped where the planner reads it: the descent gate keeps the last height that was one.
 TEST(VehicleHeightsWire, GarbageStatesAreNoHeight) {
     const auto cfg = loopback("heights");
     dw::dds::Participant lab(cfg, "planner");
@@ -963,9 +963,15 @@ TEST(VehicleHeightsWire, GarbageStatesAreNoHeight) {
     ASSERT_TRUE(w.wait_for_readers(1, 20000ms));
     dw::msg::VehicleState s;
     s.vehicle_id("v1");
+    s.tracking_valid(true);
     s.position_m().z(-1.0);
     w.write(s);
     ASSERT_TRUE(eventually([&] { return heights.down_of(0) == std::optional<double>(-1.0); }));
+    // A lost body's state (the bridge's: no pose known, zeros) is no height either: a landing's gate
+    // took such a D = 0 as where the vehicle was and dropped its setpoint 1.4 m to the floor.
+    dw::msg::VehicleState lost;
+    lost.vehicle_id("v1");
+    w.write(lost);
     for (double garbage : {1e300, -1e300, std::nan("")}) {
         s.position_m().z(garbage);
         w.write(s);
