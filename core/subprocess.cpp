@@ -8,6 +8,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <thread>
 
 #include "core/errors.hpp"
@@ -133,7 +134,19 @@ std::string last_line(std::string_view text) {
     if (line.size() > kChildLineChars) line = line.substr(0, kChildLineChars) + "...";
     return line;
 }
+constexpr std::streamoff kTailBytes = 4096;  // where a log's last line is looked for
 }  // namespace
+
+std::string last_line_of(const std::string& file) {
+    std::ifstream in(file, std::ios::binary | std::ios::ate);
+    if (!in) return "";
+    const std::streamoff size = in.tellg();
+    in.seekg(std::max<std::streamoff>(0, size - kTailBytes));
+    std::string tail(static_cast<std::size_t>(std::min(size, kTailBytes)), '\0');
+    in.read(tail.data(), static_cast<std::streamsize>(tail.size()));
+    tail.resize(static_cast<std::size_t>(in.gcount()));
+    return last_line(tail);
+}
 
 void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop) {
     std::vector<std::string> argv{executable_dir() + "/" + args.at(0)};
@@ -147,7 +160,7 @@ void run_sibling(const std::vector<std::string>& args, const std::string& log_fi
         }
     }
     if (*st != 0) {
-        const std::string said = last_line(read_file(log_file));
+        const std::string said = last_line_of(log_file);
         throw RuntimeError(log::cat(args[0], " failed (status ", *st, ")", said.empty() ? "" : ": ", said));
     }
 }

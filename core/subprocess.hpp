@@ -41,6 +41,10 @@ private:
     std::optional<int> status_;
 };
 
+// The last non-empty line of a log file (a failed child's own error), control bytes dropped, cut
+// short when long; "" when there is none.
+std::string last_line_of(const std::string& file);
+
 // The directory holding the running executable (siblings live there).
 std::string executable_dir();
 

@@ -242,7 +242,8 @@ void start_all(std::deque<Running>& procs, const LabFile& lab, bool secure, cons
 // A process (not the experiment) ended: restarted when its lab file says so, up to 3 times, each
 // time with a participant id no first start has (counted down; refused once they run out).
 void on_exit(Running& r, int status, std::size_t lab_size, int& next_participant_id, LaunchResult& R, const Say& say) {
-    say(log::cat(r.spec.name, " exited with status ", status, " (log: ", r.log, ")"));
+    const std::string said = status == 0 ? "" : last_line_of(r.log);  // its own error, when it failed
+    say(log::cat(r.spec.name, " exited with status ", status, said.empty() ? "" : ": ", said, " (log: ", r.log, ")"));
     if (r.spec.restart != Restart::on_failure || status == 0 || r.restarts >= 3) return;
     if (next_participant_id < static_cast<int>(lab_size)) {
         say(log::cat("not restarting ", r.spec.name, ": no fresh DDS participant id left (ids below ", lab_size,

@@ -27,6 +27,8 @@
 #include "lab/labfile.hpp"
 #include "lab/launcher.hpp"
 #include "lab/soak.hpp"
+#include "dds/security.hpp"
+#include "security/keystore.hpp"
 #include "mcap/mcap.hpp"
 #include "recordings/recordings.hpp"
 #include "dds/endpoint.hpp"
@@ -859,20 +861,27 @@ std::string proc_text(const std::filesystem::path& p) {  // "" once the process 
     return out.str();
 }
 
+// The running processes whose command line holds every one of `words`.
+std::vector<std::filesystem::path> processes_with(const std::vector<std::string>& words) {
+    std::vector<std::filesystem::path> found;
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator("/proc", ec)) {
+        std::string cmdline = proc_text(e.path() / "cmdline");
+        std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+        if (!cmdline.empty() && std::all_of(words.begin(), words.end(),
+                                            [&](const std::string& w) { return cmdline.find(w) != std::string::npos; }))
+            found.push_back(e.path());
+    }
+    return found;
+}
+
 // The largest resident set (VmHWM, MB) of the running process whose command line holds every one of
 // `words`, sampled until `stop`; 0 if none was seen.
 double peak_rss_mb_while(const std::vector<std::string>& words, const std::stop_token& stop) {
     double peak = 0;
     while (!stop.stop_requested()) {
-        std::error_code ec;
-        for (const auto& e : std::filesystem::directory_iterator("/proc", ec)) {
-            std::string cmdline = proc_text(e.path() / "cmdline");
-            std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
-            if (cmdline.empty() || !std::all_of(words.begin(), words.end(), [&](const std::string& w) {
-                    return cmdline.find(w) != std::string::npos;
-                }))
-                continue;
-            std::istringstream status(proc_text(e.path() / "status"));
+        for (const auto& p : processes_with(words)) {
+            std::istringstream status(proc_text(p / "status"));
             for (std::string line; std::getline(status, line);)
                 if (line.rfind("VmHWM:", 0) == 0) peak = std::max(peak, std::stod(line.substr(6)) / 1024.0);
         }
@@ -959,4 +968,39 @@ TEST(HostileWire, TheLabUnderMalformedSamplesOnEveryTopicSendsNoAbsurdCommand) {
 // packet cut short, oversized, or of NaN, ±inf and ±3.4e38 bodies and timestamp.
 TEST(HostileWire, TheLabUnderAHostileMotiveAndMalformedSamplesSendsNoAbsurdCommand) {
     fly_the_hostile_lab(", --sim-new-ids-per-frame, \"10\", --sim-frozen-clock, --sim-hostile-packets");
+}
+
+// Issue 70: a keystore whose one identity's permissions, signed by the lab's own CA, hold `<dds/>`
+// crashed that process inside Fast DDS (SIGSEGV, nothing on stderr). In a lab run now: that process
+// (the predictor, which the experiment can do without) exits 2, dw-lab's line says why naming the
+// file, the others fly the experiment to its end and stop with status 0, and nothing is left running.
+TEST(HostileWire, ALabWithASignedButMalformedPermissionsFileSaysWhichFileAndFliesOn) {
+    dw::test::TempDir dir;
+    std::string lab = lab_text("", "local");
+    const auto flaky = lab.find("  - name: flaky");
+    lab.erase(flaky, lab.find("  - name: planner") - flaky);
+    lab.replace(lab.find("    host: elsewhere\n"), std::string("    host: elsewhere\n").size(), "");
+    lab.replace(lab.find("physics.yaml]"), std::string("physics.yaml").size(), dir.file("physics.yaml"));
+    std::ofstream(dir.file("lab.yaml")) << lab;
+    std::ofstream(dir.file("physics.yaml")) << "format: downwash-physics/1\n";
+    const auto keys = dw::test::run(
+        {bin("dw-lab"), "keys", "create", "--keystore", dir.file("keys"), "--lab", dir.file("lab.yaml")}, dir);
+    ASSERT_EQ(keys.status, 0) << keys.err;
+    const std::string perm = dw::dds::KeystorePaths{dir.file("keys")}.permissions("predictor");
+    dw::security::sign_document(dir.file("keys"), "<dds/>", perm);
+    const std::string ns = "badperm" + std::to_string(::getpid());
+    const auto r =
+        dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"), "--security",
+                       dir.file("keys"), "--domain", std::to_string(dw::test::test_domain()), "--namespace", ns},
+                      dir, 300000ms);
+    const auto said = r.err.find("predictor exited with status 2: ");
+    ASSERT_NE(said, std::string::npos) << r.err;
+    const std::string line = r.err.substr(said, r.err.find('\n', said) - said);
+    EXPECT_NE(line.find(perm), std::string::npos) << line;
+    EXPECT_NE(line.find("has no <permissions>"), std::string::npos) << line;
+    EXPECT_TRUE(r.out.find("DONE: 2 of 2 legs") != std::string::npos || r.err.find("ABORTED") != std::string::npos)
+        << r.out << r.err;
+    for (const char* p : {"stand_agent", "mocap_bridge", "recorder"})
+        EXPECT_NE(r.err.find(std::string("stopped ") + p + " (status 0)"), std::string::npos) << p << "\n" << r.err;
+    EXPECT_TRUE(processes_with({ns}).empty()) << "a process of the lab outlived it";
 }
