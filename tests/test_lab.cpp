@@ -172,10 +172,9 @@ TEST(LabRun, FliesALabFileRestartsAFailingProcessAndPrintsOtherHostsCommands) {
     }
 }
 
-// Issue 18: the simulated lab with DDS Security, every process its own identity from a keystore
-// made from the lab file; the recording is complete and says who recorded it.
-TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
-    dw::test::TempDir dir;
+namespace {
+// The two-leg lab on this host (lab.yaml, its physics) and a keystore made from it (keys/).
+void write_secure_lab(const dw::test::TempDir& dir) {
     std::string lab = lab_text("", "local");
     const auto flaky = lab.find("  - name: flaky");
     lab.erase(flaky, lab.find("  - name: planner") - flaky);
@@ -188,6 +187,14 @@ TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
         {bin("dw-lab"), "keys", "create", "--keystore", dir.file("keys"), "--lab", dir.file("lab.yaml")}, dir);
     ASSERT_EQ(keys.status, 0) << keys.err;
     EXPECT_NE(keys.out.find("created identity planner"), std::string::npos) << keys.out;
+}
+}  // namespace
+
+// Issue 18: the simulated lab with DDS Security, every process its own identity from a keystore
+// made from the lab file; the recording is complete and says who recorded it.
+TEST(LabRun, FliesTheLabWithDdsSecurityEveryProcessItsOwnIdentity) {
+    dw::test::TempDir dir;
+    ASSERT_NO_FATAL_FAILURE(write_secure_lab(dir));
     const auto r = dw::test::run({bin("dw-lab"), "run", "--lab", dir.file("lab.yaml"), "--run-dir", dir.file("run"),
                                   "--security", dir.file("keys"), "--domain", std::to_string(dw::test::test_domain()),
                                   "--namespace", "labsec" + std::to_string(::getpid())},
@@ -976,16 +983,7 @@ TEST(HostileWire, TheLabUnderAHostileMotiveAndMalformedSamplesSendsNoAbsurdComma
 // file, the others fly the experiment to its end and stop with status 0, and nothing is left running.
 TEST(HostileWire, ALabWithASignedButMalformedPermissionsFileSaysWhichFileAndFliesOn) {
     dw::test::TempDir dir;
-    std::string lab = lab_text("", "local");
-    const auto flaky = lab.find("  - name: flaky");
-    lab.erase(flaky, lab.find("  - name: planner") - flaky);
-    lab.replace(lab.find("    host: elsewhere\n"), std::string("    host: elsewhere\n").size(), "");
-    lab.replace(lab.find("physics.yaml]"), std::string("physics.yaml").size(), dir.file("physics.yaml"));
-    std::ofstream(dir.file("lab.yaml")) << lab;
-    std::ofstream(dir.file("physics.yaml")) << "format: downwash-physics/1\n";
-    const auto keys = dw::test::run(
-        {bin("dw-lab"), "keys", "create", "--keystore", dir.file("keys"), "--lab", dir.file("lab.yaml")}, dir);
-    ASSERT_EQ(keys.status, 0) << keys.err;
+    ASSERT_NO_FATAL_FAILURE(write_secure_lab(dir));
     const std::string perm = dw::dds::KeystorePaths{dir.file("keys")}.permissions("predictor");
     dw::security::sign_document(dir.file("keys"), "<dds/>", perm);
     const std::string ns = "badperm" + std::to_string(::getpid());
