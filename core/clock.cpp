@@ -1,5 +1,8 @@
 #include "core/clock.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace dw {
 
 Nanos SystemClock::now_ns() const {
@@ -32,6 +35,28 @@ void ManualClock::advance(std::chrono::nanoseconds d) {
 void ManualClock::set(Nanos t) {
     std::lock_guard lock(mutex_);
     now_ = t;
+}
+
+namespace {
+bool within_step(Nanos a, Nanos b) { return std::abs(static_cast<double>(a - b)) * 1e-9 <= kMaxStampStepS; }
+}  // namespace
+
+bool StampGate::accept(Nanos stamp) {
+    if (!started_ || within_step(stamp, newest_)) {
+        newest_ = started_ ? std::max(newest_, stamp) : stamp;
+        started_ = true;
+        stray_run_ = 0;
+        return true;
+    }
+    stray_run_ = stray_run_ > 0 && within_step(stamp, stray_) ? stray_run_ + 1 : 1;
+    stray_ = stamp;
+    if (stray_run_ < kStampsToFollow) {
+        ++strays_;
+        return false;
+    }
+    newest_ = stamp;  // the stream's clock moved: follow it
+    stray_run_ = 0;
+    return true;
 }
 
 }  // namespace dw

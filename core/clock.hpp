@@ -18,6 +18,28 @@ inline constexpr double kMaxClockOffsetS = 3600;
 inline constexpr Range kClockOffsetRange{-kMaxClockOffsetS, kMaxClockOffsetS, "s"};
 inline constexpr Range kPipelineDelayRange{0, kMaxClockOffsetS, "s"};
 
+// The stamps of one stream from a wire (mocap frames), held to themselves (issue 70), whatever
+// clock the reader runs on: each stamp within kMaxStampStepS of the newest accepted, forward or
+// back (a frame the network reordered passes, though it is not the newest). A stamp further off is
+// a stray, refused and counted, unless kStampsToFollow strays in a row agree (each within the step
+// of the one before): then the stream's own clock moved (Motive restarted, a replay began) and it is
+// followed from there. A lone garbled or forged stamp never moves it.
+inline constexpr double kMaxStampStepS = 1.0;
+inline constexpr int kStampsToFollow = 5;
+
+class StampGate {
+public:
+    bool accept(Nanos stamp);
+    std::uint64_t strays() const { return strays_; }
+
+private:
+    bool started_ = false;
+    Nanos newest_ = 0;
+    Nanos stray_ = 0;  // the last stray, while a run of them lasts
+    int stray_run_ = 0;
+    std::uint64_t strays_ = 0;
+};
+
 class Clock {
 public:
     virtual ~Clock() = default;

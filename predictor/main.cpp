@@ -313,7 +313,8 @@ struct OnlineCommand {
         while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
         std::cout << "published " << node.published() << " predictions, " << node.reloads() << " model swaps, "
                   << node.frames_lost() << " mocap frames lost, " << node.unpredicted()
-                  << " frames the model could not predict\n";
+                  << " frames the model could not predict, " << node.stray_stamps()
+                  << " frames refused for a stamp off the frames' time\n";
         return 0;
     }
 };

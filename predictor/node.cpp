@@ -133,6 +133,13 @@ std::string PredictorNode::model_name() const {
 }
 
 void PredictorNode::on_frame(const msg::MocapFrame& frame) {
+    // A stamp off the stream's time (issue 70) would be published as a prediction's time: refused.
+    if (!stamps_.accept(dds::from_msg(frame.header().stamp()))) {
+        if (stray_stamps_.fetch_add(1) == 0)
+            log::warn("a mocap frame refused (the first; counted): its stamp is more than ", kMaxStampStepS,
+                      " s off the frames' own time (garbled or forged)");
+        return;
+    }
     const auto x = features_.update(frame);
     if (!x) return;
     std::shared_ptr<const ForceModel> model;

@@ -99,6 +99,8 @@ public:
     std::uint64_t frames_lost() const { return reader_->lost(); }
     // Frames the model could not predict (a geometry the physics cannot take), left unpublished.
     std::uint64_t unpredicted() const { return unpredicted_.load(); }
+    // Frames refused for a stamp off their stream's time (StampGate: garbled or forged), unpublished.
+    std::uint64_t stray_stamps() const { return stray_stamps_.load(); }
     std::string model_name() const;
 
 private:
@@ -114,7 +116,8 @@ private:
     FrameFeatures features_;
     dds::Writer<msg::WrenchPrediction> writer_;
     std::optional<dds::Reader<msg::MocapFrame>> reader_;  // subscribed once the writer's readers are awaited
-    std::atomic<std::uint64_t> published_{0}, reloads_{0}, unpredicted_{0};
+    std::atomic<std::uint64_t> published_{0}, reloads_{0}, unpredicted_{0}, stray_stamps_{0};
+    StampGate stamps_;  // on the reader's thread only
     std::atomic<bool> stop_{false};
     std::thread watcher_;
 };

@@ -25,6 +25,10 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
       world_(world),
       sufferer_(0, 0, -physics.stand.height_m),
       reader_(p, dds::topics::mocap_frame, [this](const msg::MocapFrame& f, const dds::SampleMeta&) {
+          {  // a frame stamped off the frames' own time (issue 70) is not felt, nor its lag counted
+              std::lock_guard lock(mutex_);
+              if (!stamps_.accept(dds::from_msg(f.header().stamp()))) return;
+          }
           std::vector<physics::Producer> ps;
           physics::Vec3 suf = sufferer_;
           for (const auto& b : f.bodies()) {
@@ -56,6 +60,11 @@ double PhysicsSource::force(int chip, Nanos t) {
     physics::Wrench6 read = sensor_.read(to_seconds(t), physics::to_wrench6(model_.evaluate(sufferer_, producers_)));
     chain_.calibration(read);
     return stand_.wrench_to_cells(physics::to_wrench(read))[chip];
+}
+
+std::uint64_t PhysicsSource::stray_stamps() const {
+    std::lock_guard lock(mutex_);
+    return stamps_.strays();
 }
 
 double PhysicsSource::take_air_lag_s() {

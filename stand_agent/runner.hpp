@@ -35,6 +35,8 @@ public:
     // a conversion's time less the capture stamp of the latest mocap frame (the motion capture's
     // latency, the transit, the frame's hold). A real stand has no such lag. < 0: no conversion yet.
     double take_air_lag_s();
+    // Mocap frames refused for a stamp off the frames' own time (StampGate: garbled or forged).
+    std::uint64_t stray_stamps() const;
 
 private:
     physics::PhysicsConfig physics_;  // before the chain, which reads its effects
@@ -45,7 +47,8 @@ private:
     physics::StandModel stand_;
     std::string sufferer_name_;
     const Clock& world_;
-    std::mutex mutex_;
+    mutable std::mutex mutex_;
+    StampGate stamps_;
     Nanos pose_stamp_ns_ = 0;  // the latest mocap frame's capture stamp (world realtime)
     double lag_sum_s_ = 0;
     std::size_t lag_n_ = 0;

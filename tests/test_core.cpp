@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/clock.hpp"
 #include "core/bounded_map.hpp"
 #include "core/errors.hpp"
 #include "core/parallel.hpp"
@@ -145,4 +146,26 @@ TEST(BoundedMap, HoldsItsCapacityAndForgetsTheLeastRecentlyUsed) {
     for (int k = 100; k < 10000; ++k) m[k] = k;
     EXPECT_EQ(m.size(), 3u);
     EXPECT_EQ(m.forgotten(), 1u + 9900u);
+}
+
+// Issue 70: the stamps of a stream held to themselves. A lone stamp far off is refused and moves
+// nothing; a frame the network reordered passes; a stream whose clock moved for good is followed
+// after kStampsToFollow agreeing stamps; strays interleaved with the stream are never followed.
+TEST(StampGate, ALoneStrayIsRefusedAndAStreamThatMovedIsFollowed) {
+    const dw::Nanos s = 1'000'000'000, ms = s / 1000;
+    dw::StampGate g;
+    EXPECT_TRUE(g.accept(100 * s));
+    EXPECT_TRUE(g.accept(100 * s + 5 * ms));
+    EXPECT_FALSE(g.accept(1'000'000 * s));    // garbled: a million seconds on
+    EXPECT_TRUE(g.accept(100 * s + 3 * ms));  // reordered by the network
+    EXPECT_TRUE(g.accept(100 * s + 11 * ms));
+    for (int i = 0; i < 20; ++i) {  // a forger interleaved with the stream
+        EXPECT_FALSE(g.accept(-50 * s + i * ms)) << i;
+        EXPECT_TRUE(g.accept(100 * s + (12 + i) * ms)) << i;
+    }
+    for (int i = 0; i < dw::kStampsToFollow - 1; ++i) EXPECT_FALSE(g.accept(5 * s + i * 6 * ms)) << i;
+    EXPECT_TRUE(g.accept(5 * s + (dw::kStampsToFollow - 1) * 6 * ms));  // Motive restarted: followed
+    EXPECT_TRUE(g.accept(5 * s + dw::kStampsToFollow * 6 * ms));
+    EXPECT_FALSE(g.accept(100 * s));  // the old time is now the stray
+    EXPECT_EQ(g.strays(), 1u + 20u + (dw::kStampsToFollow - 1) + 1u);
 }

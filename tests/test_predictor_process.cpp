@@ -351,7 +351,7 @@ TEST(PredictorProcess, WithoutItsTrainingModuleItStillServesAndTrainingIsOneLine
 namespace {
 struct Published {
     std::vector<dw::msg::WrenchPrediction> predictions;
-    std::uint64_t unpredicted = 0;
+    std::uint64_t unpredicted = 0, stray_stamps = 0;
 };
 Published publish_frames(const std::string& model, const std::string& name,
                          const std::function<dw::msg::MocapFrame(int)>& make) {
@@ -369,9 +369,33 @@ Published publish_frames(const std::string& model, const std::string& name,
         std::this_thread::sleep_for(5ms);
     }
     std::this_thread::sleep_for(300ms);
-    return {predictions.samples(), node.unpredicted()};
+    return {predictions.samples(), node.unpredicted(), node.stray_stamps()};
 }
 }  // namespace
+
+// A frame whose stamp is off the frames' own time (a garbled or forged word: 1e6 s ahead) was
+// predicted and published at that time; now it is refused and counted, and the frames around it
+// are predicted as before. A stream whose clock moves for good (Motive restarted) is followed.
+TEST(PredictorOnline, AFrameStampedOffTheFramesTimeIsRefused) {
+    dw::test::TempDir dir;
+    const auto model = dir.file("model.json");
+    linear_model("learnt_linear", 1.0f).save(model);
+    const auto r = publish_frames(model, "stray", [](int i) {
+        const double t = i == 10 ? 1e6 : i < 20 ? 1000.0 + i / 180.0 : 5.0 + i / 180.0;  // at 20: restarted
+        return frame(static_cast<std::uint64_t>(i), t, 0.3);
+    });
+    std::size_t after_restart = 0;
+    for (const auto& w : r.predictions) {
+        const double t = dw::dds::from_msg(w.header().stamp()) * 1e-9;
+        EXPECT_LT(t, 1e5) << "a prediction at the stray stamp";
+        after_restart += t < 100;
+    }
+    EXPECT_GE(r.predictions.size(), 20u);  // best effort on loopback
+    EXPECT_GE(after_restart, 3u) << "the restarted stream was not followed";
+    // The stray and the restarted stream's first kStampsToFollow - 1 (best effort: one may be lost).
+    EXPECT_GE(r.stray_stamps, static_cast<std::uint64_t>(dw::kStampsToFollow - 1));
+    EXPECT_LE(r.stray_stamps, static_cast<std::uint64_t>(dw::kStampsToFollow));
+}
 
 // The online predictor never publishes a non-finite value — neither for a body at NaN nor for a
 // model whose weights overflow (1e30 x an offset in float): those frames are left unpredicted and

@@ -16,6 +16,7 @@
 #include "stand_agent/hx711.hpp"
 #include "stand_agent/runner.hpp"
 #include "dds/endpoint.hpp"
+#include "dds/time.hpp"
 #include <thread>
 #include <tuple>
 #include "support.hpp"
@@ -384,4 +385,44 @@ TEST(StandPhysicsSource, BodiesThatAreNoMeasurementAreNotFelt) {
         std::this_thread::sleep_for(std::chrono::milliseconds(300));
         EXPECT_TRUE(std::isfinite(felt())) << garbage;
     }
+}
+
+// Issue 70: a frame stamped off the frames' own time (a garbled or forged stamp, 1e6 s ahead) is not
+// felt (before, its bodies were the stand's air until the next frame, and its stamp the air's lag).
+TEST(StandPhysicsSource, AFrameStampedOffTheFramesTimeIsNotFelt) {
+    dw::dds::DdsConfig cfg;
+    cfg.domain = dw::test::test_domain();
+    cfg.ns = "standstamp" + std::to_string(::getpid());
+    dw::dds::Participant stand(cfg, "stand_agent"), bridge(cfg, "mocap_bridge");
+    const auto& clock = dw::SystemClock::instance();
+    dw::stand::PhysicsSource source(stand, dw::physics::PhysicsConfig{}, clock);
+    dw::dds::Writer<dw::msg::MocapFrame> w(bridge, dw::dds::topics::mocap_frame);
+    ASSERT_TRUE(w.wait_for_readers(1, std::chrono::seconds(20)));
+    const auto send = [&](double v1_n, double ahead_s) {  // v1 0.6 m above the sufferer, v1_n m north
+        dw::msg::MocapFrame f;
+        f.header().stamp(dw::dds::to_msg(clock.now_ns() + static_cast<dw::Nanos>(ahead_s * 1e9)));
+        for (auto [name, n, d] : {std::tuple{"sufferer", 0.0, -1.4}, std::tuple{"v1", v1_n, -2.0}}) {
+            dw::msg::RigidBody b;
+            b.name(name);
+            b.position_m().x(n);
+            b.position_m().z(d);
+            b.orientation().w(1);
+            b.tracking_valid(true);
+            f.bodies().push_back(b);
+        }
+        w.write(f);
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    };
+    const auto felt_z = [&] {  // the cells' sum: the vertical force
+        double sum = 0;
+        for (int chip = 0; chip < 8; ++chip) sum += source.force(chip, clock.monotonic_ns());
+        return sum;
+    };
+    send(0.0, 0);
+    const double overhead = felt_z();
+    send(3.0, 1e6);  // v1 gone 3 m north, at a stamp off the frames' time
+    EXPECT_NEAR(felt_z(), overhead, 1e-3 * std::abs(overhead) + 1e-6) << "the stray frame was felt";
+    EXPECT_EQ(source.stray_stamps(), 1u);
+    send(3.0, 0);  // the same, at the frames' time: felt
+    EXPECT_GT(std::abs(felt_z() - overhead), 1e-3) << "v1 moving away changed nothing: the test shows nothing";
 }
