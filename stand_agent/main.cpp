@@ -124,10 +124,7 @@ int run(int argc, char** argv) {
     dw::stand::RunOptions ro{realtime, dw::Shutdown::instance().token(), {}};
     if (source) ro.pipeline_delay_s = [&source] { return source->take_air_lag_s(); };
     const auto n = dw::stand::run_agent(participant, driver, agent, ro);
-    dw::log::info(
-        "published ", n, " wrench samples",
-        source ? dw::log::cat("; ", source->stray_stamps(), " mocap frames refused for a stamp off the frames' time")
-               : "");
+    dw::log::info("published ", n, " wrench samples", source ? source->summary() : "");
     return 0;
 }
 

@@ -67,6 +67,10 @@ std::uint64_t PhysicsSource::stray_stamps() const {
     return stamps_.strays();
 }
 
+std::string PhysicsSource::summary() const {
+    return log::cat("; ", stray_stamps(), " mocap frames refused for a stamp off the frames' time");
+}
+
 double PhysicsSource::take_air_lag_s() {
     std::lock_guard lock(mutex_);
     const double mean = lag_n_ ? lag_sum_s_ / static_cast<double>(lag_n_) : -1.0;

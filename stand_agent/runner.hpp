@@ -37,6 +37,7 @@ public:
     double take_air_lag_s();
     // Mocap frames refused for a stamp off the frames' own time (StampGate: garbled or forged).
     std::uint64_t stray_stamps() const;
+    std::string summary() const;  // "; N mocap frames refused ...", for the agent's last line
 
 private:
     physics::PhysicsConfig physics_;  // before the chain, which reads its effects

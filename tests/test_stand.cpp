@@ -346,6 +346,24 @@ TEST(Gpio, NoGpioHereFailsCleanly) {
     }
 }
 
+namespace {
+// A mocap frame of the sufferer at D = suffer_d and v1 at (v1_n, 0, -2), both tracked, stamped at `stamp`.
+dw::msg::MocapFrame stand_frame(double suffer_d, double v1_n, dw::Nanos stamp = 0) {
+    dw::msg::MocapFrame f;
+    f.header().stamp(dw::dds::to_msg(stamp));
+    for (auto [name, n, d] : {std::tuple{"sufferer", 0.0, suffer_d}, std::tuple{"v1", v1_n, -2.0}}) {
+        dw::msg::RigidBody b;
+        b.name(name);
+        b.position_m().x(n);
+        b.position_m().z(d);
+        b.orientation().w(1);
+        b.tracking_valid(true);
+        f.bodies().push_back(b);
+    }
+    return f;
+}
+}  // namespace
+
 // Issue 70: the simulated stand feels the bodies of the motion capture. A body that is no
 // measurement (NaN, 1e300 from a wire), the sufferer's own included, is not felt: what the chips
 // read stays finite.
@@ -357,19 +375,7 @@ TEST(StandPhysicsSource, BodiesThatAreNoMeasurementAreNotFelt) {
     dw::stand::PhysicsSource source(stand, dw::physics::PhysicsConfig{}, dw::SystemClock::instance());
     dw::dds::Writer<dw::msg::MocapFrame> w(bridge, dw::dds::topics::mocap_frame);
     ASSERT_TRUE(w.wait_for_readers(1, std::chrono::seconds(20)));
-    const auto frame = [](double suffer_d, double v1_n) {
-        dw::msg::MocapFrame f;
-        for (auto [name, n, d] : {std::tuple{"sufferer", 0.0, suffer_d}, std::tuple{"v1", v1_n, -2.0}}) {
-            dw::msg::RigidBody b;
-            b.name(name);
-            b.position_m().x(n);
-            b.position_m().z(d);
-            b.orientation().w(1);
-            b.tracking_valid(true);
-            f.bodies().push_back(b);
-        }
-        return f;
-    };
+    const auto frame = [](double suffer_d, double v1_n) { return stand_frame(suffer_d, v1_n); };
     const auto felt = [&] {
         double sum = 0;
         for (int chip = 0; chip < 8; ++chip) sum += source.force(chip, dw::SystemClock::instance().monotonic_ns());
@@ -399,17 +405,7 @@ TEST(StandPhysicsSource, AFrameStampedOffTheFramesTimeIsNotFelt) {
     dw::dds::Writer<dw::msg::MocapFrame> w(bridge, dw::dds::topics::mocap_frame);
     ASSERT_TRUE(w.wait_for_readers(1, std::chrono::seconds(20)));
     const auto send = [&](double v1_n, double ahead_s) {  // v1 0.6 m above the sufferer, v1_n m north
-        dw::msg::MocapFrame f;
-        f.header().stamp(dw::dds::to_msg(clock.now_ns() + static_cast<dw::Nanos>(ahead_s * 1e9)));
-        for (auto [name, n, d] : {std::tuple{"sufferer", 0.0, -1.4}, std::tuple{"v1", v1_n, -2.0}}) {
-            dw::msg::RigidBody b;
-            b.name(name);
-            b.position_m().x(n);
-            b.position_m().z(d);
-            b.orientation().w(1);
-            b.tracking_valid(true);
-            f.bodies().push_back(b);
-        }
+        auto f = stand_frame(-1.4, v1_n, clock.now_ns() + static_cast<dw::Nanos>(ahead_s * 1e9));
         w.write(f);
         std::this_thread::sleep_for(std::chrono::milliseconds(300));
     };
