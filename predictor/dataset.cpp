@@ -41,6 +41,14 @@ Dataset Dataset::with_formation(const std::string& formation) const {
     return d;
 }
 
+Dataset Dataset::with_reference() const {
+    Dataset d;
+    d.sources = sources;
+    for (const auto& s : samples)
+        if (!sources[static_cast<std::size_t>(s.source)].reference.empty()) d.samples.push_back(s);
+    return d;
+}
+
 Dataset Dataset::in_altitude_band(double altitude_m, double band_m) const {
     Dataset d;
     d.sources = sources;

@@ -77,6 +77,8 @@ struct Dataset {
         return d;
     }
     Dataset with_formation(const std::string& formation) const;
+    // Samples of the flights that carry a reference prediction (reference.csv).
+    Dataset with_reference() const;
     Dataset with_k(int k_min, int k_max) const;
     // Samples with a neighbour whose reference altitude is within ± band_m of altitude_m.
     Dataset in_altitude_band(double altitude_m, double band_m) const;

@@ -129,13 +129,27 @@ const char* const kAxisTitles[6] = {"N", "E", "D", "roll", "pitch", "yaw"};
 
 std::string fmt(double v, int precision = 3) { return std::isnan(v) ? "–" : fixed(v, precision); }
 
-void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, AxisValues ComparisonRow::*metric) {
-    std::vector<std::string> order;  // formations in first-seen order, models in order
-    std::vector<std::string> models;
+// The formations and the models of `rows`, each in first-seen order.
+std::pair<std::vector<std::string>, std::vector<std::string>> formations_and_models(
+    const std::vector<ComparisonRow>& rows) {
+    std::vector<std::string> order, models;
     for (const auto& r : rows) {
         if (std::find(order.begin(), order.end(), r.formation) == order.end()) order.push_back(r.formation);
         if (std::find(models.begin(), models.end(), r.model) == models.end()) models.push_back(r.model);
     }
+    return {order, models};
+}
+
+// The row of model m on formation f, or null (a reference over some flights only): its cells "–",
+// so that every cell holds one value per model, in the models' order.
+const ComparisonRow* row_of(const std::vector<ComparisonRow>& rows, const std::string& f, const std::string& m) {
+    const auto it = std::find_if(rows.begin(), rows.end(),
+                                 [&](const ComparisonRow& r) { return r.formation == f && r.model == m; });
+    return it == rows.end() ? nullptr : &*it;
+}
+
+void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, AxisValues ComparisonRow::*metric) {
+    const auto [order, models] = formations_and_models(rows);
     out << "| formation | samples |";
     for (const auto* a : kAxisTitles) out << " " << a << " |";
     out << "\n|---|---|";
@@ -144,15 +158,14 @@ void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, Axis
     for (const auto& f : order) {
         std::size_t samples = 0;
         std::array<std::string, 6> cellv;
-        for (const auto& m : models)
-            for (const auto& r : rows)
-                if (r.formation == f && r.model == m) {
-                    samples = r.samples;
-                    for (std::size_t a = 0; a < 6; ++a) {
-                        if (!cellv[a].empty()) cellv[a] += " / ";
-                        cellv[a] += fmt((r.*metric)[a]);
-                    }
-                }
+        for (const auto& m : models) {
+            const ComparisonRow* r = row_of(rows, f, m);
+            if (r && samples == 0) samples = r->samples;  // the first model's: the reference's may be fewer
+            for (std::size_t a = 0; a < 6; ++a) {
+                if (!cellv[a].empty()) cellv[a] += " / ";
+                cellv[a] += r ? fmt((r->*metric)[a]) : fmt(NAN);
+            }
+        }
         out << "| " << f << " | " << samples << " |";
         for (const auto& c : cellv) out << " " << c << " |";
         out << "\n";
@@ -161,9 +174,7 @@ void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, Axis
 }  // namespace
 
 std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptions& o) {
-    std::vector<std::string> models;
-    for (const auto& r : rows)
-        if (std::find(models.begin(), models.end(), r.model) == models.end()) models.push_back(r.model);
+    const auto [order, models] = formations_and_models(rows);
     std::ostringstream out;
     out << "Held-out blocks (legs, or encounters in flights without legs). Each cell: " << log::join(models, " / ")
         << ".\n\n";
@@ -187,15 +198,14 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
     out << "\n|---|---|";
     for (std::size_t m = 0; m < models.size(); ++m) out << "---|";
     out << "\n";
-    std::vector<std::string> order;
-    for (const auto& r : rows)
-        if (std::find(order.begin(), order.end(), r.formation) == order.end()) order.push_back(r.formation);
     for (const auto& f : order) {
         std::string cells;
         std::size_t blocks = 0;
-        for (const auto& m : models)
-            for (const auto& r : rows)
-                if (r.formation == f && r.model == m) cells += " " + fmt(r.peak_error) + " |", blocks = r.blocks;
+        for (const auto& m : models) {
+            const ComparisonRow* r = row_of(rows, f, m);
+            cells += " " + (r ? fmt(r->peak_error) : fmt(NAN)) + " |";
+            if (r && blocks == 0) blocks = r->blocks;  // the first model's, as above
+        }
         out << "| " << f << " | " << blocks << " |" << cells << "\n";
     }
     return out.str();
@@ -238,26 +248,49 @@ void require_samples(const Dataset& all, const Dataset& part, const std::string&
                               kSplitPeriod, " blocks (legs, encounters or stretches of time)"));
 }
 
-std::string references_of(const Dataset& test, std::vector<std::string>& missing) {
+namespace {
+// The held-out flights' reference models, in first-seen order; the flights without one in `missing`.
+std::vector<std::string> references_of(const Dataset& test, std::vector<std::string>& missing, std::size_t& flights) {
     std::vector<bool> used(test.sources.size(), false);
     for (const auto& s : test.samples) used[static_cast<std::size_t>(s.source)] = true;
     std::vector<std::string> words;
+    flights = 0;
     for (std::size_t i = 0; i < test.sources.size(); ++i) {
         if (!used[i]) continue;
+        ++flights;
         const auto& r = test.sources[i].reference;
         if (r.empty()) missing.push_back(test.sources[i].name);
         else if (std::find(words.begin(), words.end(), r) == words.end()) words.push_back(r);
     }
-    return missing.empty() ? log::join(words, "; ") : std::string();
+    return words;
 }
+}  // namespace
 
-std::string reference_note(const std::string& references, const std::vector<std::string>& missing) {
-    if (!references.empty())
-        return log::cat("The row \"reference\" is the prediction recorded with the flights (reference.csv): ",
-                        references, ", on the same held-out samples.\n\n");
-    if (missing.empty()) return "";
-    return log::cat("No reference row: ", missing.size(), " flight(s) carry no reference.csv (", log::join(missing),
-                    ").\n\n");
+Compared compare_with_reference(const std::vector<const ForceModel*>& models, const Dataset& test,
+                                const ArenaOptions& o) {
+    static const ReferenceModel reference;
+    std::vector<std::string> missing;
+    std::size_t flights = 0;
+    const auto words = references_of(test, missing, flights);
+    Compared c{compare(models, test, o), "", !words.empty() && missing.empty()};
+    if (words.empty()) {
+        if (!missing.empty()) c.reference_note = "No reference row: no held-out flight carries reference.csv.\n\n";
+        return c;
+    }
+    auto rows = compare({&reference}, c.reference_everywhere ? test : test.with_reference(), o);
+    const std::size_t with = flights - missing.size();
+    const std::string name = c.reference_everywhere
+                                 ? reference.name()
+                                 : log::cat(reference.name(), " (", with, " of ", flights, " flights)");
+    for (auto& r : rows) r.model = name;
+    c.rows.insert(c.rows.end(), rows.begin(), rows.end());
+    c.reference_note = log::cat(
+        "The row \"", name, "\" is the prediction recorded with the flights (reference.csv): ", log::join(words, "; "),
+        c.reference_everywhere
+            ? ", on the same held-out samples.\n\n"
+            : log::cat(", over the held-out samples of the ", with, " flight(s) that carry one; not over ",
+                       log::join(missing), " (the other rows are over all ", flights, ").\n\n"));
+    return c;
 }
 
 std::string poses_note(const Dataset& d) {

@@ -61,11 +61,17 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
 std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptions& o);
 std::string to_csv(const std::vector<ComparisonRow>& rows, bool header = true);
 
-// The reference row (ReferenceModel) is compared only when every held-out sample's flight carries
-// a reference (reference.csv): then the models' words, else "" with the flights lacking one in
-// `missing`. What the Markdown says of it, either way.
-std::string references_of(const Dataset& test, std::vector<std::string>& missing);
-std::string reference_note(const std::string& references, const std::vector<std::string>& missing);
+// Every model on `test`, and the reference row (ReferenceModel: the prediction recorded with the
+// flights, reference.csv) over the held-out flights that carry one — all of them ("reference"), or
+// some ("reference (K of N flights)", the others named in the note). The rows, what the Markdown
+// says of the reference, and whether every held-out flight carries one.
+struct Compared {
+    std::vector<ComparisonRow> rows;
+    std::string reference_note;
+    bool reference_everywhere = false;
+};
+Compared compare_with_reference(const std::vector<const ForceModel*>& models, const Dataset& test,
+                                const ArenaOptions& o = {});
 // What the Markdown says when some flights' poses are the vehicles' own estimates (meta.json
 // pose_source: estimate) rather than motion capture; "" when none are.
 std::string poses_note(const Dataset& d);

@@ -49,12 +49,6 @@ Dataset load_all(const std::vector<std::string>& paths) {
     return d;
 }
 
-std::vector<std::unique_ptr<ForceModel>> load_models(const std::vector<std::string>& paths) {
-    std::vector<std::unique_ptr<ForceModel>> out;
-    for (const auto& p : paths) out.push_back(load_model(p));
-    return out;
-}
-
 std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>>& models) {
     std::vector<const ForceModel*> out;
     for (const auto& m : models) out.push_back(m.get());
@@ -205,17 +199,11 @@ struct CompareCommand {
         const Dataset all = load_all(data);
         const Dataset test = split_by_leg(all).test;
         require_samples(all, test, "held-out");
-        auto compared = raw(ms);
-        const dw::predictor::ReferenceModel reference;
-        std::vector<std::string> missing;
-        const std::string references = dw::predictor::references_of(test, missing);
-        if (!references.empty()) compared.push_back(&reference);
-        const auto rows = compare(compared, test, arena);
-        dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" +
-                                                  dw::predictor::reference_note(references, missing) +
-                                                  dw::predictor::poses_note(all) + to_markdown(rows, arena));
-        dw::write_file(out_dir + "/table.csv", to_csv(rows));
-        std::cout << to_markdown(rows, arena);
+        const auto c = dw::predictor::compare_with_reference(raw(ms), test, arena);
+        dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + c.reference_note +
+                                                  dw::predictor::poses_note(all) + to_markdown(c.rows, arena));
+        dw::write_file(out_dir + "/table.csv", to_csv(c.rows));
+        std::cout << c.reference_note << to_markdown(c.rows, arena);
         return 0;
     }
 };

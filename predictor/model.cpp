@@ -1,7 +1,11 @@
 #include "predictor/model.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "core/names.hpp"
@@ -317,15 +321,72 @@ Wrench6 PhysicsModel::predict(const Sample& s, const Source& source) const {
     return {w[0], w[1], w[2], w[3], w[4], w[5]};
 }
 
+void mark_correction(LearntModel& m, const physics::PhysicsConfig& corrected) {
+    nlohmann::json j = nlohmann::json::parse(m.metadata_json, nullptr, false);
+    if (!j.is_object()) j = nlohmann::json::object();
+    j[kCorrectsPhysicsKey] = physics::to_yaml(corrected);
+    m.metadata_json = j.dump();
+}
+
+namespace {
+// The physics a correction carries, if it is one.
+std::optional<physics::PhysicsConfig> corrected_physics(const LearntModel& m, const std::string& path) {
+    const auto j = nlohmann::json::parse(m.metadata_json, nullptr, false);
+    const auto it = j.is_object() ? j.find(kCorrectsPhysicsKey) : j.end();
+    if (it != j.end()) {
+        if (!it->is_string())
+            throw InputError(log::cat(path, ": metadata.", kCorrectsPhysicsKey, ": expected the physics' YAML text"));
+        return physics::parse_physics(it->get<std::string>(), log::cat(path, ": metadata.", kCorrectsPhysicsKey));
+    }
+    if (std::filesystem::path(path).stem().string().ends_with(kCorrectionFileSuffix))
+        throw InputError(log::cat(path, ": a correction to a physics (*", kCorrectionFileSuffix,
+                                  ".json) that does not carry the physics it corrects (metadata.", kCorrectsPhysicsKey,
+                                  "; saved before 2026-12-06): alone it is no model; run dw-predictor real again"));
+    return std::nullopt;
+}
+}  // namespace
+
 std::unique_ptr<ForceModel> load_model(const std::string& path) {
     if (path.ends_with(".yaml") || path.ends_with(".yml"))
         return std::make_unique<PhysicsModel>(physics::load_physics(path));
-    return std::make_unique<LearntModel>(LearntModel::load(path));
+    LearntModel m = LearntModel::load(path);
+    if (auto physics = corrected_physics(m, path)) return std::make_unique<PhysicsCorrection>(*physics, std::move(m));
+    return std::make_unique<LearntModel>(std::move(m));
 }
 
 const std::string& ReferenceModel::name() const {
     static const std::string kName = "reference";
     return kName;
+}
+
+namespace {
+class RenamedModel final : public ForceModel {
+public:
+    RenamedModel(std::unique_ptr<ForceModel> model, std::string name)
+        : model_(std::move(model)), name_(std::move(name)) {}
+    const std::string& name() const override { return name_; }
+    Wrench6 predict(std::span<const RelState> neighbours) const override { return model_->predict(neighbours); }
+    Wrench6 predict(const Sample& s, const Source& source) const override { return model_->predict(s, source); }
+
+private:
+    std::unique_ptr<ForceModel> model_;
+    std::string name_;
+};
+}  // namespace
+
+std::vector<std::unique_ptr<ForceModel>> load_models(const std::vector<std::string>& paths) {
+    std::vector<std::unique_ptr<ForceModel>> out;
+    std::map<std::string, int> uses;
+    for (const auto& p : paths) {
+        out.push_back(load_model(p));
+        ++uses[out.back()->name()];
+    }
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const std::string name = out[i]->name();
+        if (uses[name] > 1)
+            out[i] = std::make_unique<RenamedModel>(std::move(out[i]), log::cat(name, " (", paths[i], ")"));
+    }
+    return out;
 }
 
 }  // namespace dw::predictor

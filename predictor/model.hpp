@@ -187,6 +187,7 @@ public:
     const std::string& name() const override { return name_; }
     Wrench6 predict(std::span<const RelState> neighbours) const override;
     Wrench6 predict(const Sample& s, const Source& source) const override;
+    const physics::PhysicsConfig& config() const { return config_; }
 
 private:
     const physics::WrenchModel& model_for(const physics::VehicleParams& sufferer) const;
@@ -198,6 +199,28 @@ private:
     mutable std::vector<std::pair<physics::VehicleParams, std::unique_ptr<physics::WrenchModel>>> by_sufferer_;
 };
 
+// A learnt correction to a physics (dw-predictor real's models/<kind>_on_physics.json, trained on
+// what the physics leaves) carries the physics it corrects (metadata key kCorrectsPhysicsKey: its
+// YAML), so that wherever a model file is loaded (compare, map, the online node) it is served
+// composed: physics + correction, named "physics+<kind>". A correction alone is no model.
+inline constexpr const char* kCorrectsPhysicsKey = "corrects_physics";
+inline constexpr const char* kCorrectionFileSuffix = "_on_physics";  // <kind>_on_physics.json
+void mark_correction(LearntModel& m, const physics::PhysicsConfig& corrected);
+
+class PhysicsCorrection final : public ForceModel {
+public:
+    PhysicsCorrection(const physics::PhysicsConfig& physics, LearntModel correction)
+        : physics_(physics), correction_(std::move(correction)), composed_(physics_, correction_) {}
+    const std::string& name() const override { return composed_.name(); }
+    Wrench6 predict(std::span<const RelState> neighbours) const override { return composed_.predict(neighbours); }
+    Wrench6 predict(const Sample& s, const Source& source) const override { return composed_.predict(s, source); }
+
+private:
+    PhysicsModel physics_;
+    LearntModel correction_;
+    CorrectedModel composed_;  // of the two above
+};
+
 // The mean of several trainings of one model (an ensemble) as one model of their summed width: each
 // network's layers side by side, block-diagonal, so that the last layer averages (psi, rho) or
 // concatenates (phi, whose outputs feed rho) the members' outputs. Exactly the mean of the members'
@@ -205,7 +228,12 @@ private:
 // normalisations, or none.
 LearntModel average_of(std::span<const LearntModel> members);
 
-// Loads "physics" (needs the physics config) or a saved learnt model.
+// Loads a physics configuration (.yaml), a saved learnt model, or a correction composed with the
+// physics it carries (PhysicsCorrection). Throws dw::InputError naming the file: also for a file
+// named as a correction (kCorrectionFileSuffix) that carries no physics (saved before 2026-12-06).
 std::unique_ptr<ForceModel> load_model(const std::string& path);
+// Model files side by side (compare, map): each loaded as above and named distinctly — a name that
+// two files share becomes "<name> (<file>)" for each, so that no column of a table is ambiguous.
+std::vector<std::unique_ptr<ForceModel>> load_models(const std::vector<std::string>& paths);
 
 }  // namespace dw::predictor

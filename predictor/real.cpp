@@ -25,9 +25,8 @@ namespace fs = std::filesystem;
 
 constexpr double kMapCell_m = 0.05;
 // The physics-informed models' files: models/<kind>_on_physics.json, corrections to add to the physics.
-constexpr const char* kOnPhysics = "_on_physics";
 std::string model_file(const std::string& kind, bool correction) {
-    return kind + (correction ? kOnPhysics : "") + ".json";
+    return kind + (correction ? kCorrectionFileSuffix : "") + ".json";
 }
 
 // Where the horizontally nearest neighbour is: horizontal offset and height above the sufferer.
@@ -249,7 +248,8 @@ void train_models(Models& m, const Split& split, const TrainPlan& plan, const fs
         std::vector<std::string> axes;
         for (std::size_t a = 0; a < f.size(); ++a) axes.push_back(log::cat(flight::kAxes[a], " ", fixed(f[a], 2)));
         m.shrunk.push_back(log::cat("physics+", c->kind, ": ", log::join(axes)));
-        c->save((dir / model_file(c->kind, true)).string());  // the file train_and_save wrote, shrunk
+        mark_correction(*c, m.physics.config());
+        c->save((dir / model_file(c->kind, true)).string());  // the file train_and_save wrote, shrunk, marked
     }
     m.linear_p = std::make_unique<CorrectedModel>(m.physics, *m.linear_c);
     m.deep_p = std::make_unique<CorrectedModel>(m.physics, *m.deep_c);
@@ -310,18 +310,16 @@ RealResult run_real(const RealOptions& o) {
                          .stop = o.stop};
     Models m(o.physics);
     train_models(m, split, plan, out / "models", r.naive, say);
-    std::vector<std::string> missing;
-    const std::string references = references_of(split.test, missing);
-    if (!references.empty()) m.list.push_back(&m.reference);
     write_file((out / "models" / "physics.yaml").string(), physics::to_yaml(o.physics));
 
     say("comparing on the held-out blocks");
-    r.table = compare(m.list, split.test);
+    const auto compared = compare_with_reference(m.list, split.test);
+    r.table = compared.rows;
+    if (compared.reference_everywhere) m.list.push_back(&m.reference);  // drawn only where every flight has it
     draw_maps(m.list, split.test, (out / "map_f_d.png").string());
     r.map_path = (final_out / "map_f_d.png").string();
-    write_file(
-        (out / "table.md").string(),
-        table_markdown(all, split_text, r, reference_note(references, missing) + m.baseline + shrink_note(m.shrunk)));
+    write_file((out / "table.md").string(),
+               table_markdown(all, split_text, r, compared.reference_note + m.baseline + shrink_note(m.shrunk)));
     write_file((out / "table.csv").string(), to_csv(r.table));
     staged.commit();
     r.markdown_path = (final_out / "table.md").string();

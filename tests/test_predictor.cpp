@@ -3,7 +3,9 @@
 // study's claims on simulated flights (Deep Sets vs the linear models).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <opencv2/imgcodecs.hpp>
@@ -13,6 +15,7 @@
 
 #include "core/errors.hpp"
 #include "core/files.hpp"
+#include "core/log.hpp"
 #include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "physics/flight_sim.hpp"
@@ -671,3 +674,71 @@ static void study_claims(const StudySize& size) {
 }
 TEST(PredictorStudy, MakesEveryTableBandAndRegimeOnSmallFlights) { study_claims(kSmallStudy); }
 TEST(PredictorStudyFull, DeepSetsBeatsLinearOnlyWhereJetsMerge) { study_claims(kFullStudy); }
+
+// Issue 71, item 5: `dw-predictor compare` on every file a `real` run writes (models/*.json and
+// models/physics.yaml). A correction (<kind>_on_physics.json) was scored as a model on its own, and
+// two files of one kind gave a table whose header listed fewer names than each cell had values; the
+// reference row was dropped whenever one flight lacked reference.csv. Now: a correction is served
+// composed with the physics it carries, one saved without it is refused in one line, every name
+// is distinct and every cell has one value per name, and the reference row is shown over the
+// flights that carry one, the others named.
+TEST(PredictorCompare, EveryFileOfARealRunIsComparedAsAUserRunsIt) {
+    dw::test::TempDir dir;
+    const auto with_reference = small_flight(dir, "leader_follower", 10);
+    const auto without = small_flight(dir, "side_by_side", 10);
+    {  // the first flight carries a recorded prediction of f_d: the wrench's, halved
+        auto f = dw::flight::read_flight(with_reference);
+        f.meta.reference = dw::flight::ReferenceInfo{"half the truth (a test's)", {"f_d"}};
+        for (const auto& w : f.wrench) f.reference.push_back({w.t, {NAN, NAN, w.w[2] / 2, NAN, NAN, NAN}});
+        std::filesystem::remove_all(with_reference);
+        dw::flight::write_flight(f, with_reference);
+    }
+    std::filesystem::create_directories(dir.file("models"));
+    const dw::physics::PhysicsConfig physics;
+    dw::write_file(dir.file("models/physics.yaml"), dw::physics::to_yaml(physics));
+    random_model(Structure::sum, 1).save(dir.file("models/learnt_linear.json"));
+    random_model(Structure::deep_sets, 2).save(dir.file("models/deep_sets.json"));
+    LearntModel correction = random_model(Structure::sum, 3);
+    mark_correction(correction, physics);
+    correction.save(dir.file("models/learnt_linear_on_physics.json"));
+    // Served composed: the physics' prediction plus the correction's.
+    const auto composed = load_model(dir.file("models/learnt_linear_on_physics.json"));
+    EXPECT_EQ(composed->name(), "physics+learnt_linear");
+    const std::array<RelState, 1> x{RelState{0.1, 0.0, -0.6, 0, 0, 0}};
+    const auto sum = PhysicsModel(physics).predict(x), alone = correction.predict(x), both = composed->predict(x);
+    for (std::size_t a = 0; a < 6; ++a) EXPECT_NEAR(both[a], sum[a] + alone[a], 1e-9) << a;
+    // A correction saved without its physics (before this change) is no model: one line, exit 2.
+    random_model(Structure::deep_sets, 4).save(dir.file("models/deep_sets_on_physics.json"));
+    const auto old = dw::test::run(
+        {dw::test::bin("dw-predictor"), "compare", "--models", dir.file("models/deep_sets_on_physics.json"), "--data",
+         with_reference, "--out", dir.file("old")},
+        dir);
+    dw::test::expect_one_line_exit_2(old, "does not carry the physics it corrects");
+    // The run's files, and the same learnt_linear twice (another run's).
+    std::filesystem::create_directories(dir.file("other"));
+    std::filesystem::copy_file(dir.file("models/learnt_linear.json"), dir.file("other/learnt_linear.json"));
+    const auto r =
+        dw::test::run({dw::test::bin("dw-predictor"), "compare", "--models", dir.file("models/physics.yaml"),
+                       dir.file("models/learnt_linear.json"), dir.file("models/deep_sets.json"),
+                       dir.file("models/learnt_linear_on_physics.json"), dir.file("other/learnt_linear.json"), "--data",
+                       with_reference, without, "--out", dir.file("cmp")},
+                      dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string md = dw::read_file(dir.file("cmp/table.md"));
+    const std::vector<std::string> names{"physics",
+                                         "learnt_linear (" + dir.file("models/learnt_linear.json") + ")",
+                                         "deep_sets",
+                                         "physics+learnt_linear",
+                                         "learnt_linear (" + dir.file("other/learnt_linear.json") + ")",
+                                         "reference (1 of 2 flights)"};
+    EXPECT_NE(md.find("Each cell: " + dw::log::join(names, " / ") + "."), std::string::npos) << md;
+    EXPECT_NE(md.find("not over " + without + " ("), std::string::npos) << md;
+    // Every cell of the RMSE table holds one value per name (– where the reference has no flight).
+    const auto rmse = md.substr(md.find("### RMSE"));
+    for (const auto& line : dw::test::lines(rmse.substr(0, rmse.find("### Peak")))) {
+        if (line.rfind("| leader_follower", 0) != 0 && line.rfind("| side_by_side", 0) != 0) continue;
+        const auto cells = line.substr(line.find('|', line.find('|', 1) + 1));  // past formation and samples
+        const auto slashes = static_cast<std::size_t>(std::count(cells.begin(), cells.end(), '/'));
+        EXPECT_EQ(slashes, 6 * (names.size() - 1)) << line;
+    }
+}
