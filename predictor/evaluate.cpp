@@ -108,7 +108,7 @@ AxisValues arena_integral(const ForceModel& model, const Dataset& data, const Ar
 }
 
 std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models, const Dataset& test,
-                                   const ArenaOptions& o) {
+                                   const ArenaOptions& o, const NoiseModel* noise) {
     std::set<std::string> formations;
     for (const auto& s : test.sources) formations.insert(s.formation);
     std::vector<ComparisonRow> rows;
@@ -118,7 +118,7 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
         for (const auto* m : models) {
             const auto peak = peak_error(*m, d);
             rows.push_back({f, m->name(), d.samples.size(), arena_error(*m, d, o), arena_integral(*m, d, o),
-                            rmse(*m, d), peak.mean_abs, peak.blocks});
+                            rmse(*m, d), peak.mean_abs, peak.blocks, noise ? coverage(*m, d, *noise) : NAN});
         }
     }
     return rows;
@@ -171,6 +171,28 @@ void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, Axis
         out << "\n";
     }
 }
+
+// One column per model, one row per formation: `value` of each (– where a model has no row), and
+// `count` of the formation's first model.
+void per_model(std::ostringstream& out, const std::vector<ComparisonRow>& rows, const char* count_title,
+               std::size_t ComparisonRow::*count, double ComparisonRow::*value) {
+    const auto [order, models] = formations_and_models(rows);
+    out << "| formation | " << count_title << " |";
+    for (const auto& m : models) out << " " << m << " |";
+    out << "\n|---|---|";
+    for (std::size_t m = 0; m < models.size(); ++m) out << "---|";
+    out << "\n";
+    for (const auto& f : order) {
+        std::string cells;
+        std::size_t n = 0;
+        for (const auto& m : models) {
+            const ComparisonRow* r = row_of(rows, f, m);
+            cells += " " + (r ? fmt(r->*value) : fmt(NAN)) + " |";
+            if (r && n == 0) n = r->*count;  // the first model's: the reference's may be fewer
+        }
+        out << "| " << f << " | " << n << " |" << cells << "\n";
+    }
+}
 }  // namespace
 
 std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptions& o) {
@@ -193,20 +215,14 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
     }
     out << "### RMSE over all held-out samples (N, N·m; – where no flight measures the axis)\n\n";
     table(out, rows, &ComparisonRow::rmse);
-    out << "\n### Peak f_d error per held-out block: mean |max predicted − max recorded| (N)\n\n| formation | blocks |";
-    for (const auto& m : models) out << " " << m << " |";
-    out << "\n|---|---|";
-    for (std::size_t m = 0; m < models.size(); ++m) out << "---|";
-    out << "\n";
-    for (const auto& f : order) {
-        std::string cells;
-        std::size_t blocks = 0;
-        for (const auto& m : models) {
-            const ComparisonRow* r = row_of(rows, f, m);
-            cells += " " + (r ? fmt(r->peak_error) : fmt(NAN)) + " |";
-            if (r && blocks == 0) blocks = r->blocks;  // the first model's, as above
-        }
-        out << "| " << f << " | " << blocks << " |" << cells << "\n";
+    out << "\n### Peak f_d error per held-out block: mean |max predicted − max recorded| (N)\n\n";
+    per_model(out, rows, "blocks", &ComparisonRow::blocks, &ComparisonRow::peak_error);
+    const bool any_coverage =
+        std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) { return std::isfinite(r.coverage_f_d); });
+    if (any_coverage) {
+        out << "\n### 95 % prediction intervals: the share of held-out f_d samples inside (0.95 if the model and its "
+               "noise model hold; σ² = floor² + (2 I prediction)², predictor/intervals.hpp)\n\n";
+        per_model(out, rows, "samples", &ComparisonRow::samples, &ComparisonRow::coverage_f_d);
     }
     return out.str();
 }
@@ -229,9 +245,13 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
             }
             out << "\n";
         }
-    for (const auto& r : rows)  // the peak error is of f_d only
+    for (const auto& r : rows) {  // the peak error and the intervals' coverage are of f_d only
         out << r.formation << "," << r.model << ",peak_f_d_mean_abs," << r.blocks << ",,," << csv_cell(r.peak_error)
             << ",,,\n";
+        if (std::isfinite(r.coverage_f_d))
+            out << r.formation << "," << r.model << ",interval95_coverage," << r.samples << ",,,"
+                << csv_cell(r.coverage_f_d) << ",,,\n";
+    }
     return out.str();
 }
 
@@ -267,17 +287,24 @@ std::vector<std::string> references_of(const Dataset& test, std::vector<std::str
 }  // namespace
 
 Compared compare_with_reference(const std::vector<const ForceModel*>& models, const Dataset& test,
-                                const ArenaOptions& o) {
+                                const ArenaOptions& o, const NoiseModel* noise) {
     static const ReferenceModel reference;
     std::vector<std::string> missing;
     std::size_t flights = 0;
     const auto words = references_of(test, missing, flights);
-    Compared c{compare(models, test, o), "", !words.empty() && missing.empty()};
+    Compared c{compare(models, test, o, noise), "", !words.empty() && missing.empty(), ""};
+    if (noise && !noise->from_class.empty())
+        c.noise_note += log::cat("The 95 % intervals' floor of ", log::join(noise->from_class),
+                                 " (nobody is ever far there) is their sufferer class's, from its other flights.\n\n");
+    if (noise && !noise->from_differences.empty())
+        c.noise_note += log::cat("The 95 % intervals' floor of ", log::join(noise->from_differences),
+                                 " is their jitter (successive differences: nobody is ever far there, nor in any "
+                                 "flight of their class), which leaves out the slow error: too narrow.\n\n");
     if (words.empty()) {
         if (!missing.empty()) c.reference_note = "No reference row: no held-out flight carries reference.csv.\n\n";
         return c;
     }
-    auto rows = compare({&reference}, c.reference_everywhere ? test : test.with_reference(), o);
+    auto rows = compare({&reference}, c.reference_everywhere ? test : test.with_reference(), o, noise);
     const std::size_t with = flights - missing.size();
     const std::string name = c.reference_everywhere
                                  ? reference.name()

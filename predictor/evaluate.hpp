@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "predictor/dataset.hpp"
+#include "predictor/intervals.hpp"
 #include "predictor/model.hpp"
 
 namespace dw::predictor {
@@ -50,11 +51,14 @@ struct ComparisonRow {
     AxisValues rmse{};
     double peak_error = NAN;  // f_d, mean over blocks
     std::size_t blocks = 0;
+    double coverage_f_d = NAN;  // the share of held-out f_d samples inside the 95 % interval (intervals.hpp)
 };
 
 // Every model on every formation of `test` (held-out legs).
+// With `noise` (measured on the dataset `test` was cut from: its sources), each row's 95 %
+// interval coverage of f_d too.
 std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models, const Dataset& test,
-                                   const ArenaOptions& o = {});
+                                   const ArenaOptions& o = {}, const NoiseModel* noise = nullptr);
 
 // The table as Markdown (arena metric "model a / model b / ..." per formation and axis, then RMSE)
 // and as CSV (one row per formation, model, metric).
@@ -69,9 +73,10 @@ struct Compared {
     std::vector<ComparisonRow> rows;
     std::string reference_note;
     bool reference_everywhere = false;
+    std::string noise_note;  // the flights whose interval floor is their jitter (NoiseModel::from_differences)
 };
 Compared compare_with_reference(const std::vector<const ForceModel*>& models, const Dataset& test,
-                                const ArenaOptions& o = {});
+                                const ArenaOptions& o = {}, const NoiseModel* noise = nullptr);
 // What the Markdown says when some flights' poses are the vehicles' own estimates (meta.json
 // pose_source: estimate) rather than motion capture; "" when none are.
 std::string poses_note(const Dataset& d);

@@ -57,6 +57,14 @@ std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>
 
 void say(const std::string& line) { dw::log::progress(line); }
 
+// The turbulence intensity of the first physics configuration among model files (0 if none, or
+// its turbulence is off): what the intervals' noise model takes by default.
+double intensity_of(const std::vector<std::string>& model_paths) {
+    for (const auto& p : model_paths)
+        if (p.ends_with(".yaml") || p.ends_with(".yml")) return dw::predictor::turbulence_intensity(physics_from(p));
+    return 0;
+}
+
 // ---- one struct per subcommand: its options, how it is declared, what it does --------------------
 
 struct StudyCommand {
@@ -182,6 +190,7 @@ struct CompareCommand {
     std::vector<std::string> models, data;
     std::string out_dir;
     ArenaOptions arena;
+    double intensity = NAN;
 
     void add(CLI::App& app) {
         cmd = app.add_subcommand(
@@ -192,6 +201,10 @@ struct CompareCommand {
         cmd->add_option("--out", out_dir, "folder for table.md and table.csv")->required();
         cmd->add_option("--altitude", arena.altitude_m, "relative altitude of the arena metric [m]")
             ->check(dw::cli::in(dw::physics::kAltitudeRange));
+        cmd->add_option("--turbulence-intensity", intensity,
+                        "I of the 95 % intervals' noise model, sd² = floor² + (2 I prediction)² (default: the "
+                        "turbulence of the first physics .yaml among --models, else 0)")
+            ->check(dw::cli::in(kTurbulenceIntensityRange));
     }
     int run() {
         dw::require_output_dir(out_dir, "--out");
@@ -199,11 +212,12 @@ struct CompareCommand {
         const Dataset all = load_all(data);
         const Dataset test = split_by_leg(all).test;
         require_samples(all, test, "held-out");
-        const auto c = dw::predictor::compare_with_reference(raw(ms), test, arena);
-        dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + c.reference_note +
+        const auto noise = dw::predictor::noise_model(all, std::isnan(intensity) ? intensity_of(models) : intensity);
+        const auto c = dw::predictor::compare_with_reference(raw(ms), test, arena, &noise);
+        dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + c.reference_note + c.noise_note +
                                                   dw::predictor::poses_note(all) + to_markdown(c.rows, arena));
         dw::write_file(out_dir + "/table.csv", to_csv(c.rows));
-        std::cout << c.reference_note << to_markdown(c.rows, arena);
+        std::cout << c.reference_note << c.noise_note << to_markdown(c.rows, arena);
         return 0;
     }
 };

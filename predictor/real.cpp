@@ -313,13 +313,15 @@ RealResult run_real(const RealOptions& o) {
     write_file((out / "models" / "physics.yaml").string(), physics::to_yaml(o.physics));
 
     say("comparing on the held-out blocks");
-    const auto compared = compare_with_reference(m.list, split.test);
+    const auto noise = noise_model(all, turbulence_intensity(o.physics));
+    const auto compared = compare_with_reference(m.list, split.test, {}, &noise);
     r.table = compared.rows;
     if (compared.reference_everywhere) m.list.push_back(&m.reference);  // drawn only where every flight has it
     draw_maps(m.list, split.test, (out / "map_f_d.png").string());
     r.map_path = (final_out / "map_f_d.png").string();
     write_file((out / "table.md").string(),
-               table_markdown(all, split_text, r, compared.reference_note + m.baseline + shrink_note(m.shrunk)));
+               table_markdown(all, split_text, r,
+                              compared.reference_note + compared.noise_note + m.baseline + shrink_note(m.shrunk)));
     write_file((out / "table.csv").string(), to_csv(r.table));
     staged.commit();
     r.markdown_path = (final_out / "table.md").string();

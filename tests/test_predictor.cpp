@@ -25,6 +25,7 @@
 #include "predictor/model.hpp"
 #include "predictor/regimes.hpp"
 #include "predictor/study.hpp"
+#include "predictor/intervals.hpp"
 #include "predictor/train.hpp"
 #include "support.hpp"
 #include "testkit/mlp.hpp"
@@ -741,4 +742,59 @@ TEST(PredictorCompare, EveryFileOfARealRunIsComparedAsAUserRunsIt) {
         const auto slashes = static_cast<std::size_t>(std::count(cells.begin(), cells.end(), '/'));
         EXPECT_EQ(slashes, 6 * (names.size() - 1)) << line;
     }
+}
+
+// Issue 71, item 4: the 95 % intervals' noise model. A flight's floor is its recorded spread where
+// nobody is near; about a right prediction p the recording scatters with sd² = floor² + (2 I p)², so
+// an exact model's intervals hold 95 % of the samples and a biased one's far fewer.
+TEST(PredictorIntervals, AnExactModelsIntervalsHoldNinetyFivePercent) {
+    struct Constant final : ForceModel {  // f_d: `near_n` with a neighbour within 0.35 m, else 0
+        double near_n = 0;
+        std::string label = "constant";
+        const std::string& name() const override { return label; }
+        Wrench6 predict(std::span<const RelState> x) const override {
+            Wrench6 w{};
+            w[kFdAxis] = !x.empty() && std::hypot(x[0][0], x[0][1]) <= kNobodyNearM ? near_n : 0;
+            return w;
+        }
+    };
+    constexpr double kFloor = 0.01, kIntensity = 0.1, kPush = 0.2;
+    Constant exact;
+    exact.near_n = kPush;
+    Dataset d;
+    d.sources.push_back(Source{});
+    d.sources.back().name = "synthetic";
+    std::mt19937 rng(71);
+    std::normal_distribution<double> unit(0, 1);
+    for (int i = 0; i < 20000; ++i) {
+        Sample s;
+        s.k = 1;
+        s.x[0] = RelState{i % 2 ? 1.0 : 0.1, 0, -0.5, 0, 0, 0};  // far, near, far, near, ...
+        const double p = exact.predict(s.neighbours())[kFdAxis];
+        s.y[kFdAxis] = p + unit(rng) * std::sqrt(kFloor * kFloor + 4 * kIntensity * kIntensity * p * p);
+        d.samples.push_back(s);
+    }
+    // A second flight of the same sufferer where someone is always near: its floor is its class's.
+    d.sources.push_back(Source{});
+    d.sources.back().name = "always near";
+    for (int i = 0; i < 100; ++i) {
+        Sample s;
+        s.k = 1;
+        s.source = 1;
+        s.x[0] = RelState{0.1, 0, -0.5, 0, 0, 0};
+        s.y[kFdAxis] = kPush + unit(rng) * 0.05;
+        d.samples.push_back(s);
+    }
+    const NoiseModel noise = noise_model(d, kIntensity);
+    EXPECT_NEAR(noise.floor.at("synthetic")[kFdAxis], kFloor, 0.05 * kFloor);
+    EXPECT_EQ(noise.floor.at("always near")[kFdAxis], noise.floor.at("synthetic")[kFdAxis]);
+    EXPECT_EQ(noise.from_class, std::vector<std::string>{"always near"});
+    EXPECT_TRUE(noise.from_differences.empty());
+    d.samples.resize(20000);  // the first flight alone, below
+    EXPECT_NEAR(coverage(exact, d, noise), 0.95, 0.01);
+    Constant biased;  // 3 sd short where the jet pushes: most of those samples fall outside (about 0.63 in all)
+    biased.near_n = kPush - 3 * std::sqrt(kFloor * kFloor + 4 * kIntensity * kIntensity * kPush * kPush);
+    EXPECT_LT(coverage(biased, d, noise), 0.7);
+    // Without the turbulence term the near samples' spread is not the floor's: too few inside (about 0.79).
+    EXPECT_LT(coverage(exact, d, noise_model(d, 0)), 0.85);
 }

@@ -251,13 +251,18 @@ TEST(RealFlights, ThePredictorComparesEveryModelOnHeldOutEncounters) {
     ASSERT_EQ(by.size(), 2u);  // the two-vehicle flights and the three-vehicle swap
     for (const auto& [formation, models] : by) {
         SCOPED_TRACE(formation);
-        // physics, naive linear, learnt linear, Deep Sets, and the last two on the physics; no
-        // reference row: the CSV logs of these trials do not carry the onboard network's prediction.
-        ASSERT_EQ(models.size(), 6u);
-        EXPECT_FALSE(models.count("reference"));
+        // physics, naive linear, learnt linear, Deep Sets, and the last two on the physics; and the
+        // onboard network's prediction over the flights whose logs carry it (issue 71: it was
+        // dropped whenever one flight lacked it), named with how many.
+        std::size_t references = 0;
+        for (const auto& [name, row] : models) references += name.rfind("reference", 0) == 0;
+        ASSERT_EQ(models.size() - references, 6u);
+        EXPECT_LE(references, 1u);
         for (const auto& [name, row] : models) {
+            if (name.rfind("reference", 0) == 0) continue;
             EXPECT_TRUE(std::isfinite(row->rmse[2])) << name;
             EXPECT_TRUE(std::isfinite(row->peak_error)) << name;
+            EXPECT_TRUE(row->coverage_f_d > 0 && row->coverage_f_d <= 1) << name << ": " << row->coverage_f_d;
             EXPECT_GE(row->blocks, 2u);
             EXPECT_TRUE(std::isnan(row->rmse[3])) << "moments are not measured";
         }
@@ -268,7 +273,10 @@ TEST(RealFlights, ThePredictorComparesEveryModelOnHeldOutEncounters) {
     EXPECT_TRUE(fs::exists(r.map_path));
     const auto md = dw::read_file(r.markdown_path, "table");
     EXPECT_NE(md.find("Peak f_d error"), std::string::npos);
-    EXPECT_NE(md.find("No reference row"), std::string::npos);
+    EXPECT_TRUE(md.find("No reference row") != std::string::npos ||
+                md.find("flight(s) that carry one") != std::string::npos)
+        << md;
+    EXPECT_NE(md.find("95 % prediction intervals"), std::string::npos);
     EXPECT_EQ(md.find("nan"), std::string::npos);
 }
 
