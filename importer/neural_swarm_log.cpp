@@ -71,6 +71,10 @@ std::vector<std::string_view> split(std::string_view line) {
 // with a 10 MB garbage tail was resynchronised byte by byte, each try a checksum, past SIGINT).
 constexpr std::size_t kStopCheckEvery = 4096;
 
+// A CSV log's line is at most this long (the shared logs' are about 750 bytes): a longer one is no
+// log's, refused before it is held (a file of one endless line would have filled memory).
+constexpr std::size_t kMaxCsvLineBytes = 1 << 16;
+
 struct Limits {
     std::stop_token stop;
     std::size_t max_samples;  // what is left of the trial's kMaxTrialSamples
@@ -85,15 +89,19 @@ void require_room(const VehicleLog& log, const Limits& limits, const std::string
 
 VehicleLog read_csv(const std::string& path, VehicleLog log, const Limits& limits) {
     require_readable_file(path, "log");
-    std::ifstream in(path, std::ios::binary);  // line by line: a log is never held whole
-    std::string buffer;
+    std::ifstream in(path, std::ios::binary);  // line by line: a log is never held whole, nor a line past the cap
+    std::vector<char> buffer(kMaxCsvLineBytes + 2);
     std::size_t line_no = 0;
     auto next_line = [&](std::string_view& line) {
-        if (!std::getline(in, buffer)) {
-            if (in.bad()) throw InputError(log::cat(path, ":", line_no + 1, ": cannot read the log"));
-            return false;
+        in.getline(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+        const auto n = static_cast<std::size_t>(in.gcount());
+        if (in.bad()) throw InputError(log::cat(path, ":", line_no + 1, ": cannot read the log"));
+        if (in.fail()) {
+            if (n == 0 && in.eof()) return false;
+            throw InputError(log::cat(path, ":", line_no + 1, ": a line longer than ", kMaxCsvLineBytes,
+                                      " bytes: not a Neural-Swarm log"));
         }
-        line = buffer;
+        line = std::string_view(buffer.data(), in.eof() ? n : n - 1);  // less the newline getline took
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
         ++line_no;
         return true;

@@ -27,8 +27,8 @@ inline double turbulence_intensity(const physics::PhysicsConfig& p) {
 }
 
 struct NoiseModel {
-    double intensity = 0;                      // I (0: no turbulence term)
-    std::map<std::string, flight::AxisValues> floor;   // per flight (Source::name), per axis (NaN: unknown)
+    double intensity = 0;                             // I (0: no turbulence term)
+    std::map<std::string, flight::AxisValues> floor;  // per flight (Source::name), per axis (NaN: unknown)
     // The flights with too few samples with nobody near: their floor is their sufferer class's (the
     // median of its flights' floors that are known: a lab measures its noise with nobody near), or,
     // where no flight of that class has one, the jitter of their whole recording (successive

@@ -308,6 +308,11 @@ TEST(Import, ATrialPastItsCapIsRefusedAtItsLineAndMemoryStaysUnderItsFigure) {
         {bin("dw-import"), "neural-swarm", d.file("c/e/cf50_01.csv"), d.file("c/e/cf51_01.csv"), "--out", d.file("o3")},
         d);
     dw::test::expect_one_line_exit_2(two, "cf51_01.csv:2: more than");
+    // A CSV log's line is held whole: one endless line is refused at its start, not read into memory.
+    std::ofstream(d.file("c/e/cf51_01.csv")) << "# " << std::string(1 << 20, 'x');
+    const auto endless =
+        dw::test::run({bin("dw-import"), "neural-swarm", d.file("c/e/cf51_01.csv"), "--out", d.file("o5")}, d);
+    dw::test::expect_one_line_exit_2(endless, "cf51_01.csv:1: a line longer than");
     // A binary log is read whole: past kMaxBinaryLogBytes it is refused before it is read.
     { std::ofstream(d.file("c/e/cf52_01")); }
     fs::resize_file(d.file("c/e/cf52_01"), kMaxBinaryLogBytes + 1);
