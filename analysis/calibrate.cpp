@@ -67,6 +67,8 @@ struct FlightData {
     std::string pairing;
     std::vector<std::size_t> rows, fit_rows;  // near samples; every stride-th of them
     std::vector<double> offset, above;        // per row: the nearest neighbour's horizontal offset, height
+    std::size_t sufferer_class = 0;           // index into the configuration's classes
+    std::vector<double> far_f_d;              // the measured f_d where nobody is near
 };
 
 struct Trial {
@@ -194,6 +196,8 @@ private:
             d.trial = it->second;
             trials_[d.trial].flights.push_back(flights_.size());
             note_roles(f);
+            d.sufferer_class =
+                class_index(config_, physics::vehicle_of(f.meta, f.meta.sufferer, config_.sufferer.vehicle));
             d.pairing = pairing_of(f);
             flights_.push_back(std::move(d));
         }
@@ -205,7 +209,11 @@ private:
         const auto blocks = flight::find_blocks(f, kBlocksWanted, physics::encounter_radii(f.meta, config_));
         const auto info = describe(*d.sim, blocks);
         for (std::size_t i = 0; i < info.size(); ++i) {
-            if (!info[i].near || !std::isfinite(d.sim->measured()[i][kFdAxis])) continue;
+            if (!std::isfinite(d.sim->measured()[i][kFdAxis])) continue;
+            if (!info[i].near) {
+                d.far_f_d.push_back(d.sim->measured()[i][kFdAxis]);
+                continue;
+            }
             if (d.rows.size() % static_cast<std::size_t>(o_.stride) == 0) d.fit_rows.push_back(i);
             d.rows.push_back(i);
             d.offset.push_back(info[i].offset);
@@ -372,6 +380,21 @@ PhysicsConfig with_provenance(const PhysicsConfig& fitted, const PhysicsConfig& 
     return c;
 }
 
+// Each vehicle class's noise floor as the sufferer (VehicleClass::noise_floor_n): the median over its
+// flights of f_d's spread where nobody is near — those with kMinFarSamples such samples, and its
+// flights alone.
+void set_noise_floors(PhysicsConfig& c, const Calibration& cal) {
+    for (std::size_t k = 0; k < c.classes.size(); ++k) {
+        std::vector<double> floors;
+        for (const auto& f : cal.flights())
+            if (f.sufferer_class == k && f.far_f_d.size() >= physics::kMinFarSamples)
+                floors.push_back(standard_deviation(f.far_f_d));
+        for (const auto& a : cal.alone())
+            if (a.vehicle_class == c.classes[k].name) floors.push_back(a.sd_f_d);
+        if (!floors.empty()) c.classes[k].noise_floor_n = median(floors);
+    }
+}
+
 // The trial's flights explained against the calibration that left it out (reports under folds/<trial>/).
 void explain_heldout(TrialError& e, const PhysicsConfig& fold, const CalibrateOptions& o) {
     const fs::path dir = fs::path(o.out_dir) / "folds" / e.trial;
@@ -464,6 +487,7 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     R.calibrated =
         with_provenance(cal.config_of(x), o.physics, R.turbulence_intensity,
                         log::cat("on ", cal.flights().size(), " flights of ", cal.trials().size(), " trials"));
+    set_noise_floors(R.calibrated, cal);
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     write_calibration(pairings, R, in);
     staged.commit();

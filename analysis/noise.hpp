@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "analysis/fit.hpp"
+#include "physics/bodies.hpp"
 
 namespace dw::analysis {
 
@@ -20,8 +21,8 @@ struct NoiseFloor {
 NoiseFloor floor_of(const Resimulation& r, const std::vector<SampleInfo>& info, const std::vector<Wrench6>& pred,
                     double tare_s);
 inline constexpr double kTareSettle_s = 0.5;
-inline constexpr double kMinNoiseFloor = 1e-4;     // N or N·m
-inline constexpr std::size_t kMinFarSamples = 30;  // fewer far samples: the differences' spread
+inline constexpr double kMinNoiseFloor = 1e-4;  // N or N·m
+using physics::kMinFarSamples;                  // fewer far samples: the differences' spread
 // The floor from one axis's residual when nobody is ever far: its successive differences' spread.
 double floor_from_differences(std::span<const double> residual);
 

@@ -107,6 +107,15 @@ double median(std::vector<double> v) {
     return 0.5 * (*mid + *std::max_element(v.begin(), mid));
 }
 
+double standard_deviation(std::span<const double> x) {
+    if (x.size() < 2) return 0;
+    double mean = 0, ss = 0;
+    for (const double v : x) mean += v;
+    mean /= static_cast<double>(x.size());
+    for (const double v : x) ss += (v - mean) * (v - mean);
+    return std::sqrt(ss / static_cast<double>(x.size() - 1));
+}
+
 double sd_from_differences(std::span<const double> x) {
     if (x.size() < 2) return 0;
     std::vector<double> d;

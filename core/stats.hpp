@@ -43,6 +43,9 @@ std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replica
 // The median (the mean of the two middle values for an even count); 0 for none.
 double median(std::vector<double> v);
 
+// The sample standard deviation of x (n − 1 in the denominator); 0 for fewer than two values.
+double standard_deviation(std::span<const double> x);
+
 // The standard deviation of white noise in x, from its successive differences and robustly:
 // 1.4826 × median |x[i] − x[i−1]| / √2 (a slow drift or a few spikes do not count). 0 for fewer
 // than two values.

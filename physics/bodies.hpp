@@ -25,6 +25,9 @@ PhysicsConfig for_flight(PhysicsConfig c, const flight::Meta& m);
 
 // The horizontal distance within which `neighbour` counts as near the sufferer.
 double near_radius(const VehicleParams& neighbour);
+// A noise floor (the recorded spread where nobody is near) is measured on at least this many
+// samples (the explainer's, a vehicle class's, a prediction interval's).
+inline constexpr std::size_t kMinFarSamples = 30;
 // Every neighbour's parameters, in meta.json's order; and their encounter radii.
 std::vector<VehicleParams> neighbours_of(const flight::Meta& m, const PhysicsConfig& c);
 std::vector<double> encounter_radii(const flight::Meta& m, const PhysicsConfig& c);

@@ -84,6 +84,7 @@ void class_keys(KeyVisitor& k, PhysicsConfig& c) {
         item.section("jet", [&](KeyVisitor& j) { coefficient_keys(j, x.jet); });
         item.number("drag_coefficient", x.drag_coefficient, {0, 5});
         item.number("kv_omega_n_per_mps", x.kv_omega_n_per_mps, {0, 10});
+        item.number("noise_floor_n", x.noise_floor_n, kNoiseFloorRange);
     });
     c.classes.resize(count);
     k.text("calibration", c.calibration);
@@ -104,7 +105,7 @@ void noise_keys(KeyVisitor& k, PhysicsConfig& c) {
     k.section("turbulence", [&](KeyVisitor& s) {
         TurbulenceParams& x = c.turbulence;
         s.flag("enabled", x.enabled);
-        s.number("intensity", x.intensity, {0, 1});
+        s.number("intensity", x.intensity, kTurbulenceIntensityRange);
         s.number("time_scale_s", x.time_scale_s, {1e-4, 10});
         s.number("lateral_intensity", x.lateral_intensity, {0, 1});
         s.number("lateral_time_scale_s", x.lateral_time_scale_s, {1e-4, 10});

@@ -69,6 +69,8 @@ struct StandParams {
 
 inline constexpr double kLateralIntensity = 0.2;  // v'/U of a round jet (Pope, Turbulent Flows)
 
+inline constexpr Range kTurbulenceIntensityRange{0, 1};  // u'/U
+
 struct TurbulenceParams {
     bool enabled = true;
     double intensity = 0.1;       // u'/U of the jet speed (Ornstein-Uhlenbeck)
@@ -153,7 +155,12 @@ struct VehicleClass {
     JetCoefficients jet;
     double drag_coefficient = 1.18;
     double kv_omega_n_per_mps = 0.1;
+    // As the sufferer, its measured f_d's spread (1 sigma) where nobody is near: the noise a right
+    // prediction's interval starts from (predictor/intervals.hpp). dw-explain calibrate measures it
+    // on the class's flights; 0: not measured.
+    double noise_floor_n = 0;
 };
+inline constexpr Range kNoiseFloorRange{0, 10, "N"};
 
 // A learnt discrepancy carried in a fitted physics file (dw-explain writes it; analysis/discrepancy.hpp
 // defines its inputs and evaluates it; dw-sim fly and replay add it to the recorded wrench). It is

@@ -8,17 +8,15 @@
 namespace dw::predictor {
 
 namespace {
-double spread(const std::vector<double>& v) {  // the sample standard deviation
-    double mean = 0, ss = 0;
-    for (const double x : v) mean += x;
-    mean /= static_cast<double>(v.size());
-    for (const double x : v) ss += (x - mean) * (x - mean);
-    return std::sqrt(ss / static_cast<double>(v.size() - 1));
-}
 
-bool nobody_near(const Sample& s) {
-    for (const auto& x : s.neighbours())
-        if (std::hypot(x[0], x[1]) <= kNobodyNearM) return false;
+// Every neighbour beyond its near radius (physics/bodies.hpp; one not described: the sufferer's size).
+bool nobody_near(const Sample& s, const Source& source) {
+    for (int j = 0; j < s.k; ++j) {
+        const auto who = static_cast<std::size_t>(s.who[static_cast<std::size_t>(j)]);
+        const auto& v = who < source.neighbours.size() ? source.neighbours[who] : source.sufferer;
+        const auto& x = s.x[static_cast<std::size_t>(j)];
+        if (std::hypot(x[0], x[1]) <= physics::near_radius(v)) return false;
+    }
     return true;
 }
 }  // namespace
@@ -32,38 +30,51 @@ std::string class_of(const Source& s) {
 }
 }  // namespace
 
-NoiseModel noise_model(const Dataset& all, double intensity) {
+// The floor of a flight with too few samples with nobody near, per axis (the lists say which).
+flight::AxisValues floor_elsewhere(const Source& source, const std::array<std::vector<double>, 6>& every,
+                                   const std::array<std::vector<double>, 6>* dataset_class,
+                                   const physics::VehicleClass* calibrated, NoiseModel& m) {
+    const bool from_physics = calibrated && calibrated->noise_floor_n > 0;
+    (from_physics || dataset_class ? m.from_class : m.from_differences).push_back(source.name);
+    flight::AxisValues f{};
+    for (std::size_t a = 0; a < 6; ++a)
+        f[a] = !source.measured[a]            ? NAN
+               : a == kFdAxis && from_physics ? calibrated->noise_floor_n
+               : dataset_class                ? median((*dataset_class)[a])
+                                              : sd_from_differences(every[a]);
+    return f;
+}
+
+NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics) {
     NoiseModel m;
-    m.intensity = intensity;
+    m.intensity = turbulence_intensity(physics);
     const std::size_t n = all.sources.size();
     std::vector<std::array<std::vector<double>, 6>> far(n), every(n);
-    for (const auto& s : all.samples)
+    for (const auto& s : all.samples) {
+        const auto i = static_cast<std::size_t>(s.source);
+        const bool alone = nobody_near(s, all.sources[i]);
         for (std::size_t a = 0; a < 6; ++a) {
-            every[static_cast<std::size_t>(s.source)][a].push_back(s.y[a]);
-            if (nobody_near(s)) far[static_cast<std::size_t>(s.source)][a].push_back(s.y[a]);
+            every[i][a].push_back(s.y[a]);
+            if (alone) far[i][a].push_back(s.y[a]);
         }
+    }
     // Flights with nobody near long enough: their own floor, and their class's (the median of them).
     std::map<std::string, std::array<std::vector<double>, 6>> by_class;
     for (std::size_t i = 0; i < n; ++i) {
-        if (far[i][kFdAxis].size() < kMinFloorSamples) continue;
+        if (far[i][kFdAxis].size() < physics::kMinFarSamples) continue;
         flight::AxisValues f{};
         for (std::size_t a = 0; a < 6; ++a) {
-            f[a] = all.sources[i].measured[a] ? spread(far[i][a]) : NAN;
+            f[a] = all.sources[i].measured[a] ? standard_deviation(far[i][a]) : NAN;
             by_class[class_of(all.sources[i])][a].push_back(f[a]);
         }
         m.floor[all.sources[i].name] = f;
     }
     for (std::size_t i = 0; i < n; ++i) {
-        const auto& name = all.sources[i].name;
-        if (m.floor.contains(name)) continue;
-        const auto cls = by_class.find(class_of(all.sources[i]));
-        (cls != by_class.end() ? m.from_class : m.from_differences).push_back(name);
-        flight::AxisValues f{};
-        for (std::size_t a = 0; a < 6; ++a)
-            f[a] = !all.sources[i].measured[a] ? NAN
-                   : cls != by_class.end()     ? median(cls->second[a])
-                                               : sd_from_differences(every[i][a]);
-        m.floor[name] = f;
+        const Source& source = all.sources[i];
+        if (m.floor.contains(source.name)) continue;
+        const auto cls = by_class.find(class_of(source));
+        m.floor[source.name] = floor_elsewhere(source, every[i], cls == by_class.end() ? nullptr : &cls->second,
+                                               physics::class_of(physics, source.sufferer), m);
     }
     return m;
 }

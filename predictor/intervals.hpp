@@ -2,25 +2,24 @@
 // Prediction intervals from the explainer's noise model (analysis/noise.cpp, excess_of): about a
 // right prediction p, a recorded wrench scatters per axis with variance
 //     floor² + (2 I p)²
-// — the flight's own noise floor (the recorded wrench's spread where nobody is near: the residual's
-// slow error and its jitter) and the jets' turbulence, whose force fluctuation grows with the push
-// (I: the physics' turbulence intensity, which dw-explain calibrate measures). The 95 % interval is
-// p ± kZ95 σ (core/stats.hpp); its coverage on held-out samples says whether the model and the noise model hold.
+// — the flight's own noise floor (the recorded wrench's spread where nobody is near, each neighbour
+// beyond its near radius, physics/bodies.hpp: the residual's slow error and its jitter) and the
+// jets' turbulence, whose force fluctuation grows with the push (I: the physics' turbulence
+// intensity, which dw-explain calibrate measures, as it does each vehicle class's floor). The 95 %
+// interval is p ± kZ95 σ (core/stats.hpp); its coverage on held-out samples says whether the model
+// and the noise model hold.
 #include <cstddef>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "core/stats.hpp"
+#include "physics/bodies.hpp"
 #include "predictor/dataset.hpp"
 #include "predictor/model.hpp"
 
 namespace dw::predictor {
 
-inline constexpr double kNobodyNearM = 0.35;         // every neighbour farther than this horizontally
-inline constexpr std::size_t kMinFloorSamples = 30;  // fewer: the floor from elsewhere (below)
-
-inline constexpr Range kTurbulenceIntensityRange{0, 1};
 // The physics' turbulence intensity where its turbulence is on, else 0.
 inline double turbulence_intensity(const physics::PhysicsConfig& p) {
     return p.turbulence.enabled ? p.turbulence.intensity : 0;
@@ -29,16 +28,16 @@ inline double turbulence_intensity(const physics::PhysicsConfig& p) {
 struct NoiseModel {
     double intensity = 0;                             // I (0: no turbulence term)
     std::map<std::string, flight::AxisValues> floor;  // per flight (Source::name), per axis (NaN: unknown)
-    // The flights with too few samples with nobody near: their floor is their sufferer class's (the
-    // median of its flights' floors that are known: a lab measures its noise with nobody near), or,
-    // where no flight of that class has one, the jitter of their whole recording (successive
-    // differences, as the explainer's when nobody is ever far), which leaves out the residual's
-    // slow error: those intervals are too narrow, not too wide.
+    // The flights with fewer than kMinFarSamples samples with nobody near: their floor is their
+    // sufferer class's — the physics' (VehicleClass::noise_floor_n, calibrated), else the median of
+    // the known floors of this dataset's flights of that class — or, where there is none, the jitter
+    // of their whole recording (successive differences, as the explainer's when nobody is ever far),
+    // which leaves out the residual's slow error: those intervals are too narrow, not too wide.
     std::vector<std::string> from_class, from_differences;
 };
 // Each flight's floor from its samples with nobody near (all of them, held out or not: a lab
 // measures its noise with nobody near, and no sample near a jet enters it), else (below).
-NoiseModel noise_model(const Dataset& all, double intensity);
+NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics);
 
 // The 95 % interval's half width about prediction p on `axis` of a sample of flight `source` (NaN
 // when that flight's floor is unknown).

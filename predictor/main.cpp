@@ -57,12 +57,14 @@ std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>
 
 void say(const std::string& line) { dw::log::progress(line); }
 
-// The turbulence intensity of the first physics configuration among model files (0 if none, or
-// its turbulence is off): what the intervals' noise model takes by default.
-double intensity_of(const std::vector<std::string>& model_paths) {
+// The physics whose noise model (turbulence intensity, vehicle classes' floors) the intervals take:
+// the first physics configuration among model files, else none (no turbulence, no class floors).
+dw::physics::PhysicsConfig noise_physics(const std::vector<std::string>& model_paths) {
     for (const auto& p : model_paths)
-        if (p.ends_with(".yaml") || p.ends_with(".yml")) return dw::predictor::turbulence_intensity(physics_from(p));
-    return 0;
+        if (p.ends_with(".yaml") || p.ends_with(".yml")) return physics_from(p);
+    dw::physics::PhysicsConfig none;
+    none.turbulence.enabled = false;
+    return none;
 }
 
 // ---- one struct per subcommand: its options, how it is declared, what it does --------------------
@@ -203,8 +205,9 @@ struct CompareCommand {
             ->check(dw::cli::in(dw::physics::kAltitudeRange));
         cmd->add_option("--turbulence-intensity", intensity,
                         "I of the 95 % intervals' noise model, sd² = floor² + (2 I prediction)² (default: the "
-                        "turbulence of the first physics .yaml among --models, else 0)")
-            ->check(dw::cli::in(kTurbulenceIntensityRange));
+                        "turbulence of the first physics .yaml among --models, whose vehicle classes also give "
+                        "the floors of flights where someone is always near; else 0)")
+            ->check(dw::cli::in(dw::physics::kTurbulenceIntensityRange));
     }
     int run() {
         dw::require_output_dir(out_dir, "--out");
@@ -212,7 +215,9 @@ struct CompareCommand {
         const Dataset all = load_all(data);
         const Dataset test = split_by_leg(all).test;
         require_samples(all, test, "held-out");
-        const auto noise = dw::predictor::noise_model(all, std::isnan(intensity) ? intensity_of(models) : intensity);
+        auto physics = noise_physics(models);
+        if (!std::isnan(intensity)) physics.turbulence.enabled = true, physics.turbulence.intensity = intensity;
+        const auto noise = dw::predictor::noise_model(all, physics);
         const auto c = dw::predictor::compare_with_reference(raw(ms), test, arena, &noise);
         dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + c.reference_note + c.noise_note +
                                                   dw::predictor::poses_note(all) + to_markdown(c.rows, arena));

@@ -313,7 +313,7 @@ RealResult run_real(const RealOptions& o) {
     write_file((out / "models" / "physics.yaml").string(), physics::to_yaml(o.physics));
 
     say("comparing on the held-out blocks");
-    const auto noise = noise_model(all, turbulence_intensity(o.physics));
+    const auto noise = noise_model(all, o.physics);
     const auto compared = compare_with_reference(m.list, split.test, {}, &noise);
     r.table = compared.rows;
     if (compared.reference_everywhere) m.list.push_back(&m.reference);  // drawn only where every flight has it

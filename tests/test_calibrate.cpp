@@ -375,8 +375,13 @@ TEST(RealCalibration, TheSharedTrialsLeftOutInTurnArePredictedBetterAndTheShippe
         for (auto [x, y] : {std::pair{a.jet.strength, b.jet.strength},
                             {a.jet.width, b.jet.width},
                             {a.jet.origin, b.jet.origin},
-                            {a.kv_omega_n_per_mps, b.kv_omega_n_per_mps}})
+                            {a.kv_omega_n_per_mps, b.kv_omega_n_per_mps},
+                            {a.noise_floor_n, b.noise_floor_n}})
             EXPECT_NEAR(x, y, 1e-4 * std::abs(y) + 1e-9) << a.name << ": regenerate config/physics.crazyflie.yaml";
+        // Issue 71: each class's floor as the sufferer, where nobody is near (its flights' and its
+        // flight alone's spread: 7.5 mN small, 9.7 mN large, measured), the intervals' start.
+        EXPECT_GT(b.noise_floor_n, 0.003) << b.name;
+        EXPECT_LT(b.noise_floor_n, 0.03) << b.name;
     }
     EXPECT_EQ(shipped.calibration, r.calibrated.calibration);
     // The jets' turbulence the residual shows (pooled 2I 0.20: intensity 0.10), written as the

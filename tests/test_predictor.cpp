@@ -748,13 +748,13 @@ TEST(PredictorCompare, EveryFileOfARealRunIsComparedAsAUserRunsIt) {
 // nobody is near; about a right prediction p the recording scatters with sd² = floor² + (2 I p)², so
 // an exact model's intervals hold 95 % of the samples and a biased one's far fewer.
 TEST(PredictorIntervals, AnExactModelsIntervalsHoldNinetyFivePercent) {
-    struct Constant final : ForceModel {  // f_d: `near_n` with a neighbour within 0.35 m, else 0
+    struct Constant final : ForceModel {  // f_d: `near_n` with a neighbour within 0.3 m, else 0
         double near_n = 0;
         std::string label = "constant";
         const std::string& name() const override { return label; }
         Wrench6 predict(std::span<const RelState> x) const override {
             Wrench6 w{};
-            w[kFdAxis] = !x.empty() && std::hypot(x[0][0], x[0][1]) <= kNobodyNearM ? near_n : 0;
+            w[kFdAxis] = !x.empty() && std::hypot(x[0][0], x[0][1]) <= 0.3 ? near_n : 0;
             return w;
         }
     };
@@ -769,7 +769,7 @@ TEST(PredictorIntervals, AnExactModelsIntervalsHoldNinetyFivePercent) {
     for (int i = 0; i < 20000; ++i) {
         Sample s;
         s.k = 1;
-        s.x[0] = RelState{i % 2 ? 1.0 : 0.1, 0, -0.5, 0, 0, 0};  // far, near, far, near, ...
+        s.x[0] = RelState{i % 2 ? 3.0 : 0.1, 0, -0.5, 0, 0, 0};  // far, near, far, near, ...
         const double p = exact.predict(s.neighbours())[kFdAxis];
         s.y[kFdAxis] = p + unit(rng) * std::sqrt(kFloor * kFloor + 4 * kIntensity * kIntensity * p * p);
         d.samples.push_back(s);
@@ -785,16 +785,23 @@ TEST(PredictorIntervals, AnExactModelsIntervalsHoldNinetyFivePercent) {
         s.y[kFdAxis] = kPush + unit(rng) * 0.05;
         d.samples.push_back(s);
     }
-    const NoiseModel noise = noise_model(d, kIntensity);
+    dw::physics::PhysicsConfig physics;
+    physics.turbulence.intensity = kIntensity;
+    const NoiseModel noise = noise_model(d, physics);
     EXPECT_NEAR(noise.floor.at("synthetic")[kFdAxis], kFloor, 0.05 * kFloor);
     EXPECT_EQ(noise.floor.at("always near")[kFdAxis], noise.floor.at("synthetic")[kFdAxis]);
     EXPECT_EQ(noise.from_class, std::vector<std::string>{"always near"});
     EXPECT_TRUE(noise.from_differences.empty());
+    // A calibrated class floor (the physics' vehicle class of that sufferer) comes first.
+    auto calibrated = physics;
+    calibrated.classes.push_back({"the sufferer's", d.sources[1].sufferer, {}, 1.18, 0.1, 0.02});
+    EXPECT_EQ(noise_model(d, calibrated).floor.at("always near")[kFdAxis], 0.02);
     d.samples.resize(20000);  // the first flight alone, below
     EXPECT_NEAR(coverage(exact, d, noise), 0.95, 0.01);
     Constant biased;  // 3 sd short where the jet pushes: most of those samples fall outside (about 0.63 in all)
     biased.near_n = kPush - 3 * std::sqrt(kFloor * kFloor + 4 * kIntensity * kIntensity * kPush * kPush);
     EXPECT_LT(coverage(biased, d, noise), 0.7);
     // Without the turbulence term the near samples' spread is not the floor's: too few inside (about 0.79).
-    EXPECT_LT(coverage(exact, d, noise_model(d, 0)), 0.85);
+    physics.turbulence.enabled = false;
+    EXPECT_LT(coverage(exact, d, noise_model(d, physics)), 0.85);
 }
