@@ -94,7 +94,7 @@ void fields(const msg::ExperimentState& m, V& v) {
 template <class V>
 void fields(const msg::WrenchPrediction& m, V& v) {
     v("header", m.header()), v("model_name", m.model_name()), v("force_n", m.force_n()), v("torque_nm", m.torque_nm()),
-        v("input_age_s", m.input_age_s());
+        v("input_age_s", m.input_age_s()), v("f_d_interval_n", m.f_d_interval_n());
 }
 template <class V>
 void fields(const msg::TopicRate& m, V& v) {

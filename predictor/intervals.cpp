@@ -79,11 +79,20 @@ NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics
     return m;
 }
 
+double interval_half_width(double floor, double intensity, double p) {
+    const double turbulent = 2 * intensity * p;
+    return kZ95 * std::sqrt(floor * floor + turbulent * turbulent);
+}
+
+double f_d_half_width(const physics::PhysicsConfig& physics, const physics::VehicleParams& sufferer, double p) {
+    const auto* k = physics::class_of(physics, sufferer);
+    if (!k || !(k->noise_floor_n > 0)) return 0;
+    return interval_half_width(k->noise_floor_n, turbulence_intensity(physics), p);
+}
+
 double half_width(const NoiseModel& m, const std::string& source, std::size_t axis, double p) {
     const auto it = m.floor.find(source);
-    if (it == m.floor.end()) return NAN;
-    const double floor = it->second[axis], turbulent = 2 * m.intensity * p;
-    return kZ95 * std::sqrt(floor * floor + turbulent * turbulent);
+    return it == m.floor.end() ? NAN : interval_half_width(it->second[axis], m.intensity, p);
 }
 
 double coverage(const ForceModel& model, const Dataset& d, const NoiseModel& noise, std::size_t axis) {

@@ -39,6 +39,13 @@ struct NoiseModel {
 // measures its noise with nobody near, and no sample near a jet enters it), else (below).
 NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics);
 
+// kZ95 sqrt(floor² + (2 I p)²): the 95 % interval's half width about prediction p.
+double interval_half_width(double floor, double intensity, double p);
+// ... online, on f_d, for a sufferer of parameters `sufferer` under `physics`: its vehicle class's
+// calibrated floor (VehicleClass::noise_floor_n) and the physics' turbulence; 0 (none) when the
+// class has no floor.
+double f_d_half_width(const physics::PhysicsConfig& physics, const physics::VehicleParams& sufferer, double p);
+
 // The 95 % interval's half width about prediction p on `axis` of a sample of flight `source` (NaN
 // when that flight's floor is unknown).
 double half_width(const NoiseModel& m, const std::string& source, std::size_t axis, double p);

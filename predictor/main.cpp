@@ -310,6 +310,9 @@ struct OnlineCommand {
                         "a flight's meta.json describing the lab's bodies (sufferer, neighbours, each one's mass and "
                         "rotors): the models take them per body, as on a recorded flight")
             ->excludes(sufferer);
+        cmd->add_option("--noise", no.noise_path,
+                        "physics configuration whose noise model (the sufferer's class floor, the turbulence) gives "
+                        "each prediction's 95 % interval on f_d, for a learnt model (a physics model uses its own)");
     }
     int run(const dw::dds::ProcessCli& cli) {
         dw::dds::Participant participant(cli.dds(), "predictor", cli.clock());

@@ -367,6 +367,7 @@ public:
     const std::string& name() const override { return name_; }
     Wrench6 predict(std::span<const RelState> neighbours) const override { return model_->predict(neighbours); }
     Wrench6 predict(const Sample& s, const Source& source) const override { return model_->predict(s, source); }
+    const physics::PhysicsConfig* physics() const override { return model_->physics(); }
 
 private:
     std::unique_ptr<ForceModel> model_;

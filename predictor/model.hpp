@@ -47,6 +47,9 @@ public:
         (void)source;
         return predict(s.neighbours());
     }
+    // The physics the model is or carries (a physics model, a correction composed with its
+    // physics), whose noise model its predictions' intervals take; null for a learnt model alone.
+    virtual const physics::PhysicsConfig* physics() const { return nullptr; }
 };
 
 // Another model's prediction recorded with the flight (reference.csv, e.g. the vehicle's own
@@ -188,6 +191,7 @@ public:
     Wrench6 predict(std::span<const RelState> neighbours) const override;
     Wrench6 predict(const Sample& s, const Source& source) const override;
     const physics::PhysicsConfig& config() const { return config_; }
+    const physics::PhysicsConfig* physics() const override { return &config_; }
 
 private:
     const physics::WrenchModel& model_for(const physics::VehicleParams& sufferer) const;
@@ -214,6 +218,7 @@ public:
     const std::string& name() const override { return composed_.name(); }
     Wrench6 predict(std::span<const RelState> neighbours) const override { return composed_.predict(neighbours); }
     Wrench6 predict(const Sample& s, const Source& source) const override { return composed_.predict(s, source); }
+    const physics::PhysicsConfig* physics() const override { return &physics_.config(); }
 
 private:
     PhysicsModel physics_;

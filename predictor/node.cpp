@@ -1,5 +1,7 @@
 #include "predictor/node.hpp"
 
+#include "predictor/intervals.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -109,6 +111,7 @@ PredictorNode::PredictorNode(dds::Participant& p, const NodeOptions& o, const Cl
       clock_(clock),
       model_(load_model(o.model_path)),
       bodies_(bodies_from(o)),
+      noise_(o.noise_path.empty() ? std::nullopt : std::optional(physics::load_physics(o.noise_path))),
       features_(bodies_ ? bodies_->sufferer() : o.sufferer,
                 bodies_ ? bodies_->neighbours() : std::vector<std::string>{}),
       writer_(p, dds::topics::wrench_prediction) {
@@ -174,7 +177,14 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
     out.torque_nm().y(w[4]);
     out.torque_nm().z(w[5]);
     out.input_age_s(static_cast<double>(clock_.now_ns() - dds::from_msg(frame.header().stamp())) * 1e-9);
+    out.f_d_interval_n(f_d_interval(*model, w[kFdAxis]));
     if (writer_.write(out)) ++published_;
+}
+
+double PredictorNode::f_d_interval(const ForceModel& model, double f_d) const {
+    const physics::PhysicsConfig* noise = model.physics() ? model.physics() : (noise_ ? &*noise_ : nullptr);
+    if (!noise) return 0;
+    return f_d_half_width(*noise, bodies_ ? bodies_->source().sufferer : noise->sufferer.vehicle, f_d);
 }
 
 Wrench6 PredictorNode::predict(const ForceModel& model, const FrameNeighbours& f) const {

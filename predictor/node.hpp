@@ -64,6 +64,10 @@ struct NodeOptions {
     // neighbours and their parameters (mass, rotors, ...), which the models take per body as they do
     // on a recorded flight. Empty: the bodies are not known (each model's defaults).
     std::string vehicles_path;
+    // A physics configuration whose noise model (the sufferer's class floor, the turbulence) gives
+    // each prediction's 95 % interval on f_d, for a model that carries no physics of its own (a
+    // physics model, or a correction composed with one, uses its own). Empty: none.
+    std::string noise_path;
     double reload_check_s = 0.5;
 };
 
@@ -106,6 +110,7 @@ public:
 private:
     void on_frame(const msg::MocapFrame& frame);
     Wrench6 predict(const ForceModel& model, const FrameNeighbours& f) const;
+    double f_d_interval(const ForceModel& model, double f_d) const;  // the 95 % half width, 0: none
     void watch();
 
     NodeOptions options_;
@@ -113,6 +118,7 @@ private:
     mutable std::mutex mutex_;
     std::shared_ptr<const ForceModel> model_;
     std::optional<OnlineBodies> bodies_;
+    std::optional<physics::PhysicsConfig> noise_;  // NodeOptions::noise_path
     FrameFeatures features_;
     dds::Writer<msg::WrenchPrediction> writer_;
     std::optional<dds::Reader<msg::MocapFrame>> reader_;  // subscribed once the writer's readers are awaited

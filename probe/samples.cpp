@@ -183,6 +183,7 @@ void fill(msg::WrenchPrediction& m, std::uint64_t i) {
     m.force_n(vec(i, 2.5, 0.2));
     m.torque_nm(vec(i, 0.04, 1.2));
     m.input_age_s(1e-5 * static_cast<double>(1 + i % 50));
+    m.f_d_interval_n(i % 3 == 0 ? 0.0 : 0.02 + 1e-3 * static_cast<double>(i % 7));
 }
 
 void fill(msg::ProcessStatus& m, std::uint64_t i) {

@@ -14,6 +14,8 @@
 #include <thread>
 
 #include "core/errors.hpp"
+#include "core/files.hpp"
+#include "core/stats.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/time.hpp"
 #include "flight/flight.hpp"
@@ -395,6 +397,32 @@ TEST(PredictorOnline, AFrameStampedOffTheFramesTimeIsRefused) {
     // The stray and the restarted stream's first kStampsToFollow - 1 (best effort: one may be lost).
     EXPECT_GE(r.stray_stamps, static_cast<std::uint64_t>(dw::kStampsToFollow - 1));
     EXPECT_LE(r.stray_stamps, static_cast<std::uint64_t>(dw::kStampsToFollow));
+}
+
+// Issue 71, item 4: each online prediction carries its 95 % interval on f_d from the physics' noise
+// model — the sufferer's vehicle class's calibrated floor and the turbulence: 1.96 sqrt(floor² +
+// (2 I f_d)²); a learnt model with no physics to take it from carries none (0).
+TEST(PredictorOnline, EachPredictionCarriesItsIntervalFromThePhysicsNoiseModel) {
+    dw::test::TempDir dir;
+    dw::physics::PhysicsConfig physics;
+    physics.turbulence.enabled = true;
+    physics.turbulence.intensity = 0.1;
+    physics.classes.push_back({"the lab's sufferer", physics.sufferer.vehicle, physics.bauersfeld, 1.18, 0.1, 0.02});
+    dw::write_file(dir.file("physics.yaml"), dw::physics::to_yaml(physics));
+    const auto with = publish_frames(dir.file("physics.yaml"), "interval", [](int i) {
+        return frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0, 0.2);
+    });
+    ASSERT_GE(with.predictions.size(), 20u);  // best effort on loopback
+    for (const auto& w : with.predictions) {
+        const double f_d = w.force_n().z(), turbulent = 2 * 0.1 * f_d;
+        EXPECT_NEAR(w.f_d_interval_n(), dw::kZ95 * std::sqrt(0.02 * 0.02 + turbulent * turbulent), 1e-12);
+    }
+    linear_model("learnt_linear", 1.0f).save(dir.file("model.json"));
+    const auto without = publish_frames(dir.file("model.json"), "nointerval", [](int i) {
+        return frame(static_cast<std::uint64_t>(i), 1000.0 + i / 180.0, 0.2);
+    });
+    ASSERT_FALSE(without.predictions.empty());
+    for (const auto& w : without.predictions) EXPECT_EQ(w.f_d_interval_n(), 0.0);
 }
 
 // The online predictor never publishes a non-finite value — neither for a body at NaN nor for a
