@@ -19,16 +19,13 @@ bool nobody_near(const Sample& s, const Source& source) {
     }
     return true;
 }
-}  // namespace
 
-namespace {
 // A sufferer's class: the four numbers a flight gives of it (a vehicle class of the physics matches
 // on the same four).
-std::string class_of(const Source& s) {
+std::string class_key(const Source& s) {
     const auto& v = s.sufferer;
     return log::cat(v.mass_kg, " kg, ", v.rotors, " rotors, ", v.prop_radius_m, " m, ", v.motor_distance_m, " m");
 }
-}  // namespace
 
 // The floor of a flight with too few samples with nobody near, per axis (the lists say which).
 flight::AxisValues floor_elsewhere(const Source& source, const std::array<std::vector<double>, 6>& every,
@@ -44,6 +41,7 @@ flight::AxisValues floor_elsewhere(const Source& source, const std::array<std::v
                                               : sd_from_differences(every[a]);
     return f;
 }
+}  // namespace
 
 NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics) {
     NoiseModel m;
@@ -65,14 +63,14 @@ NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics
         flight::AxisValues f{};
         for (std::size_t a = 0; a < 6; ++a) {
             f[a] = all.sources[i].measured[a] ? standard_deviation(far[i][a]) : NAN;
-            by_class[class_of(all.sources[i])][a].push_back(f[a]);
+            by_class[class_key(all.sources[i])][a].push_back(f[a]);
         }
         m.floor[all.sources[i].name] = f;
     }
     for (std::size_t i = 0; i < n; ++i) {
         const Source& source = all.sources[i];
         if (m.floor.contains(source.name)) continue;
-        const auto cls = by_class.find(class_of(source));
+        const auto cls = by_class.find(class_key(source));
         m.floor[source.name] = floor_elsewhere(source, every[i], cls == by_class.end() ? nullptr : &cls->second,
                                                physics::class_of(physics, source.sufferer), m);
     }
