@@ -239,9 +239,10 @@ std::vector<Field> binary_header(const std::string& path, const std::string& byt
 VehicleLog read_binary(const std::string& path, VehicleLog log, const Limits& limits) {
     log.binary = true;
     require_readable_file(path, "log");
-    if (std::error_code ec; fs::file_size(path, ec) > kMaxBinaryLogBytes && !ec)
-        throw InputError(log::cat(path, ": ", fs::file_size(path, ec), " bytes, more than a binary log may hold (",
-                                  kMaxBinaryLogBytes, "): split the log"));
+    std::error_code ec;
+    if (const auto size = fs::file_size(path, ec); !ec && size > kMaxBinaryLogBytes)
+        throw InputError(log::cat(path, ": ", size, " bytes, more than a binary log may hold (", kMaxBinaryLogBytes,
+                                  "): split the log"));
     const std::string bytes = read_file(path, "log");
     std::size_t pos = 0;
     const auto fields = binary_header(path, bytes, pos);

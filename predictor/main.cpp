@@ -58,10 +58,12 @@ std::vector<const ForceModel*> raw(const std::vector<std::unique_ptr<ForceModel>
 void say(const std::string& line) { dw::log::progress(line); }
 
 // The physics whose noise model (turbulence intensity, vehicle classes' floors) the intervals take:
-// the first physics configuration among model files, else none (no turbulence, no class floors).
-dw::physics::PhysicsConfig noise_physics(const std::vector<std::string>& model_paths) {
-    for (const auto& p : model_paths)
-        if (p.ends_with(".yaml") || p.ends_with(".yml")) return physics_from(p);
+// the first physics configuration among the model files (as loaded: `models[i]` from `paths[i]`),
+// else none (no turbulence, no class floors).
+dw::physics::PhysicsConfig noise_physics(const std::vector<std::string>& paths,
+                                         const std::vector<std::unique_ptr<ForceModel>>& models) {
+    for (std::size_t i = 0; i < paths.size(); ++i)
+        if (paths[i].ends_with(".yaml") || paths[i].ends_with(".yml")) return *models[i]->physics();
     dw::physics::PhysicsConfig none;
     none.turbulence.enabled = false;
     return none;
@@ -215,7 +217,7 @@ struct CompareCommand {
         const Dataset all = load_all(data);
         const Dataset test = split_by_leg(all).test;
         require_samples(all, test, "held-out");
-        auto physics = noise_physics(models);
+        auto physics = noise_physics(models, ms);
         if (!std::isnan(intensity)) physics.turbulence.enabled = true, physics.turbulence.intensity = intensity;
         const auto noise = dw::predictor::noise_model(all, physics);
         const auto c = dw::predictor::compare_with_reference(raw(ms), test, arena, &noise);
