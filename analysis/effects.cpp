@@ -24,6 +24,14 @@ std::vector<double> Effect::neutral() const {
     return v;
 }
 
+bool Effect::holds_neutral(const std::vector<double>& lo, const std::vector<double>& hi) const {
+    const auto n = neutral();
+    if (lo.size() != n.size() || hi.size() != n.size()) return false;
+    for (std::size_t k = 0; k < n.size(); ++k)
+        if (n[k] < lo[k] || n[k] > hi[k]) return false;
+    return true;
+}
+
 void Effect::apply(physics::PhysicsConfig& c, const std::vector<double>& v) const {
     type->set(c.effects, v, {from, to});
 }

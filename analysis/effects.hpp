@@ -18,12 +18,18 @@ struct Effect {
     const physics::EffectType* type = nullptr;
     std::string name;
     std::vector<Parameter> params;
-    // The axes of an effect that acts between two (type->has_axes()), chosen before the fit.
+    // The axes of an effect that acts between two (type->has_axes()), chosen before the fit — by
+    // the explainer from the residual, unless given (axes_given: a proof asks about these axes).
     int from = 2, to = 0;
+    bool axes_given = false;
     // Switches the effect on in c with these parameter values.
     void apply(physics::PhysicsConfig& c, const std::vector<double>& values) const;
     // The neutral values (the effect absent).
     std::vector<double> neutral() const;
+    // Whether intervals [lo, hi] (one per parameter) hold the neutral values, every one. Where the
+    // neutral values are the effect's absence, the data cannot tell the effect from no effect, and
+    // it is never accepted.
+    bool holds_neutral(const std::vector<double>& lo, const std::vector<double>& hi) const;
     // Whether evaluating it needs the physics again (flow effects) or only the recording's view.
     bool changes_flow() const { return type->changes_flow(); }
 };

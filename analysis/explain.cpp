@@ -23,25 +23,6 @@ namespace {
 
 // ---- explain(), stage by stage: resimulate -> locate -> screen -> cross-validate -> select -> report
 
-// Resimulation and sample bookkeeping: the data every later stage reads. Throws dw::InputError when
-// the flight has too few blocks for the folds.
-ExplainData prepare(const Resimulation& sim, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
-                    const ExplainOptions& o, const AxisValues& sigma) {
-    ExplainData d{sim, info, sigma, {}, sim.buffeting_sigma(o.physics), 0, o.huber_delta};
-    for (std::size_t i = 0; i < info.size(); ++i)
-        if (info[i].leg >= 0) d.on_legs.push_back(i);
-    std::set<int> leg_ids;
-    for (auto i : d.on_legs) leg_ids.insert(info[i].leg);
-    d.legs = leg_ids.size();
-    if (d.legs < static_cast<std::size_t>(o.folds)) {
-        throw InputError(log::cat("wrench.csv: ", d.legs, " of ", blocks.blocks.size(), " cross-validation blocks (",
-                                  flight::to_string(blocks.kind), ") hold wrench samples (", d.on_legs.size(),
-                                  " samples in blocks); cross-validation needs at least ", o.folds,
-                                  " — do the wrench and pose clocks overlap?"));
-    }
-    return d;
-}
-
 // The verdict: what the fit leaves, whether a mismatch is detected and whether it is explained.
 void conclude(ExplainResult& R, const ExplainData& d, const Baseline& base, const Baseline& final_model, bool stand_in,
               const ExplainOptions& o, const std::string& formation) {
@@ -257,7 +238,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
                  " neighbours, ", blocks.blocks.size(), " blocks by ", flight::to_string(blocks.kind)));
     auto base_pred = sim.recorded(o.physics);
     const NoiseFloor floor = floor_of(sim, info, base_pred, o.physics.stand.tare_s);
-    const ExplainData d = prepare(sim, info, blocks, o, floor.sigma);
+    const ExplainData d = explain_data(sim, info, blocks, o.folds, o.huber_delta, o.physics, floor.sigma);
     const Baseline base = baseline_of(d, o.physics, std::move(base_pred));
     R.noise_floor = d.sigma;
     R.noise_floor_basis = floor.basis;

@@ -188,6 +188,10 @@ struct ExplainResult {
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);
 
+// The verdict in a line: "explained by: a, b" (with the families' sentences, and whether a residual
+// remains) / "mismatch found, not explained" / "no mismatch".
+std::string verdict_line(const ExplainResult& r);
+
 // report.json, report.md, physics.yaml and the PNG figures into dir.
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir);
 

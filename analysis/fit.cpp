@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 #include "analysis/noise.hpp"
+#include "core/errors.hpp"
+#include "core/log.hpp"
 #include "core/stats.hpp"
 
 namespace dw::analysis {
@@ -15,6 +18,24 @@ namespace dw::analysis {
 std::vector<Wrench6> ExplainData::predict(const physics::PhysicsConfig& c) const {
     ++resimulations;
     return sim.recorded(c);
+}
+
+ExplainData explain_data(const Resimulation& sim, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
+                         int folds, double huber_delta, const physics::PhysicsConfig& physics,
+                         const AxisValues& sigma) {
+    ExplainData d{sim, info, sigma, {}, sim.buffeting_sigma(physics), 0, huber_delta};
+    for (std::size_t i = 0; i < info.size(); ++i)
+        if (info[i].leg >= 0) d.on_legs.push_back(i);
+    std::set<int> leg_ids;
+    for (auto i : d.on_legs) leg_ids.insert(info[i].leg);
+    d.legs = leg_ids.size();
+    if (d.legs < static_cast<std::size_t>(folds)) {
+        throw InputError(log::cat("wrench.csv: ", d.legs, " of ", blocks.blocks.size(), " cross-validation blocks (",
+                                  flight::to_string(blocks.kind), ") hold wrench samples (", d.on_legs.size(),
+                                  " samples in blocks); cross-validation needs at least ", folds,
+                                  " — do the wrench and pose clocks overlap?"));
+    }
+    return d;
 }
 
 double norm_sq(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a) {

@@ -34,6 +34,11 @@ struct ExplainData {
     std::vector<Wrench6> predict(const physics::PhysicsConfig& c) const;
 };
 
+// The data of a flight's fits: its resimulation, its samples' bookkeeping, its noise floor.
+// Throws dw::InputError when fewer blocks than `folds` hold wrench samples.
+ExplainData explain_data(const Resimulation& sim, const std::vector<SampleInfo>& info, const flight::Blocks& blocks,
+                         int folds, double huber_delta, const physics::PhysicsConfig& physics, const AxisValues& sigma);
+
 // Sample i's squared residual on axis a in noise floors (0 on an axis that carries no measurement).
 double norm_sq(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a);
 // The sum of norm_sq over the samples on legs and every axis.

@@ -1,6 +1,7 @@
 // dw-explain: when a recording and the simulation of the same flight differ, locate where, name
 // the missing physics, model it and show the fit improve. `dw-explain proof` shows it works.
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <sstream>
@@ -9,6 +10,8 @@
 #include "analysis/coverage.hpp"
 #include "analysis/explain.hpp"
 #include "analysis/proof.hpp"
+#include "analysis/session.hpp"
+#include "analysis/session_proof.hpp"
 #include "analysis/unnamed.hpp"
 #include "core/cli.hpp"
 #include "core/errors.hpp"
@@ -116,6 +119,45 @@ struct UnnamedCommand {
     int run(const Progress& progress) { return run_study(options, cases, progress, dw::analysis::run_unnamed); }
 };
 
+// The sizes of the concealed effects, each an option.
+void add_concealed_options(CLI::App* sub, dw::analysis::Concealed& c) {
+    const struct {
+        const char* flag;
+        double& value;
+        dw::Range range;
+        const char* help;
+    } concealed[] = {
+        {"--clock", c.clock_s, kConcealedClockRange, "clock_offset case: the wrench stamped this late [s]"},
+        {"--scale", c.scale, kConcealedScaleRange, "force_scale case: the wrench multiplied by this"},
+        {"--lag", c.lag_s, kConcealedLagRange, "sensor_lag case: first-order lag time constant [s]"},
+        {"--leak", c.leak, kConcealedLeakRange, "cell_crosstalk case: f_n += leak x f_d"},
+    };
+    for (const auto& k : concealed)
+        sub->add_option(k.flag, k.value, k.help)->check(dw::cli::in(k.range))->capture_default_str();
+}
+
+// The options the studies on recorded flights share: --physics, --out, --cases and the concealed sizes.
+template <class Options>
+void add_recorded_study_options(CLI::App* sub, Options& o, std::string& physics, std::string& cases,
+                                const char* out_help) {
+    sub->add_option("--physics", physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
+    sub->add_option("--out", o.out_dir, out_help)->required();
+    sub->add_option("--cases", cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
+    add_concealed_options(sub, o.concealed);
+}
+
+// A study on recorded flights: its physics (its own --physics, else the main one), its cases, its verdict.
+template <class Options, class Run>
+int run_recorded_study(Options& o, const std::string& physics, const std::string& main_physics,
+                       const std::string& cases, const Progress& progress, Run run) {
+    prepare(o, progress);
+    const std::string path = physics.empty() ? main_physics : physics;
+    o.physics = path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
+    o.cases = split_list(cases);
+    const auto r = run(o);
+    return finish(r.table_path, r.pass, kProofVerdict);
+}
+
 // `dw-explain real-proof`: effects concealed in recorded flights.
 struct RealProofCommand {
     CLI::App* sub = nullptr;
@@ -127,31 +169,10 @@ struct RealProofCommand {
             "real-proof",
             "conceal known effects in recorded flights and check each is found on top of the flight's own fit");
         sub->add_option("--flights", options.flights, "flight folders (e.g. dw-import's)")->required();
-        sub->add_option("--physics", physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
-        sub->add_option("--out", options.out_dir, "output folder (reports, proof.md)")->required();
-        sub->add_option("--cases", cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
-        auto& c = options.concealed;
-        const struct {
-            const char* flag;
-            double& value;
-            dw::Range range;
-            const char* help;
-        } concealed[] = {
-            {"--clock", c.clock_s, kConcealedClockRange, "clock_offset case: the wrench stamped this late [s]"},
-            {"--scale", c.scale, kConcealedScaleRange, "force_scale case: the wrench multiplied by this"},
-            {"--lag", c.lag_s, kConcealedLagRange, "sensor_lag case: first-order lag time constant [s]"},
-            {"--leak", c.leak, kConcealedLeakRange, "cell_crosstalk case: f_n += leak x f_d"},
-        };
-        for (const auto& k : concealed)
-            sub->add_option(k.flag, k.value, k.help)->check(dw::cli::in(k.range))->capture_default_str();
+        add_recorded_study_options(sub, options, physics, cases, "output folder (reports, proof.md)");
     }
     int run(const std::string& main_physics, const Progress& progress) {
-        prepare(options, progress);
-        const std::string path = physics.empty() ? main_physics : physics;
-        options.physics = path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
-        options.cases = split_list(cases);
-        const auto r = dw::analysis::run_real_proof(options);
-        return finish(r.table_path, r.pass, kProofVerdict);
+        return run_recorded_study(options, physics, main_physics, cases, progress, dw::analysis::run_real_proof);
     }
 };
 
@@ -220,6 +241,68 @@ struct CalibrateCommand {
     }
 };
 
+// `dw-explain session-proof`: rig effects concealed in every flight of sessions of recorded flights.
+struct SessionProofCommand {
+    CLI::App* sub = nullptr;
+    dw::analysis::SessionProofOptions options;
+    std::string cases, physics;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand("session-proof",
+                                 "group recorded flights into sessions, conceal a rig effect in every flight below "
+                                 "what one flight shows, and check the session finds it on top of its own fit");
+        sub->add_option("--flights", options.flights, "flight folders (those with a neighbour are grouped in order)")
+            ->required();
+        add_recorded_study_options(sub, options, physics, cases, "output folder (session_proof.md)");
+        sub->add_option("--session-size", options.session_size, "flights per session")
+            ->check(dw::cli::in({2, 100}))
+            ->capture_default_str();
+        sub->add_option("--sessions", options.max_sessions, "at most this many sessions (0: every full group)")
+            ->check(dw::cli::in({0, 1000}));
+    }
+    int run(const std::string& main_physics, const Progress& progress) {
+        return run_recorded_study(options, physics, main_physics, cases, progress, dw::analysis::run_session_proof);
+    }
+};
+
+// `dw-explain session`: several flights of one rig explained as one session.
+struct SessionCommand {
+    CLI::App* sub = nullptr;
+    std::vector<std::string> flights;
+    std::string out, effects;
+    bool rig_only = false;
+
+    void add(CLI::App& app) {
+        sub = app.add_subcommand("session",
+                                 "explain several flights of one rig as one session: the rig's effects (clock, sensor "
+                                 "lag, cross-talk, gain) fitted jointly, each flight's own effects on top");
+        sub->add_option("--flights", flights, "flight folders (e.g. dw-import's), two or more")->required();
+        sub->add_option("--out", out, "output folder: session.json, session.md, a report per flight")->required();
+        sub->add_option("--effects", effects, "candidates, comma-separated (default: every effect of the vocabulary)");
+        sub->add_flag("--rig-only", rig_only, "the rig's effects only (no per-flight explanation)");
+    }
+    int run(const std::string& physics_path, const Progress& progress) const {
+        dw::require_output_dir(out, "--out");
+        dw::analysis::SessionOptions o;
+        o.explain.physics =
+            physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
+        if (!effects.empty()) o.explain.candidates = dw::analysis::effects_named(split_list(effects));
+        o.explain.progress = progress;
+        o.explain.stop = dw::Shutdown::instance().token();
+        o.flight_effects = !rig_only;
+        std::vector<dw::flight::Flight> read;  // every input read before any work is done
+        std::vector<std::string> names;
+        for (const auto& path : flights) {
+            read.push_back(dw::flight::read_flight(path));
+            names.push_back(std::filesystem::path(path).filename().string());
+        }
+        const auto r = dw::analysis::explain_session(read, names, o);
+        dw::analysis::write_session_report(read, r, o, out);
+        std::cout << r.verdict << "; report: " << out << "/session.md (" << r.seconds << " s)\n";
+        return 0;
+    }
+};
+
 // The main command: explain one recording.
 struct ExplainCommand {
     std::string physics_path, real, out, effects;
@@ -252,17 +335,8 @@ struct ExplainCommand {
         const auto f = dw::recordings::read_flight_or_recording(real, raw);
         const auto r = dw::analysis::explain(f, o);
         dw::analysis::write_report(f, r, o, out);
-        std::cout << verdict(r) << "; report: " << out << "/report.md (" << r.seconds << " s)\n";
+        std::cout << dw::analysis::verdict_line(r) << "; report: " << out << "/report.md (" << r.seconds << " s)\n";
         return 0;
-    }
-    // "explained by: a, b" / "mismatch found, not explained" / "no mismatch"
-    static std::string verdict(const dw::analysis::ExplainResult& r) {
-        std::string by;
-        for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
-        if (!r.detected) return "no mismatch";
-        if (by.empty()) return "mismatch found, not explained";
-        for (const auto& v : r.families) by += "; " + v.sentence;
-        return "explained by: " + by + (r.unexplained ? " (a residual remains unexplained)" : "");
     }
 };
 
@@ -286,11 +360,17 @@ int run(int argc, char** argv) {
     coverage.add(app);
     CalibrateCommand calibrate;
     calibrate.add(app);
+    SessionCommand session;
+    session.add(app);
+    SessionProofCommand session_proof;
+    session_proof.add(app);
     dw::cli::parse(app, argc, argv);
     dw::log::set_level(dw::log::parse_level(base.log_level));
     const Progress progress = [quiet](const std::string& s) {
         if (!quiet) dw::log::progress(s);
     };
+    if (session_proof.sub->parsed()) return session_proof.run(explain.physics_path, progress);
+    if (session.sub->parsed()) return session.run(explain.physics_path, progress);
     if (real_proof.sub->parsed()) return real_proof.run(explain.physics_path, progress);
     if (coverage.sub->parsed()) return coverage.run(progress);
     if (calibrate.sub->parsed()) return calibrate.run(explain.physics_path, progress);

@@ -1,5 +1,7 @@
 #include "analysis/proof.hpp"
 
+#include "analysis/conceal.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -24,12 +26,6 @@ namespace dw::analysis {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Truth {
-    std::string effect, param;
-    double value;
-    std::size_t index = 0;  // into the effect's parameters
-};
 
 struct Case {
     std::string name, formation, hidden;
@@ -306,82 +302,13 @@ ProofResult run_proof(const ProofOptions& o) {
 
 namespace {
 
-// An effect concealed in a recording, and what the explainer should then fit on top of the
-// flight's own fit: the concealed value combined with what the untouched flight already shows of
-// that effect (its fit on top of its own fit, accepted or not; else the own fit's setting).
-struct Concealment {
-    std::string name, description;
-    std::function<void(flight::Flight&)> conceal;
-    std::function<Truth(const physics::Effects& own, std::optional<double> untouched)> expect;
-};
-
 // The untouched flight's first fit of an effect (on top of its own fit), if it was scored.
 std::optional<double> untouched_value(const ExplainResult& r, const std::string& effect) {
     for (const auto& c : r.candidates)
         if (c.effect.name == effect && !c.values.empty() &&
-            (!c.effect.type->has_axes() || (c.effect.from == 2 && c.effect.to == 0)))
+            (!c.effect.type->has_axes() || physics::AxisPair{c.effect.from, c.effect.to} == kConcealedLeakAxes))
             return c.values.front();
     return std::nullopt;
-}
-
-// The recording-side effects of fx put into a recorded flight through the recording chain: the
-// sensor on the recorded stamps, the calibration, the clock (the recording keeps its own tare: the
-// calibration is linear, so its zero moves with it).
-void conceal(flight::Flight& f, const physics::Effects& fx) {
-    const physics::RecordingChain chain(fx);
-    std::vector<double> t;
-    physics::RecordedWrench w;
-    for (const auto& s : f.wrench) t.push_back(s.t), w.push_back(s.w);
-    chain.sensor(t, w);
-    for (auto& x : w) chain.calibration(x);
-    const double delay = chain.clock_delay_s();
-    for (std::size_t i = 0; i < w.size(); ++i) f.wrench[i] = {t[i] + delay, w[i]};
-}
-
-std::vector<Concealment> concealments(const Concealed& m) {
-    return {
-        {"clock_offset", log::cat("wrench stamped ", m.clock_s, " s late"),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.clock_offset = {true, m.clock_s};
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"clock_offset", "offset_s",
-                          u.value_or(own.clock_offset.enabled ? own.clock_offset.offset_s : 0) + m.clock_s};
-         }},
-        {"force_scale", log::cat("wrench × ", m.scale),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.force_scale = {true, m.scale};
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"force_scale", "scale",
-                          u.value_or(own.force_scale.enabled ? own.force_scale.scale : 1) * m.scale};
-         }},
-        {"sensor_lag", log::cat("first-order lag, tau ", m.lag_s, " s"),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.sensor_lag = {true, m.lag_s};
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"sensor_lag", "tau_s",
-                          u.value_or(own.sensor_lag.enabled ? own.sensor_lag.tau_s : 0) + m.lag_s};
-         }},
-        {"cell_crosstalk", log::cat("f_n += ", m.leak, " f_d"),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.cell_crosstalk = {true, 2, 0, m.leak};  // f_d into f_n
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             const auto& c = own.cell_crosstalk;
-             return Truth{"cell_crosstalk", "coefficient",
-                          u.value_or(c.enabled && c.from == 2 && c.to == 0 ? c.coefficient : 0) + m.leak};
-         }},
-    };
 }
 
 }  // namespace
@@ -410,8 +337,7 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     const auto all = concealments(o.concealed);
     for (const auto& n : o.cases)
         if (std::none_of(all.begin(), all.end(), [&](const Concealment& c) { return c.name == n; }))
-            throw InputError(log::cat("--cases: unknown case '", n,
-                                      "' (expected clock_offset, force_scale, sensor_lag or cell_crosstalk)"));
+            throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", kConcealmentNames, ")"));
     if (o.flights.empty()) throw InputError("--flights: no flight to prove on");
     std::vector<flight::Flight> flights;  // every input read before any output is made
     for (const auto& path : o.flights) flights.push_back(flight::read_flight(path));

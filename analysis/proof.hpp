@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/conceal.hpp"
 #include "physics/config.hpp"
 #include "physics/trajectory.hpp"
 
@@ -62,17 +63,6 @@ void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& form
 // and explained with that own fit as the physics: each must be found on top of it, its parameter
 // (the own fit's combined with the concealed value) inside the interval, nothing else claimed; and
 // the untouched flight explained on top of its own fit must claim nothing new.
-// How much of each effect the real-data proof conceals (values not round; `dw-explain real-proof`
-// --clock, --scale, --lag, --leak probe what a flight can show). The scale and the lag are where
-// the shared flights can show them: a smaller lag is taken for a longer delay on the random walk,
-// a smaller scale for the flight's own separation-dependent misfit (docs/REAL.md, the limits).
-struct Concealed {
-    double clock_s = 0.083;  // the wrench stamped this late
-    double scale = 1.61;     // the wrench multiplied by this
-    double lag_s = 0.151;    // the wrench seen through a first-order lag of this time constant
-    double leak = 0.113;     // f_n += leak × f_d
-};
-
 struct RealProofOptions {
     std::vector<std::string> flights;  // flight folders
     physics::PhysicsConfig physics;    // what the untouched flights are first explained with

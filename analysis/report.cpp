@@ -530,6 +530,15 @@ std::optional<std::string> non_finite(const json& j, const std::string& path) {
 }
 }  // namespace
 
+std::string verdict_line(const ExplainResult& r) {
+    std::string by;
+    for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
+    if (!r.detected) return "no mismatch";
+    if (by.empty()) return "mismatch found, not explained";
+    for (const auto& v : r.families) by += "; " + v.sentence;
+    return "explained by: " + by + (r.unexplained ? " (a residual remains unexplained)" : "");
+}
+
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& out) {
     StagedFolder staged(out);  // the report and its figures appear together, or not at all
     const std::string& dir = staged.path();

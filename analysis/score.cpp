@@ -12,17 +12,23 @@ namespace dw::analysis {
 
 using flight::kAxes;
 
-namespace {
+namespace {  // Whether the effect at its neutral (starting) values predicts what the model without it does — its
+// start is then its absence (a clock offset of 0, a scale of 1), and an interval that holds it
+// cannot tell the effect from no effect. (A flow effect may start at a typical value instead: a wake
+// transport at the jet law's delay.)
+constexpr double kAbsenceTolerance = 1e-9;  // noise floors
+bool start_is_absence(Fit& fit, const Baseline& b, const Effect& e) {
+    const auto& p = fit.predict(e.neutral());
+    const auto& d = fit.data();
+    for (auto i : d.on_legs)
+        for (std::size_t a = 0; a < 6; ++a)
+            if (d.sim.measured_axes()[a] && std::abs(p[i][a] - b.pred[i][a]) > kAbsenceTolerance * d.sigma[a])
+                return false;
+    return true;
+}
 
-struct Scores {
-    std::map<int, AxisValues> before, after;  // per piece: normalised MSE sums per axis
-    std::map<int, std::size_t> n;
-    std::map<int, double> change;  // per piece: how much the candidate changes the prediction (normalised, summed)
-};
+}  // namespace
 
-// A parameter fitted to a bound that is not its neutral value has not been identified: the effect
-// is standing in for something else.
-constexpr double kPinnedFraction = 1e-4;  // of the parameter's range
 bool pinned(const Effect& e, const std::vector<double>& values) {
     for (std::size_t k = 0; k < values.size(); ++k) {
         const auto& p = e.params[k];
@@ -32,6 +38,8 @@ bool pinned(const Effect& e, const std::vector<double>& values) {
     }
     return false;
 }
+
+namespace {
 
 // A candidate that passes the whole-flight test and removes enough held-out error, but whose
 // held-out evidence sits in so few pieces (about one per pass of a neighbour) that the sum over
@@ -44,33 +52,11 @@ bool too_few_pieces(const CandidateResult& c, const ExplainOptions& o) {
 }
 
 // Paired comparison over held-out legs.
-void judge(CandidateResult& c, const Scores& s, const AxisValues& sigma, const ExplainOptions& o, double dbic) {
-    // The axis judged: the most significant among those whose held-out error falls by at least
-    // min_gain (else the most significant of all, for the note).
-    double best_t = -INFINITY;
-    bool best_gains = false;
-    for (std::size_t a = 0; a < 6; ++a) {
-        std::vector<double> d;
-        double before = 0, after = 0;
-        for (const auto& [leg, b] : s.before) {
-            const double nl = static_cast<double>(s.n.at(leg));
-            if (s.change.at(leg) / nl < kEvidenceChange * kEvidenceChange) continue;
-            d.push_back((b[a] - s.after.at(leg)[a]) / nl);
-            before += b[a];
-            after += s.after.at(leg)[a];
-        }
-        const double t = paired_z(d);
-        const double gain = before > 0 ? (before - after) / before : 0;
-        const bool gains = gain >= o.min_gain;
-        c.axis_t[a] = t, c.axis_gain[a] = gain;
-        if ((gains && !best_gains) || (gains == best_gains && t > best_t)) {
-            best_t = t;
-            best_gains = gains;
-            c.best_axis = static_cast<int>(a);
-            c.gain = gain;
-            c.evidence_pieces = effective_count(d);
-        }
-    }
+void judge(CandidateResult& c, const PieceScores& s, const AxisValues& sigma, const ExplainOptions& o, double dbic) {
+    const HeldOut h = judge_pieces(s, o.min_gain);
+    c.axis_t = h.axis_t, c.axis_gain = h.axis_gain;
+    c.best_axis = h.best_axis, c.gain = h.gain, c.evidence_pieces = h.evidence_pieces;
+    const double best_t = h.t;
     double total_n = 0;
     for (const auto& [leg, k] : s.n) total_n += static_cast<double>(k);
     for (std::size_t a = 0; a < 6; ++a) {
@@ -114,17 +100,7 @@ std::pair<double, double> regress_residual(const ExplainData& d, const Baseline&
 
 // cell_crosstalk: the axis pair whose residual the model's other axis explains best.
 Effect with_crosstalk_axes(Effect e, const ExplainData& d, const Baseline& b) {
-    double best = -1;
-    const auto& measured = d.sim.measured_axes();
-    for (int from = 0; from < 6; ++from)
-        for (int to = 0; to < 6; ++to) {
-            if (from == to || !measured[static_cast<std::size_t>(from)] || !measured[static_cast<std::size_t>(to)])
-                continue;
-            const double sigma = d.sigma[static_cast<std::size_t>(to)];
-            const double explained = regress_residual(d, b, from, to).second / (sigma * sigma);
-            if (explained > best) best = explained, e.from = from, e.to = to;
-        }
-    return e;
+    return with_crosstalk_axes(std::move(e), {{&d, &b}});
 }
 
 // The base model's own errors can look like a leak: the same regression on the axes of the same
@@ -141,24 +117,16 @@ double crosstalk_discrepancy(const ExplainData& d, const Baseline& b, const Effe
 
 // Each fold fitted on its training legs (warm-started at `start`) and scored per piece of its
 // held-out legs; the fold's values are appended to `fold_values` (for the jackknife).
-Scores cross_validate(const ExplainData& d, const Baseline& b, const Effect& e, const std::vector<double>& start,
-                      const Folds& folds, std::vector<std::vector<double>>& fold_values, std::stop_token stop) {
-    Scores s;
+PieceScores cross_validate(const ExplainData& d, const Baseline& b, const Effect& e, const std::vector<double>& start,
+                           const Folds& folds, std::vector<std::vector<double>>& fold_values, std::stop_token stop) {
+    PieceScores s;
     for (std::size_t k = 0; k < folds.train.size(); ++k) {
         throw_if_stopped(stop, "the fits");
         Fit fk(d, b.physics, e);
         auto [vk, sek] = fk.solve(start, folds.train[k], false, b.factor);
         fold_values.push_back(vk);
         const auto& p = fk.predict(vk);
-        for (auto i : folds.test[k]) {
-            const int piece = piece_of(d, folds, i);
-            ++s.n[piece];
-            for (std::size_t a = 0; a < 6; ++a) {
-                s.before[piece][a] += norm_sq(d, b.pred, i, a);
-                s.after[piece][a] += norm_sq(d, p, i, a);
-                if (d.sim.measured_axes()[a]) s.change[piece] += std::pow((p[i][a] - b.pred[i][a]) / d.sigma[a], 2);
-            }
-        }
+        for (auto i : folds.test[k]) s.add(piece_of(d, folds, i), d, b.pred, p, i);
     }
     return s;
 }
@@ -183,6 +151,65 @@ void set_intervals(CandidateResult& c, const ExplainData& d, const Baseline& b, 
 }
 
 }  // namespace
+
+Effect with_crosstalk_axes(Effect e, const std::vector<std::pair<const ExplainData*, const Baseline*>>& flights) {
+    if (e.axes_given) return e;
+    double best = -1;
+    for (int from = 0; from < 6; ++from)
+        for (int to = 0; to < 6; ++to) {
+            double explained = 0;
+            bool measured = from != to;
+            for (const auto& [d, b] : flights) {
+                const auto& m = d->sim.measured_axes();
+                measured = measured && m[static_cast<std::size_t>(from)] && m[static_cast<std::size_t>(to)];
+                const double sigma = d->sigma[static_cast<std::size_t>(to)];
+                if (measured) explained += regress_residual(*d, *b, from, to).second / (sigma * sigma);
+            }
+            if (measured && explained > best) best = explained, e.from = from, e.to = to;
+        }
+    return e;
+}
+
+void PieceScores::add(long piece, const ExplainData& d, const std::vector<Wrench6>& before_pred,
+                      const std::vector<Wrench6>& after_pred, std::size_t i) {
+    ++n[piece];
+    for (std::size_t a = 0; a < 6; ++a) {
+        before[piece][a] += norm_sq(d, before_pred, i, a);
+        after[piece][a] += norm_sq(d, after_pred, i, a);
+        if (d.sim.measured_axes()[a]) change[piece] += std::pow((after_pred[i][a] - before_pred[i][a]) / d.sigma[a], 2);
+    }
+}
+
+HeldOut judge_pieces(const PieceScores& s, double min_gain) {
+    // The axis judged: the most significant among those whose held-out error falls by at least
+    // min_gain (else the most significant of all, for the note).
+    HeldOut h;
+    h.t = -INFINITY;
+    bool best_gains = false;
+    for (std::size_t a = 0; a < 6; ++a) {
+        std::vector<double> d;
+        double before = 0, after = 0;
+        for (const auto& [piece, b] : s.before) {
+            const double nl = static_cast<double>(s.n.at(piece));
+            if (s.change.at(piece) / nl < kEvidenceChange * kEvidenceChange) continue;
+            d.push_back((b[a] - s.after.at(piece)[a]) / nl);
+            before += b[a];
+            after += s.after.at(piece)[a];
+        }
+        const double t = paired_z(d);
+        const double gain = before > 0 ? (before - after) / before : 0;
+        const bool gains = gain >= min_gain;
+        h.axis_t[a] = t, h.axis_gain[a] = gain;
+        if ((gains && !best_gains) || (gains == best_gains && t > h.t)) {
+            h.t = t;
+            best_gains = gains;
+            h.best_axis = static_cast<int>(a);
+            h.gain = gain;
+            h.evidence_pieces = effective_count(d);
+        }
+    }
+    return h;
+}
 
 int piece_of(const ExplainData& d, const Folds& folds, std::size_t i) {
     const int leg = d.info[i].leg;
@@ -226,9 +253,14 @@ CandidateResult score(const ExplainData& d, const Baseline& b, const Folds& fold
         return c;
     }
     std::vector<std::vector<double>> fold_values;
-    const Scores s = cross_validate(d, b, c.effect, values, folds, fold_values, o.stop);
+    const PieceScores s = cross_validate(d, b, c.effect, values, folds, fold_values, o.stop);
     set_intervals(c, d, b, fit, se, fold_values);
     judge(c, s, d.sigma, o, dbic);
+    if (c.accepted && c.effect.holds_neutral(c.lo, c.hi) && start_is_absence(fit, b, c.effect)) {
+        c.accepted = false;
+        c.note = c.note.substr(0, c.note.rfind(" — accepted")) +
+                 " — its 95 % interval holds its neutral value (the effect absent): not accepted";
+    }
     for (const auto& [piece, err] : s.after) c.heldout_pieces[piece] = std::accumulate(err.begin(), err.end(), 0.0);
     return c;
 }

@@ -27,6 +27,38 @@ int piece_of(const ExplainData& d, const Folds& folds, std::size_t i);
 // left out of the signed-rank test (it would only dilute it).
 inline constexpr double kEvidenceChange = 0.1;
 
+// Per held-out piece (any key: a flight's piece_of, or a session's flight and piece): the
+// normalised squared errors per axis before and after a change of the model, the samples, and how
+// much the change moves the prediction (normalised, summed).
+struct PieceScores {
+    std::map<long, AxisValues> before, after;
+    std::map<long, std::size_t> n;
+    std::map<long, double> change;
+    // Sample i of d, predicted as before_pred and after_pred, into piece `piece`.
+    void add(long piece, const ExplainData& d, const std::vector<Wrench6>& before_pred,
+             const std::vector<Wrench6>& after_pred, std::size_t i);
+};
+
+// The paired test over the pieces, per axis: its z (paired_z over the pieces where the change
+// moves the prediction) and the fraction of its error removed; the axis judged is the most
+// significant of those that gain at least min_gain (else the most significant).
+struct HeldOut {
+    AxisValues axis_t{}, axis_gain{};
+    int best_axis = 2;
+    double t = 0, gain = 0, evidence_pieces = 0;
+};
+HeldOut judge_pieces(const PieceScores& s, double min_gain);
+
+// A parameter fitted to a bound that is not its neutral value has not been identified: the effect
+// is standing in for something else.
+inline constexpr double kPinnedFraction = 1e-4;  // of the parameter's range
+bool pinned(const Effect& e, const std::vector<double>& values);
+
+// cell_crosstalk's axes over these flights (each with the model it is scored against): the pair
+// whose residual, in noise floors and summed over the flights, the other measured axis explains
+// best by regression.
+Effect with_crosstalk_axes(Effect e, const std::vector<std::pair<const ExplainData*, const Baseline*>>& flights);
+
 // Candidate e scored against model b in forward-selection round `round`.
 CandidateResult score(const ExplainData& d, const Baseline& b, const Folds& folds, Effect e, int round,
                       const ExplainOptions& o);

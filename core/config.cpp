@@ -159,7 +159,7 @@ void fail_at_node(const std::string& file, const YAML::Node& node, const std::st
 }
 
 std::string unknown_key_problem(const std::string& key, const std::set<std::string>& known) {
-    return log::cat("unknown key '", quote_bytes(key, kQuotedBytes),
+    return log::cat("unknown key '", quote_bytes(key, kRepeatedKeyBytes),
                     "' (known: ", choices(key, {known.begin(), known.end()}, ", "), ")");
 }
 

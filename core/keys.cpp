@@ -85,9 +85,10 @@ public:
             const std::string key = kv.first.Scalar();
             if (used_.count(key)) continue;
             fail(kv.first, key,
-                 unknown_hint.empty() ? unknown_key_problem(key, used_)
-                                      : log::cat("unknown key '", quote_bytes(key, kQuotedBytes), "': ", unknown_hint,
-                                                 " (expected ", choices(key, {used_.begin(), used_.end()}), ")"));
+                 unknown_hint.empty()
+                     ? unknown_key_problem(key, used_)
+                     : log::cat("unknown key '", quote_bytes(key, kRepeatedKeyBytes), "': ", unknown_hint,
+                                " (expected ", choices(key, {used_.begin(), used_.end()}), ")"));
         }
     }
 

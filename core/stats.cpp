@@ -86,6 +86,12 @@ double normal_upper(double p) {
     return 0.5 * (lo + hi);
 }
 
+double chi2_upper(double p, int dof) {
+    if (dof < 1) return 0;
+    const double k = dof, v = 2.0 / (9.0 * k);
+    return k * std::pow(std::max(0.0, 1 - v + normal_upper(p) * std::sqrt(v)), 3);
+}
+
 std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates) {
     const double G = static_cast<double>(replicates.size());
     std::vector<double> out;

@@ -10,6 +10,9 @@ namespace dw {
 
 // At most this many characters of input (escapes included) are quoted in an error.
 inline constexpr std::size_t kQuotedBytes = 40;
+// An unknown key quoted again in its problem, after its path (up to kQuotedBytes) already names it:
+// at most this many, so that a long hostile key is not said twice in full.
+inline constexpr std::size_t kRepeatedKeyBytes = 16;
 
 // `text` escaped for one line (control bytes, quotes and non-ASCII as \xHH), cut to at most n
 // characters with "..." after when longer.

@@ -157,6 +157,14 @@ public:
     std::vector<double> neutral() const;
 };
 
+// Whether an effect belongs to the rig's measurement chain — it acts after the air has reached the
+// sufferer (the sensor's response, the calibration, the stamps' clock), so it is the same hardware
+// on every flight a lab flies with it, and a session of flights shares one value of it. The air's,
+// the sufferer's and the positions' effects depend on where and how each flight flew.
+inline bool of_the_rig(const EffectType& t) {
+    return t.stage() == Stage::sensor || t.stage() == Stage::calibration || t.stage() == Stage::clock;
+}
+
 // Every registered effect, built-ins first in the vocabulary's order, then those of the effect
 // modules (below). Throws dw::InputError naming a module that cannot be loaded.
 const std::vector<const EffectType*>& effect_types();

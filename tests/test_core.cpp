@@ -109,6 +109,15 @@ TEST(Stats, StudentTQuantilesMatchTheTables) {
     EXPECT_NEAR(dw::normal_upper(0.5), 0.0, 1e-9);
 }
 
+// The chi-square upper quantiles a session's one-value test uses, against published tables (1 %).
+TEST(Stats, ChiSquareQuantilesMatchTheTables) {
+    EXPECT_NEAR(dw::chi2_upper(0.01, 2), 9.210, 0.1);
+    EXPECT_NEAR(dw::chi2_upper(0.01, 4), 13.277, 0.1);
+    EXPECT_NEAR(dw::chi2_upper(0.01, 9), 21.666, 0.1);
+    EXPECT_NEAR(dw::chi2_upper(0.05, 19), 30.144, 0.1);
+    EXPECT_EQ(dw::chi2_upper(0.01, 0), 0.0);
+}
+
 // The robust summaries the explainer, the calibration and the importer share (one rule each).
 TEST(Stats, MedianAndTheNoiseOfSuccessiveDifferences) {
     EXPECT_DOUBLE_EQ(dw::median({3, 1, 2}), 2.0);

@@ -6,10 +6,13 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <random>
 #include <nlohmann/json.hpp>
 
 #include "analysis/explain.hpp"
 #include "analysis/proof.hpp"
+#include "analysis/session.hpp"
+#include "analysis/session_proof.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "flight/blocks.hpp"
@@ -220,6 +223,11 @@ TEST(RealFlights, TheExplainerSaysWhatEachSharedFlightShows) {
         for (const auto& c : r.candidates)
             if (c.effect.name == "force_scale" && c.round == 1 && t.name != "swap_sl_large_under_small")
                 EXPECT_LT(c.values[0], 0.8);
+        // Issue 71: no effect is accepted whose interval holds its neutral value where that value is
+        // its absence (the rig's effects: a clock of 0, a scale of 1, no lag, no leak).
+        for (const auto& a : r.accepted)
+            if (dw::physics::of_the_rig(*a.effect.type))
+                EXPECT_FALSE(a.effect.holds_neutral(a.lo, a.hi)) << a.effect.name << " " << a.note;
         const std::string out = d.file(t.name + "_report");
         dw::analysis::write_report(f, r, o, out);
         for (const char* file :
@@ -424,4 +432,124 @@ TEST(RealFlights, OnUnseenTrialsTheModelsOnThePhysicsBeatTheOnboardNetwork) {
     EXPECT_NE(md.find("one whole flight of each vehicle mix flown twice or more validates"), std::string::npos) << md;
     EXPECT_NE(md.find("physics+deep_sets: f_n "), std::string::npos) << "the shrink factors are reported";
     EXPECT_NE(md.find("Deep Sets starts from naive_linear (validation f_d RMSE"), std::string::npos) << md;
+}
+
+// ---- Sessions (issue 71): several flights of one rig explained as one.
+
+namespace {
+
+// A synthetic recording of crossing(passes): the wrench the physics predicts with the stand's clock
+// `clock_s` late, plus white noise of 3 mN.
+Flight clocked_crossing(int passes, double clock_s, std::uint64_t seed) {
+    Flight f = crossing(passes);
+    dw::physics::PhysicsConfig hidden;
+    dw::physics::effect_type(dw::physics::kClockOffsetEffect).set(hidden.effects, {clock_s});
+    const dw::analysis::Resimulation r(f, {});
+    const auto w = r.recorded(hidden);
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> noise(0, 0.003);
+    for (std::size_t i = 0; i < f.wrench.size(); ++i)
+        for (std::size_t a = 0; a < 3; ++a) f.wrench[i].w[a] = w[i][a] + noise(rng);
+    return f;
+}
+
+dw::analysis::SessionResult session_of(const std::vector<double>& clocks) {
+    std::vector<Flight> flights;
+    std::vector<std::string> names;
+    for (std::size_t k = 0; k < clocks.size(); ++k) {
+        flights.push_back(clocked_crossing(12 + static_cast<int>(k), clocks[k], 7 + k));
+        names.push_back("flight_" + std::to_string(k));
+    }
+    dw::analysis::SessionOptions o;
+    o.flight_effects = false;
+    return dw::analysis::explain_session(flights, names, o);
+}
+
+// The message of the dw::InputError that f throws ("" when it throws none).
+template <class F>
+std::string input_error_of(F f) {
+    try {
+        f();
+    } catch (const dw::InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+const dw::analysis::RigCandidate* first_round(const dw::analysis::SessionResult& r, const std::string& effect) {
+    for (const auto& c : r.candidates)
+        if (c.effect.name == effect && c.round == 1) return &c;
+    return nullptr;
+}
+
+}  // namespace
+
+// One clock offset on every flight of a session: fitted jointly, its interval holds the truth, it is
+// one value (Cochran's Q under its limit) and it is accepted — or named with its family. The same
+// rig with a clock that differs from flight to flight: refused as not one value, and said so.
+TEST(Session, ARigEffectSharedByEveryFlightIsFoundJointlyAndOneThatDiffersIsRefused) {
+    const double truth = 0.04;
+    const auto same = session_of({truth, truth, truth, truth});
+    const auto* clock = first_round(same, "clock_offset");
+    ASSERT_NE(clock, nullptr);
+    EXPECT_TRUE(clock->one_value) << clock->note;
+    EXPECT_LE(clock->lo, truth);
+    EXPECT_GE(clock->hi, truth);
+    ASSERT_FALSE(same.accepted.empty()) << same.verdict;
+    const auto& a = same.accepted.front();
+    const bool named = a.effect.name == "clock_offset" ||
+                       std::find(a.family_alike.begin(), a.family_alike.end(), "clock_offset") != a.family_alike.end();
+    EXPECT_TRUE(named) << same.verdict;
+    EXPECT_EQ(clock->per_flight.size(), 4u);
+
+    const auto differ = session_of({0.0, 0.08, 0.16, 0.24});
+    const auto* moved = first_round(differ, "clock_offset");
+    ASSERT_NE(moved, nullptr);
+    EXPECT_FALSE(moved->one_value) << moved->note;
+    EXPECT_FALSE(moved->accepted);
+    for (const auto& c : differ.accepted) EXPECT_NE(c.effect.name, "clock_offset") << differ.verdict;
+    EXPECT_NE(moved->note.find("not one value for the session"), std::string::npos) << moved->note;
+}
+
+// A session is two flights or more, each with a neighbour: else one clear error naming the flight.
+TEST(Session, TooFewFlightsOrAFlightWithoutNeighbourIsOneClearError) {
+    dw::analysis::SessionOptions o;
+    const std::vector<Flight> one{clocked_crossing(12, 0, 1)};
+    EXPECT_NE(input_error_of([&] { dw::analysis::explain_session(one, {"a"}, o); }).find("2 flights or more"),
+              std::string::npos);
+    auto alone = crossing(12);
+    alone.meta.neighbours.clear();
+    alone.meta.vehicles.erase("n");
+    const std::vector<Flight> two{clocked_crossing(12, 0, 1), alone};
+    EXPECT_NE(input_error_of([&] {
+                  dw::analysis::explain_session(two, {"a", "b"}, o);
+              }).find("b: meta.json"),
+              std::string::npos);
+}
+
+// The Done-when at small size: one session of five shared trials, a timing effect concealed in
+// every flight at a size one flight alone rarely shows (kSessionConcealed): on top of the
+// session's own fit it is recovered (accepted with the expected value inside its interval) or named
+// with its family, never as the other member alone, and the untouched session claims nothing new.
+// docs/REAL.md has the full table (every session of the collection, every rig effect).
+TEST(RealSession, ATimingEffectConcealedInEveryFlightIsFoundByTheSession) {
+    REQUIRE_SHARED_DATA();
+    dw::test::TempDir d;
+    dw::analysis::SessionProofOptions o;
+    for (const auto& t : dw::test::shared_trials())
+        if (t.name != "randomwalk_cf51") o.flights.push_back(import_trial(t, d));
+    ASSERT_EQ(o.flights.size(), 5u);
+    o.physics = dw::physics::load_physics(dw::test::crazyflie_physics());
+    o.out_dir = d.file("proof");
+    o.cases = {"clock_offset", "sensor_lag"};
+    const auto r = dw::analysis::run_session_proof(o);
+    const std::string table = dw::read_file(r.table_path);
+    ASSERT_EQ(r.rows.size(), 3u) << table;
+    EXPECT_EQ(r.clean, 1u) << table;
+    for (const auto& row : r.rows) {
+        SCOPED_TRACE(row.concealed);
+        EXPECT_TRUE(row.pass) << row.why << "\n" << table;
+        if (!row.untouched) EXPECT_LT(row.alone, row.flights) << "not below what one flight shows";
+    }
+    EXPECT_TRUE(fs::exists(o.out_dir + "/session_1/clock_offset/session.json"));
 }

@@ -1,0 +1,56 @@
+#pragma once
+// The session's proof on recorded flights (another lab's: their physics is not the truth there).
+// The flights are grouped into sessions; each session is first explained as it is (its own fit of
+// the rig), then again on top of that fit — where it must claim nothing new. Then each effect of
+// the rig is concealed in every flight of the session at a size one flight alone rarely shows
+// (each row says on how many flights the single-flight explainer accepts it), and the session is
+// explained on top of its own fit: the effect must be accepted with the expected value (the own
+// fit's combined with the concealed one) inside its interval — or, for an effect of a family, the
+// family named with it — and nothing else claimed.
+#include <functional>
+#include <stop_token>
+#include <string>
+#include <vector>
+
+#include "analysis/conceal.hpp"
+#include "physics/config.hpp"
+
+namespace dw::analysis {
+
+// How much of each effect the session proof conceals: below what one of the shared flights shows
+// alone (docs/REAL.md, "Sessions"; `dw-explain session-proof --clock ...` probes other sizes).
+inline constexpr Concealed kSessionConcealed{0.031, 1.31, 0.043, 0.09};
+inline constexpr std::size_t kDefaultSessionSize = 5;
+// The share of concealed sessions in which the effect must be recovered.
+inline constexpr double kSessionRecoveryTarget = 0.9;
+
+struct SessionProofOptions {
+    std::vector<std::string> flights;  // flight folders; those with a neighbour are grouped in order
+    physics::PhysicsConfig physics;
+    std::string out_dir;
+    std::size_t session_size = kDefaultSessionSize;
+    std::size_t max_sessions = 0;    // 0: every full group
+    std::vector<std::string> cases;  // kConcealmentNames (empty: all)
+    Concealed concealed = kSessionConcealed;
+    std::stop_token stop;
+    std::function<void(const std::string&)> progress;
+};
+
+struct SessionProofRow {
+    std::string session, concealed, expected, found, fitted;
+    std::size_t alone = 0, flights = 0;  // flights on which one flight alone accepts the concealed effect
+    bool untouched = false, pass = false, family_named = false;
+    std::string why;
+};
+
+struct SessionProofResult {
+    std::vector<SessionProofRow> rows;
+    std::size_t recovered = 0, concealed = 0, clean = 0, untouched = 0;
+    bool pass = false;
+    std::string table_path;
+};
+
+inline constexpr const char* kSessionProofTableFile = "session_proof.md";
+SessionProofResult run_session_proof(const SessionProofOptions& o);
+
+}  // namespace dw::analysis
