@@ -108,6 +108,14 @@ std::string trial_key(const flight::Flight& f, const std::string& dir) {
 
 }  // namespace
 
+// The noise model a residual is standardised by (predictor/intervals.hpp's): per flight its floor,
+// and the jets' turbulence, which grows with the push p: sigma² = floor² + (2 I p)².
+struct NoiseScale {
+    std::vector<double> floor;  // per flight (Calibration::flights())
+    double intensity = 0;
+    double sigma(std::size_t flight, double p) const { return std::hypot(floor[flight], 2 * intensity * p); }
+};
+
 // The flights, their trials and classes, and the fit's parameters.
 class Calibration {
 public:
@@ -144,8 +152,10 @@ public:
     // Whether parameter i acts on flight f (its class flies there in its role).
     bool acts_on(std::size_t i, std::size_t f) const { return roles_[f].count({params_[i].cls, knob(i).producer}) > 0; }
 
-    // f_d residuals (recorded − predicted) on the fit rows of the flights in `use`, in order.
-    Eigen::VectorXd residuals(const std::vector<double>& x, const std::vector<std::size_t>& use, bool fit_rows) const {
+    // f_d residuals (recorded − predicted) on the fit rows of the flights in `use`, in order; with a
+    // noise model, each over its standard deviation there.
+    Eigen::VectorXd residuals(const std::vector<double>& x, const std::vector<std::size_t>& use, bool fit_rows,
+                              const NoiseScale* noise = nullptr) const {
         const PhysicsConfig c = config_of(x);
         std::vector<std::vector<double>> parts(use.size());
         parallel_for(use.size(), o_.jobs, [&](std::size_t k) {
@@ -158,6 +168,10 @@ public:
             if (fd.sim->flying()) {  // its residual's own zero: a nuisance of each flight
                 const double bias = std::accumulate(part.begin(), part.end(), 0.0) / static_cast<double>(part.size());
                 for (double& v : part) v -= bias;
+            }
+            if (noise) {
+                const auto& rows = fit_rows ? fd.fit_rows : fd.rows;
+                for (std::size_t j = 0; j < part.size(); ++j) part[j] /= noise->sigma(use[k], pred[rows[j]][kFdAxis]);
             }
         });
         std::size_t n = 0;
@@ -395,6 +409,27 @@ void set_noise_floors(PhysicsConfig& c, const Calibration& cal) {
     }
 }
 
+// Each flight's noise floor: its own f_d spread where nobody is near when it has kMinFarSamples such
+// samples, else its sufferer class's (set_noise_floors, over every flight of the class), else — no
+// flight of its class is ever alone — the jitter of its whole recording (successive differences, as
+// the predictor's intervals do: it leaves out the residual's slow error).
+std::vector<double> flight_floors(const Calibration& cal, const PhysicsConfig& base) {
+    PhysicsConfig c = base;
+    set_noise_floors(c, cal);
+    std::vector<double> out;
+    for (const auto& f : cal.flights()) {
+        double floor = f.far_f_d.size() >= physics::kMinFarSamples ? standard_deviation(f.far_f_d)
+                                                                   : c.classes[f.sufferer_class].noise_floor_n;
+        if (!(floor > 0)) {
+            std::vector<double> f_d;
+            for (const auto& w : f.sim->measured()) f_d.push_back(w[kFdAxis]);
+            floor = sd_from_differences(f_d);
+        }
+        out.push_back(floor);
+    }
+    return out;
+}
+
 // The trial's flights explained against the calibration that left it out (reports under folds/<trial>/).
 void explain_heldout(TrialError& e, const PhysicsConfig& fold, const CalibrateOptions& o) {
     const fs::path dir = fs::path(o.out_dir) / "folds" / e.trial;
@@ -457,6 +492,7 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     const auto pairings = samples_by_pairing(cal, x0, x, o);
     R.turbulence_intensity = turbulence_intensity(pairings);
     std::vector<std::vector<double>> replicates;
+    const auto floors = flight_floors(cal, cal.config_of(x));
     for (std::size_t t = 0; t < cal.trials().size(); ++t) {
         const auto& trial = cal.trials()[t];
         const auto others = flights_except(cal, t);
@@ -472,6 +508,8 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         e.rmse_all = rmse(cal.residuals(x, own, false));
         e.rmse_heldout = rmse(cal.residuals(xt, own, false));
         e.turbulence_intensity = fold_turbulence_intensity(cal, xt, others, o);
+        const NoiseScale noise{floors, e.turbulence_intensity};
+        e.z_rms_heldout = rmse(cal.residuals(xt, own, false, &noise));
         if (o.explain_heldout)
             explain_heldout(
                 e, with_provenance(cal.config_of(xt), o.physics, e.turbulence_intensity, "without " + trial.name), in);

@@ -52,12 +52,19 @@ struct TrialError {
     // it leaves on the other trials (0: the spread does not grow there, and the fold keeps the base's
     // turbulence): what explain_heldout's explanation counts as noise where a jet pushes.
     double turbulence_intensity = 0;
+    // The held-out residual standardised by the noise model (each sample over sqrt(floor² + (2 I p)²):
+    // its flight's noise floor, this fold's turbulence intensity, the push predicted), its RMS: 1 when
+    // the physics and the noise model hold; kStandardisedBand says how near counts.
+    double z_rms_heldout = 0;
     // With explain_heldout, per flight: the explainer's held-out f_d error after its fit over its
     // noise floor, and what it accepted.
     std::vector<double> explained_ratio;
     std::vector<double> discrepancy_ratio;  // ... and with the learnt discrepancy (analysis/discrepancy.hpp)
     std::vector<std::vector<std::string>> explained_by;
 };
+
+// A trial whose standardised held-out RMS lies within this band is predicted to its noise (issue 71).
+inline constexpr Range kStandardisedBand{0.8, 1.25};
 
 // A flight with nobody near the sufferer (a vehicle flying alone): no downwash to calibrate on, so
 // it takes no part in the fit, but the residual's own errors show there. Its f_d mean and RMS, and

@@ -110,6 +110,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
                           {"rmse_f_d_all_trials_n", t.rmse_all},
                           {"rmse_f_d_held_out_n", t.rmse_heldout},
                           {"turbulence_intensity_held_out", t.turbulence_intensity},
+                          {"standardised_rms_held_out", t.z_rms_heldout},
                           {"explained_f_d_over_noise_floor", t.explained_ratio},
                           {"with_discrepancy_f_d_over_noise_floor", t.discrepancy_ratio},
                           {"explained_by", t.explained_by}});
@@ -190,18 +191,25 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const std::vec
                  "f_d error after its effects, in noise floors, then with its learnt discrepancy (what the effects "
                  "leave, as a function of the geometry), and what it accepted."
                : "")
-       << "\n\n| trial | pairing | samples | uncalibrated | calibrated on all | held out |"
+       << "\n\n| trial | pairing | samples | uncalibrated | calibrated on all | held out | held out, standardised "
+          "RMS |"
        << (explained ? " after the effects / noise floor | with the discrepancy | explained by "
-                       "|\n|---|---|---|---|---|---|---|---|---|\n"
-                     : "\n|---|---|---|---|---|---|\n");
+                       "|\n|---|---|---|---|---|---|---|---|---|---|\n"
+                     : "\n|---|---|---|---|---|---|---|\n");
     std::vector<double> before, heldout, ratios, with;
     for (const auto& t : r.trials) {
         md << "| " << t.trial << " | " << t.pairing << " | " << t.samples << " | " << fixed(t.rmse_before, 4) << " | "
-           << fixed(t.rmse_all, 4) << " | " << fixed(t.rmse_heldout, 4) << " |";
+           << fixed(t.rmse_all, 4) << " | " << fixed(t.rmse_heldout, 4) << " | " << fixed(t.z_rms_heldout, 2) << " |";
         if (explained) md << " " << explained_cells(t, ratios, with);
         md << "\n";
         before.push_back(t.rmse_before), heldout.push_back(t.rmse_heldout);
     }
+    const auto within = std::count_if(r.trials.begin(), r.trials.end(),
+                                      [](const TrialError& t) { return kStandardisedBand.contains(t.z_rms_heldout); });
+    md << "\nThe held-out residual standardised by the noise model (each sample over √(floor² + (2 I p)²): its "
+          "flight's noise floor, the fold's turbulence intensity I, the push p predicted) has an RMS within ["
+       << kStandardisedBand.lo << ", " << kStandardisedBand.hi << "] on " << within << " of " << r.trials.size()
+       << " trials (1: the physics and its noise model hold).\n";
     md << "\nMedian over trials: " << fixed(median(before), 4) << " N uncalibrated, " << fixed(median(heldout), 4)
        << " N held out"
        << (explained ? log::cat("; after the explainer, median ", fixed(median(ratios), 2),

@@ -59,11 +59,12 @@ std::vector<Concealment> concealments(const Concealed& m) {
          },
          [m](const physics::Effects& own, std::optional<double> u) {
              const auto& c = own.cell_crosstalk;
-             return Truth{"cell_crosstalk", "coefficient",
-                          u.value_or(c.enabled && physics::AxisPair{c.from, c.to} == kConcealedLeakAxes ? c.coefficient : 0) + m.leak};
+             return Truth{
+                 "cell_crosstalk", "coefficient",
+                 u.value_or(c.enabled && physics::AxisPair{c.from, c.to} == kConcealedLeakAxes ? c.coefficient : 0) +
+                     m.leak};
          }},
     };
 }
-
 
 }  // namespace dw::analysis

@@ -77,10 +77,8 @@ public:
         const double g = (std::sqrt(5.0) - 1) / 2, tol = kGoldenTolerance * std::max(b - a, 1e-12);
         double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = cost(x1), f2 = cost(x2);
         while (b - a > tol) {
-            if (f1 < f2)
-                b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = cost(x1);
-            else
-                a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = cost(x2);
+            if (f1 < f2) b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = cost(x1);
+            else a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = cost(x2);
         }
         return 0.5 * (a + b);
     }
@@ -156,11 +154,12 @@ HeldOut pooled_heldout(Members& m, JointFit& jf, RigCandidate& c, const ExplainO
         for (std::size_t i = 0; i < m.size(); ++i) {
             const auto& p = jf.at(i).predict({v});
             for (auto r : m[i]->folds.test[k])
-                s.add(static_cast<long>(i) * kFlightKey + piece_of(*m[i]->d, m[i]->folds, r), *m[i]->d,
-                      m[i]->base.pred, p, r);
+                s.add(static_cast<long>(i) * kFlightKey + piece_of(*m[i]->d, m[i]->folds, r), *m[i]->d, m[i]->base.pred,
+                      p, r);
         }
     }
-    for (const auto& [piece, err] : s.after) c.pieces_after[piece] = err[0] + err[1] + err[2] + err[3] + err[4] + err[5];
+    for (const auto& [piece, err] : s.after)
+        c.pieces_after[piece] = err[0] + err[1] + err[2] + err[3] + err[4] + err[5];
     return judge_pieces(s, o.min_gain);
 }
 
@@ -189,8 +188,8 @@ HeldOut left_out_heldout(Members& m, JointFit& jf, const RigCandidate& c, const 
         values.push_back(v);
         const auto& p = jf.at(j).predict({v});
         for (auto r : m[j]->d->on_legs)
-            s.add(static_cast<long>(j) * kFlightKey + piece_of(*m[j]->d, m[j]->folds, r), *m[j]->d, m[j]->base.pred,
-                  p, r);
+            s.add(static_cast<long>(j) * kFlightKey + piece_of(*m[j]->d, m[j]->folds, r), *m[j]->d, m[j]->base.pred, p,
+                  r);
     }
     return judge_pieces(s, o.min_gain);
 }
@@ -231,8 +230,8 @@ RigCandidate score_rig(Members& m, const Effect& effect, int round, const Sessio
     c.left_out = left_out_heldout(m, jf, c, o, left);
     std::vector<std::vector<double>> replicates;
     for (double v : left) replicates.push_back({v});
-    const double half = std::max(t975(static_cast<int>(m.size()) - 1) * jackknife_sd(replicates).front(),
-                                 kZ95 * random_effects_se(c));
+    const double half =
+        std::max(t975(static_cast<int>(m.size()) - 1) * jackknife_sd(replicates).front(), kZ95 * random_effects_se(c));
     c.lo = c.value - half, c.hi = c.value + half;
     c.pooled = pooled_heldout(m, jf, c, o, c.value);
     c.accepted = passes_heldout(c, o) && c.one_value && !holds_neutral(c);
@@ -246,9 +245,9 @@ RigCandidate score_rig(Members& m, const Effect& effect, int round, const Sessio
 std::vector<Effect> rig_candidates(const Members& m, const ExplainOptions& o) {
     std::vector<Effect> out;
     for (const auto& e : o.candidates)
-        if (physics::of_the_rig(*e.type) && e.params.size() == 1 &&
-            std::all_of(m.begin(), m.end(),
-                        [&](const auto& x) { return e.type->applies(x->sim.neighbours(), x->sim.flying()); }))
+        if (physics::of_the_rig(*e.type) && e.params.size() == 1 && std::all_of(m.begin(), m.end(), [&](const auto& x) {
+                return e.type->applies(x->sim.neighbours(), x->sim.flying());
+            }))
             out.push_back(e);
     return out;
 }
@@ -290,9 +289,8 @@ void select_rig(Members& m, SessionResult& R, const SessionOptions& so, const Pr
         }
         R.candidates.insert(R.candidates.end(), scored.begin(), scored.end());
         for (const auto& c : scored)
-            if (c.not_one_value &&
-                std::find(R.refused_not_one_value.begin(), R.refused_not_one_value.end(), c.effect.name) ==
-                    R.refused_not_one_value.end())
+            if (c.not_one_value && std::find(R.refused_not_one_value.begin(), R.refused_not_one_value.end(),
+                                             c.effect.name) == R.refused_not_one_value.end())
                 R.refused_not_one_value.push_back(c.effect.name);
         const RigCandidate* best = best_of(scored);
         if (!best) break;
@@ -332,8 +330,8 @@ std::string session_verdict(const SessionResult& R) {
         std::string s = log::cat("the rig: ", value_text(c), ", one value over the ", R.flights.size(),
                                  " flights (one flight alone shows it on ", c.alone_count(), ")");
         if (!c.family_alike.empty())
-            s += log::cat("; ", c.effect.type->family()->shared, ": ", c.effect.name, " or ",
-                          log::join(c.family_alike), " — this session cannot tell which");
+            s += log::cat("; ", c.effect.type->family()->shared, ": ", c.effect.name, " or ", log::join(c.family_alike),
+                          " — this session cannot tell which");
         parts.push_back(s);
     }
     if (R.accepted.empty())
@@ -368,8 +366,8 @@ SessionResult explain_session(const std::vector<flight::Flight>& flights, const 
     const ExplainOptions& o = so.explain;
     validate(o);
     if (flights.size() < kMinSessionFlights || names.size() != flights.size())
-        throw InputError(log::cat("--flights: a session is ", kMinSessionFlights, " flights or more (given ",
-                                  flights.size(), ")"));
+        throw InputError(
+            log::cat("--flights: a session is ", kMinSessionFlights, " flights or more (given ", flights.size(), ")"));
     if (!so.per_flight_physics.empty() && so.per_flight_physics.size() != flights.size())
         throw InputError("session: one base physics per flight, or none");
     const auto started = std::chrono::steady_clock::now();

@@ -63,13 +63,13 @@ struct RigCandidate {
     std::vector<FlightFit> per_flight;
     double q = 0, q_limit = 0;  // Cochran's Q of the per-flight values, and its 1 % limit
     int dof = 0;
-    double known_sd = 0;        // the natural spread counted (SessionOptions::between_flight_sd)
-    double between_sd = 0;      // the per-flight values' spread beyond their errors (DerSimonian-Laird)
+    double known_sd = 0;    // the natural spread counted (SessionOptions::between_flight_sd)
+    double between_sd = 0;  // the per-flight values' spread beyond their errors (DerSimonian-Laird)
     bool one_value = true;
-    HeldOut pooled, left_out;  // over every flight's held-out pieces; over whole flights left out
+    HeldOut pooled, left_out;             // over every flight's held-out pieces; over whole flights left out
     std::map<long, double> pieces_after;  // pooled: per piece, the normalised squared error after
     bool accepted = false;
-    bool not_one_value = false;  // it passed the held-out tests, but the flights differ in it: refused
+    bool not_one_value = false;             // it passed the held-out tests, but the flights differ in it: refused
     std::vector<std::string> family_alike;  // accepted alongside: members of its family the session cannot tell from it
     std::string note;
     std::size_t alone_count() const;
@@ -101,7 +101,7 @@ SessionResult explain_session(const std::vector<flight::Flight>& flights, const 
                               const SessionOptions& o);
 
 // session.json, session.md and each flight's own report (when explained) into dir.
-void write_session_report(const std::vector<flight::Flight>& flights, const SessionResult& r,
-                          const SessionOptions& o, const std::string& dir);
+void write_session_report(const std::vector<flight::Flight>& flights, const SessionResult& r, const SessionOptions& o,
+                          const std::string& dir);
 
 }  // namespace dw::analysis

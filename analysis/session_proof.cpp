@@ -36,8 +36,8 @@ std::vector<Session> sessions_of(const SessionProofOptions& o) {
     if (o.max_sessions > 0 && out.size() > o.max_sessions) out.resize(o.max_sessions);
     for (auto& s : out) s.name = log::join(s.names, " ");
     if (out.empty())
-        throw InputError(log::cat("--flights: fewer than ", o.session_size,
-                                  " flights with a neighbour: no session of that size"));
+        throw InputError(
+            log::cat("--flights: fewer than ", o.session_size, " flights with a neighbour: no session of that size"));
     return out;
 }
 
@@ -99,7 +99,8 @@ void check(SessionProofRow& row, const SessionResult& r, const Truth& t) {
         }
     row.flights = r.flights.size();
     if (!hit) row.why += t.effect + " not accepted. ";
-    if (hit && !row.family_named && (t.value < hit->lo || t.value > hit->hi)) row.why += t.param + " outside the interval. ";
+    if (hit && !row.family_named && (t.value < hit->lo || t.value > hit->hi))
+        row.why += t.param + " outside the interval. ";
     row.pass = row.why.empty();
 }
 
@@ -131,8 +132,16 @@ void prove_session(const Session& s, const fs::path& dir, const SessionProofOpti
     so.between_flight_sd = spread_of(own);
     const auto again = explain_session(s.flights, s.names, so);
     write_session_report(s.flights, again, so, (dir / "untouched_on_own_fit").string());
-    SessionProofRow null_row{s.name, "nothing (its own fit: " + found_of(own) + ")", "nothing new", found_of(again),
-                             "–", 0, s.flights.size(), true, again.accepted.empty(), false,
+    SessionProofRow null_row{s.name,
+                             "nothing (its own fit: " + found_of(own) + ")",
+                             "nothing new",
+                             found_of(again),
+                             "–",
+                             0,
+                             s.flights.size(),
+                             true,
+                             again.accepted.empty(),
+                             false,
                              again.accepted.empty() ? "" : "claimed on its own fit. "};
     R.rows.push_back(null_row);
     ++R.untouched;
@@ -173,8 +182,9 @@ SessionProofResult run_session_proof(const SessionProofOptions& o) {
              static_cast<double>(R.recovered) >= kSessionRecoveryTarget * static_cast<double>(R.concealed);
     std::ostringstream md;
     md << table(R.rows) << "\nRecovered in " << R.recovered << " of " << R.concealed << " concealed sessions (target "
-       << fixed(kSessionRecoveryTarget * 100, 0) << " %); untouched sessions claiming nothing new on their own fit: "
-       << R.clean << " of " << R.untouched << ".\n";
+       << fixed(kSessionRecoveryTarget * 100, 0)
+       << " %); untouched sessions claiming nothing new on their own fit: " << R.clean << " of " << R.untouched
+       << ".\n";
     write_file((fs::path(staged.path()) / kSessionProofTableFile).string(), md.str());
     staged.commit();
     R.table_path = (fs::path(o.out_dir) / kSessionProofTableFile).string();

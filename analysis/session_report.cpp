@@ -26,9 +26,8 @@ json axes_json(const AxisValues& v) {
 }
 
 json heldout_json(const HeldOut& h) {
-    return {{"axis", flight::kAxes[static_cast<std::size_t>(h.best_axis)]},
-            {"z", number(h.t)},
-            {"gain", number(h.gain)}};
+    return {
+        {"axis", flight::kAxes[static_cast<std::size_t>(h.best_axis)]}, {"z", number(h.t)}, {"gain", number(h.gain)}};
 }
 
 json candidate_json(const RigCandidate& c, const std::vector<std::string>& flights) {
@@ -114,7 +113,10 @@ void md_rig(std::ostringstream& md, const SessionResult& R) {
            << fixed(c.pooled.t, 1) << " (" << fixed(c.pooled.gain * 100, 1) << " % of "
            << flight::kAxes[static_cast<std::size_t>(c.pooled.best_axis)] << ") | " << fixed(c.left_out.t, 1) << " | "
            << c.alone_count() << " of " << c.per_flight.size() << " | "
-           << (c.accepted ? "**accepted**" : c.not_one_value ? "refused: not one value" : "not accepted") << " |\n";
+           << (c.accepted        ? "**accepted**"
+               : c.not_one_value ? "refused: not one value"
+                                 : "not accepted")
+           << " |\n";
 }
 
 void md_flights(std::ostringstream& md, const SessionResult& R) {
@@ -131,8 +133,8 @@ void md_flights(std::ostringstream& md, const SessionResult& R) {
 
 }  // namespace
 
-void write_session_report(const std::vector<flight::Flight>& flights, const SessionResult& R,
-                          const SessionOptions& o, const std::string& out) {
+void write_session_report(const std::vector<flight::Flight>& flights, const SessionResult& R, const SessionOptions& o,
+                          const std::string& out) {
     StagedFolder staged(out);
     const std::string& dir = staged.path();
     write_file((fs::path(dir) / "session.json").string(), session_json(R).dump(2) + "\n");
