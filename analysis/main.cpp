@@ -269,7 +269,7 @@ struct SessionProofCommand {
 struct SessionCommand {
     CLI::App* sub = nullptr;
     std::vector<std::string> flights;
-    std::string out, effects;
+    std::string out, effects, spread;
     bool rig_only = false;
 
     void add(CLI::App& app) {
@@ -280,6 +280,9 @@ struct SessionCommand {
         sub->add_option("--out", out, "output folder: session.json, session.md, a report per flight")->required();
         sub->add_option("--effects", effects, "candidates, comma-separated (default: every effect of the vocabulary)");
         sub->add_flag("--rig-only", rig_only, "the rig's effects only (no per-flight explanation)");
+        sub->add_option("--spread", spread,
+                        "an earlier session's session.json: its between-flight spreads are this rig's natural "
+                        "variation (default: none, which is strict)");
     }
     int run(const std::string& physics_path, const Progress& progress) const {
         dw::require_output_dir(out, "--out");
@@ -290,6 +293,7 @@ struct SessionCommand {
         o.explain.progress = progress;
         o.explain.stop = dw::Shutdown::instance().token();
         o.flight_effects = !rig_only;
+        if (!spread.empty()) o.between_flight_sd = dw::analysis::spreads_from(spread);
         std::vector<dw::flight::Flight> read;  // every input read before any work is done
         std::vector<std::string> names;
         for (const auto& path : flights) {

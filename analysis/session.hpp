@@ -100,6 +100,11 @@ struct SessionResult {
 SessionResult explain_session(const std::vector<flight::Flight>& flights, const std::vector<std::string>& names,
                               const SessionOptions& o);
 
+// The natural between-flight spreads a session.json measured (each rig candidate of its first round:
+// spread_key -> between_flight_sd), for SessionOptions::between_flight_sd. Throws dw::InputError
+// naming the file and what is wrong with it.
+std::map<std::string, double> spreads_from(const std::string& session_json);
+
 // session.json, session.md and each flight's own report (when explained) into dir.
 void write_session_report(const std::vector<flight::Flight>& flights, const SessionResult& r, const SessionOptions& o,
                           const std::string& dir);

@@ -1,11 +1,13 @@
 // A session's report: session.json (keys in docs/EXPLAINER.md, "Sessions"), session.md, and each
 // flight's own report in a folder of its name.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "analysis/session.hpp"
+#include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
 
@@ -132,6 +134,41 @@ void md_flights(std::ostringstream& md, const SessionResult& R) {
 }
 
 }  // namespace
+
+std::map<std::string, double> spreads_from(const std::string& path) {
+    json j;
+    try {
+        j = json::parse(read_file(path, "--spread"));
+    } catch (const json::exception& e) {
+        throw InputError(log::cat(path, ": not JSON (", e.what(), ")"));
+    }
+    if (!j.is_object() || j.value("format", "") != "downwash-session/1" || !j["rig_candidates"].is_array())
+        throw InputError(log::cat(path, ": not a session report (format downwash-session/1 with rig_candidates)"));
+    std::map<std::string, double> out;
+    for (const auto& c : j["rig_candidates"]) {
+        if (!c.is_object() || c.value("round", 0) != 1) continue;
+        const auto sd = c.find("between_flight_sd");
+        if (sd == c.end() || !sd->is_number() || !std::isfinite(sd->get<double>()) || sd->get<double>() < 0)
+            throw InputError(log::cat(path, ": rig_candidates: ", c.value("effect", "?"),
+                                      ": between_flight_sd is not a number >= 0"));
+        const std::string name = c["effect"].is_string() ? c["effect"].get<std::string>() : "";
+        const auto all = all_effects();
+        const auto e = std::find_if(all.begin(), all.end(), [&](const Effect& x) { return x.name == name; });
+        if (e == all.end()) throw InputError(log::cat(path, ": rig_candidates: unknown effect '", name, "'"));
+        Effect x = *e;
+        if (x.type->has_axes()) {
+            const auto& axes = c["axes"];
+            const bool ok = axes.is_array() && axes.size() == 2 && axes[0].is_string() && axes[1].is_string();
+            x.from = ok ? physics::axis_index(axes[0].get<std::string>()) : -1;
+            x.to = ok ? physics::axis_index(axes[1].get<std::string>()) : -1;
+            if (x.from < 0 || x.to < 0)
+                throw InputError(
+                    log::cat(path, ": rig_candidates: ", name, ": axes is not [from, to] of f_n ... m_yaw"));
+        }
+        out[spread_key(x)] = sd->get<double>();
+    }
+    return out;
+}
 
 void write_session_report(const std::vector<flight::Flight>& flights, const SessionResult& R, const SessionOptions& o,
                           const std::string& out) {

@@ -553,3 +553,28 @@ TEST(RealSession, ATimingEffectConcealedInEveryFlightIsFoundByTheSession) {
     }
     EXPECT_TRUE(fs::exists(o.out_dir + "/session_1/clock_offset/session.json"));
 }
+
+// A session's natural spreads come back from its session.json (keyed as the session keys them); a
+// file that is not a session report, or names an unknown effect, is one clear error naming it.
+TEST(Session, TheSpreadsOfAnEarlierSessionAreReadBackFromItsReport) {
+    dw::test::TempDir d;
+    std::vector<Flight> flights{clocked_crossing(12, 0.0, 1), clocked_crossing(13, 0.08, 2)};
+    dw::analysis::SessionOptions o;
+    o.flight_effects = false;
+    const auto r = dw::analysis::explain_session(flights, {"a", "b"}, o);
+    dw::analysis::write_session_report(flights, r, o, d.file("s"));
+    const auto spreads = dw::analysis::spreads_from(d.file("s") + "/session.json");
+    const auto* clock = first_round(r, "clock_offset");
+    ASSERT_NE(clock, nullptr);
+    ASSERT_TRUE(spreads.count("clock_offset"));
+    EXPECT_DOUBLE_EQ(spreads.at("clock_offset"), clock->between_sd);
+    EXPECT_GT(clock->between_sd, 0.0) << "two clocks 0.08 s apart";
+    dw::write_file(d.file("bad.json"), R"({"format": "downwash-flight/1"})");
+    EXPECT_NE(input_error_of([&] { dw::analysis::spreads_from(d.file("bad.json")); }).find("not a session report"),
+              std::string::npos);
+    dw::write_file(
+        d.file("unknown.json"),
+        R"({"format": "downwash-session/1", "rig_candidates": [{"round": 1, "effect": "x", "between_flight_sd": 1}]})");
+    EXPECT_NE(input_error_of([&] { dw::analysis::spreads_from(d.file("unknown.json")); }).find("unknown effect 'x'"),
+              std::string::npos);
+}
