@@ -251,6 +251,8 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
     }
     std::stable_sort(f.poses.begin(), f.poses.end(),
                      [](const flight::PoseSample& a, const flight::PoseSample& b) { return a.t < b.t; });
+    nlohmann::json battery = nlohmann::json::object();  // each vehicle's median battery voltage over the trial
+    for (const auto& l : logs) battery[l.name] = median(l.vbat_v);
     f.meta.extra_json =
         nlohmann::json{
             {"source", source_of(logs)},
@@ -262,6 +264,7 @@ flight::Flight to_flight(std::vector<VehicleLog> logs, const ImportOptions& o) {
               {"thrust_lag", o.thrust_lag},
               {"tare_n", {to_ned(tare)[0], to_ned(tare)[1], to_ned(tare)[2]}},
               {"tare_rule", "median Fa where every neighbour is > 0.35 m away horizontally"}}},
+            {"battery_v", battery},
             {"clocks",
              "each log from its own first sample; the logs of a trial taken as simultaneous (the authors' alignment)"}}
             .dump();
