@@ -166,6 +166,13 @@ TEST(Import, MetaNamesTheCollectionTheLogsCameFrom) {
     };
     const auto shared = neural_swarm_importer().import(trial({"swap_ss/cf50_01", "swap_ss/cf51_01"}), {});
     EXPECT_EQ(collection(shared), "aerorobotics/neural-swarm datacollection21_06_16_2020");
+    // Issue 71: each vehicle's median battery voltage, a covariate of the trial (a 1S LiPo's range).
+    const auto battery = nlohmann::json::parse(shared.meta.extra_json)["battery_v"];
+    for (const char* v : {"cf50", "cf51"}) {
+        ASSERT_TRUE(battery.contains(v)) << battery.dump();
+        EXPECT_GT(battery[v].get<double>(), 3.0) << v;
+        EXPECT_LT(battery[v].get<double>(), 4.3) << v;
+    }
     dw::test::TempDir d;
     for (const char* dir : {"datacollection_other/swap_ss", "another/swap_ss"}) {
         fs::create_directories(d.file(dir));
