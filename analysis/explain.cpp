@@ -192,6 +192,37 @@ std::vector<FamilyVerdict> families_of(const ExplainResult& R, const Resimulatio
     return out;
 }
 
+// The held-out variance shared out on f_d (else the axis with the largest held-out error).
+VarianceShares shares_of(const ExplainResult& R, const ExplainData& d, const std::vector<Wrench6>& pred,
+                         double intensity) {
+    VarianceShares v;
+    v.axis = d.sim.measured_axes()[2]
+                 ? 2
+                 : static_cast<int>(std::max_element(R.heldout_before.begin(), R.heldout_before.end()) -
+                                    R.heldout_before.begin());
+    const auto a = static_cast<std::size_t>(v.axis);
+    const auto sq = [](double x) { return x * x; };
+    double turbulent = 0;
+    for (auto i : d.on_legs) turbulent += sq(2 * intensity * pred[i][a]) + sq(d.buffeting[i][a]);
+    turbulent /= static_cast<double>(std::max<std::size_t>(1, d.on_legs.size()));
+    const double before = sq(R.heldout_before[a]), after = sq(R.heldout_after[a]);
+    const double left = R.discrepancy.significant ? std::min(after, sq(R.discrepancy.heldout_after[a])) : after;
+    // What is left is the noise floor's first (measured where nobody is near), then the turbulence's
+    // up to what the model expects of it, then unexplained.
+    const double noise = sq(d.sigma[a]), expected = noise + turbulent;
+    v.effects = std::max(0.0, before - after);
+    v.discrepancy = std::max(0.0, after - left);
+    v.noise = std::min(left, noise);
+    v.turbulence = std::min(left - v.noise, turbulent);
+    v.unexplained = left - v.noise - v.turbulence;
+    v.total = v.effects + v.discrepancy + v.noise + v.turbulence + v.unexplained;
+    for (double* x : {&v.effects, &v.discrepancy, &v.noise, &v.turbulence, &v.unexplained})
+        *x = v.total > 0 ? *x / v.total : 0;
+    v.to_the_noise = after <= kDetectExcess * kDetectExcess * expected;
+    v.modelled_to_the_noise = !v.to_the_noise && left <= kDetectExcess * kDetectExcess * expected;
+    return v;
+}
+
 }  // namespace
 
 void validate(const ExplainOptions& o) {
@@ -209,6 +240,15 @@ void validate(const ExplainOptions& o) {
     if (o.shift_step_s > o.shift_half_width_s)
         throw InputError(log::cat("explain: shift_step_s ", o.shift_step_s, " is wider than shift_half_width_s ",
                                   o.shift_half_width_s));
+}
+
+std::string verdict_line(const ExplainResult& r) {
+    std::string by;
+    for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
+    if (!r.detected) return "no mismatch";
+    if (by.empty()) return "mismatch found, not explained";
+    for (const auto& v : r.families) by += "; " + v.sentence;
+    return "explained by: " + by + (r.unexplained ? " (a residual remains unexplained)" : "");
 }
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
@@ -272,6 +312,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         say(log::cat("  what is left has a shape: it depends on ", R.discrepancy.structured_by,
                      " beyond every other input"));
     }
+    R.shares = shares_of(R, d, final_model.pred, o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0);
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     R.resimulations = d.resimulations + 1;  // and the base model's, before the data
     say(log::cat("done: ", R.resimulations, " resimulations of the flight in ", std::round(R.seconds * 10) / 10, " s"));

@@ -162,6 +162,19 @@ struct Discrepancy {
     std::string note;
 };
 
+// The held-out mean square of one axis's residual, shared out (issue 71): the noise floor's, the
+// jets' turbulence (2 I p and the lateral buffeting, at the final model's push), what the accepted
+// effects remove, what the learnt discrepancy removes, and the rest — unexplained. Fractions that
+// add to 1. A flight is explained to the noise when what the accepted effects leave is within
+// kDetectExcess² of noise and turbulence (the excess a null flight shows); modelled to the noise when
+// only the learnt discrepancy (not physics) brings it there.
+struct VarianceShares {
+    int axis = 2;
+    double total = 0;  // the mean square before the effects (N² or N²·m²)
+    double noise = 0, turbulence = 0, effects = 0, discrepancy = 0, unexplained = 0;
+    bool to_the_noise = false, modelled_to_the_noise = false;
+};
+
 struct ExplainResult {
     bool detected = false;
     AxisValues noise_floor{};
@@ -184,6 +197,7 @@ struct ExplainResult {
     OneJetPart one_jet;                   // where one jet pushes alone (a flight with two neighbours or more)
     // The strongest line in the residual's spectrum before the fit and after it (analysis/spectrum.hpp).
     SpectralLine line_before, line_after;
+    VarianceShares shares;
 };
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);

@@ -360,8 +360,17 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
          {{"before", axes_json(r.excess_before)},
           {"after", axes_json(r.excess_after)},
           {"threshold", o.detect_excess}}},
-        {"spectrum",
-         {{"before", line_json(r.line_before)}, {"after", line_json(r.line_after)}, {"alpha", kLineAlpha}}}};
+        {"spectrum", {{"before", line_json(r.line_before)}, {"after", line_json(r.line_after)}, {"alpha", kLineAlpha}}},
+        {"variance_shares",
+         {{"axis", flight::kAxes[static_cast<std::size_t>(r.shares.axis)]},
+          {"total", r.shares.total},
+          {"noise", r.shares.noise},
+          {"turbulence", r.shares.turbulence},
+          {"effects", r.shares.effects},
+          {"discrepancy", r.shares.discrepancy},
+          {"unexplained", r.shares.unexplained},
+          {"explained_to_the_noise", r.shares.to_the_noise},
+          {"modelled_to_the_noise", r.shares.modelled_to_the_noise}}}};
     json cands = json::array();
     for (const auto& e : o.candidates)  // each effect once: its accepted (final) or latest score
         if (const CandidateResult* c = final_result(r, e.name)) cands.push_back(candidate_json(*c, measured));
@@ -444,9 +453,24 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
     }
 }
 
+// The held-out variance shared out, in one line.
+std::string shares_line(const VarianceShares& v) {
+    const auto pc = [](double x) { return fixed(100 * x, 0) + " %"; };
+    return log::cat("Of the held-out ", flight::kAxes[static_cast<std::size_t>(v.axis)], " variance (",
+                    fixed(std::sqrt(v.total), 4), " RMS): noise ", pc(v.noise), ", turbulence ", pc(v.turbulence),
+                    ", the accepted effects ", pc(v.effects), ", the learnt discrepancy ", pc(v.discrepancy),
+                    ", unexplained ", pc(v.unexplained),
+                    v.to_the_noise            ? " — explained to the noise"
+                    : v.modelled_to_the_noise ? " — not explained to the noise by physics; the learnt discrepancy "
+                                                "models what is left to the noise"
+                                              : "",
+                    ".\n\n");
+}
+
 // Where: the noise floor, the significant regions and the time-shift signatures.
 void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o, const physics::EffectVoice& who) {
-    md << "## Where: noise floor and significant regions\n\nNoise floor (" << describe(r.noise_floor_basis);
+    md << "## Where: noise floor and significant regions\n\n"
+       << shares_line(r.shares) << "Noise floor (" << describe(r.noise_floor_basis);
     if (r.noise_floor_basis == FloorBasis::far_samples)
         md << " " << physics::kNearSizes << " of its own motor distances horizontally";
     md << "): ";
@@ -529,15 +553,6 @@ std::optional<std::string> non_finite(const json& j, const std::string& path) {
     return std::nullopt;
 }
 }  // namespace
-
-std::string verdict_line(const ExplainResult& r) {
-    std::string by;
-    for (const auto& c : r.accepted) by += (by.empty() ? "" : ", ") + c.effect.name;
-    if (!r.detected) return "no mismatch";
-    if (by.empty()) return "mismatch found, not explained";
-    for (const auto& v : r.families) by += "; " + v.sentence;
-    return "explained by: " + by + (r.unexplained ? " (a residual remains unexplained)" : "");
-}
 
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& out) {
     StagedFolder staged(out);  // the report and its figures appear together, or not at all

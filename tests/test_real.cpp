@@ -578,3 +578,21 @@ TEST(Session, TheSpreadsOfAnEarlierSessionAreReadBackFromItsReport) {
     EXPECT_NE(input_error_of([&] { dw::analysis::spreads_from(d.file("unknown.json")); }).find("unknown effect 'x'"),
               std::string::npos);
 }
+
+// Issue 71, item 2: the report shares the held-out variance out — noise, turbulence, the accepted
+// effects, the learnt discrepancy, unexplained — adding to 1. A flight with a clock hidden in it is
+// mostly the effect's, and once it is found what is left is the noise; an untouched one is noise.
+TEST(NoiseShares, TheHeldOutVarianceIsSharedOutAndAFoundEffectLeavesTheNoise) {
+    dw::analysis::ExplainOptions o;
+    const auto clocked = dw::analysis::explain(clocked_crossing(12, 0.06, 3), o);
+    const auto& v = clocked.shares;
+    EXPECT_EQ(v.axis, 2);
+    EXPECT_NEAR(v.noise + v.turbulence + v.effects + v.discrepancy + v.unexplained, 1.0, 1e-9);
+    ASSERT_FALSE(clocked.accepted.empty()) << dw::analysis::verdict_line(clocked);
+    EXPECT_GT(v.effects, 0.5);
+    EXPECT_TRUE(v.to_the_noise);
+    const auto untouched = dw::analysis::explain(clocked_crossing(12, 0.0, 3), o);
+    EXPECT_TRUE(untouched.accepted.empty()) << dw::analysis::verdict_line(untouched);
+    EXPECT_GT(untouched.shares.noise, 0.8);
+    EXPECT_TRUE(untouched.shares.to_the_noise);
+}
