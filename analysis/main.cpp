@@ -285,6 +285,7 @@ struct SessionCommand {
                         "variation (default: none, which is strict)");
     }
     int run(const std::string& physics_path, const Progress& progress) const {
+        dw::analysis::require_session_size(flights.size());  // before any flight is read
         dw::require_output_dir(out, "--out");
         dw::analysis::SessionOptions o;
         o.explain.physics =

@@ -355,6 +355,12 @@ void explain_flights(Members& m, SessionResult& R, const ExplainOptions& o, cons
 
 }  // namespace
 
+void require_session_size(std::size_t flights) {
+    if (flights < kMinSessionFlights)
+        throw InputError(
+            log::cat("--flights: a session is ", kMinSessionFlights, " flights or more (given ", flights, ")"));
+}
+
 std::string spread_key(const Effect& e) {
     if (!e.type->has_axes()) return e.name;
     return log::cat(e.name, " ", flight::kAxes[static_cast<std::size_t>(e.from)], "->",
@@ -365,9 +371,8 @@ SessionResult explain_session(const std::vector<flight::Flight>& flights, const 
                               const SessionOptions& so) {
     const ExplainOptions& o = so.explain;
     validate(o);
-    if (flights.size() < kMinSessionFlights || names.size() != flights.size())
-        throw InputError(
-            log::cat("--flights: a session is ", kMinSessionFlights, " flights or more (given ", flights.size(), ")"));
+    require_session_size(flights.size());
+    if (names.size() != flights.size()) throw InputError("session: one name per flight");
     if (!so.per_flight_physics.empty() && so.per_flight_physics.size() != flights.size())
         throw InputError("session: one base physics per flight, or none");
     const auto started = std::chrono::steady_clock::now();

@@ -28,8 +28,9 @@ namespace dw::analysis {
 // The one-value test's level: values of one rig effect fitted per flight that differ more than
 // chance at this level would are not one value.
 inline constexpr double kOneValueLevel = 0.01;
-// A session is at least this many flights (one leaves out, one is left).
+// A session is at least this many flights (one leaves out, one is left); fewer: dw::InputError.
 inline constexpr std::size_t kMinSessionFlights = 2;
+void require_session_size(std::size_t flights);
 
 struct SessionOptions {
     ExplainOptions explain;  // the physics every flight is compared with, and the thresholds

@@ -240,6 +240,29 @@ TEST(ExplainCli, BadInputIsOneLineAndExit2) {
     EXPECT_NE(r.err.find("gremlins"), std::string::npos) << r.err;
 }
 
+// A session (issue 71): too few flights, a flight that cannot be read, or a --spread file that is
+// not a session report — each one line naming what and where, exit 2.
+TEST(ExplainCli, ASessionsBadInputIsOneLineAndExit2) {
+    dw::test::TempDir dir;
+    const auto explain = dw::test::bin("dw-explain");
+    auto r = dw::test::run({explain, "--quiet", "session", "--flights", dir.file("a"), "--out", dir.file("o")}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("a session is 2 flights or more"), std::string::npos) << r.err;
+    r = dw::test::run(
+        {explain, "--quiet", "session", "--flights", dir.file("a"), dir.file("b"), "--out", dir.file("o")}, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(dw::test::lines(r.err).size(), 1u) << r.err;
+    EXPECT_NE(r.err.find(dir.file("a")), std::string::npos) << r.err;
+    std::ofstream(dir.file("spread.json")) << "{\"format\": \"downwash-explain/1\"}";
+    r = dw::test::run({explain, "--quiet", "session", "--flights", dir.file("a"), dir.file("b"), "--spread",
+                       dir.file("spread.json"), "--out", dir.file("o")},
+                      dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("spread.json: not a session report"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("o")));
+}
+
 // The issue's proof (dw-explain proof does the same from the command line): every hidden effect,
 // and `null_seeds` flights with nothing hidden — three by default, the proof's ten under --full.
 // `jobs` flights at once: by default one, so that the proof takes one core beside the real-time
