@@ -251,6 +251,34 @@ std::string verdict_line(const ExplainResult& r) {
     return "explained by: " + by + (r.unexplained ? " (a residual remains unexplained)" : "");
 }
 
+// The held-out variance shared out, in one line.
+std::string shares_line(const VarianceShares& v) {
+    const auto pc = [](double x) { return fixed(100 * x, 0) + " %"; };
+    return log::cat("Of the held-out ", flight::kAxes[static_cast<std::size_t>(v.axis)], " variance (",
+                    fixed(std::sqrt(v.total), 4), " RMS): noise ", pc(v.noise), ", turbulence ", pc(v.turbulence),
+                    ", the accepted effects ", pc(v.effects), ", the learnt discrepancy ", pc(v.discrepancy),
+                    ", unexplained ", pc(v.unexplained),
+                    v.to_the_noise            ? " — explained to the noise"
+                    : v.modelled_to_the_noise ? " — not explained to the noise by physics; the learnt discrepancy "
+                                                "models what is left to the noise"
+                                              : "",
+                    ".\n\n");
+}
+
+std::string turbulence_line(const ExplainResult& r, double physics_intensity) {
+    if (r.turbulence.empty()) return "";
+    std::vector<std::string> bands, beyond;
+    for (const auto& b : r.turbulence) {
+        const std::string at = log::cat(fixed(b.intensity, 2), " at ", kBands[b.band].name, " below the neighbour");
+        bands.push_back(log::cat(at, " (", b.samples, " samples)"));
+        if (b.intensity > kTurbulenceBeyond * physics_intensity) beyond.push_back(at);
+    }
+    return log::cat("Near a jet the residual scatters with the push as turbulence of intensity ", log::join(bands),
+                    " — if the mean flow is right there; the physics has ", fixed(physics_intensity, 2),
+                    beyond.empty() ? "." : log::cat(". **Left out: turbulence, intensity ", log::join(beyond), ".**"),
+                    "\n\n");
+}
+
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
     validate(o);
     // Ceres warns on stderr when a covariance is rank deficient (a parameter the rows cannot see:
@@ -313,6 +341,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
                      " beyond every other input"));
     }
     R.shares = shares_of(R, d, final_model.pred, o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0);
+    R.turbulence = turbulence_by_band(d, final_model.pred, static_cast<std::size_t>(R.shares.axis));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     R.resimulations = d.resimulations + 1;  // and the base model's, before the data
     say(log::cat("done: ", R.resimulations, " resimulations of the flight in ", std::round(R.seconds * 10) / 10, " s"));

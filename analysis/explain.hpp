@@ -198,6 +198,7 @@ struct ExplainResult {
     // The strongest line in the residual's spectrum before the fit and after it (analysis/spectrum.hpp).
     SpectralLine line_before, line_after;
     VarianceShares shares;
+    std::vector<BandTurbulence> turbulence;  // on the shares' axis, after the final model
 };
 
 ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);
@@ -205,6 +206,11 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o);
 // The verdict in a line: "explained by: a, b" (with the families' sentences, and whether a residual
 // remains) / "mismatch found, not explained" / "no mismatch".
 std::string verdict_line(const ExplainResult& r);
+
+// The report's lines on the noise: the held-out variance shared out; the turbulence the residual
+// shows per band against the physics' intensity ("" where no band is measured).
+std::string shares_line(const VarianceShares& v);
+std::string turbulence_line(const ExplainResult& r, double physics_intensity);
 
 // report.json, report.md, physics.yaml and the PNG figures into dir.
 void write_report(const flight::Flight& f, const ExplainResult& r, const ExplainOptions& o, const std::string& dir);

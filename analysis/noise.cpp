@@ -1,6 +1,7 @@
 #include "analysis/noise.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/stats.hpp"
@@ -63,6 +64,27 @@ AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, dou
         }
     for (auto& v : e) v = d.on_legs.empty() ? 0 : std::sqrt(v / static_cast<double>(d.on_legs.size()));
     return e;
+}
+
+std::vector<BandTurbulence> turbulence_by_band(const ExplainData& d, const std::vector<Wrench6>& pred,
+                                               std::size_t axis) {
+    std::array<double, kBands.size()> r2{}, p2{};
+    std::array<std::size_t, kBands.size()> n{};
+    const double floor = d.sigma[axis];
+    for (auto i : d.on_legs) {
+        const double p = pred[i][axis];
+        if (!d.info[i].near || std::abs(p) < kTurbulencePush * floor) continue;
+        const auto b = static_cast<std::size_t>(band_index(d.info[i].h));
+        const double r = d.sim.measured()[i][axis] - p;
+        r2[b] += r * r, p2[b] += 4 * p * p, ++n[b];
+    }
+    std::vector<BandTurbulence> out;
+    for (std::size_t b = 0; b < kBands.size(); ++b)
+        if (n[b] >= kMinTurbulenceSamples) {
+            const double excess = std::max(0.0, r2[b] / static_cast<double>(n[b]) - floor * floor);
+            out.push_back({b, n[b], std::sqrt(excess / (p2[b] / static_cast<double>(n[b])))});
+        }
+    return out;
 }
 
 double largest(const AxisValues& v) { return *std::max_element(v.begin(), v.end()); }

@@ -32,6 +32,22 @@ AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, dou
 
 double largest(const AxisValues& v);
 
+// The jets' turbulence the residual shows, per vertical-separation band (kBands: the lowest
+// neighbour's height above the sufferer): over the near samples where the push predicted on `axis`
+// is at least kTurbulencePush noise floors, the intensity I with mean(r²) = floor² + (2 I p)² (0
+// where the spread does not exceed the floor). What the mean flow leaves scatters like turbulence
+// only if the mean flow is right there: the report says so.
+struct BandTurbulence {
+    std::size_t band = 0, samples = 0;
+    double intensity = 0;
+};
+inline constexpr double kTurbulencePush = 3;              // noise floors
+inline constexpr std::size_t kMinTurbulenceSamples = 50;  // fewer in a band: not measured there
+// A band whose intensity exceeds the physics' this many times shows turbulence the physics left out.
+inline constexpr double kTurbulenceBeyond = 1.5;
+std::vector<BandTurbulence> turbulence_by_band(const ExplainData& d, const std::vector<Wrench6>& pred,
+                                               std::size_t axis);
+
 // The fraction of the samples on legs that count as independent, from the lag-1 autocorrelation
 // of the normalised residual along legs.
 double neff_factor(const ExplainData& d, const std::vector<Wrench6>& pred);

@@ -345,6 +345,13 @@ json line_json(const SpectralLine& l) {
                 {"significant", l.significant}};
 }
 
+json turbulence_json(const std::vector<BandTurbulence>& t) {
+    json j = json::array();
+    for (const auto& b : t)
+        j.push_back({{"band", kBands[b.band].name}, {"samples", b.samples}, {"intensity", b.intensity}});
+    return j;
+}
+
 // report.json: the machine-readable contract (FLIGHT_FORMAT.md, explain report).
 json report_json(const ExplainResult& r, const ExplainOptions& o, const std::optional<MeasuredClock>& measured) {
     json j;
@@ -370,7 +377,8 @@ json report_json(const ExplainResult& r, const ExplainOptions& o, const std::opt
           {"discrepancy", r.shares.discrepancy},
           {"unexplained", r.shares.unexplained},
           {"explained_to_the_noise", r.shares.to_the_noise},
-          {"modelled_to_the_noise", r.shares.modelled_to_the_noise}}}};
+          {"modelled_to_the_noise", r.shares.modelled_to_the_noise}}},
+        {"turbulence_by_band", turbulence_json(r.turbulence)}};
     json cands = json::array();
     for (const auto& e : o.candidates)  // each effect once: its accepted (final) or latest score
         if (const CandidateResult* c = final_result(r, e.name)) cands.push_back(candidate_json(*c, measured));
@@ -453,24 +461,12 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
     }
 }
 
-// The held-out variance shared out, in one line.
-std::string shares_line(const VarianceShares& v) {
-    const auto pc = [](double x) { return fixed(100 * x, 0) + " %"; };
-    return log::cat("Of the held-out ", flight::kAxes[static_cast<std::size_t>(v.axis)], " variance (",
-                    fixed(std::sqrt(v.total), 4), " RMS): noise ", pc(v.noise), ", turbulence ", pc(v.turbulence),
-                    ", the accepted effects ", pc(v.effects), ", the learnt discrepancy ", pc(v.discrepancy),
-                    ", unexplained ", pc(v.unexplained),
-                    v.to_the_noise            ? " — explained to the noise"
-                    : v.modelled_to_the_noise ? " — not explained to the noise by physics; the learnt discrepancy "
-                                                "models what is left to the noise"
-                                              : "",
-                    ".\n\n");
-}
-
 // Where: the noise floor, the significant regions and the time-shift signatures.
 void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o, const physics::EffectVoice& who) {
     md << "## Where: noise floor and significant regions\n\n"
-       << shares_line(r.shares) << "Noise floor (" << describe(r.noise_floor_basis);
+       << shares_line(r.shares)
+       << turbulence_line(r, o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0) << "Noise floor ("
+       << describe(r.noise_floor_basis);
     if (r.noise_floor_basis == FloorBasis::far_samples)
         md << " " << physics::kNearSizes << " of its own motor distances horizontally";
     md << "): ";

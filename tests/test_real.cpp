@@ -453,6 +453,20 @@ Flight clocked_crossing(int passes, double clock_s, std::uint64_t seed) {
     return f;
 }
 
+// crossing(passes) recorded with the jets' turbulence of intensity i (the push's scatter 2 i p) over 3 mN of noise.
+Flight turbulent_crossing(int passes, double i, std::uint64_t seed) {
+    Flight f = crossing(passes);
+    const dw::analysis::Resimulation r(f, {});
+    dw::physics::PhysicsConfig plain;
+    plain.turbulence.enabled = false;
+    const auto w = r.recorded(plain);
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> unit(0, 1);
+    for (std::size_t k = 0; k < f.wrench.size(); ++k)
+        for (std::size_t a = 0; a < 3; ++a) f.wrench[k].w[a] = w[k][a] * (1 + 2 * i * unit(rng)) + 0.003 * unit(rng);
+    return f;
+}
+
 dw::analysis::SessionResult session_of(const std::vector<double>& clocks) {
     std::vector<Flight> flights;
     std::vector<std::string> names;
@@ -582,7 +596,7 @@ TEST(Session, TheSpreadsOfAnEarlierSessionAreReadBackFromItsReport) {
 // Issue 71, item 2: the report shares the held-out variance out — noise, turbulence, the accepted
 // effects, the learnt discrepancy, unexplained — adding to 1. A flight with a clock hidden in it is
 // mostly the effect's, and once it is found what is left is the noise; an untouched one is noise.
-TEST(NoiseShares, TheHeldOutVarianceIsSharedOutAndAFoundEffectLeavesTheNoise) {
+TEST(NoiseShares, TheHeldOutVarianceIsSharedOutAndTurbulenceLeftOutIsAFinding) {
     dw::analysis::ExplainOptions o;
     const auto clocked = dw::analysis::explain(clocked_crossing(12, 0.06, 3), o);
     const auto& v = clocked.shares;
@@ -595,4 +609,12 @@ TEST(NoiseShares, TheHeldOutVarianceIsSharedOutAndAFoundEffectLeavesTheNoise) {
     EXPECT_TRUE(untouched.accepted.empty()) << dw::analysis::verdict_line(untouched);
     EXPECT_GT(untouched.shares.noise, 0.8);
     EXPECT_TRUE(untouched.shares.to_the_noise);
+    // Turbulence the physics leaves out is a finding, with its intensity where it is measured.
+    o.physics.turbulence.enabled = false;
+    const auto turbulent = dw::analysis::explain(turbulent_crossing(12, 0.2, 4), o);
+    ASSERT_FALSE(turbulent.turbulence.empty());
+    for (const auto& b : turbulent.turbulence) EXPECT_NEAR(b.intensity, 0.2, 0.04) << b.samples << " samples";
+    const auto line = dw::analysis::turbulence_line(turbulent, 0);
+    EXPECT_NE(line.find("Left out: turbulence, intensity 0.2"), std::string::npos) << line;
+    EXPECT_EQ(dw::analysis::turbulence_line(turbulent, 0.2).find("Left out"), std::string::npos);
 }
