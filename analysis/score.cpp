@@ -12,7 +12,9 @@ namespace dw::analysis {
 
 using flight::kAxes;
 
-namespace {  // Whether the effect at its neutral (starting) values predicts what the model without it does — its
+namespace {
+
+// Whether the effect at its neutral (starting) values predicts what the model without it does — its
 // start is then its absence (a clock offset of 0, a scale of 1), and an interval that holds it
 // cannot tell the effect from no effect. (A flow effect may start at a typical value instead: a wake
 // transport at the jet law's delay.)
