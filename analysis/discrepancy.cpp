@@ -6,6 +6,7 @@
 #include <map>
 #include <numeric>
 
+#include "analysis/noise.hpp"
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/stats.hpp"
@@ -421,7 +422,7 @@ double total(const std::map<int, AxisValues>& pieces, std::size_t a) {
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
                               const ExplainOptions& o, const DiscrepancyRun& run) {
     Discrepancy r;
-    const double intensity = o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0;
+    const double intensity = turbulence_of(o.physics);
     const Design ds = design(d, pred, folds, intensity, run.weigh_by ? *run.weigh_by : pred);
     const Layout& l = ds.layout;
     std::vector<int> cols;

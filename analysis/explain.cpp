@@ -27,16 +27,9 @@ namespace {
 void conclude(ExplainResult& R, const ExplainData& d, const Baseline& base, const Baseline& final_model, bool stand_in,
               const ExplainOptions& o, const std::string& formation) {
     const std::vector<Wrench6>& base_pred = base.pred;
-    if (R.accepted.empty()) {
-        AxisValues rm{};
-        for (auto i : d.on_legs)
-            for (std::size_t a = 0; a < 6; ++a) rm[a] += norm_sq(d, base_pred, i, a);
-        for (std::size_t a = 0; a < 6; ++a)
-            rm[a] = std::sqrt(rm[a] / static_cast<double>(d.on_legs.size())) * d.sigma[a];
-        R.heldout_before = R.heldout_after = rm;
-    }
+    if (R.accepted.empty()) R.heldout_before = R.heldout_after = residual_rms(d, base_pred);
     R.fitted = final_model.physics;
-    const double intensity = o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0;
+    const double intensity = turbulence_of(o.physics);
     R.excess_before = excess_of(d, base_pred, intensity);
     R.excess_after = excess_of(d, final_model.pred, intensity);
     // Whether: an accepted effect, a candidate that predicts held-out data better but only as a
@@ -203,7 +196,7 @@ VarianceShares shares_of(const ExplainResult& R, const ExplainData& d, const std
     const auto a = static_cast<std::size_t>(v.axis);
     const auto sq = [](double x) { return x * x; };
     double turbulent = 0;
-    for (auto i : d.on_legs) turbulent += sq(2 * intensity * pred[i][a]) + sq(d.buffeting[i][a]);
+    for (auto i : d.on_legs) turbulent += turbulent_variance(d, pred, i, a, intensity);
     turbulent /= static_cast<double>(std::max<std::size_t>(1, d.on_legs.size()));
     const double before = sq(R.heldout_before[a]), after = sq(R.heldout_after[a]);
     const double left = R.discrepancy.significant ? std::min(after, sq(R.discrepancy.heldout_after[a])) : after;
@@ -340,7 +333,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         say(log::cat("  what is left has a shape: it depends on ", R.discrepancy.structured_by,
                      " beyond every other input"));
     }
-    R.shares = shares_of(R, d, final_model.pred, o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0);
+    R.shares = shares_of(R, d, final_model.pred, turbulence_of(o.physics));
     R.turbulence = turbulence_by_band(d, final_model.pred, static_cast<std::size_t>(R.shares.axis));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     R.resimulations = d.resimulations + 1;  // and the base model's, before the data

@@ -187,6 +187,15 @@ Baseline baseline_of(const ExplainData& d, const physics::PhysicsConfig& c, std:
 
 Baseline baseline_of(const ExplainData& d, const physics::PhysicsConfig& c) { return baseline_of(d, c, d.predict(c)); }
 
+AxisValues residual_rms(const ExplainData& d, const std::vector<Wrench6>& pred) {
+    AxisValues r{};
+    for (auto i : d.on_legs)
+        for (std::size_t a = 0; a < 6; ++a) r[a] += norm_sq(d, pred, i, a);
+    for (std::size_t a = 0; a < 6; ++a)
+        r[a] = std::sqrt(r[a] / static_cast<double>(std::max<std::size_t>(1, d.on_legs.size()))) * d.sigma[a];
+    return r;
+}
+
 double rss(const ExplainData& d, const std::vector<Wrench6>& p) {
     double s = 0;
     for (auto i : d.on_legs)

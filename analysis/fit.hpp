@@ -41,6 +41,8 @@ ExplainData explain_data(const Resimulation& sim, const std::vector<SampleInfo>&
 
 // Sample i's squared residual on axis a in noise floors (0 on an axis that carries no measurement).
 double norm_sq(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a);
+// Per axis, the residual's RMS over the samples on legs (N or N·m; 0 on an axis not measured).
+AxisValues residual_rms(const ExplainData& d, const std::vector<Wrench6>& pred);
 // The sum of norm_sq over the samples on legs and every axis.
 double rss(const ExplainData& d, const std::vector<Wrench6>& pred);
 

@@ -53,14 +53,19 @@ double floor_from_differences(std::span<const double> residual) {
 // Each sample's residual is divided by sqrt(sigma² + (2 I F)² + b²): the noise floor, the force
 // fluctuation of a jet whose speed fluctuates by the turbulence intensity I (F ∝ U², so
 // δF ≈ 2 I F) and the jets' lateral buffeting b.
+double turbulent_variance(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a,
+                          double intensity) {
+    const double turbulent = 2 * intensity * pred[i][a], buffet = d.buffeting[i][a];
+    return turbulent * turbulent + buffet * buffet;
+}
+
 AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity) {
     AxisValues e{};
     for (auto i : d.on_legs)
         for (std::size_t a = 0; a < 6; ++a) {
             if (!d.sim.measured_axes()[a]) continue;
-            const double r = d.sim.measured()[i][a] - pred[i][a], turbulent = 2 * intensity * pred[i][a];
-            const double buffet = d.buffeting[i][a];
-            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent * turbulent + buffet * buffet);
+            const double r = d.sim.measured()[i][a] - pred[i][a];
+            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent_variance(d, pred, i, a, intensity));
         }
     for (auto& v : e) v = d.on_legs.empty() ? 0 : std::sqrt(v / static_cast<double>(d.on_legs.size()));
     return e;

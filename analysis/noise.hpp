@@ -26,6 +26,17 @@ using physics::kMinFarSamples;                  // fewer far samples: the differ
 // The floor from one axis's residual when nobody is ever far: its successive differences' spread.
 double floor_from_differences(std::span<const double> residual);
 
+// The physics' turbulence intensity where its turbulence is on, else 0 (predictor/intervals.hpp
+// has the same rule for the predictor).
+inline double turbulence_of(const physics::PhysicsConfig& p) {
+    return p.turbulence.enabled ? p.turbulence.intensity : 0.0;
+}
+
+// The variance the jets' turbulence adds to sample i on axis a under the push pred predicts there:
+// (2 I p)² and the lateral buffeting's — the noise model's second term, beside the floor's.
+double turbulent_variance(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a,
+                          double intensity);
+
 // The residual's RMS over the blocks against what noise and turbulence alone explain, per measured
 // axis (0 where not measured); about 1 when the physics is right (see noise.cpp).
 AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity);

@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "analysis/noise.hpp"
 #include "analysis/discrepancy.hpp"
 #include "analysis/explain.hpp"
 #include "core/errors.hpp"
@@ -464,8 +465,7 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
 // Where: the noise floor, the significant regions and the time-shift signatures.
 void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o, const physics::EffectVoice& who) {
     md << "## Where: noise floor and significant regions\n\n"
-       << shares_line(r.shares)
-       << turbulence_line(r, o.physics.turbulence.enabled ? o.physics.turbulence.intensity : 0.0) << "Noise floor ("
+       << shares_line(r.shares) << turbulence_line(r, turbulence_of(o.physics)) << "Noise floor ("
        << describe(r.noise_floor_basis);
     if (r.noise_floor_basis == FloorBasis::far_samples)
         md << " " << physics::kNearSizes << " of its own motor distances horizontally";

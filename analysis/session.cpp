@@ -107,7 +107,7 @@ FlightFit fit_alone(Member& m, JointFit& jf, std::size_t i, const Effect& e, con
 std::vector<std::pair<double, double>> weighted(const RigCandidate& c) {
     std::vector<std::pair<double, double>> out;
     for (const auto& f : c.per_flight)
-        if (std::isfinite(f.se) && f.se > 0) out.emplace_back(f.value, f.se * f.se + c.known_sd * c.known_sd);
+        if (f.seen()) out.emplace_back(f.value, f.se * f.se + c.known_sd * c.known_sd);
     return out;
 }
 
@@ -131,7 +131,7 @@ void one_value_test(RigCandidate& c) {
 double random_effects_se(const RigCandidate& c) {
     double s = 0;
     for (const auto& f : c.per_flight)
-        if (std::isfinite(f.se) && f.se > 0) s += 1 / (f.se * f.se + c.between_sd * c.between_sd);
+        if (f.seen()) s += 1 / (f.se * f.se + c.between_sd * c.between_sd);
     return s > 0 ? 1 / std::sqrt(s) : INFINITY;
 }
 
@@ -309,15 +309,6 @@ void select_rig(Members& m, SessionResult& R, const SessionOptions& so, const Pr
     }
 }
 
-AxisValues rms_of(const Member& x, const std::vector<Wrench6>& pred) {
-    AxisValues r{};
-    for (auto i : x.d->on_legs)
-        for (std::size_t a = 0; a < 6; ++a) r[a] += norm_sq(*x.d, pred, i, a);
-    for (std::size_t a = 0; a < 6; ++a)
-        r[a] = std::sqrt(r[a] / static_cast<double>(std::max<std::size_t>(1, x.d->on_legs.size()))) * x.d->sigma[a];
-    return r;
-}
-
 std::string value_text(const RigCandidate& c) {
     const auto& p = c.effect.params.front();
     return log::cat(c.effect.name, " ", p.name, " ", fixed(c.value, 4), " [", fixed(c.lo, 4), ", ", fixed(c.hi, 4), "]",
@@ -390,8 +381,8 @@ SessionResult explain_session(const std::vector<flight::Flight>& flights, const 
     }
     select_rig(m, R, so, say);
     for (const auto& x : m) {
-        R.rows.push_back({x->name, x->d->on_legs.size(), x->d->sigma, rms_of(*x, x->first.pred),
-                          rms_of(*x, x->base.pred), std::nullopt});
+        R.rows.push_back({x->name, x->d->on_legs.size(), x->d->sigma, residual_rms(*x->d, x->first.pred),
+                          residual_rms(*x->d, x->base.pred), std::nullopt});
         R.fitted.push_back(x->base.physics);
     }
     if (so.flight_effects) explain_flights(m, R, o, say);

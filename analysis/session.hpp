@@ -14,6 +14,7 @@
 // - its interval does not hold its neutral value.
 // Its interval: the session's joint fit ± the wider of the flights-left-out jackknife (t, n − 1
 // degrees of freedom) and the random-effects standard error of the flights' own fits.
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <stop_token>
@@ -55,6 +56,7 @@ struct FlightFit {
     // autocorrelation); infinite where the flight cannot see it (a value pinned at a bound).
     double value = 0, se = 0;
     bool alone_accepted = false;  // the single-flight explainer's test on that flight alone accepts it
+    bool seen() const { return std::isfinite(se) && se > 0; }  // a spread to weigh it by
 };
 
 struct RigCandidate {

@@ -64,8 +64,8 @@ double untouched_value(const Session& s, SessionOptions so, const SessionResult&
     e.from = kConcealedLeakAxes.from, e.to = kConcealedLeakAxes.to, e.axes_given = true;
     so.explain.candidates = {e};
     so.explain.max_effects = 1;
-    for (const auto& c : explain_session(s.flights, s.names, so).candidates) return c.value;
-    return e.neutral().front();
+    const auto on_axes = explain_session(s.flights, s.names, so);
+    return on_axes.candidates.empty() ? e.neutral().front() : on_axes.candidates.front().value;
 }
 
 // The natural spread of each effect over the session's flights: the untouched session's, fitted per flight.

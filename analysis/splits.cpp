@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "analysis/noise.hpp"
 #include "analysis/score.hpp"
 #include "core/log.hpp"
 #include "core/numbers.hpp"
@@ -239,7 +240,7 @@ std::optional<SplitMove> one_value_check(const ExplainData& d, const physics::Ph
     const Rows near = near_samples(d);
     if (near.size() < 2 * kMinPartSamples) return std::nullopt;
     Fit fit(d, current, e);
-    const double intensity = current.turbulence.enabled ? current.turbulence.intensity : 0.0;
+    const double intensity = turbulence_of(current);
     const Linearised L = linearise(d, fit, e, values, intensity);
     const auto& with = fit.predict(values);
     std::vector<double> range_step;  // how far the effect is from absent, per parameter
