@@ -24,6 +24,7 @@
 #include "flight/blocks.hpp"
 #include "flight/flight.hpp"
 #include "physics/bodies.hpp"
+#include "physics/prediction_noise.hpp"
 
 namespace dw::analysis {
 
@@ -108,12 +109,11 @@ std::string trial_key(const flight::Flight& f, const std::string& dir) {
 
 }  // namespace
 
-// The noise model a residual is standardised by (predictor/intervals.hpp's): per flight its floor,
-// and the jets' turbulence, which grows with the push p: sigma² = floor² + (2 I p)².
+// The noise model a residual is standardised by (physics/prediction_noise.hpp, the predictor's
+// intervals'): per flight its floor, and the scatter that grows with the push p and its rate.
 struct NoiseScale {
     std::vector<double> floor;  // per flight (Calibration::flights())
-    double intensity = 0;
-    double sigma(std::size_t flight, double p) const { return std::hypot(floor[flight], 2 * intensity * p); }
+    physics::PredictionNoise noise;
 };
 
 // The flights, their trials and classes, and the fit's parameters.
@@ -156,31 +156,42 @@ public:
     // noise model, each over its standard deviation there.
     Eigen::VectorXd residuals(const std::vector<double>& x, const std::vector<std::size_t>& use, bool fit_rows,
                               const NoiseScale* noise = nullptr) const {
+        const auto samples = noise_samples(x, use, fit_rows, noise ? noise->floor : std::vector<double>{});
+        Eigen::VectorXd r(static_cast<Eigen::Index>(samples.size()));
+        for (std::size_t k = 0; k < samples.size(); ++k) {
+            const auto& s = samples[k];
+            r[static_cast<Eigen::Index>(k)] =
+                noise ? s.residual / physics::prediction_sd(s.floor, noise->noise, s.p, s.p_rate) : s.residual;
+        }
+        return r;
+    }
+
+    // The same residuals with what the noise model needs of each: its flight's floor (from `floors`,
+    // per flight; 0 where none is given), the push predicted and its rate.
+    std::vector<physics::NoiseSample> noise_samples(const std::vector<double>& x, const std::vector<std::size_t>& use,
+                                                    bool fit_rows, const std::vector<double>& floors) const {
         const PhysicsConfig c = config_of(x);
-        std::vector<std::vector<double>> parts(use.size());
+        std::vector<std::vector<physics::NoiseSample>> parts(use.size());
         parallel_for(use.size(), o_.jobs, [&](std::size_t k) {
             throw_if_stopped(o_.stop, "the calibration");
             const auto& fd = flights_[use[k]];
             const auto pred = fd.sim->recorded(c);
+            std::vector<double> p_d;
+            for (const auto& w : pred) p_d.push_back(w[kFdAxis]);
+            const auto rate = physics::push_rates(fd.sim->stamps(), p_d);
+            const double floor = floors.empty() ? 0.0 : floors[use[k]];
             auto& part = parts[k];
             for (auto i : fit_rows ? fd.fit_rows : fd.rows)
-                part.push_back(fd.sim->measured()[i][kFdAxis] - pred[i][kFdAxis]);
+                part.push_back({fd.sim->measured()[i][kFdAxis] - p_d[i], floor, p_d[i], rate[i]});
             if (fd.sim->flying()) {  // its residual's own zero: a nuisance of each flight
-                const double bias = std::accumulate(part.begin(), part.end(), 0.0) / static_cast<double>(part.size());
-                for (double& v : part) v -= bias;
-            }
-            if (noise) {
-                const auto& rows = fit_rows ? fd.fit_rows : fd.rows;
-                for (std::size_t j = 0; j < part.size(); ++j) part[j] /= noise->sigma(use[k], pred[rows[j]][kFdAxis]);
+                double bias = 0;
+                for (const auto& s : part) bias += s.residual / static_cast<double>(part.size());
+                for (auto& s : part) s.residual -= bias;
             }
         });
-        std::size_t n = 0;
-        for (const auto& p : parts) n += p.size();
-        Eigen::VectorXd r(static_cast<Eigen::Index>(n));
-        Eigen::Index at = 0;
-        for (const auto& p : parts)
-            for (double v : p) r[at++] = v;
-        return r;
+        std::vector<physics::NoiseSample> out;
+        for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+        return out;
     }
 
 private:
@@ -394,32 +405,50 @@ PhysicsConfig with_provenance(const PhysicsConfig& fitted, const PhysicsConfig& 
     return c;
 }
 
-// Each vehicle class's noise floor as the sufferer (VehicleClass::noise_floor_n): the median over its
-// flights of f_d's spread where nobody is near — those with kMinFarSamples such samples, and its
-// flights alone.
-void set_noise_floors(PhysicsConfig& c, const Calibration& cal) {
+// A flight's quiet f_d: where nobody is near, and where a neighbour is but physics c predicts a
+// push under physics::kQuietPush_n (a neighbour below, or beside its jet).
+std::vector<double> quiet_f_d(const FlightData& fd, const PhysicsConfig& c) {
+    auto out = fd.far_f_d;
+    const auto pred = fd.sim->recorded(c);
+    for (auto i : fd.rows)
+        if (std::abs(pred[i][kFdAxis]) < physics::kQuietPush_n) out.push_back(fd.sim->measured()[i][kFdAxis]);
+    return out;
+}
+
+// Each flight's own noise floor under physics c: its quiet f_d's spread where it has
+// kMinFarSamples such samples, else NaN.
+std::vector<double> own_floors(const Calibration& cal, const PhysicsConfig& c) {
+    std::vector<double> out;
+    for (const auto& f : cal.flights()) {
+        const auto quiet = quiet_f_d(f, c);
+        out.push_back(quiet.size() >= physics::kMinFarSamples ? standard_deviation(quiet) : NAN);
+    }
+    return out;
+}
+
+// Each vehicle class's noise floor as the sufferer (VehicleClass::noise_floor_n): the median of its
+// flights' own floors (`own`) and of its flights alone.
+void set_noise_floors(PhysicsConfig& c, const Calibration& cal, const std::vector<double>& own) {
     for (std::size_t k = 0; k < c.classes.size(); ++k) {
         std::vector<double> floors;
-        for (const auto& f : cal.flights())
-            if (f.sufferer_class == k && f.far_f_d.size() >= physics::kMinFarSamples)
-                floors.push_back(standard_deviation(f.far_f_d));
+        for (std::size_t f = 0; f < cal.flights().size(); ++f)
+            if (cal.flights()[f].sufferer_class == k && std::isfinite(own[f])) floors.push_back(own[f]);
         for (const auto& a : cal.alone())
             if (a.vehicle_class == c.classes[k].name) floors.push_back(a.sd_f_d);
         if (!floors.empty()) c.classes[k].noise_floor_n = median(floors);
     }
 }
 
-// Each flight's noise floor: its own f_d spread where nobody is near when it has kMinFarSamples such
-// samples, else its sufferer class's (set_noise_floors, over every flight of the class), else — no
-// flight of its class is ever alone — the jitter of its whole recording (successive differences, as
-// the predictor's intervals do: it leaves out the residual's slow error).
-std::vector<double> flight_floors(const Calibration& cal, const PhysicsConfig& base) {
+// Each flight's noise floor: its own (own_floors), else its sufferer class's (set_noise_floors), else
+// — no flight of its class is ever quiet — the jitter of its whole recording (successive
+// differences, as the predictor's intervals do: it leaves out the residual's slow error).
+std::vector<double> flight_floors(const Calibration& cal, const PhysicsConfig& base, const std::vector<double>& own) {
     PhysicsConfig c = base;
-    set_noise_floors(c, cal);
+    set_noise_floors(c, cal, own);
     std::vector<double> out;
-    for (const auto& f : cal.flights()) {
-        double floor = f.far_f_d.size() >= physics::kMinFarSamples ? standard_deviation(f.far_f_d)
-                                                                   : c.classes[f.sufferer_class].noise_floor_n;
+    for (std::size_t i = 0; i < cal.flights().size(); ++i) {
+        const auto& f = cal.flights()[i];
+        double floor = std::isfinite(own[i]) ? own[i] : c.classes[f.sufferer_class].noise_floor_n;
         if (!(floor > 0)) {
             std::vector<double> f_d;
             for (const auto& w : f.sim->measured()) f_d.push_back(w[kFdAxis]);
@@ -492,7 +521,8 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     const auto pairings = samples_by_pairing(cal, x0, x, o);
     R.turbulence_intensity = turbulence_intensity(pairings);
     std::vector<std::vector<double>> replicates;
-    const auto floors = flight_floors(cal, cal.config_of(x));
+    const auto own_floor = own_floors(cal, cal.config_of(x));
+    const auto floors = flight_floors(cal, cal.config_of(x), own_floor);
     for (std::size_t t = 0; t < cal.trials().size(); ++t) {
         const auto& trial = cal.trials()[t];
         const auto others = flights_except(cal, t);
@@ -508,7 +538,8 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
         e.rmse_all = rmse(cal.residuals(x, own, false));
         e.rmse_heldout = rmse(cal.residuals(xt, own, false));
         e.turbulence_intensity = fold_turbulence_intensity(cal, xt, others, o);
-        const NoiseScale noise{floors, e.turbulence_intensity};
+        e.noise = physics::fit_prediction_noise(cal.noise_samples(xt, others, true, floors));
+        const NoiseScale noise{floors, e.noise};
         e.z_rms_heldout = rmse(cal.residuals(xt, own, false, &noise));
         if (o.explain_heldout)
             explain_heldout(
@@ -525,7 +556,9 @@ CalibrateResult calibrate(const CalibrateOptions& o) {
     R.calibrated =
         with_provenance(cal.config_of(x), o.physics, R.turbulence_intensity,
                         log::cat("on ", cal.flights().size(), " flights of ", cal.trials().size(), " trials"));
-    set_noise_floors(R.calibrated, cal);
+    set_noise_floors(R.calibrated, cal, own_floor);
+    R.calibrated.prediction_noise =
+        physics::fit_prediction_noise(cal.noise_samples(x, flights_except(cal, std::nullopt), true, floors));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     write_calibration(pairings, R, in);
     staged.commit();

@@ -52,9 +52,12 @@ struct TrialError {
     // it leaves on the other trials (0: the spread does not grow there, and the fold keeps the base's
     // turbulence): what explain_heldout's explanation counts as noise where a jet pushes.
     double turbulence_intensity = 0;
-    // The held-out residual standardised by the noise model (each sample over sqrt(floor² + (2 I p)²):
-    // its flight's noise floor, this fold's turbulence intensity, the push predicted), its RMS: 1 when
-    // the physics and the noise model hold; kStandardisedBand says how near counts.
+    // The noise model of the calibration without this trial (physics/prediction_noise.hpp), fitted
+    // by maximum likelihood on the residual it leaves on the other trials.
+    physics::PredictionNoise noise;
+    // The held-out residual standardised by that noise model (each sample over
+    // sqrt(floor² + (s p)² + (tau dp/dt)²): its flight's noise floor, the push predicted and its
+    // rate), its RMS: 1 when the physics and the noise model hold; kStandardisedBand says how near counts.
     double z_rms_heldout = 0;
     // With explain_heldout, per flight: the explainer's held-out f_d error after its fit over its
     // noise floor, and what it accepted.

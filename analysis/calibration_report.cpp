@@ -92,6 +92,10 @@ nlohmann::json scatter_json(const std::vector<PairingSamples>& pairings, const s
     return out;
 }
 
+nlohmann::json noise_json(const physics::PredictionNoise& n) {
+    return {{"push_share", n.push_share}, {"timing_spread_s", n.timing_spread_s}};
+}
+
 nlohmann::json to_json(const CalibrateResult& r) {
     nlohmann::json params = nlohmann::json::array(), trials = nlohmann::json::array();
     for (const auto& p : r.parameters)
@@ -110,6 +114,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
                           {"rmse_f_d_all_trials_n", t.rmse_all},
                           {"rmse_f_d_held_out_n", t.rmse_heldout},
                           {"turbulence_intensity_held_out", t.turbulence_intensity},
+                          {"prediction_noise_held_out", noise_json(t.noise)},
                           {"standardised_rms_held_out", t.z_rms_heldout},
                           {"explained_f_d_over_noise_floor", t.explained_ratio},
                           {"with_discrepancy_f_d_over_noise_floor", t.discrepancy_ratio},
@@ -132,6 +137,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
             {"trials", trials},
             {"alone", alone},
             {"turbulence_intensity", r.turbulence_intensity},
+            {"prediction_noise", noise_json(r.calibrated.prediction_noise)},
             {"seconds", r.seconds}};
 }
 
@@ -206,9 +212,13 @@ std::string markdown(const std::vector<PairingSamples>& pairings, const std::vec
     }
     const auto within = std::count_if(r.trials.begin(), r.trials.end(),
                                       [](const TrialError& t) { return kStandardisedBand.contains(t.z_rms_heldout); });
-    md << "\nThe held-out residual standardised by the noise model (each sample over √(floor² + (2 I p)²): its "
-          "flight's noise floor, the fold's turbulence intensity I, the push p predicted) has an RMS within ["
-       << kStandardisedBand.lo << ", " << kStandardisedBand.hi << "] on " << within << " of " << r.trials.size()
+    const auto& n = r.calibrated.prediction_noise;
+    md << "\nThe held-out residual standardised by the noise model (each sample over √(floor² + (s p)² + (τ dp/dt)²): "
+          "its flight's noise floor — its f_d's spread where the physics predicts no push —, the push p predicted "
+          "and its rate, s and τ fitted by maximum likelihood on the other trials; on every trial s = "
+       << fixed(n.push_share, 3) << ", τ = " << fixed(n.timing_spread_s, 3)
+       << " s, the calibrated physics' `prediction_noise`) has an RMS within [" << kStandardisedBand.lo << ", "
+       << kStandardisedBand.hi << "] on " << within << " of " << r.trials.size()
        << " trials (1: the physics and its noise model hold).\n";
     md << "\nMedian over trials: " << fixed(median(before), 4) << " N uncalibrated, " << fixed(median(heldout), 4)
        << " N held out"

@@ -6,6 +6,7 @@
 
 #include "analysis/fit.hpp"
 #include "physics/bodies.hpp"
+#include "physics/prediction_noise.hpp"
 
 namespace dw::analysis {
 
@@ -26,11 +27,7 @@ using physics::kMinFarSamples;                  // fewer far samples: the differ
 // The floor from one axis's residual when nobody is ever far: its successive differences' spread.
 double floor_from_differences(std::span<const double> residual);
 
-// The physics' turbulence intensity where its turbulence is on, else 0 (predictor/intervals.hpp
-// has the same rule for the predictor).
-inline double turbulence_of(const physics::PhysicsConfig& p) {
-    return p.turbulence.enabled ? p.turbulence.intensity : 0.0;
-}
+using physics::turbulence_of;
 
 // The variance the jets' turbulence adds to sample i on axis a under the push pred predicts there:
 // (2 I p)² and the lateral buffeting's — the noise model's second term, beside the floor's.

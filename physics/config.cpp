@@ -110,6 +110,10 @@ void noise_keys(KeyVisitor& k, PhysicsConfig& c) {
         s.number("lateral_intensity", x.lateral_intensity, {0, 1});
         s.number("lateral_time_scale_s", x.lateral_time_scale_s, {1e-4, 10});
     });
+    k.section("prediction_noise", [&](KeyVisitor& s) {
+        s.number("push_share", c.prediction_noise.push_share, kPushShareRange);
+        s.number("timing_spread_s", c.prediction_noise.timing_spread_s, kTimingSpreadRange_s);
+    });
     k.section("dynamics", [&](KeyVisitor& s) {
         DynamicsParams& x = c.dynamics;
         s.number("natural_frequency_rad_s", x.natural_frequency_rad_s, {0.1, 50});

@@ -82,6 +82,18 @@ struct TurbulenceParams {
     double lateral_time_scale_s = 0.03;
 };
 
+// A prediction's noise model beyond the flight's floor (physics/prediction_noise.hpp): a scatter
+// that grows with the push p (push_share × p: the jets' turbulence, 2 I, and what the mean-flow
+// model leaves near a jet) and one that grows with how fast the push changes (timing_spread_s × dp/dt:
+// when a wake arrives varies). dw-explain calibrate fits both by maximum likelihood on the trials it
+// calibrates on; push_share 0 (not calibrated): 2 I from the turbulence, and no timing term.
+struct PredictionNoise {
+    double push_share = 0;
+    double timing_spread_s = 0;
+};
+inline constexpr Range kPushShareRange{0, 5};
+inline constexpr Range kTimingSpreadRange_s{0, 1, "s"};
+
 struct DynamicsParams {  // simulated vehicles
     double natural_frequency_rad_s = 3.0;
     double damping = 0.6;
@@ -191,6 +203,7 @@ struct PhysicsConfig {
     VehicleParams neighbour;  // neighbours' parameters
     StandParams stand;
     TurbulenceParams turbulence;
+    PredictionNoise prediction_noise;
     DynamicsParams dynamics;
     MocapParams mocap;
     Effects effects;

@@ -221,7 +221,7 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
         std::any_of(rows.begin(), rows.end(), [](const ComparisonRow& r) { return std::isfinite(r.coverage_f_d); });
     if (any_coverage) {
         out << "\n### 95 % prediction intervals: the share of held-out f_d samples inside (0.95 if the model and its "
-               "noise model hold; σ² = floor² + (2 I prediction)², predictor/intervals.hpp)\n\n";
+               "noise model hold; σ² = floor² + (s p)² + (τ dp/dt)², physics/prediction_noise.hpp)\n\n";
         per_model(out, rows, "samples", &ComparisonRow::samples, &ComparisonRow::coverage_f_d);
     }
     return out.str();
@@ -294,11 +294,12 @@ Compared compare_with_reference(const std::vector<const ForceModel*>& models, co
     const auto words = references_of(test, missing, flights);
     Compared c{compare(models, test, o, noise), "", !words.empty() && missing.empty(), ""};
     if (noise && !noise->from_class.empty())
-        c.noise_note += log::cat("The 95 % intervals' floor of ", log::join(noise->from_class),
-                                 " (nobody is ever far there) is their sufferer class's, from its other flights.\n\n");
+        c.noise_note +=
+            log::cat("The 95 % intervals' floor of ", log::join(noise->from_class),
+                     " (too few samples where no jet reaches) is their sufferer class's, from its other flights.\n\n");
     if (noise && !noise->from_differences.empty())
         c.noise_note += log::cat("The 95 % intervals' floor of ", log::join(noise->from_differences),
-                                 " is their jitter (successive differences: nobody is ever far there, nor in any "
+                                 " is their jitter (successive differences: no jet-free samples there, nor in any "
                                  "flight of their class), which leaves out the slow error: too narrow.\n\n");
     if (words.empty()) {
         if (!missing.empty()) c.reference_note = "No reference row: no held-out flight carries reference.csv.\n\n";

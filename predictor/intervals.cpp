@@ -1,7 +1,9 @@
 #include "predictor/intervals.hpp"
 
+#include <algorithm>
 #include <cmath>
 
+#include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/stats.hpp"
 
@@ -18,6 +20,43 @@ bool nobody_near(const Sample& s, const Source& source) {
         if (std::hypot(x[0], x[1]) <= physics::near_radius(v)) return false;
     }
     return true;
+}
+
+// The physics predicts no push on s (under physics::kQuietPush_n; a geometry it cannot take is not quiet).
+bool quiet(const PhysicsModel& model, const Sample& s, const Source& source) {
+    try {
+        return std::abs(model.predict(s, source)[kFdAxis]) < physics::kQuietPush_n;
+    } catch (const InputError&) {
+        return false;
+    }
+}
+
+// The samples of each source, in time order (indices into d.samples).
+std::vector<std::vector<std::size_t>> by_source(const Dataset& d) {
+    std::vector<std::vector<std::size_t>> out(d.sources.size());
+    for (std::size_t i = 0; i < d.samples.size(); ++i) out[static_cast<std::size_t>(d.samples[i].source)].push_back(i);
+    for (auto& idx : out)
+        std::stable_sort(idx.begin(), idx.end(), [&](auto a, auto b) { return d.samples[a].t < d.samples[b].t; });
+    return out;
+}
+
+// Each sample's predicted `axis` and its rate of change along its flight (physics::push_rates).
+struct Predicted {
+    std::vector<double> p, rate;
+};
+Predicted predicted(const ForceModel& model, const Dataset& d, std::size_t axis) {
+    Predicted out{std::vector<double>(d.samples.size()), std::vector<double>(d.samples.size(), 0.0)};
+    for (std::size_t i = 0; i < d.samples.size(); ++i) {
+        const auto& s = d.samples[i];
+        out.p[i] = model.predict(s, d.sources[static_cast<std::size_t>(s.source)])[axis];
+    }
+    for (const auto& idx : by_source(d)) {
+        std::vector<double> t, p;
+        for (auto i : idx) t.push_back(d.samples[i].t), p.push_back(std::isfinite(out.p[i]) ? out.p[i] : 0.0);
+        const auto r = physics::push_rates(t, p);
+        for (std::size_t k = 0; k < idx.size(); ++k) out.rate[idx[k]] = r[k];
+    }
+    return out;
 }
 
 // A sufferer's class: the four numbers a flight gives of it (a vehicle class of the physics matches
@@ -45,12 +84,13 @@ flight::AxisValues floor_elsewhere(const Source& source, const std::array<std::v
 
 NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics) {
     NoiseModel m;
-    m.intensity = turbulence_intensity(physics);
+    m.noise = physics::prediction_noise_of(physics);
     const std::size_t n = all.sources.size();
+    const PhysicsModel quiet_model(physics);
     std::vector<std::array<std::vector<double>, 6>> far(n), every(n);
     for (const auto& s : all.samples) {
         const auto i = static_cast<std::size_t>(s.source);
-        const bool alone = nobody_near(s, all.sources[i]);
+        const bool alone = nobody_near(s, all.sources[i]) || quiet(quiet_model, s, all.sources[i]);
         for (std::size_t a = 0; a < 6; ++a) {
             every[i][a].push_back(s.y[a]);
             if (alone) far[i][a].push_back(s.y[a]);
@@ -77,27 +117,29 @@ NoiseModel noise_model(const Dataset& all, const physics::PhysicsConfig& physics
     return m;
 }
 
-double interval_half_width(double floor, double intensity, double p) {
-    const double turbulent = 2 * intensity * p;
-    return kZ95 * std::sqrt(floor * floor + turbulent * turbulent);
+double interval_half_width(double floor, const physics::PredictionNoise& n, double p, double p_rate) {
+    return kZ95 * physics::prediction_sd(floor, n, p, p_rate);
 }
 
-double f_d_half_width(const physics::PhysicsConfig& physics, const physics::VehicleParams& sufferer, double p) {
+double f_d_half_width(const physics::PhysicsConfig& physics, const physics::VehicleParams& sufferer, double p,
+                      double p_rate) {
     const auto* k = physics::class_of(physics, sufferer);
     if (!k || !(k->noise_floor_n > 0)) return 0;
-    return interval_half_width(k->noise_floor_n, turbulence_intensity(physics), p);
+    return interval_half_width(k->noise_floor_n, physics::prediction_noise_of(physics), p, p_rate);
 }
 
-double half_width(const NoiseModel& m, const std::string& source, std::size_t axis, double p) {
+double half_width(const NoiseModel& m, const std::string& source, std::size_t axis, double p, double p_rate) {
     const auto it = m.floor.find(source);
-    return it == m.floor.end() ? NAN : interval_half_width(it->second[axis], m.intensity, p);
+    return it == m.floor.end() ? NAN : interval_half_width(it->second[axis], m.noise, p, p_rate);
 }
 
 double coverage(const ForceModel& model, const Dataset& d, const NoiseModel& noise, std::size_t axis) {
     std::size_t inside = 0, counted = 0;
-    for (const auto& s : d.samples) {
+    const auto pred = predicted(model, d, axis);
+    for (std::size_t i = 0; i < d.samples.size(); ++i) {
+        const auto& s = d.samples[i];
         const auto& source = d.sources[static_cast<std::size_t>(s.source)];
-        const double p = model.predict(s, source)[axis], w = half_width(noise, source.name, axis, p);
+        const double p = pred.p[i], w = half_width(noise, source.name, axis, p, pred.rate[i]);
         if (!std::isfinite(p) || !std::isfinite(w) || !std::isfinite(s.y[axis])) continue;
         ++counted;
         inside += std::abs(s.y[axis] - p) <= w;

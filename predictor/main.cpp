@@ -218,7 +218,8 @@ struct CompareCommand {
         const Dataset test = split_by_leg(all).test;
         require_samples(all, test, "held-out");
         auto physics = noise_physics(models, ms);
-        if (!std::isnan(intensity)) physics.turbulence.enabled = true, physics.turbulence.intensity = intensity;
+        if (!std::isnan(intensity))  // the noise model of that intensity, not a calibrated one
+            physics.turbulence.enabled = true, physics.turbulence.intensity = intensity, physics.prediction_noise = {};
         const auto noise = dw::predictor::noise_model(all, physics);
         const auto c = dw::predictor::compare_with_reference(raw(ms), test, arena, &noise);
         dw::write_file(out_dir + "/table.md", "# Force models compared\n\n" + c.reference_note + c.noise_note +

@@ -177,14 +177,16 @@ void PredictorNode::on_frame(const msg::MocapFrame& frame) {
     out.torque_nm().y(w[4]);
     out.torque_nm().z(w[5]);
     out.input_age_s(static_cast<double>(clock_.now_ns() - dds::from_msg(frame.header().stamp())) * 1e-9);
-    out.f_d_interval_n(f_d_interval(*model, w[kFdAxis]));
+    out.f_d_interval_n(f_d_interval(*model, to_seconds(dds::from_msg(frame.header().stamp())), w[kFdAxis]));
     if (writer_.write(out)) ++published_;
 }
 
-double PredictorNode::f_d_interval(const ForceModel& model, double f_d) const {
+double PredictorNode::f_d_interval(const ForceModel& model, double t, double f_d) {
     const physics::PhysicsConfig* noise = model.physics() ? model.physics() : (noise_ ? &*noise_ : nullptr);
     if (!noise) return 0;
-    return f_d_half_width(*noise, bodies_ ? bodies_->source().sufferer : noise->sufferer.vehicle, f_d);
+    if (model.name() != push_rate_model_) push_rate_ = {}, push_rate_model_ = model.name();  // a new model's own rate
+    const double rate = push_rate_.update(t, f_d);
+    return f_d_half_width(*noise, bodies_ ? bodies_->source().sufferer : noise->sufferer.vehicle, f_d, rate);
 }
 
 Wrench6 PredictorNode::predict(const ForceModel& model, const FrameNeighbours& f) const {

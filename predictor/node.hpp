@@ -20,6 +20,7 @@
 #include "dw/msg/Mocap.h"
 #include "dw/msg/Prediction.h"
 #include "flight/flight.hpp"
+#include "physics/prediction_noise.hpp"
 #include "predictor/dataset.hpp"
 #include "predictor/model.hpp"
 
@@ -110,7 +111,8 @@ public:
 private:
     void on_frame(const msg::MocapFrame& frame);
     Wrench6 predict(const ForceModel& model, const FrameNeighbours& f) const;
-    double f_d_interval(const ForceModel& model, double f_d) const;  // the 95 % half width, 0: none
+    // The 95 % half width of f_d predicted at stand time t, 0: none.
+    double f_d_interval(const ForceModel& model, double t, double f_d);
     void watch();
 
     NodeOptions options_;
@@ -123,7 +125,9 @@ private:
     dds::Writer<msg::WrenchPrediction> writer_;
     std::optional<dds::Reader<msg::MocapFrame>> reader_;  // subscribed once the writer's readers are awaited
     std::atomic<std::uint64_t> published_{0}, reloads_{0}, unpredicted_{0}, stray_stamps_{0};
-    StampGate stamps_;  // on the reader's thread only
+    StampGate stamps_;             // on the reader's thread only
+    physics::PushRate push_rate_;  // of the model named push_rate_model_; on the reader's thread only
+    std::string push_rate_model_;
     std::atomic<bool> stop_{false};
     std::thread watcher_;
 };

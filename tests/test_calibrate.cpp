@@ -110,6 +110,12 @@ TEST(PhysicsCalibration, EachTrialLeftOutGetsTheTurbulenceOfTheOtherTrials) {
         if (t.flights[0] == o.flights[0]) EXPECT_GT(t.z_rms_heldout, 2 * dw::analysis::kStandardisedBand.hi);
         else EXPECT_LT(t.z_rms_heldout, 1.0) << t.trial;
     }
+    // The noise model the standardisation takes is fitted per fold: the push's share of the scatter
+    // is larger in the folds that hold the turbulent trial.
+    const auto own_fold =
+        std::find_if(r.trials.begin(), r.trials.end(), [&](const auto& t) { return t.flights[0] == o.flights[0]; });
+    for (const auto& t : r.trials)
+        if (&t != &*own_fold) EXPECT_GT(t.noise.push_share, 2 * own_fold->noise.push_share) << t.trial;
 }
 
 // Flights simulated with a jet law other than the configuration's: calibrated from the published
@@ -383,8 +389,8 @@ TEST(RealCalibration, TheSharedTrialsLeftOutInTurnArePredictedBetterAndTheShippe
                             {a.kv_omega_n_per_mps, b.kv_omega_n_per_mps},
                             {a.noise_floor_n, b.noise_floor_n}})
             EXPECT_NEAR(x, y, 1e-4 * std::abs(y) + 1e-9) << a.name << ": regenerate config/physics.crazyflie.yaml";
-        // Issue 71: each class's floor as the sufferer, where nobody is near (its flights' and its
-        // flight alone's spread: 7.5 mN small, 9.7 mN large, measured), the intervals' start.
+        // Issue 71: each class's floor as the sufferer, where no jet reaches (its flights' and its
+        // flight alone's spread: 5.4 mN small, 11.3 mN large, measured), the intervals' start.
         EXPECT_GT(b.noise_floor_n, 0.003) << b.name;
         EXPECT_LT(b.noise_floor_n, 0.03) << b.name;
     }
@@ -396,6 +402,17 @@ TEST(RealCalibration, TheSharedTrialsLeftOutInTurnArePredictedBetterAndTheShippe
     EXPECT_TRUE(shipped.turbulence.enabled);
     EXPECT_NEAR(shipped.turbulence.intensity, r.turbulence_intensity, 1e-3)
         << "regenerate config/physics.crazyflie.yaml";
+    // Issue 71: the noise model (each flight's floor where the physics predicts no push; s and tau by
+    // maximum likelihood) fits the trials it never saw: the held-out residual standardised by it has
+    // an RMS within kStandardisedBand on at least 80 % of them (17 of 20 measured), and the shipped
+    // file carries the one fitted on all of them.
+    const auto within = std::count_if(r.trials.begin(), r.trials.end(), [](const auto& t) {
+        return dw::analysis::kStandardisedBand.contains(t.z_rms_heldout);
+    });
+    EXPECT_GE(static_cast<double>(within), 0.8 * static_cast<double>(r.trials.size())) << dw::read_file(r.report_path);
+    EXPECT_NEAR(shipped.prediction_noise.push_share, r.calibrated.prediction_noise.push_share, 1e-3);
+    EXPECT_NEAR(shipped.prediction_noise.timing_spread_s, r.calibrated.prediction_noise.timing_spread_s, 1e-4);
+    EXPECT_GT(r.calibrated.prediction_noise.timing_spread_s, 0.0);
 }
 
 // What the calibration fixed: explained against it, the shared flights no longer buy back a

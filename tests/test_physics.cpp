@@ -4,12 +4,14 @@
 #include <cmath>
 #include <fstream>
 #include <numeric>
+#include <random>
 
 #include "core/errors.hpp"
 #include "flight/blocks.hpp"
 #include "physics/config.hpp"
 #include "physics/flight_sim.hpp"
 #include "physics/jet.hpp"
+#include "physics/prediction_noise.hpp"
 #include "physics/recording_chain.hpp"
 #include "physics/stand.hpp"
 #include "physics/wrench_model.hpp"
@@ -748,4 +750,47 @@ TEST(RecordingChain, EachStageActsOnceAndLiveReadingsAreTheSeriesReadings) {
     auto untouched = series;
     dw::physics::RecordingChain(none).sensor(t, untouched);
     EXPECT_EQ(untouched, series);
+}
+
+// Issue 71: the prediction's noise model. Residuals drawn with a known push share and timing
+// spread about pushes and rates of either size are fitted back by maximum likelihood; a push's
+// rate is its change across the span, offline and online; and the calibrated model is the one a
+// configuration serves, else 2 I from its turbulence.
+TEST(PredictionNoise, TheFitRecoversAKnownPushShareAndTimingSpread) {
+    using dw::physics::NoiseSample;
+    constexpr double kShare = 0.4, kSpread_s = 0.06, kFloor = 0.005;
+    std::mt19937 rng(71);
+    std::normal_distribution<double> unit(0, 1);
+    std::uniform_real_distribution<double> push(0, 0.1), rate(-0.5, 0.5);
+    std::vector<NoiseSample> samples;
+    for (int i = 0; i < 40000; ++i) {
+        NoiseSample s{0, kFloor, push(rng), rate(rng)};
+        s.residual = unit(rng) * dw::physics::prediction_sd(kFloor, {kShare, kSpread_s}, s.p, s.p_rate);
+        samples.push_back(s);
+    }
+    const auto n = dw::physics::fit_prediction_noise(samples);
+    EXPECT_NEAR(n.push_share, kShare, 0.03 * kShare);
+    EXPECT_NEAR(n.timing_spread_s, kSpread_s, 0.03 * kSpread_s);
+    for (auto& s : samples)
+        s.p_rate = 0, s.residual = unit(rng) * dw::physics::prediction_sd(kFloor, {kShare, 0}, s.p, 0);
+    EXPECT_LT(dw::physics::fit_prediction_noise(samples).timing_spread_s, 0.01) << "no rate, no timing spread";
+
+    std::vector<double> t, p;
+    for (int i = 0; i < 100; ++i) t.push_back(0.01 * i), p.push_back(i < 50 ? 0.3 * t.back() : 0.0);
+    const auto r = dw::physics::push_rates(t, p);
+    EXPECT_NEAR(r[20], 0.3, 1e-9) << "a ramp's slope";
+    EXPECT_NEAR(r[90], 0.0, 1e-9) << "flat";
+    EXPECT_LT(r[50], 0.0) << "the ramp's fall";
+    dw::physics::PushRate online;
+    double last = 0;
+    for (int i = 0; i < 30; ++i) last = online.update(t[static_cast<std::size_t>(i)], p[static_cast<std::size_t>(i)]);
+    EXPECT_NEAR(last, 0.3, 1e-9);
+
+    dw::physics::PhysicsConfig c;
+    c.turbulence.intensity = 0.1;
+    EXPECT_DOUBLE_EQ(dw::physics::prediction_noise_of(c).push_share, 0.2);
+    EXPECT_DOUBLE_EQ(dw::physics::prediction_noise_of(c).timing_spread_s, 0.0);
+    c.prediction_noise = {0.5, 0.07};
+    EXPECT_DOUBLE_EQ(dw::physics::prediction_noise_of(c).push_share, 0.5);
+    EXPECT_DOUBLE_EQ(dw::physics::prediction_noise_of(c).timing_spread_s, 0.07);
 }

@@ -745,7 +745,8 @@ TEST(PredictorCompare, EveryFileOfARealRunIsComparedAsAUserRunsIt) {
 }
 
 // Issue 71, item 4: the 95 % intervals' noise model. A flight's floor is its recorded spread where
-// nobody is near; about a right prediction p the recording scatters with sd² = floor² + (2 I p)², so
+// no jet reaches (nobody near, or the physics predicting no push); about a right prediction p the
+// recording scatters with sd² = floor² + (2 I p)² (an uncalibrated physics' noise model), so
 // an exact model's intervals hold 95 % of the samples and a biased one's far fewer.
 TEST(PredictorIntervals, AnExactModelsIntervalsHoldNinetyFivePercent) {
     struct Constant final : ForceModel {  // f_d: `near_n` with a neighbour within 0.3 m, else 0
@@ -785,10 +786,24 @@ TEST(PredictorIntervals, AnExactModelsIntervalsHoldNinetyFivePercent) {
         s.y[kFdAxis] = kPush + unit(rng) * 0.05;
         d.samples.push_back(s);
     }
+    // A third whose neighbour is always near but 0.5 m below, where the physics predicts no push
+    // (under physics::kQuietPush_n): quiet, so its floor is its own. (Another vehicle: another class.)
+    d.sources.push_back(Source{});
+    d.sources.back().name = "neighbour below";
+    d.sources.back().sufferer.mass_kg *= 2;
+    for (int i = 0; i < 200; ++i) {
+        Sample s;
+        s.k = 1;
+        s.source = 2;
+        s.x[0] = RelState{0.1, 0, 0.5, 0, 0, 0};
+        s.y[kFdAxis] = unit(rng) * 3 * kFloor;
+        d.samples.push_back(s);
+    }
     dw::physics::PhysicsConfig physics;
     physics.turbulence.intensity = kIntensity;
     const NoiseModel noise = noise_model(d, physics);
     EXPECT_NEAR(noise.floor.at("synthetic")[kFdAxis], kFloor, 0.05 * kFloor);
+    EXPECT_NEAR(noise.floor.at("neighbour below")[kFdAxis], 3 * kFloor, 0.3 * kFloor);
     EXPECT_EQ(noise.floor.at("always near")[kFdAxis], noise.floor.at("synthetic")[kFdAxis]);
     EXPECT_EQ(noise.from_class, std::vector<std::string>{"always near"});
     EXPECT_TRUE(noise.from_differences.empty());
