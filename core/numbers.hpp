@@ -22,6 +22,7 @@ struct Range {
 
 // Ranges several tools share.
 inline constexpr Range kSeedRange{0, 9007199254740992.0};  // 2^53: every seed a double can say exactly
+inline constexpr Range kPortRange{0, 65535};               // a TCP port; 0 = any free one where a tool says so
 inline constexpr Range kTimeoutRange{0, 86400, "s"};       // 0 = no limit where a tool says so
 
 // Why `v` is not acceptable for `r` ("nan is not a finite number", "7 is not in [0, 1.4] m"),

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <thread>
 
 #include "core/errors.hpp"
 #include "core/files.hpp"
@@ -89,6 +91,29 @@ std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& 
                     (run / "logs" / ("export-" + f.name + ".log")).string(), o.stop);
     }
     return results;
+}
+
+// The lab live while the experiments fly (issue 72): dw-viewer beside them, its address printed.
+// A viewer that cannot start (its port taken, say) is said in one line and the demo goes on.
+constexpr int kViewerStartPolls = 500;  // of 20 ms
+std::optional<Subprocess> start_viewer(const DemoOptions& o, const fs::path& run) {
+    std::vector<std::string> argv{executable_dir() + "/dw-viewer", "--port", std::to_string(o.viewer_port)};
+    argv.insert(argv.end(), o.dds_args.begin(), o.dds_args.end());
+    const auto out = (run / "logs" / "viewer.out").string(), log_file = (run / "logs" / "viewer.log").string();
+    Subprocess viewer({argv, out, log_file, {}});
+    for (int i = 0; i < kViewerStartPolls && viewer.running(); ++i) {
+        const auto text = fs::exists(out) ? read_file(out) : std::string();
+        const auto at = text.find("viewer at ");
+        if (at != std::string::npos && text.find('\n', at) != std::string::npos) {
+            const auto url = text.substr(at + 10, text.find('\n', at) - at - 10);
+            std::cout << "watch the lab live: open " << url << " in a browser; in Foxglove or Lichtblick, Open "
+                      << "connection, Foxglove WebSocket, ws://" << url.substr(7, url.size() - 8) << std::endl;
+            return viewer;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::cerr << "dw-lab: the viewer did not start (" << last_line_of(log_file) << "); the demo goes on without it\n";
+    return std::nullopt;
 }
 
 // 4. The study's models on the recorded (DDS) flights, and the recorded map.
@@ -208,7 +233,9 @@ int run_demo(const DemoOptions& o) {
         // The explainer's cross-validation needs at least 5 blocks (encounters): 6 legs in --quick.
         {"lf3", "leader_follower3", "v1,v2,v3", o.quick ? "6" : "12", "1.3", kHiddenStandClockOffsetS},
     };
+    auto viewer = start_viewer(o, run);
     const std::vector<LaunchResult> results = fly_experiments(o, run, lab, physics_path, flights, step);
+    if (viewer) viewer->stop();
 
     // 3. Train and compare (the study: simulated training flights of every formation).
     step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");

@@ -18,6 +18,7 @@ struct DemoOptions {
     bool quick = false;                 // fewer legs and epochs (the CI test)
     int jobs = machine_cores();         // cores the study may use (dw-predictor study --jobs)
     std::vector<std::string> dds_args;  // for every process
+    int viewer_port = 8765;             // dw-viewer's while the experiments fly (0: any free port)
     dds::DdsConfig dds;                 // the launcher's own participant
     std::stop_token stop;               // every step and child stops: dw::Stopped
 };

@@ -102,6 +102,9 @@ int run(int argc, char** argv) {
     demo->add_flag("--quick", demo_o.quick, "fewer legs and epochs (a smoke test, ~3 min)");
     demo->add_option("--jobs", demo_o.jobs, "cores the study may use (default: every core)")
         ->check(dw::cli::in(dw::kJobsRange));
+    demo->add_option("--viewer-port", demo_o.viewer_port,
+                     "dw-viewer's port while the experiments fly (default 8765; 0: any free one)")
+        ->check(dw::cli::in(dw::kPortRange));
     RunCommand runc;
     runc.add(app);
 

@@ -11,6 +11,7 @@
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
+#include "dds/cdr.hpp"
 #include "dds/endpoint.hpp"
 #include "idl/idl_texts.hpp"
 
@@ -80,11 +81,9 @@ private:
         Nanos& last = last_received_ns_[meta.writer];  // per writer: its own silence, not the topic's
         if (meta.missing_before > 0) note_gap({last, meta.reception_time_ns, meta.missing_before});
         last = meta.reception_time_ns;
-        const std::uint32_t size = support_.getSerializedSizeProvider(const_cast<T*>(&m))();
-        if (payload_.max_size < size) payload_.reserve(size);
-        payload_.length = 0;
-        if (!support_.serialize(const_cast<T*>(&m), &payload_)) return;
-        sink_(index_, {payload_.data, payload_.length}, static_cast<std::uint64_t>(meta.reception_time_ns),
+        const auto payload = cdr_.serialize(m);
+        if (payload.empty()) return;
+        sink_(index_, payload, static_cast<std::uint64_t>(meta.reception_time_ns),
               static_cast<std::uint64_t>(meta.source_time_ns), static_cast<std::uint32_t>(m.header().seq()));
     }
 
@@ -93,8 +92,7 @@ private:
         sink_;
     std::uint16_t index_;
     std::map<eprosima::fastdds::dds::InstanceHandle_t, Nanos> last_received_ns_;  // per writer; listener thread only
-    typename dds::PubSubOf<T>::type support_;
-    eprosima::fastrtps::rtps::SerializedPayload_t payload_{256};
+    dds::CdrWriter<T> cdr_;
     dds::Reader<T> reader_;  // last: its callback uses the members above
 };
 

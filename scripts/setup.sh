@@ -12,7 +12,7 @@ packages=(
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools libtinyxml2-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libeigen3-dev
   libzstd-dev liblz4-dev libisal-dev zlib1g-dev libgpiod-dev libopencv-dev libssl-dev
-  libtorch-dev libceres-dev
+  libtorch-dev libceres-dev libboost-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   iproute2 procps python3 clang-format
 )

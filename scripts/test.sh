@@ -26,7 +26,14 @@ if ! command -v npm >/dev/null; then
   "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
   "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends nodejs npm
 fi
-(cd "$here/tests/js" && npm ci --no-audit --no-fund --loglevel=error)
+# Debian's chromium for the viewer's page in a real browser (tests/js/check_viewer_page.mjs, driven
+# by npm's puppeteer-core: no browser is downloaded).
+if ! command -v chromium >/dev/null; then
+  sudo_cmd=(); [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
+  "${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends chromium
+fi
+(cd "$here/tests/js" && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error)
 status=0
 # Tests run side by side while the machine's CPU slots last (tests/CMakeLists.txt: what each takes;
 # build/resources.json: how many there are).

@@ -754,9 +754,12 @@ TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
     const auto r =
         // --jobs 1: the study trains one model at a time, so the demo takes one thread's slots.
         dw::test::run({bin("dw-lab"), "demo", "--quick", "--jobs", "1", "--out", dir.file("demo"), "--domain",
-                       std::to_string(dw::test::test_domain()), "--namespace", "demo" + std::to_string(::getpid())},
+                       std::to_string(dw::test::test_domain()), "--namespace", "demo" + std::to_string(::getpid()),
+                       "--viewer-port", "0"},
                       dir, 900000ms);
     ASSERT_EQ(r.status, 0) << r.err;
+    // Issue 72: the viewer ran beside the experiments and its address was printed.
+    EXPECT_NE(r.out.find("watch the lab live: open http://127.0.0.1:"), std::string::npos) << r.out;
     const std::string index = dw::read_file(dir.file("demo/index.md"));
     for (const char* f :
          {"recordings/single.mcap", "recordings/lf3.mcap", "flights/lf3", "study/table.md", "study/models",
