@@ -16,6 +16,7 @@ enum class Role : unsigned {
     recorder = 1u << 4,
     launcher = 1u << 5,   // dw-lab: starts the processes, shows their status
     operator_ = 1u << 6,  // a person's tools (dw-probe): watch everything, command the experiment
+    viewer = 1u << 7,     // dw-viewer: reads every topic, publishes nothing (not even a heartbeat)
 };
 using Roles = unsigned;
 constexpr Roles operator|(Role a, Role b) { return static_cast<Roles>(a) | static_cast<Roles>(b); }
@@ -27,7 +28,7 @@ struct RoleInfo {
     std::string_view name;        // the identity's default name
     std::string_view executable;  // the lab executable that plays it
 };
-inline constexpr std::array<RoleInfo, 7> kRoles{{
+inline constexpr std::array<RoleInfo, 8> kRoles{{
     {Role::stand_agent, "stand_agent", "dw-stand-agent"},
     {Role::mocap_bridge, "mocap_bridge", "dw-mocap-bridge"},
     {Role::planner, "planner", "dw-planner"},
@@ -35,12 +36,16 @@ inline constexpr std::array<RoleInfo, 7> kRoles{{
     {Role::recorder, "recorder", "dw-recorder"},
     {Role::launcher, "launcher", "dw-lab"},
     {Role::operator_, "operator", "dw-probe"},
+    {Role::viewer, "viewer", "dw-viewer"},
 }};
 inline constexpr Roles kEveryRole = [] {
     Roles all = 0;
     for (const auto& r : kRoles) all |= static_cast<Roles>(r.role);
     return all;
 }();
+// The roles that only read: their permissions grant no topic to publish.
+inline constexpr Roles kReadOnlyRoles = static_cast<Roles>(Role::viewer);
+inline constexpr Roles kEveryPublisher = kEveryRole & ~kReadOnlyRoles;
 
 std::string_view role_name(Role r);
 std::optional<Role> role_named(std::string_view name);

@@ -71,7 +71,7 @@ inline constexpr Topic<WrenchStamped> stand_wrench{
     "calibrated 6-DOF wrench on the sufferer (80 Hz)",
     "Wrench",
     Roles(Role::stand_agent),
-    Role::recorder | Role::operator_,
+    Role::recorder | Role::operator_ | Role::viewer,
     Protection::sign,
     "the measurement itself: forged, it corrupts the study; read, it costs nothing"};
 inline constexpr Topic<LoadCellFrame> stand_cells{"stand/cells",
@@ -80,7 +80,7 @@ inline constexpr Topic<LoadCellFrame> stand_cells{"stand/cells",
                                                   "raw counts of the 8 load cells (80 Hz)",
                                                   "Stand",
                                                   Roles(Role::stand_agent),
-                                                  Role::recorder | Role::operator_,
+                                                  Role::recorder | Role::operator_ | Role::viewer,
                                                   Protection::sign,
                                                   "raw counts behind the wrench: the same as stand/wrench"};
 inline constexpr Topic<StandStatus> stand_status{
@@ -90,7 +90,7 @@ inline constexpr Topic<StandStatus> stand_status{
     "stand agent state, faults and tare (latched)",
     "Stand",
     Roles(Role::stand_agent),
-    Role::recorder | Role::launcher | Role::operator_,
+    Role::recorder | Role::launcher | Role::operator_ | Role::viewer,
     Protection::sign,
     "a forged READY or tare would start an experiment on an untared stand"};
 inline constexpr Topic<MocapFrame> mocap_frame{
@@ -100,7 +100,7 @@ inline constexpr Topic<MocapFrame> mocap_frame{
     "one motion-capture frame, every rigid body (180 Hz)",
     "Mocap",
     Roles(Role::mocap_bridge),
-    Role::stand_agent | Role::predictor | Role::recorder | Role::operator_,
+    Role::stand_agent | Role::predictor | Role::recorder | Role::operator_ | Role::viewer,
     Protection::sign,
     "forged poses would mislead the predictor and the stand simulation; positions in a lab are no secret"};
 inline constexpr Topic<VehicleState> vehicle_state{
@@ -110,7 +110,7 @@ inline constexpr Topic<VehicleState> vehicle_state{
     "per-vehicle pose and velocity (keyed by vehicle_id)",
     "Vehicle",
     Roles(Role::mocap_bridge),
-    Role::planner | Role::recorder | Role::operator_,
+    Role::planner | Role::recorder | Role::operator_ | Role::viewer,
     Protection::sign,
     "the planner supervises tracking and the geofence on it: forged, it hides a vehicle going astray"};
 inline constexpr Topic<VehicleSetpoint> vehicle_setpoint{
@@ -120,7 +120,7 @@ inline constexpr Topic<VehicleSetpoint> vehicle_setpoint{
     "per-vehicle trajectory setpoint (keyed by vehicle_id, >= 50 Hz)",
     "Vehicle",
     Roles(Role::planner),
-    Role::mocap_bridge | Role::recorder | Role::operator_,
+    Role::mocap_bridge | Role::recorder | Role::operator_ | Role::viewer,
     Protection::encrypt,
     "moves real multirotors over a person-sized stand: no one outside the lab may read or write it",
     true};
@@ -131,7 +131,7 @@ inline constexpr Topic<VehicleCommandSent> vehicle_command{
     "every command the lab sent to a vehicle's autopilot: mode, arm, land (keyed by vehicle_id)",
     "Vehicle",
     Roles(Role::planner),
-    Role::recorder | Role::operator_,
+    Role::recorder | Role::operator_ | Role::viewer,
     Protection::encrypt,
     "what the lab asked of its vehicles, and when: no one outside the lab may read or forge it",
     true};
@@ -142,7 +142,7 @@ inline constexpr Topic<ExperimentPlan> experiment_plan{
     "the experiment's formation and legs (latched)",
     "Experiment",
     Roles(Role::planner),
-    Role::recorder | Role::launcher | Role::operator_,
+    Role::recorder | Role::launcher | Role::operator_ | Role::viewer,
     Protection::encrypt,
     "the legs the vehicles will fly: kept from anyone outside the lab"};
 inline constexpr Topic<ExperimentCommand> experiment_command{
@@ -152,7 +152,7 @@ inline constexpr Topic<ExperimentCommand> experiment_command{
     "operator/planner commands: start, calibrate, pause, abort",
     "Experiment",
     Role::planner | Role::operator_,
-    Role::stand_agent | Role::planner | Role::recorder,
+    Role::stand_agent | Role::planner | Role::recorder | Role::viewer,
     Protection::encrypt,
     "start, abort and calibrate: only the planner and the operator, unseen",
     true};
@@ -163,7 +163,7 @@ inline constexpr Topic<ExperimentState> experiment_state{
     "experiment phase, leg and progress (latched)",
     "Experiment",
     Roles(Role::planner),
-    Role::launcher | Role::recorder | Role::operator_,
+    Role::launcher | Role::recorder | Role::operator_ | Role::viewer,
     Protection::sign,
     "a forged DONE or ABORTED would mislead the operator and the launcher"};
 inline constexpr Topic<WrenchPrediction> wrench_prediction{"predictor/wrench",
@@ -172,7 +172,7 @@ inline constexpr Topic<WrenchPrediction> wrench_prediction{"predictor/wrench",
                                                            "predicted wrench on the sufferer, per model",
                                                            "Prediction",
                                                            Roles(Role::predictor),
-                                                           Role::recorder | Role::operator_,
+                                                           Role::recorder | Role::operator_ | Role::viewer,
                                                            Protection::sign,
                                                            "forged predictions would be recorded as the model's"};
 inline constexpr Topic<ProcessStatus> process_status{
@@ -181,7 +181,7 @@ inline constexpr Topic<ProcessStatus> process_status{
     "dw::msg::ProcessStatus",
     "heartbeat and status of every lab process (keyed by process)",
     "Status",
-    kEveryRole,
+    kEveryPublisher,
     kEveryRole,
     Protection::sign,
     "forged heartbeats would hide a dead process from the supervision"};
@@ -191,8 +191,8 @@ inline constexpr Topic<ClockProbe> clock_request{
     "dw::msg::ClockProbe",
     "a process asks the reference clock (the recorder) for its time (every 0.5 s)",
     "Status",
-    kEveryRole,
-    Roles(Role::recorder),
+    kEveryPublisher,
+    Role::recorder | Role::viewer,
     Protection::sign,
     "forged requests only cost the recorder an answer"};
 inline constexpr Topic<ClockProbe> clock_reply{

@@ -22,6 +22,7 @@
 #include "core/subprocess.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/heartbeat.hpp"
+#include "dds/roles.hpp"
 #include "dds/names.hpp"
 #include "dds/participant.hpp"
 #include "dds/time.hpp"
@@ -173,8 +174,10 @@ std::string status_text(const std::deque<Running>& procs, const dds::PeerMonitor
                           auth_text(secure, peers.identity(r.spec.name), r.spec.name).c_str(), out_hz, in_hz, lost,
                           clock_text(*st).c_str(), st->message().empty() ? "" : "  ", st->message().c_str());
         } else {
-            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s (no heartbeat yet)", r.spec.name.c_str(), "-",
-                          where.c_str(), r.spec.host.c_str());
+            const auto role = dds::role_of_executable(r.spec.run.front());
+            const bool reads_only = role && dds::has(dds::kReadOnlyRoles, *role);  // publishes no heartbeat
+            std::snprintf(line, sizeof line, "  %-14s %-9s %-10s @%-8s %s", r.spec.name.c_str(), "-", where.c_str(),
+                          r.spec.host.c_str(), reads_only ? "(reads only: no heartbeat)" : "(no heartbeat yet)");
         }
         s << line << "\n";
     }

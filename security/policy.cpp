@@ -99,10 +99,11 @@ std::string permissions_xml(const Grant& g) {
       << "      <validity><not_before>" << utc(g.not_before) << "</not_before><not_after>" << utc(g.not_after)
       << "</not_after></validity>\n"
       << "      <!-- role " << dds::role_name(g.role) << " -->\n"
-      << "      <allow_rule>\n        " << domains() << "\n"
-      << "        <publish>\n          <topics>\n"
-      << pub.str() << "          </topics>\n        </publish>\n"
-      << "        <subscribe>\n          <topics>\n"
+      << "      <allow_rule>\n        " << domains() << "\n";
+    // A role that only reads (the viewer) has no publish section: an empty one is no valid document.
+    if (!pub.str().empty())
+        o << "        <publish>\n          <topics>\n" << pub.str() << "          </topics>\n        </publish>\n";
+    o << "        <subscribe>\n          <topics>\n"
       << sub.str() << "          </topics>\n        </subscribe>\n"
       << "      </allow_rule>\n      <default>DENY</default>\n    </grant>\n  </permissions>\n</dds>\n";
     return o.str();

@@ -131,6 +131,8 @@ std::vector<Row> table() {
          {},
          {{"--summary", Role::out, ".json", true}},
          {}},
+        // ---- dw-viewer (a daemon: it serves until stopped)
+        {"viewer", "dw-viewer", "", {"--domain", "{domain}", "--port", "0"}, daemon, true, false, {}, {}, {}},
         // ---- dw-lab
         {"lab_loopback",
          "dw-lab",

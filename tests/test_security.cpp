@@ -36,7 +36,9 @@
 #include "dds/security.hpp"
 #include "probe/samples.hpp"
 #include "security/keystore.hpp"
+#include "security/policy.hpp"
 #include "support.hpp"
+#include "viewer/hub.hpp"
 
 using namespace std::chrono_literals;
 using dw::dds::Participant;
@@ -396,6 +398,19 @@ TEST(SecureDds, AnIdentityMayNotPublishWhatItsRoleDoesNotProduce) {
     Participant predictor(secure("predictor"), "predictor");
     EXPECT_THROW(dw::dds::Writer<dw::msg::WrenchStamped>(predictor, topics::stand_wrench), dw::RuntimeError);
     EXPECT_NO_THROW(dw::dds::Writer<dw::msg::WrenchPrediction>(predictor, topics::wrench_prediction));
+}
+
+// Issue 72: the viewer's identity reads every lab topic and may publish none — not even the
+// heartbeat or a clock request every other role sends — and its hub shows every channel.
+TEST(SecureDds, TheViewerReadsEveryTopicAndMayPublishNone) {
+    Participant viewer(secure("viewer"), "viewer");
+    EXPECT_THROW(dw::dds::Writer<dw::msg::ProcessStatus>(viewer, topics::process_status), dw::RuntimeError);
+    EXPECT_THROW(dw::dds::Writer<dw::msg::ClockProbe>(viewer, topics::clock_request), dw::RuntimeError);
+    EXPECT_THROW(dw::dds::Writer<dw::msg::ExperimentCommand>(viewer, topics::experiment_command), dw::RuntimeError);
+    const dw::viewer::Hub hub(viewer);
+    EXPECT_EQ(hub.channels().size(), static_cast<std::size_t>(topics::kTopicCount));
+    const auto xml = dw::security::permissions_xml({"viewer", dw::dds::Role::viewer, {}, {}});
+    EXPECT_EQ(xml.find("<publish>"), std::string::npos) << xml;
 }
 
 // Shared memory beside UDP made secure participants sometimes never authenticate (Fast DDS 2.9.1,

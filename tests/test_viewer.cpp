@@ -97,3 +97,20 @@ TEST(ViewerPage, ThePagesFilesAreServedAndNothingElse) {
     EXPECT_EQ(page_file("/../etc/passwd"), nullptr);
     EXPECT_EQ(page_file("/nope"), nullptr);
 }
+
+// Hostile text never throws out of the viewer: a sample's string that is no UTF-8 (a malformed
+// sample on the wire), a client's long operation name in many-byte letters cut at 40 bytes.
+TEST(Foxglove, TextThatIsNoUtf8BecomesReplacementCharactersNotAnException) {
+    const std::string bad =
+        "run\xff\xfe"
+        "id";
+    std::string text;
+    EXPECT_NO_THROW(text = json_text({{"run_id", bad}}));
+    EXPECT_NE(text.find("\xef\xbf\xbd"), std::string::npos) << text;  // U+FFFD
+    std::string op;
+    for (int i = 0; i < 30; ++i) op += "\xc3\xa9";  // é × 30: 60 bytes
+    const auto r = parse_client(R"({"op":")" + op + R"("})");
+    ASSERT_TRUE(std::holds_alternative<Refused>(r));
+    EXPECT_NO_THROW(text = status(StatusLevel::error, std::get<Refused>(r).why));
+    EXPECT_FALSE(nlohmann::json::parse(text, nullptr, false).is_discarded()) << text;
+}

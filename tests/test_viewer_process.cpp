@@ -39,6 +39,8 @@ processes:
     experiment: true
 )";
 
+constexpr std::chrono::milliseconds kLabStopGrace{60000};
+
 std::string js(const std::string& script) { return std::string(DW_SOURCE_DIR) + "/tests/js/" + script; }
 
 struct LiveLab {
@@ -68,6 +70,12 @@ struct LiveLab {
                 url = out.substr(at + 10, out.find('\n', at) - at - 10);
             else std::this_thread::sleep_for(10ms);
         }
+    }
+    // The lab stopped as a person would (SIGTERM: dw-lab stops its processes first; a SIGKILL would
+    // leave them running), then the viewer.
+    ~LiveLab() {
+        if (lab) lab->stop(kLabStopGrace);
+        if (viewer) viewer->stop();
     }
     std::string ws() const { return "ws://" + url.substr(7); }
     // Until the experiment flies a leg (the state says so), at most `limit`.

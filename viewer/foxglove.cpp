@@ -64,6 +64,10 @@ ClientMessage parse_unsubscribe(const nlohmann::json& j) {
 }
 }  // namespace
 
+std::string json_text(const nlohmann::json& j) {
+    return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 std::optional<Chosen> choose_subprotocol(std::string_view offered) {
     for (const auto t : tokens(offered)) {
         if (t == kFoxgloveSdk || t == kFoxgloveWebsocket) return Chosen{std::string(t), Dialect::foxglove};
@@ -73,13 +77,12 @@ std::optional<Chosen> choose_subprotocol(std::string_view offered) {
 }
 
 std::string server_info(std::string_view name, std::string_view session_id) {
-    return nlohmann::json{{"op", "serverInfo"},
-                          {"name", name},
-                          {"capabilities", nlohmann::json::array({"time"})},
-                          {"supportedEncodings", nlohmann::json::array()},
-                          {"metadata", nlohmann::json::object()},
-                          {"sessionId", session_id}}
-        .dump();
+    return json_text(nlohmann::json{{"op", "serverInfo"},
+                                    {"name", name},
+                                    {"capabilities", nlohmann::json::array({"time"})},
+                                    {"supportedEncodings", nlohmann::json::array()},
+                                    {"metadata", nlohmann::json::object()},
+                                    {"sessionId", session_id}});
 }
 
 std::string advertise(std::span<const Channel> channels) {
@@ -91,11 +94,11 @@ std::string advertise(std::span<const Channel> channels) {
                         {"schemaName", c.schema_name},
                         {"schema", c.schema},
                         {"schemaEncoding", "omgidl"}});
-    return nlohmann::json{{"op", "advertise"}, {"channels", list}}.dump();
+    return json_text(nlohmann::json{{"op", "advertise"}, {"channels", list}});
 }
 
 std::string status(StatusLevel level, std::string_view message) {
-    return nlohmann::json{{"op", "status"}, {"level", static_cast<int>(level)}, {"message", message}}.dump();
+    return json_text(nlohmann::json{{"op", "status"}, {"level", static_cast<int>(level)}, {"message", message}});
 }
 
 std::vector<std::uint8_t> message_data(std::uint32_t subscription, std::uint64_t log_time_ns,

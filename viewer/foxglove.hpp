@@ -4,6 +4,7 @@
 // takes subscriptions, and refuses every client operation that would publish, call or set
 // anything. Pure functions: the socket is server.hpp's.
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
 #include <string>
@@ -45,6 +46,10 @@ inline constexpr std::uint8_t kTimeOpcode = 2;
 std::vector<std::uint8_t> message_data(std::uint32_t subscription, std::uint64_t log_time_ns,
                                        std::span<const std::uint8_t> payload);
 std::vector<std::uint8_t> time_message(std::uint64_t now_ns);
+
+// j as JSON text, never throwing: bytes that are no UTF-8 (a hostile sample's string, a client's
+// name cut short) become U+FFFD.
+std::string json_text(const nlohmann::json& j);
 
 // A client's text message, as the viewer takes it.
 struct Subscribe {

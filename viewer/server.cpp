@@ -135,7 +135,16 @@ void Server::Impl::upgraded(tcp::socket socket, http::request<http::string_body>
 Server::Server(Hub& hub, const ServerOptions& o) : impl_(std::make_unique<Impl>(hub, o)) {
     impl_->listen();
     impl_->accept();
-    impl_->thread = std::thread([this] { impl_->io.run(); });
+    impl_->thread = std::thread([this] {
+        for (;;) {  // a handler's exception ends that handler, never the server
+            try {
+                impl_->io.run();
+                return;
+            } catch (const std::exception& e) {
+                log::error("viewer: ", e.what(), " (that client's request dropped; serving on)");
+            }
+        }
+    });
 }
 
 Server::~Server() {

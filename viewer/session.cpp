@@ -41,7 +41,8 @@ void Session::start(http::request<http::string_body> upgrade) {
         res.set(http::field::server, "dw-viewer");
     }));
     ws_.async_accept(upgrade, [self = shared_from_this()](beast::error_code ec) {
-        if (!ec) self->opened();
+        if (ec) return self->close();  // a handshake that failed: no client
+        self->opened();
     });
 }
 
@@ -52,8 +53,7 @@ void Session::opened() {
     } else {
         nlohmann::json topics = nlohmann::json::array();
         for (const auto& c : hub_.channels()) topics.push_back(c.topic);
-        control(nlohmann::json{{"op", "hello"}, {"name", server_name_}, {"topics", topics}, {"enums", enum_names()}}
-                    .dump());
+        control(json_text({{"op", "hello"}, {"name", server_name_}, {"topics", topics}, {"enums", enum_names()}}));
     }
     hub_.attach(shared_from_this());
     read();
