@@ -85,6 +85,15 @@ TEST(Outbox, AStalledClientLosesItsOldestSensorFramesAndKeepsEachStatesNewest) {
     for (int i = 0; i < 10; ++i) box.push_stream({true, big});
     EXPECT_LE(box.bytes(), kMaxQueuedBytes);
     EXPECT_EQ(box.dropped(), pushed - kMaxQueuedFrames + 6);
+    // Instances named on the wire are held up to kMaxHeldStates; more wait as stream frames, which
+    // are bounded: a writer inventing a name per sample does not grow the outbox.
+    Outbox names;
+    const std::size_t invented = kMaxHeldStates + 2 * kMaxQueuedFrames;
+    for (std::size_t i = 0; i < invented; ++i) names.push_latest(1, "p" + std::to_string(i), {false, "s"});
+    std::size_t frames = 0;
+    while (names.pop()) ++frames;
+    EXPECT_EQ(frames, kMaxHeldStates + kMaxQueuedFrames);
+    EXPECT_EQ(names.dropped(), invented - frames);
 }
 
 TEST(ViewerPage, ThePagesFilesAreServedAndNothingElse) {

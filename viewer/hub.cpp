@@ -9,6 +9,7 @@
 #include "dds/msg_json.hpp"
 #include "dds/topics.hpp"
 #include "idl/idl_texts.hpp"
+#include "viewer/outbox.hpp"
 
 namespace dw::viewer {
 
@@ -129,13 +130,14 @@ void Hub::replay(Client& c, std::uint32_t channel) {
 
 void Hub::publish(const Sample& s) {
     ++received_;
-    if (s.latest) {
-        std::lock_guard lock(mutex_);
+    std::unique_lock lock(mutex_);
+    if (s.latest && (latest_.size() < kMaxHeldStates || latest_.contains({s.channel, std::string(s.key)}))) {
         Held& h = latest_[{s.channel, std::string(s.key)}];
         h = {s.channel,          std::string(s.suffix),
              std::string(s.key), s.json ? *s.json : std::string(),
              s.log_time_ns,      std::vector<std::uint8_t>(s.cdr.begin(), s.cdr.end())};
     }
+    lock.unlock();
     for (const auto& c : clients()) c->deliver(s);
 }
 

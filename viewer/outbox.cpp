@@ -14,7 +14,11 @@ void Outbox::push_stream(Frame f) {
 }
 
 void Outbox::push_latest(std::uint32_t channel, const std::string& key, Frame f) {
-    std::lock_guard lock(mutex_);
+    std::unique_lock lock(mutex_);
+    if (latest_.size() >= kMaxHeldStates && !latest_.contains({channel, key})) {
+        lock.unlock();
+        return push_stream(std::move(f));
+    }
     auto& slot = latest_[{channel, key}];
     bytes_ += f.bytes.size();
     bytes_ -= slot.bytes.size();

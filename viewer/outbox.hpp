@@ -17,6 +17,10 @@ namespace dw::viewer {
 // At most this many stream frames, and this many bytes of them, wait per client.
 inline constexpr std::size_t kMaxQueuedFrames = 1024;
 inline constexpr std::size_t kMaxQueuedBytes = std::size_t{4} << 20;
+// At most this many state instances are held (per client, and in the hub): names come from the
+// wire, and a writer inventing one per sample must not grow memory. Past it a new instance's
+// frame waits as a stream frame (bounded above).
+inline constexpr std::size_t kMaxHeldStates = 512;
 
 struct Frame {
     bool binary = false;
