@@ -167,7 +167,7 @@ public:
     }
 
     // The same residuals with what the noise model needs of each: its flight's floor (from `floors`,
-    // per flight; 0 where none is given), the push predicted and its rate.
+    // per flight), the push predicted and its rate; without floors (no noise model), floor and rate 0.
     std::vector<physics::NoiseSample> noise_samples(const std::vector<double>& x, const std::vector<std::size_t>& use,
                                                     bool fit_rows, const std::vector<double>& floors) const {
         const PhysicsConfig c = config_of(x);
@@ -178,7 +178,9 @@ public:
             const auto pred = fd.sim->recorded(c);
             std::vector<double> p_d;
             for (const auto& w : pred) p_d.push_back(w[kFdAxis]);
-            const auto rate = physics::push_rates(fd.sim->stamps(), p_d);
+            // The rates only where a noise model is asked for (not on the fit's many residual calls).
+            const auto rate =
+                floors.empty() ? std::vector<double>(p_d.size(), 0.0) : physics::push_rates(fd.sim->stamps(), p_d);
             const double floor = floors.empty() ? 0.0 : floors[use[k]];
             auto& part = parts[k];
             for (auto i : fit_rows ? fd.fit_rows : fd.rows)

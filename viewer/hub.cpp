@@ -130,15 +130,17 @@ void Hub::replay(Client& c, std::uint32_t channel) {
 
 void Hub::publish(const Sample& s) {
     ++received_;
-    std::unique_lock lock(mutex_);
-    if (s.latest && (latest_.size() < kMaxHeldStates || latest_.contains({s.channel, std::string(s.key)}))) {
-        Held& h = latest_[{s.channel, std::string(s.key)}];
-        h = {s.channel,          std::string(s.suffix),
-             std::string(s.key), s.json ? *s.json : std::string(),
-             s.log_time_ns,      std::vector<std::uint8_t>(s.cdr.begin(), s.cdr.end())};
-    }
-    lock.unlock();
+    if (s.latest) hold(s);
     for (const auto& c : clients()) c->deliver(s);
+}
+
+void Hub::hold(const Sample& s) {
+    std::lock_guard lock(mutex_);
+    const std::pair<std::uint32_t, std::string> at{s.channel, std::string(s.key)};
+    if (latest_.size() >= kMaxHeldStates && !latest_.contains(at)) return;  // names from the wire: bounded
+    latest_[at] = {s.channel,          std::string(s.suffix),
+                   std::string(s.key), s.json ? *s.json : std::string(),
+                   s.log_time_ns,      std::vector<std::uint8_t>(s.cdr.begin(), s.cdr.end())};
 }
 
 }  // namespace dw::viewer

@@ -66,6 +66,7 @@ private:
         std::vector<std::uint8_t> cdr;
     };
     std::vector<std::shared_ptr<Client>> clients();
+    void hold(const Sample& s);  // a state topic's newest sample per instance (up to kMaxHeldStates)
 
     std::vector<Channel> channels_;
     std::mutex mutex_;
