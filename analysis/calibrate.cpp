@@ -408,12 +408,12 @@ PhysicsConfig with_provenance(const PhysicsConfig& fitted, const PhysicsConfig& 
 }
 
 // A flight's quiet f_d: where nobody is near, and where a neighbour is but physics c predicts a
-// push under physics::kQuietPush_n (a neighbour below, or beside its jet).
+// push it calls quiet (physics::quiet_push: a neighbour below, or beside its jet).
 std::vector<double> quiet_f_d(const FlightData& fd, const PhysicsConfig& c) {
     auto out = fd.far_f_d;
     const auto pred = fd.sim->recorded(c);
     for (auto i : fd.rows)
-        if (std::abs(pred[i][kFdAxis]) < physics::kQuietPush_n) out.push_back(fd.sim->measured()[i][kFdAxis]);
+        if (physics::quiet_push(pred[i][kFdAxis])) out.push_back(fd.sim->measured()[i][kFdAxis]);
     return out;
 }
 

@@ -285,9 +285,10 @@ struct Design {
     Layout layout;
 };
 
-Design design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds, double intensity,
-              const std::vector<Wrench6>& weigh_by) {
+Design design(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
+              const physics::PredictionNoise& n, const std::vector<Wrench6>& weigh_by) {
     const Frame frame = frame_of(d, pred);
+    const PushNoise push(d, weigh_by, n);
     const Context c{d.sim, d.info, pred, frame, layout_of(frame.drift.count)};
     std::vector<Gram> parts;
     Eigen::VectorXd sum_sq = Eigen::VectorXd::Zero(c.layout.columns);
@@ -301,8 +302,10 @@ Design design(const ExplainData& d, const std::vector<Wrench6>& pred, const Fold
             const auto row = static_cast<Eigen::Index>(r);
             // Each sample weighed by its noise: the floor and the turbulence that grows with the push
             // (analysis/noise.hpp's excess), so that the near passes' scatter does not drown the rest.
-            const double turbulent = 2 * intensity * push_of(d.sim, d.sigma, weigh_by, test[r]);
-            const double w = 1 / std::sqrt(1 + turbulent * turbulent);
+            double beyond = 0;
+            for (std::size_t a = 0; a < 6; ++a)
+                if (d.sim.measured_axes()[a]) beyond += push.relative(test[r], a);
+            const double w = 1 / std::sqrt(1 + beyond);
             g.x.row(row) = w * inputs_of(c, test[r]);
             for (std::size_t a = 0; a < 6; ++a)
                 if (d.sim.measured_axes()[a])
@@ -422,8 +425,8 @@ double total(const std::map<int, AxisValues>& pieces, std::size_t a) {
 Discrepancy learn_discrepancy(const ExplainData& d, const std::vector<Wrench6>& pred, const Folds& folds,
                               const ExplainOptions& o, const DiscrepancyRun& run) {
     Discrepancy r;
-    const double intensity = turbulence_of(o.physics);
-    const Design ds = design(d, pred, folds, intensity, run.weigh_by ? *run.weigh_by : pred);
+    const Design ds =
+        design(d, pred, folds, physics::prediction_noise_of(o.physics), run.weigh_by ? *run.weigh_by : pred);
     const Layout& l = ds.layout;
     std::vector<int> cols;
     for (std::size_t g = 0; g < kInputGroups.size(); ++g)

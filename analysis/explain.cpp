@@ -29,15 +29,15 @@ void conclude(ExplainResult& R, const ExplainData& d, const Baseline& base, cons
     const std::vector<Wrench6>& base_pred = base.pred;
     if (R.accepted.empty()) R.heldout_before = R.heldout_after = residual_rms(d, base_pred);
     R.fitted = final_model.physics;
-    const double intensity = turbulence_of(o.physics);
-    R.excess_before = excess_of(d, base_pred, intensity);
-    R.excess_after = excess_of(d, final_model.pred, intensity);
+    const auto noise = physics::prediction_noise_of(o.physics);
+    R.excess_before = excess_of(d, base_pred, noise);
+    R.excess_after = excess_of(d, final_model.pred, noise);
     // Whether: an accepted effect, a candidate that predicts held-out data better but only as a
     // stand-in, or a residual beyond what noise and turbulence explain (the regions say where; on
     // their own they are many cells tested at once, not evidence).
     const bool excess = largest(R.excess_before) > o.detect_excess;
-    R.line_before = strongest_line(d, base_pred, intensity);
-    R.line_after = R.line_before.significant ? strongest_line(d, final_model.pred, intensity) : R.line_before;
+    R.line_before = strongest_line(d, base_pred, noise);
+    R.line_after = R.line_before.significant ? strongest_line(d, final_model.pred, noise) : R.line_before;
     const bool any_stand_in =
         std::any_of(R.candidates.begin(), R.candidates.end(), [](const CandidateResult& c) { return c.stand_in; });
     R.detected = !R.accepted.empty() || excess || any_stand_in || R.line_before.significant;
@@ -187,7 +187,7 @@ std::vector<FamilyVerdict> families_of(const ExplainResult& R, const Resimulatio
 
 // The held-out variance shared out on f_d (else the axis with the largest held-out error).
 VarianceShares shares_of(const ExplainResult& R, const ExplainData& d, const std::vector<Wrench6>& pred,
-                         double intensity) {
+                         const physics::PredictionNoise& model) {
     VarianceShares v;
     v.axis = d.sim.measured_axes()[2]
                  ? 2
@@ -196,7 +196,8 @@ VarianceShares shares_of(const ExplainResult& R, const ExplainData& d, const std
     const auto a = static_cast<std::size_t>(v.axis);
     const auto sq = [](double x) { return x * x; };
     double turbulent = 0;
-    for (auto i : d.on_legs) turbulent += turbulent_variance(d, pred, i, a, intensity);
+    const PushNoise push(d, pred, model);
+    for (auto i : d.on_legs) turbulent += turbulent_variance(d, push, i, a);
     turbulent /= static_cast<double>(std::max<std::size_t>(1, d.on_legs.size()));
     const double before = sq(R.heldout_before[a]), after = sq(R.heldout_after[a]);
     const double left = R.discrepancy.significant ? std::min(after, sq(R.discrepancy.heldout_after[a])) : after;
@@ -211,8 +212,11 @@ VarianceShares shares_of(const ExplainResult& R, const ExplainData& d, const std
     v.total = v.effects + v.discrepancy + v.noise + v.turbulence + v.unexplained;
     for (double* x : {&v.effects, &v.discrepancy, &v.noise, &v.turbulence, &v.unexplained})
         *x = v.total > 0 ? *x / v.total : 0;
-    v.to_the_noise = after <= kDetectExcess * kDetectExcess * expected;
-    v.modelled_to_the_noise = !v.to_the_noise && left <= kDetectExcess * kDetectExcess * expected;
+    // Noise is what nothing predicts: where the learnt discrepancy predicts held-out data, what the
+    // physics leaves has structure, whatever its size.
+    const double within = kDetectExcess * kDetectExcess * expected;
+    v.to_the_noise = after <= within && !R.discrepancy.significant;
+    v.modelled_to_the_noise = !v.to_the_noise && R.discrepancy.significant && left <= within;
     return v;
 }
 
@@ -267,7 +271,7 @@ std::string turbulence_line(const ExplainResult& r, double physics_intensity) {
         if (b.intensity > kTurbulenceBeyond * physics_intensity) beyond.push_back(at);
     }
     return log::cat("Near a jet the residual scatters with the push as turbulence of intensity ", log::join(bands),
-                    " — if the mean flow is right there; the physics has ", fixed(physics_intensity, 2),
+                    " — if the mean flow is right there; the physics' noise model counts ", fixed(physics_intensity, 2),
                     beyond.empty() ? "." : log::cat(". **Left out: turbulence, intensity ", log::join(beyond), ".**"),
                     "\n\n");
 }
@@ -333,7 +337,7 @@ ExplainResult explain(const flight::Flight& f, const ExplainOptions& o) {
         say(log::cat("  what is left has a shape: it depends on ", R.discrepancy.structured_by,
                      " beyond every other input"));
     }
-    R.shares = shares_of(R, d, final_model.pred, turbulence_of(o.physics));
+    R.shares = shares_of(R, d, final_model.pred, physics::prediction_noise_of(o.physics));
     R.turbulence = turbulence_by_band(d, final_model.pred, static_cast<std::size_t>(R.shares.axis));
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     R.resimulations = d.resimulations + 1;  // and the base model's, before the data

@@ -163,11 +163,13 @@ struct Discrepancy {
 };
 
 // The held-out mean square of one axis's residual, shared out (issue 71): the noise floor's, the
-// jets' turbulence (2 I p and the lateral buffeting, at the final model's push), what the accepted
-// effects remove, what the learnt discrepancy removes, and the rest — unexplained. Fractions that
-// add to 1. A flight is explained to the noise when what the accepted effects leave is within
-// kDetectExcess² of noise and turbulence (the excess a null flight shows); modelled to the noise when
-// only the learnt discrepancy (not physics) brings it there.
+// noise model's terms that grow with the push (physics/prediction_noise.hpp: the calibrated push
+// share and timing spread, else 2 I p; and the lateral buffeting, at the final model's push), what
+// the accepted effects remove, what the learnt discrepancy removes, and the rest — unexplained.
+// Fractions that add to 1. A flight is explained to the noise when what the accepted effects leave
+// is within kDetectExcess² of that noise (the excess a null flight shows) and the learnt
+// discrepancy predicts none of it held out; modelled to the noise when the learnt discrepancy
+// (not physics) predicts some of it and brings it there.
 struct VarianceShares {
     int axis = 2;
     double total = 0;  // the mean square before the effects (N² or N²·m²)

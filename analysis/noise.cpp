@@ -50,22 +50,40 @@ double floor_from_differences(std::span<const double> residual) {
     return std::max(sd_from_differences(residual), kMinNoiseFloor);
 }
 
-// Each sample's residual is divided by sqrt(sigma² + (2 I F)² + b²): the noise floor, the force
-// fluctuation of a jet whose speed fluctuates by the turbulence intensity I (F ∝ U², so
-// δF ≈ 2 I F) and the jets' lateral buffeting b.
-double turbulent_variance(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a,
-                          double intensity) {
-    const double turbulent = 2 * intensity * pred[i][a], buffet = d.buffeting[i][a];
-    return turbulent * turbulent + buffet * buffet;
+PushNoise::PushNoise(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n)
+    : d_(d), pred_(pred), n_(n) {
+    if (n_.timing_spread_s <= 0) return;
+    std::vector<double> p(pred.size());
+    for (std::size_t a = 0; a < 6; ++a) {
+        if (!d.sim.measured_axes()[a]) continue;
+        for (std::size_t i = 0; i < pred.size(); ++i) p[i] = pred[i][a];
+        rate_[a] = physics::push_rates(d.sim.stamps(), p);
+    }
 }
 
-AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity) {
+// A jet whose speed fluctuates by the turbulence intensity I scatters its force by 2 I F (F ∝ U²):
+// s p; and when a wake arrives varies by tau: tau dp/dt.
+double PushNoise::variance(std::size_t i, std::size_t a) const {
+    const double push = n_.push_share * pred_[i][a];
+    const double timing = rate_[a].empty() ? 0.0 : n_.timing_spread_s * rate_[a][i];
+    return push * push + timing * timing;
+}
+
+double turbulent_variance(const ExplainData& d, const PushNoise& push, std::size_t i, std::size_t a) {
+    const double buffet = d.buffeting[i][a];
+    return push.variance(i, a) + buffet * buffet;
+}
+
+// Each sample's residual is divided by sqrt(sigma² + the push's noise + b²): the noise floor, the
+// noise model's terms that grow with the push and its rate, and the jets' lateral buffeting b.
+AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n) {
+    const PushNoise push(d, pred, n);
     AxisValues e{};
     for (auto i : d.on_legs)
         for (std::size_t a = 0; a < 6; ++a) {
             if (!d.sim.measured_axes()[a]) continue;
             const double r = d.sim.measured()[i][a] - pred[i][a];
-            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent_variance(d, pred, i, a, intensity));
+            e[a] += r * r / (d.sigma[a] * d.sigma[a] + turbulent_variance(d, push, i, a));
         }
     for (auto& v : e) v = d.on_legs.empty() ? 0 : std::sqrt(v / static_cast<double>(d.on_legs.size()));
     return e;

@@ -1,6 +1,7 @@
 #pragma once
 // What noise alone leaves in a recording, for the explainer: the noise floor per axis, the
 // residual's size against noise and turbulence, and how many samples count as independent.
+#include <array>
 #include <span>
 #include <vector>
 
@@ -29,14 +30,29 @@ double floor_from_differences(std::span<const double> residual);
 
 using physics::turbulence_of;
 
-// The variance the jets' turbulence adds to sample i on axis a under the push pred predicts there:
-// (2 I p)² and the lateral buffeting's — the noise model's second term, beside the floor's.
-double turbulent_variance(const ExplainData& d, const std::vector<Wrench6>& pred, std::size_t i, std::size_t a,
-                          double intensity);
+// The noise model (physics/prediction_noise.hpp: the physics' calibrated one, else 2 I and no
+// timing term) on one flight's predictions pred: what it adds beyond the floor at each sample,
+// (s p)² + (tau dp/dt)², with dp/dt along the recording. pred is held by reference.
+class PushNoise {
+public:
+    PushNoise(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n);
+    double variance(std::size_t i, std::size_t a) const;  // N² (N·m² on a moment)
+    double relative(std::size_t i, std::size_t a) const { return variance(i, a) / (d_.sigma[a] * d_.sigma[a]); }
+
+private:
+    const ExplainData& d_;
+    const std::vector<Wrench6>& pred_;
+    physics::PredictionNoise n_;
+    std::array<std::vector<double>, 6> rate_;  // per measured axis; none without a timing term
+};
+
+// The variance beyond the floor at sample i on axis a: the push's (PushNoise) and the lateral
+// buffeting's — the noise model's terms beside the floor's.
+double turbulent_variance(const ExplainData& d, const PushNoise& push, std::size_t i, std::size_t a);
 
 // The residual's RMS over the blocks against what noise and turbulence alone explain, per measured
 // axis (0 where not measured); about 1 when the physics is right (see noise.cpp).
-AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity);
+AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n);
 
 double largest(const AxisValues& v);
 

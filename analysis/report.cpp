@@ -465,7 +465,8 @@ void md_summary(std::ostream& md, const flight::Flight& f, const ExplainResult& 
 // Where: the noise floor, the significant regions and the time-shift signatures.
 void md_where(std::ostream& md, const ExplainResult& r, const ExplainOptions& o, const physics::EffectVoice& who) {
     md << "## Where: noise floor and significant regions\n\n"
-       << shares_line(r.shares) << turbulence_line(r, turbulence_of(o.physics)) << "Noise floor ("
+       << shares_line(r.shares)
+       << turbulence_line(r, physics::counted_intensity(physics::prediction_noise_of(o.physics))) << "Noise floor ("
        << describe(r.noise_floor_basis);
     if (r.noise_floor_basis == FloorBasis::far_samples)
         md << " " << physics::kNearSizes << " of its own motor distances horizontally";

@@ -33,7 +33,8 @@ std::vector<std::array<double, 6>> periodogram(const std::vector<double>& t, con
 
 }  // namespace
 
-SpectralLine strongest_line(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity) {
+SpectralLine strongest_line(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n) {
+    const PushNoise push(d, pred, n);
     SpectralLine best;
     if (d.on_legs.size() < 2) return best;
     std::vector<double> t;
@@ -43,8 +44,7 @@ SpectralLine strongest_line(const ExplainData& d, const std::vector<Wrench6>& pr
         Wrench6 x{};
         for (std::size_t a = 0; a < 6; ++a) {
             if (!d.sim.measured_axes()[a]) continue;
-            const double turbulent = 2 * intensity * pred[i][a] / d.sigma[a];
-            x[a] = (d.sim.measured()[i][a] - pred[i][a]) / d.sigma[a] / std::sqrt(1 + turbulent * turbulent);
+            x[a] = (d.sim.measured()[i][a] - pred[i][a]) / d.sigma[a] / std::sqrt(1 + push.relative(i, a));
         }
         r.push_back(x);
     }

@@ -31,6 +31,6 @@ struct SpectralLine {
 };
 
 // The strongest line in the residual of `pred` (intensity: the turbulence's, 0 when off).
-SpectralLine strongest_line(const ExplainData& d, const std::vector<Wrench6>& pred, double intensity);
+SpectralLine strongest_line(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n);
 
 }  // namespace dw::analysis

@@ -85,9 +85,11 @@ struct Linearised {
 
 // The weights are the noise's: the floor and the turbulence that grows with the push (analysis/
 // noise.hpp's excess), times the Huber weight of the residual in those units.
-Linearised linearise(const ExplainData& d, Fit& fit, const Effect& e, const std::vector<double>& v, double intensity) {
+Linearised linearise(const ExplainData& d, Fit& fit, const Effect& e, const std::vector<double>& v,
+                     const physics::PredictionNoise& noise) {
     Linearised L;
     const auto with = fit.predict(v);
+    const PushNoise push(d, with, noise);
     const std::size_t n = with.size();
     L.residual.assign(n, Wrench6{});
     L.weight.assign(n, Wrench6{});
@@ -95,8 +97,7 @@ Linearised linearise(const ExplainData& d, Fit& fit, const Effect& e, const std:
         for (std::size_t a = 0; a < 6; ++a) {
             if (!d.sim.measured_axes()[a]) continue;
             const double r = (d.sim.measured()[i][a] - with[i][a]) / d.sigma[a];
-            const double turbulent = 2 * intensity * with[i][a] / d.sigma[a];
-            const double var = 1 + turbulent * turbulent, u = std::abs(r) / std::sqrt(var);
+            const double var = 1 + push.relative(i, a), u = std::abs(r) / std::sqrt(var);
             L.residual[i][a] = r;
             L.weight[i][a] = (u <= d.huber_delta ? 1.0 : d.huber_delta / u) / var;
         }
@@ -240,8 +241,7 @@ std::optional<SplitMove> one_value_check(const ExplainData& d, const physics::Ph
     const Rows near = near_samples(d);
     if (near.size() < 2 * kMinPartSamples) return std::nullopt;
     Fit fit(d, current, e);
-    const double intensity = turbulence_of(current);
-    const Linearised L = linearise(d, fit, e, values, intensity);
+    const Linearised L = linearise(d, fit, e, values, physics::prediction_noise_of(current));
     const auto& with = fit.predict(values);
     std::vector<double> range_step;  // how far the effect is from absent, per parameter
     for (std::size_t p = 0; p < values.size(); ++p) range_step.push_back(values[p] - e.params[p].start);

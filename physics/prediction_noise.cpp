@@ -35,7 +35,7 @@ double golden_min(double lo, double hi, F f) {
 
 PredictionNoise prediction_noise_of(const PhysicsConfig& p) {
     if (p.prediction_noise.push_share > 0) return p.prediction_noise;
-    return {2 * turbulence_of(p), 0};
+    return {kPushSharePerIntensity * turbulence_of(p), 0};
 }
 
 double prediction_sd(double floor, const PredictionNoise& n, double p, double p_rate) {

@@ -22,10 +22,10 @@ bool nobody_near(const Sample& s, const Source& source) {
     return true;
 }
 
-// The physics predicts no push on s (under physics::kQuietPush_n; a geometry it cannot take is not quiet).
+// The physics predicts no push on s (physics::quiet_push; a geometry it cannot take is not quiet).
 bool quiet(const PhysicsModel& model, const Sample& s, const Source& source) {
     try {
-        return std::abs(model.predict(s, source)[kFdAxis]) < physics::kQuietPush_n;
+        return physics::quiet_push(model.predict(s, source)[kFdAxis]);
     } catch (const InputError&) {
         return false;
     }

@@ -621,4 +621,13 @@ TEST(NoiseShares, TheHeldOutVarianceIsSharedOutAndTurbulenceLeftOutIsAFinding) {
     const auto line = dw::analysis::turbulence_line(turbulent, 0);
     EXPECT_NE(line.find("Left out: turbulence, intensity 0.2"), std::string::npos) << line;
     EXPECT_EQ(dw::analysis::turbulence_line(turbulent, 0.2).find("Left out"), std::string::npos);
+    // The explainer's noise is the physics' own noise model (physics/prediction_noise.hpp): one whose
+    // push share is the hidden turbulence's (2 I) counts that scatter as turbulence, not unexplained.
+    o.physics.prediction_noise = {dw::physics::kPushSharePerIntensity * 0.2, 0};
+    const auto counted = dw::analysis::explain(turbulent_crossing(12, 0.2, 4), o);
+    EXPECT_GT(counted.shares.turbulence, 0.5);  // 0 without it
+    EXPECT_LT(counted.shares.unexplained, 0.5 * turbulent.shares.unexplained);
+    EXPECT_EQ(dw::analysis::turbulence_line(counted, dw::physics::counted_intensity(o.physics.prediction_noise))
+                  .find("Left out"),
+              std::string::npos);
 }
