@@ -231,11 +231,14 @@ Folds folds_of(const ExplainData& d, int folds) {
 }
 
 // One candidate: screened on the whole flight by ΔBIC and identifiability, then cross-validated.
-CandidateResult score(const ExplainData& d, const Baseline& b, const Folds& folds, Effect e, int round,
-                      const ExplainOptions& o) {
+namespace {
+
+// The candidate e, on its axes as they are.
+CandidateResult score_on_axes(const ExplainData& d, const Baseline& b, const Folds& folds, const Effect& e, int round,
+                              const ExplainOptions& o) {
     CandidateResult c;
     c.round = round;
-    c.effect = e.type->has_axes() ? with_crosstalk_axes(e, d, b) : e;
+    c.effect = e;
     throw_if_stopped(o.stop, "the fits");
     Fit fit(d, b.physics, c.effect);
     auto [values, se] = fit.solve(c.effect.neutral(), d.on_legs, true, b.factor);
@@ -265,6 +268,17 @@ CandidateResult score(const ExplainData& d, const Baseline& b, const Folds& fold
     }
     for (const auto& [piece, err] : s.after) c.heldout_pieces[piece] = std::accumulate(err.begin(), err.end(), 0.0);
     return c;
+}
+
+}  // namespace
+
+CandidateResult score(const ExplainData& d, const Baseline& b, const Folds& folds, Effect e, int round,
+                      const ExplainOptions& o) {
+    if (!e.type->has_axes() || e.axes_given) return score_on_axes(d, b, folds, e, round, o);
+    return in_better_direction(
+        with_crosstalk_axes(std::move(e), d, b),
+        [&](const Effect& x) { return score_on_axes(d, b, folds, x, round, o); },
+        [](const CandidateResult& c) { return c.t; });
 }
 
 }  // namespace dw::analysis

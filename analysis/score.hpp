@@ -3,6 +3,7 @@
 // then fitted per fold of blocked cross-validation and judged on the held-out pieces (a paired
 // z per axis), with intervals from the jackknife, the covariance and the tare.
 #include <map>
+#include <utility>
 #include <vector>
 
 #include "analysis/explain.hpp"
@@ -59,7 +60,22 @@ bool pinned(const Effect& e, const std::vector<double>& values);
 // best by regression.
 Effect with_crosstalk_axes(Effect e, const std::vector<std::pair<const ExplainData*, const Baseline*>>& flights);
 
-// Candidate e scored against model b in forward-selection round `round`.
+// A cross-talk's direction: the regression that chooses its pair (with_crosstalk_axes) cannot tell
+// the pair's two directions apart where one axis's measurement holds the other's (a leak from a into
+// b puts a's own residual into the measured b, which then seems to explain a). Both directions are
+// scored (score_one: an Effect to its result) and the one whose held-out z (held_out_z) is larger kept.
+template <class ScoreOne, class HeldOutZ>
+auto in_better_direction(const Effect& on_pair, ScoreOne score_one, HeldOutZ held_out_z) {
+    Effect reverse = on_pair;
+    std::swap(reverse.from, reverse.to);
+    reverse.axes_given = true;
+    auto c = score_one(on_pair);
+    auto r = score_one(reverse);
+    return held_out_z(r) > held_out_z(c) ? r : c;
+}
+
+// Candidate e scored against model b in forward-selection round `round`; a cross-talk whose axes
+// are not given on the pair with_crosstalk_axes chooses, in_better_direction.
 CandidateResult score(const ExplainData& d, const Baseline& b, const Folds& folds, Effect e, int round,
                       const ExplainOptions& o);
 

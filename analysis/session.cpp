@@ -240,6 +240,14 @@ RigCandidate score_rig(Members& m, const Effect& effect, int round, const Sessio
     return c;
 }
 
+// A cross-talk on the session's pair, in_better_direction (score.hpp) by the pieces of all flights.
+RigCandidate score_rig_directed(Members& m, const Effect& effect, int round, const SessionOptions& so) {
+    if (!effect.type->has_axes() || effect.axes_given) return score_rig(m, effect, round, so);
+    return in_better_direction(
+        with_session_axes(m, effect), [&](const Effect& x) { return score_rig(m, x, round, so); },
+        [](const RigCandidate& c) { return c.pooled.t; });
+}
+
 // The rig's candidates: the effects of the measurement chain that act on every flight of the session
 // (one parameter each: a joint fit searches one value).
 std::vector<Effect> rig_candidates(const Members& m, const ExplainOptions& o) {
@@ -284,7 +292,7 @@ void select_rig(Members& m, SessionResult& R, const SessionOptions& so, const Pr
         std::vector<RigCandidate> scored;
         for (const auto& e : remaining) {
             say(log::cat("round ", round, ": ", e.name, " fitted over the session's ", m.size(), " flights"));
-            scored.push_back(score_rig(m, e, round, so));
+            scored.push_back(score_rig_directed(m, e, round, so));
             say("  " + scored.back().note);
         }
         R.candidates.insert(R.candidates.end(), scored.begin(), scored.end());
