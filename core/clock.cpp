@@ -38,7 +38,7 @@ void ManualClock::set(Nanos t) {
 }
 
 namespace {
-bool within_step(Nanos a, Nanos b) { return std::abs(static_cast<double>(a - b)) * 1e-9 <= kMaxStampStepS; }
+bool within_step(Nanos a, Nanos b) { return std::abs(to_seconds(a - b)) <= kMaxStampStepS; }
 }  // namespace
 
 bool StampGate::accept(Nanos stamp) {

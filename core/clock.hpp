@@ -83,6 +83,7 @@ private:
     Nanos offset_ns_;
 };
 
+inline constexpr Nanos kNanosPerSecond = 1'000'000'000;
 inline double to_seconds(Nanos ns) { return static_cast<double>(ns) * 1e-9; }
 inline Nanos from_seconds(double s) { return static_cast<Nanos>(s * 1e9); }
 

@@ -15,6 +15,8 @@
 #include <memory>
 #include <string>
 
+#include "core/clock.hpp"
+
 namespace dw::dds {
 
 // What a guarded type tells its participant: the type's name and what the decoder said, the first
@@ -33,7 +35,7 @@ public:
             if (!PubSub::deserialize(payload, data)) return false;
             using T = typename PubSub::type;
             if constexpr (requires(T & m) { m.header().stamp().nanosec(); }) {
-                if (static_cast<T*>(data)->header().stamp().nanosec() >= kNanosPerSecond)
+                if (static_cast<T*>(data)->header().stamp().nanosec() >= static_cast<std::uint32_t>(kNanosPerSecond))
                     return refuse("its header stamp's nanosec is a second or more");
             }
             return true;
@@ -43,7 +45,6 @@ public:
     }
 
 private:
-    static constexpr std::uint32_t kNanosPerSecond = 1'000'000'000;
     bool refuse(const std::string& what) {
         if (refusals_->refused.fetch_add(1) == 0 && refusals_->first) refusals_->first(this->getName(), what);
         return false;

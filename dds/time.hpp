@@ -11,16 +11,14 @@ using dw::kMaxClockOffsetS;  // core/clock.hpp
 
 // Whether a stamp from a wire can be a time on this clock: within the widest clock error of `now`
 // (further off it is a garbled or forged word, and never reaches a vehicle as a capture time).
-inline bool stamp_in_time(Nanos stamp, Nanos now) {
-    return std::abs(static_cast<double>(stamp - now)) * 1e-9 <= kMaxClockOffsetS;
-}
+inline bool stamp_in_time(Nanos stamp, Nanos now) { return std::abs(to_seconds(stamp - now)) <= kMaxClockOffsetS; }
 
 inline msg::Time to_msg(Nanos t) {
     msg::Time m;
-    Nanos sec = t / 1'000'000'000;
-    Nanos ns = t % 1'000'000'000;
+    Nanos sec = t / kNanosPerSecond;
+    Nanos ns = t % kNanosPerSecond;
     if (ns < 0) {  // floor division for times before the epoch
-        ns += 1'000'000'000;
+        ns += kNanosPerSecond;
         --sec;
     }
     m.sec(static_cast<std::int32_t>(sec));
@@ -29,7 +27,7 @@ inline msg::Time to_msg(Nanos t) {
 }
 
 inline Nanos from_msg(const msg::Time& m) {
-    return static_cast<Nanos>(m.sec()) * 1'000'000'000 + static_cast<Nanos>(m.nanosec());
+    return static_cast<Nanos>(m.sec()) * kNanosPerSecond + static_cast<Nanos>(m.nanosec());
 }
 
 }  // namespace dw::dds

@@ -13,7 +13,7 @@
 namespace dw::natnet {
 
 namespace {
-constexpr Nanos kKeepAlivePeriod_ns = 1'000'000'000;  // next_frame sends a keepalive about this often
+constexpr Nanos kKeepAlivePeriod_ns = kNanosPerSecond;  // next_frame sends a keepalive about this often
 }  // namespace
 
 NatNetClient::NatNetClient(const ClientOptions& o)
@@ -126,7 +126,7 @@ FrameConverter::FrameConverter(const BridgeOptions& o, const ServerInfo& server,
 }
 
 double FrameConverter::camera_time_s(const FrameOfData& f, Nanos receive_wall_ns) {
-    const double receive = static_cast<double>(receive_wall_ns) * 1e-9;
+    const double receive = to_seconds(receive_wall_ns);
     if (server_.clock_frequency == 0 || f.transmit == 0) return receive;  // no camera stamps (< 3.0)
     const double freq = static_cast<double>(server_.clock_frequency);
     switch (options_.mode) {
@@ -163,10 +163,10 @@ FrameConverter::Output FrameConverter::convert(const FrameOfData& f, Nanos recei
     last_camera_s_ = tc;
     const double freq = server_.clock_frequency ? static_cast<double>(server_.clock_frequency) : 1.0;
     auto& m = out.frame;
-    m.header().stamp(dds::to_msg(static_cast<Nanos>(t * 1e9)));
+    m.header().stamp(dds::to_msg(from_seconds(t)));
     m.frame_number(static_cast<std::uint64_t>(f.frame_number));
-    m.camera_mid_exposure(dds::to_msg(static_cast<Nanos>(static_cast<double>(f.mid_exposure) / freq * 1e9)));
-    m.transmit(dds::to_msg(static_cast<Nanos>(static_cast<double>(f.transmit) / freq * 1e9)));
+    m.camera_mid_exposure(dds::to_msg(from_seconds(static_cast<double>(f.mid_exposure) / freq)));
+    m.transmit(dds::to_msg(from_seconds(static_cast<double>(f.transmit) / freq)));
     m.receive(dds::to_msg(receive_wall_ns));
     m.timestamp_mode(options_.mode);
     m.dropped_frames(static_cast<std::uint32_t>(dropped_));

@@ -117,8 +117,7 @@ std::vector<std::uint8_t> NatNetEmulator::frame(std::int32_t number, double t) {
         f.bodies.push_back(b);
     }
     const Nanos now = SystemClock::instance().monotonic_ns();
-    const auto ticks =
-        static_cast<std::uint64_t>(static_cast<double>(now) * 1e-9 * static_cast<double>(options_.clock_frequency));
+    const auto ticks = static_cast<std::uint64_t>(to_seconds(now) * static_cast<double>(options_.clock_frequency));
     f.transmit = ticks;
     f.mid_exposure =
         ticks - static_cast<std::uint64_t>(options_.latency_s * static_cast<double>(options_.clock_frequency));
@@ -154,7 +153,7 @@ std::vector<std::uint8_t> NatNetEmulator::hostile_packet(std::int32_t number, do
 void NatNetEmulator::loop() {
     std::mt19937_64 rng(options_.seed);
     std::uniform_real_distribution<double> u(0, 1);
-    const double period_ns = 1e9 / options_.rate_hz;
+    const double period_ns = static_cast<double>(kNanosPerSecond) / options_.rate_hz;
     std::int32_t number = 0;
     Nanos next = start_ns_;
     while (!stop_) {
@@ -168,7 +167,7 @@ void NatNetEmulator::loop() {
         const Nanos left = next - SystemClock::instance().monotonic_ns();
         if (left > 1'000'000) continue;                           // keep listening until the last millisecond
         while (SystemClock::instance().monotonic_ns() < next) {}  // then spin, for an even rate
-        const double t = static_cast<double>(next - start_ns_) * 1e-9;
+        const double t = to_seconds(next - start_ns_);
         next += static_cast<Nanos>(period_ns);
         ++number;
         if (options_.drop_probability > 0 && u(rng) < options_.drop_probability) continue;

@@ -76,7 +76,7 @@ void Px4PoseSource::on_odometry(Vehicle& v, const VehicleOdometry_& m) {
     }
     // The estimate's age when PX4 published it, on PX4's own clock (both stamps are PX4's).
     const double age_s = (static_cast<double>(m.timestamp()) - static_cast<double>(m.timestamp_sample())) * 1e-6;
-    const Nanos age = age_s >= 0 && age_s <= kMaxPublishDelayS ? static_cast<Nanos>(age_s * 1e9) : 0;
+    const Nanos age = age_s >= 0 && age_s <= kMaxPublishDelayS ? from_seconds(age_s) : 0;
     planner::LocalFrame f = planner::local_frame(v.cfg);
     if (o_.px4.ground == planner::GroundFrom::estimate) {  // not posed until its frame is tied to the floor
         const auto armed = armed_.armed(v.cfg.name);

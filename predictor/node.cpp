@@ -27,7 +27,7 @@ std::array<double, 3> FrameFeatures::velocity(History& h, double t, const std::a
 }
 
 std::optional<FrameNeighbours> FrameFeatures::update(const msg::MocapFrame& frame) {
-    const double t = static_cast<double>(dds::from_msg(frame.header().stamp())) * 1e-9;
+    const double t = to_seconds(dds::from_msg(frame.header().stamp()));
     std::array<double, 3> ps{}, vs{};
     bool have_sufferer = false;
     struct Other {

@@ -34,8 +34,8 @@ msg::Quaternion quat(std::uint64_t i) {
 msg::Time time_of(std::uint64_t i, std::int64_t offset_ns) {
     const std::int64_t t = 1'700'000'000'000'000'000LL + static_cast<std::int64_t>(i) * 5'555'556 + offset_ns;
     msg::Time m;
-    m.sec(static_cast<std::int32_t>(t / 1'000'000'000));
-    m.nanosec(static_cast<std::uint32_t>(t % 1'000'000'000));
+    m.sec(static_cast<std::int32_t>(t / kNanosPerSecond));
+    m.nanosec(static_cast<std::uint32_t>(t % kNanosPerSecond));
     return m;
 }
 
@@ -78,7 +78,7 @@ void fill(msg::StandStatus& m, std::uint64_t i) {
     m.spikes_rejected(i / 7);
     for (std::size_t c = 0; c < 8; ++c)
         m.tare_offset_counts()[c] = 1000.5 * static_cast<double>(c) - static_cast<double>(i);
-    m.last_tare(time_of(i, -1'000'000'000));
+    m.last_tare(time_of(i, -kNanosPerSecond));
     m.pipeline_delay_s(i % 2 ? -1.0 : 0.0071);
 }
 

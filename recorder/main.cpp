@@ -57,7 +57,7 @@ struct RecordCommand {
         rec.writer.fsync = !no_fsync;
         rec.command_control = !no_commands;
         // Ticks every 50 ms, so a chunk is written out no later than the interval.
-        rec.writer.flush_interval_ns = static_cast<std::uint64_t>(std::max(0.0, flush_s - 0.05) * 1e9);
+        rec.writer.flush_interval_ns = static_cast<std::uint64_t>(dw::from_seconds(std::max(0.0, flush_s - 0.05)));
         rec.split_bytes =
             static_cast<std::uint64_t>(std::ceil(split_mb * 1e6));  // a positive size is never 0 ("never")
         rec.topics = dw::dds::select_topics(rec.topics, dds.ns);

@@ -122,7 +122,7 @@ bool print_info(const std::string& path, std::ostream& out) {
         last = std::max(last, p.last);
         total += p.count;
     }
-    const double duration = total ? static_cast<double>(last - first) * 1e-9 : 0.0;
+    const double duration = total ? to_seconds(last - first) : 0.0;
     std::map<std::string, std::string> loss;
     for (const auto& m : metadata) {
         if (m.name == "loss") loss = m.entries;
@@ -141,7 +141,7 @@ bool print_info(const std::string& path, std::ostream& out) {
         << "  losses\n";
     for (const auto& [id, c] : l.channels) {
         const PerChannel p = per.count(id) ? per.at(id) : PerChannel{};
-        const double span = p.count > 1 ? static_cast<double>(p.last - p.first) * 1e-9 : 0.0;
+        const double span = p.count > 1 ? to_seconds(p.last - p.first) : 0.0;
         const std::string type = l.type_of(c);
         out << std::left << std::setw(tw) << c.topic << std::setw(yw) << type << std::right << std::setw(9) << p.count
             << std::setw(10) << std::setprecision(1) << (span > 0 ? static_cast<double>(p.count - 1) / span : 0.0)
@@ -214,7 +214,7 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
     if (suffix == topics::stand_wrench.suffix) {
         msg::WrenchStamped w;
         if (!deserialize(m.data, w)) throw undecodable();
-        WrenchRow r{static_cast<double>(dds::from_msg(w.header().stamp())) * 1e-9,
+        WrenchRow r{to_seconds(dds::from_msg(w.header().stamp())),
                     {w.force_n().x(), w.force_n().y(), w.force_n().z(), w.torque_nm().x(), w.torque_nm().y(),
                      w.torque_nm().z()},
                     w.tared()};
@@ -227,7 +227,7 @@ void read_message(Found& found, const RowHandlers& rows, const std::string& suff
     } else if (suffix == topics::mocap_frame.suffix) {
         msg::MocapFrame fr;
         if (!deserialize(m.data, fr)) throw undecodable();
-        const double t = static_cast<double>(dds::from_msg(fr.header().stamp())) * 1e-9;
+        const double t = to_seconds(dds::from_msg(fr.header().stamp()));
         if (fr.pose_source() == msg::POSE_VEHICLE_ESTIMATE) found.estimated_poses = true;
         for (const auto& b : fr.bodies()) {
             PoseRow r{t,

@@ -114,7 +114,7 @@ StandAgent::Output StandAgent::process(const Hx711Sample& s) {
     ++published_;
     const Nanos now = clock_.monotonic_ns();
     recent_.push_back(now);
-    while (!recent_.empty() && now - recent_.front() > 1'000'000'000) recent_.pop_front();
+    while (!recent_.empty() && now - recent_.front() > kNanosPerSecond) recent_.pop_front();
     out.status_changed = state_ != before || message_ != before_msg;
     return out;
 }

@@ -13,7 +13,8 @@ EmulatedBank::EmulatedBank(Clock& clock, const BankOptions& options, Source forc
       rng_(options.seed) {
     const Nanos now = clock_.monotonic_ns();
     for (auto& c : chips_) {
-        c.period_ns = 1e9 / (options_.rate_hz * (1.0 + options_.rate_skew * (2 * rng_.uniform() - 1)));
+        c.period_ns = static_cast<double>(kNanosPerSecond) /
+                      (options_.rate_hz * (1.0 + options_.rate_skew * (2 * rng_.uniform() - 1)));
         c.next_ns = now + static_cast<Nanos>(c.period_ns * rng_.uniform());
         c.offset = options_.offset_sigma_counts * rng_.normal();
     }

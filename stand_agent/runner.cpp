@@ -112,7 +112,7 @@ std::uint64_t run_agent(dds::Participant& p, Hx711Driver& driver, StandAgent& ag
             ++published;
         }
         const Nanos now = p.clock().monotonic_ns();
-        if (out.status_changed || now - last_status > 1'000'000'000) {
+        if (out.status_changed || now - last_status > kNanosPerSecond) {
             msg::StandStatus st = agent.status();
             if (o.pipeline_delay_s) st.pipeline_delay_s(o.pipeline_delay_s());
             status.write(st);

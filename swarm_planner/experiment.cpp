@@ -123,7 +123,7 @@ Experiment::Experiment(dds::Participant& p, const Plan& plan, const RunOptions& 
               log::info(e.process, " is back");
           }
       }) {
-    if (o_.run_id.empty()) o_.run_id = log::cat("run-", p.clock().now_ns() / 1'000'000'000);
+    if (o_.run_id.empty()) o_.run_id = log::cat("run-", p.clock().now_ns() / kNanosPerSecond);
     if (o_.px4.vehicles.empty()) o_.px4 = default_px4_options(plan_.vehicles);
     link_ = make_link(o_.link, p, plan_.vehicles, o_.run_id, o_.px4);
     link_->set_fence(plan_.options.fence);  // the last gate: nothing outside the room reaches a vehicle
