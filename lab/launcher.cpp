@@ -23,7 +23,7 @@
 #include "dds/endpoint.hpp"
 #include "dds/heartbeat.hpp"
 #include "dds/roles.hpp"
-#include "dds/names.hpp"
+#include "dds/wire_enums.hpp"
 #include "dds/participant.hpp"
 #include "dds/time.hpp"
 #include "lab/resources.hpp"

@@ -11,7 +11,7 @@
 #include "core/numbers.hpp"
 #include "core/shutdown.hpp"
 #include "dds/heartbeat.hpp"
-#include "dds/names.hpp"
+#include "dds/wire_enums.hpp"
 #include "probe/hostile.hpp"
 #include "probe/probe.hpp"
 

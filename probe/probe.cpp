@@ -11,7 +11,7 @@
 
 #include "core/errors.hpp"
 #include "core/log.hpp"
-#include "dds/names.hpp"
+#include "dds/wire_enums.hpp"
 #include "core/shutdown.hpp"
 #include "dds/endpoint.hpp"
 #include "dds/time.hpp"

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "core/log.hpp"
-#include "dds/names.hpp"
+#include "dds/wire_enums.hpp"
 #include "dds/px4.hpp"
 
 namespace dw::probe {

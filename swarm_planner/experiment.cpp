@@ -5,7 +5,7 @@
 
 #include "core/log.hpp"
 #include "core/numbers.hpp"
-#include "dds/names.hpp"
+#include "dds/wire_enums.hpp"
 #include "dds/time.hpp"
 
 namespace dw::planner {

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/log.hpp"
-#include "dds/names.hpp"
+#include "dds/wire_enums.hpp"
 
 namespace dw::viewer {
 

@@ -1,4 +1,4 @@
-#include "dds/names.hpp"
+#include "dds/wire_enums.hpp"
 
 #include <algorithm>
 #include <cctype>
