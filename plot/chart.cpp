@@ -27,12 +27,12 @@ void axes(cv::Mat& img, const Frame& f, const std::string& x_label, const std::s
     for (double x = std::ceil(f.x0 / xs) * xs; x <= f.x1 + 1e-9; x += xs) {
         const auto p = f.at(x, f.y0);
         cv::line(img, p, {p.x, p.y + 5}, cv::Scalar(60, 60, 60));
-        text(img, num(x, xs < 1 ? (xs < 0.1 ? 2 : 1) : 0), {p.x, p.y + 20}, 0.4, 1);
+        text(img, fixed(x, xs < 1 ? (xs < 0.1 ? 2 : 1) : 0), {p.x, p.y + 20}, 0.4, 1);
     }
     for (double y = std::ceil(f.y0 / ys) * ys; y <= f.y1 + 1e-9; y += ys) {
         const auto p = f.at(f.x0, y);
         cv::line(img, p, {p.x - 5, p.y}, cv::Scalar(60, 60, 60));
-        text(img, num(y, ys < 1 ? (ys < 0.01 ? 3 : 2) : 0), {p.x - 8, p.y + 4}, 0.4, 2);
+        text(img, fixed(y, ys < 1 ? (ys < 0.01 ? 3 : 2) : 0), {p.x - 8, p.y + 4}, 0.4, 2);
     }
     text(img, x_label, {f.area.x + f.area.width / 2, f.area.y + f.area.height + 40}, 0.45, 1);
     text(img, y_label, {f.area.x, f.area.y - 8}, 0.45, 0);
@@ -118,8 +118,8 @@ void render_heats(const std::vector<Heat>& heats, const std::string& title, cons
     const int bx = width - bar + 20;  // the colour bar
     for (int y = 0; y < panel; ++y)
         cv::line(img, {bx, top + y}, {bx + 18, top + y}, bgr(colour_of(vmax - 2 * vmax * y / panel, -vmax, vmax)));
-    text(img, num(vmax, 3), {bx, top - 6}, 0.4);
-    text(img, num(-vmax, 3), {bx, top + panel + 16}, 0.4);
+    text(img, fixed(vmax, 3), {bx, top - 6}, 0.4);
+    text(img, fixed(-vmax, 3), {bx, top + panel + 16}, 0.4);
     text(img, unit, {bx, top + panel + 34}, 0.4);
     write_png(img, png);
 }

@@ -2,19 +2,12 @@
 // Small OpenCV drawing helpers shared by the plots (for .cpp files that link OpenCV).
 #include <array>
 #include <cmath>
-#include <iomanip>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 #include <string>
 
-namespace dw::plot {
+#include "core/numbers.hpp"
 
-// v with a fixed number of decimals.
-inline std::string num(double v, int precision) {
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(precision) << v;
-    return s.str();
-}
+namespace dw::plot {
 
 // Dark text at `at`; align 0 left, 1 centred, 2 right.
 inline void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.45, int align = 0,

@@ -84,10 +84,10 @@ MapLayout render_fields(const std::vector<Field>& fields, const std::string& tit
         for (double t = -std::floor(L.half_width_m * 2) / 2; t <= L.half_width_m + 1e-9; t += 0.5) {
             const auto px = L.pixel(static_cast<int>(p), -L.half_width_m, t);
             cv::line(img, {px[0], q.y + size}, {px[0], q.y + size + 4}, cv::Scalar(40, 40, 40));
-            text(img, num(t, 1), {px[0], q.y + size + 18}, 0.38, 1);
+            text(img, fixed(t, 1), {px[0], q.y + size + 18}, 0.38, 1);
             const auto py = L.pixel(static_cast<int>(p), t, -L.half_width_m);
             cv::line(img, {q.x - 4, py[1]}, {q.x, py[1]}, cv::Scalar(40, 40, 40));
-            text(img, num(t, 1), {q.x - 6, py[1] + 4}, 0.38, 2);
+            text(img, fixed(t, 1), {q.x - 6, py[1] + 4}, 0.38, 2);
         }
         text(img, "E [m]", {q.x + size / 2, q.y + size + 36}, 0.42, 1);
         text(img, "N [m]", {q.x - 30, q.y - 10}, 0.42, 1);
@@ -104,7 +104,7 @@ MapLayout render_fields(const std::vector<Field>& fields, const std::string& tit
     for (double v = std::ceil(L.vmin / step) * step; v <= L.vmax + 1e-12; v += step) {
         const int py = top + static_cast<int>(std::lround((L.vmax - v) / (L.vmax - L.vmin) * (size - 1)));
         cv::line(img, {bx + bw, py}, {bx + bw + 4, py}, cv::Scalar(40, 40, 40));
-        text(img, num(std::abs(v) < 1e-12 ? 0.0 : v, prec), {bx + bw + 6, py + 4}, 0.38);
+        text(img, fixed(std::abs(v) < 1e-12 ? 0.0 : v, prec), {bx + bw + 6, py + 4}, 0.38);
     }
     text(img, unit, {bx + bw / 2, top - 10}, 0.42, 1);
     write_png(img, png);

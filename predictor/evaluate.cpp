@@ -127,8 +127,6 @@ std::vector<ComparisonRow> compare(const std::vector<const ForceModel*>& models,
 namespace {
 const char* const kAxisTitles[6] = {"N", "E", "D", "roll", "pitch", "yaw"};
 
-std::string fmt(double v, int precision = 3) { return std::isnan(v) ? "–" : fixed(v, precision); }
-
 // The formations and the models of `rows`, each in first-seen order.
 std::pair<std::vector<std::string>, std::vector<std::string>> formations_and_models(
     const std::vector<ComparisonRow>& rows) {
@@ -163,7 +161,7 @@ void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, Axis
             if (r && samples == 0) samples = r->samples;  // the first model's: the reference's may be fewer
             for (std::size_t a = 0; a < 6; ++a) {
                 if (!cellv[a].empty()) cellv[a] += " / ";
-                cellv[a] += r ? fmt((r->*metric)[a]) : fmt(NAN);
+                cellv[a] += r ? fixed((r->*metric)[a], 3) : fixed(NAN, 3);
             }
         }
         out << "| " << f << " | " << samples << " |";
@@ -187,7 +185,7 @@ void per_model(std::ostringstream& out, const std::vector<ComparisonRow>& rows, 
         std::size_t n = 0;
         for (const auto& m : models) {
             const ComparisonRow* r = row_of(rows, f, m);
-            cells += " " + (r ? fmt(r->*value) : fmt(NAN)) + " |";
+            cells += " " + (r ? fixed(r->*value, 3) : fixed(NAN, 3)) + " |";
             if (r && n == 0) n = r->*count;  // the first model's: the reference's may be fewer
         }
         out << "| " << f << " | " << n << " |" << cells << "\n";
@@ -204,7 +202,7 @@ std::string to_markdown(const std::vector<ComparisonRow>& rows, const ArenaOptio
         return std::any_of(r.arena.begin(), r.arena.end(), [](double v) { return std::isfinite(v); });
     });
     if (any_arena) {
-        out << "### Arena-mean |prediction − truth| at " << fmt(o.altitude_m, 2) << " ± " << fmt(o.band_m, 2)
+        out << "### Arena-mean |prediction − truth| at " << fixed(o.altitude_m, 2) << " ± " << fixed(o.band_m, 2)
             << " m relative altitude (the study's Table 1 metric; N, N·m)\n\n";
         table(out, rows, &ComparisonRow::arena);
         out << "\n### The same |prediction − truth| integrated over the occupied cells (N·m², N·m³)\n\n"

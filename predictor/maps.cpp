@@ -17,7 +17,6 @@ namespace dw::predictor {
 
 using plot::bgr;
 using plot::nice_step;
-using plot::num;
 using plot::text;
 
 namespace {
@@ -78,8 +77,8 @@ MapLayout draw_force_map(const std::vector<const ForceModel*>& models, const Map
     if (r.observed) fields.push_back(observed_field(*r.observed, r));
     for (const auto* m : models) fields.push_back(model_field(*m, r));
     const std::string title =
-        log::cat(kAxisLabel[r.axis], " on the sufferer: ", r.formation, " at ", num(r.altitude_m, 1),
-                 " m above it, flying +E at ", num(r.speed_mps, 1), " m/s (position of the formation's centre)");
+        log::cat(kAxisLabel[r.axis], " on the sufferer: ", r.formation, " at ", fixed(r.altitude_m, 1),
+                 " m above it, flying +E at ", fixed(r.speed_mps, 1), " m/s (position of the formation's centre)");
     return render_fields(fields, title, kAxisLabel[r.axis], outlines_for(r.formation), png);
 }
 
@@ -130,17 +129,17 @@ void draw_force_line(const std::vector<const ForceModel*>& models, const MapRequ
     const double step = nice_step(hi - lo);
     for (double v = std::ceil(lo / step) * step; v <= hi; v += step) {
         cv::line(img, {left, Y(v)}, {left + pw, Y(v)}, cv::Scalar(225, 225, 225));
-        text(img, num(std::abs(v) < 1e-12 ? 0.0 : v, step >= 1 ? 0 : (step >= 0.1 ? 1 : 2)), {left - 6, Y(v) + 4}, 0.4,
-             2);
+        text(img, fixed(std::abs(v) < 1e-12 ? 0.0 : v, step >= 1 ? 0 : (step >= 0.1 ? 1 : 2)), {left - 6, Y(v) + 4},
+             0.4, 2);
     }
     for (double e = -1.0; e <= 1.0 + 1e-9; e += 0.5) {
         cv::line(img, {X(e), top + ph}, {X(e), top + ph + 4}, cv::Scalar(40, 40, 40));
-        text(img, num(e, 1), {X(e), top + ph + 18}, 0.4, 1);
+        text(img, fixed(e, 1), {X(e), top + ph + 18}, 0.4, 1);
     }
     text(img, "E of the formation's centre [m] (N = 0, through the stand)", {left + pw / 2, H - 18}, 0.45, 1);
     text(img,
-         log::cat(kAxisLabel[r.axis], " along E: ", r.formation, " at ", num(r.altitude_m, 1), " m, +E at ",
-                  num(r.speed_mps, 1), " m/s"),
+         log::cat(kAxisLabel[r.axis], " along E: ", r.formation, " at ", fixed(r.altitude_m, 1), " m, +E at ",
+                  fixed(r.speed_mps, 1), " m/s"),
          {W / 2, 28}, 0.55, 1);
     const cv::Scalar palette[] = {{0, 0, 0}, {200, 120, 0}, {0, 140, 0}, {40, 40, 220}, {160, 0, 160}, {0, 160, 200}};
     for (std::size_t k = 0; k < curves.size(); ++k) {

@@ -110,8 +110,8 @@ std::string regimes_markdown(const std::vector<RegimeRow>& rows, const RegimeOpt
         << "|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : rows)
         out << "| " << r.formation << " | " << r.altitude_m << " m | " << regime_name(r.regime) << " | " << r.legs
-            << " | " << plot::num(r.signal_rms, 3) << " | " << plot::num(r.explained * 100, 0) << " % | "
-            << plot::num(r.gain * 100, 0) << " % | " << plot::num(r.z, 1) << " |\n";
+            << " | " << fixed(r.signal_rms, 3) << " | " << fixed(r.explained * 100, 0) << " % | "
+            << fixed(r.gain * 100, 0) << " % | " << fixed(r.z, 1) << " |\n";
     return out.str();
 }
 
@@ -159,7 +159,7 @@ void draw_regime_map(const std::vector<RegimeRow>& rows, const std::string& png)
         const cv::Rect cell(left + c * cw + 2, top + i * ch + 2, cw - 4, ch - 4);
         cv::rectangle(img, cell, colour(r.regime), cv::FILLED);
         plot::text(img, regime_name(r.regime), {cell.x + cell.width / 2, cell.y + 24}, 0.55, 1);
-        plot::text(img, log::cat("gain ", plot::num(r.gain * 100, 0), " %, z ", plot::num(r.z, 1)),
+        plot::text(img, log::cat("gain ", fixed(r.gain * 100, 0), " %, z ", fixed(r.z, 1)),
                    {cell.x + cell.width / 2, cell.y + 46}, 0.42, 1);
     }
     int x = left;

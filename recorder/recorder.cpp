@@ -28,14 +28,12 @@ public:
     std::string take_gaps_text() {
         std::lock_guard lock(gaps_mutex_);
         std::ostringstream s;
-        s << std::fixed;
         for (const auto& g : gaps_) {
             if (s.tellp() > 0) s << "; ";
-            s.precision(3);
             if (g.after_ns > 0)
-                s << to_seconds(g.after_ns) << "-" << to_seconds(g.before_ns) << " ("
-                  << to_seconds(g.before_ns - g.after_ns) << " s)";
-            else s << "before " << to_seconds(g.before_ns);
+                s << fixed(to_seconds(g.after_ns), 3) << "-" << fixed(to_seconds(g.before_ns), 3) << " ("
+                  << fixed(to_seconds(g.before_ns - g.after_ns), 3) << " s)";
+            else s << "before " << fixed(to_seconds(g.before_ns), 3);
             s << ": " << g.missing << " missing";
         }
         if (gaps_unlisted_ > 0) s << "; and " << gaps_unlisted_ << " more gaps";

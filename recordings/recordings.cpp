@@ -128,7 +128,7 @@ bool print_info(const std::string& path, std::ostream& out) {
         if (m.name == "loss") loss = m.entries;
     }
     out << "file:      " << path << (r.complete ? "" : "  (INCOMPLETE)") << "\n";
-    out << "messages:  " << total << " in " << std::fixed << std::setprecision(2) << duration << " s\n";
+    out << "messages:  " << total << " in " << fixed(duration, 2) << " s\n";
     // Columns as wide as the longest name (long namespaces make long topics), two spaces apart.
     std::size_t topic_w = 30, type_w = 28;
     for (const auto& [id, c] : l.channels) {
@@ -144,8 +144,8 @@ bool print_info(const std::string& path, std::ostream& out) {
         const double span = p.count > 1 ? to_seconds(p.last - p.first) : 0.0;
         const std::string type = l.type_of(c);
         out << std::left << std::setw(tw) << c.topic << std::setw(yw) << type << std::right << std::setw(9) << p.count
-            << std::setw(10) << std::setprecision(1) << (span > 0 ? static_cast<double>(p.count - 1) / span : 0.0)
-            << std::setw(12) << p.bytes << "  " << (loss.count(c.topic) ? loss.at(c.topic) : "(not stored)") << "\n";
+            << std::setw(10) << fixed(span > 0 ? static_cast<double>(p.count - 1) / span : 0.0, 1) << std::setw(12)
+            << p.bytes << "  " << (loss.count(c.topic) ? loss.at(c.topic) : "(not stored)") << "\n";
     }
     for (const auto& m : metadata) {
         if (m.name == "loss") continue;

@@ -34,7 +34,7 @@ public:
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**body_drag** — the flying sufferer's own drag against its motion through still air: C_d A = ",
-                        f3(v[0], 4), " m² horizontally, ", f3(v[1], 4),
+                        fixed(v[0], 4), " m² horizontally, ", fixed(v[1], 4),
                         " m² vertically (f = −½ ρ C_d A |v| v). The simulation had only the neighbours' air. ");
     }
 };

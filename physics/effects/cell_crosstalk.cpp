@@ -45,7 +45,7 @@ public:
     }  // f_d leaks into f_e
     std::string describe(const std::vector<double>& v, AxisPair a, const EffectVoice& who) const override {
         return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration",
-                        " leaks ", kAxes[a.from], " into ", kAxes[a.to], ": ", f3(v[0] * 100, 2), " % of the true ",
+                        " leaks ", kAxes[a.from], " into ", kAxes[a.to], ": ", fixed(v[0] * 100, 2), " % of the true ",
                         kAxes[a.from], " appears on ", kAxes[a.to], ". ",
                         who.flying
                             ? "A flying sufferer has no load cells: this stands for a force that follows another axis "

@@ -25,12 +25,12 @@ public:
     }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{-0.15, 0.15}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
-        return log::cat("**clock_offset** — ", who.clock, " is ", f3(std::abs(v[0])), " s ",
+        return log::cat("**clock_offset** — ", who.clock, " is ", fixed(std::abs(v[0]), 3), " s ",
                         v[0] >= 0 ? "behind" : "ahead of",
                         " the poses': the force on the sufferer at pose time t is stamped t ", v[0] >= 0 ? "+ " : "− ",
-                        f3(std::abs(v[0])),
+                        fixed(std::abs(v[0]), 3),
                         " s in wrench.csv. Nothing aerodynamic is missing; the two time bases differ. At 0.5 m/s it ",
-                        "moves the force pattern ", f3(std::abs(v[0]) * 50, 1), " cm ", who.along,
+                        "moves the force pattern ", fixed(std::abs(v[0]) * 50, 1), " cm ", who.along,
                         " — while the time shift is the same at every separation (table of shifts). ");
     }
 };

@@ -1,5 +1,5 @@
 #pragma once
-// What the built-in effects' files share: number words for the report, search grids, and the
+// What the built-in effects' files share: search grids, and the
 // class of an effect whose configuration is one struct in Effects with `enabled` and one number.
 #include <string>
 #include <vector>
@@ -9,9 +9,6 @@
 #include "physics/effect_types.hpp"
 
 namespace dw::physics::effects {
-
-// The report's numbers: `p` digits after the point.
-inline std::string f3(double v, int p = 3) { return fixed(v, p); }
 
 inline std::vector<double> range(double a, double b, int n) {
     std::vector<double> v;

@@ -30,7 +30,7 @@ public:
         return log::cat(
             "**floor_recirculation** — jets hitting the floor come back as a bias that grows with the jets impinging "
             "(coefficient ",
-            f3(v[0]), "). ");
+            fixed(v[0], 3), "). ");
     }
 };
 

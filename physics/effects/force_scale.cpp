@@ -20,10 +20,10 @@ public:
     }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{0.8, 1.25}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
-        return log::cat("**force_scale** — the recorded wrench is ", f3(v[0]),
+        return log::cat("**force_scale** — the recorded wrench is ", fixed(v[0], 3),
                         " × the simulated one everywhere: a mass, drag coefficient or ",
                         who.flying ? "thrust-model gain" : "load-cell gain", " that differs from the model by ",
-                        f3((v[0] - 1) * 100, 1), " %. ");
+                        fixed((v[0] - 1) * 100, 1), " %. ");
     }
 };
 

@@ -24,7 +24,7 @@ public:
                 0, 0, 0};
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
-        return log::cat("**ground_effect** — extra lift near the floor: ", f3(v[0], 2),
+        return log::cat("**ground_effect** — extra lift near the floor: ", fixed(v[0], 2),
                         " × the hover thrust × (R / 4h)². ");
     }
 };

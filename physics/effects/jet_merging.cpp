@@ -39,7 +39,7 @@ public:
         return log::cat(
             "**jet_merging** — neighbouring jets merge into one contracted, momentum-conserving column where their "
             "half-widths overlap (contraction ",
-            f3(v[0], 2), "): the aggregate is not the sum of single jets. It acts only with ",
+            fixed(v[0], 2), "): the aggregate is not the sum of single jets. It acts only with ",
             "two or more neighbours close together and far enough above the sufferer for the jets to widen. ");
     }
 };

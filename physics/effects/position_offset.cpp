@@ -39,8 +39,8 @@ public:
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(
-            "**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (", f3(v[0]),
-            ", ", f3(v[1]), ", ", f3(v[2]),
+            "**position_offset** — the neighbours' motion-capture frame is offset from the sufferer's by (",
+            fixed(v[0], 3), ", ", fixed(v[1], 3), ", ", fixed(v[2], 3),
             ") m (N, E, D): the force pattern sits off the recorded positions by a fixed distance, the same ",
             who.flying ? "whichever way the neighbour passes" : "on +E and −E legs", ". ");
     }

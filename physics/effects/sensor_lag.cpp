@@ -31,7 +31,7 @@ public:
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(
             "**sensor_lag** — ", who.sensor, " is a first-order low-pass of the force with a time constant of ",
-            f3(v[0]), " s: peaks are late and flattened. ",
+            fixed(v[0], 3), " s: peaks are late and flattened. ",
             who.flying ? "The estimate's own dynamics (the thrust model's motor lag, the state estimator's filtering)"
                        : "The stand's dynamics (filtering, mounting)",
             " were left out. ");

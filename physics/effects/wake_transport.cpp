@@ -23,7 +23,7 @@ public:
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat(
             "**wake_transport** — the downwash takes time to descend: the force follows each neighbour's state ",
-            f3(v[0], 2),
+            fixed(v[0], 2),
             " × τ(s) ago, τ(s) the turbulent jet's descent time over the vertical separation s (146 ms at 1.3 m for ",
             "k = 1). The simulation had the force follow the neighbour instantly. Its signature: the time shift grows "
             "with separation. ");
