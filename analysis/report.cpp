@@ -224,16 +224,11 @@ struct MeasuredClock {
     double expected_s() const { return (raw_stamps ? offset_s : 0.0) + pipeline_delay_s.value_or(0.0); }
 };
 std::optional<MeasuredClock> measured_clock(const flight::Flight& f) {
+    if (!f.meta.clock_offset_measured_s) return std::nullopt;
     const json extra = json::parse(f.meta.extra_json, nullptr, false);
-    if (!extra.is_object() || !extra.contains(flight::kMeasuredClockOffsetKey) ||
-        !extra[flight::kMeasuredClockOffsetKey].is_number())
-        return std::nullopt;
-    const auto raw = extra.find("raw_stamps");
-    MeasuredClock m{extra[flight::kMeasuredClockOffsetKey].get<double>(),
-                    raw == extra.end() || !raw->is_boolean() || raw->get<bool>(), std::nullopt};
-    const auto delay = extra.find(flight::kStandPipelineDelayKey);
-    if (delay != extra.end() && delay->is_number()) m.pipeline_delay_s = delay->get<double>();
-    return m;
+    const auto raw = extra.is_object() ? extra.find("raw_stamps") : extra.end();
+    return MeasuredClock{*f.meta.clock_offset_measured_s, raw == extra.end() || !raw->is_boolean() || raw->get<bool>(),
+                         f.meta.stand_pipeline_delay_s};
 }
 
 // What the report says of an effect: its accepted (final, refitted) result, else its latest score.

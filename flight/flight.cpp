@@ -11,6 +11,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "core/errors.hpp"
 #include "core/clock.hpp"
@@ -31,9 +32,18 @@ namespace {
 constexpr int kMaxJsonDepth = 64;  // meta.json nests 3 deep; 100 000 crashed a JSON library's destructor
 constexpr Range kLegNumberRange{0, 1e6};
 // The meta.json keys this library reads; every other key is kept as it was (extra_json).
-constexpr std::array<const char*, 10> kMetaKeys = {"format",    "sufferer",   "neighbours",    "formation",
-                                                   "vehicles",  "stand",      "wrench_source", "moments_measured",
-                                                   "reference", "pose_source"};
+constexpr std::array<const char*, 12> kMetaKeys = {"format",
+                                                   "sufferer",
+                                                   "neighbours",
+                                                   "formation",
+                                                   "vehicles",
+                                                   "stand",
+                                                   "moments_measured",
+                                                   "reference",
+                                                   "pose_source",
+                                                   "wrench_source",
+                                                   kMeasuredClockOffsetKey,
+                                                   kStandPipelineDelayKey};
 constexpr std::array<std::pair<PoseSource, const char*>, 2> kPoseSourceNames{
     {{PoseSource::motion_capture, "motion_capture"}, {PoseSource::estimate, "estimate"}}};
 }  // namespace
@@ -136,7 +146,7 @@ public:
         read_wrench_source(m);
         read_pose_source(m);
         read_reference(m);
-        read_measured_timing();
+        read_measured_timing(m);
         json extra = json::object();
         for (const auto& [k, v] : j_.items())
             if (std::find(kMetaKeys.begin(), kMetaKeys.end(), k) == kMetaKeys.end()) extra[k] = v;
@@ -181,14 +191,16 @@ private:
             m.neighbours.push_back(name);
         }
     }
-    // The lab's measured clock offset and the stand's pipeline delay, kept among the extra keys,
-    // must be times a lab could measure (a 1e300 s offset was printed in full by the explainer).
-    void read_measured_timing() const {
-        for (const auto& [key, range] :
-             {std::pair{kMeasuredClockOffsetKey, kClockOffsetRange}, {kStandPipelineDelayKey, kPipelineDelayRange}}) {
+    // The lab's measured clock offset and the stand's pipeline delay must be times a lab could
+    // measure (a 1e300 s offset was printed in full by the explainer).
+    void read_measured_timing(Meta& m) const {
+        for (const auto& [key, range, to] :
+             {std::tuple{kMeasuredClockOffsetKey, kClockOffsetRange, &Meta::clock_offset_measured_s},
+              {kStandPipelineDelayKey, kPipelineDelayRange, &Meta::stand_pipeline_delay_s}}) {
             if (!j_.contains(key)) continue;
             if (!j_[key].is_number()) fail(key, "not a number");
             if (!range.contains(j_[key].get<double>())) fail(key, range_problem(j_[key].get<double>(), range));
+            m.*to = j_[key].get<double>();
         }
     }
     void read_vehicles(Meta& m) const {
@@ -422,6 +434,8 @@ std::string meta_text(const Meta& m) {
     }
     meta["vehicles"] = vehicles;
     if (m.stand_height_m) meta["stand"] = {{"height_m", *m.stand_height_m}};
+    if (m.clock_offset_measured_s) meta[kMeasuredClockOffsetKey] = *m.clock_offset_measured_s;
+    if (m.stand_pipeline_delay_s) meta[kStandPipelineDelayKey] = *m.stand_pipeline_delay_s;
     if (m.wrench_source != WrenchSource::stand) meta["wrench_source"] = to_string(m.wrench_source);
     if (!m.moments_measured) meta["moments_measured"] = false;
     if (m.pose_source != PoseSource::motion_capture) meta["pose_source"] = to_string(m.pose_source);

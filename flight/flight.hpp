@@ -99,11 +99,11 @@ const char* to_string(WrenchSource s);
 enum class PoseSource { motion_capture, estimate };
 const char* to_string(PoseSource s);
 
-// meta.json extra key of a flight exported from a recording (dw-recorder export): the stand's clock
+// meta.json key of a flight exported from a recording (dw-recorder export): the stand's clock
 // against the mocap's as the lab's time service measured it live, in seconds, in the sense of the
 // clock_offset effect (a force at mocap time t stamped t + offset).
 inline constexpr const char* kMeasuredClockOffsetKey = "clock_offset_measured_s";
-// meta.json extra key beside it: the stand's own pipeline delay as the stand measured it live
+// meta.json key beside it: the stand's own pipeline delay as the stand measured it live
 // (StandStatus.pipeline_delay_s, median), in seconds — what the stand's wrench stamps lag the
 // forces beyond the chips' sample-and-hold; absent where the stand did not measure one.
 inline constexpr const char* kStandPipelineDelayKey = "stand_pipeline_delay_s";
@@ -128,7 +128,11 @@ struct Meta {
     bool moments_measured = true;  // false: the moment columns carry no measurement
     PoseSource pose_source = PoseSource::motion_capture;
     std::optional<ReferenceInfo> reference;  // present exactly when reference.csv is
-    std::string extra_json = "{}";           // unknown keys, kept as they were (a JSON object)
+    // What the lab measured live, for a flight exported from a recording (kMeasuredClockOffsetKey,
+    // kStandPipelineDelayKey); absent where it was not measured.
+    std::optional<double> clock_offset_measured_s;
+    std::optional<double> stand_pipeline_delay_s;
+    std::string extra_json = "{}";  // unknown keys, kept as they were (a JSON object)
 };
 
 struct Flight {

@@ -46,15 +46,12 @@ std::optional<double> median_offset(const Offsets& offsets, const std::string& p
     return median(it->second);
 }
 
-// What the lab's time service measured, for meta.json's extra: each producer's median offset and,
-// when both clocks were measured, the stand's against the mocap's (the explainer's clock_offset:
-// a force at mocap time t is stamped t + offset by the stand).
+// What the lab's time service measured, for meta.json's extra: each producer's median offset.
 nlohmann::json measured_clocks(const std::optional<double>& stand, const std::optional<double>& mocap,
                                const std::string& stand_name, const std::string& mocap_name) {
     nlohmann::json j{{"clock_offsets_measured_s", nlohmann::json::object()}};
     if (stand) j["clock_offsets_measured_s"][stand_name] = *stand;
     if (mocap) j["clock_offsets_measured_s"][mocap_name] = *mocap;
-    if (stand && mocap) j[flight::kMeasuredClockOffsetKey] = *stand - *mocap;
     return j;
 }
 
@@ -347,7 +344,10 @@ flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& fo
     nlohmann::json extra{
         {"source", path}, {"epoch_unix_s", c.epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
     extra.update(measured_clocks(c.stand_measured, c.mocap_measured, c.stand, c.mocap));
-    if (!found.pipeline_delays.empty()) extra[flight::kStandPipelineDelayKey] = median(found.pipeline_delays);
+    // When both clocks were measured, the stand's against the mocap's (the explainer's clock_offset:
+    // a force at mocap time t is stamped t + offset by the stand).
+    if (c.stand_measured && c.mocap_measured) m.clock_offset_measured_s = *c.stand_measured - *c.mocap_measured;
+    if (!found.pipeline_delays.empty()) m.stand_pipeline_delay_s = median(found.pipeline_delays);
     extra.update(tare_note(found, path));
     extra.update(left_out_note(found, path));
     m.extra_json = extra.dump();

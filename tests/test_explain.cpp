@@ -16,6 +16,7 @@
 #include "analysis/explain.hpp"
 #include "analysis/proof.hpp"
 #include "analysis/replay.hpp"
+#include "analysis/score.hpp"
 #include "analysis/unnamed.hpp"
 #include "core/errors.hpp"
 #include "core/numbers.hpp"
@@ -85,6 +86,26 @@ TEST(ExplainResimulation, ClockOffsetAndScaleActOnTheRecordingOnly) {
         ++checked;
     }
     EXPECT_GT(checked, 50);
+}
+
+// A cross-talk's pair is chosen by regression, its direction by held-out data (score.hpp): both
+// directions are scored, the reverse on its axes as given, and the one with the larger z kept.
+TEST(ExplainEffects, ACrossTalkKeepsTheDirectionHeldOutDataPrefer) {
+    auto leak = effects_named({"cell_crosstalk"}).front();
+    leak.from = 2, leak.to = 0;  // f_d -> f_n
+    for (const double reverse_z : {1.0, 9.0}) {
+        std::vector<std::pair<int, int>> scored;
+        const auto kept = dw::analysis::in_better_direction(
+            leak,
+            [&](const dw::analysis::Effect& e) {
+                scored.emplace_back(e.from, e.to);
+                EXPECT_EQ(e.axes_given, e.from == 0) << "the reverse is scored on its axes as given";
+                return std::pair{e, e.from == 2 ? 5.0 : reverse_z};
+            },
+            [](const auto& r) { return r.second; });
+        EXPECT_EQ(scored, (std::vector<std::pair<int, int>>{{2, 0}, {0, 2}}));
+        EXPECT_EQ(kept.first.from, reverse_z > 5 ? 0 : 2) << "reverse z " << reverse_z;
+    }
 }
 
 TEST(ExplainEffects, NamesAreTheContractsAndUnknownOnesAreRefused) {

@@ -54,8 +54,13 @@ TEST(FlightFolder, RoundTripsAndKeepsUnknownMetaKeys) {
     dw::test::TempDir d;
     Flight f = sample_flight();
     f.meta.extra_json = R"({"lab":"Cambridge","notes":{"wind":0}})";
+    f.meta.clock_offset_measured_s = 0.0123456789012345;  // the lab's measured timing: numbers end to end
+    f.meta.stand_pipeline_delay_s = 0.004;
     write_flight(f, d.file("f"));
     const Flight g = read_flight(d.file("f"));
+    EXPECT_EQ(g.meta.clock_offset_measured_s, f.meta.clock_offset_measured_s);
+    EXPECT_EQ(g.meta.stand_pipeline_delay_s, f.meta.stand_pipeline_delay_s);
+    EXPECT_EQ(g.meta.extra_json.find("measured"), std::string::npos) << "a typed key, not an extra one";
     EXPECT_EQ(g.meta.neighbours, f.meta.neighbours);
     EXPECT_EQ(g.bodies, f.bodies);
     ASSERT_EQ(g.wrench.size(), 10u);
