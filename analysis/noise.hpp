@@ -28,8 +28,6 @@ using physics::kMinFarSamples;                  // fewer far samples: the differ
 // The floor from one axis's residual when nobody is ever far: its successive differences' spread.
 double floor_from_differences(std::span<const double> residual);
 
-using physics::turbulence_of;
-
 // The noise model (physics/prediction_noise.hpp: the physics' calibrated one, else 2 I and no
 // timing term) on one flight's predictions pred: what it adds beyond the floor at each sample,
 // (s p)² + (tau dp/dt)², with dp/dt along the recording. pred is held by reference.

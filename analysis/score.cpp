@@ -230,10 +230,10 @@ Folds folds_of(const ExplainData& d, int folds) {
     return f;
 }
 
-// One candidate: screened on the whole flight by ΔBIC and identifiability, then cross-validated.
 namespace {
 
-// The candidate e, on its axes as they are.
+// One candidate on its axes as they are: screened on the whole flight by ΔBIC and identifiability,
+// then cross-validated.
 CandidateResult score_on_axes(const ExplainData& d, const Baseline& b, const Folds& folds, const Effect& e, int round,
                               const ExplainOptions& o) {
     CandidateResult c;

@@ -28,14 +28,36 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-struct Step {
-    int index, total;
-    Clock::time_point demo_start;
-    void begin(const std::string& what) const {
-        const double t = std::chrono::duration<double>(Clock::now() - demo_start).count();
-        std::cerr << "\n== [" << index << "/" << total << "] " << what << "  (" << static_cast<int>(t) / 60 << ":"
-                  << (static_cast<int>(t) % 60 < 10 ? "0" : "") << static_cast<int>(t) % 60 << " elapsed)\n";
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// m:ss
+std::string minutes(double seconds) {
+    const int s = static_cast<int>(seconds);
+    return log::cat(s / 60, ":", s % 60 < 10 ? "0" : "", s % 60);
+}
+
+// The demo's steps: each announced with the time elapsed, and where the time went kept for the end.
+class Steps {
+public:
+    Steps(int total, Clock::time_point start) : total_(total), start_(start) {}
+    void begin(const std::string& what) {
+        const double t = seconds_since(start_);
+        begun_.emplace_back(what, t);
+        std::cerr << "\n== [" << begun_.size() << "/" << total_ << "] " << what << "  (" << minutes(t) << " elapsed)\n";
     }
+    // Each step begun, with its seconds (the last one's up to now).
+    std::vector<std::pair<std::string, double>> durations() const {
+        std::vector<std::pair<std::string, double>> out;
+        for (std::size_t k = 0; k < begun_.size(); ++k)
+            out.emplace_back(begun_[k].first,
+                             (k + 1 < begun_.size() ? begun_[k + 1].second : seconds_since(start_)) - begun_[k].second);
+        return out;
+    }
+
+private:
+    int total_;
+    Clock::time_point start_;
+    std::vector<std::pair<std::string, double>> begun_;  // what, seconds into the demo
 };
 
 std::string first_line_with(const std::string& text, const std::string& needle) {
@@ -56,13 +78,12 @@ constexpr const char* kHiddenStandClockOffsetS = "0.1";
 // 1-2. Two experiments, every process separate, over loopback DDS; each recording exported to a flight.
 std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& run, const LabFile& lab,
                                           const std::string& physics_path, const std::vector<DemoFlight>& flights,
-                                          const std::function<Step(int)>& step) {
+                                          Steps& steps) {
     std::vector<LaunchResult> results;
     for (std::size_t k = 0; k < flights.size(); ++k) {
         const auto& f = flights[k];
-        step(static_cast<int>(k) + 1)
-            .begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
-                            " m over loopback DDS (stand, mocap and vehicles simulated)"));
+        steps.begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
+                             " m over loopback DDS (stand, mocap and vehicles simulated)"));
         LaunchOptions lo;
         lo.run_dir = (run / ("lab-" + f.name)).string();
         lo.vars = {{"formation", f.formation},
@@ -153,8 +174,16 @@ std::pair<std::string, std::string> found_and_fitted(const nlohmann::json& repor
 }
 
 // 6. index.md: what ran, where its outputs are, and what was found.
+// Where the demo's time went, step by step (a markdown table).
+std::string time_table(const std::vector<std::pair<std::string, double>>& steps) {
+    std::string md = "## Where the time went\n\n| step | time (m:ss) |\n|---|---|\n";
+    for (const auto& [what, s] : steps) md += log::cat("| ", what, " | ", minutes(s), " |\n");
+    return md;
+}
+
 std::string index_markdown(double seconds, const std::vector<DemoFlight>& flights,
-                           const std::vector<LaunchResult>& results, const nlohmann::json& report) {
+                           const std::vector<LaunchResult>& results, const nlohmann::json& report,
+                           const std::vector<std::pair<std::string, double>>& steps) {
     const auto [found, fitted] = found_and_fitted(report);
     const double before = report["fit"]["heldout_rmse_before"]["f_d"].get<double>(),
                  after = report["fit"]["heldout_rmse_after"]["f_d"].get<double>();
@@ -206,7 +235,8 @@ std::string index_markdown(double seconds, const std::vector<DemoFlight>& flight
        << std::round(before * 1000) / 1000 << " N → " << std::round(after * 1000) / 1000
        << " N. Report: [explain/report.md](explain/report.md) ([report.json](explain/report.json), fitted physics "
           "[explain/physics.yaml](explain/physics.yaml)).\n\n![residuals before](explain/residuals_before.png)\n\n"
-          "![residuals after](explain/residuals_after.png)\n";
+          "![residuals after](explain/residuals_after.png)\n\n"
+       << time_table(steps);
     return md.str();
 }
 
@@ -216,8 +246,7 @@ int run_demo(const DemoOptions& o) {
     const auto started = Clock::now();
     const fs::path run = fs::absolute(o.out_dir);
     fs::create_directories(run / "logs");
-    const int total = 6;
-    const std::function<Step(int)> step = [&](int i) { return Step{i, total, started}; };
+    Steps steps(6, started);
 
     // The physics every simulated part shares: the documented defaults with jets merging.
     physics::PhysicsConfig physics;
@@ -234,35 +263,38 @@ int run_demo(const DemoOptions& o) {
         {"lf3", "leader_follower3", "v1,v2,v3", o.quick ? "6" : "12", "1.3", kHiddenStandClockOffsetS},
     };
     auto viewer = start_viewer(o, run);
-    const std::vector<LaunchResult> results = fly_experiments(o, run, lab, physics_path, flights, step);
+    const std::vector<LaunchResult> results = fly_experiments(o, run, lab, physics_path, flights, steps);
     if (viewer) viewer->stop();
 
     // 3. Train and compare (the study: simulated training flights of every formation).
-    step(3).begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
+    steps.begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
     std::vector<std::string> study{"dw-predictor", "study",      "--out",  (run / "study").string(),
                                    "--physics",    physics_path, "--jobs", std::to_string(o.jobs)};
     if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
     run_sibling(study, (run / "logs" / "study.log").string(), o.stop);
 
-    step(4).begin("the models on the recorded flights: table and maps");
+    steps.begin("the models on the recorded flights: table and maps");
     models_on_recorded(run, physics_path, o.stop);
 
     // 5. Explain the recording in which the running lab hid something its physics leaves out.
-    step(5).begin(log::cat("explaining the Leader Follower K=3 recording (its stand agent ran ",
-                           kHiddenStandClockOffsetS, " s ahead) against the lab's physics"));
+    steps.begin(log::cat("explaining the Leader Follower K=3 recording (its stand agent ran ", kHiddenStandClockOffsetS,
+                         " s ahead) against the lab's physics"));
     run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "recordings" / "lf3.mcap").string(), "--out",
                  (run / "explain").string()},
                 (run / "logs" / "explain.log").string(), o.stop);
 
-    step(6).begin("writing index.md");
+    steps.begin("writing index.md");
     const auto report = nlohmann::json::parse(read_file((run / "explain" / "report.json").string()));
     const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
-    write_file((run / "index.md").string(), index_markdown(seconds, flights, results, report));
+    const auto time_by_step = steps.durations();
+    write_file((run / "index.md").string(), index_markdown(seconds, flights, results, report, time_by_step));
     const std::string found = found_and_fitted(report).first;
     std::cout << "demo done in " << static_cast<int>(seconds) << " s: " << (run / "index.md").string() << "\n"
               << "  experiments: " << results[0].phase << ", " << results[1].phase
               << "; explained by: " << (found.empty() ? "nothing" : found) << "\n  "
-              << first_line_with(read_file((run / "study" / "table.md").string()), "| leader_follower K=3") << "\n";
+              << first_line_with(read_file((run / "study" / "table.md").string()), "| leader_follower K=3") << "\n"
+              << "  where the time went:\n";
+    for (const auto& [what, s] : time_by_step) std::cout << "    " << minutes(s) << "  " << what << "\n";
     return 0;
 }
 

@@ -789,6 +789,13 @@ TEST(LabDemo, QuickDemoMakesEverythingItsIndexLinks) {
     }
     EXPECT_NE(dw::read_file(dir.file("demo/explain/report.md")).find("measured beside fitted"), std::string::npos);
     EXPECT_NE(r.out.find("experiments: DONE, DONE"), std::string::npos) << r.out;
+    // Issue 73, item 6: where its time went, step by step, printed and in index.md.
+    EXPECT_NE(r.out.find("where the time went:"), std::string::npos) << r.out;
+    const auto table = index.find("## Where the time went");
+    ASSERT_NE(table, std::string::npos) << index;
+    for (const char* step : {"| flying single", "| flying leader_follower3", "| training ", "| the models on the",
+                             "| explaining ", "| writing index.md"})
+        EXPECT_NE(index.find(step, table), std::string::npos) << step;
 }
 
 // Issue 17: the lab file is read through core/keys like every configuration; a misspelt key is
