@@ -173,7 +173,6 @@ std::pair<std::string, std::string> found_and_fitted(const nlohmann::json& repor
     return {found, fitted};
 }
 
-// 6. index.md: what ran, where its outputs are, and what was found.
 // Where the demo's time went, step by step (a markdown table).
 std::string time_table(const std::vector<std::pair<std::string, double>>& steps) {
     std::string md = "## Where the time went\n\n| step | time (m:ss) |\n|---|---|\n";
@@ -181,6 +180,7 @@ std::string time_table(const std::vector<std::pair<std::string, double>>& steps)
     return md;
 }
 
+// 6. index.md: what ran, where its outputs are, what was found, and where the time went.
 std::string index_markdown(double seconds, const std::vector<DemoFlight>& flights,
                            const std::vector<LaunchResult>& results, const nlohmann::json& report,
                            const std::vector<std::pair<std::string, double>>& steps) {
