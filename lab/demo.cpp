@@ -285,7 +285,7 @@ int run_demo(const DemoOptions& o) {
 
     steps.begin("writing index.md");
     const auto report = nlohmann::json::parse(read_file((run / "explain" / "report.json").string()));
-    const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
+    const double seconds = seconds_since(started);
     const auto time_by_step = steps.durations();
     write_file((run / "index.md").string(), index_markdown(seconds, flights, results, report, time_by_step));
     const std::string found = found_and_fitted(report).first;

@@ -161,7 +161,7 @@ void table(std::ostringstream& out, const std::vector<ComparisonRow>& rows, Axis
             if (r && samples == 0) samples = r->samples;  // the first model's: the reference's may be fewer
             for (std::size_t a = 0; a < 6; ++a) {
                 if (!cellv[a].empty()) cellv[a] += " / ";
-                cellv[a] += r ? fixed((r->*metric)[a], 3) : fixed(NAN, 3);
+                cellv[a] += fixed(r ? (r->*metric)[a] : NAN, 3);  // "–" where none
             }
         }
         out << "| " << f << " | " << samples << " |";
@@ -185,7 +185,7 @@ void per_model(std::ostringstream& out, const std::vector<ComparisonRow>& rows, 
         std::size_t n = 0;
         for (const auto& m : models) {
             const ComparisonRow* r = row_of(rows, f, m);
-            cells += " " + (r ? fixed(r->*value, 3) : fixed(NAN, 3)) + " |";
+            cells += " " + fixed(r ? r->*value : NAN, 3) + " |";
             if (r && n == 0) n = r->*count;  // the first model's: the reference's may be fewer
         }
         out << "| " << f << " | " << n << " |" << cells << "\n";
