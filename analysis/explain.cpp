@@ -30,14 +30,15 @@ void conclude(ExplainResult& R, const ExplainData& d, const Baseline& base, cons
     if (R.accepted.empty()) R.heldout_before = R.heldout_after = residual_rms(d, base_pred);
     R.fitted = final_model.physics;
     const auto noise = physics::prediction_noise_of(o.physics);
-    R.excess_before = excess_of(d, base_pred, noise);
-    R.excess_after = excess_of(d, final_model.pred, noise);
+    const PushNoise before(d, base_pred, noise), after(d, final_model.pred, noise);  // each pred's rates once
+    R.excess_before = excess_of(d, before);
+    R.excess_after = excess_of(d, after);
     // Whether: an accepted effect, a candidate that predicts held-out data better but only as a
     // stand-in, or a residual beyond what noise and turbulence explain (the regions say where; on
     // their own they are many cells tested at once, not evidence).
     const bool excess = largest(R.excess_before) > o.detect_excess;
-    R.line_before = strongest_line(d, base_pred, noise);
-    R.line_after = R.line_before.significant ? strongest_line(d, final_model.pred, noise) : R.line_before;
+    R.line_before = strongest_line(d, before);
+    R.line_after = R.line_before.significant ? strongest_line(d, after) : R.line_before;
     const bool any_stand_in =
         std::any_of(R.candidates.begin(), R.candidates.end(), [](const CandidateResult& c) { return c.stand_in; });
     R.detected = !R.accepted.empty() || excess || any_stand_in || R.line_before.significant;

@@ -76,8 +76,8 @@ double turbulent_variance(const ExplainData& d, const PushNoise& push, std::size
 
 // Each sample's residual is divided by sqrt(sigma² + the push's noise + b²): the noise floor, the
 // noise model's terms that grow with the push and its rate, and the jets' lateral buffeting b.
-AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n) {
-    const PushNoise push(d, pred, n);
+AxisValues excess_of(const ExplainData& d, const PushNoise& push) {
+    const auto& pred = push.pred();
     AxisValues e{};
     for (auto i : d.on_legs)
         for (std::size_t a = 0; a < 6; ++a) {

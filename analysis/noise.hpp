@@ -36,6 +36,7 @@ public:
     PushNoise(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n);
     double variance(std::size_t i, std::size_t a) const;  // N² (N·m² on a moment)
     double relative(std::size_t i, std::size_t a) const { return variance(i, a) / (d_.sigma[a] * d_.sigma[a]); }
+    const std::vector<Wrench6>& pred() const { return pred_; }
 
 private:
     const ExplainData& d_;
@@ -50,7 +51,7 @@ double turbulent_variance(const ExplainData& d, const PushNoise& push, std::size
 
 // The residual's RMS over the blocks against what noise and turbulence alone explain, per measured
 // axis (0 where not measured); about 1 when the physics is right (see noise.cpp).
-AxisValues excess_of(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n);
+AxisValues excess_of(const ExplainData& d, const PushNoise& push);
 
 double largest(const AxisValues& v);
 

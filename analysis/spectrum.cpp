@@ -33,10 +33,10 @@ std::vector<std::array<double, 6>> periodogram(const std::vector<double>& t, con
 
 }  // namespace
 
-SpectralLine strongest_line(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n) {
+SpectralLine strongest_line(const ExplainData& d, const PushNoise& push) {
+    const auto& pred = push.pred();
     SpectralLine best;
     if (d.on_legs.size() < 2) return best;
-    const PushNoise push(d, pred, n);
     std::vector<double> t;
     std::vector<Wrench6> r;
     for (auto i : d.on_legs) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "analysis/fit.hpp"
+#include "analysis/noise.hpp"
 
 namespace dw::analysis {
 
@@ -30,7 +31,7 @@ struct SpectralLine {
     bool significant = false;  // false_alarm < kLineAlpha
 };
 
-// The strongest line in the residual of `pred` (intensity: the turbulence's, 0 when off).
-SpectralLine strongest_line(const ExplainData& d, const std::vector<Wrench6>& pred, const physics::PredictionNoise& n);
+// The strongest line in the residual of push.pred(), each sample weighed by its noise (PushNoise).
+SpectralLine strongest_line(const ExplainData& d, const PushNoise& push);
 
 }  // namespace dw::analysis
