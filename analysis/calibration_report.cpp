@@ -141,7 +141,7 @@ nlohmann::json to_json(const CalibrateResult& r) {
             {"seconds", r.seconds}};
 }
 
-// "2.31 | force_scale, body_drag |" for each of the trial's flights (one line each), their ratios kept.
+// "2.31 | <effect>, <effect> |" for each of the trial's flights (one line each), their ratios kept.
 std::string explained_cells(const TrialError& t, std::vector<double>& ratios, std::vector<double>& with) {
     std::string ratio, learnt, by;
     for (std::size_t k = 0; k < t.explained_ratio.size(); ++k) {

@@ -1,6 +1,7 @@
 #include "analysis/conceal.hpp"
 
 #include "core/log.hpp"
+#include "physics/effect_types.hpp"
 #include "physics/recording_chain.hpp"
 
 namespace dw::analysis {
@@ -19,52 +20,52 @@ void conceal(flight::Flight& f, const physics::Effects& fx) {
     for (std::size_t i = 0; i < w.size(); ++i) f.wrench[i] = {t[i] + delay, w[i]};
 }
 
+Concealed concealed_sizes(ConcealedSize which) {
+    Concealed out;
+    for (const auto* t : physics::effect_types())
+        if (const auto c = t->real_concealment())
+            out[t->name()] = which == ConcealedSize::single ? c->single : c->session;
+    return out;
+}
+
+bool on_concealed_axes(const physics::EffectType& t, physics::AxisPair axes) {
+    const auto c = t.real_concealment();
+    return !t.has_axes() || (c && axes == c->axes);
+}
+
+namespace {
+
+// One effect's concealment at one size.
+Concealment concealment_of(const physics::EffectType& t, const physics::RealConcealment& c, double size) {
+    return {t.name(), log::cat(c.said_before, size, c.said_after),
+            [&t, c, size](flight::Flight& f) {
+                physics::Effects fx;
+                t.set(fx, {size}, c.axes);
+                conceal(f, fx);
+            },
+            [&t, c, size](const physics::Effects& own, std::optional<double> u) {
+                const double mine =
+                    t.enabled(own) && on_concealed_axes(t, t.axes(own)) ? t.values(own).front() : t.neutral().front();
+                const double before = u.value_or(mine);
+                return Truth{t.name(), t.parameters().front().name, c.multiplies ? before * size : before + size};
+            }};
+}
+
+}  // namespace
+
 std::vector<Concealment> concealments(const Concealed& m) {
-    return {
-        {"clock_offset", log::cat("wrench stamped ", m.clock_s, " s late"),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.clock_offset = {true, m.clock_s};
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"clock_offset", "offset_s",
-                          u.value_or(own.clock_offset.enabled ? own.clock_offset.offset_s : 0) + m.clock_s};
-         }},
-        {"force_scale", log::cat("wrench × ", m.scale),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.force_scale = {true, m.scale};
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"force_scale", "scale",
-                          u.value_or(own.force_scale.enabled ? own.force_scale.scale : 1) * m.scale};
-         }},
-        {"sensor_lag", log::cat("first-order lag, tau ", m.lag_s, " s"),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.sensor_lag = {true, m.lag_s};
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             return Truth{"sensor_lag", "tau_s",
-                          u.value_or(own.sensor_lag.enabled ? own.sensor_lag.tau_s : 0) + m.lag_s};
-         }},
-        {"cell_crosstalk", log::cat("f_n += ", m.leak, " f_d"),
-         [m](flight::Flight& f) {
-             physics::Effects fx;
-             fx.cell_crosstalk = {true, kConcealedLeakAxes.from, kConcealedLeakAxes.to, m.leak};
-             conceal(f, fx);
-         },
-         [m](const physics::Effects& own, std::optional<double> u) {
-             const auto& c = own.cell_crosstalk;
-             return Truth{
-                 "cell_crosstalk", "coefficient",
-                 u.value_or(c.enabled && physics::AxisPair{c.from, c.to} == kConcealedLeakAxes ? c.coefficient : 0) +
-                     m.leak};
-         }},
-    };
+    std::vector<Concealment> out;
+    for (const auto* t : physics::effect_types())
+        if (const auto c = t->real_concealment(); c && m.count(t->name()))
+            out.push_back(concealment_of(*t, *c, m.at(t->name())));
+    return out;
+}
+
+std::string concealment_names() {
+    std::vector<std::string> names;
+    for (const auto* t : physics::effect_types())
+        if (t->real_concealment()) names.push_back(t->name());
+    return log::join(names);
 }
 
 }  // namespace dw::analysis

@@ -6,6 +6,7 @@
 // flight already shows of that effect.
 #include <cstddef>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,19 +23,12 @@ struct Truth {
     std::size_t index = 0;  // into the effect's parameters
 };
 
-// How much of each effect the real-data proof conceals (values not round; `dw-explain real-proof`
-// --clock, --scale, --lag, --leak probe what a flight can show). The scale and the lag are where
-// the shared flights can show them: a smaller lag is taken for a longer delay on the random walk,
-// a smaller scale for the flight's own separation-dependent misfit (docs/REAL.md, the limits).
-struct Concealed {
-    double clock_s = 0.083;  // the wrench stamped this late
-    double scale = 1.61;     // the wrench multiplied by this
-    double lag_s = 0.151;    // the wrench seen through a first-order lag of this time constant
-    double leak = 0.113;     // f_n += leak × f_d
-};
-
-// The axes the cross-talk is concealed between: f_d leaks into f_n.
-inline constexpr physics::AxisPair kConcealedLeakAxes{2, 0};
+// How much of each concealable effect a proof hides: effect name -> size. Each effect of the rig
+// declares its concealment (physics::RealConcealment): its option, its sizes, how it combines.
+using Concealed = std::map<std::string, double>;
+enum class ConcealedSize { single, session };
+// Every concealable effect at its size for one flight's proof or for a session's.
+Concealed concealed_sizes(ConcealedSize which);
 
 // An effect concealed in a recording, and what the explainer should then fit on top of the
 // flight's own fit: the concealed value combined with what the untouched flight already shows of
@@ -50,9 +44,11 @@ struct Concealment {
 // calibration is linear, so its zero moves with it).
 void conceal(flight::Flight& f, const physics::Effects& fx);
 
-// The four concealments (clock_offset, force_scale, sensor_lag, cell_crosstalk) at m's sizes.
+// The concealments of m's effects at m's sizes, in the vocabulary's order.
 std::vector<Concealment> concealments(const Concealed& m);
-// Their names, comma-separated (for messages).
-inline constexpr const char* kConcealmentNames = "clock_offset, force_scale, sensor_lag or cell_crosstalk";
+// The concealable effects' names, comma-separated (for messages).
+std::string concealment_names();
+// Whether an effect's axes are those it is concealed between (an effect without axes: always).
+bool on_concealed_axes(const physics::EffectType& t, physics::AxisPair axes);
 
 }  // namespace dw::analysis

@@ -2,8 +2,8 @@
 // How honest the explainer's 95 % intervals are (issue 15, item 6): flights flown by `dw-sim fly`
 // with one effect hidden at a value drawn per seed, explained with that effect as the only
 // candidate, and the interval of its fit checked against the hidden value. Every one-parameter
-// effect of the vocabulary that a flight over the stand can show, and each component of
-// position_offset. `dw-explain coverage` runs it; docs/EXPLAINER.md holds the table.
+// effect of the vocabulary that a flight over the stand can show, and each component of a
+// several-parameter one (the positions' offset). `dw-explain coverage` runs it; docs/EXPLAINER.md holds the table.
 #include <functional>
 #include <stop_token>
 #include <string>

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "core/log.hpp"
+#include "physics/effect_types.hpp"
 
 namespace dw::analysis {
 
@@ -117,10 +118,12 @@ std::vector<Shift> shifts(const ExplainData& d, const physics::PhysicsConfig& ba
     const auto half = static_cast<long>(std::floor(o.shift_half_width_s / step + 1e-9));
     std::vector<double> grid;
     for (long k = -half; k <= half; ++k) grid.push_back(static_cast<double>(k) * step);
-    const double base_offset = base.effects.clock_offset.enabled ? base.effects.clock_offset.offset_s : 0.0;
+    // The shift moves the stamps' clock: the effect the lab's time service measures.
+    const auto& clock = physics::clock_effect();
+    const double base_offset = (clock.enabled(base.effects) ? clock.values(base.effects) : clock.neutral()).front();
     for (std::size_t g = 0; g < grid.size(); ++g) {
         physics::PhysicsConfig c = base;
-        c.effects.clock_offset = {true, base_offset + grid[g]};
+        clock.set(c.effects, {base_offset + grid[g]});
         const auto p = d.predict(c);
         for (auto i : d.on_legs) {
             const auto& s = d.info[i];

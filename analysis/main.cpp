@@ -20,6 +20,7 @@
 #include "core/parallel.hpp"
 #include "core/shutdown.hpp"
 #include "core/subprocess.hpp"
+#include "physics/effect_types.hpp"
 #include "recordings/recordings.hpp"
 
 namespace {
@@ -42,11 +43,6 @@ struct Verdict {
 };
 constexpr Verdict kProofVerdict{"PROOF PASSED", "PROOF FAILED"};
 constexpr Verdict kCoverageVerdict{nullptr, "COVERAGE BELOW TARGET"};
-// What the real-data proof may conceal: enough to be a change, not so much that the flight is another.
-constexpr dw::Range kConcealedClockRange{0.001, 2, "s"};
-constexpr dw::Range kConcealedScaleRange{0.1, 10};
-constexpr dw::Range kConcealedLagRange{0.001, 2, "s"};
-constexpr dw::Range kConcealedLeakRange{-1, 1};
 constexpr const char* kJobsHelp = "flights flown and explained at once (each explanation is one thread)";
 
 // Prints a study's table and its verdict; a failed verdict is a runtime failure.
@@ -119,21 +115,13 @@ struct UnnamedCommand {
     int run(const Progress& progress) { return run_study(options, cases, progress, dw::analysis::run_unnamed); }
 };
 
-// The sizes of the concealed effects, each an option.
+// The sizes of the concealed effects, each an option its effect declares.
 void add_concealed_options(CLI::App* sub, dw::analysis::Concealed& c) {
-    const struct {
-        const char* flag;
-        double& value;
-        dw::Range range;
-        const char* help;
-    } concealed[] = {
-        {"--clock", c.clock_s, kConcealedClockRange, "clock_offset case: the wrench stamped this late [s]"},
-        {"--scale", c.scale, kConcealedScaleRange, "force_scale case: the wrench multiplied by this"},
-        {"--lag", c.lag_s, kConcealedLagRange, "sensor_lag case: first-order lag time constant [s]"},
-        {"--leak", c.leak, kConcealedLeakRange, "cell_crosstalk case: f_n += leak x f_d"},
-    };
-    for (const auto& k : concealed)
-        sub->add_option(k.flag, k.value, k.help)->check(dw::cli::in(k.range))->capture_default_str();
+    for (const auto* t : dw::physics::effect_types())
+        if (const auto k = t->real_concealment(); k && c.count(t->name()))
+            sub->add_option(k->option, c[t->name()], t->name() + " case: " + k->option_help)
+                ->check(dw::cli::in(k->range))
+                ->capture_default_str();
 }
 
 // The options the studies on recorded flights share: --physics, --out, --cases and the concealed sizes.
@@ -142,7 +130,7 @@ void add_recorded_study_options(CLI::App* sub, Options& o, std::string& physics,
                                 const char* out_help) {
     sub->add_option("--physics", physics, "the physics to explain them with (e.g. config/physics.crazyflie.yaml)");
     sub->add_option("--out", o.out_dir, out_help)->required();
-    sub->add_option("--cases", cases, "clock_offset, force_scale, sensor_lag, cell_crosstalk (default: all)");
+    sub->add_option("--cases", cases, dw::analysis::concealment_names() + " (default: all)");
     add_concealed_options(sub, o.concealed);
 }
 

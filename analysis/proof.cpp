@@ -27,12 +27,34 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The seed of the flight with two effects at once.
+constexpr std::uint64_t kTwoEffectsSeed = 16;
+
 struct Case {
     std::string name, formation, hidden;
     std::function<void(physics::PhysicsConfig&)> hide;
     std::vector<Truth> truth;
     std::uint64_t seed = 1;
 };
+
+// The effects that declare a value for it hidden together in one flight (side by side).
+Case two_effects_case() {
+    Case c{"two_effects", "side_by_side", "", {}, {}, kTwoEffectsSeed};
+    std::vector<std::string> said;
+    std::vector<std::pair<const physics::EffectType*, std::vector<double>>> hidden;
+    for (const auto* t : physics::effect_types())
+        if (auto v = t->in_two_effects_case()) {
+            hidden.emplace_back(t, *v);
+            said.push_back(log::cat(t->name(), " ", log::join(*v, " ")));
+            const auto params = t->parameters();
+            for (std::size_t k = 0; k < params.size(); ++k) c.truth.push_back({t->name(), params[k].name, (*v)[k], k});
+        }
+    c.hidden = log::join(said, " and ");
+    c.hide = [hidden](physics::PhysicsConfig& config) {
+        for (const auto& [t, v] : hidden) t->set(config.effects, v);
+    };
+    return c;
+}
 
 // Every registered effect's own proof case (in the registry's order), then two effects at once.
 std::vector<Case> cases() {
@@ -50,15 +72,7 @@ std::vector<Case> cases() {
         for (std::size_t k = 0; k < params.size(); ++k) c.truth.push_back({t->name(), params[k].name, p->values[k], k});
         out.push_back(std::move(c));
     }
-    out.push_back({"two_effects",
-                   "side_by_side",
-                   "clock offset 0.08 s and force scale 1.15",
-                   [](physics::PhysicsConfig& c) {
-                       c.effects.clock_offset = {true, 0.08};
-                       c.effects.force_scale = {true, 1.15};
-                   },
-                   {{"clock_offset", "offset_s", 0.08}, {"force_scale", "scale", 1.15}},
-                   16});
+    out.push_back(two_effects_case());
     return out;
 }
 
@@ -306,7 +320,7 @@ namespace {
 std::optional<double> untouched_value(const ExplainResult& r, const std::string& effect) {
     for (const auto& c : r.candidates)
         if (c.effect.name == effect && !c.values.empty() &&
-            (!c.effect.type->has_axes() || physics::AxisPair{c.effect.from, c.effect.to} == kConcealedLeakAxes))
+            on_concealed_axes(*c.effect.type, {c.effect.from, c.effect.to}))
             return c.values.front();
     return std::nullopt;
 }
@@ -337,7 +351,7 @@ ProofResult run_real_proof(const RealProofOptions& o) {
     const auto all = concealments(o.concealed);
     for (const auto& n : o.cases)
         if (std::none_of(all.begin(), all.end(), [&](const Concealment& c) { return c.name == n; }))
-            throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", kConcealmentNames, ")"));
+            throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", concealment_names(), ")"));
     if (o.flights.empty()) throw InputError("--flights: no flight to prove on");
     std::vector<flight::Flight> flights;  // every input read before any output is made
     for (const auto& path : o.flights) flights.push_back(flight::read_flight(path));

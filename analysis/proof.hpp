@@ -59,7 +59,7 @@ void fly_simulated(const physics::PhysicsConfig& hidden, const std::string& form
 
 // The proof on recorded flights (another lab's: the physics is not the truth there). Each flight
 // is first explained as it is — its own fit, whatever the real data shows. Known effects are then
-// concealed in its recording (clock offset, force scale, sensor lag, crosstalk; values not round)
+// concealed in its recording (each effect of the rig that declares a concealment; values not round)
 // and explained with that own fit as the physics: each must be found on top of it, its parameter
 // (the own fit's combined with the concealed value) inside the interval, nothing else claimed; and
 // the untouched flight explained on top of its own fit must claim nothing new.
@@ -67,8 +67,8 @@ struct RealProofOptions {
     std::vector<std::string> flights;  // flight folders
     physics::PhysicsConfig physics;    // what the untouched flights are first explained with
     std::string out_dir;
-    std::vector<std::string> cases;  // clock_offset, force_scale, sensor_lag, cell_crosstalk (empty: all)
-    Concealed concealed;
+    std::vector<std::string> cases;  // concealment_names() (empty: all)
+    Concealed concealed = concealed_sizes(ConcealedSize::single);
     std::stop_token stop;
     std::function<void(const std::string&)> progress;
 };

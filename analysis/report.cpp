@@ -213,14 +213,14 @@ std::string flying_figures(const Figures& g, const flight::Blocks& blocks) {
 
 // The stand's clock against the mocap's as the lab's time service measured it while recording
 // (meta.json extra, dw-recorder export), if it did; whether the stamps are still as recorded; and
-// the stand's own pipeline delay where the stand measured one. The explainer's clock_offset is
-// the time between a force and the pose behind it beyond what the resimulation models (the
-// chips' sample-and-hold): the clock's offset plus that delay.
+// the stand's own pipeline delay where the stand measured one. The explainer's clock effect
+// (physics::clock_effect()) is the time between a force and the pose behind it beyond what the
+// resimulation models (the chips' sample-and-hold): the clock's offset plus that delay.
 struct MeasuredClock {
     double offset_s = 0;
     bool raw_stamps = true;
     std::optional<double> pipeline_delay_s;
-    // What a fitted clock_offset should estimate: the offset left in these stamps plus the delay.
+    // What the fitted clock effect should estimate: the offset left in these stamps plus the delay.
     double expected_s() const { return (raw_stamps ? offset_s : 0.0) + pipeline_delay_s.value_or(0.0); }
 };
 std::optional<MeasuredClock> measured_clock(const flight::Flight& f) {
@@ -246,7 +246,7 @@ std::string measured_clock_text(const std::optional<MeasuredClock>& measured, co
     if (!measured) return "";
     const MeasuredClock& m = *measured;
     std::string fitted = "not fitted (not a candidate)";
-    if (const auto* c = final_result(r, physics::kClockOffsetEffect)) {
+    if (const auto* c = final_result(r, physics::clock_effect().name())) {
         const double e = m.expected_s();
         const bool holds = c->lo[0] <= e && e <= c->hi[0];
         fitted = log::cat(fixed(c->values[0], 4), " s [", fixed(c->lo[0], 4), ", ", fixed(c->hi[0], 4), "], ",
@@ -262,12 +262,14 @@ std::string measured_clock_text(const std::optional<MeasuredClock>& measured, co
                                       "which arrive late)")
                            : "; the stand measured no pipeline delay of its own (a real stand's air has none)";
     return log::cat(
-        "**Clock offset, measured beside fitted.** The explainer's clock_offset is the time between a force and the "
-        "pose behind it beyond what the resimulation models (the chips' sample-and-hold): the stand's clock against "
+        "**Clock offset, measured beside fitted.** The explainer's ", physics::clock_effect().name(),
+        " is the time between a force and the pose behind it beyond what the resimulation models (the chips' "
+        "sample-and-hold): the stand's clock against "
         "the mocap's plus the stand's own pipeline delay. The lab's time service measured the clock while recording: ",
         fixed(m.offset_s, 4), " s",
         m.raw_stamps ? " (these stamps are as recorded)" : " (already taken out of these stamps by the export)", delay,
-        ". Together ", fixed(m.expected_s(), 4), " s. The explainer's clock_offset: ", fitted, ".\n\n");
+        ". Together ", fixed(m.expected_s(), 4), " s. The explainer's ", physics::clock_effect().name(), ": ", fitted,
+        ".\n\n");
 }
 
 // One candidate's entry in report.json.
@@ -302,7 +304,7 @@ json candidate_json(const CandidateResult& c, const std::optional<MeasuredClock>
     if (c.too_few_pieces)
         j["not_identifiable"] = {{"evidence_pieces", c.evidence_pieces},
                                  {"why", "its held-out evidence sits in too few pieces"}};
-    if (measured && c.effect.name == physics::kClockOffsetEffect)
+    if (measured && c.effect.type == &physics::clock_effect())
         j["measured"] = {{"offset_s", measured->offset_s}, {"expected_s", measured->expected_s()}};
     return j;
 }
@@ -508,7 +510,8 @@ void md_candidates(std::ostream& md, const ExplainResult& r, const ExplainOption
           "its held-out evidence sits in so few pieces that the sum cannot reach the threshold is not identifiable "
           "from this flight (said in its verdict). Intervals: the wider of the fold jackknife "
           "and the "
-          "covariance (inflated for autocorrelation); cell_crosstalk's also includes the apparent leak the base model "
+          "covariance (inflated for autocorrelation); a leak between two axes' also includes the apparent leak the "
+          "base model "
           "shows on the axes of the same kind where none is claimed.\n\n| round | effect | parameters [95 %] | ΔBIC | "
           "verdict |\n|---|---|---|---|---|\n";
     for (const auto& c : r.candidates)

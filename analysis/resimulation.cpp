@@ -98,7 +98,9 @@ const std::vector<Wrench6>& Resimulation::air(const physics::PhysicsConfig& c) c
     const auto& fx = flow.effects;
     const physics::Vec3 offset =
         physics::RecordingChain(fx).position_error_m();  // the motion capture's, on the neighbours
-    const bool far_is_zero = !fx.floor_recirculation.enabled;
+    const auto& types = physics::effect_types();
+    const bool far_is_zero = std::none_of(types.begin(), types.end(),
+                                          [&](const auto* t) { return t->acts_far_from_jets() && t->enabled(fx); });
     std::vector<Wrench6> out(n_, Wrench6{});
     std::vector<physics::Producer> ps(bodies_.neighbours.size());
     for (std::size_t i = 0; i < n_; ++i) {

@@ -100,7 +100,7 @@ std::pair<double, double> regress_residual(const ExplainData& d, const Baseline&
     return xx > 0 ? std::pair{xy / xx, xy * xy / xx} : std::pair{0.0, 0.0};
 }
 
-// cell_crosstalk: the axis pair whose residual the model's other axis explains best.
+// An effect between two axes: the axis pair whose residual the model's other axis explains best.
 Effect with_crosstalk_axes(Effect e, const ExplainData& d, const Baseline& b) {
     return with_crosstalk_axes(std::move(e), {{&d, &b}});
 }

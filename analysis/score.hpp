@@ -55,7 +55,7 @@ HeldOut judge_pieces(const PieceScores& s, double min_gain);
 inline constexpr double kPinnedFraction = 1e-4;  // of the parameter's range
 bool pinned(const Effect& e, const std::vector<double>& values);
 
-// cell_crosstalk's axes over these flights (each with the model it is scored against): the pair
+// The axes of an effect between two axes over these flights (each with the model it is scored against): the pair
 // whose residual, in noise floors and summed over the flights, the other measured axis explains
 // best by regression.
 Effect with_crosstalk_axes(Effect e, const std::vector<std::pair<const ExplainData*, const Baseline*>>& flights);

@@ -47,7 +47,7 @@ struct SessionOptions {
 };
 
 // An effect's key in between_flight_sd: its name, and an effect between two axes its axes too
-// ("cell_crosstalk f_d->f_n").
+// ("<effect> f_d->f_n").
 std::string spread_key(const Effect& e);
 
 // One rig effect, fitted on one flight alone.

@@ -51,8 +51,7 @@ std::string found_of(const SessionResult& r) {
 
 // Whether c is the concealed effect as concealed (a cross-talk: between the concealed axes).
 bool as_concealed(const RigCandidate& c, const std::string& effect) {
-    return c.effect.name == effect &&
-           (!c.effect.type->has_axes() || physics::AxisPair{c.effect.from, c.effect.to} == kConcealedLeakAxes);
+    return c.effect.name == effect && on_concealed_axes(*c.effect.type, {c.effect.from, c.effect.to});
 }
 
 // The untouched session's value of an effect on top of its own fit (its first round): from r when
@@ -61,7 +60,8 @@ double untouched_value(const Session& s, SessionOptions so, const SessionResult&
     for (const auto& c : r.candidates)
         if (c.round == 1 && as_concealed(c, effect)) return c.value;
     auto e = effects_named({effect}).front();
-    e.from = kConcealedLeakAxes.from, e.to = kConcealedLeakAxes.to, e.axes_given = true;
+    const auto axes = e.type->real_concealment()->axes;
+    e.from = axes.from, e.to = axes.to, e.axes_given = true;
     so.explain.candidates = {e};
     so.explain.max_effects = 1;
     const auto on_axes = explain_session(s.flights, s.names, so);
@@ -168,7 +168,7 @@ SessionProofResult run_session_proof(const SessionProofOptions& o) {
     auto cases = concealments(o.concealed);
     for (const auto& n : o.cases)
         if (std::none_of(cases.begin(), cases.end(), [&](const Concealment& c) { return c.name == n; }))
-            throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", kConcealmentNames, ")"));
+            throw InputError(log::cat("--cases: unknown case '", n, "' (expected ", concealment_names(), ")"));
     if (!o.cases.empty())
         std::erase_if(cases, [&](const Concealment& c) {
             return std::find(o.cases.begin(), o.cases.end(), c.name) == o.cases.end();

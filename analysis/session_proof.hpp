@@ -17,9 +17,6 @@
 
 namespace dw::analysis {
 
-// How much of each effect the session proof conceals: below what one of the shared flights shows
-// alone (docs/REAL.md, "Sessions"; `dw-explain session-proof --clock ...` probes other sizes).
-inline constexpr Concealed kSessionConcealed{0.031, 1.31, 0.043, 0.09};
 inline constexpr std::size_t kDefaultSessionSize = 5;
 // The share of concealed sessions in which the effect must be recovered.
 inline constexpr double kSessionRecoveryTarget = 0.9;
@@ -30,8 +27,10 @@ struct SessionProofOptions {
     std::string out_dir;
     std::size_t session_size = kDefaultSessionSize;
     std::size_t max_sessions = 0;    // 0: every full group
-    std::vector<std::string> cases;  // kConcealmentNames (empty: all)
-    Concealed concealed = kSessionConcealed;
+    std::vector<std::string> cases;  // concealment_names() (empty: all)
+    // How much of each effect it conceals: below what one of the shared flights shows alone
+    // (docs/REAL.md, "Sessions"; the options, e.g. `--clock`, probe other sizes).
+    Concealed concealed = concealed_sizes(ConcealedSize::session);
     std::stop_token stop;
     std::function<void(const std::string&)> progress;
 };

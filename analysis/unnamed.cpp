@@ -17,6 +17,7 @@
 #include "core/names.hpp"
 #include "core/numbers.hpp"
 #include "core/parallel.hpp"
+#include "physics/effect_types.hpp"
 #include "physics/flight_sim.hpp"
 
 namespace dw::analysis {
@@ -49,6 +50,14 @@ struct Case {
     std::vector<std::string> truly;  // effects of the vocabulary that truly are in it (several: a family to name)
     std::uint64_t seed = 1;
 };
+
+// The effects of a family (each may be what a case's mismatch is named as).
+std::vector<std::string> members_of(const physics::EffectFamily& family) {
+    std::vector<std::string> out;
+    for (const auto* t : physics::effect_types())
+        if (t->family() == &family) out.push_back(t->name());
+    return out;
+}
 
 // The flight's first and last wrench stamps.
 std::pair<double, double> span_of(const flight::Flight& f) { return {f.wrench.front().t, f.wrench.back().t}; }
@@ -194,9 +203,9 @@ std::vector<Case> air_cases() {
          [](PhysicsConfig& c) { c.aggregation = physics::Aggregation::velocity_superposition; },
          {},
          {},
-         // jet_merging's meaning is "the aggregate is not the sum of single jets": this is one such
-         // aggregate. Where the jets always share the push, a gain of it is its family too (kPushFamily).
-         {"force_scale", "jet_merging"},
+         // The push family's meaning includes "the aggregate is not the sum of single jets": this is one
+         // such aggregate. Where the jets always share the push, a gain of it is its family too.
+         members_of(physics::kPushFamily),
          38},
         {"jain_jet",
          "single",
@@ -211,12 +220,10 @@ std::vector<Case> air_cases() {
          "single",
          "family",
          log::cat("clock offset ", kFamilyClock_s, " s on a flight at one height (", kFamilyAltitude_m, " m)"),
-         [](PhysicsConfig& c) {
-             c.effects.clock_offset = {true, kFamilyClock_s};
-         },
+         [](PhysicsConfig& c) { physics::clock_effect().set(c.effects, {kFamilyClock_s}); },
          {},
          [](physics::GridOptions& g) { g.altitudes_m = {kFamilyAltitude_m}; },
-         {"clock_offset", "sensor_lag", "wake_transport"},
+         members_of(physics::kDelayFamily),
          40},
     };
 }

@@ -101,7 +101,7 @@ const char* to_string(PoseSource s);
 
 // meta.json key of a flight exported from a recording (dw-recorder export): the stand's clock
 // against the mocap's as the lab's time service measured it live, in seconds, in the sense of the
-// clock_offset effect (a force at mocap time t stamped t + offset).
+// explainer's clock effect (a force at mocap time t stamped t + offset).
 inline constexpr const char* kMeasuredClockOffsetKey = "clock_offset_measured_s";
 // meta.json key beside it: the stand's own pipeline delay as the stand measured it live
 // (StandStatus.pipeline_delay_s, median), in seconds — what the stand's wrench stamps lag the

@@ -66,6 +66,12 @@ std::vector<std::string> names() {
 
 std::string effect_names() { return log::alternatives(names()); }
 
+const EffectType& clock_effect() {
+    for (const auto* t : effect_types())
+        if (t->stage() == Stage::clock) return *t;
+    throw std::logic_error("no effect acts on the stamps' clock");
+}
+
 const EffectType& effect_type(const std::string& name, const std::string& what) {
     const auto known = names();
     const auto i = find_name(known, name);

@@ -25,9 +25,6 @@
 
 namespace dw::physics {
 
-// The effect the lab's time service measures live (dds/clock_sync.hpp): its name is the contract's.
-inline constexpr const char* kClockOffsetEffect = "clock_offset";
-
 // Effects that explain the same change of the recording against the poses, which a flight may be
 // unable to separate: when the explainer cannot tell its members apart it names the family and what
 // they share, never one member alone. Each effect type says which family it belongs to.
@@ -49,7 +46,7 @@ struct EffectParameter {
     double start = 0;                       // the neutral value (the effect absent)
 };
 
-// cell_crosstalk's axes (0-5, flight::kAxes), chosen before the fit.
+// The axes of an effect between two axes (0-5, flight::kAxes), chosen before the fit.
 struct AxisPair {
     int from = 2, to = 0;
     bool operator==(const AxisPair&) const = default;
@@ -79,6 +76,19 @@ struct ProofCase {
     std::uint64_t seed = 1;
 };
 
+// How the real-data proofs (dw-explain real-proof, session-proof) conceal an effect of the rig in
+// recorded flights, where nobody knows the physics: the option that sets its size and what it may
+// say, the sizes, and how the concealed value combines with what the untouched flight shows of it.
+struct RealConcealment {
+    std::string option, option_help;      // "--clock", "the wrench stamped this late [s]"
+    Range range;                          // what the option may say
+    double single = 0;                    // one flight's proof: a size the shared flights can show
+    double session = 0;                   // a session's: below what one flight alone shows
+    bool multiplies = false;              // the truth: the flight's own value × the size (else +)
+    AxisPair axes{};                      // between these axes (an effect with axes)
+    std::string said_before, said_after;  // the case in words: said_before + size + said_after
+};
+
 using flight::Wrench6;
 using RecordedWrench = std::vector<Wrench6>;
 
@@ -103,6 +113,9 @@ public:
     virtual bool changes_flow() const { return false; }
     // Whether it can act in a flight with this many neighbours and this kind of sufferer.
     virtual bool applies(int neighbours, bool flying) const;
+    // Whether, on, it acts on the sufferer far from every jet too (a flow effect), so that no
+    // sample's air can be left out as too far from the neighbours.
+    virtual bool acts_far_from_jets() const { return false; }
     // Whether it acts between two axes chosen before the fit (AxisPair).
     virtual bool has_axes() const { return false; }
     // The family of effects it may be indistinguishable from (nullptr: none).
@@ -123,6 +136,8 @@ public:
     virtual void clear(Effects& e) const;
     virtual bool enabled(const Effects& e) const;
     virtual std::vector<double> values(const Effects& e) const;
+    // The axes it holds (an effect with axes; else the default pair).
+    virtual AxisPair axes(const Effects&) const { return {}; }
     // The keys of its section `effects.<name>`, declared once for reading and writing
     // (core/keys.hpp): by default `enabled` and each parameter by name.
     virtual void keys(KeyVisitor& k, Effects& e) const;
@@ -151,6 +166,11 @@ public:
     virtual std::optional<ProofCase> proof_case() const { return std::nullopt; }
     // Its coverage case; none for an effect that the simulated flights over a stand cannot show.
     virtual std::optional<CoverageCase> coverage_case() const { return std::nullopt; }
+    // Its values in the proof's flight with two effects hidden at once; none: not one of them.
+    virtual std::optional<std::vector<double>> in_two_effects_case() const { return std::nullopt; }
+    // Its concealment on recorded flights; none for an effect the recording chain cannot put into a
+    // recording after the fact (the air's, the sufferer's, the positions').
+    virtual std::optional<RealConcealment> real_concealment() const { return std::nullopt; }
     // Its paragraph in the report (without the held-out numbers, which the report adds).
     virtual std::string describe(const std::vector<double>& values, AxisPair axes, const EffectVoice& who) const = 0;
 
@@ -175,6 +195,10 @@ const std::vector<const EffectType*>& effect_types();
 // against the lab's headers). Loaded on the registry's first use; every program that reads a
 // physics configuration then knows them.
 inline constexpr const char* kEffectModulesVariable = "DW_EFFECT_MODULES";
+// The effect of the stamps' clock (the first at Stage::clock), which the lab's time service
+// measures live (dds/clock_sync.hpp): the explainer's locator shifts it, its report sets the
+// measurement beside it. A program error (std::logic_error) if no effect acts there.
+const EffectType& clock_effect();
 // The named effect; throws dw::InputError "<what>: unknown effect 'x' (expected one of ...)".
 const EffectType& effect_type(const std::string& name, const std::string& what = "effect");
 // The known names, comma separated (for messages).

@@ -344,7 +344,7 @@ flight::Meta export_meta(const std::vector<std::string>& bodies, const Found& fo
     nlohmann::json extra{
         {"source", path}, {"epoch_unix_s", c.epoch}, {"raw_stamps", o.raw_stamps}, {"clock_offsets_applied_s", clocks}};
     extra.update(measured_clocks(c.stand_measured, c.mocap_measured, c.stand, c.mocap));
-    // When both clocks were measured, the stand's against the mocap's (the explainer's clock_offset:
+    // When both clocks were measured, the stand's against the mocap's (the explainer's clock effect:
     // a force at mocap time t is stamped t + offset by the stand).
     if (c.stand_measured && c.mocap_measured) m.clock_offset_measured_s = *c.stand_measured - *c.mocap_measured;
     if (!found.pipeline_delays.empty()) m.stand_pipeline_delay_s = median(found.pipeline_delays);

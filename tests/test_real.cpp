@@ -447,7 +447,7 @@ namespace {
 Flight clocked_crossing(int passes, double clock_s, std::uint64_t seed) {
     Flight f = crossing(passes);
     dw::physics::PhysicsConfig hidden;
-    dw::physics::effect_type(dw::physics::kClockOffsetEffect).set(hidden.effects, {clock_s});
+    dw::physics::clock_effect().set(hidden.effects, {clock_s});
     const dw::analysis::Resimulation r(f, {});
     const auto w = r.recorded(hidden);
     std::mt19937_64 rng(seed);

@@ -23,6 +23,7 @@ public:
     void clear(Effects& e) const override { e.cell_crosstalk = {}; }
     bool enabled(const Effects& e) const override { return e.cell_crosstalk.enabled; }
     std::vector<double> values(const Effects& e) const override { return {e.cell_crosstalk.coefficient}; }
+    AxisPair axes(const Effects& e) const override { return {e.cell_crosstalk.from, e.cell_crosstalk.to}; }
     void keys(KeyVisitor& k, Effects& e) const override {
         auto& x = e.cell_crosstalk;
         k.flag("enabled", x.enabled);
@@ -42,7 +43,10 @@ public:
     }
     std::optional<CoverageCase> coverage_case() const override {
         return CoverageCase{"single", {{-0.06, 0.06}}, {2, 1}};
-    }  // f_d leaks into f_e
+    }                                                                   // f_d leaks into f_e
+    std::optional<RealConcealment> real_concealment() const override {  // f_d leaks into f_n
+        return RealConcealment{"--leak", "f_n += leak x f_d", {-1, 1}, 0.113, 0.09, false, {2, 0}, "f_n += ", " f_d"};
+    }
     std::string describe(const std::vector<double>& v, AxisPair a, const EffectVoice& who) const override {
         return log::cat("**cell_crosstalk** — ", who.flying ? "the force estimate" : "the stand's calibration",
                         " leaks ", kAxes[a.from], " into ", kAxes[a.to], ": ", fixed(v[0] * 100, 2), " % of the true ",

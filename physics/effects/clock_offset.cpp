@@ -10,7 +10,7 @@ namespace {
 class ClockOffset final : public OneNumber<DW_FIELD(clock_offset)> {
 public:
     ClockOffset() : OneNumber(&Effects::clock_offset, &DW_FIELD(clock_offset)::offset_s) {}
-    std::string name() const override { return kClockOffsetEffect; }
+    std::string name() const override { return "clock_offset"; }
     const EffectFamily* family() const override { return &kDelayFamily; }
     std::optional<std::vector<double>> from_family_quantity(double shift_s) const override {
         return std::vector<double>{shift_s};  // the stamps run late by the shift itself
@@ -24,6 +24,12 @@ public:
         return ProofCase{"single", "clock offset 0.1 s (legs both ways; the maps look right)", {0.1}, {}, 11};
     }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{-0.15, 0.15}}}; }
+    std::optional<std::vector<double>> in_two_effects_case() const override { return std::vector<double>{0.08}; }
+    std::optional<RealConcealment> real_concealment() const override {
+        return RealConcealment{
+            "--clock", "the wrench stamped this late [s]", {0.001, 2, "s"}, 0.083, 0.031, false, {}, "wrench stamped ",
+            " s late"};
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**clock_offset** — ", who.clock, " is ", fixed(std::abs(v[0]), 3), " s ",
                         v[0] >= 0 ? "behind" : "ahead of",

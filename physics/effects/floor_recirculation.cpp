@@ -14,6 +14,7 @@ public:
         return {{"coefficient", "", 0, 1, 0.0, 0.3, range(0.0, 0.1, 5), 0.02}};
     }
     bool changes_flow() const override { return true; }
+    bool acts_far_from_jets() const override { return true; }  // the jets that hit the floor come back everywhere
     void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
         e.floor_recirculation.enabled = on;
         e.floor_recirculation.coefficient = v[0];

@@ -19,6 +19,13 @@ public:
         for (auto& v : w) v *= e.force_scale.scale;
     }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{0.8, 1.25}}}; }
+    std::optional<std::vector<double>> in_two_effects_case() const override { return std::vector<double>{1.15}; }
+    // The shared flights show a scale from about this size: a smaller one is taken for a flight's own
+    // separation-dependent misfit (docs/REAL.md, the limits).
+    std::optional<RealConcealment> real_concealment() const override {
+        return RealConcealment{"--scale", "the wrench multiplied by this", {0.1, 10}, 1.61, 1.31, true, {}, "wrench × ",
+                               ""};
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat("**force_scale** — the recorded wrench is ", fixed(v[0], 3),
                         " × the simulated one everywhere: a mass, drag coefficient or ",

@@ -28,6 +28,19 @@ public:
         return ProofCase{"single", "stand lag, tau 0.08 s", {0.08}, {}, 13};
     }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{0.02, 0.15}}}; }
+    // The shared flights show a lag from about this size: a smaller one is taken for a longer delay on
+    // the random walk (docs/REAL.md, the limits).
+    std::optional<RealConcealment> real_concealment() const override {
+        return RealConcealment{"--lag",
+                               "first-order lag time constant [s]",
+                               {0.001, 2, "s"},
+                               0.151,
+                               0.043,
+                               false,
+                               {},
+                               "first-order lag, tau ",
+                               " s"};
+    }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice& who) const override {
         return log::cat(
             "**sensor_lag** — ", who.sensor, " is a first-order low-pass of the force with a time constant of ",
