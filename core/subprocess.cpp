@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -68,6 +69,11 @@ Subprocess::Subprocess(const SpawnOptions& options) {
     if (rc != 0) {
         pid_ = -1;
         throw RuntimeError("cannot start '" + options.argv[0] + "': " + std::strerror(rc));
+    }
+    if (options.niceness != 0) {
+        errno = 0;
+        const int now = ::getpriority(PRIO_PROCESS, static_cast<id_t>(pid_));
+        if (errno == 0) ::setpriority(PRIO_PROCESS, static_cast<id_t>(pid_), now + options.niceness);
     }
 }
 
@@ -148,21 +154,33 @@ std::string last_line_of(const std::string& file) {
     return last_line(tail);
 }
 
-void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop) {
+namespace {
+SpawnOptions sibling_options(const std::vector<std::string>& args, const std::string& log_file, int niceness) {
     std::vector<std::string> argv{executable_dir() + "/" + args.at(0)};
     argv.insert(argv.end(), args.begin() + 1, args.end());
-    Subprocess p({argv, log_file, log_file, {}});
+    return {argv, log_file, log_file, {}, niceness};
+}
+}  // namespace
+
+Sibling::Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness)
+    : name_(args.at(0)), log_file_(log_file), p_(sibling_options(args, log_file, niceness)) {}
+
+void Sibling::finish(const std::stop_token& stop) {
     std::optional<int> st;
-    while (!(st = p.wait_for(std::chrono::milliseconds(200)))) {
+    while (!(st = p_.wait_for(std::chrono::milliseconds(200)))) {
         if (stop.stop_requested()) {
-            p.stop();
-            throw Stopped(log::cat("stopped during ", args[0]));
+            p_.stop();
+            throw Stopped(log::cat("stopped during ", name_));
         }
     }
     if (*st != 0) {
-        const std::string said = last_line_of(log_file);
-        throw RuntimeError(log::cat(args[0], " failed (status ", *st, ")", said.empty() ? "" : ": ", said));
+        const std::string said = last_line_of(log_file_);
+        throw RuntimeError(log::cat(name_, " failed (status ", *st, ")", said.empty() ? "" : ": ", said));
     }
+}
+
+void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop) {
+    Sibling(args, log_file).finish(stop);
 }
 
 }  // namespace dw

@@ -15,6 +15,7 @@ struct SpawnOptions {
     std::string stdout_path;        // "" = inherit
     std::string stderr_path;        // "" = inherit; may equal stdout_path
     std::vector<std::string> env;   // extra NAME=VALUE entries
+    int niceness = 0;               // added to the child's nice value (its threads and children inherit it)
 };
 
 class Subprocess {
@@ -53,5 +54,17 @@ std::string executable_dir();
 // one line naming it, its status and the last line of its log (its own error) when it fails: the
 // log may not outlive the failure (it is written into an output that is whole or not at all).
 void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop);
+
+// A sibling lab executable started in the background (this much nicer than its parent); finish()
+// waits for it and fails as run_sibling does.
+class Sibling {
+public:
+    Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness = 0);
+    void finish(const std::stop_token& stop);
+
+private:
+    std::string name_, log_file_;
+    Subprocess p_;
+};
 
 }  // namespace dw

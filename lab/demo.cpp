@@ -36,28 +36,33 @@ std::string minutes(double seconds) {
     return log::cat(s / 60, ":", s % 60 < 10 ? "0" : "", s % 60);
 }
 
-// The demo's steps: each announced with the time elapsed, and where the time went kept for the end.
+// The demo's steps, each announced with the time elapsed; a step may run beside others (the
+// training beside the flying). Where the time went is kept for the end.
 class Steps {
 public:
     Steps(int total, Clock::time_point start) : total_(total), start_(start) {}
-    void begin(const std::string& what) {
+    std::size_t begin(const std::string& what) {
         const double t = seconds_since(start_);
-        begun_.emplace_back(what, t);
-        std::cerr << "\n== [" << begun_.size() << "/" << total_ << "] " << what << "  (" << minutes(t) << " elapsed)\n";
+        steps_.push_back({what, t, -1});
+        std::cerr << "\n== [" << steps_.size() << "/" << total_ << "] " << what << "  (" << minutes(t) << " elapsed)\n";
+        return steps_.size() - 1;
     }
-    // Each step begun, with its seconds (the last one's up to now).
+    void end(std::size_t step) { steps_.at(step).end = seconds_since(start_); }
+    // Each step begun, with its seconds (one not ended: up to now).
     std::vector<std::pair<std::string, double>> durations() const {
         std::vector<std::pair<std::string, double>> out;
-        for (std::size_t k = 0; k < begun_.size(); ++k)
-            out.emplace_back(begun_[k].first,
-                             (k + 1 < begun_.size() ? begun_[k + 1].second : seconds_since(start_)) - begun_[k].second);
+        for (const auto& s : steps_) out.emplace_back(s.what, (s.end < 0 ? seconds_since(start_) : s.end) - s.begin);
         return out;
     }
 
 private:
+    struct Step {
+        std::string what;
+        double begin, end;  // seconds into the demo (end < 0: running)
+    };
     int total_;
     Clock::time_point start_;
-    std::vector<std::pair<std::string, double>> begun_;  // what, seconds into the demo
+    std::vector<Step> steps_;
 };
 
 std::string first_line_with(const std::string& text, const std::string& needle) {
@@ -72,6 +77,9 @@ struct DemoFlight {
     std::string stand_clock_offset = "0";  // s: the running stand agent's clock error (the hidden effect)
 };
 
+// The training runs beside the real-time flying, this much nicer: the flying's processes come first.
+constexpr int kTrainingNiceness = 10;
+
 // The effect the demo hides in the running lab: the stand agent's clock 0.1 s ahead of the others'.
 constexpr const char* kHiddenStandClockOffsetS = "0.1";
 
@@ -82,8 +90,8 @@ std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& 
     std::vector<LaunchResult> results;
     for (std::size_t k = 0; k < flights.size(); ++k) {
         const auto& f = flights[k];
-        steps.begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
-                             " m over loopback DDS (stand, mocap and vehicles simulated)"));
+        const auto step = steps.begin(log::cat("flying ", f.formation, ": ", f.legs, " legs at ", f.altitudes,
+                                               " m over loopback DDS (stand, mocap and vehicles simulated)"));
         LaunchOptions lo;
         lo.run_dir = (run / ("lab-" + f.name)).string();
         lo.vars = {{"formation", f.formation},
@@ -110,6 +118,7 @@ std::vector<LaunchResult> fly_experiments(const DemoOptions& o, const fs::path& 
         run_sibling({"dw-recorder", "export", (run / "recordings" / (f.name + ".mcap")).string(), "--flight",
                      (run / "flights" / f.name).string()},
                     (run / "logs" / ("export-" + f.name + ".log")).string(), o.stop);
+        steps.end(step);
     }
     return results;
 }
@@ -262,29 +271,36 @@ int run_demo(const DemoOptions& o) {
         // The explainer's cross-validation needs at least 5 blocks (encounters): 6 legs in --quick.
         {"lf3", "leader_follower3", "v1,v2,v3", o.quick ? "6" : "12", "1.3", kHiddenStandClockOffsetS},
     };
+    // 3. Training and the comparison (the study: simulated training flights of every formation), on
+    // the cores the real-time flying leaves idle.
+    const auto training = steps.begin(
+        "training naive linear, learnt linear and Deep Sets; the comparison table and maps (beside the flying)");
+    std::vector<std::string> study_args{"dw-predictor", "study",      "--out",  (run / "study").string(),
+                                        "--physics",    physics_path, "--jobs", std::to_string(o.jobs)};
+    if (o.quick) study_args.insert(study_args.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
+    Sibling study(study_args, (run / "logs" / "study.log").string(), kTrainingNiceness);
+
     auto viewer = start_viewer(o, run);
     const std::vector<LaunchResult> results = fly_experiments(o, run, lab, physics_path, flights, steps);
     if (viewer) viewer->stop();
 
-    // 3. Train and compare (the study: simulated training flights of every formation).
-    steps.begin("training naive linear, learnt linear and Deep Sets; the comparison table and maps");
-    std::vector<std::string> study{"dw-predictor", "study",      "--out",  (run / "study").string(),
-                                   "--physics",    physics_path, "--jobs", std::to_string(o.jobs)};
-    if (o.quick) study.insert(study.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
-    run_sibling(study, (run / "logs" / "study.log").string(), o.stop);
-
-    steps.begin("the models on the recorded flights: table and maps");
-    models_on_recorded(run, physics_path, o.stop);
-
-    // 5. Explain the recording in which the running lab hid something its physics leaves out.
-    steps.begin(log::cat("explaining the Leader Follower K=3 recording (its stand agent ran ", kHiddenStandClockOffsetS,
-                         " s ahead) against the lab's physics"));
+    // 4. Explain the recording in which the running lab hid something its physics leaves out.
+    auto step = steps.begin(log::cat("explaining the Leader Follower K=3 recording (its stand agent ran ",
+                                     kHiddenStandClockOffsetS, " s ahead) against the lab's physics"));
     run_sibling({"dw-explain", "--physics", physics_path, "--real", (run / "recordings" / "lf3.mcap").string(), "--out",
                  (run / "explain").string()},
                 (run / "logs" / "explain.log").string(), o.stop);
+    steps.end(step);
 
-    steps.begin("writing index.md");
+    study.finish(o.stop);
+    steps.end(training);
+    step = steps.begin("the models on the recorded flights: table and maps");
+    models_on_recorded(run, physics_path, o.stop);
+    steps.end(step);
+
+    step = steps.begin("writing index.md");
     const auto report = nlohmann::json::parse(read_file((run / "explain" / "report.json").string()));
+    steps.end(step);
     const double seconds = seconds_since(started);
     const auto time_by_step = steps.durations();
     write_file((run / "index.md").string(), index_markdown(seconds, flights, results, report, time_by_step));
