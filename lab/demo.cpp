@@ -257,9 +257,8 @@ int run_demo(const DemoOptions& o) {
     fs::create_directories(run / "logs");
     Steps steps(6, started);
 
-    // The physics every simulated part shares: the documented defaults with jets merging.
-    physics::PhysicsConfig physics;
-    physics.effects.jet_merging.enabled = true;
+    // The physics every simulated part shares (config/physics.demo.yaml).
+    const physics::PhysicsConfig physics = physics::parse_physics(kDemoPhysicsYaml, kDemoPhysicsSource);
     const std::string physics_path = (run / "physics.yaml").string();
     write_file(physics_path, physics::to_yaml(physics));
     const std::string lab_path = (run / "lab.yaml").string();

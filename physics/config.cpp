@@ -11,6 +11,7 @@
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/names.hpp"
+#include "physics/effect_types.hpp"
 #include "core/numbers.hpp"
 #include "flight/flight.hpp"
 #include "physics/effect_types.hpp"
@@ -41,6 +42,14 @@ void coefficient_keys(KeyVisitor& k, JetCoefficients& j) {
     k.number("width", j.width, {0.001, 10});
 }
 
+// The effects that regroup jets (jets merging), for the aggregation's message.
+std::string regrouping_effects() {
+    std::vector<std::string> names;
+    for (const auto* t : effect_types())
+        if (t->regroups_jets()) names.push_back(t->name());
+    return log::join(names);
+}
+
 void jet_keys(KeyVisitor& k, PhysicsConfig& c) {
     k.section("jet", [&](KeyVisitor& jet) {
         jet.enumeration("model", c.jet_model, kJetModelNames, "jet model");
@@ -54,7 +63,7 @@ void jet_keys(KeyVisitor& k, PhysicsConfig& c) {
         });
     });
     k.enumeration("aggregation", c.aggregation, kAggregationNames, "aggregation",
-                  "; momentum merging is the jet_merging effect");
+                  "; momentum merging is an effect: " + regrouping_effects());
 }
 
 void body_keys(KeyVisitor& k, PhysicsConfig& c) {

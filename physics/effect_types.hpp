@@ -89,6 +89,11 @@ struct RealConcealment {
     std::string said_before, said_after;  // the case in words: said_before + size + said_after
 };
 
+// What a flow effect sees of the air at the sufferer, and a jet it regroups with its weight
+// (physics/wrench_model.hpp).
+struct AirScene;
+struct WeightedProducer;
+
 using flight::Wrench6;
 using RecordedWrench = std::vector<Wrench6>;
 
@@ -133,6 +138,8 @@ public:
     // defaults; whether on; the values it holds.
     virtual void store(Effects& e, bool on, const std::vector<double>& values, AxisPair axes) const;
     void set(Effects& e, const std::vector<double>& values, AxisPair axes = {}) const;
+    // On, with the values (and axes) it holds (a configuration's, else its defaults).
+    void switch_on(Effects& e) const { store(e, true, values(e), axes(e)); }
     virtual void clear(Effects& e) const;
     virtual bool enabled(const Effects& e) const;
     virtual std::vector<double> values(const Effects& e) const;
@@ -148,6 +155,14 @@ public:
     // The chain's hooks, each called only at the effect's own stage while it is on:
     // positions: how far the motion capture's positions are off the truth (NED, m).
     virtual std::array<double, 3> position_error_m(const Effects&) const { return {0, 0, 0}; }
+    // air (a flow effect, evaluated where the wrench model evaluates the jets): a wrench of its own
+    // beyond the jets' (NED, N and N·m); the jets' transport delay, × each jet's descent time (0:
+    // none); whether it regroups the jets, and then the jets whose air adds as the aggregation
+    // says, each with its weight (in this order: a flow is summed in it).
+    virtual Wrench6 air_wrench(const Effects&, const AirScene&) const { return {}; }
+    virtual double transport_delay_scale(const Effects&) const { return 0; }
+    virtual bool regroups_jets() const { return false; }
+    virtual void regroup_jets(const Effects&, const AirScene&, std::vector<WeightedProducer>&) const {}
     // sufferer: the force a flying sufferer's own motion adds to what it feels (NED, N).
     virtual Wrench6 sufferer_force(const Effects&, const SuffererState&) const { return {}; }
     // sensor: one step of the sensor's response: over dt seconds the force on the sufferer went

@@ -12,7 +12,7 @@ Jet Jet::make(const VehicleParams& v, const PhysicsConfig& c) {
     j.u_hover = std::sqrt(j.thrust_n / (2.0 * c.air_density_kg_m3 * disc));
     j.l = v.motor_distance_m;
     j.inv_l = 1.0 / v.motor_distance_m;
-    // Every jet carries its Bauersfeld width: merged columns (jet_merging) are Bauersfeld jets
+    // Every jet carries its Bauersfeld width: merged columns (an effect that regroups jets) are Bauersfeld jets
     // whatever their members' model, and a zero width made them NaN.
     j.k = jet_coefficients(c, v);
     j.c_half = j.k.width * v.motor_distance_m;

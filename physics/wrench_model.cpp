@@ -80,6 +80,12 @@ WrenchModel::WrenchModel(const PhysicsConfig& config)
     config_.sufferer = sufferer_as(config_, config_.sufferer.vehicle);  // its class's drag and thrust loss
     half_rho_cd_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.drag_coefficient;
     half_rho_clat_ = 0.5 * config_.air_density_kg_m3 * config_.sufferer.lateral_drag_coefficient;
+    for (const auto* t : effect_types()) {
+        if (t->stage() != Stage::air || !t->enabled(config_.effects)) continue;
+        air_effects_.push_back(t);
+        if (!regrouper_ && t->regroups_jets()) regrouper_ = t;
+        if (delay_scale_ == 0) delay_scale_ = t->transport_delay_scale(config_.effects);
+    }
 }
 
 Producer WrenchModel::producer(const Vec3& position, const Vec3& velocity) const {
@@ -124,8 +130,7 @@ DW_VECTOR_CLONES void WrenchModel::add_velocity(const Vec3& suf, const double* _
                                                 double weight, double* __restrict ux, double* __restrict uy,
                                                 double* __restrict uz) const {
     const Jet& jet = p.jet;
-    const double delay_scale =
-        config_.effects.wake_transport.enabled ? config_.effects.wake_transport.delay_scale : 0.0;
+    const double delay_scale = delay_scale_;
     if (jet.model != JetModelKind::bauersfeld) {
         add_velocity_jain(suf, cx, cy, n, p, weight, delay_scale, ux, uy, uz);
         return;
@@ -140,7 +145,7 @@ DW_VECTOR_CLONES void WrenchModel::add_velocity(const Vec3& suf, const double* _
     for (std::size_t i = 0; i < n; ++i) {
         double dx = ox + cx[i], dy = oy + cy[i], dz = oz;
         const double s0 = std::max(dx * ax + dy * ay + dz * az, 0.0);
-        // The air at depth s left the producer τ(s) ago, when it was at p - v τ (wake_transport).
+        // The air at depth s left the producer τ(s) ago, when it was at p - v τ (the transport delay a flow effect sets).
         const double tau = t.delay * t.jet.descent_numerator(s0);
         dx += vx * tau;
         dy += vy * tau;
@@ -235,19 +240,11 @@ Wrench WrenchModel::drag(Scratch& sc) const {
     return w;
 }
 
-Wrench WrenchModel::floor_bias(const Vec3& suf, std::span<const Producer> producers) const {
+Wrench WrenchModel::beyond_the_jets(const Vec3& suf, std::span<const Producer> producers) const {
     Wrench w = Wrench::Zero();
-    const auto& e = config_.effects.floor_recirculation;
-    if (!e.enabled) return w;
-    // Jets that reach the floor come back up around the stand: an upward bias that grows with
-    // each impinging jet and fades with its lateral distance.
-    for (const auto& p : producers) {
-        if (p.position.z() >= suf.z()) continue;  // not above the sufferer
-        const double dx = p.position.x() - suf.x(), dy = p.position.y() - suf.y();
-        const double r2 = (dx * dx + dy * dy) / (e.length_m * e.length_m);
-        w[2] -= e.coefficient * p.jet.thrust_n * std::exp(-r2);
-    }
-    return w;
+    const AirScene scene{suf, producers};
+    for (const auto* t : air_effects_) w += to_wrench(t->air_wrench(config_.effects, scene));
+    return w + buffeting(suf, producers);
 }
 
 Wrench WrenchModel::buffeting(const Vec3& suf, std::span<const Producer> producers) const {
@@ -289,139 +286,27 @@ Wrench WrenchModel::buffeting_sigma(const Vec3& suf, std::span<const Producer> p
     return var.cwiseSqrt();
 }
 
-Producer WrenchModel::merged(std::span<const Producer> producers, const std::vector<int>& members) const {
-    // Momentum flux adds; the merged axis sits at the momentum-weighted centroid; the column
-    // contracts by κ with its centreline speed raised by 1/κ so that momentum is conserved.
-    const double kappa = config_.effects.jet_merging.contraction;
-    Producer m;
-    m.position.setZero();
-    m.axis.setZero();
-    m.velocity.setZero();
-    m.gust = 0;
-    double total = 0, uh2 = 0, c_half = 0, l = 0;
-    for (int i : members) {
-        const Producer& p = producers[static_cast<std::size_t>(i)];
-        const double w = p.jet.thrust_n;
-        total += w;
-        m.position += w * p.position;
-        m.axis += w * p.axis;
-        m.velocity += w * p.velocity;
-        m.gust += w * p.gust;
-        uh2 += p.jet.u_hover * p.jet.u_hover;
-        c_half += w * p.jet.c_half;
-        l += w * p.jet.l;
-    }
-    m.position /= total;
-    m.axis.normalize();
-    m.velocity /= total;
-    m.gust /= total;
-    m.jet = producers[static_cast<std::size_t>(members.front())].jet;
-    m.jet.model = JetModelKind::bauersfeld;
-    m.jet.thrust_n = total;
-    m.jet.u_hover = std::sqrt(uh2);
-    m.jet.l = l / total;
-    m.jet.inv_l = 1.0 / m.jet.l;
-    m.jet.k_centre = m.jet.u_hover * m.jet.k.strength / kappa;
-    m.jet.c_half = kappa * c_half / total;
-    return m;
-}
-
-namespace {
-
-// Which producers' jets merge at the sufferer's depth: pairs whose half-widths overlap, joined
-// transitively. Each producer's group (its lowest member) and its merging weight (0-1).
-struct MergeGroups {
-    std::vector<int> group;
-    std::vector<double> weight;
-};
-
-MergeGroups merge_groups(const Vec3& suf, std::span<const Producer> producers, double onset, double full) {
-    const std::size_t k = producers.size();
-    std::vector<int> group(k);
-    std::iota(group.begin(), group.end(), 0);
-    std::vector<double> weight(k, 0.0);
-    auto root = [&](int i) {
-        while (group[static_cast<std::size_t>(i)] != i) i = group[static_cast<std::size_t>(i)];
-        return i;
-    };
-    std::vector<Vec3> centre(k);
-    std::vector<double> half(k), depth(k);
-    for (std::size_t j = 0; j < k; ++j) {
-        depth[j] = (suf - producers[j].position).dot(producers[j].axis);
-        centre[j] = producers[j].position + depth[j] * producers[j].axis;
-        half[j] = producers[j].jet.half_width(depth[j]);
-    }
-    for (std::size_t a = 0; a < k; ++a) {
-        for (std::size_t b = a + 1; b < k; ++b) {
-            if (depth[a] <= 0 || depth[b] <= 0) continue;
-            const double d = std::max((centre[a] - centre[b]).norm(), 1e-6);
-            const double o = (half[a] + half[b]) / d;
-            double w = std::clamp((o - onset) / (full - onset), 0.0, 1.0);
-            w = w * w * (3 - 2 * w);  // smoothstep: no kink where merging begins
-            if (w <= 0) continue;
-            const int ra = root(static_cast<int>(a)), rb = root(static_cast<int>(b));
-            group[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
-            weight[a] = std::max(weight[a], w);
-            weight[b] = std::max(weight[b], w);
-        }
-    }
-    for (std::size_t j = 0; j < k; ++j) group[j] = root(static_cast<int>(j));
-    return {group, weight};
-}
-
-}  // namespace
-
 Wrench WrenchModel::evaluate(const Vec3& suf, std::span<const Producer> producers) const {
     thread_local Scratch sc;
     const std::size_t k = producers.size();
     const bool sum = config_.aggregation == Aggregation::force_sum;
-    Wrench total = floor_bias(suf, producers) + buffeting(suf, producers);
+    Wrench total = beyond_the_jets(suf, producers);
     if (k == 0) return total;
     const std::size_t n = planform_.size();
-    const auto& jm = config_.effects.jet_merging;
-    if (!jm.enabled || k == 1) {  // the common case, without any allocation
-        if (!sum) sc.reset(n);
-        for (const auto& p : producers) {
-            if (sum) sc.reset(n);
-            add_velocity(suf, p, 1.0, sc);
-            if (sum) total += drag(sc);
-        }
-        if (!sum) total += drag(sc);
-        return total;
-    }
-
-    const auto [group, weight] = merge_groups(suf, producers, jm.onset, jm.full);
     if (!sum) sc.reset(n);
-    for (std::size_t g = 0; g < k; ++g) {
-        std::vector<int> members;
-        double w_merge = 0;
-        for (std::size_t j = 0; j < k; ++j) {
-            if (static_cast<std::size_t>(group[j]) == g) {
-                members.push_back(static_cast<int>(j));
-                w_merge = std::max(w_merge, weight[j]);
-            }
-        }
-        if (members.empty()) continue;
-        const double w_single = members.size() > 1 ? 1.0 - w_merge : 1.0;
-        for (int j : members) {
-            if (sum) {
-                sc.reset(n);
-                add_velocity(suf, producers[static_cast<std::size_t>(j)], 1.0, sc);
-                total += w_single * drag(sc);
-            } else {
-                add_velocity(suf, producers[static_cast<std::size_t>(j)], w_single, sc);
-            }
-        }
-        if (members.size() > 1 && w_merge > 0) {
-            const Producer m = merged(producers, members);
-            if (sum) {
-                sc.reset(n);
-                add_velocity(suf, m, 1.0, sc);
-                total += w_merge * drag(sc);
-            } else {
-                add_velocity(suf, m, w_merge, sc);
-            }
-        }
+    const auto add = [&](const Producer& p, double weight) {
+        if (!sum) return add_velocity(suf, p, weight, sc);
+        sc.reset(n);
+        add_velocity(suf, p, 1.0, sc);
+        total += weight == 1.0 ? drag(sc) : Wrench(weight * drag(sc));
+    };
+    if (!regrouper_ || k == 1) {  // the common case, without any allocation
+        for (const auto& p : producers) add(p, 1.0);
+    } else {
+        thread_local std::vector<WeightedProducer> jets;
+        jets.clear();
+        regrouper_->regroup_jets(config_.effects, AirScene{suf, producers}, jets);
+        for (const auto& j : jets) add(j.producer, j.weight);
     }
     if (!sum) total += drag(sc);
     return total;

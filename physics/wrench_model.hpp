@@ -5,14 +5,16 @@
 // drag from the air velocity there — f_d = ½ rho C_d A |u_d| u_d vertically and ½ rho C_lat A |u_h| u_h
 // laterally — and torques r x f about the sufferer's centre. Spinning rotors also lose thrust in
 // oncoming flow, ΔT ≈ k_v Ω v_in per rotor (PHYSICS.md). Several producers aggregate by a force sum
-// or by velocity superposition; with the jet_merging effect, jets whose half-widths overlap merge
-// into one momentum-conserving, contracted jet on their momentum-weighted axis.
+// or by velocity superposition. The flow effects that are on act here through their hooks
+// (physics/effect_types.hpp, stage air): a wrench of their own, the jets' transport delay, or the
+// jets regrouped (jets that merge).
 #include <Eigen/Core>
 #include <array>
 #include <span>
 #include <vector>
 
 #include "physics/config.hpp"
+#include "physics/effect_types.hpp"
 #include "physics/jet.hpp"
 
 namespace dw::physics {
@@ -37,6 +39,17 @@ struct Producer {
     Jet jet;
     double gust = 1.0;                 // turbulence: multiplier on the jet speed
     Vec3 lateral_gust = Vec3::Zero();  // lateral buffeting: velocity across the axis / axial speed
+};
+
+// The air at the sufferer as a flow effect sees it: where the sufferer is, and the jets.
+struct AirScene {
+    Vec3 sufferer;
+    std::span<const Producer> producers;
+};
+// A jet and the weight its air has in the aggregate (an effect that regroups jets).
+struct WeightedProducer {
+    Producer producer;
+    double weight = 1;
 };
 
 // The sufferer's planform cells, in its own level frame centred on it (x north, y east).
@@ -78,11 +91,14 @@ private:
                            double weight, double delay_scale, double* ux, double* uy, double* uz) const;
     void add_velocity(const Vec3& sufferer, const Producer& p, double weight, Scratch& s) const;
     Wrench drag(Scratch& s) const;  // s: the air at each cell, and room for each cell's force
-    Wrench floor_bias(const Vec3& sufferer, std::span<const Producer> producers) const;
     Wrench buffeting(const Vec3& sufferer, std::span<const Producer> producers) const;
-    Producer merged(std::span<const Producer> producers, const std::vector<int>& members) const;
+    // The flow effects' own wrenches and the buffeting.
+    Wrench beyond_the_jets(const Vec3& sufferer, std::span<const Producer> producers) const;
 
     PhysicsConfig config_;
+    std::vector<const EffectType*> air_effects_;  // the flow effects on, in the vocabulary's order
+    const EffectType* regrouper_ = nullptr;       // the first of them that regroups the jets
+    double delay_scale_ = 0;                      // the jets' transport delay (the first that sets one)
     Planform planform_;
     Jet neighbour_jet_;
     double half_rho_cd_ = 0;

@@ -21,6 +21,7 @@
 #include "predictor/real.hpp"
 #include "predictor/study.hpp"
 #include "predictor/train.hpp"
+#include "physics/effect_types.hpp"
 #include "physics/trajectory.hpp"
 
 namespace {
@@ -75,7 +76,8 @@ struct StudyCommand {
     CLI::App* cmd = nullptr;
     StudyOptions so;
     std::string physics_path;
-    bool jet_merging = false, no_generalisation = false, no_maps = false;
+    std::vector<std::string> effects;
+    bool no_generalisation = false, no_maps = false;
 
     void add(CLI::App& app) {
         cmd = app.add_subcommand(
@@ -84,7 +86,9 @@ struct StudyCommand {
         cmd->add_option("--out", so.out_dir, "output folder (flights, models, table.md, table.csv, maps)")->required();
         cmd->add_option("--physics", physics_path,
                         "physics configuration (default: config/physics.example.yaml's defaults)");
-        cmd->add_flag("--jet-merging", jet_merging, "switch the jet_merging effect on (the aggregate is not a sum)");
+        cmd->add_option("--effect", effects,
+                        "switch an effect of the vocabulary on at its configured values (repeatable; e.g. the jets "
+                        "merging: the aggregate is not a sum)");
         cmd->add_option("--legs", so.legs, "legs per flight")
             ->check(dw::cli::in(dw::Range{5, dw::physics::kLegsRange.hi}));
         cmd->add_option("--seed", so.seed, "seed of the flights and the training")->check(dw::cli::in(dw::kSeedRange));
@@ -99,9 +103,9 @@ struct StudyCommand {
         cmd->add_flag("--no-maps", no_maps, "skip the maps");
     }
     int run() {
-        dw::require_output_dir(so.out_dir, "--out");
         so.physics = physics_from(physics_path);
-        if (jet_merging) so.physics.effects.jet_merging.enabled = true;
+        for (const auto& e : effects) dw::physics::effect_type(e, "--effect").switch_on(so.physics.effects);
+        dw::require_output_dir(so.out_dir, "--out");
         so.generalisation = !no_generalisation;
         so.maps = !no_maps;
         so.progress = say;

@@ -14,6 +14,7 @@
 #include "core/parallel.hpp"
 #include "core/shutdown.hpp"
 #include "flight/flight.hpp"
+#include "physics/effect_types.hpp"
 #include "physics/flight_sim.hpp"
 #include "predictor/ensemble.hpp"
 #include "predictor/maps.hpp"
@@ -206,12 +207,20 @@ std::string draw_maps(const StudyOptions& o, const fs::path& out, const std::vec
     return md;
 }
 
+// The effects of the vocabulary switched on in e ("none").
+std::string effects_on(const physics::Effects& e) {
+    std::vector<std::string> on;
+    for (const auto* t : physics::effect_types())
+        if (t->enabled(e)) on.push_back(t->name());
+    return on.empty() ? "none" : log::join(on);
+}
+
 // 5. table.md (without the maps) and the banded rows for the CSV.
 std::string tables_markdown(const StudyOptions& o, const StudyResult& r, std::vector<ComparisonRow>& banded) {
     std::string md = "# Force models compared\n\n";
     md += log::cat("Simulated flights (", o.legs, " legs each, seed ", o.seed, "; aggregation ",
                    o.physics.aggregation == physics::Aggregation::force_sum ? "force sum" : "velocity superposition",
-                   ", jet merging ", o.physics.effects.jet_merging.enabled ? "on" : "off", ").\n\n");
+                   "; effects on: ", effects_on(o.physics.effects), ").\n\n");
     md += to_markdown(r.table, o.arena);
     md += "\n## By altitude band (the flights' three altitudes; RMSE over the held-out samples within the band)\n\n";
     for (const auto& [altitude, rows] : r.by_altitude) {

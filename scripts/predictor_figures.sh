@@ -9,7 +9,7 @@ bin=build/bin/dw-predictor
 [[ -x $bin ]] || { echo "predictor_figures: $bin not built (scripts/setup.sh)" >&2; exit 1; }
 work=${1:-/tmp/dw-predictor-figures}
 mkdir -p "$work"
-[[ -f $work/study-merging/table.md ]] || "$bin" study --out "$work/study-merging" --jet-merging
+[[ -f $work/study-merging/table.md ]] || "$bin" study --out "$work/study-merging" --effect jet_merging
 [[ -f $work/study-sum/table.md ]] || "$bin" study --out "$work/study-sum" --no-generalisation
 m=$work/study-merging
 models=("$m/models/physics.yaml" "$m/models/naive_linear.json" "$m/models/learnt_linear.json" "$m/models/deep_sets.json")

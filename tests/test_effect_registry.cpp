@@ -144,16 +144,9 @@ TEST(EffectRegistry, TheShippedProgramsLoadItAsAModuleFlyExplainAndReportIt) {
 TEST(EffectRegistry, ABuiltInIsNamedOnlyInItsOwnFile) {
     namespace fs = std::filesystem;
     const std::map<std::string, std::set<std::string>> kNotYet = {
-        {"lab/demo.cpp", {"jet_merging"}},
-        {"physics/config.cpp", {"jet_merging"}},
         {"physics/config.hpp",
          {"body_drag", "cell_crosstalk", "clock_offset", "floor_recirculation", "force_scale", "ground_effect",
           "jet_merging", "position_offset", "sensor_lag", "wake_transport"}},
-        {"physics/jet.cpp", {"jet_merging"}},
-        {"physics/wrench_model.cpp", {"floor_recirculation", "jet_merging", "wake_transport"}},
-        {"physics/wrench_model.hpp", {"jet_merging"}},
-        {"predictor/main.cpp", {"jet_merging"}},
-        {"predictor/study.cpp", {"jet_merging"}},
     };
     std::vector<std::string> names;
     for (const auto& t : builtin_effects()) names.push_back(t->name());

@@ -1,8 +1,9 @@
-// floor_recirculation: jets hitting the floor coming back as a bias (stage: air; its physics is wrench_model's).
+// floor_recirculation: jets hitting the floor coming back as a bias (stage: air).
 #include <cmath>
 
 #include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
+#include "physics/wrench_model.hpp"
 
 namespace dw::physics::effects {
 namespace {
@@ -14,6 +15,19 @@ public:
         return {{"coefficient", "", 0, 1, 0.0, 0.3, range(0.0, 0.1, 5), 0.02}};
     }
     bool changes_flow() const override { return true; }
+    // Jets that reach the floor come back up around the stand: an upward bias that grows with each
+    // impinging jet and fades with its lateral distance.
+    Wrench6 air_wrench(const Effects& fx, const AirScene& s) const override {
+        const auto& e = fx.floor_recirculation;
+        Wrench6 w{};
+        for (const auto& p : s.producers) {
+            if (p.position.z() >= s.sufferer.z()) continue;  // not above the sufferer
+            const double dx = p.position.x() - s.sufferer.x(), dy = p.position.y() - s.sufferer.y();
+            const double r2 = (dx * dx + dy * dy) / (e.length_m * e.length_m);
+            w[2] -= e.coefficient * p.jet.thrust_n * std::exp(-r2);
+        }
+        return w;
+    }
     bool acts_far_from_jets() const override { return true; }  // the jets that hit the floor come back everywhere
     void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
         e.floor_recirculation.enabled = on;

@@ -1,4 +1,5 @@
-// wake_transport: the downwash's descent time (stage: air; its physics is wrench_model's).
+// wake_transport: the downwash's descent time (stage: air): each jet's air at the sufferer follows
+// its producer's state delay_scale × its descent time ago (the wrench model's jets carry the delay).
 #include <cmath>
 
 #include "physics/effects/builtins.hpp"
@@ -16,6 +17,7 @@ public:
         return {{"delay_scale", "", 0, 10, 0.0, 5.0, range(0.0, 3.0, 7), 1.0}};
     }
     bool changes_flow() const override { return true; }
+    double transport_delay_scale(const Effects& e) const override { return e.wake_transport.delay_scale; }
     std::optional<ProofCase> proof_case() const override {
         return ProofCase{"leader_follower", "wake transport delay (jet law, scale 1)", {1.0}, {}, 12};
     }
