@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
         std::printf("| step (36-leg leader_follower3, 2 cores) | seconds | target |\n|---|---|---|\n");
         for (bool merging : {true, false}) {
             dw::physics::PhysicsConfig hidden;
-            hidden.effects.jet_merging.enabled = merging;
+            if (merging) dw::physics::effect_type("jet_merging").switch_on(hidden.effects);
             dw::physics::FlyOptions fly;
             fly.formation = "leader_follower3";
             fly.seed = 7;

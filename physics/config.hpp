@@ -3,6 +3,7 @@
 // vehicles, the stand, noise and turbulence, and the switchable effects named as in
 // ../shared/FLIGHT_FORMAT.md. Loaded strictly from YAML: an unknown key or a bad value is an
 // error naming file, line and key. config/physics.example.yaml documents every key.
+#include <any>
 #include <array>
 #include <string>
 #include <map>
@@ -108,52 +109,9 @@ struct MocapParams {
 };
 
 struct Effects {
-    struct {
-        bool enabled = false;
-        double offset_s = 0.0;
-    } clock_offset;
-    struct {
-        bool enabled = false;
-        double tau_s = 0.0;
-    } sensor_lag;
-    struct {
-        bool enabled = false;
-        double delay_scale = 1.0;
-    } wake_transport;
-    struct {
-        bool enabled = false;
-        std::array<double, 3> offset_m{0, 0, 0};
-    } position_offset;
-    struct {
-        bool enabled = false;
-        double scale = 1.0;
-    } force_scale;
-    struct {
-        bool enabled = false;
-        int from = 2;
-        int to = 0;
-        double coefficient = 0.0;
-    } cell_crosstalk;  // axes 0-5
-    struct {
-        bool enabled = false;
-        double contraction = 0.8;
-        double onset = 0.6;
-        double full = 1.0;
-    } jet_merging;
-    struct {
-        bool enabled = false;
-        double coefficient = 0.02;
-        double length_m = 1.0;
-    } floor_recirculation;
-    struct {
-        bool enabled = false;
-        double cda_h_m2 = 0.0;
-        double cda_v_m2 = 0.0;
-    } body_drag;  // a flying sufferer's own drag
-    struct {
-        bool enabled = false;
-        double coefficient = 0.0;
-    } ground_effect;  // extra lift near the floor
+    // The built-ins' settings, each its own file's struct (physics/effects/common.hpp, SettingsOf),
+    // by name; an effect absent here has its defaults.
+    std::map<std::string, std::any> settings;
     // Effects registered beyond these (physics/effect_types.hpp): those switched on, with their values.
     std::map<std::string, std::vector<double>> extra;
 };

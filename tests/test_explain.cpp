@@ -69,8 +69,8 @@ TEST(ExplainResimulation, ClockOffsetAndScaleActOnTheRecordingOnly) {
     const auto f = fly(plain, "single", 12);
     const Resimulation r(f);
     auto shifted = plain;
-    shifted.effects.clock_offset = {true, 0.1};
-    shifted.effects.force_scale = {true, 2.0};
+    dw::physics::effect_type("clock_offset").set(shifted.effects, {0.1});
+    dw::physics::effect_type("force_scale").set(shifted.effects, {2.0});
     const auto a = r.recorded(plain), b = r.recorded(shifted);
     // b at stamp t is twice a at stamp t - 0.1 (stamps are ~80 Hz: interpolate a).
     int checked = 0;
@@ -157,7 +157,7 @@ TEST(ExplainOptions, EachThresholdOutsideItsRangeIsNamed) {
 TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
     dw::test::TempDir dir;
     dw::physics::PhysicsConfig hidden;
-    hidden.effects.clock_offset = {true, 0.12};
+    dw::physics::effect_type("clock_offset").set(hidden.effects, {0.12});
     dw::flight::write_flight(fly(hidden, "single", 20, 21), dir.file("sim"));
     // Someone else's folder: only the contract's files, no legs.csv (legs are found), an unknown
     // meta key, and the simulator's own files nowhere near.
@@ -237,8 +237,8 @@ TEST(ExplainFolder, WorksOnAFolderItDidNotWriteAndKeepsToTheContract) {
         EXPECT_TRUE(j["discrepancy"].contains(key)) << key;
     EXPECT_NE(dw::read_file(dir.file("out/report.md")).find("What is left, learnt"), std::string::npos);
     const auto fitted = dw::physics::load_physics(dir.file("out/physics.yaml"));
-    EXPECT_TRUE(fitted.effects.clock_offset.enabled);
-    EXPECT_NEAR(fitted.effects.clock_offset.offset_s, 0.12, 0.02);
+    EXPECT_TRUE(dw::physics::clock_effect().enabled(fitted.effects));
+    EXPECT_NEAR(dw::physics::clock_effect().values(fitted.effects).front(), 0.12, 0.02);
     for (const char* png :
          {"residuals_before.png", "residuals_after.png", "maps_east.png", "maps_west.png", "report.md"})
         EXPECT_TRUE(std::filesystem::exists(dir.file(std::string("out/") + png))) << png;
@@ -481,7 +481,7 @@ TEST(ExplainUnnamed, VelocitySuperpositionNamesThePushFamilyNotAGainAlone) {
 // named alone.
 TEST(ExplainFamilies, AGainWhereOneJetPushesAloneIsNamedAlone) {
     dw::physics::PhysicsConfig real;
-    real.effects.force_scale = {true, 1.2};
+    dw::physics::effect_type("force_scale").set(real.effects, {1.2});
     auto f = fly(real, "single", 24, 41);
     ASSERT_EQ(f.meta.neighbours.size(), 1u);
     const std::string first = f.meta.neighbours[0], second = "parked";

@@ -22,8 +22,8 @@ using namespace dw::physics;
 constexpr double kFraction = 0.3;
 
 std::string outwash_yaml() {
-    return dw::log::cat("format: downwash-physics/1\neffects:\n  toy_outwash:\n    enabled: true\n    fraction: ",
-                        kFraction, "\n");
+    return dw::log::cat(
+        "format: downwash-physics/1\neffects:\n  toy_outwash:\n    enabled: true\n    fraction: ", kFraction, "\n");
 }
 
 FlyOptions flight_options() {
@@ -39,7 +39,8 @@ dw::flight::Flight fly(const PhysicsConfig& c) { return simulate_flight(c, fligh
 // The largest change of an axis between two simulations of the same flight.
 double largest_change(const dw::flight::Flight& a, const dw::flight::Flight& b, std::size_t axis) {
     double most = 0;
-    for (std::size_t i = 0; i < a.wrench.size(); ++i) most = std::max(most, std::abs(a.wrench[i].w[axis] - b.wrench[i].w[axis]));
+    for (std::size_t i = 0; i < a.wrench.size(); ++i)
+        most = std::max(most, std::abs(a.wrench[i].w[axis] - b.wrench[i].w[axis]));
     return most;
 }
 
@@ -68,10 +69,10 @@ TEST(FlowEffect, AToyFlowEffectIsSimulatedWhereTheAirIsAndExplained) {
 TEST(FlowEffect, TheShippedSimulatorLoadsItAsAModule) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("outwash.yaml")) << outwash_yaml();
-    const auto r = dw::test::run({dw::test::bin("dw-sim"), "fly", "--formation", "single", "--legs", "12", "--seed",
-                                  "5", "--physics", dir.file("outwash.yaml"), "--quiet", "--out", dir.file("f")},
-                                 dir, std::chrono::minutes(2),
-                                 {std::string(kEffectModulesVariable) + "=" + DW_TOY_FLOW_MODULE});
+    const auto r =
+        dw::test::run({dw::test::bin("dw-sim"), "fly", "--formation", "single", "--legs", "12", "--seed", "5",
+                       "--physics", dir.file("outwash.yaml"), "--quiet", "--out", dir.file("f")},
+                      dir, std::chrono::minutes(2), {std::string(kEffectModulesVariable) + "=" + DW_TOY_FLOW_MODULE});
     ASSERT_EQ(r.status, 0) << r.err;
     const auto shipped = dw::flight::read_flight(dir.file("f"));
     const auto here = fly(parse_physics(outwash_yaml(), "outwash.yaml"));

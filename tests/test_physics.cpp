@@ -165,8 +165,8 @@ TEST(Field, TheFastLoopIsTheJetsOwnFormulas) {
     for (const bool delayed : {false, true}) {
         SCOPED_TRACE(delayed ? "with the transport delay" : "without it");
         PhysicsConfig c;
-        c.effects.wake_transport.enabled = delayed;
-        c.effects.wake_transport.delay_scale = 1.3;
+        constexpr double kDelayScale = 1.3;
+        dw::physics::effect_type("wake_transport").store(c.effects, delayed, {kDelayScale}, {});
         const WrenchModel m(c);
         Producer p = m.producer(Vec3(0.1, -0.2, -2.6), Vec3(0.8, -0.3, 0.1));
         p.axis = Vec3(0.12, -0.08, 1.0).normalized();
@@ -176,7 +176,7 @@ TEST(Field, TheFastLoopIsTheJetsOwnFormulas) {
             const Vec3 x(0.9 * std::sin(1.7 * k), 0.9 * std::cos(2.3 * k), -2.6 + 2.4 * std::sin(0.37 * k + 1));
             Vec3 d = x - p.position;
             const double s0 = d.dot(p.axis);
-            if (delayed && s0 > 0) d += p.velocity * c.effects.wake_transport.delay_scale * p.jet.transport_delay(s0);
+            if (delayed && s0 > 0) d += p.velocity * kDelayScale * p.jet.transport_delay(s0);
             const double s = d.dot(p.axis);
             const Vec3 radial = d - s * p.axis;
             const double r = radial.norm();
@@ -235,7 +235,7 @@ TEST(Field, TheWholePlanformsWrenchIsEachCellsDragInTheJetsOwnAir) {
 
 TEST(Field, TranslatingProducerIsOnlyMirrorSymmetric) {
     PhysicsConfig c;
-    c.effects.wake_transport.enabled = true;
+    dw::physics::effect_type("wake_transport").switch_on(c.effects);
     const WrenchModel m(c);
     const std::array<Producer, 1> ps{m.producer(Vec3(0, 0, -2.7), Vec3(0, 0.5, 0))};  // moving along +E
     double asym = 0;
@@ -338,9 +338,9 @@ TEST(PhysicsConfig, TheExampleFileIsTheDefaults) {
 
 TEST(PhysicsConfig, RoundTripsThroughYaml) {
     PhysicsConfig c;
-    c.effects.clock_offset = {true, 0.118};
-    c.effects.cell_crosstalk = {true, 1, 3, 0.04};
-    c.effects.position_offset = {true, {0.01, -0.02, 0.03}};
+    dw::physics::effect_type("clock_offset").set(c.effects, {0.118});
+    dw::physics::effect_type("cell_crosstalk").set(c.effects, {0.04}, {1, 3});
+    dw::physics::effect_type("position_offset").set(c.effects, {0.01, -0.02, 0.03});
     c.jet_model = JetModelKind::jain;
     c.aggregation = Aggregation::velocity_superposition;
     LearntDiscrepancy m;
@@ -383,7 +383,7 @@ TEST(PhysicsConfig, ErrorsNameFileLineAndKey) {
 TEST(Effects, ClockOffsetShiftsThePeakByVTimesOffsetFlippingWithDirection) {
     PhysicsConfig base = quiet_config();
     PhysicsConfig off = base;
-    off.effects.clock_offset = {true, 0.1};
+    dw::physics::effect_type("clock_offset").set(off.effects, {0.1});
     const auto a = simulate_flight(base, over_the_stand(0.3));
     const auto b = simulate_flight(off, over_the_stand(0.3));
     const Peaks pa = peak_positions(a.flight), pb = peak_positions(b.flight);
@@ -398,7 +398,7 @@ TEST(Effects, ClockOffsetShiftsThePeakByVTimesOffsetFlippingWithDirection) {
 TEST(Effects, WakeTransportShiftGrowsWithVerticalSeparation) {
     PhysicsConfig base = quiet_config();
     PhysicsConfig wake = base;
-    wake.effects.wake_transport = {true, 1.0};
+    dw::physics::effect_type("wake_transport").set(wake.effects, {1.0});
     const Jet j = Jet::make(base.neighbour, base);
     double shift_low = 0, shift_high = 0;
     for (double alt : {0.3, 1.3}) {
@@ -416,7 +416,7 @@ TEST(Effects, WakeTransportShiftGrowsWithVerticalSeparation) {
 TEST(Effects, SensorLagDelaysAndSmoothsButDoesNotDependOnSeparation) {
     PhysicsConfig base = quiet_config();
     PhysicsConfig lag = base;
-    lag.effects.sensor_lag = {true, 0.08};
+    dw::physics::effect_type("sensor_lag").set(lag.effects, {0.08});
     std::array<double, 2> shifts{};
     for (int i = 0; i < 2; ++i) {
         const double alt = i == 0 ? 0.3 : 1.3;
@@ -433,7 +433,7 @@ TEST(Effects, SensorLagDelaysAndSmoothsButDoesNotDependOnSeparation) {
 TEST(Effects, PositionOffsetShiftsThePeakWithoutFlipping) {
     PhysicsConfig base = quiet_config();
     PhysicsConfig off = base;
-    off.effects.position_offset = {true, {0.0, 0.05, 0.0}};
+    dw::physics::effect_type("position_offset").set(off.effects, {0.0, 0.05, 0.0});
     const Peaks pa = peak_positions(simulate_flight(base, over_the_stand(0.3)).flight);
     const Peaks pb = peak_positions(simulate_flight(off, over_the_stand(0.3)).flight);
     EXPECT_NEAR(pb.plus_e - pa.plus_e, 0.05, 0.005);
@@ -443,8 +443,8 @@ TEST(Effects, PositionOffsetShiftsThePeakWithoutFlipping) {
 TEST(Effects, ForceScaleAndCrosstalkChangeOnlyTheRecording) {
     const PhysicsConfig base;  // with noise: the same seed gives the same noise
     PhysicsConfig scaled = base, cross = base;
-    scaled.effects.force_scale = {true, 1.2};
-    cross.effects.cell_crosstalk = {true, 2, 0, 0.05};
+    dw::physics::effect_type("force_scale").set(scaled.effects, {1.2});
+    dw::physics::effect_type("cell_crosstalk").set(cross.effects, {0.05}, {2, 0});
     const auto a = simulate_flight(base, over_the_stand(0.3));
     const auto s = simulate_flight(scaled, over_the_stand(0.3));
     const auto x = simulate_flight(cross, over_the_stand(0.3));
@@ -460,7 +460,7 @@ TEST(Effects, ForceScaleAndCrosstalkChangeOnlyTheRecording) {
 TEST(Effects, JetMergingChangesLeaderFollower3At13mButNotASingleProducer) {
     PhysicsConfig base;
     PhysicsConfig merge = base;
-    merge.effects.jet_merging.enabled = true;
+    dw::physics::effect_type("jet_merging").switch_on(merge.effects);
     const WrenchModel m_sum(base), m_merge(merge);
     const Vec3 suf(0, 0, -1.4);
     const auto lf3 = make_formation("leader_follower3");
@@ -487,7 +487,7 @@ TEST(Effects, JetMergingChangesLeaderFollower3At13mButNotASingleProducer) {
 
 TEST(Effects, FloorRecirculationGrowsWithImpingingJets) {
     PhysicsConfig on;
-    on.effects.floor_recirculation.enabled = true;
+    dw::physics::effect_type("floor_recirculation").switch_on(on.effects);
     const PhysicsConfig off;
     const WrenchModel with(on), without(off);
     const Vec3 suf(0, 0, -1.4);
@@ -682,7 +682,7 @@ TEST(PhysicsHardening, JainJetsMergeIntoFiniteForcesOfTheRightSize) {
     PhysicsConfig jain = quiet_config();
     jain.jet_model = dw::physics::JetModelKind::jain;
     PhysicsConfig merged = jain;
-    merged.effects.jet_merging.enabled = true;
+    dw::physics::effect_type("jet_merging").switch_on(merged.effects);
     for (const char* formation : {"stack", "side_by_side", "leader_follower3", "hybrid"}) {
         const double plain = peak_fd(simulate_flight(jain, over_the_stand(0.8, formation)).flight);
         const double with = peak_fd(simulate_flight(merged, over_the_stand(0.8, formation)).flight);
@@ -718,11 +718,11 @@ TEST(PhysicsHardening, DuplicateKeysAndNonFiniteOffsetsAreRefused) {
 // recurrence gives the same readings to a whole series and to a live stream.
 TEST(RecordingChain, EachStageActsOnceAndLiveReadingsAreTheSeriesReadings) {
     dw::physics::Effects fx;
-    fx.sensor_lag = {true, 0.05};
-    fx.force_scale = {true, 1.2};
-    fx.cell_crosstalk = {true, 2, 0, 0.1};  // f_d leaks into f_n
-    fx.clock_offset = {true, 0.03};
-    fx.position_offset = {true, {0.1, -0.2, 0.0}};
+    dw::physics::effect_type("sensor_lag").set(fx, {0.05});
+    dw::physics::effect_type("force_scale").set(fx, {1.2});
+    dw::physics::effect_type("cell_crosstalk").set(fx, {0.1}, {2, 0});  // f_d leaks into f_n
+    dw::physics::effect_type("clock_offset").set(fx, {0.03});
+    dw::physics::effect_type("position_offset").set(fx, {0.1, -0.2, 0.0});
     const dw::physics::RecordingChain chain(fx);
     EXPECT_DOUBLE_EQ(chain.clock_delay_s(), 0.03);
     EXPECT_EQ(chain.position_error_m(), dw::physics::Vec3(0.1, -0.2, 0.0));

@@ -650,10 +650,10 @@ static void study_claims(const StudySize& size) {
     o.generalisation = false;
     o.maps = false;
     o.out_dir = dir.file("merging");
-    o.physics.effects.jet_merging.enabled = true;
+    dw::physics::effect_type("jet_merging").switch_on(o.physics.effects);
     const auto merging = run_study(o);
     o.out_dir = dir.file("sum");
-    o.physics.effects.jet_merging.enabled = false;
+    dw::physics::effect_type("jet_merging").clear(o.physics.effects);
     const auto sum = run_study(o);
     if (size.accuracy) study_accuracy(merging, sum);
     EXPECT_TRUE(std::filesystem::exists(sum.markdown_path));

@@ -20,9 +20,7 @@ constexpr double kOutwashWidth_m = 0.3;  // the distance over which it fades (1/
 class ToyOutwash final : public EffectType {
 public:
     std::string name() const override { return "toy_outwash"; }
-    std::vector<EffectParameter> parameters() const override {
-        return {{"fraction", "", -1, 1, -0.5, 0.5, {}, 0.0}};
-    }
+    std::vector<EffectParameter> parameters() const override { return {{"fraction", "", -1, 1, -0.5, 0.5, {}, 0.0}}; }
     bool changes_flow() const override { return true; }
     Wrench6 air_wrench(const Effects& e, const AirScene& s) const override {
         const double fraction = values(e).front();

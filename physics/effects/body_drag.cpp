@@ -7,27 +7,29 @@
 namespace dw::physics::effects {
 namespace {
 
-class BodyDrag final : public EffectType {
+struct BodyDragSettings {
+    bool enabled = false;
+    double cda_h_m2 = 0.0, cda_v_m2 = 0.0;
+};
+
+class BodyDrag final : public BuiltIn<BodyDragSettings> {
 public:
-    std::string name() const override { return "body_drag"; }
+    BodyDrag() : BuiltIn("body_drag") {}
     std::vector<EffectParameter> parameters() const override {
         return {{"cda_h_m2", "m²", 0, 10, 0.0, 0.1, {}, 0.0}, {"cda_v_m2", "m²", 0, 10, 0.0, 0.1, {}, 0.0}};
     }
     bool applies(int, bool flying) const override { return flying; }
-    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
-        e.body_drag = {on, v[0], v[1]};
-    }
-    void clear(Effects& e) const override { e.body_drag = {}; }
-    bool enabled(const Effects& e) const override { return e.body_drag.enabled; }
-    std::vector<double> values(const Effects& e) const override { return {e.body_drag.cda_h_m2, e.body_drag.cda_v_m2}; }
+    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override { of(e) = {on, v[0], v[1]}; }
+    std::vector<double> values(const Effects& e) const override { return {of(e).cda_h_m2, of(e).cda_v_m2}; }
     Stage stage() const override { return Stage::sufferer; }
     // f = −½ ρ C_d A |v| v, horizontally and vertically with their own areas.
     Wrench6 sufferer_force(const Effects& e, const SuffererState& s) const override {
         const auto& v = s.velocity_m_s;
         const double half_rho = 0.5 * s.air_density_kg_m3, vh = std::hypot(v[0], v[1]);
-        return {-half_rho * e.body_drag.cda_h_m2 * vh * v[0],
-                -half_rho * e.body_drag.cda_h_m2 * vh * v[1],
-                -half_rho * e.body_drag.cda_v_m2 * std::abs(v[2]) * v[2],
+        const auto& x = of(e);
+        return {-half_rho * x.cda_h_m2 * vh * v[0],
+                -half_rho * x.cda_h_m2 * vh * v[1],
+                -half_rho * x.cda_v_m2 * std::abs(v[2]) * v[2],
                 0,
                 0,
                 0};

@@ -10,22 +10,26 @@ namespace {
 
 using flight::kAxes;
 
-class CellCrosstalk final : public EffectType {
+struct CellCrosstalkSettings {
+    bool enabled = false;
+    int from = 2, to = 0;  // axes 0-5
+    double coefficient = 0.0;
+};
+
+class CellCrosstalk final : public BuiltIn<CellCrosstalkSettings> {
 public:
-    std::string name() const override { return "cell_crosstalk"; }
+    CellCrosstalk() : BuiltIn("cell_crosstalk") {}
     std::vector<EffectParameter> parameters() const override {
         return {{"coefficient", "", -1, 1, -0.5, 0.5, {}, 0.0}};
     }
     bool has_axes() const override { return true; }
     void store(Effects& e, bool on, const std::vector<double>& v, AxisPair a) const override {
-        e.cell_crosstalk = {on, a.from, a.to, v[0]};
+        of(e) = {on, a.from, a.to, v[0]};
     }
-    void clear(Effects& e) const override { e.cell_crosstalk = {}; }
-    bool enabled(const Effects& e) const override { return e.cell_crosstalk.enabled; }
-    std::vector<double> values(const Effects& e) const override { return {e.cell_crosstalk.coefficient}; }
-    AxisPair axes(const Effects& e) const override { return {e.cell_crosstalk.from, e.cell_crosstalk.to}; }
+    std::vector<double> values(const Effects& e) const override { return {of(e).coefficient}; }
+    AxisPair axes(const Effects& e) const override { return {of(e).from, of(e).to}; }
     void keys(KeyVisitor& k, Effects& e) const override {
-        auto& x = e.cell_crosstalk;
+        auto& x = of(e);
         k.flag("enabled", x.enabled);
         k.choice("from", x.from, kAxes, "axis");
         k.choice("to", x.to, kAxes, "axis");
@@ -35,7 +39,7 @@ public:
     Stage stage() const override { return Stage::calibration; }
     // The leak is of the true `from` axis, which the recording holds (crosstalk leaves it alone).
     void on_calibration(const Effects& e, Wrench6& w, const Wrench6& recorded) const override {
-        const auto& x = e.cell_crosstalk;
+        const auto& x = of(e);
         w[static_cast<std::size_t>(x.to)] += x.coefficient * recorded[static_cast<std::size_t>(x.from)];
     }
     std::optional<ProofCase> proof_case() const override {

@@ -7,10 +7,14 @@
 namespace dw::physics::effects {
 namespace {
 
-class ClockOffset final : public OneNumber<DW_FIELD(clock_offset)> {
+struct ClockOffsetSettings {
+    bool enabled = false;
+    double offset_s = 0.0;
+};
+
+class ClockOffset final : public OneNumber<ClockOffsetSettings> {
 public:
-    ClockOffset() : OneNumber(&Effects::clock_offset, &DW_FIELD(clock_offset)::offset_s) {}
-    std::string name() const override { return "clock_offset"; }
+    ClockOffset() : OneNumber("clock_offset", &ClockOffsetSettings::offset_s) {}
     const EffectFamily* family() const override { return &kDelayFamily; }
     std::optional<std::vector<double>> from_family_quantity(double shift_s) const override {
         return std::vector<double>{shift_s};  // the stamps run late by the shift itself
@@ -19,7 +23,7 @@ public:
         return {{"offset_s", "s", -10, 10, -0.5, 0.5, range(-0.3, 0.3, 25), 0.0}};
     }
     Stage stage() const override { return Stage::clock; }
-    double clock_delay_s(const Effects& e) const override { return e.clock_offset.offset_s; }
+    double clock_delay_s(const Effects& e) const override { return of(e).offset_s; }
     std::optional<ProofCase> proof_case() const override {
         return ProofCase{"single", "clock offset 0.1 s (legs both ways; the maps look right)", {0.1}, {}, 11};
     }

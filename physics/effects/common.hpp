@@ -1,6 +1,7 @@
 #pragma once
 // What the built-in effects' files share: search grids, and the
 // class of an effect whose configuration is one struct in Effects with `enabled` and one number.
+#include <any>
 #include <string>
 #include <vector>
 
@@ -16,25 +17,58 @@ inline std::vector<double> range(double a, double b, int n) {
     return v;
 }
 
-// A built-in whose configuration is one struct in Effects with `enabled` and one number.
-template <class Field>
-class OneNumber : public EffectType {
+// A built-in's settings: a struct of its own file's (with `enabled`), kept in Effects::settings
+// under its name; an effect absent there has the struct's defaults.
+template <class S>
+class SettingsOf {
 public:
-    OneNumber(Field Effects::*field, double Field::*value) : field_(field), value_(value) {}
-    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
-        (e.*field_).enabled = on;
-        (e.*field_).*value_ = v[0];
+    explicit SettingsOf(std::string name) : name_(std::move(name)) {}
+    const S& operator()(const Effects& e) const {
+        static const S defaults{};
+        const auto it = e.settings.find(name_);
+        return it == e.settings.end() ? defaults : std::any_cast<const S&>(it->second);
     }
-    void clear(Effects& e) const override { e.*field_ = Field{}; }
-    bool enabled(const Effects& e) const override { return (e.*field_).enabled; }
-    std::vector<double> values(const Effects& e) const override { return {(e.*field_).*value_}; }
+    S& operator()(Effects& e) const {
+        auto& a = e.settings[name_];
+        if (!a.has_value()) a = S{};
+        return std::any_cast<S&>(a);
+    }
+    void clear(Effects& e) const { e.settings.erase(name_); }
 
 private:
-    Field Effects::*field_;
-    double Field::*value_;
+    std::string name_;
 };
 
-// The struct of one built-in (an unnamed struct in Effects).
-#define DW_FIELD(member) decltype(Effects::member)
+// A built-in with its settings S (kept by SettingsOf).
+template <class S>
+class BuiltIn : public EffectType {
+public:
+    explicit BuiltIn(std::string name) : of(name), name_(std::move(name)) {}
+    std::string name() const override { return name_; }
+    void clear(Effects& e) const override { of.clear(e); }
+    bool enabled(const Effects& e) const override { return of(e).enabled; }
+
+protected:
+    SettingsOf<S> of;
+
+private:
+    std::string name_;
+};
+
+// A built-in whose settings are `enabled` and one number.
+template <class S>
+class OneNumber : public BuiltIn<S> {
+public:
+    OneNumber(std::string name, double S::*value) : BuiltIn<S>(std::move(name)), value_(value) {}
+    void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
+        auto& s = this->of(e);
+        s.enabled = on;
+        s.*value_ = v[0];
+    }
+    std::vector<double> values(const Effects& e) const override { return {this->of(e).*value_}; }
+
+private:
+    double S::*value_;
+};
 
 }  // namespace dw::physics::effects

@@ -8,9 +8,15 @@
 namespace dw::physics::effects {
 namespace {
 
-class FloorRecirculation final : public EffectType {
+struct FloorRecirculationSettings {
+    bool enabled = false;
+    double coefficient = 0.02;
+    double length_m = 1.0;
+};
+
+class FloorRecirculation final : public BuiltIn<FloorRecirculationSettings> {
 public:
-    std::string name() const override { return "floor_recirculation"; }
+    FloorRecirculation() : BuiltIn("floor_recirculation") {}
     std::vector<EffectParameter> parameters() const override {
         return {{"coefficient", "", 0, 1, 0.0, 0.3, range(0.0, 0.1, 5), 0.02}};
     }
@@ -18,7 +24,7 @@ public:
     // Jets that reach the floor come back up around the stand: an upward bias that grows with each
     // impinging jet and fades with its lateral distance.
     Wrench6 air_wrench(const Effects& fx, const AirScene& s) const override {
-        const auto& e = fx.floor_recirculation;
+        const auto& e = of(fx);
         Wrench6 w{};
         for (const auto& p : s.producers) {
             if (p.position.z() >= s.sufferer.z()) continue;  // not above the sufferer
@@ -30,15 +36,13 @@ public:
     }
     bool acts_far_from_jets() const override { return true; }  // the jets that hit the floor come back everywhere
     void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
-        e.floor_recirculation.enabled = on;
-        e.floor_recirculation.coefficient = v[0];
+        of(e).enabled = on;
+        of(e).coefficient = v[0];
     }
-    void clear(Effects& e) const override { e.floor_recirculation = {}; }
-    bool enabled(const Effects& e) const override { return e.floor_recirculation.enabled; }
-    std::vector<double> values(const Effects& e) const override { return {e.floor_recirculation.coefficient}; }
+    std::vector<double> values(const Effects& e) const override { return {of(e).coefficient}; }
     void keys(KeyVisitor& k, Effects& e) const override {
         EffectType::keys(k, e);
-        k.number("length_m", e.floor_recirculation.length_m, {0.01, 100});
+        k.number("length_m", of(e).length_m, {0.01, 100});
     }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"stack", {{0.01, 0.08}}}; }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {

@@ -7,16 +7,20 @@
 namespace dw::physics::effects {
 namespace {
 
-class ForceScale final : public OneNumber<DW_FIELD(force_scale)> {
+struct ForceScaleSettings {
+    bool enabled = false;
+    double scale = 1.0;
+};
+
+class ForceScale final : public OneNumber<ForceScaleSettings> {
 public:
-    ForceScale() : OneNumber(&Effects::force_scale, &DW_FIELD(force_scale)::scale) {}
-    std::string name() const override { return "force_scale"; }
+    ForceScale() : OneNumber("force_scale", &ForceScaleSettings::scale) {}
     std::vector<EffectParameter> parameters() const override { return {{"scale", "", 0, 10, 0.3, 3.0, {}, 1.0}}; }
     Stage stage() const override { return Stage::calibration; }
     const EffectFamily* family() const override { return &kPushFamily; }
     bool gain_of_the_push() const override { return true; }
     void on_calibration(const Effects& e, Wrench6& w, const Wrench6&) const override {
-        for (auto& v : w) v *= e.force_scale.scale;
+        for (auto& v : w) v *= of(e).scale;
     }
     std::optional<CoverageCase> coverage_case() const override { return CoverageCase{"single", {{0.8, 1.25}}}; }
     std::optional<std::vector<double>> in_two_effects_case() const override { return std::vector<double>{1.15}; }

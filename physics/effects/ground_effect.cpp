@@ -7,10 +7,14 @@
 namespace dw::physics::effects {
 namespace {
 
-class GroundEffect final : public OneNumber<DW_FIELD(ground_effect)> {
+struct GroundEffectSettings {
+    bool enabled = false;
+    double coefficient = 0.0;
+};
+
+class GroundEffect final : public OneNumber<GroundEffectSettings> {
 public:
-    GroundEffect() : OneNumber(&Effects::ground_effect, &DW_FIELD(ground_effect)::coefficient) {}
-    std::string name() const override { return "ground_effect"; }
+    GroundEffect() : OneNumber("ground_effect", &GroundEffectSettings::coefficient) {}
     std::vector<EffectParameter> parameters() const override {
         return {{"coefficient", "", 0, 50, 0.0, 50.0, range(0.0, 20.0, 5), 0.0}};
     }
@@ -20,8 +24,7 @@ public:
     // held at the propeller radius: the law's pole is not reached by a flying vehicle.
     Wrench6 sufferer_force(const Effects& e, const SuffererState& s) const override {
         const double h = std::max(-s.position_m[2], s.prop_radius_m);
-        return {0, 0, -e.ground_effect.coefficient * s.hover_thrust_n * std::pow(s.prop_radius_m / (4 * h), 2),
-                0, 0, 0};
+        return {0, 0, -of(e).coefficient * s.hover_thrust_n * std::pow(s.prop_radius_m / (4 * h), 2), 0, 0, 0};
     }
     std::string describe(const std::vector<double>& v, AxisPair, const EffectVoice&) const override {
         return log::cat("**ground_effect** — extra lift near the floor: ", fixed(v[0], 2),

@@ -88,8 +88,15 @@ Producer merged(std::span<const Producer> producers, const std::vector<int>& mem
     return m;
 }
 
+struct JetMergingSettings {
+    bool enabled = false;
+    double contraction = 0.8;
+    double onset = 0.6;  // the jets' overlap (half-widths over distance) where merging begins
+    double full = 1.0;   // and where it is complete
+};
+
 // Each group's jets at the weight left them by merging, then the group merged at its weight.
-void regroup(const AirScene& s, const DW_FIELD(jet_merging) & jm, std::vector<WeightedProducer>& out) {
+void regroup(const AirScene& s, const JetMergingSettings& jm, std::vector<WeightedProducer>& out) {
     const std::size_t k = s.producers.size();
     const auto [group, weight] = merge_groups(s.sufferer, s.producers, jm.onset, jm.full);
     for (std::size_t g = 0; g < k; ++g) {
@@ -108,31 +115,30 @@ void regroup(const AirScene& s, const DW_FIELD(jet_merging) & jm, std::vector<We
     }
 }
 
-class JetMerging final : public EffectType {
+class JetMerging final : public BuiltIn<JetMergingSettings> {
 public:
-    std::string name() const override { return "jet_merging"; }
+    JetMerging() : BuiltIn("jet_merging") {}
     std::vector<EffectParameter> parameters() const override {
         return {{"contraction", "", 0.05, 2, 0.05, 1.0, range(0.2, 1.0, 5), 0.8}};
     }
     bool changes_flow() const override { return true; }
     bool regroups_jets() const override { return true; }
     void regroup_jets(const Effects& e, const AirScene& s, std::vector<WeightedProducer>& out) const override {
-        regroup(s, e.jet_merging, out);
+        regroup(s, of(e), out);
     }
     const EffectFamily* family() const override { return &kPushFamily; }
     bool applies(int neighbours, bool) const override { return neighbours >= 2; }
     void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
-        e.jet_merging.enabled = on;
-        e.jet_merging.contraction = v[0];
+        of(e).enabled = on;
+        of(e).contraction = v[0];
     }
-    void clear(Effects& e) const override { e.jet_merging = {}; }
-    bool enabled(const Effects& e) const override { return e.jet_merging.enabled; }
-    std::vector<double> values(const Effects& e) const override { return {e.jet_merging.contraction}; }
+    std::vector<double> values(const Effects& e) const override { return {of(e).contraction}; }
     void keys(KeyVisitor& k, Effects& e) const override {
         EffectType::keys(k, e);
-        k.number("onset", e.jet_merging.onset, {0, 10});
-        k.number("full", e.jet_merging.full, {0, 10});
-        k.require(e.jet_merging.full > e.jet_merging.onset, "full", "must be greater than onset");
+        auto& x = of(e);
+        k.number("onset", x.onset, {0, 10});
+        k.number("full", x.full, {0, 10});
+        k.require(x.full > x.onset, "full", "must be greater than onset");
     }
     std::optional<ProofCase> proof_case() const override {
         return ProofCase{"leader_follower3", "jet merging (only where jets overlap: K = 3, >= 1 m)", {0.8}, {}, 14};

@@ -7,9 +7,14 @@
 namespace dw::physics::effects {
 namespace {
 
-class PositionOffset final : public EffectType {
+struct PositionOffsetSettings {
+    bool enabled = false;
+    std::array<double, 3> offset_m{0, 0, 0};
+};
+
+class PositionOffset final : public BuiltIn<PositionOffsetSettings> {
 public:
-    std::string name() const override { return "position_offset"; }
+    PositionOffset() : BuiltIn("position_offset") {}
     std::vector<EffectParameter> parameters() const override {
         std::vector<EffectParameter> p;
         for (const char* axis : {"offset_n_m", "offset_e_m", "offset_d_m"})
@@ -19,21 +24,19 @@ public:
     bool changes_flow() const override { return true; }
     std::string grouped_key() const override { return "offset_m"; }
     void store(Effects& e, bool on, const std::vector<double>& v, AxisPair) const override {
-        e.position_offset = {on, {v[0], v[1], v[2]}};
+        of(e) = {on, {v[0], v[1], v[2]}};
     }
-    void clear(Effects& e) const override { e.position_offset = {}; }
-    bool enabled(const Effects& e) const override { return e.position_offset.enabled; }
     std::vector<double> values(const Effects& e) const override {
-        return {e.position_offset.offset_m.begin(), e.position_offset.offset_m.end()};
+        return {of(e).offset_m.begin(), of(e).offset_m.end()};
     }
     void keys(KeyVisitor& k, Effects& e) const override {
-        k.flag("enabled", e.position_offset.enabled);
+        auto& x = of(e);
+        k.flag("enabled", x.enabled);
         const auto p = parameters().front();  // the three axes share their bounds
-        k.numbers(grouped_key(), e.position_offset.offset_m, {p.config_min, p.config_max, "m"},
-                  "expected [n, e, d] in metres");
+        k.numbers(grouped_key(), x.offset_m, {p.config_min, p.config_max, "m"}, "expected [n, e, d] in metres");
     }
     Stage stage() const override { return Stage::positions; }
-    std::array<double, 3> position_error_m(const Effects& e) const override { return e.position_offset.offset_m; }
+    std::array<double, 3> position_error_m(const Effects& e) const override { return of(e).offset_m; }
     std::optional<CoverageCase> coverage_case() const override {
         return CoverageCase{"single", {{-0.1, 0.1}, {-0.1, 0.1}, {-0.1, 0.1}}};
     }

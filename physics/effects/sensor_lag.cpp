@@ -8,10 +8,14 @@
 namespace dw::physics::effects {
 namespace {
 
-class SensorLag final : public OneNumber<DW_FIELD(sensor_lag)> {
+struct SensorLagSettings {
+    bool enabled = false;
+    double tau_s = 0.0;
+};
+
+class SensorLag final : public OneNumber<SensorLagSettings> {
 public:
-    SensorLag() : OneNumber(&Effects::sensor_lag, &DW_FIELD(sensor_lag)::tau_s) {}
-    std::string name() const override { return "sensor_lag"; }
+    SensorLag() : OneNumber("sensor_lag", &SensorLagSettings::tau_s) {}
     const EffectFamily* family() const override { return &kDelayFamily; }
     std::optional<std::vector<double>> from_family_quantity(double shift_s) const override {
         if (shift_s <= 0) return std::nullopt;  // a lag cannot make the force early
@@ -22,7 +26,7 @@ public:
     }
     Stage stage() const override { return Stage::sensor; }
     void sensor_step(const Effects& e, double dt, const Wrench6& x0, const Wrench6& x1, Wrench6& y) const override {
-        first_order_lag_step(e.sensor_lag.tau_s, dt, x0, x1, y);
+        first_order_lag_step(of(e).tau_s, dt, x0, x1, y);
     }
     std::optional<ProofCase> proof_case() const override {
         return ProofCase{"single", "stand lag, tau 0.08 s", {0.08}, {}, 13};

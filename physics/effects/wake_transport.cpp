@@ -8,16 +8,20 @@
 namespace dw::physics::effects {
 namespace {
 
-class WakeTransport final : public OneNumber<DW_FIELD(wake_transport)> {
+struct WakeTransportSettings {
+    bool enabled = false;
+    double delay_scale = 1.0;
+};
+
+class WakeTransport final : public OneNumber<WakeTransportSettings> {
 public:
-    WakeTransport() : OneNumber(&Effects::wake_transport, &DW_FIELD(wake_transport)::delay_scale) {}
-    std::string name() const override { return "wake_transport"; }
+    WakeTransport() : OneNumber("wake_transport", &WakeTransportSettings::delay_scale) {}
     const EffectFamily* family() const override { return &kDelayFamily; }
     std::vector<EffectParameter> parameters() const override {
         return {{"delay_scale", "", 0, 10, 0.0, 5.0, range(0.0, 3.0, 7), 1.0}};
     }
     bool changes_flow() const override { return true; }
-    double transport_delay_scale(const Effects& e) const override { return e.wake_transport.delay_scale; }
+    double transport_delay_scale(const Effects& e) const override { return of(e).delay_scale; }
     std::optional<ProofCase> proof_case() const override {
         return ProofCase{"leader_follower", "wake transport delay (jet law, scale 1)", {1.0}, {}, 12};
     }
