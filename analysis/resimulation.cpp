@@ -91,7 +91,7 @@ std::vector<physics::Jet> Resimulation::jets_of(const physics::PhysicsConfig& fl
 
 const std::vector<Wrench6>& Resimulation::air(const physics::PhysicsConfig& c) const {
     const physics::PhysicsConfig flow = flow_of(c);
-    const std::string key = physics::to_yaml(flow);
+    const KeyValues key = physics::key_values(flow);
     if (auto it = cache_.find(key); it != cache_.end()) return it->second;
     const physics::WrenchModel model(flow);
     const std::vector<physics::Jet> jets = jets_of(flow);

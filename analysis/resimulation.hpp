@@ -96,8 +96,8 @@ private:
     std::vector<Wrench6> measured_;
     double t0_ = 0, dt_ = 0.01;
     std::size_t n_ = 0;
-    mutable std::map<std::string, std::vector<Wrench6>> cache_;
-    mutable std::vector<std::string> cache_order_;
+    mutable std::map<KeyValues, std::vector<Wrench6>> cache_;  // by the flow's values (physics::key_values)
+    mutable std::vector<KeyValues> cache_order_;
 };
 
 // Where each wrench sample is, relative to the formation.

@@ -2,6 +2,7 @@
 #include "core/keys.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -445,6 +446,67 @@ void write_keys(YAML::Emitter& out, const KeyVisitor::Body& body) {
     out << YAML::BeginMap;
     body(w);
     out << YAML::EndMap;
+}
+
+namespace {
+
+// Collects every value visited (KeyValues).
+class ValueCollector final : public KeyVisitor {
+public:
+    explicit ValueCollector(KeyValues& out) : out_(out) {}
+    void number(const std::string&, double& v, const Range&) override { add(v); }
+    void integer(const std::string&, int& v, const Range&) override { add(v); }
+    void flag(const std::string&, bool& v) override { add(v ? 1 : 0); }
+    void text(const std::string&, std::string& v) override { out_.texts.push_back(v); }
+    void texts(const std::string&, std::vector<std::string>& v) override {
+        add(static_cast<double>(v.size()));
+        out_.texts.insert(out_.texts.end(), v.begin(), v.end());
+    }
+    bool has(const std::string&) override { return true; }
+    void choice(const std::string&, int& v, std::span<const char* const>, const std::string&,
+                const std::string&) override {
+        add(v);
+    }
+    void numbers(const std::string&, std::span<double> v, const Range&, const std::string&) override { add_all(v); }
+    void table(const std::string&, std::span<double> v, std::size_t, const Range&, const std::string&) override {
+        add_all(v);
+    }
+    void values(const std::string&, std::vector<double>& v, const Range&) override { add_all(v); }
+    void matrix(const std::string&, std::vector<double>& v, std::size_t& rows, std::size_t& cols,
+                const Range&) override {
+        add(static_cast<double>(rows));
+        add(static_cast<double>(cols));
+        add_all(v);
+    }
+    void verbatim(const std::string&, std::string& json) override { out_.texts.push_back(json); }
+    void constant(const std::string&, const std::string&) override {}
+    void section(const std::string&, const Body& body, const std::string&) override { body(*this); }
+    void names(std::vector<std::string>& v) override {
+        add(static_cast<double>(v.size()));
+        out_.texts.insert(out_.texts.end(), v.begin(), v.end());
+    }
+    void list(const std::string&, std::size_t& count, const Item& item) override {
+        add(static_cast<double>(count));
+        for (std::size_t i = 0; i < count; ++i) item(*this, i);
+    }
+    void require(bool, const std::string&, const std::string&) override {}
+
+private:
+    void add(double v) { out_.numbers.push_back(std::bit_cast<std::uint64_t>(v)); }
+    void add_all(std::span<const double> v) {
+        add(static_cast<double>(v.size()));
+        for (double x : v) add(x);
+    }
+    KeyValues& out_;
+};
+
+}  // namespace
+
+KeyValues key_values(const KeyVisitor::Body& body) {
+    KeyValues out;
+    ValueCollector c(out);
+    body(c);
+    return out;
 }
 
 }  // namespace dw

@@ -6,6 +6,8 @@
 // the writer, or written under another name.
 #include <yaml-cpp/yaml.h>
 
+#include <compare>
+#include <cstdint>
 #include <functional>
 #include <span>
 #include <string>
@@ -92,5 +94,15 @@ void write_keys(YAML::Emitter& out, const KeyVisitor::Body& body);
 // problem"; a syntax error says "not valid JSON"). Written as one JSON object, indented one space a
 // level; a non-finite number cannot be written (dw::RuntimeError).
 std::string write_json_keys(const KeyVisitor::Body& body);
+
+// Every value `body` visits, exactly, in its order (numbers by their bits; the lengths of lists
+// with them, so that two declarations' values cannot run together): a key for a cache of what a
+// configuration computes, without writing it as text. Equal configurations give equal keys.
+struct KeyValues {
+    std::vector<std::uint64_t> numbers;
+    std::vector<std::string> texts;
+    auto operator<=>(const KeyValues&) const = default;
+};
+KeyValues key_values(const KeyVisitor::Body& body);
 
 }  // namespace dw

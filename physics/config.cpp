@@ -226,6 +226,11 @@ PhysicsConfig load_physics(const std::string& path) {
     return parse_physics(read_file(path, "physics configuration"), path);
 }
 
+KeyValues key_values(const PhysicsConfig& c) {
+    PhysicsConfig copy = c;  // the visitor takes what it reads by reference; collecting leaves it as it is
+    return dw::key_values([&](KeyVisitor& k) { physics_keys(k, copy); });
+}
+
 std::string to_yaml(const PhysicsConfig& c) {
     PhysicsConfig copy = c;  // the visitor takes what it reads by reference; writing leaves it as it is
     YAML::Emitter o;

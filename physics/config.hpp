@@ -9,6 +9,7 @@
 #include <map>
 #include <vector>
 
+#include "core/keys.hpp"
 #include "core/numbers.hpp"
 #include "flight/flight.hpp"
 
@@ -182,6 +183,8 @@ PhysicsConfig load_physics(const std::string& path);
 PhysicsConfig parse_physics(const std::string& yaml, const std::string& name);
 // A complete YAML document that parse_physics reads back to the same configuration.
 std::string to_yaml(const PhysicsConfig& c);
+// Every value of c, exactly (core/keys.hpp): a cache's key for what a configuration computes.
+KeyValues key_values(const PhysicsConfig& c);
 
 int axis_index(const std::string& name);  // "f_n" -> 0 ... "m_yaw" -> 5, -1 if unknown
 

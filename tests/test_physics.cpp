@@ -355,6 +355,30 @@ TEST(PhysicsConfig, RoundTripsThroughYaml) {
     EXPECT_EQ(back.discrepancy[0].inputs, 2u);
 }
 
+// Issue 73: the resimulation's cache is keyed by a configuration's values, not its YAML text.
+TEST(PhysicsConfig, ItsKeyIsItsValuesExactly) {
+    PhysicsConfig c;
+    dw::physics::effect_type("cell_crosstalk").set(c.effects, {0.04}, {1, 3});
+    const auto key = key_values(c);
+    EXPECT_EQ(key_values(parse_physics(to_yaml(c), "x.yaml")), key) << "what reads back the same keys the same";
+    PhysicsConfig d = c;
+    dw::physics::effect_type("cell_crosstalk").set(d.effects, {std::nextafter(0.04, 1.0)}, {1, 3});
+    EXPECT_NE(key_values(d), key) << "a value's last bit";
+    d = c;
+    dw::physics::effect_type("cell_crosstalk").set(d.effects, {0.04}, {1, 4});
+    EXPECT_NE(key_values(d), key) << "an effect's axes";
+    d = c;
+    d.aggregation = Aggregation::velocity_superposition;
+    EXPECT_NE(key_values(d), key) << "a choice";
+    d = c;
+    d.classes.push_back({});
+    d.classes.back().name = "x";
+    const auto with_x = key_values(d);
+    EXPECT_NE(with_x, key) << "a list's length";
+    d.classes.back().name = "y";
+    EXPECT_NE(key_values(d), with_x) << "a text";
+}
+
 TEST(PhysicsConfig, ALearntDiscrepancyMustHaveSixRows) {
     EXPECT_EQ(error("discrepancy:\n  - {flight: x, heldout_gain: 0.1, height_lo_m: 0, height_step_m: 0.1, "
                     "height_width_m: 0.1, t0_s: 0, t1_s: 1, drift_bumps: 2, push_top: 1, sigma: [1, 1, 1, 1, 1, 1], "
