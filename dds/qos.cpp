@@ -60,36 +60,36 @@ std::string to_string(QosProfile p) {
     return "?";
 }
 
-fdds::DataWriterQos writer_qos(QosProfile p, const QosOverrides& o) {
-    const Shape s = shape_of(p, o);
-    fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
+namespace {
+// What a writer's and a reader's QoS share: reliability, durability, history, limits, liveliness.
+template <class Q>
+void apply_shape(Q& q, const Shape& s) {
     q.reliability().kind = s.reliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
     q.durability().kind = s.transient_local ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS : fdds::VOLATILE_DURABILITY_QOS;
     q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
     q.history().depth = s.depth;
     limit_instances(q, s.depth);
-    // Synchronous publishing: the sample is handed to the transport in write() (lowest latency).
-    q.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
     if (s.liveliness) {
         q.liveliness().kind = fdds::AUTOMATIC_LIVELINESS_QOS;
         q.liveliness().lease_duration = kLease;
-        q.liveliness().announcement_period = kAnnounce;
     }
+}
+}  // namespace
+
+fdds::DataWriterQos writer_qos(QosProfile p, const QosOverrides& o) {
+    const Shape s = shape_of(p, o);
+    fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
+    apply_shape(q, s);
+    // Synchronous publishing: the sample is handed to the transport in write() (lowest latency).
+    q.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
+    if (s.liveliness) q.liveliness().announcement_period = kAnnounce;
     return q;
 }
 
 fdds::DataReaderQos reader_qos(QosProfile p, const QosOverrides& o) {
     const Shape s = shape_of(p, o);
     fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
-    q.reliability().kind = s.reliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
-    q.durability().kind = s.transient_local ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS : fdds::VOLATILE_DURABILITY_QOS;
-    q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
-    q.history().depth = s.depth;
-    limit_instances(q, s.depth);
-    if (s.liveliness) {
-        q.liveliness().kind = fdds::AUTOMATIC_LIVELINESS_QOS;
-        q.liveliness().lease_duration = kLease;
-    }
+    apply_shape(q, s);
     // Another system's messages may be longer than the part the lab reads (PX4's VehicleStatus:
     // the lab's type is its prefix); a preallocated payload pool would drop them.
     if (p == QosProfile::px4)

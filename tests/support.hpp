@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -110,6 +111,31 @@ inline void expect_one_line_exit_2(const RunResult& r, const std::string& needle
     const auto l = lines(r.err);
     ASSERT_EQ(l.size(), 1u) << r.err;
     EXPECT_NE(l[0].find(needle), std::string::npos) << l[0];
+}
+
+// The nominal stand under 12 known loads, as dw-stand-agent calibrate reads them: tared counts =
+// cell forces x 21400, the minimum-norm cell forces of the nominal geometry (vertical cells at
+// 45° + k 90°).
+inline std::string known_loads_csv() {
+    std::string csv = "c0,c1,c2,c3,c4,c5,c6,c7,f_n,f_e,f_d,m_roll,m_pitch,m_yaw\n";
+    const double r = 0.1;
+    for (int i = 0; i < 12; ++i) {
+        const double fz = 1.0 + i, fn = (i % 3) - 1.0, fe = (i % 4) - 1.5, mr = 0.01 * (i % 5), mp = -0.01 * (i % 3),
+                     my = 0.005 * (i % 2);
+        double v[4];
+        for (int k = 0; k < 4; ++k) {
+            const double phi = M_PI / 4 + M_PI / 2 * k, x = r * std::cos(phi), y = r * std::sin(phi);
+            v[k] = fz / 4 + mr * y / (4 * r * r * 0.5) - mp * x / (4 * r * r * 0.5);
+        }
+        const double n4 = fn / 2 - my / (4 * r), n5 = fn / 2 + my / (4 * r);
+        const double e6 = fe / 2 - my / (4 * r), e7 = fe / 2 + my / (4 * r);
+        char line[512];
+        std::snprintf(line, sizeof(line), "%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f,%f\n", v[0] * 21400, v[1] * 21400,
+                      v[2] * 21400, v[3] * 21400, n4 * 21400, n5 * 21400, e6 * 21400, e7 * 21400, fn, fe, fz, mr, mp,
+                      my);
+        csv += line;
+    }
+    return csv;
 }
 
 }  // namespace dw::test
