@@ -152,9 +152,17 @@ std::string csv(const std::vector<std::pair<Target, Effect>>& chosen, const std:
         for (std::size_t k = 0; k < outs[ti].size(); ++k)
             for (std::size_t p = 0; p < chosen[ti].second.params.size(); ++p) {
                 const auto& x = outs[ti][k];
-                s << chosen[ti].first.effect << "," << chosen[ti].second.params[p].name << "," << k << ","
-                  << csv_cell(x.hidden[p]) << "," << csv_cell(x.values[p]) << "," << csv_cell(x.lo[p]) << ","
-                  << csv_cell(x.hi[p]) << "," << x.interval << "," << x.accepted << "\n";
+                s << CsvRow()
+                         .text(chosen[ti].first.effect)
+                         .text(chosen[ti].second.params[p].name)
+                         .count(static_cast<long long>(k))
+                         .num(x.hidden[p])
+                         .num(x.values[p])
+                         .num(x.lo[p])
+                         .num(x.hi[p])
+                         .count(x.interval)
+                         .count(x.accepted)
+                         .line();
             }
     return s.str();
 }

@@ -49,6 +49,29 @@ bool try_append_fixed(std::string& out, double v, int decimals);
 // A CSV cell: v with `significant` digits (%g), or empty for NaN and inf (a cell with no value):
 // no CSV a tool writes holds "nan" or "inf".
 std::string csv_cell(double v, int significant = 6);
+// One row of a CSV table, its cells in order — numbers as csv_cell writes them, text and counts as
+// they are — ended by line(). The one way the tools write a CSV row.
+class CsvRow {
+public:
+    CsvRow& num(double v, int significant = 6) { return cell(csv_cell(v, significant)); }
+    CsvRow& text(std::string_view v) { return cell(v); }
+    CsvRow& count(long long v) { return cell(std::to_string(v)); }
+    CsvRow& empty(int n = 1) {
+        for (int i = 0; i < n; ++i) cell("");
+        return *this;
+    }
+    std::string line() const { return row_ + "\n"; }
+
+private:
+    CsvRow& cell(std::string_view v) {
+        if (!first_) row_ += ',';
+        row_ += v;
+        first_ = false;
+        return *this;
+    }
+    std::string row_;
+    bool first_ = true;
+};
 // v with `decimals` digits after the point, for reports and tables; "–" (no value) for NaN and inf.
 std::string fixed(double v, int decimals);
 

@@ -200,7 +200,7 @@ void log_resources(std::ofstream& out, const std::deque<Running>& procs, const d
         std::uint64_t lost = 0;
         if (const auto st = peers.last(r.spec.name))
             for (const auto& t : st->rates()) lost += t.lost();
-        out << to_csv_line({t_s, r.spec.name, r.proc->pid(), *usage, lost}) << "\n";
+        out << to_csv_line({t_s, r.spec.name, r.proc->pid(), *usage, lost});
     }
     out.flush();
 }

@@ -51,8 +51,14 @@ std::optional<Usage> usage_of(pid_t pid) {
 }
 
 std::string to_csv_line(const ResourceRow& r) {
-    return log::cat(csv_cell(r.t_s, kTimeDigits), ",", r.process, ",", r.pid, ",", csv_cell(r.usage.rss_mb), ",",
-                    csv_cell(r.usage.cpu_s), ",", r.lost);
+    return CsvRow()
+        .num(r.t_s, kTimeDigits)
+        .text(r.process)
+        .count(r.pid)
+        .num(r.usage.rss_mb)
+        .num(r.usage.cpu_s)
+        .count(static_cast<long long>(r.lost))
+        .line();
 }
 
 std::vector<ResourceRow> read_resources(const std::string& path) {

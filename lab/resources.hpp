@@ -32,7 +32,7 @@ struct ResourceRow {
     std::uint64_t lost = 0;  // samples lost on its readers so far (its heartbeat's count)
 };
 
-std::string to_csv_line(const ResourceRow& r);
+std::string to_csv_line(const ResourceRow& r);  // ended by its newline
 // Reads a resources.csv; throws dw::InputError naming the file and line of a bad row.
 std::vector<ResourceRow> read_resources(const std::string& path);
 

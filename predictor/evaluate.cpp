@@ -236,19 +236,26 @@ std::string to_csv(const std::vector<ComparisonRow>& rows, bool header) {
         for (const auto& [name, metric] :
              {std::pair{"arena_mean_abs", &ComparisonRow::arena},
               std::pair{"arena_integral", &ComparisonRow::arena_integral}, std::pair{"rmse", &ComparisonRow::rmse}}) {
-            out << r.formation << "," << r.model << "," << name << "," << r.samples;
-            for (std::size_t a = 0; a < 6; ++a) {
-                const double v = (r.*metric)[a];
-                out << "," << csv_cell(v);  // empty: no sample in the band (never nan or inf)
-            }
-            out << "\n";
+            CsvRow row;
+            row.text(r.formation).text(r.model).text(name).count(static_cast<long long>(r.samples));
+            for (std::size_t a = 0; a < 6; ++a) row.num((r.*metric)[a]);  // empty: no sample in the band
+            out << row.line();
         }
-    for (const auto& r : rows) {  // the peak error and the intervals' coverage are of f_d only
-        out << r.formation << "," << r.model << ",peak_f_d_mean_abs," << r.blocks << ",,," << csv_cell(r.peak_error)
-            << ",,,\n";
-        if (std::isfinite(r.coverage_f_d))
-            out << r.formation << "," << r.model << ",interval95_coverage," << r.samples << ",,,"
-                << csv_cell(r.coverage_f_d) << ",,,\n";
+    // The peak error and the intervals' coverage are of f_d only (the third axis).
+    const auto f_d_only = [&](const ComparisonRow& r, const char* metric, std::size_t n, double v) {
+        out << CsvRow()
+                   .text(r.formation)
+                   .text(r.model)
+                   .text(metric)
+                   .count(static_cast<long long>(n))
+                   .empty(2)
+                   .num(v)
+                   .empty(3)
+                   .line();
+    };
+    for (const auto& r : rows) {
+        f_d_only(r, "peak_f_d_mean_abs", r.blocks, r.peak_error);
+        if (std::isfinite(r.coverage_f_d)) f_d_only(r, "interval95_coverage", r.samples, r.coverage_f_d);
     }
     return out.str();
 }

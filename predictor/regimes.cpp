@@ -119,9 +119,16 @@ std::string regimes_csv(const std::vector<RegimeRow>& rows) {
     std::ostringstream out;
     out << "formation,altitude_m,regime,legs,f_d_rms,explained,gain,z\n";
     for (const auto& r : rows)
-        out << r.formation << "," << csv_cell(r.altitude_m) << "," << regime_name(r.regime) << "," << r.legs << ","
-            << csv_cell(r.signal_rms) << "," << csv_cell(r.explained) << "," << csv_cell(r.gain) << "," << csv_cell(r.z)
-            << "\n";
+        out << CsvRow()
+                   .text(r.formation)
+                   .num(r.altitude_m)
+                   .text(regime_name(r.regime))
+                   .count(r.legs)
+                   .num(r.signal_rms)
+                   .num(r.explained)
+                   .num(r.gain)
+                   .num(r.z)
+                   .line();
     return out.str();
 }
 

@@ -199,6 +199,15 @@ TEST(Yaml, AliasBombsSecondDocumentsAndDeepNestingAreRefusedInOneLine) {
     EXPECT_NO_THROW(dw::load_yaml("", "p.yaml"));                       // empty: no settings
 }
 
+// Issue 73: one CSV row writer: numbers as csv_cell writes them (a non-finite one an empty cell,
+// never "nan"), text and counts as they are, empty cells where asked.
+TEST(Numbers, ACsvRowIsItsCellsInOrder) {
+    EXPECT_EQ(dw::CsvRow().text("a").num(0.1234567).count(-3).empty(2).num(NAN).num(1.5, 2).line(),
+              "a,0.123457,-3,,,,1.5\n");
+    EXPECT_EQ(dw::CsvRow().num(INFINITY).line(), "\n");
+    EXPECT_EQ(dw::CsvRow().empty(3).line(), ",,\n");
+}
+
 TEST(Numbers, AppendFixedWritesExactlyWhatItFormatted) {
     std::string out = "x";
     dw::append_fixed(out, 1e300, 6, "v");
