@@ -113,6 +113,8 @@ class EffectType {
 public:
     virtual ~EffectType() = default;
     virtual std::string name() const = 0;
+    // A built-in's place in the vocabulary (../shared/FLIGHT_FORMAT.md): the registry's order.
+    virtual int vocabulary_place() const { return 0; }
     virtual std::vector<EffectParameter> parameters() const = 0;
     // Whether evaluating it needs the air again, or only the recording's view of it.
     virtual bool changes_flow() const { return false; }
@@ -226,7 +228,8 @@ struct EffectRegistration {
     EffectRegistration() { register_effect(std::make_unique<T>()); }
 };
 
-// The built-ins (effects/builtins.cpp: effects/builtins.hpp lists them).
+// The built-ins, in the vocabulary's order: each file in effects/ is one, with its factory
+// make_<file name>() (physics/CMakeLists.txt lists them from the folder).
 std::vector<std::unique_ptr<EffectType>> builtin_effects();
 
 }  // namespace dw::physics

@@ -1,7 +1,6 @@
 // body_drag: a flying sufferer's own drag against its motion through still air (stage: sufferer).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 
 namespace dw::physics::effects {
@@ -15,6 +14,7 @@ struct BodyDragSettings {
 class BodyDrag final : public BuiltIn<BodyDragSettings> {
 public:
     BodyDrag() : BuiltIn("body_drag") {}
+    int vocabulary_place() const override { return 9; }  // ../shared/FLIGHT_FORMAT.md
     std::vector<EffectParameter> parameters() const override {
         return {{"cda_h_m2", "m²", 0, 10, 0.0, 0.1, {}, 0.0}, {"cda_v_m2", "m²", 0, 10, 0.0, 0.1, {}, 0.0}};
     }

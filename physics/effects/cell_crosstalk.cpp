@@ -2,7 +2,6 @@
 #include <cmath>
 
 #include "flight/flight.hpp"
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 
 namespace dw::physics::effects {
@@ -19,6 +18,7 @@ struct CellCrosstalkSettings {
 class CellCrosstalk final : public BuiltIn<CellCrosstalkSettings> {
 public:
     CellCrosstalk() : BuiltIn("cell_crosstalk") {}
+    int vocabulary_place() const override { return 6; }  // ../shared/FLIGHT_FORMAT.md
     std::vector<EffectParameter> parameters() const override {
         return {{"coefficient", "", -1, 1, -0.5, 0.5, {}, 0.0}};
     }

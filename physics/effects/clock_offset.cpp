@@ -1,7 +1,6 @@
 // clock_offset: the wrench's clock against the poses' (stage: clock).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 
 namespace dw::physics::effects {
@@ -15,6 +14,7 @@ struct ClockOffsetSettings {
 class ClockOffset final : public OneNumber<ClockOffsetSettings> {
 public:
     ClockOffset() : OneNumber("clock_offset", &ClockOffsetSettings::offset_s) {}
+    int vocabulary_place() const override { return 1; }  // ../shared/FLIGHT_FORMAT.md
     const EffectFamily* family() const override { return &kDelayFamily; }
     std::optional<std::vector<double>> from_family_quantity(double shift_s) const override {
         return std::vector<double>{shift_s};  // the stamps run late by the shift itself

@@ -1,6 +1,7 @@
 #pragma once
-// What the built-in effects' files share: search grids, and the
-// class of an effect whose configuration is one struct in Effects with `enabled` and one number.
+// What the built-in effects' files share: search grids and the classes that keep a built-in's
+// settings. Each file in this folder is one built-in, with its factory make_<file name>() in
+// dw::physics::effects and its place in the vocabulary (physics/CMakeLists.txt makes them all).
 #include <any>
 #include <string>
 #include <vector>

@@ -1,7 +1,6 @@
 // floor_recirculation: jets hitting the floor coming back as a bias (stage: air).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 #include "physics/wrench_model.hpp"
 
@@ -17,6 +16,7 @@ struct FloorRecirculationSettings {
 class FloorRecirculation final : public BuiltIn<FloorRecirculationSettings> {
 public:
     FloorRecirculation() : BuiltIn("floor_recirculation") {}
+    int vocabulary_place() const override { return 8; }  // ../shared/FLIGHT_FORMAT.md
     std::vector<EffectParameter> parameters() const override {
         return {{"coefficient", "", 0, 1, 0.0, 0.3, range(0.0, 0.1, 5), 0.02}};
     }

@@ -1,7 +1,6 @@
 // force_scale: a gain on the whole recorded wrench (stage: calibration).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 
 namespace dw::physics::effects {
@@ -15,6 +14,7 @@ struct ForceScaleSettings {
 class ForceScale final : public OneNumber<ForceScaleSettings> {
 public:
     ForceScale() : OneNumber("force_scale", &ForceScaleSettings::scale) {}
+    int vocabulary_place() const override { return 5; }  // ../shared/FLIGHT_FORMAT.md
     std::vector<EffectParameter> parameters() const override { return {{"scale", "", 0, 10, 0.3, 3.0, {}, 1.0}}; }
     Stage stage() const override { return Stage::calibration; }
     const EffectFamily* family() const override { return &kPushFamily; }

@@ -1,7 +1,6 @@
 // ground_effect: a flying sufferer's extra lift near the floor, by the image-rotor law (stage: sufferer).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 
 namespace dw::physics::effects {
@@ -15,6 +14,7 @@ struct GroundEffectSettings {
 class GroundEffect final : public OneNumber<GroundEffectSettings> {
 public:
     GroundEffect() : OneNumber("ground_effect", &GroundEffectSettings::coefficient) {}
+    int vocabulary_place() const override { return 10; }  // ../shared/FLIGHT_FORMAT.md
     std::vector<EffectParameter> parameters() const override {
         return {{"coefficient", "", 0, 50, 0.0, 50.0, range(0.0, 20.0, 5), 0.0}};
     }

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <numeric>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 #include "physics/wrench_model.hpp"
 
@@ -118,6 +117,7 @@ void regroup(const AirScene& s, const JetMergingSettings& jm, std::vector<Weight
 class JetMerging final : public BuiltIn<JetMergingSettings> {
 public:
     JetMerging() : BuiltIn("jet_merging") {}
+    int vocabulary_place() const override { return 7; }  // ../shared/FLIGHT_FORMAT.md
     std::vector<EffectParameter> parameters() const override {
         return {{"contraction", "", 0.05, 2, 0.05, 1.0, range(0.2, 1.0, 5), 0.8}};
     }

@@ -1,7 +1,6 @@
 // position_offset: the neighbours' motion-capture frame offset from the sufferer's (stage: positions).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 
 namespace dw::physics::effects {
@@ -15,6 +14,7 @@ struct PositionOffsetSettings {
 class PositionOffset final : public BuiltIn<PositionOffsetSettings> {
 public:
     PositionOffset() : BuiltIn("position_offset") {}
+    int vocabulary_place() const override { return 4; }  // ../shared/FLIGHT_FORMAT.md
     std::vector<EffectParameter> parameters() const override {
         std::vector<EffectParameter> p;
         for (const char* axis : {"offset_n_m", "offset_e_m", "offset_d_m"})

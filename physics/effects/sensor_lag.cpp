@@ -1,7 +1,6 @@
 // sensor_lag: the sensor's first-order response (stage: sensor).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 #include "physics/recording_chain.hpp"
 
@@ -16,6 +15,7 @@ struct SensorLagSettings {
 class SensorLag final : public OneNumber<SensorLagSettings> {
 public:
     SensorLag() : OneNumber("sensor_lag", &SensorLagSettings::tau_s) {}
+    int vocabulary_place() const override { return 2; }  // ../shared/FLIGHT_FORMAT.md
     const EffectFamily* family() const override { return &kDelayFamily; }
     std::optional<std::vector<double>> from_family_quantity(double shift_s) const override {
         if (shift_s <= 0) return std::nullopt;  // a lag cannot make the force early

@@ -2,7 +2,6 @@
 // its producer's state delay_scale × its descent time ago (the wrench model's jets carry the delay).
 #include <cmath>
 
-#include "physics/effects/builtins.hpp"
 #include "physics/effects/common.hpp"
 
 namespace dw::physics::effects {
@@ -16,6 +15,7 @@ struct WakeTransportSettings {
 class WakeTransport final : public OneNumber<WakeTransportSettings> {
 public:
     WakeTransport() : OneNumber("wake_transport", &WakeTransportSettings::delay_scale) {}
+    int vocabulary_place() const override { return 3; }  // ../shared/FLIGHT_FORMAT.md
     const EffectFamily* family() const override { return &kDelayFamily; }
     std::vector<EffectParameter> parameters() const override {
         return {{"delay_scale", "", 0, 10, 0.0, 5.0, range(0.0, 3.0, 7), 1.0}};
