@@ -165,11 +165,15 @@ SpawnOptions sibling_options(const std::vector<std::string>& args, const std::st
 Sibling::Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness)
     : name_(args.at(0)), log_file_(log_file), p_(sibling_options(args, log_file, niceness)) {}
 
+Sibling::~Sibling() {
+    if (p_.running()) p_.stop(kSiblingStopGrace);
+}
+
 void Sibling::finish(const std::stop_token& stop) {
     std::optional<int> st;
     while (!(st = p_.wait_for(std::chrono::milliseconds(200)))) {
         if (stop.stop_requested()) {
-            p_.stop();
+            p_.stop(kSiblingStopGrace);
             throw Stopped(log::cat("stopped during ", name_));
         }
     }

@@ -56,10 +56,16 @@ std::string executable_dir();
 void run_sibling(const std::vector<std::string>& args, const std::string& log_file, const std::stop_token& stop);
 
 // A sibling lab executable started in the background (this much nicer than its parent); finish()
-// waits for it and fails as run_sibling does.
+// waits for it and fails as run_sibling does. One still running when this ends (its parent
+// stopped or failed) is asked to stop (SIGTERM, then SIGKILL after kSiblingStopGrace), so that
+// it removes its unfinished outputs as any stopped lab program does.
+inline constexpr std::chrono::milliseconds kSiblingStopGrace{5000};
 class Sibling {
 public:
     Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness = 0);
+    ~Sibling();
+    Sibling(const Sibling&) = delete;
+    Sibling& operator=(const Sibling&) = delete;
     void finish(const std::stop_token& stop);
 
 private:
