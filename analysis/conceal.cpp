@@ -3,21 +3,19 @@
 #include "core/log.hpp"
 #include "physics/effect_types.hpp"
 #include "physics/recording_chain.hpp"
+#include "physics/samplers.hpp"
 
 namespace dw::analysis {
 
-// The recording-side effects of fx put into a recorded flight through the recording chain: the
-// sensor on the recorded stamps, the calibration, the clock (the recording keeps its own tare: the
-// calibration is linear, so its zero moves with it).
+// The recording-side effects of fx put into a recorded flight through the recording chain, on the
+// recording's own samples (it keeps its own tare: the calibration is linear, so its zero moves
+// with it).
 void conceal(flight::Flight& f, const physics::Effects& fx) {
-    const physics::RecordingChain chain(fx);
-    std::vector<double> t;
-    physics::RecordedWrench w;
-    for (const auto& s : f.wrench) t.push_back(s.t), w.push_back(s.w);
-    chain.sensor(t, w);
-    for (auto& x : w) chain.calibration(x);
-    const double delay = chain.clock_delay_s();
-    for (std::size_t i = 0; i < w.size(); ++i) f.wrench[i] = {t[i] + delay, w[i]};
+    physics::ChainInput in;
+    for (const auto& s : f.wrench) in.t.push_back(s.t), in.force.push_back(s.w);
+    physics::OwnSampler own;
+    const auto s = physics::RecordingChain(fx).record(std::move(in), own);
+    for (std::size_t i = 0; i < s.w.size(); ++i) f.wrench[i] = {s.stamps[i], s.w[i]};
 }
 
 Concealed concealed_sizes(ConcealedSize which) {

@@ -9,6 +9,7 @@
 #include "core/log.hpp"
 #include "physics/effect_types.hpp"
 #include "physics/recording_chain.hpp"
+#include "physics/samplers.hpp"
 #include "physics/wrench_model.hpp"
 
 namespace dw::analysis {
@@ -181,54 +182,23 @@ std::vector<double> Resimulation::shared_push(const physics::PhysicsConfig& c) c
     return out;
 }
 
-std::vector<Wrench6> Resimulation::own_forces(const physics::PhysicsConfig& c,
-                                              const physics::RecordingChain& chain) const {
-    std::vector<Wrench6> out(n_, Wrench6{});
-    for (std::size_t i = 0; i < n_; ++i) {
-        const auto& g = grid_[i];
-        out[i] = chain.sufferer_force(physics::sufferer_state(
-            c, sufferer_params_, physics::Vec3(g.sufferer[0], g.sufferer[1], g.sufferer[2]),
-            physics::Vec3(g.sufferer_velocity[0], g.sufferer_velocity[1], g.sufferer_velocity[2])));
-    }
-    return out;
-}
-
 std::vector<Wrench6> Resimulation::recorded(const physics::PhysicsConfig& c) const {
-    const auto& fx = c.effects;
-    const physics::RecordingChain chain(fx);
-    std::vector<Wrench6> series = air(c);
-    if (chain.acts_on_sufferer()) {
-        const auto own = own_forces(c, chain);
-        for (std::size_t i = 0; i < n_; ++i)
-            for (std::size_t a = 0; a < 6; ++a) series[i][a] += own[i][a];
-    }
-    std::vector<double> grid_t(n_);
-    for (std::size_t i = 0; i < n_; ++i) grid_t[i] = t0_ + static_cast<double>(i) * dt_;
-    chain.sensor(grid_t, series);
-    // A load stand's sample-and-hold ages its wrench by 7/16 of a conversion period; another
-    // lab's residual is computed from one sample's own readings.
-    const double hold = residual_ ? 0.0 : 7.0 / 16.0 / c.stand.rate_hz;
-    const double delay = chain.clock_delay_s() + hold;
-    std::vector<Wrench6> out(stamps_.size());
-    for (std::size_t i = 0; i < stamps_.size(); ++i) {
-        const double g = std::clamp((stamps_[i] - delay - t0_) / dt_, 0.0, static_cast<double>(n_ - 1) - 1e-9);
-        const auto k = static_cast<std::size_t>(g);
-        const double f = g - static_cast<double>(k);
-        for (std::size_t a = 0; a < 6; ++a) out[i][a] = (1 - f) * series[k][a] + f * series[std::min(k + 1, n_ - 1)][a];
-    }
-    // The tare: a stand's recording is zeroed over its first tare_s (a residual source is tared
-    // by its importer where no neighbour is near, where the physics gives no force either).
-    Wrench6 zero{};
-    const std::size_t n = tare_samples(c);
-    for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t a = 0; a < 6; ++a) zero[a] += out[i][a];
-    for (std::size_t i = 0; i < out.size(); ++i) {
-        if (n > 0)
-            for (std::size_t a = 0; a < 6; ++a) out[i][a] -= zero[a] / static_cast<double>(n);
-        chain.calibration(out[i], measured_[i]);
-    }
-    chain.recording(stamps_, out);
-    return out;
+    physics::ChainInput in;
+    in.t.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) in.t[i] = t0_ + static_cast<double>(i) * dt_;
+    in.force = air(c);
+    in.sufferer = [this, &c](std::size_t i) {
+        const auto& g = grid_[i];
+        return physics::sufferer_state(
+            c, sufferer_params_, physics::Vec3(g.sufferer[0], g.sufferer[1], g.sufferer[2]),
+            physics::Vec3(g.sufferer_velocity[0], g.sufferer_velocity[1], g.sufferer_velocity[2]));
+    };
+    // A stand's recording is zeroed over its first tare_s; a residual source is tared by its
+    // importer where no neighbour is near, where the physics gives no force either.
+    in.tare_s = residual_ ? 0.0 : c.stand.tare_s;
+    in.recorded = &measured_;
+    physics::StampSampler at_stamps(stamps_, residual_ ? nullptr : &c.stand);
+    return physics::RecordingChain(c.effects).record(std::move(in), at_stamps).w;
 }
 
 std::size_t Resimulation::tare_samples(const physics::PhysicsConfig& c) const {

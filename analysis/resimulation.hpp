@@ -34,7 +34,8 @@ public:
 
     // The wrench the recording would hold under physics c, at every wrench stamp. The stand's
     // own sample-and-hold is included: a wrench frame combines chip 0's fresh conversion with the
-    // other seven chips' latest ones, on average half a conversion period old (7/16 of a period).
+    // other seven chips' latest ones, on average half a conversion period old
+    // (physics::StampSampler).
     std::vector<Wrench6> recorded(const physics::PhysicsConfig& c) const;
     // The air's wrench on the sufferer on the grid (mocap time), for the flow part of c.
     const std::vector<Wrench6>& air(const physics::PhysicsConfig& c) const;
@@ -77,8 +78,6 @@ private:
     using AtStamp = std::function<void(std::size_t, const physics::Vec3&, const physics::WrenchModel&,
                                        const std::vector<physics::Producer>&)>;
     void at_stamps(const physics::PhysicsConfig& c, const AtStamp& f) const;
-    // The flying sufferer's own forces on the grid: the chain's stage sufferer at its recorded states.
-    std::vector<Wrench6> own_forces(const physics::PhysicsConfig& c, const physics::RecordingChain& chain) const;
     struct GridState {  // the recorded states at one grid time
         std::array<double, 3> sufferer;
         std::array<double, 3> sufferer_velocity;

@@ -11,6 +11,7 @@
 #include "physics/bodies.hpp"
 #include "physics/effect_types.hpp"
 #include "physics/recording_chain.hpp"
+#include "physics/samplers.hpp"
 #include "physics/stand.hpp"
 #include "physics/vehicle.hpp"
 
@@ -45,117 +46,24 @@ private:
     bool buffeting_;
 };
 
-// The wrench series at the base rate, read between samples by linear interpolation.
-Wrench interpolate(const std::vector<Wrench>& w, double t, double dt) {
-    const double x = t / dt;
-    if (x <= 0) return w.front();
-    const auto i = static_cast<std::size_t>(x);
-    if (i + 1 >= w.size()) return w.back();
-    const double a = x - static_cast<double>(i);
-    return (1 - a) * w[i] + a * w[i + 1];
-}
-
-// 2. The stand's response: the recording chain's sensor stage on the true wrench.
-std::vector<Wrench> felt_wrench(const std::vector<Wrench>& truth, const std::vector<double>& t,
-                                const RecordingChain& chain) {
-    RecordedWrench series;
-    for (const auto& w : truth) series.push_back(to_wrench6(w));
-    chain.sensor(t, series);
-    std::vector<Wrench> felt;
-    for (const auto& w : series) felt.push_back(to_wrench(w));
-    return felt;
-}
-
-using Counts = Eigen::Matrix<double, kCells, 1>;
-struct StandFrames {  // what the agent publishes: every chip's latest counts when chip 0 converts
-    std::vector<double> t;
-    std::vector<Counts> counts;
-};
-
-// 3. Eight HX711s on their own oscillators, each converting its cell's force.
-StandFrames convert_on_chips(const PhysicsConfig& c, const StandModel& stand, const std::vector<Wrench>& felt,
-                             double dt, double end, Rng& stand_rng) {
-    struct Chip {
-        double period, phase, offset;
-        std::vector<double> t;
-        std::vector<std::int32_t> counts;
-    };
-    std::array<Chip, kCells> chips;
-    for (int ci = 0; ci < kCells; ++ci) {
-        Chip& chip = chips[static_cast<std::size_t>(ci)];
-        chip.period = 1.0 / (c.stand.rate_hz * (1.0 + c.stand.rate_skew * (2 * stand_rng.uniform() - 1)));
-        chip.phase = chip.period * stand_rng.uniform();
-        chip.offset = c.stand.offset_sigma_counts * stand_rng.normal();
-        for (double t = chip.phase; t <= end; t += chip.period) {
-            const auto cells = stand.wrench_to_cells(interpolate(felt, t, dt));
-            const double force = cells[ci] + c.stand.noise_n * stand_rng.normal();
-            chip.t.push_back(t);
-            chip.counts.push_back(StandModel::to_counts(force, chip.offset, c.stand.counts_per_newton));
-        }
+void check_finite(double t, const Wrench& w) {
+    if (!w.allFinite()) {
+        throw InputError(log::cat("physics: the configuration gives a non-finite wrench at t = ", t,
+                                  " s (jet model, aggregation and effects together are not usable)"));
     }
-    std::array<std::size_t, kCells> latest{};
-    StandFrames out;
-    for (std::size_t i = 0; i < chips[0].t.size(); ++i) {
-        const double t = chips[0].t[i];
-        Counts counts;
-        bool complete = true;
-        for (std::size_t ci = 0; ci < kCells; ++ci) {
-            while (latest[ci] + 1 < chips[ci].t.size() && chips[ci].t[latest[ci] + 1] <= t) ++latest[ci];
-            if (chips[ci].t.empty() || chips[ci].t[latest[ci]] > t) complete = false;
-            else counts[static_cast<Eigen::Index>(ci)] = chips[ci].counts[latest[ci]];
-        }
-        if (!complete) continue;
-        out.t.push_back(t);
-        out.counts.push_back(counts);
-    }
-    return out;
 }
 
-// The recorded wrench at its stamps, after the chain's recording stage, into the flight.
-void write_recording(const RecordingChain& chain, const std::vector<double>& stamps, RecordedWrench& recorded,
-                     flight::Flight& f) {
-    chain.recording(stamps, recorded);
-    for (std::size_t i = 0; i < stamps.size(); ++i) f.wrench.push_back({stamps[i], recorded[i]});
-}
-
-// 4. Tare (the mean of the first tare_s: neighbours far away, sufferer at hover thrust), the
-// calibrated wrench, then the recording chain's calibration, clock and recording stages.
-void record_wrench(const PhysicsConfig& c, const StandModel& stand, const StandFrames& frames,
-                   const RecordingChain& chain, flight::Flight& f) {
-    Counts zero = Counts::Zero();
-    int tare_n = 0;
-    for (std::size_t i = 0; i < frames.t.size() && frames.t[i] < frames.t.front() + c.stand.tare_s; ++i, ++tare_n)
-        zero += frames.counts[i];
-    zero /= std::max(tare_n, 1);
-    const double delay = chain.clock_delay_s();
-    std::vector<double> stamps;
-    RecordedWrench recorded;
-    for (std::size_t i = 0; i < frames.t.size(); ++i) {
-        Wrench6 x = to_wrench6(stand.cells_to_wrench() * ((frames.counts[i] - zero) / c.stand.counts_per_newton));
-        chain.calibration(x);
-        stamps.push_back(frames.t[i] + delay);
-        recorded.push_back(x);
-    }
-    write_recording(chain, stamps, recorded, f);
-}
-
-// 3-4 for a flying sufferer: its residual, the felt forces at the residual's rate with noise (no
-// moments, no tare), through the chain's calibration, clock and recording stages.
-void record_residual(const PhysicsConfig& c, const FlyingSufferer& o, const std::vector<Wrench>& felt, double dt,
-                     double end, const RecordingChain& chain, Rng& rng, flight::Flight& f) {
-    const double delay = chain.clock_delay_s();
-    std::vector<double> stamps;
-    RecordedWrench recorded;
-    for (std::size_t i = 0; static_cast<double>(i) / o.rate_hz <= end; ++i) {
-        const double t = static_cast<double>(i) / o.rate_hz;
-        Wrench6 x = to_wrench6(interpolate(felt, t, dt));
-        for (std::size_t a = 0; a < 3; ++a) x[a] += c.stand.noise_n * rng.normal();
-        chain.calibration(x);
-        for (std::size_t a = 3; a < 6; ++a) x[a] = 0;  // moments_measured: false
-        stamps.push_back(t + delay);
-        recorded.push_back(x);
-    }
-    write_recording(chain, stamps, recorded, f);
+// 2-4. The stand's response, its chips (or a flying sufferer's residual), the tare and the recorded
+// wrench: the recording chain after the air, into the flight; the force on the sufferer into truth.
+void record(const PhysicsConfig& c, const FlyingSufferer& o, ChainInput in, const RecordingChain& chain, Rng& rng,
+            flight::Flight& f) {
+    const bool flying = o.enabled;
+    ChipSampler chips(c.stand, rng);
+    RateSampler residual(o.rate_hz, c.stand.noise_n, rng);
+    in.tare_s = flying ? 0.0 : c.stand.tare_s;  // a residual is no stand's: no tare
+    in.moments_measured = !flying;
+    Samples s = chain.record(std::move(in), flying ? static_cast<Sampler&>(residual) : chips);
+    for (std::size_t i = 0; i < s.stamps.size(); ++i) f.wrench.push_back({s.stamps[i], s.w[i]});
 }
 
 // The flight's bodies in meta.json: the sufferer, then v1..vK; returns the neighbours' indices.
@@ -249,11 +157,11 @@ public:
     Eigen::Quaterniond orientation() const {
         return vehicle_ ? vehicle_->state().orientation : Eigen::Quaterniond::Identity();
     }
-    // What its own flight adds to the air's wrench (the chain's stage sufferer); nothing on the stand.
-    Wrench own_force(const RecordingChain& chain) const {
-        if (!vehicle_) return Wrench::Zero();
+    bool flying() const { return vehicle_.has_value(); }
+    // As the chain's stage sufferer sees it (its own forces: a flying sufferer's only).
+    SuffererState state() const {
         const auto& s = vehicle_->state();
-        return to_wrench(chain.sufferer_force(sufferer_state(c_, c_.sufferer.vehicle, s.position, s.velocity)));
+        return sufferer_state(c_, c_.sufferer.vehicle, s.position, s.velocity);
     }
 
 private:
@@ -281,7 +189,6 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     grid.stand_height_m = c.stand.height_m;
     const ReferenceTrajectory reference(grid);
     const WrenchModel model(c);
-    const StandModel stand(c.stand);
     const RecordingChain chain(c.effects);
 
     Rng master(o.seed);
@@ -301,8 +208,10 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     const auto steps = static_cast<std::size_t>(std::ceil(reference.duration() / dt)) + 1;
     const double mocap_dt = 1.0 / c.mocap.rate_hz;
     double next_mocap = 0;
-    out.truth_t.reserve(steps);
-    out.truth.reserve(steps);
+    ChainInput in;  // the air on the sufferer at every step, for the recording chain
+    in.t.reserve(steps);
+    in.force.reserve(steps);
+    std::vector<SuffererState> states;  // a flying sufferer's, at every step
     auto add_pose = [&](double t, std::uint16_t body, const Vec3& p, const Eigen::Quaterniond& q, const Vec3& offset) {
         flight::PoseSample s;
         s.t = t;
@@ -317,12 +226,10 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
         const double t = static_cast<double>(n) * dt;
         fleet.step(formation, reference.at(t), n, t, dt, c, model);
         sufferer.step(n, t, dt);
-        out.truth_t.push_back(t);
-        out.truth.push_back(model.evaluate(sufferer.position(), fleet.producers) + sufferer.own_force(chain));
-        if (!out.truth.back().allFinite()) {
-            throw InputError(log::cat("physics: the configuration gives a non-finite wrench at t = ", t,
-                                      " s (jet model, aggregation and effects together are not usable)"));
-        }
+        in.t.push_back(t);
+        in.force.push_back(to_wrench6(model.evaluate(sufferer.position(), fleet.producers)));
+        check_finite(t, to_wrench(in.force.back()));
+        if (sufferer.flying()) states.push_back(sufferer.state());
         if (t + 1e-9 >= next_mocap) {
             add_pose(t, sufferer_body, sufferer.position(), sufferer.orientation(), Vec3::Zero());
             for (std::size_t j = 0; j < k; ++j) {
@@ -338,10 +245,15 @@ SimResult simulate_flight(const PhysicsConfig& c, const FlyOptions& o) {
     }
 
     // 2-4. The stand's response, its chips, the tare and the recorded wrench (or the residual).
-    const std::vector<Wrench> felt = felt_wrench(out.truth, out.truth_t, chain);
-    if (o.flying_sufferer.enabled)
-        record_residual(c, o.flying_sufferer, felt, dt, out.truth_t.back(), chain, stand_rng, f);
-    else record_wrench(c, stand, convert_on_chips(c, stand, felt, dt, out.truth_t.back(), stand_rng), chain, f);
+    out.truth_t = in.t;
+    if (sufferer.flying()) in.sufferer = [&states](std::size_t i) { return states[i]; };
+    in.felt = [&out](const RecordedWrench& w) {
+        for (std::size_t i = 0; i < w.size(); ++i) {
+            out.truth.push_back(to_wrench(w[i]));
+            check_finite(out.truth_t[i], out.truth.back());
+        }
+    };
+    record(c, o.flying_sufferer, std::move(in), chain, stand_rng, f);
 
     std::vector<flight::Leg> legs;
     for (const auto& l : reference.legs()) legs.push_back({l.index, l.t_start, l.t_end});

@@ -1,5 +1,6 @@
 #include "physics/recording_chain.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dw::physics {
@@ -62,6 +63,38 @@ Wrench6 RecordingChain::SensorStream::read(double t, const Wrench6& x) {
     }
     t_ = t;
     return input;
+}
+
+Samples RecordingChain::record(ChainInput in, Sampler& sampler) const {
+    if (in.sufferer && acts_on_sufferer())
+        for (std::size_t i = 0; i < in.force.size(); ++i)
+            in.force[i] = to_wrench6(to_wrench(in.force[i]) + to_wrench(sufferer_force(in.sufferer(i))));
+    if (in.felt) in.felt(in.force);
+    sensor(in.t, in.force);
+    Samples s = sampler.sample(in.t, in.force, clock_delay_s());
+    tare(s, in.tare_s);
+    for (std::size_t i = 0; i < s.w.size(); ++i) {
+        calibration(s.w[i], in.recorded ? (*in.recorded)[i] : s.w[i]);
+        if (!in.moments_measured) std::fill(s.w[i].begin() + 3, s.w[i].end(), 0.0);
+    }
+    recording(s.stamps, s.w);
+    return s;
+}
+
+void RecordingChain::tare(Samples& s, double tare_s) const {
+    std::size_t n = 0;
+    while (n < s.stamps.size() && s.stamps[n] < s.stamps.front() + tare_s) ++n;
+    if (n == 0) return;
+    Wrench zero = Wrench::Zero();
+    for (std::size_t i = 0; i < n; ++i) zero += to_wrench(s.w[i]);
+    zero /= static_cast<double>(n);
+    for (auto& w : s.w) w = to_wrench6(to_wrench(w) - zero);
+}
+
+Wrench6 RecordingChain::Live::read(double t, const Wrench6& x) {
+    Wrench6 w = sensor_.read(t, x);
+    chain_.calibration(w);
+    return w;
 }
 
 void RecordingChain::calibration(Wrench6& w, const Wrench6& recorded) const {

@@ -26,6 +26,7 @@ public:
     const Eigen::Matrix<double, 6, kCells>& cells_to_wrench() const { return a_; }
     // The minimum-norm cell forces that carry a wrench (the pseudo-inverse of A).
     Eigen::Matrix<double, kCells, 1> wrench_to_cells(const Wrench& w) const { return a_pinv_ * w; }
+    const Eigen::Matrix<double, kCells, 6>& wrench_to_cells() const { return a_pinv_; }
     const std::array<StandCell, kCells>& cells() const { return cells_; }
 
     // What an HX711 reports for a cell force: offset + gain * force, saturated to 24 bits.

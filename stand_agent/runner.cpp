@@ -17,7 +17,7 @@ PhysicsSource::PhysicsSource(dds::Participant& p, const physics::PhysicsConfig& 
                              std::string sufferer)
     : physics_(physics),
       chain_(physics_.effects),
-      sensor_(chain_),
+      live_(chain_),
       position_error_(chain_.position_error_m()),
       model_(physics),
       stand_(physics.stand),
@@ -57,8 +57,8 @@ double PhysicsSource::force(int chip, Nanos t) {
         lag_sum_s_ += to_seconds(world_.now_ns() - (world_.monotonic_ns() - t) - pose_stamp_ns_);
         ++lag_n_;
     }
-    physics::Wrench6 read = sensor_.read(to_seconds(t), physics::to_wrench6(model_.evaluate(sufferer_, producers_)));
-    chain_.calibration(read);
+    const physics::Wrench6 read =
+        live_.read(to_seconds(t), physics::to_wrench6(model_.evaluate(sufferer_, producers_)));
     return stand_.wrench_to_cells(physics::to_wrench(read))[chip];
 }
 

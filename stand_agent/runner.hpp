@@ -42,7 +42,7 @@ public:
 private:
     physics::PhysicsConfig physics_;  // before the chain, which reads its effects
     physics::RecordingChain chain_;
-    physics::RecordingChain::SensorStream sensor_;
+    physics::RecordingChain::Live live_;
     physics::Vec3 position_error_;
     physics::WrenchModel model_;
     physics::StandModel stand_;

@@ -512,7 +512,7 @@ TEST(ExplainUnnamed, UnknownCasesAreRefused) {
 // Issue 44: the simulator's recording chain and the resimulation's are one in effect — each built-in
 // effect, switched on with the same parameters in both, leaves a residual far below the stand's
 // noise on every measured axis (noise and turbulence off, so what is left is the two chains'
-// disagreement: 0.0006-0.0025 N here), while leaving it out of the resimulation misses by ten
+// disagreement: 0.0005-0.0025 N here), while leaving it out of the resimulation misses by ten
 // times that or more. A flying sufferer's own effects are shown on a flying sufferer (its
 // residual: forces only).
 TEST(ExplainResimulation, EachEffectIsReplayedAsItIsSimulated) {

@@ -13,6 +13,7 @@
 #include "physics/jet.hpp"
 #include "physics/prediction_noise.hpp"
 #include "physics/recording_chain.hpp"
+#include "physics/samplers.hpp"
 #include "physics/stand.hpp"
 #include "physics/wrench_model.hpp"
 
@@ -774,6 +775,50 @@ TEST(RecordingChain, EachStageActsOnceAndLiveReadingsAreTheSeriesReadings) {
     auto untouched = series;
     dw::physics::RecordingChain(none).sensor(t, untouched);
     EXPECT_EQ(untouched, series);
+}
+
+// Issue 73: the replay's sampler is the chips' hold, axis by axis. A frame holds chip 0's fresh
+// conversion and the other seven chips' latest, each on average half a period old, so f_d (four
+// vertical cells, chip 0 among them) is 3/8 of a period old and f_n, f_e half a period. On a ramp
+// on every force, over many stands (random phases and rates, no noise: one stand's chips of nearly
+// one rate keep their phases), the chips and the replay's sampler at the chips' own stamps agree
+// on average to a small share of what one age for all (7/16 of a period, the replay's before)
+// misses on f_d.
+TEST(RecordingChain, TheReplaysSamplerAgesEachAxisAsTheChipsDo) {
+    StandParams p;
+    p.noise_n = 0;
+    p.offset_sigma_counts = 0;
+    constexpr double kSlope = 1.0;  // N/s on every force; the moments nil
+    constexpr int kStands = 100;
+    std::vector<double> t;
+    RecordedWrench felt;
+    for (int i = 0; i <= 5000; ++i) {  // 5 s at 1 kHz
+        t.push_back(0.001 * i);
+        felt.push_back({kSlope * t.back(), kSlope * t.back(), kSlope * t.back(), 0, 0, 0});
+    }
+    const double one_age = 7.0 / 16.0 / p.rate_hz, step = kSlope / p.rate_hz / 16;  // 7/16 against 3/8 or 1/2
+    Wrench6 bias{}, bias_one_age{};  // the chips' recording less the replay's, on average
+    for (int seed = 1; seed <= kStands; ++seed) {
+        Rng rng(static_cast<std::uint64_t>(seed));
+        ChipSampler chips(p, rng);
+        const Samples a = chips.sample(t, felt, 0.0);
+        StampSampler replay(a.stamps, &p);
+        const Samples b = replay.sample(t, felt, 0.0);
+        const double n = static_cast<double>(a.w.size()) * kStands;
+        for (std::size_t i = 0; i < a.w.size(); ++i) {
+            for (std::size_t ax = 0; ax < 6; ++ax) {
+                bias[ax] += (a.w[i][ax] - b.w[i][ax]) / n;
+                bias_one_age[ax] += (a.w[i][ax] - kSlope * (a.stamps[i] - one_age) * (ax < 3)) / n;
+            }
+        }
+    }
+    for (std::size_t ax = 0; ax < 6; ++ax) {
+        std::printf("axis %zu: the chips less the replay %+.6f, less one age for all %+.6f\n", ax, bias[ax],
+                    bias_one_age[ax]);
+        EXPECT_LT(std::abs(bias[ax]), 0.25 * step) << "axis " << ax;
+    }
+    EXPECT_GT(bias_one_age[2], 0.75 * step);   // f_d: younger than one age for all
+    EXPECT_LT(bias_one_age[0], -0.75 * step);  // f_n: older
 }
 
 // Issue 71: the prediction's noise model. Residuals drawn with a known push share and timing
