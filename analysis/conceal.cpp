@@ -42,8 +42,7 @@ Concealment concealment_of(const physics::EffectType& t, const physics::RealConc
                 conceal(f, fx);
             },
             [&t, c, size](const physics::Effects& own, std::optional<double> u) {
-                const double mine =
-                    t.enabled(own) && on_concealed_axes(t, t.axes(own)) ? t.values(own).front() : t.neutral().front();
+                const double mine = (on_concealed_axes(t, t.axes(own)) ? t.in_force(own) : t.neutral()).front();
                 const double before = u.value_or(mine);
                 return Truth{t.name(), t.parameters().front().name, c.multiplies ? before * size : before + size};
             }};

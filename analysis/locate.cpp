@@ -120,7 +120,7 @@ std::vector<Shift> shifts(const ExplainData& d, const physics::PhysicsConfig& ba
     for (long k = -half; k <= half; ++k) grid.push_back(static_cast<double>(k) * step);
     // The shift moves the stamps' clock: the effect the lab's time service measures.
     const auto& clock = physics::clock_effect();
-    const double base_offset = (clock.enabled(base.effects) ? clock.values(base.effects) : clock.neutral()).front();
+    const double base_offset = clock.in_force(base.effects).front();
     for (std::size_t g = 0; g < grid.size(); ++g) {
         physics::PhysicsConfig c = base;
         clock.set(c.effects, {base_offset + grid[g]});

@@ -91,8 +91,8 @@ std::vector<physics::Jet> Resimulation::jets_of(const physics::PhysicsConfig& fl
 }
 
 const std::vector<Wrench6>& Resimulation::air(const physics::PhysicsConfig& c) const {
-    const physics::PhysicsConfig flow = flow_of(c);
-    const KeyValues key = physics::key_values(flow);
+    physics::PhysicsConfig flow = flow_of(c);
+    const KeyValues key = physics::key_values(flow);  // only read
     if (auto it = cache_.find(key); it != cache_.end()) return it->second;
     const physics::WrenchModel model(flow);
     const std::vector<physics::Jet> jets = jets_of(flow);

@@ -458,10 +458,7 @@ public:
     void integer(const std::string&, int& v, const Range&) override { add(v); }
     void flag(const std::string&, bool& v) override { add(v ? 1 : 0); }
     void text(const std::string&, std::string& v) override { out_.texts.push_back(v); }
-    void texts(const std::string&, std::vector<std::string>& v) override {
-        add(static_cast<double>(v.size()));
-        out_.texts.insert(out_.texts.end(), v.begin(), v.end());
-    }
+    void texts(const std::string&, std::vector<std::string>& v) override { add_words(v); }
     bool has(const std::string&) override { return true; }
     void choice(const std::string&, int& v, std::span<const char* const>, const std::string&,
                 const std::string&) override {
@@ -481,10 +478,7 @@ public:
     void verbatim(const std::string&, std::string& json) override { out_.texts.push_back(json); }
     void constant(const std::string&, const std::string&) override {}
     void section(const std::string&, const Body& body, const std::string&) override { body(*this); }
-    void names(std::vector<std::string>& v) override {
-        add(static_cast<double>(v.size()));
-        out_.texts.insert(out_.texts.end(), v.begin(), v.end());
-    }
+    void names(std::vector<std::string>& v) override { add_words(v); }
     void list(const std::string&, std::size_t& count, const Item& item) override {
         add(static_cast<double>(count));
         for (std::size_t i = 0; i < count; ++i) item(*this, i);
@@ -496,6 +490,10 @@ private:
     void add_all(std::span<const double> v) {
         add(static_cast<double>(v.size()));
         for (double x : v) add(x);
+    }
+    void add_words(const std::vector<std::string>& v) {
+        add(static_cast<double>(v.size()));
+        out_.texts.insert(out_.texts.end(), v.begin(), v.end());
     }
     KeyValues& out_;
 };

@@ -228,7 +228,11 @@ PhysicsConfig load_physics(const std::string& path) {
 
 KeyValues key_values(const PhysicsConfig& c) {
     PhysicsConfig copy = c;  // the visitor takes what it reads by reference; collecting leaves it as it is
-    return dw::key_values([&](KeyVisitor& k) { physics_keys(k, copy); });
+    return key_values(copy);
+}
+
+KeyValues key_values(PhysicsConfig& c) {
+    return dw::key_values([&](KeyVisitor& k) { physics_keys(k, c); });
 }
 
 std::string to_yaml(const PhysicsConfig& c) {

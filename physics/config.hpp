@@ -185,6 +185,7 @@ PhysicsConfig parse_physics(const std::string& yaml, const std::string& name);
 std::string to_yaml(const PhysicsConfig& c);
 // Every value of c, exactly (core/keys.hpp): a cache's key for what a configuration computes.
 KeyValues key_values(const PhysicsConfig& c);
+KeyValues key_values(PhysicsConfig& c);  // the same, of a configuration the caller lets it visit (c is only read)
 
 int axis_index(const std::string& name);  // "f_n" -> 0 ... "m_yaw" -> 5, -1 if unknown
 

@@ -192,6 +192,8 @@ public:
     virtual std::string describe(const std::vector<double>& values, AxisPair axes, const EffectVoice& who) const = 0;
 
     std::vector<double> neutral() const;
+    // What it does in e: its values where it is on, else its neutral ones.
+    std::vector<double> in_force(const Effects& e) const { return enabled(e) ? values(e) : neutral(); }
 };
 
 // Whether an effect belongs to the rig's measurement chain — it acts after the air has reached the

@@ -21,6 +21,7 @@
 #include "physics/effect_types.hpp"
 #include "physics/flight_sim.hpp"
 #include "support.hpp"
+#include "toy_support.hpp"
 
 namespace {
 
@@ -28,22 +29,13 @@ using namespace dw::physics;
 
 constexpr double kBias = 0.137;
 
-std::string toy_yaml() {
-    return dw::log::cat(
-        "format: downwash-physics/1\neffects:\n  toy_lateral_bias:\n    enabled: true\n    bias_n: ", kBias, "\n");
-}
+std::string toy_yaml() { return dw::test::one_effect_yaml("toy_lateral_bias", "bias_n", kBias); }
 PhysicsConfig with_toy() { return parse_physics(toy_yaml(), "toy.yaml"); }
 
 // The shipped programs with the toy effect's file built as an effect module.
 const std::vector<std::string> kWithToyModule{std::string(dw::physics::kEffectModulesVariable) + "=" + DW_TOY_MODULE};
 
-dw::flight::Flight fly(const PhysicsConfig& c) {
-    FlyOptions o;
-    o.formation = "single";
-    o.grid.legs = 12;
-    o.seed = 5;
-    return simulate_flight(c, o).flight;
-}
+using dw::test::fly_toy;
 
 }  // namespace
 
@@ -69,7 +61,7 @@ TEST(EffectRegistry, AToyEffectIsConfiguredLikeTheVocabulary) {
 
 TEST(EffectRegistry, AToyEffectIsSimulatedExplainedAndReported) {
     dw::test::TempDir dir;
-    const auto plain = fly(PhysicsConfig{}), toy = fly(with_toy());
+    const auto plain = fly_toy(PhysicsConfig{}), toy = fly_toy(with_toy());
     ASSERT_EQ(plain.wrench.size(), toy.wrench.size());
     for (std::size_t i = 0; i < toy.wrench.size(); ++i) {  // the same flight, with the bias on f_e alone
         EXPECT_NEAR(toy.wrench[i].w[1] - plain.wrench[i].w[1], kBias, 1e-9);
@@ -104,8 +96,8 @@ TEST(EffectRegistry, AToyEffectIsSimulatedExplainedAndReported) {
 TEST(EffectRegistry, TheShippedProgramsLoadItAsAModuleFlyExplainAndReportIt) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("toy.yaml")) << toy_yaml();
-    const std::vector<std::string> fly_args{"fly",       "--formation",        "single",  "--legs", "12", "--seed", "5",
-                                            "--physics", dir.file("toy.yaml"), "--quiet", "--out"};
+    std::vector<std::string> fly_args = dw::test::kToyFlightArgs;
+    fly_args.insert(fly_args.end(), {"--physics", dir.file("toy.yaml"), "--quiet", "--out"});
     auto args = [&](const std::string& exe, const std::string& out) {
         std::vector<std::string> a{exe};
         a.insert(a.end(), fly_args.begin(), fly_args.end());

@@ -14,6 +14,7 @@
 #include "physics/effect_types.hpp"
 #include "physics/flight_sim.hpp"
 #include "support.hpp"
+#include "toy_support.hpp"
 
 namespace {
 
@@ -21,20 +22,9 @@ using namespace dw::physics;
 
 constexpr double kFraction = 0.3;
 
-std::string outwash_yaml() {
-    return dw::log::cat(
-        "format: downwash-physics/1\neffects:\n  toy_outwash:\n    enabled: true\n    fraction: ", kFraction, "\n");
-}
+std::string outwash_yaml() { return dw::test::one_effect_yaml("toy_outwash", "fraction", kFraction); }
 
-FlyOptions flight_options() {
-    FlyOptions o;
-    o.formation = "single";
-    o.grid.legs = 12;
-    o.seed = 5;
-    return o;
-}
-
-dw::flight::Flight fly(const PhysicsConfig& c) { return simulate_flight(c, flight_options()).flight; }
+using dw::test::fly_toy;
 
 // The largest change of an axis between two simulations of the same flight.
 double largest_change(const dw::flight::Flight& a, const dw::flight::Flight& b, std::size_t axis) {
@@ -50,7 +40,7 @@ TEST(FlowEffect, AToyFlowEffectIsSimulatedWhereTheAirIsAndExplained) {
     const PhysicsConfig c = parse_physics(outwash_yaml(), "outwash.yaml");
     ASSERT_EQ(c.effects.extra.count("toy_outwash"), 1u);
     EXPECT_TRUE(effect_type("toy_outwash").changes_flow());
-    const auto plain = fly(PhysicsConfig{}), outwash = fly(c);
+    const auto plain = fly_toy(PhysicsConfig{}), outwash = fly_toy(c);
     ASSERT_EQ(plain.wrench.size(), outwash.wrench.size());
     // The same flight: its push is lateral only, and there only where a jet passes above.
     EXPECT_EQ(largest_change(plain, outwash, 2), 0.0);
@@ -69,16 +59,17 @@ TEST(FlowEffect, AToyFlowEffectIsSimulatedWhereTheAirIsAndExplained) {
 TEST(FlowEffect, TheShippedSimulatorLoadsItAsAModule) {
     dw::test::TempDir dir;
     std::ofstream(dir.file("outwash.yaml")) << outwash_yaml();
-    const auto r =
-        dw::test::run({dw::test::bin("dw-sim"), "fly", "--formation", "single", "--legs", "12", "--seed", "5",
-                       "--physics", dir.file("outwash.yaml"), "--quiet", "--out", dir.file("f")},
-                      dir, std::chrono::minutes(2), {std::string(kEffectModulesVariable) + "=" + DW_TOY_FLOW_MODULE});
+    std::vector<std::string> args{dw::test::bin("dw-sim")};
+    args.insert(args.end(), dw::test::kToyFlightArgs.begin(), dw::test::kToyFlightArgs.end());
+    args.insert(args.end(), {"--physics", dir.file("outwash.yaml"), "--quiet", "--out", dir.file("f")});
+    const auto r = dw::test::run(args, dir, std::chrono::minutes(2),
+                                 {std::string(kEffectModulesVariable) + "=" + DW_TOY_FLOW_MODULE});
     ASSERT_EQ(r.status, 0) << r.err;
     const auto shipped = dw::flight::read_flight(dir.file("f"));
-    const auto here = fly(parse_physics(outwash_yaml(), "outwash.yaml"));
+    const auto here = fly_toy(parse_physics(outwash_yaml(), "outwash.yaml"));
     ASSERT_EQ(shipped.wrench.size(), here.wrench.size());
     // The same wrench as simulated here (flight folders keep 6 decimals), the outwash in it.
     for (std::size_t axis = 0; axis < 3; ++axis) EXPECT_LE(largest_change(shipped, here, axis), 1e-6) << axis;
-    const auto plain = fly(PhysicsConfig{});
+    const auto plain = fly_toy(PhysicsConfig{});
     EXPECT_GT(largest_change(shipped, plain, 0) + largest_change(shipped, plain, 1), 0.02);
 }
