@@ -14,6 +14,7 @@
 #include "analysis/session_proof.hpp"
 #include "analysis/unnamed.hpp"
 #include "core/cli.hpp"
+#include "core/command.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
@@ -35,6 +36,24 @@ std::vector<std::string> split_list(const std::string& text) {
 }
 
 using Progress = std::function<void(const std::string&)>;
+
+// What every dw-explain command takes from the root's options: --physics and --quiet.
+struct Root {
+    std::string physics_path;
+    bool quiet = false;
+    Progress progress() const {
+        return [quiet = quiet](const std::string& s) {
+            if (!quiet) dw::log::progress(s);
+        };
+    }
+};
+
+// A dw-explain subcommand: given the root's options.
+struct ExplainTool : dw::cli::Command {
+    explicit ExplainTool(const Root& r) : root(r) {}
+    const Root& root;
+    CLI::App* sub = nullptr;
+};
 
 // What a study prints after its table: the line when it passes (none: the table alone), the word when it fails.
 struct Verdict {
@@ -81,28 +100,29 @@ int run_study(Options& o, const std::string& cases, const Progress& progress, Ru
 }
 
 // `dw-explain proof`: simulated flights with hidden effects.
-struct ProofCommand {
-    CLI::App* sub = nullptr;
+struct ProofCommand final : ExplainTool {
+    using ExplainTool::ExplainTool;
     dw::analysis::ProofOptions options;
     std::string cases;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("proof",
                                  "simulate flights with hidden effects (in-process, as dw-sim fly does), explain them, "
                                  "check what was found");
         add_study_options(sub, options, cases, dw::analysis::proof_case_list(),
                           "output folder (flights, reports, proof.md)");
+        return sub;
     }
-    int run(const Progress& progress) { return run_study(options, cases, progress, dw::analysis::run_proof); }
+    int run() override { return run_study(options, cases, root.progress(), dw::analysis::run_proof); }
 };
 
 // `dw-explain unnamed`: simulated flights with mismatches the vocabulary has no word for.
-struct UnnamedCommand {
-    CLI::App* sub = nullptr;
+struct UnnamedCommand final : ExplainTool {
+    using ExplainTool::ExplainTool;
     dw::analysis::UnnamedOptions options;
     std::string cases;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("unnamed",
                                  "simulate flights with mismatches no effect of the vocabulary names, explain them, "
                                  "check each is detected, nothing named for it and what is left modelled");
@@ -111,8 +131,9 @@ struct UnnamedCommand {
         sub->add_option("--legs", options.legs, "legs per flight")
             ->check(dw::cli::in({5, 1000}))
             ->capture_default_str();
+        return sub;
     }
-    int run(const Progress& progress) { return run_study(options, cases, progress, dw::analysis::run_unnamed); }
+    int run() override { return run_study(options, cases, root.progress(), dw::analysis::run_unnamed); }
 };
 
 // The sizes of the concealed effects, each an option its effect declares.
@@ -136,41 +157,39 @@ void add_recorded_study_options(CLI::App* sub, Options& o, std::string& physics,
 
 // A study on recorded flights: its physics (its own --physics, else the main one), its cases, its verdict.
 template <class Options, class Run>
-int run_recorded_study(Options& o, const std::string& physics, const std::string& main_physics,
-                       const std::string& cases, const Progress& progress, Run run) {
-    prepare(o, progress);
-    const std::string path = physics.empty() ? main_physics : physics;
-    o.physics = path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
+int run_recorded_study(Options& o, const std::string& physics, const Root& root, const std::string& cases, Run run) {
+    prepare(o, root.progress());
+    const std::string path = physics.empty() ? root.physics_path : physics;
+    o.physics = dw::physics::physics_or_defaults(path);
     o.cases = split_list(cases);
     const auto r = run(o);
     return finish(r.table_path, r.pass, kProofVerdict);
 }
 
 // `dw-explain real-proof`: effects concealed in recorded flights.
-struct RealProofCommand {
-    CLI::App* sub = nullptr;
+struct RealProofCommand final : ExplainTool {
+    using ExplainTool::ExplainTool;
     dw::analysis::RealProofOptions options;
     std::string cases, physics;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand(
             "real-proof",
             "conceal known effects in recorded flights and check each is found on top of the flight's own fit");
         sub->add_option("--flights", options.flights, "flight folders (e.g. dw-import's)")->required();
         add_recorded_study_options(sub, options, physics, cases, "output folder (reports, proof.md)");
+        return sub;
     }
-    int run(const std::string& main_physics, const Progress& progress) {
-        return run_recorded_study(options, physics, main_physics, cases, progress, dw::analysis::run_real_proof);
-    }
+    int run() override { return run_recorded_study(options, physics, root, cases, dw::analysis::run_real_proof); }
 };
 
 // `dw-explain coverage`: how often the intervals hold the hidden value.
-struct CoverageCommand {
-    CLI::App* sub = nullptr;
+struct CoverageCommand final : ExplainTool {
+    using ExplainTool::ExplainTool;
     dw::analysis::CoverageOptions options;
     std::string effects;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand(
             "coverage",
             "measure how often the 95 % intervals hold the hidden value, over many simulated flights per effect");
@@ -180,9 +199,10 @@ struct CoverageCommand {
         sub->add_option("--jobs", options.jobs, kJobsHelp)->check(dw::cli::in(dw::kJobsRange));
         sub->add_option("--effects", effects,
                         "effects, comma-separated (default: every one a flight over the stand can show)");
+        return sub;
     }
-    int run(const Progress& progress) {
-        prepare(options, progress);
+    int run() override {
+        prepare(options, root.progress());
         options.effects = split_list(effects);
         const auto r = dw::analysis::run_coverage(options);
         return finish(r.table_path, r.pass, kCoverageVerdict);
@@ -190,12 +210,12 @@ struct CoverageCommand {
 };
 
 // `dw-explain calibrate`: the physics fitted per vehicle class on many flights, checked on trials left out.
-struct CalibrateCommand {
-    CLI::App* sub = nullptr;
+struct CalibrateCommand final : ExplainTool {
+    using ExplainTool::ExplainTool;
     dw::analysis::CalibrateOptions options;
     std::string physics;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("calibrate",
                                  "fit the physics per vehicle class on many flights; validate by leaving trials out");
         sub->add_option("--flights", options.flights, "flight folders (e.g. dw-import's), two trials or more")
@@ -215,11 +235,12 @@ struct CalibrateCommand {
             ->capture_default_str();
         sub->add_flag("--explain", options.explain_heldout,
                       "also explain each trial against the calibration that left it out (reports in folds/)");
+        return sub;
     }
-    int run(const std::string& main_physics, const Progress& progress) {
-        prepare(options, progress);
-        const std::string path = physics.empty() ? main_physics : physics;
-        options.physics = path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
+    int run() override {
+        prepare(options, root.progress());
+        const std::string path = physics.empty() ? root.physics_path : physics;
+        options.physics = dw::physics::physics_or_defaults(path);
         const auto r = dw::analysis::calibrate(options);
         for (const auto& p : r.parameters)
             std::cout << p.vehicle_class << ": " << p.name << " " << p.value << " [" << p.lo << ", " << p.hi << "]\n";
@@ -230,12 +251,12 @@ struct CalibrateCommand {
 };
 
 // `dw-explain session-proof`: rig effects concealed in every flight of sessions of recorded flights.
-struct SessionProofCommand {
-    CLI::App* sub = nullptr;
+struct SessionProofCommand final : ExplainTool {
+    using ExplainTool::ExplainTool;
     dw::analysis::SessionProofOptions options;
     std::string cases, physics;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("session-proof",
                                  "group recorded flights into sessions, conceal a rig effect in every flight below "
                                  "what one flight shows, and check the session finds it on top of its own fit");
@@ -247,20 +268,19 @@ struct SessionProofCommand {
             ->capture_default_str();
         sub->add_option("--sessions", options.max_sessions, "at most this many sessions (0: every full group)")
             ->check(dw::cli::in({0, 1000}));
+        return sub;
     }
-    int run(const std::string& main_physics, const Progress& progress) {
-        return run_recorded_study(options, physics, main_physics, cases, progress, dw::analysis::run_session_proof);
-    }
+    int run() override { return run_recorded_study(options, physics, root, cases, dw::analysis::run_session_proof); }
 };
 
 // `dw-explain session`: several flights of one rig explained as one session.
-struct SessionCommand {
-    CLI::App* sub = nullptr;
+struct SessionCommand final : ExplainTool {
+    using ExplainTool::ExplainTool;
     std::vector<std::string> flights;
     std::string out, effects, spread;
     bool rig_only = false;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("session",
                                  "explain several flights of one rig as one session: the rig's effects (clock, sensor "
                                  "lag, cross-talk, gain) fitted jointly, each flight's own effects on top");
@@ -271,15 +291,15 @@ struct SessionCommand {
         sub->add_option("--spread", spread,
                         "an earlier session's session.json: its between-flight spreads are this rig's natural "
                         "variation (default: none, which is strict)");
+        return sub;
     }
-    int run(const std::string& physics_path, const Progress& progress) const {
+    int run() override {
         dw::analysis::require_session_size(flights.size());  // before any flight is read
         dw::require_output_dir(out, "--out");
         dw::analysis::SessionOptions o;
-        o.explain.physics =
-            physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
+        o.explain.physics = dw::physics::physics_or_defaults(root.physics_path);
         if (!effects.empty()) o.explain.candidates = dw::analysis::effects_named(split_list(effects));
-        o.explain.progress = progress;
+        o.explain.progress = root.progress();
         o.explain.stop = dw::Shutdown::instance().token();
         o.flight_effects = !rig_only;
         if (!spread.empty()) o.between_flight_sd = dw::analysis::spreads_from(spread);
@@ -296,29 +316,32 @@ struct SessionCommand {
     }
 };
 
-// The main command: explain one recording.
-struct ExplainCommand {
-    std::string physics_path, real, out, effects;
+// The main command: explain one recording. It holds the root's options the others are given.
+struct ExplainCommand final : dw::cli::Command {
+    Root root;
+    std::string real, out, effects;
     std::uint64_t seed = 1;
 
-    void add(CLI::App& app) {
-        app.add_option("--physics", physics_path,
+    CLI::App* add(CLI::App& app) override {
+        app.add_option("--physics", root.physics_path,
                        "the physics configuration to compare with (default: config/physics.example.yaml's defaults)");
         app.add_option("--real", real, "the recording: a flight folder (downwash-flight/1) or an .mcap file");
         app.add_option("--out", out, "output folder: report.json, report.md, physics.yaml, figures");
         app.add_option("--effects", effects, "candidates, comma-separated (default: every effect of the vocabulary)");
         app.add_option("--seed", seed, "seed (the analysis is deterministic; recorded in the report)")
             ->check(dw::cli::in(dw::kSeedRange));
+        app.add_flag("--quiet", root.quiet, "no progress");
+        return &app;
     }
-    int run(const Progress& progress) const {
+    int run() override {
         if (real.empty()) throw dw::InputError("--real: required (a flight folder or an .mcap recording)");
         if (out.empty()) throw dw::InputError("--out: required (the report's folder)");
         dw::require_output_dir(out, "--out");
         dw::analysis::ExplainOptions o;
-        o.physics = physics_path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_path);
+        o.physics = dw::physics::physics_or_defaults(root.physics_path);
         if (!effects.empty()) o.candidates = dw::analysis::effects_named(split_list(effects));
         o.seed = seed;
-        o.progress = progress;
+        o.progress = root.progress();
         o.stop = dw::Shutdown::instance().token();
         // A recording is explained with its stamps as recorded: the explainer checks the clocks itself,
         // and the report puts the time service's measurement beside what it fits.
@@ -339,37 +362,20 @@ int run(int argc, char** argv) {
         "re-simulate"};
     dw::cli::BaseOptions base;
     dw::cli::configure(app, base);
-    bool quiet = false;
     ExplainCommand explain;
-    explain.add(app);
-    app.add_flag("--quiet", quiet, "no progress");
-    ProofCommand proof;
-    proof.add(app);
-    UnnamedCommand unnamed;
-    unnamed.add(app);
-    RealProofCommand real_proof;
-    real_proof.add(app);
-    CoverageCommand coverage;
-    coverage.add(app);
-    CalibrateCommand calibrate;
-    calibrate.add(app);
-    SessionCommand session;
-    session.add(app);
-    SessionProofCommand session_proof;
-    session_proof.add(app);
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
-    const Progress progress = [quiet](const std::string& s) {
-        if (!quiet) dw::log::progress(s);
-    };
-    if (session_proof.sub->parsed()) return session_proof.run(explain.physics_path, progress);
-    if (session.sub->parsed()) return session.run(explain.physics_path, progress);
-    if (real_proof.sub->parsed()) return real_proof.run(explain.physics_path, progress);
-    if (coverage.sub->parsed()) return coverage.run(progress);
-    if (calibrate.sub->parsed()) return calibrate.run(explain.physics_path, progress);
-    if (proof.sub->parsed()) return proof.run(progress);
-    if (unnamed.sub->parsed()) return unnamed.run(progress);
-    return explain.run(progress);
+    const Root& root = explain.root;
+    ProofCommand proof(root);
+    UnnamedCommand unnamed(root);
+    RealProofCommand real_proof(root);
+    CoverageCommand coverage(root);
+    CalibrateCommand calibrate(root);
+    SessionCommand session(root);
+    SessionProofCommand session_proof(root);
+    return dw::cli::run_commands(
+        app, {&explain, &proof, &unnamed, &real_proof, &coverage, &calibrate, &session, &session_proof}, [&] {
+            dw::cli::parse(app, argc, argv);
+            dw::log::set_level(dw::log::parse_level(base.log_level));
+        });
 }
 
 }  // namespace

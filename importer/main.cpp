@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "core/cli.hpp"
+#include "core/command.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
@@ -50,46 +51,76 @@ void add_thrust_lag(CLI::App& sub, dw::importer::ImportOptions& o) {
         ->check(dw::cli::in(dw::importer::kThrustLagRange));
 }
 
-int run(int argc, char** argv) {
-    CLI::App app{"dw-import: bring another lab's flight logs into a flight folder (downwash-flight/1)"};
-    dw::cli::BaseOptions base;
-    dw::cli::configure(app, base);
-    app.require_subcommand(1);
+// What every import does before its own work: the output folder checked, warnings and the stop.
+void prepare(const std::string& out, dw::importer::ImportOptions& o) {
+    dw::require_output_dir(out, "--out");
+    o.warn = [](const std::string& w) { dw::log::warn(w); };
+    o.stop = dw::Shutdown::instance().token();
+}
+
+// `dw-import <format>`: one trial's logs in one importer's format.
+struct ImportCommand final : dw::cli::Command {
+    explicit ImportCommand(const dw::importer::Importer& i) : im(i) {}
+    const dw::importer::Importer& im;
     std::vector<std::string> logs;
     std::string out;
     dw::importer::ImportOptions o;
-    std::vector<std::pair<CLI::App*, const dw::importer::Importer*>> commands;
-    for (const auto* im : dw::importer::importers()) {
-        auto* sub = app.add_subcommand(std::string(im->name()), std::string(im->description()));
+
+    CLI::App* add(CLI::App& app) override {
+        auto* sub = app.add_subcommand(std::string(im.name()), std::string(im.description()));
         sub->add_option("logs", logs, "the log files of one trial, one per vehicle")->required();
         sub->add_option("--out", out, "flight folder to write")->required();
         sub->add_option("--sufferer", o.sufferer,
                         "the vehicle whose residual force is the wrench (default: the lowest)");
         add_thrust_lag(*sub, o);
-        commands.emplace_back(sub, im);
+        return sub;
     }
-    std::string collection;
-    auto* whole = app.add_subcommand("neural-swarm-collection",
-                                     "every trial of a Neural-Swarm collection folder, one flight folder each");
-    whole->add_option("dir", collection, "the collection (e.g. .../datacollection21_06_16_2020)")->required();
-    whole->add_option("--out", out, "folder for the flight folders (one per trial)")->required();
-    add_thrust_lag(*whole, o);
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
-    dw::require_output_dir(out, "--out");
-    o.warn = [](const std::string& w) { dw::log::warn(w); };
-    o.stop = dw::Shutdown::instance().token();
-    if (whole->parsed()) return import_collection(collection, out, o);
-    if (std::filesystem::exists(out))
-        throw dw::InputError("--out " + out + ": exists already (a flight folder is written whole, once)");
-    for (const auto& [sub, im] : commands) {
-        if (!sub->parsed()) continue;
-        const auto f = im->import(logs, o);
+    int run() override {
+        prepare(out, o);
+        if (std::filesystem::exists(out))
+            throw dw::InputError("--out " + out + ": exists already (a flight folder is written whole, once)");
+        const auto f = im.import(logs, o);
         dw::flight::write_flight(f, out);
         std::cout << "wrote " << out << ": sufferer " << f.meta.sufferer << ", " << f.meta.neighbours.size()
                   << " neighbour(s), " << f.wrench.size() << " wrench samples, " << f.poses.size() << " poses\n";
+        return 0;
     }
-    return 0;
+};
+
+// `dw-import neural-swarm-collection`: every trial of a collection folder.
+struct CollectionCommand final : dw::cli::Command {
+    std::string collection, out;
+    dw::importer::ImportOptions o;
+
+    CLI::App* add(CLI::App& app) override {
+        auto* sub = app.add_subcommand("neural-swarm-collection",
+                                       "every trial of a Neural-Swarm collection folder, one flight folder each");
+        sub->add_option("dir", collection, "the collection (e.g. .../datacollection21_06_16_2020)")->required();
+        sub->add_option("--out", out, "folder for the flight folders (one per trial)")->required();
+        add_thrust_lag(*sub, o);
+        return sub;
+    }
+    int run() override {
+        prepare(out, o);
+        return import_collection(collection, out, o);
+    }
+};
+
+int run(int argc, char** argv) {
+    CLI::App app{"dw-import: bring another lab's flight logs into a flight folder (downwash-flight/1)"};
+    dw::cli::BaseOptions base;
+    dw::cli::configure(app, base);
+    app.require_subcommand(1);
+    std::vector<ImportCommand> formats;
+    for (const auto* im : dw::importer::importers()) formats.emplace_back(*im);
+    CollectionCommand collection;
+    std::vector<dw::cli::Command*> commands;
+    for (auto& f : formats) commands.push_back(&f);
+    commands.push_back(&collection);
+    return dw::cli::run_commands(app, commands, [&] {
+        dw::cli::parse(app, argc, argv);
+        dw::log::set_level(dw::log::parse_level(base.log_level));
+    });
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <array>
 #include <sstream>
 
+#include "core/command.hpp"
 #include "core/errors.hpp"
 #include "core/log.hpp"
 #include "core/names.hpp"
@@ -126,59 +127,72 @@ int bridge_px4(dw::dds::ProcessCli& cli, dw::natnet::Px4SourceOptions o) {
     return 0;
 }
 
-int run(int argc, char** argv) {
-    dw::dds::ProcessCli cli(
-        "dw-mocap-bridge: OptiTrack NatNet motion capture onto DDS (180 Hz), its simulation, or PX4's own estimate");
-    CLI::App& app = cli.app();
-    std::string source = "natnet", px4_file, physics_file;
+// dw-mocap-bridge's one command: the motion capture (or PX4's estimate) onto DDS.
+struct BridgeCommand final : dw::cli::Command {
+    explicit BridgeCommand(dw::dds::ProcessCli& c) : cli(c) {}
+    dw::dds::ProcessCli& cli;
+    std::string source = "natnet", px4_file, physics_file, feed_file;
     std::vector<std::string> px4_vehicles{"v1"};
     NatNetArgs a;
     bool sim = false;
     dw::natnet::Px4SourceOptions po;
-    app.add_option("--source", source,
-                   "natnet (Motive), sim (simulated vehicles through an emulated NatNet server), or px4 (no motion "
-                   "capture: each PX4's own estimate, fmu/out/vehicle_odometry)");
-    app.add_flag("--sim", sim, "same as --source sim");
-    app.add_option("--server", a.client.server_ip, "Motive host (natnet)");
-    app.add_option("--command-port", a.client.command_port, "NatNet command port (default 1510)")
-        ->check(dw::cli::in(dw::natnet::kPortRange));
-    app.add_option("--local-ip", a.client.local_ip, "this host's address towards Motive");
-    app.add_option("--axes", a.axes, "NED axes as Motive axes: default x,z,-y (Y up)");
-    app.add_option("--name", a.name_map, "RIGIDBODY=VEHICLE (repeatable)");
-    app.add_option("--timestamps", a.mode, "receive, compensated (default) or clock_sync");
-    app.add_option("--sim-vehicles", a.sim_vehicles, "sim: the neighbours' names (they follow vehicles/setpoint)");
-    app.add_option("--sim-fault", a.sim_fault,
-                   "sim: KIND:VEHICLE:AFTER_S — the vehicle stops following its setpoints (stuck) or mocap "
-                   "reports it 10 m away (jump), AFTER_S after its first setpoint (fault tests)");
-    app.add_option("--sim-rate", a.sim_rate, "sim: camera rate [Hz]")->check(dw::cli::in({1, 1000, "Hz"}));
-    dw::natnet::add_hostility_options(app, a.sim_hostile, "sim-");
-    app.add_option("--px4-vehicles", px4_vehicles,
-                   "px4 and --feed-px4: the vehicles, comma-separated (the plan's names)")
-        ->delimiter(',');
-    app.add_option("--px4", px4_file,
-                   "px4: the planner's PX4 settings file (each vehicle's namespace, origin and heading; default: "
-                   "namespace = name, origin 0, heading 0)");
-    app.add_option("--physics", physics_file, "px4: physics configuration (the stand's height: where the sufferer is)");
-    std::string feed_file;
-    app.add_option(
-        "--feed-px4", feed_file,
-        "natnet/sim: also feed each tracked vehicle's pose to its PX4's estimator (vehicle_visual_odometry), "
-        "whenever it is tracked, per this PX4 settings file (it must say odometry: bridge); vehicles from "
-        "--px4-vehicles");
-    app.add_option("--px4-rate", po.rate_hz, "px4: frames published per second")
-        ->check(dw::cli::in(dw::natnet::kEstimateRateRange));
-    cli.parse(argc, argv);
-    const Source kind =
-        sim ? Source::sim : dw::parse_entry(kSources, source, "source", "--source (replay: dw-recorder replay)");
-    if (kind != Source::px4) {
-        if (app.count("--feed-px4") > 0) a.feed = feed_options(feed_file, px4_vehicles);
-        return bridge_natnet(cli, std::move(a), kind == Source::sim);
+
+    CLI::App* add(CLI::App& app) override {
+        app.add_option("--source", source,
+                       "natnet (Motive), sim (simulated vehicles through an emulated NatNet server), or px4 (no motion "
+                       "capture: each PX4's own estimate, fmu/out/vehicle_odometry)");
+        app.add_flag("--sim", sim, "same as --source sim");
+        app.add_option("--server", a.client.server_ip, "Motive host (natnet)");
+        app.add_option("--command-port", a.client.command_port, "NatNet command port (default 1510)")
+            ->check(dw::cli::in(dw::natnet::kPortRange));
+        app.add_option("--local-ip", a.client.local_ip, "this host's address towards Motive");
+        app.add_option("--axes", a.axes, "NED axes as Motive axes: default x,z,-y (Y up)");
+        app.add_option("--name", a.name_map, "RIGIDBODY=VEHICLE (repeatable)");
+        app.add_option("--timestamps", a.mode, "receive, compensated (default) or clock_sync");
+        app.add_option("--sim-vehicles", a.sim_vehicles, "sim: the neighbours' names (they follow vehicles/setpoint)");
+        app.add_option("--sim-fault", a.sim_fault,
+                       "sim: KIND:VEHICLE:AFTER_S — the vehicle stops following its setpoints (stuck) or mocap "
+                       "reports it 10 m away (jump), AFTER_S after its first setpoint (fault tests)");
+        app.add_option("--sim-rate", a.sim_rate, "sim: camera rate [Hz]")->check(dw::cli::in({1, 1000, "Hz"}));
+        dw::natnet::add_hostility_options(app, a.sim_hostile, "sim-");
+        app.add_option("--px4-vehicles", px4_vehicles,
+                       "px4 and --feed-px4: the vehicles, comma-separated (the plan's names)")
+            ->delimiter(',');
+        app.add_option("--px4", px4_file,
+                       "px4: the planner's PX4 settings file (each vehicle's namespace, origin and heading; default: "
+                       "namespace = name, origin 0, heading 0)");
+        app.add_option("--physics", physics_file,
+                       "px4: physics configuration (the stand's height: where the sufferer is)");
+        app.add_option(
+            "--feed-px4", feed_file,
+            "natnet/sim: also feed each tracked vehicle's pose to its PX4's estimator (vehicle_visual_odometry), "
+            "whenever it is tracked, per this PX4 settings file (it must say odometry: bridge); vehicles from "
+            "--px4-vehicles");
+        app.add_option("--px4-rate", po.rate_hz, "px4: frames published per second")
+            ->check(dw::cli::in(dw::natnet::kEstimateRateRange));
+        return &app;
     }
-    po.px4 = app.count("--px4") == 0 ? dw::planner::default_px4_options(px4_vehicles)
-                                     : dw::planner::load_px4_options(px4_file, px4_vehicles);
-    const auto physics = physics_file.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_file);
-    po.sufferer = dw::physics::sufferer_on_stand(physics.stand);
-    return bridge_px4(cli, std::move(po));
+    int run() override {
+        CLI::App& app = cli.app();
+        const Source kind =
+            sim ? Source::sim : dw::parse_entry(kSources, source, "source", "--source (replay: dw-recorder replay)");
+        if (kind != Source::px4) {
+            if (app.count("--feed-px4") > 0) a.feed = feed_options(feed_file, px4_vehicles);
+            return bridge_natnet(cli, std::move(a), kind == Source::sim);
+        }
+        po.px4 = app.count("--px4") == 0 ? dw::planner::default_px4_options(px4_vehicles)
+                                         : dw::planner::load_px4_options(px4_file, px4_vehicles);
+        const auto physics = dw::physics::physics_or_defaults(physics_file);
+        po.sufferer = dw::physics::sufferer_on_stand(physics.stand);
+        return bridge_px4(cli, std::move(po));
+    }
+};
+
+int run(int argc, char** argv) {
+    dw::dds::ProcessCli cli(
+        "dw-mocap-bridge: OptiTrack NatNet motion capture onto DDS (180 Hz), its simulation, or PX4's own estimate");
+    BridgeCommand bridge(cli);
+    return dw::cli::run_commands(cli.app(), {&bridge}, [&] { cli.parse(argc, argv); });
 }
 
 }  // namespace

@@ -226,6 +226,10 @@ PhysicsConfig load_physics(const std::string& path) {
     return parse_physics(read_file(path, "physics configuration"), path);
 }
 
+PhysicsConfig physics_or_defaults(const std::string& path) {
+    return path.empty() ? PhysicsConfig{} : load_physics(path);
+}
+
 KeyValues key_values(const PhysicsConfig& c) {
     PhysicsConfig copy = c;  // the visitor takes what it reads by reference; collecting leaves it as it is
     return key_values(copy);

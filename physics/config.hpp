@@ -180,6 +180,8 @@ SuffererParams sufferer_as(const PhysicsConfig& c, const VehicleParams& v);
 
 // Throws dw::InputError "file:line:col: key: problem".
 PhysicsConfig load_physics(const std::string& path);
+// load_physics(path), or the documented defaults (config/physics.example.yaml) when path is empty.
+PhysicsConfig physics_or_defaults(const std::string& path);
 PhysicsConfig parse_physics(const std::string& yaml, const std::string& name);
 // A complete YAML document that parse_physics reads back to the same configuration.
 std::string to_yaml(const PhysicsConfig& c);

@@ -8,6 +8,7 @@
 
 #include "analysis/replay.hpp"
 #include "core/cli.hpp"
+#include "core/command.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
@@ -18,16 +19,12 @@
 
 namespace {
 
-dw::physics::PhysicsConfig physics_from(const std::string& path) {
-    return path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
-}
-
-struct FlyCommand {
+struct FlyCommand final : dw::cli::Command {
     dw::physics::FlyOptions fly;
     std::string physics_path, out_dir, altitudes;  // empty: GridOptions' own
     bool quiet = false;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         auto* cmd =
             app.add_subcommand("fly", "simulate a formation flying grid legs over the stand; write a flight folder");
         cmd->add_option("--formation", fly.formation,
@@ -49,13 +46,14 @@ struct FlyCommand {
                       "the sufferer flies (swaying about the stand's point) and its wrench is recorded as a "
                       "residual (forces only, no stand)");
         cmd->add_flag("--quiet", quiet, "no progress");
+        return cmd;
     }
 
-    int run() {
+    int run() override {
         dw::require_output_dir(out_dir, "--out");
         if (!altitudes.empty())
             fly.grid.altitudes_m = dw::parse_number_list(altitudes, dw::physics::kAltitudeRange, "--altitudes");
-        const auto physics = physics_from(physics_path);
+        const auto physics = dw::physics::physics_or_defaults(physics_path);
         if (!quiet) {
             fly.progress = [](double done) {
                 std::fprintf(stderr, "\rdw-sim: simulating %3d %%", static_cast<int>(done * 100));
@@ -90,11 +88,11 @@ std::string rms_line(const dw::flight::AxisValues& v, const dw::analysis::Replay
     return out;
 }
 
-struct ReplayCommand {
+struct ReplayCommand final : dw::cli::Command {
     std::string flight_dir, physics_path, out_dir;
     bool without = false;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         auto* cmd = app.add_subcommand(
             "replay",
             "a recorded flight's wrench as a physics configuration predicts it along the flight's own poses (no "
@@ -103,11 +101,12 @@ struct ReplayCommand {
         cmd->add_option("--physics", physics_path, "physics configuration (e.g. a physics.yaml dw-explain wrote)");
         cmd->add_option("--out", out_dir, "flight folder to write: the flight with the replayed wrench")->required();
         cmd->add_flag("--without-discrepancy", without, "leave the configuration's learnt discrepancy out");
+        return cmd;
     }
 
-    int run() {
+    int run() override {
         dw::require_output_dir(out_dir, "--out");
-        const auto physics = physics_from(physics_path);
+        const auto physics = dw::physics::physics_or_defaults(physics_path);
         const auto recorded = dw::flight::read_flight(flight_dir);
         const auto r = dw::analysis::replay(recorded, physics);
         const auto with = r.with_discrepancy();  // the physics alone when there is none
@@ -133,11 +132,10 @@ int run(int argc, char** argv) {
     app.require_subcommand(1);
     FlyCommand fly;
     ReplayCommand replay;
-    fly.add(app);
-    replay.add(app);
-    dw::cli::parse(app, argc, argv);
-    dw::log::set_level(dw::log::parse_level(base.log_level));
-    return app.got_subcommand("fly") ? fly.run() : replay.run();
+    return dw::cli::run_commands(app, {&fly, &replay}, [&] {
+        dw::cli::parse(app, argc, argv);
+        dw::log::set_level(dw::log::parse_level(base.log_level));
+    });
 }
 
 }  // namespace

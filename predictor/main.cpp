@@ -6,6 +6,7 @@
 #include <iostream>
 #include <optional>
 
+#include "core/command.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "plot/png.hpp"
@@ -36,10 +37,6 @@ constexpr const char* kStudyJobsHelp =
 
 constexpr const char* kMembersHelp =
     "Deep Sets trainings (each from its own seed) averaged into the model (1: one training)";
-
-dw::physics::PhysicsConfig physics_from(const std::string& path) {
-    return path.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(path);
-}
 
 Dataset load_all(const std::vector<std::string>& paths) {
     Dataset d;
@@ -72,14 +69,14 @@ dw::physics::PhysicsConfig noise_physics(const std::vector<std::string>& paths,
 
 // ---- one struct per subcommand: its options, how it is declared, what it does --------------------
 
-struct StudyCommand {
+struct StudyCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     StudyOptions so;
     std::string physics_path;
     std::vector<std::string> effects;
     bool no_generalisation = false, no_maps = false;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand(
             "study",
             "simulate flights, train every model, compare on held-out legs, draw maps (one command for the table)");
@@ -101,9 +98,10 @@ struct StudyCommand {
             ->check(dw::cli::in(dw::physics::kAltitudeRange));
         cmd->add_flag("--no-generalisation", no_generalisation, "skip the K <= 2 -> K = 3 and leave-stack-out tests");
         cmd->add_flag("--no-maps", no_maps, "skip the maps");
+        return cmd;
     }
-    int run() {
-        so.physics = physics_from(physics_path);
+    int run() override {
+        so.physics = dw::physics::physics_or_defaults(physics_path);
         for (const auto& e : effects) dw::physics::effect_type(e, "--effect").switch_on(so.physics.effects);
         dw::require_output_dir(so.out_dir, "--out");
         so.generalisation = !no_generalisation;
@@ -116,12 +114,12 @@ struct StudyCommand {
     }
 };
 
-struct RegimesCommand {
+struct RegimesCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     std::string dir;
     RegimeOptions o;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd =
             app.add_subcommand("regimes",
                                "the regime map of a study's folder: each formation x altitude band chaotic, linear or "
@@ -134,8 +132,9 @@ struct RegimesCommand {
         cmd->add_option("--min-explained", o.min_explained,
                         "below this fraction of f_d's mean square explained, a band is chaotic")
             ->check(dw::cli::in(kFractionRange));
+        return cmd;
     }
-    int run() {
+    int run() override {
         const auto r = regimes_of_study(dir, o, dw::Shutdown::instance().token());
         std::cout << dw::read_file(r.markdown_path, "regimes") << "wrote " << r.markdown_path << ", " << r.csv_path
                   << " and " << r.png_path << "\n";
@@ -143,14 +142,14 @@ struct RegimesCommand {
     }
 };
 
-struct TrainCommand {
+struct TrainCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     TrainOptions to;
     int members = kDefaultDeepSetsMembers;
     std::vector<std::string> data;
     std::string model_out, baseline_path;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand("train", "train one model on flight folders / recordings (split by leg)");
         cmd->add_option("--kind", to.kind, "naive_linear, learnt_linear or deep_sets")->required();
         cmd->add_option("--data", data, "flight folders or .mcap recordings")->required();
@@ -165,8 +164,9 @@ struct TrainCommand {
         cmd->add_option(
             "--baseline", baseline_path,
             "deep_sets only: a saved sum model (learnt_linear) to learn the residual on, as the study does");
+        return cmd;
     }
-    int run() {
+    int run() override {
         dw::require_writable_path(model_out, "--out");
         to.stop = dw::Shutdown::instance().token();
         Dataset d = load_all(data);
@@ -193,14 +193,14 @@ struct TrainCommand {
     }
 };
 
-struct CompareCommand {
+struct CompareCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     std::vector<std::string> models, data;
     std::string out_dir;
     ArenaOptions arena;
     double intensity = NAN;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand(
             "compare", "compare models on the held-out legs (leg % 5 == 0) of flights: Table 1 metric and RMSE");
         cmd->add_option("--models", models, "model files (.json), or a physics configuration (.yaml) for the simulator")
@@ -214,8 +214,9 @@ struct CompareCommand {
                         "turbulence of the first physics .yaml among --models, whose vehicle classes also give "
                         "the floors of flights where someone is always near; else 0)")
             ->check(dw::cli::in(dw::physics::kTurbulenceIntensityRange));
+        return cmd;
     }
-    int run() {
+    int run() override {
         dw::require_output_dir(out_dir, "--out");
         const auto ms = load_models(models);
         const Dataset all = load_all(data);
@@ -234,12 +235,12 @@ struct CompareCommand {
     }
 };
 
-struct RealCommand {
+struct RealCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     RealOptions ro;
     std::string physics_path;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand(
             "real",
             "recorded flights without legs (e.g. dw-import's): train every model, compare with the physics "
@@ -255,10 +256,11 @@ struct RealCommand {
         cmd->add_option("--threads", ro.threads, kThreadsHelp)->check(dw::cli::in(kThreadsRange));
         cmd->add_option("--members", ro.members, kMembersHelp)->check(dw::cli::in(kMembersRange));
         cmd->add_option("--seed", ro.seed, "seed of the training")->check(dw::cli::in(dw::kSeedRange));
+        return cmd;
     }
-    int run() {
+    int run() override {
         dw::require_output_dir(ro.out_dir, "--out");
-        ro.physics = physics_from(physics_path);
+        ro.physics = dw::physics::physics_or_defaults(physics_path);
         ro.progress = say;
         ro.stop = dw::Shutdown::instance().token();
         const auto r = run_real(ro);
@@ -268,13 +270,13 @@ struct RealCommand {
     }
 };
 
-struct MapCommand {
+struct MapCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     MapRequest mr;
     std::vector<std::string> models, data;
     std::string axis = "f_d", png = "map.png", line;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd =
             app.add_subcommand("map", "draw force maps (observed vs models, one colour scale) and a line plot along E");
         cmd->add_option("--models", models, "model files (.json) or physics configurations (.yaml)")->required();
@@ -286,8 +288,9 @@ struct MapCommand {
         cmd->add_option("--data", data, "recorded flight of this formation: drawn as 'observed'");
         cmd->add_option("--out", png, "the map (PNG)");
         cmd->add_option("--line", line, "the line plot along E through the stand (PNG; default: <out>_line.png)");
+        return cmd;
     }
-    int run() {
+    int run() override {
         mr.axis = dw::physics::axis_index(axis);
         if (mr.axis < 0) throw dw::InputError("--axis: '" + axis + "' (expected " + dw::flight::axis_list() + ")");
         (void)dw::physics::make_formation(mr.formation);  // validates the name
@@ -303,11 +306,13 @@ struct MapCommand {
     }
 };
 
-struct OnlineCommand {
+struct OnlineCommand final : dw::cli::Command {
+    explicit OnlineCommand(const dw::dds::ProcessCli& c) : cli(c) {}
+    const dw::dds::ProcessCli& cli;
     CLI::App* cmd = nullptr;
     NodeOptions no;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand("run", "online: mocap/frame in, predictor/wrench out at the mocap rate");
         cmd->add_option("--model", no.model_path,
                         "model file (.json) or physics configuration (.yaml); swapped in when it changes")
@@ -320,8 +325,9 @@ struct OnlineCommand {
         cmd->add_option("--noise", no.noise_path,
                         "physics configuration whose noise model (the sufferer's class floor, the turbulence) gives "
                         "each prediction's 95 % interval on f_d, for a learnt model (a physics model uses its own)");
+        return cmd;
     }
-    int run(const dw::dds::ProcessCli& cli) {
+    int run() override {
         dw::dds::Participant participant(cli.dds(), "predictor", cli.clock());
         dw::dds::Heartbeat heartbeat(participant);
         dw::SystemClock clock;
@@ -343,25 +349,12 @@ int run(int argc, char** argv) {
     StudyCommand study;
     RegimesCommand regimes;
     TrainCommand train;
-    CompareCommand compare_cmd;
+    CompareCommand compare;
     RealCommand real;
     MapCommand map;
-    OnlineCommand online;
-    study.add(app);
-    regimes.add(app);
-    train.add(app);
-    compare_cmd.add(app);
-    real.add(app);
-    map.add(app);
-    online.add(app);
-    cli.parse(argc, argv);
-    if (study.cmd->parsed()) return study.run();
-    if (regimes.cmd->parsed()) return regimes.run();
-    if (train.cmd->parsed()) return train.run();
-    if (compare_cmd.cmd->parsed()) return compare_cmd.run();
-    if (real.cmd->parsed()) return real.run();
-    if (map.cmd->parsed()) return map.run();
-    return online.run(cli);
+    OnlineCommand online(cli);
+    return dw::cli::run_commands(app, {&study, &regimes, &train, &compare, &real, &map, &online},
+                                 [&] { cli.parse(argc, argv); });
 }
 
 }  // namespace

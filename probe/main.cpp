@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "dds/process_cli.hpp"
+#include "core/command.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
 #include "core/names.hpp"
@@ -42,14 +43,31 @@ struct TopicArgs {
     }
 };
 
-struct PubCommand {
+// What every dw-probe command is given: the DDS settings and its name in heartbeats.
+struct ProbeTool : dw::cli::Command {
+    ProbeTool(const dw::dds::ProcessCli& c, const std::string& n) : cli(c), name(n) {}
+    const dw::dds::ProcessCli& cli;
+    const std::string& name;
     CLI::App* sub = nullptr;
+};
+
+// The probe on the lab's DDS: its participant, its heartbeat saying it runs.
+struct OnDds {
+    OnDds(const ProbeTool& t) : participant(t.cli.dds(), t.name, t.cli.clock()), heartbeat(participant) {
+        heartbeat.set_state(dw::msg::PROC_RUNNING);
+    }
+    dw::dds::Participant participant;
+    dw::dds::Heartbeat heartbeat;
+};
+
+struct PubCommand final : ProbeTool {
+    using ProbeTool::ProbeTool;
     TopicArgs topics;
     dw::probe::PubOptions options;
     double linger_s = 0.0;
     double wait_timeout_s = 10.0;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("pub", "publish deterministic samples on lab topics");
         topics.add(sub);
         sub->add_option("--count", options.count, "samples per topic")->check(dw::cli::in({1, 1e8}));
@@ -62,27 +80,27 @@ struct PubCommand {
         sub->add_option("--linger", linger_s, "seconds to stay after publishing (latched topics), -1 = until stopped")
             ->check(dw::cli::in({-1, dw::kTimeoutRange.hi, "s"}));
         sub->add_flag("--quiet", options.quiet, "do not print each sample");
+        return sub;
     }
-    void check(const std::string& ns) {
-        options.topics = dw::dds::select_topics(topics.topics, ns);
+    int run() override {
+        options.topics = dw::dds::select_topics(topics.topics, cli.dds().ns);
         options.qos = qos_overrides(topics.reliability, topics.durability);
-    }
-    int run(dw::dds::Participant& participant) {
+        OnDds dds(*this);
         options.wait_timeout = dw::to_millis(wait_timeout_s);
         options.linger = dw::to_millis(linger_s);
         options.stop = dw::Shutdown::instance().token();
-        return dw::probe::run_pub(participant, options, std::cout) ? 0 : dw::kExitRuntime;
+        return dw::probe::run_pub(dds.participant, options, std::cout) ? 0 : dw::kExitRuntime;
     }
 };
 
-struct EchoCommand {
-    CLI::App* sub = nullptr;
+struct EchoCommand final : ProbeTool {
+    using ProbeTool::ProbeTool;
     TopicArgs topics;
     dw::probe::EchoOptions options;
     double timeout_s = 0.0;
     std::string summary_path;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("echo", "print samples of lab topics and check their content");
         topics.add(sub);
         sub->add_option("--expect", options.expect, "end after this many intact samples per topic (0 = until stopped)")
@@ -94,16 +112,16 @@ struct EchoCommand {
             ->check(dw::cli::in(dw::kTimeoutRange));
         sub->add_option("--summary", summary_path, "write a JSON summary here");
         sub->add_flag("--quiet", options.quiet, "print only the summary table");
+        return sub;
     }
-    void check(const std::string& ns) {
-        options.topics = dw::dds::select_topics(topics.topics, ns);
+    int run() override {
+        options.topics = dw::dds::select_topics(topics.topics, cli.dds().ns);
         options.qos = qos_overrides(topics.reliability, topics.durability);
         if (sub->count("--summary")) dw::require_writable_path(summary_path, "--summary");
-    }
-    int run(dw::dds::Participant& participant) {
+        OnDds dds(*this);
         options.timeout = dw::to_millis(timeout_s);
         options.stop = dw::Shutdown::instance().token();
-        const auto report = dw::probe::run_echo(participant, options, std::cout);
+        const auto report = dw::probe::run_echo(dds.participant, options, std::cout);
         dw::probe::print_table(report, std::cout);
         if (!summary_path.empty()) dw::write_file(summary_path, report.to_json() + "\n");
         if (!report.ok())
@@ -112,31 +130,35 @@ struct EchoCommand {
     }
 };
 
-struct CommandCommand {
-    CLI::App* sub = nullptr;
+struct CommandCommand final : ProbeTool {
+    using ProbeTool::ProbeTool;
     dw::probe::CommandOptions options;
     std::string kind;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         const std::string kinds = dw::log::alternatives(dw::dds::command_names());
         sub = app.add_subcommand("command", "send the experiment a command as the operator: " + kinds);
         sub->add_option("kind", kind, kinds)->required();
         sub->add_option("--reason", options.reason, "why (in the planner's log and the experiment state)");
         sub->add_option("--to", options.to, "the process that must hear it (default planner)");
+        return sub;
     }
-    void check() {
+    int run() override {
         const auto k = dw::dds::command_named(kind);
         if (!k) throw dw::InputError("command: " + dw::unknown_name_problem("kind", kind, dw::dds::command_names()));
         options.kind = *k;
+        OnDds dds(*this);
+        dw::probe::send_command(dds.participant, options, std::cout);
+        return 0;
     }
 };
 
-struct HostileCommand {
-    CLI::App* sub = nullptr;
+struct HostileCommand final : ProbeTool {
+    using ProbeTool::ProbeTool;
     std::vector<std::string> topics;
     dw::probe::HostileOptions options;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         sub = app.add_subcommand("hostile",
                                  "test tool: publish malformed samples on lab topics (bad encapsulation, truncated; "
                                  "absurd words on the sensor topics that command nothing)");
@@ -151,23 +173,30 @@ struct HostileCommand {
                         "PX4 namespaces (px4_1,...) whose output topics (vehicle_odometry, vehicle_status, "
                         "vehicle_command_ack; v1.15) get the same")
             ->delimiter(',');
+        return sub;
     }
-    int run(const dw::dds::DdsConfig& cfg) {
-        for (const auto& t : dw::dds::select_topics(topics, cfg.ns)) options.topics.push_back(t);
+    int run() override {
+        for (const auto& t : dw::dds::select_topics(topics, cli.dds().ns)) options.topics.push_back(t);
         options.stop = dw::Shutdown::instance().token();
-        dw::probe::run_hostile(cfg, options, std::cout);
+        dw::probe::run_hostile(cli.dds(), options, std::cout);
         return 0;
     }
 };
 
 // `dw-probe list`: every lab topic with its type and QoS.
-int list_topics(const std::string& ns) {
-    dw::dds::topics::for_each([&](const auto& spec) {
-        std::cout << "rt/" << ns << "/" << spec.suffix << "  " << spec.type_name << "  " << dw::dds::to_string(spec.qos)
-                  << "  " << spec.description << "\n";
-    });
-    return 0;
-}
+struct ListCommand final : ProbeTool {
+    using ProbeTool::ProbeTool;
+    CLI::App* add(CLI::App& app) override {
+        return sub = app.add_subcommand("list", "list every lab topic with its type and QoS");
+    }
+    int run() override {
+        dw::dds::topics::for_each([&](const auto& spec) {
+            std::cout << "rt/" << cli.dds().ns << "/" << spec.suffix << "  " << spec.type_name << "  "
+                      << dw::dds::to_string(spec.qos) << "  " << spec.description << "\n";
+        });
+        return 0;
+    }
+};
 
 int run(int argc, char** argv) {
     dw::dds::ProcessCli cli("dw-probe: list the lab's DDS topics, publish test samples, echo and check them");
@@ -175,33 +204,12 @@ int run(int argc, char** argv) {
     std::string name = "probe-" + std::to_string(::getpid());
     app.add_option("--name", name, "process name in heartbeats");
     app.require_subcommand(1);
-    auto* list = app.add_subcommand("list", "list every lab topic with its type and QoS");
-    PubCommand pub;
-    pub.add(app);
-    EchoCommand echo;
-    echo.add(app);
-    CommandCommand command;
-    command.add(app);
-    HostileCommand hostile;
-    hostile.add(app);
-
-    cli.parse(argc, argv);
-    const dw::dds::DdsConfig& dds_config = cli.dds();
-    if (list->parsed()) return list_topics(dds_config.ns);
-    if (hostile.sub->parsed()) return hostile.run(dds_config);
-    if (command.sub->parsed()) command.check();
-    if (pub.sub->parsed()) pub.check(dds_config.ns);
-    if (echo.sub->parsed()) echo.check(dds_config.ns);
-
-    dw::dds::Participant participant(dds_config, name, cli.clock());
-    dw::dds::Heartbeat heartbeat(participant);
-    heartbeat.set_state(dw::msg::PROC_RUNNING);
-    if (command.sub->parsed()) {
-        dw::probe::send_command(participant, command.options, std::cout);
-        return 0;
-    }
-    if (pub.sub->parsed()) return pub.run(participant);
-    return echo.run(participant);
+    ListCommand list(cli, name);
+    PubCommand pub(cli, name);
+    EchoCommand echo(cli, name);
+    CommandCommand command(cli, name);
+    HostileCommand hostile(cli, name);
+    return dw::cli::run_commands(app, {&list, &pub, &echo, &command, &hostile}, [&] { cli.parse(argc, argv); });
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "core/cli.hpp"
+#include "core/command.hpp"
 #include "core/log.hpp"
 #include "core/names.hpp"
 #include "core/shutdown.hpp"
@@ -114,59 +115,70 @@ void add_fault_options(CLI::App& app, Faults& f, double& origin_above_floor) {
         ->check(dw::cli::in(kTimeJumpEveryRange));
 }
 
+// dw-px4-sim's one command: simulated PX4 vehicles, until stopped.
+struct Px4SimCommand final : dw::cli::Command {
+    explicit Px4SimCommand(dw::dds::ProcessCli& c) : cli(c) {}
+    dw::dds::ProcessCli& cli;
+    std::vector<std::string> names{"v1"};
+    std::string px4_file, physics_file, position_source = dw::px4sim::kPositionSourceNames[0];
+    std::uint16_t natnet_port = 0;
+    Faults faults;
+    double origin_above_floor = 0;
+    bool no_motion_capture = false;
+
+    CLI::App* add(CLI::App& app) override {
+        app.add_option("--vehicles", names, "the plan's vehicles, comma-separated (each a PX4)")->delimiter(',');
+        app.add_option("--px4", px4_file, "the planner's PX4 settings file (version, namespaces, MAV_SYS_IDs, frames)");
+        add_fault_options(app, faults, origin_above_floor);
+        app.add_option("--natnet-port", natnet_port,
+                       "play the motion capture as an emulated NatNet server on 127.0.0.1:PORT for dw-mocap-bridge "
+                       "(0 = publish vehicles/state directly)")
+            ->check(dw::cli::in(dw::natnet::kPortRange));
+        app.add_option("--position-source", position_source,
+                       "where each PX4's estimator gets its position: vision (the lab's vehicle_visual_odometry) or "
+                       "onboard (its own sensors: GPS, SITL's ground truth)");
+        app.add_flag(
+            "--no-motion-capture", no_motion_capture,
+            "play no motion capture at all (neither vehicles/state nor NatNet): the lab's poses come from PX4's "
+            "estimate (dw-mocap-bridge --source px4)");
+        app.add_option("--physics", physics_file,
+                       "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
+        return &app;
+    }
+    int run() override {
+        CLI::App& app = cli.app();
+        const auto source_index = dw::find_name(dw::px4sim::kPositionSourceNames, position_source);
+        if (!source_index)
+            throw dw::InputError("--position-source: " + dw::unknown_name_problem("position source", position_source,
+                                                                                  dw::px4sim::kPositionSourceNames));
+        const auto source = static_cast<dw::px4sim::PositionSource>(*source_index);
+        if (no_motion_capture && natnet_port != 0) throw dw::InputError("--natnet-port: not with --no-motion-capture");
+        const double stand_height_m = dw::physics::physics_or_defaults(physics_file).stand.height_m;
+        const auto options = app.count("--px4") == 0 ? dw::planner::default_px4_options(names)
+                                                     : dw::planner::load_px4_options(px4_file, names);
+        dw::dds::Participant lab(cli.dds(), "px4_sim", cli.clock());
+        dw::dds::Heartbeat heartbeat(lab);  // the planner and dw-lab wait for it (--wait-for px4_sim)
+        if (app.count("--origin-above-floor") > 0) faults.origin_above_floor = origin_above_floor;
+        const auto sims = start_vehicles(lab, cli, options, faults, natnet_port == 0 && !no_motion_capture, source);
+        const auto mocap = natnet_port == 0 ? nullptr : motion_capture(natnet_port, stand_height_m, names, sims);
+        if (mocap) std::cout << "motion capture: emulated NatNet server on 127.0.0.1:" << mocap->port() << std::endl;
+        heartbeat.set_state(dw::msg::PROC_RUNNING);
+        while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
+        for (std::size_t i = 0; i < sims.size(); ++i) {
+            const auto r = sims[i]->report();
+            std::cout << options.vehicles[i].name << ": " << (r.was_armed ? "armed" : "never armed") << ", "
+                      << r.ignored_commands << " commands ignored (another system), " << r.undecodable
+                      << " payloads undecodable\n";
+        }
+        return 0;
+    }
+};
+
 int run(int argc, char** argv) {
     dw::dds::ProcessCli cli(
         "dw-px4-sim: simulated PX4 vehicles (uXRCE-DDS topics, Commander rules) for dw-planner --vehicles px4");
-    CLI::App& app = cli.app();
-    std::vector<std::string> names{"v1"};
-    std::string px4_file;
-    std::uint16_t natnet_port = 0;
-    std::string physics_file;
-    Faults faults;
-    double origin_above_floor = 0;
-    app.add_option("--vehicles", names, "the plan's vehicles, comma-separated (each a PX4)")->delimiter(',');
-    app.add_option("--px4", px4_file, "the planner's PX4 settings file (version, namespaces, MAV_SYS_IDs, frames)");
-    add_fault_options(app, faults, origin_above_floor);
-    app.add_option("--natnet-port", natnet_port,
-                   "play the motion capture as an emulated NatNet server on 127.0.0.1:PORT for dw-mocap-bridge "
-                   "(0 = publish vehicles/state directly)")
-        ->check(dw::cli::in(dw::natnet::kPortRange));
-    std::string position_source = dw::px4sim::kPositionSourceNames[0];
-    app.add_option("--position-source", position_source,
-                   "where each PX4's estimator gets its position: vision (the lab's vehicle_visual_odometry) or "
-                   "onboard (its own sensors: GPS, SITL's ground truth)");
-    bool no_motion_capture = false;
-    app.add_flag("--no-motion-capture", no_motion_capture,
-                 "play no motion capture at all (neither vehicles/state nor NatNet): the lab's poses come from PX4's "
-                 "estimate (dw-mocap-bridge --source px4)");
-    app.add_option("--physics", physics_file,
-                   "physics configuration: the stand's height, where the sufferer's body is (--natnet-port)");
-    cli.parse(argc, argv);
-    const auto source_index = dw::find_name(dw::px4sim::kPositionSourceNames, position_source);
-    if (!source_index)
-        throw dw::InputError("--position-source: " + dw::unknown_name_problem("position source", position_source,
-                                                                              dw::px4sim::kPositionSourceNames));
-    const auto source = static_cast<dw::px4sim::PositionSource>(*source_index);
-    if (no_motion_capture && natnet_port != 0) throw dw::InputError("--natnet-port: not with --no-motion-capture");
-    const double stand_height_m =
-        (physics_file.empty() ? dw::physics::PhysicsConfig{} : dw::physics::load_physics(physics_file)).stand.height_m;
-    const auto options = app.count("--px4") == 0 ? dw::planner::default_px4_options(names)
-                                                 : dw::planner::load_px4_options(px4_file, names);
-    dw::dds::Participant lab(cli.dds(), "px4_sim", cli.clock());
-    dw::dds::Heartbeat heartbeat(lab);  // the planner and dw-lab wait for it (--wait-for px4_sim)
-    if (app.count("--origin-above-floor") > 0) faults.origin_above_floor = origin_above_floor;
-    const auto sims = start_vehicles(lab, cli, options, faults, natnet_port == 0 && !no_motion_capture, source);
-    const auto mocap = natnet_port == 0 ? nullptr : motion_capture(natnet_port, stand_height_m, names, sims);
-    if (mocap) std::cout << "motion capture: emulated NatNet server on 127.0.0.1:" << mocap->port() << std::endl;
-    heartbeat.set_state(dw::msg::PROC_RUNNING);
-    while (!dw::Shutdown::instance().wait_for(std::chrono::seconds(1))) {}
-    for (std::size_t i = 0; i < sims.size(); ++i) {
-        const auto r = sims[i]->report();
-        std::cout << options.vehicles[i].name << ": " << (r.was_armed ? "armed" : "never armed") << ", "
-                  << r.ignored_commands << " commands ignored (another system), " << r.undecodable
-                  << " payloads undecodable\n";
-    }
-    return 0;
+    Px4SimCommand sim(cli);
+    return dw::cli::run_commands(cli.app(), {&sim}, [&] { cli.parse(argc, argv); });
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <iostream>
 #include <optional>
 
+#include "core/command.hpp"
 #include "core/errors.hpp"
 #include "core/files.hpp"
 #include "core/log.hpp"
@@ -18,7 +19,9 @@ namespace {
 
 // ---- one struct per subcommand: its options, how it is declared, what it does --------------------
 
-struct RecordCommand {
+struct RecordCommand final : dw::cli::Command {
+    explicit RecordCommand(const dw::dds::ProcessCli& c) : cli(c) {}
+    const dw::dds::ProcessCli& cli;
     CLI::App* cmd = nullptr;
     dw::recorder::RecordOptions rec;
     std::string compression = "zstd";
@@ -26,7 +29,7 @@ struct RecordCommand {
     std::vector<std::string> attach;
     bool quiet = false, no_fsync = false, no_commands = false;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand("record", "record lab topics (default: all) to an MCAP file");
         cmd->add_option("topics", rec.topics, "topic suffixes (stand/wrench) or full names; default all");
         cmd->add_option("-o,--out", rec.out, "output file (with splitting: <stem>_NNNN.mcap)");
@@ -50,6 +53,7 @@ struct RecordCommand {
                       "never overwrite: write the next free <stem>_NNNN.mcap, and recover in place a file a killed "
                       "recorder left unfinished "
                       "(dw-lab run adds it when it restarts a recorder)");
+        return cmd;
     }
     // The options as the Recorder takes them; throws dw::InputError on a bad --attach or compression.
     void complete(const dw::dds::DdsConfig& dds) {
@@ -67,7 +71,14 @@ struct RecordCommand {
             rec.attachments.emplace_back(a.substr(0, eq), a.substr(eq + 1));
         }
     }
-    int run(dw::dds::Participant& participant) {
+    int run() override {
+        dw::require_writable_path(rec.out, "--out");
+        dw::dds::Participant participant(cli.dds(), "recorder", cli.clock());
+        // The recorder's clock stamps every recorded message: the lab's reference clock.
+        const dw::dds::ClockReference reference(participant);
+        dw::dds::Heartbeat heartbeat(participant);
+        heartbeat.set_state(dw::msg::PROC_RUNNING);
+        complete(cli.dds());
         dw::recorder::Recorder recorder(participant, rec);
         dw::Shutdown::instance().on_user_signal([&] { recorder.toggle("SIGUSR1"); });
         dw::log::info("recording to ", recorder.files().front(), " (", compression, ", flush every ", flush_s, " s)");
@@ -96,15 +107,16 @@ struct RecordCommand {
     }
 };
 
-struct InfoCommand {
+struct InfoCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     std::string file;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand("info", "topics, counts, rates, duration, losses, metadata");
         cmd->add_option("file", file, "MCAP file")->required();
+        return cmd;
     }
-    int run() {
+    int run() override {
         if (!dw::recordings::print_info(file, std::cout)) {
             throw dw::InputError(file + ": damaged (see above); dw-recorder recover rebuilds what is readable");
         }
@@ -112,16 +124,17 @@ struct InfoCommand {
     }
 };
 
-struct RecoverCommand {
+struct RecoverCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     std::string file, out;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand("recover", "rebuild a readable file from a truncated or damaged one");
         cmd->add_option("file", file, "damaged MCAP file")->required();
         cmd->add_option("out", out, "recovered file to write")->required();
+        return cmd;
     }
-    int run() {
+    int run() override {
         dw::require_writable_path(out, "recover output");
         dw::mcap::WriterOptions o;
         const auto r = dw::mcap::recover(file, out, o, dw::Shutdown::instance().token());
@@ -135,12 +148,12 @@ struct RecoverCommand {
     }
 };
 
-struct ExportCommand {
+struct ExportCommand final : dw::cli::Command {
     CLI::App* cmd = nullptr;
     std::string file, flight_dir, csv_dir;
     dw::recordings::ExportOptions ex;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand("export", "export a recording to a flight folder and/or per-topic CSV");
         cmd->add_option("file", file, "MCAP file")->required();
         cmd->add_option("--flight", flight_dir, "flight folder to write (downwash-flight/1)");
@@ -149,8 +162,9 @@ struct ExportCommand {
         cmd->add_flag("--raw-stamps", ex.raw_stamps,
                       "flight: keep each topic's stamps as recorded (default: moved onto the recorder's clock by the "
                       "measured clock offsets)");
+        return cmd;
     }
-    int run() {
+    int run() override {
         // Both outputs are checked before either is written.
         if (cmd->count("--flight")) dw::require_output_dir(flight_dir, "--flight");
         if (cmd->count("--csv")) dw::require_output_dir(csv_dir, "--csv");
@@ -172,12 +186,14 @@ struct ExportCommand {
     }
 };
 
-struct ReplayCommand {
+struct ReplayCommand final : dw::cli::Command {
+    explicit ReplayCommand(const dw::dds::ProcessCli& c) : cli(c) {}
+    const dw::dds::ProcessCli& cli;
     CLI::App* cmd = nullptr;
     std::string file;
     dw::recorder::ReplayOptions rp;
 
-    void add(CLI::App& app) {
+    CLI::App* add(CLI::App& app) override {
         cmd = app.add_subcommand("replay", "publish a recording back on DDS with its original timing");
         cmd->add_option("file", file, "MCAP file")->required();
         cmd->add_option("topics", rp.topics, "topic suffixes to replay; default all");
@@ -186,8 +202,12 @@ struct ReplayCommand {
             ->check(dw::cli::in(dw::dds::kReadersRange));
         cmd->add_flag("--commands", rp.commands,
                       "replay command topics too (setpoints, experiment commands): vehicles listening will move");
+        return cmd;
     }
-    int run(dw::dds::Participant& participant) {
+    int run() override {
+        dw::dds::Participant participant(cli.dds(), "replay", cli.clock());
+        dw::dds::Heartbeat heartbeat(participant);
+        heartbeat.set_state(dw::msg::PROC_RUNNING);
         rp.progress = [](double done) {
             std::fprintf(stderr, "\rdw-recorder: replaying %3d %%", static_cast<int>(done * 100));
         };
@@ -209,32 +229,12 @@ int run(int argc, char** argv) {
         "dw-recorder: record every lab topic to MCAP; inspect, recover, export and replay recordings");
     CLI::App& app = cli.app();
     app.require_subcommand(1);
-    RecordCommand record;
+    RecordCommand record(cli);
     InfoCommand info;
     RecoverCommand recover;
     ExportCommand exp;
-    ReplayCommand replay;
-    record.add(app);
-    info.add(app);
-    recover.add(app);
-    exp.add(app);
-    replay.add(app);
-    cli.parse(argc, argv);
-    if (info.cmd->parsed()) return info.run();
-    if (recover.cmd->parsed()) return recover.run();
-    if (exp.cmd->parsed()) return exp.run();
-
-    const bool recording = record.cmd->parsed();
-    if (recording) dw::require_writable_path(record.rec.out, "--out");
-    dw::dds::Participant participant(cli.dds(), recording ? "recorder" : "replay", cli.clock());
-    // The recorder's clock stamps every recorded message: the lab's reference clock.
-    std::optional<dw::dds::ClockReference> reference;
-    if (recording) reference.emplace(participant);
-    dw::dds::Heartbeat heartbeat(participant);
-    heartbeat.set_state(dw::msg::PROC_RUNNING);
-    if (!recording) return replay.run(participant);
-    record.complete(cli.dds());
-    return record.run(participant);
+    ReplayCommand replay(cli);
+    return dw::cli::run_commands(app, {&record, &info, &recover, &exp, &replay}, [&] { cli.parse(argc, argv); });
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // Unit tests of the core library's pieces that other tests do not reach on their own.
 #include <random>
+#include <regex>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +13,9 @@
 #include <vector>
 
 #include "core/clock.hpp"
+#include "core/cli.hpp"
+#include "core/command.hpp"
+#include "core/files.hpp"
 #include "core/bounded_map.hpp"
 #include "core/errors.hpp"
 #include "core/parallel.hpp"
@@ -177,4 +181,57 @@ TEST(StampGate, ALoneStrayIsRefusedAndAStreamThatMovedIsFollowed) {
     EXPECT_TRUE(g.accept(5 * s + dw::kStampsToFollow * 6 * ms));
     EXPECT_FALSE(g.accept(100 * s));  // the old time is now the stray
     EXPECT_EQ(g.strays(), 1u + 20u + (dw::kStampsToFollow - 1) + 1u);
+}
+
+// Issue 73: one command pattern. A tool is its commands: the one the line chose runs (a
+// subcommand given, else the main command), with its own options bound; and every tool's main.cpp
+// is written that way.
+namespace {
+struct Counting final : dw::cli::Command {
+    explicit Counting(const char* n) : name(n) {}
+    const char* name;  // nullptr: the main command, on the app itself
+    int value = 0, runs = 0;
+    CLI::App* add(CLI::App& app) override {
+        CLI::App* where = name ? app.add_subcommand(name, "a command") : &app;
+        where->add_option(name ? "--value" : "--main-value", value, "a number")->check(dw::cli::in({0, 100}));
+        return where;
+    }
+    int run() override { return ++runs, value; }
+};
+int run_line(std::vector<dw::cli::Command*> commands, std::vector<std::string> line) {
+    CLI::App app{"a tool"};
+    std::vector<char*> argv{const_cast<char*>("tool")};
+    for (auto& w : line) argv.push_back(w.data());
+    return dw::cli::run_commands(app, commands,
+                                 [&] { dw::cli::parse(app, static_cast<int>(argv.size()), argv.data()); });
+}
+}  // namespace
+
+TEST(Commands, TheChosenCommandRunsElseTheMainOne) {
+    Counting main(nullptr), a("a"), b("b");
+    EXPECT_EQ(run_line({&main, &a, &b}, {"b", "--value", "7"}), 7);
+    EXPECT_EQ(b.runs, 1);
+    EXPECT_EQ(a.runs + main.runs, 0);
+    EXPECT_EQ(run_line({&main, &a, &b}, {"--main-value", "3"}), 3);
+    EXPECT_EQ(main.runs, 1);
+    EXPECT_EQ(a.runs, 0);
+    Counting c("c"), d("d");
+    EXPECT_THROW(run_line({&c, &d}, {}), std::logic_error) << "no command chosen and no main command";
+    EXPECT_THROW(run_line({&c, &d}, {"d", "--value", "500"}), dw::InputError) << "its options are checked";
+    EXPECT_EQ(d.runs, 0);
+}
+
+TEST(Commands, EveryToolsMainIsItsCommands) {
+    namespace fs = std::filesystem;
+    int tools = 0;
+    for (const auto& top : fs::directory_iterator(DW_SOURCE_DIR)) {
+        const fs::path main = top.path() / "main.cpp";
+        if (!top.is_directory() || !fs::exists(main)) continue;
+        ++tools;
+        const std::string text = dw::read_file(main.string());
+        EXPECT_NE(text.find("dw::cli::run_commands("), std::string::npos) << main << " does not run its commands";
+        EXPECT_FALSE(std::regex_search(text, std::regex(R"(\w+\.\w+->parsed\(\)|got_subcommand)")))
+            << main << " chooses among its commands itself";
+    }
+    EXPECT_GE(tools, 11);
 }

@@ -12,8 +12,8 @@ namespace dw::test {
 
 // "format: ...\neffects:\n  <effect>:\n    enabled: true\n    <key>: <value>\n"
 inline std::string one_effect_yaml(const std::string& effect, const std::string& key, double value) {
-    return log::cat("format: downwash-physics/1\neffects:\n  ", effect, ":\n    enabled: true\n    ", key, ": ",
-                    value, "\n");
+    return log::cat("format: downwash-physics/1\neffects:\n  ", effect, ":\n    enabled: true\n    ", key, ": ", value,
+                    "\n");
 }
 
 // The toys' flight: one neighbour, 12 legs, seed 5; and dw-sim fly's options for the same.
