@@ -46,7 +46,7 @@ inline constexpr double kDivergence_m = 100.0;
 struct SimResult {
     flight::Flight flight;
     std::vector<double> truth_t;  // simulation time (= mocap clock) [s]
-    std::vector<Wrench> truth;    // the true wrench on the sufferer, before the stand
+    RecordedWrench truth;         // the true wrench on the sufferer, before the stand
 };
 
 // Throws dw::InputError when the configuration makes the physics produce a non-finite wrench or

@@ -19,10 +19,16 @@ Vec3 RecordingChain::position_error_m() const {
     return out;
 }
 
+namespace {
+void add_to(Wrench6& w, const Wrench6& x, double scale = 1.0) {
+    for (std::size_t a = 0; a < w.size(); ++a) w[a] += scale * x[a];
+}
+}  // namespace
+
 Wrench6 RecordingChain::sufferer_force(const SuffererState& s) const {
-    Wrench out{Wrench::Zero()};
-    for (const auto* t : at(Stage::sufferer)) out += to_wrench(t->sufferer_force(effects_, s));
-    return to_wrench6(out);
+    Wrench6 out{};
+    for (const auto* t : at(Stage::sufferer)) add_to(out, t->sufferer_force(effects_, s));
+    return out;
 }
 
 SuffererState sufferer_state(const PhysicsConfig& c, const VehicleParams& v, const Vec3& p, const Vec3& velocity) {
@@ -67,8 +73,7 @@ Wrench6 RecordingChain::SensorStream::read(double t, const Wrench6& x) {
 
 Samples RecordingChain::record(ChainInput in, Sampler& sampler) const {
     if (in.sufferer && acts_on_sufferer())
-        for (std::size_t i = 0; i < in.force.size(); ++i)
-            in.force[i] = to_wrench6(to_wrench(in.force[i]) + to_wrench(sufferer_force(in.sufferer(i))));
+        for (std::size_t i = 0; i < in.force.size(); ++i) add_to(in.force[i], sufferer_force(in.sufferer(i)));
     if (in.felt) in.felt(in.force);
     sensor(in.t, in.force);
     Samples s = sampler.sample(in.t, in.force, clock_delay_s());
@@ -85,10 +90,9 @@ void RecordingChain::tare(Samples& s, double tare_s) const {
     std::size_t n = 0;
     while (n < s.stamps.size() && s.stamps[n] < s.stamps.front() + tare_s) ++n;
     if (n == 0) return;
-    Wrench zero = Wrench::Zero();
-    for (std::size_t i = 0; i < n; ++i) zero += to_wrench(s.w[i]);
-    zero /= static_cast<double>(n);
-    for (auto& w : s.w) w = to_wrench6(to_wrench(w) - zero);
+    Wrench6 zero{};
+    for (std::size_t i = 0; i < n; ++i) add_to(zero, s.w[i], 1.0 / static_cast<double>(n));
+    for (auto& w : s.w) add_to(w, zero, -1.0);
 }
 
 Wrench6 RecordingChain::Live::read(double t, const Wrench6& x) {
