@@ -47,11 +47,17 @@ struct Out {
         u32(static_cast<std::uint32_t>(v.size()));
         s += v;
     }
-    void map(const std::map<std::string, std::string>& m) {
+    void field(const std::string& v) { str(v); }
+    void field(std::uint16_t v) { u16(v); }
+    void field(std::uint64_t v) { u64(v); }
+    // A map: its byte length, then each key and value (Map<string, string> of metadata, Map<uint16,
+    // uint64> of a chunk index's offsets and the statistics' channel counts).
+    template <class K, class V>
+    void map(const std::map<K, V>& m) {
         Out body;
         for (const auto& [k, v] : m) {
-            body.str(k);
-            body.str(v);
+            body.field(k);
+            body.field(v);
         }
         u32(static_cast<std::uint32_t>(body.s.size()));
         s += body.s;

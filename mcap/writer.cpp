@@ -45,13 +45,7 @@ struct Writer::ChunkIndexEntry {
         o.u64(end_time);
         o.u64(chunk_offset);
         o.u64(chunk_length);
-        Out offsets;
-        for (const auto& [ch, off] : index_offsets) {
-            offsets.u16(ch);
-            offsets.u64(off);
-        }
-        o.u32(static_cast<std::uint32_t>(offsets.s.size()));
-        o.s += offsets.s;
+        o.map(index_offsets);
         o.u64(index_length);
         o.str(compression);
         o.u64(compressed_size);
@@ -313,13 +307,7 @@ std::string Writer::statistics() const {
     o.u32(static_cast<std::uint32_t>(chunk_indexes_.size()));
     o.u64(message_count_ ? first_time_ : 0);
     o.u64(message_count_ ? last_time_ : 0);
-    Out counts;
-    for (const auto& [ch, n] : channel_counts_) {
-        counts.u16(ch);
-        counts.u64(n);
-    }
-    o.u32(static_cast<std::uint32_t>(counts.s.size()));
-    o.s += counts.s;
+    o.map(channel_counts_);
     return o.s;
 }
 
