@@ -77,7 +77,7 @@ Samples RecordingChain::record(ChainInput in, Sampler& sampler) const {
     if (in.felt) in.felt(in.force);
     sensor(in.t, in.force);
     Samples s = sampler.sample(in.t, in.force, clock_delay_s());
-    tare(s, in.tare_s);
+    sampler.tare(s, in.tare_s);
     for (std::size_t i = 0; i < s.w.size(); ++i) {
         calibration(s.w[i], in.recorded ? (*in.recorded)[i] : s.w[i]);
         if (!in.moments_measured) std::fill(s.w[i].begin() + 3, s.w[i].end(), 0.0);
@@ -86,9 +86,14 @@ Samples RecordingChain::record(ChainInput in, Sampler& sampler) const {
     return s;
 }
 
-void RecordingChain::tare(Samples& s, double tare_s) const {
+std::size_t tare_count(const std::vector<double>& t, double tare_s) {
     std::size_t n = 0;
-    while (n < s.stamps.size() && s.stamps[n] < s.stamps.front() + tare_s) ++n;
+    while (n < t.size() && t[n] < t.front() + tare_s) ++n;
+    return n;
+}
+
+void Sampler::tare(Samples& s, double tare_s) const {
+    const std::size_t n = tare_count(s.stamps, tare_s);
     if (n == 0) return;
     Wrench6 zero{};
     for (std::size_t i = 0; i < n; ++i) add_to(zero, s.w[i], 1.0 / static_cast<double>(n));

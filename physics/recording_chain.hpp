@@ -32,6 +32,9 @@ public:
     // The felt series on the grid t (s, the poses' clock), sampled and stamped on the recording's
     // clock, which runs clock_delay_s late.
     virtual Samples sample(const std::vector<double>& t, const RecordedWrench& felt, double clock_delay_s) = 0;
+    // The tare stage: the samples zeroed by their mean over their first tare_s (none given 0). An
+    // instrument that zeroes otherwise says how (the stand's chips: their counts, as its agent does).
+    virtual void tare(Samples& s, double tare_s) const;
 };
 
 // What RecordingChain::record is given.
@@ -89,7 +92,6 @@ public:
     void recording(const std::vector<double>& stamps, RecordedWrench& w) const;
 
 private:
-    void tare(Samples& s, double tare_s) const;
     const Effects& effects_;
     std::array<std::vector<const EffectType*>, kStages> at_;  // the effects on, by Stage
     const std::vector<const EffectType*>& at(Stage s) const { return at_[static_cast<std::size_t>(s)]; }
@@ -104,6 +106,9 @@ private:
     const RecordingChain& chain_;
     SensorStream sensor_;
 };
+
+// How many of the samples at times t fall in the first tare_s: those a tare averages.
+std::size_t tare_count(const std::vector<double>& t, double tare_s);
 
 // The sufferer as the stage-sufferer effects see it: its vehicle v in configuration c, at p moving
 // at velocity (NED, SI).

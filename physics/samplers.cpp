@@ -17,7 +17,7 @@ Wrench6 interpolate(const std::vector<double>& t, const RecordedWrench& w, doubl
 
 namespace {
 
-using Counts = Eigen::Matrix<double, kCells, 1>;
+using Counts = ChipSampler::Counts;
 
 struct Chip {
     double period, phase, offset;
@@ -26,21 +26,20 @@ struct Chip {
 };
 
 // The frames: when chip 0 converts, every chip's latest counts (none until each has converted).
-Samples frames(const std::array<Chip, kCells>& chips, const StandModel& stand, double counts_per_newton,
-               double clock_delay_s) {
+std::vector<Counts> frames(const std::array<Chip, kCells>& chips, std::vector<double>& t) {
     std::array<std::size_t, kCells> latest{};
-    Samples out;
-    for (const double t : chips[0].t) {
+    std::vector<Counts> out;
+    for (const double t0 : chips[0].t) {
         Counts counts;
         bool complete = true;
         for (std::size_t ci = 0; ci < kCells; ++ci) {
-            while (latest[ci] + 1 < chips[ci].t.size() && chips[ci].t[latest[ci] + 1] <= t) ++latest[ci];
-            if (chips[ci].t.empty() || chips[ci].t[latest[ci]] > t) complete = false;
+            while (latest[ci] + 1 < chips[ci].t.size() && chips[ci].t[latest[ci] + 1] <= t0) ++latest[ci];
+            if (chips[ci].t.empty() || chips[ci].t[latest[ci]] > t0) complete = false;
             else counts[static_cast<Eigen::Index>(ci)] = chips[ci].counts[latest[ci]];
         }
         if (!complete) continue;
-        out.stamps.push_back(t + clock_delay_s);
-        out.w.push_back(to_wrench6(stand.cells_to_wrench() * (counts / counts_per_newton)));
+        t.push_back(t0);
+        out.push_back(counts);
     }
     return out;
 }
@@ -61,7 +60,23 @@ Samples ChipSampler::sample(const std::vector<double>& t, const RecordedWrench& 
             chip.counts.push_back(StandModel::to_counts(force, chip.offset, p_.counts_per_newton));
         }
     }
-    return frames(chips, stand_, p_.counts_per_newton, clock_delay_s);
+    std::vector<double> at;
+    counts_ = frames(chips, at);
+    Samples out;
+    for (std::size_t i = 0; i < at.size(); ++i) {
+        out.stamps.push_back(at[i] + clock_delay_s);
+        out.w.push_back(to_wrench6(stand_.cells_to_wrench() * (counts_[i] / p_.counts_per_newton)));
+    }
+    return out;
+}
+
+void ChipSampler::tare(Samples& s, double tare_s) const {
+    const std::size_t n = tare_count(s.stamps, tare_s);
+    Counts zero = Counts::Zero();
+    for (std::size_t i = 0; i < n; ++i) zero += counts_[i];
+    zero /= static_cast<double>(std::max<std::size_t>(n, 1));
+    for (std::size_t i = 0; i < s.w.size(); ++i)
+        s.w[i] = to_wrench6(stand_.cells_to_wrench() * ((counts_[i] - zero) / p_.counts_per_newton));
 }
 
 Samples RateSampler::sample(const std::vector<double>& t, const RecordedWrench& felt, double clock_delay_s) {

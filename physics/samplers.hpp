@@ -24,11 +24,16 @@ class ChipSampler final : public Sampler {
 public:
     ChipSampler(const StandParams& p, Rng& rng) : p_(p), stand_(p), rng_(rng) {}
     Samples sample(const std::vector<double>& t, const RecordedWrench& felt, double clock_delay_s) override;
+    // As the stand agent tares: the mean counts of the first tare_s subtracted from every frame's.
+    void tare(Samples& s, double tare_s) const override;
+
+    using Counts = Eigen::Matrix<double, kCells, 1>;
 
 private:
     const StandParams& p_;
     StandModel stand_;
     Rng& rng_;
+    std::vector<Counts> counts_;  // the last samples' frames
 };
 
 // A flying sufferer's residual: the felt wrench every 1/rate_hz, the stand's noise on its forces.
