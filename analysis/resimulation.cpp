@@ -195,17 +195,16 @@ std::vector<Wrench6> Resimulation::recorded(const physics::PhysicsConfig& c) con
     };
     // A stand's recording is zeroed over its first tare_s; a residual source is tared by its
     // importer where no neighbour is near, where the physics gives no force either.
-    in.tare_s = residual_ ? 0.0 : c.stand.tare_s;
+    in.tare_s = tare_s(c);
     in.recorded = &measured_;
     physics::StampSampler at_stamps(stamps_, residual_ ? nullptr : &c.stand);
     return physics::RecordingChain(c.effects).record(std::move(in), at_stamps).w;
 }
 
+double Resimulation::tare_s(const physics::PhysicsConfig& c) const { return residual_ ? 0.0 : c.stand.tare_s; }
+
 std::size_t Resimulation::tare_samples(const physics::PhysicsConfig& c) const {
-    if (residual_) return 0;
-    std::size_t n = 0;
-    while (n < stamps_.size() && stamps_[n] < stamps_.front() + c.stand.tare_s) ++n;
-    return n;
+    return physics::tare_count(stamps_, tare_s(c));
 }
 
 std::vector<SampleInfo> describe(const Resimulation& r, const flight::Blocks& blocks, const physics::PhysicsConfig& c) {

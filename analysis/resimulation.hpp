@@ -64,6 +64,8 @@ public:
     // How many of the recording's first samples a stand's tare averages (0: no tare here — a
     // residual source is tared by its importer).
     std::size_t tare_samples(const physics::PhysicsConfig& c) const;
+    // How long a tare the recording had: a stand's tare_s, none for a residual source.
+    double tare_s(const physics::PhysicsConfig& c) const;
 
 private:
     // c's flow part (what the air does) with the sufferer's own parameters; the neighbours' jets in it.

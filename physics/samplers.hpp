@@ -3,7 +3,6 @@
 // Sampler): the load stand's eight chips (the simulator), a flying sufferer's residual at its rate
 // (the simulator), a sampler that matches the chips at a recording's own stamps (the replay), and
 // a recording's own samples (a concealment).
-#include <optional>
 #include <vector>
 
 #include "physics/config.hpp"
