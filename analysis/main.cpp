@@ -268,6 +268,8 @@ struct SessionProofCommand final : ExplainTool {
             ->capture_default_str();
         sub->add_option("--sessions", options.max_sessions, "at most this many sessions (0: every full group)")
             ->check(dw::cli::in({0, 1000}));
+        sub->add_flag("--interleave", options.interleave,
+                      "deal the flights into the sessions in turn (flight k to session k mod sessions), not in order");
         return sub;
     }
     int run() override { return run_recorded_study(options, physics, root, cases, dw::analysis::run_session_proof); }

@@ -103,36 +103,25 @@ FlightFit fit_alone(Member& m, JointFit& jf, std::size_t i, const Effect& e, con
     return r;
 }
 
-// The flights whose fit gives a spread, with their variance: the fit's own and the known natural spread.
-std::vector<std::pair<double, double>> weighted(const RigCandidate& c) {
+// The flights whose fit gives a spread, with their fit's variance.
+std::vector<std::pair<double, double>> seen_estimates(const RigCandidate& c) {
     std::vector<std::pair<double, double>> out;
     for (const auto& f : c.per_flight)
-        if (f.seen()) out.emplace_back(f.value, f.se * f.se + c.known_sd * c.known_sd);
+        if (f.seen()) out.emplace_back(f.value, f.se * f.se);
     return out;
 }
 
-// Cochran's Q of the flights' own values about their inverse-variance mean, and the spread between
-// flights beyond it (DerSimonian-Laird).
-void one_value_test(RigCandidate& c) {
-    const auto v = weighted(c);
-    if (v.size() < 2) return;
-    double sw = 0, swx = 0, sw2 = 0;
-    for (const auto& [x, var] : v) sw += 1 / var, swx += x / var, sw2 += 1 / (var * var);
-    const double mean = swx / sw;
-    for (const auto& [x, var] : v) c.q += (x - mean) * (x - mean) / var;
-    c.dof = static_cast<int>(v.size()) - 1;
-    c.q_limit = chi2_upper(kOneValueLevel, c.dof);
-    c.one_value = c.q <= c.q_limit;
-    c.between_sd = std::sqrt(std::max(0.0, (c.q - c.dof) / (sw - sw2 / sw)) + c.known_sd * c.known_sd);
-}
-
-// The random-effects standard error of the session's value: each flight's variance with the spread
-// between flights added.
-double random_effects_se(const RigCandidate& c) {
-    double s = 0;
-    for (const auto& f : c.per_flight)
-        if (f.seen()) s += 1 / (f.se * f.se + c.between_sd * c.between_sd);
-    return s > 0 ? 1 / std::sqrt(s) : INFINITY;
+// The flights' own values pooled as random effects (the known natural spread counted): the one-value
+// test (Cochran's Q against its limit), the spread between flights, and the session's value and
+// interval. Fewer than two flights seeing it: no test, and the value of the joint fit without an
+// interval.
+void pool_flights(RigCandidate& c, double joint) {
+    const RandomEffects r = random_effects(seen_estimates(c), c.known_sd);
+    c.value = joint, c.lo = -INFINITY, c.hi = INFINITY;
+    if (r.dof < 1) return;
+    c.q = r.q, c.dof = r.dof, c.q_limit = chi2_upper(kOneValueLevel, r.dof), c.one_value = c.q <= c.q_limit;
+    c.between_sd = r.between_sd;
+    c.value = r.mean, c.lo = r.mean - r.half95, c.hi = r.mean + r.half95;
 }
 
 // The axes of a cross-talk for the session: chosen on every flight's residual at once.
@@ -174,10 +163,8 @@ std::vector<double> seen_values(const RigCandidate& c, std::size_t left_out = SI
     return seen.empty() ? all : seen;
 }
 
-// Held out by whole flights: each flight predicted by the fit on the others; their values (the
-// jackknife's replicates) are returned in `values`.
-HeldOut left_out_heldout(Members& m, JointFit& jf, const RigCandidate& c, const ExplainOptions& o,
-                         std::vector<double>& values) {
+// Held out by whole flights: each flight predicted by the fit on the others.
+HeldOut left_out_heldout(Members& m, JointFit& jf, const RigCandidate& c, const ExplainOptions& o) {
     PieceScores s;
     const std::vector<std::size_t> none;
     for (std::size_t j = 0; j < m.size(); ++j) {
@@ -185,7 +172,6 @@ HeldOut left_out_heldout(Members& m, JointFit& jf, const RigCandidate& c, const 
         std::vector<const std::vector<std::size_t>*> rows;
         for (std::size_t i = 0; i < m.size(); ++i) rows.push_back(i == j ? &none : &m[i]->d->on_legs);
         const double v = jf.solve(rows, seen_values(c, j));
-        values.push_back(v);
         const auto& p = jf.at(j).predict({v});
         for (auto r : m[j]->d->on_legs)
             s.add(static_cast<long>(j) * kFlightKey + piece_of(*m[j]->d, m[j]->folds, r), *m[j]->d, m[j]->base.pred, p,
@@ -222,17 +208,11 @@ RigCandidate score_rig(Members& m, const Effect& effect, int round, const Sessio
         c.known_sd = k->second;
     JointFit jf(m, c.effect);
     for (std::size_t i = 0; i < m.size(); ++i) c.per_flight.push_back(fit_alone(*m[i], jf, i, c.effect, o));
-    one_value_test(c);
     std::vector<const std::vector<std::size_t>*> all;
     for (const auto& x : m) all.push_back(&x->d->on_legs);
-    c.value = jf.solve(all, seen_values(c));
-    std::vector<double> left;
-    c.left_out = left_out_heldout(m, jf, c, o, left);
-    std::vector<std::vector<double>> replicates;
-    for (double v : left) replicates.push_back({v});
-    const double half =
-        std::max(t975(static_cast<int>(m.size()) - 1) * jackknife_sd(replicates).front(), kZ95 * random_effects_se(c));
-    c.lo = c.value - half, c.hi = c.value + half;
+    const double joint = jf.solve(all, seen_values(c));
+    c.left_out = left_out_heldout(m, jf, c, o);
+    pool_flights(c, joint);
     c.pooled = pooled_heldout(m, jf, c, o, c.value);
     c.accepted = passes_heldout(c, o) && c.one_value && !holds_neutral(c);
     c.not_one_value = passes_heldout(c, o) && !c.one_value;

@@ -22,22 +22,27 @@ struct Session {
     std::vector<std::string> names;
 };
 
-// The flights with a neighbour, in order, in groups of session_size (a last, smaller group is left out).
+// The flights with a neighbour in groups of session_size: in order, or dealt in turn (flight k to
+// session k mod the number of sessions); flights beyond the last full group are left out.
 std::vector<Session> sessions_of(const SessionProofOptions& o) {
-    std::vector<Session> out(1);
+    std::vector<std::pair<flight::Flight, std::string>> flights;
     for (const auto& path : o.flights) {
         auto f = flight::read_flight(path);
-        if (f.meta.neighbours.empty()) continue;
-        if (out.back().flights.size() == o.session_size) out.emplace_back();
-        out.back().flights.push_back(std::move(f));
-        out.back().names.push_back(fs::path(path).filename().string());
+        if (!f.meta.neighbours.empty()) flights.emplace_back(std::move(f), fs::path(path).filename().string());
     }
-    if (out.back().flights.size() < o.session_size) out.pop_back();
-    if (o.max_sessions > 0 && out.size() > o.max_sessions) out.resize(o.max_sessions);
-    for (auto& s : out) s.name = log::join(s.names, " ");
-    if (out.empty())
+    const std::size_t n = flights.size() / o.session_size;
+    if (n == 0)
         throw InputError(
             log::cat("--flights: fewer than ", o.session_size, " flights with a neighbour: no session of that size"));
+    flights.resize(n * o.session_size);
+    std::vector<Session> out(n);
+    for (std::size_t k = 0; k < flights.size(); ++k) {
+        auto& s = out[o.interleave ? k % n : k / o.session_size];
+        s.flights.push_back(std::move(flights[k].first));
+        s.names.push_back(flights[k].second);
+    }
+    if (o.max_sessions > 0 && out.size() > o.max_sessions) out.resize(o.max_sessions);
+    for (auto& s : out) s.name = log::join(s.names, " ");
     return out;
 }
 
@@ -125,11 +130,12 @@ void prove_session(const Session& s, const fs::path& dir, const SessionProofOpti
     so.explain.physics = o.physics;
     so.explain.stop = o.stop;
     so.flight_effects = false;
-    say(log::cat("session ", s.name, ": explaining it untouched"));
+    say(log::cat("session ", s.name, ": its flights' natural spread, untouched"));
+    so.between_flight_sd = spread_of(explain_session(s.flights, s.names, so));
+    say(log::cat("session ", s.name, ": explaining it untouched, its natural spread known"));
     const auto own = explain_session(s.flights, s.names, so);
     write_session_report(s.flights, own, so, (dir / "untouched").string());
     so.per_flight_physics = own.fitted;  // from here on, on top of the session's own fit
-    so.between_flight_sd = spread_of(own);
     const auto again = explain_session(s.flights, s.names, so);
     write_session_report(s.flights, again, so, (dir / "untouched_on_own_fit").string());
     SessionProofRow null_row{s.name,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -103,6 +104,56 @@ std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replica
         out.push_back(std::sqrt(var * (G - 1) / G));
     }
     return out;
+}
+
+namespace {
+
+using Estimates = std::span<const std::pair<double, double>>;
+
+// The inverse-variance mean of estimates with tau2 added to each variance, and its standard error.
+std::pair<double, double> pooled_mean(Estimates e, double tau2) {
+    double sw = 0, swx = 0;
+    for (const auto& [x, v] : e) sw += 1 / (v + tau2), swx += x / (v + tau2);
+    return {swx / sw, 1 / std::sqrt(sw)};
+}
+
+double cochran_q(Estimates e, double tau2) {
+    const double mean = pooled_mean(e, tau2).first;
+    double q = 0;
+    for (const auto& [x, v] : e) q += (x - mean) * (x - mean) / (v + tau2);
+    return q;
+}
+
+// Paule-Mandel's spread beyond known2: the tau² that brings Q to dof (Q falls as it grows), by bisection.
+constexpr int kSpreadBisections = 60;
+double excess_variance(Estimates e, double known2, int dof) {
+    if (cochran_q(e, known2) <= dof) return 0;
+    double lo = 0, hi = 1;
+    while (cochran_q(e, known2 + hi) > dof) hi *= 2;
+    for (int k = 0; k < kSpreadBisections; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (cochran_q(e, known2 + mid) > dof ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+RandomEffects random_effects(Estimates e, double known_sd) {
+    RandomEffects r;
+    if (e.size() < 2) {
+        r.mean = e.empty() ? 0 : e.front().first;
+        r.se = r.half95 = INFINITY;
+        return r;
+    }
+    const double known2 = known_sd * known_sd;
+    r.dof = static_cast<int>(e.size()) - 1;
+    r.q = cochran_q(e, known2);
+    const double tau2 = known2 + excess_variance(e, known2, r.dof);
+    r.between_sd = std::sqrt(tau2);
+    std::tie(r.mean, r.se) = pooled_mean(e, tau2);
+    r.half95 = t975(r.dof) * r.se;
+    return r;
 }
 
 double median(std::vector<double> v) {

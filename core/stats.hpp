@@ -3,6 +3,7 @@
 // effect better? the predictor's regime map: is Deep Sets better than the sum?), intervals, and
 // the robust summaries the explainer, the calibration and the importer use.
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace dw {
@@ -44,6 +45,18 @@ double chi2_upper(double p, int dof);
 // The spread of a jackknife over its replicates (each with one group left out):
 // sqrt((G - 1) / G * sum (x - mean)²), per parameter.
 std::vector<double> jackknife_sd(const std::vector<std::vector<double>>& replicates);
+
+// Estimates of one quantity pooled as random effects (a meta-analysis of them): each estimate x_i
+// with its variance v_i, the true values differing between estimates by a spread tau.
+struct RandomEffects {
+    double q = 0;             // Cochran's Q about the inverse-variance mean, with the known spread only
+    int dof = 0;              // estimates - 1
+    double between_sd = 0;    // tau: the known spread and Paule-Mandel's beyond it (Q brought to its dof)
+    double mean = 0, se = 0;  // weighed by 1 / (v_i + tau²)
+    double half95 = 0;        // Student's t (dof) × se: Hartung-Knapp's 95 % half-width
+};
+// Fewer than two estimates: dof 0, and the one estimate (or none: 0) with se and half95 infinite.
+RandomEffects random_effects(std::span<const std::pair<double, double>> value_variance, double known_sd);
 
 // The median (the mean of the two middle values for an even count); 0 for none.
 double median(std::vector<double> v);

@@ -122,6 +122,33 @@ TEST(Stats, ChiSquareQuantilesMatchTheTables) {
     EXPECT_EQ(dw::chi2_upper(0.01, 0), 0.0);
 }
 
+// A session's flights pooled as random effects. With equal errors v Paule-Mandel's spread has a
+// closed form, tau² = s² − v (s²: the values' sample variance), and the mean is the plain mean;
+// a known spread wider than the scatter is kept as it is; values that agree add no spread.
+TEST(Stats, RandomEffectsPoolWithPauleMandelsSpreadAndHartungKnappsInterval) {
+    const std::vector<std::pair<double, double>> scattered{{0.9, 0.01}, {1.3, 0.01}, {1.0, 0.01}, {1.5, 0.01}};
+    const auto r = dw::random_effects(scattered, 0.0);
+    const double mean = (0.9 + 1.3 + 1.0 + 1.5) / 4;
+    double s2 = 0;
+    for (const auto& [x, v] : scattered) s2 += (x - mean) * (x - mean) / 3;
+    EXPECT_NEAR(r.mean, mean, 1e-9);
+    EXPECT_NEAR(r.between_sd * r.between_sd, s2 - 0.01, 1e-9);
+    EXPECT_NEAR(r.se, std::sqrt(s2 / 4), 1e-9);
+    EXPECT_NEAR(r.half95, dw::t975(3) * r.se, 1e-12);
+    EXPECT_EQ(r.dof, 3);
+    EXPECT_NEAR(r.q, 3 * s2 / 0.01, 1e-9) << "Cochran's Q with no spread known";
+    const auto known = dw::random_effects(scattered, 0.5);
+    EXPECT_DOUBLE_EQ(known.between_sd, 0.5) << "a known spread wider than the scatter leaves nothing beyond it";
+    EXPECT_LT(known.q, known.dof);
+    const std::vector<std::pair<double, double>> agreeing{{2.0, 0.04}, {2.0, 0.01}};
+    const auto a = dw::random_effects(agreeing, 0.0);
+    EXPECT_EQ(a.between_sd, 0.0);
+    EXPECT_NEAR(a.se, 1 / std::sqrt(1 / 0.04 + 1 / 0.01), 1e-12);
+    const std::vector<std::pair<double, double>> one{{2.0, 0.04}};
+    EXPECT_EQ(dw::random_effects(one, 0.0).dof, 0);
+    EXPECT_TRUE(std::isinf(dw::random_effects(one, 0.0).half95));
+}
+
 // The robust summaries the explainer, the calibration and the importer share (one rule each).
 TEST(Stats, MedianAndTheNoiseOfSuccessiveDifferences) {
     EXPECT_DOUBLE_EQ(dw::median({3, 1, 2}), 2.0);
