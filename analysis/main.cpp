@@ -260,7 +260,8 @@ struct SessionProofCommand final : ExplainTool {
         sub = app.add_subcommand("session-proof",
                                  "group recorded flights into sessions, conceal a rig effect in every flight below "
                                  "what one flight shows, and check the session finds it on top of its own fit");
-        sub->add_option("--flights", options.flights, "flight folders (those with a neighbour are grouped in order)")
+        sub->add_option("--flights", options.flights,
+                        "flight folders (those with a neighbour are grouped into sessions, in order or --interleave)")
             ->required();
         add_recorded_study_options(sub, options, physics, cases, "output folder (session_proof.md)");
         sub->add_option("--session-size", options.session_size, "flights per session")

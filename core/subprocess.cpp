@@ -162,20 +162,39 @@ SpawnOptions sibling_options(const std::vector<std::string>& args, const std::st
 }
 }  // namespace
 
-Sibling::Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness)
-    : name_(args.at(0)), log_file_(log_file), p_(sibling_options(args, log_file, niceness)) {}
+Sibling::Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness,
+                 const std::stop_token& stop)
+    : name_(args.at(0)), log_file_(log_file), p_(sibling_options(args, log_file, niceness)) {
+    on_stop_.emplace(stop, [this] { ask_to_stop(); });
+}
+
+void Sibling::ask_to_stop() {
+    const std::lock_guard lock(m_);
+    if (!asked_ && p_.running()) p_.signal(SIGTERM);
+    asked_ = true;
+}
 
 Sibling::~Sibling() {
-    if (p_.running()) p_.stop(kSiblingStopGrace);
+    on_stop_.reset();  // waits for a callback under way
+    ask_to_stop();
+    p_.wait_for(kSiblingStopGrace);  // still running then: ~Subprocess kills it
+}
+
+bool Sibling::running() {
+    const std::lock_guard lock(m_);
+    return p_.running();
 }
 
 void Sibling::finish(const std::stop_token& stop) {
     std::optional<int> st;
-    while (!(st = p_.wait_for(std::chrono::milliseconds(200)))) {
-        if (stop.stop_requested()) {
-            p_.stop(kSiblingStopGrace);
-            throw Stopped(log::cat("stopped during ", name_));
+    while (true) {
+        {
+            const std::lock_guard lock(m_);
+            st = p_.wait_for(std::chrono::milliseconds(200));
         }
+        // Stopped, it was asked to stop (and ends as asked); the destructor waits for it.
+        if (stop.stop_requested()) throw Stopped(log::cat("stopped during ", name_));
+        if (st) break;
     }
     if (*st != 0) {
         const std::string said = last_line_of(log_file_);

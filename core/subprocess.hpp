@@ -3,6 +3,8 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <functional>
+#include <mutex>
 #include <optional>
 #include <stop_token>
 #include <string>
@@ -58,19 +60,27 @@ void run_sibling(const std::vector<std::string>& args, const std::string& log_fi
 // A sibling lab executable started in the background (this much nicer than its parent); finish()
 // waits for it and fails as run_sibling does. One still running when this ends (its parent
 // stopped or failed) is asked to stop (SIGTERM, then SIGKILL after kSiblingStopGrace), so that
-// it removes its unfinished outputs as any stopped lab program does.
+// it removes its unfinished outputs as any stopped lab program does. Given the parent's stop, it is
+// asked the moment a stop is requested, so its grace runs beside whatever else the parent stops.
 inline constexpr std::chrono::milliseconds kSiblingStopGrace{5000};
 class Sibling {
 public:
-    Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness = 0);
+    Sibling(const std::vector<std::string>& args, const std::string& log_file, int niceness = 0,
+            const std::stop_token& stop = {});
     ~Sibling();
     Sibling(const Sibling&) = delete;
     Sibling& operator=(const Sibling&) = delete;
     void finish(const std::stop_token& stop);
+    bool running();
 
 private:
+    void ask_to_stop();  // SIGTERM once: a second would end it at once, its outputs unremoved
+
     std::string name_, log_file_;
+    std::mutex m_;  // the stop callback's thread and this one's waits
     Subprocess p_;
+    bool asked_ = false;
+    std::optional<std::stop_callback<std::function<void()>>> on_stop_;
 };
 
 }  // namespace dw

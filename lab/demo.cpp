@@ -277,7 +277,7 @@ int run_demo(const DemoOptions& o) {
     std::vector<std::string> study_args{"dw-predictor", "study",      "--out",  (run / "study").string(),
                                         "--physics",    physics_path, "--jobs", std::to_string(o.jobs)};
     if (o.quick) study_args.insert(study_args.end(), {"--legs", "20", "--epochs", "30", "--no-generalisation"});
-    Sibling study(study_args, (run / "logs" / "study.log").string(), kTrainingNiceness);
+    Sibling study(study_args, (run / "logs" / "study.log").string(), kTrainingNiceness, o.stop);
 
     auto viewer = start_viewer(o, run);
     const std::vector<LaunchResult> results = fly_experiments(o, run, lab, physics_path, flights, steps);
