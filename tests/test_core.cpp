@@ -20,7 +20,6 @@
 #include "core/errors.hpp"
 #include "core/parallel.hpp"
 #include "core/stats.hpp"
-#include "core/subprocess.hpp"
 
 using dw::Cores;
 
@@ -262,19 +261,4 @@ TEST(Commands, EveryToolsMainIsItsCommands) {
             << main << " chooses among its commands itself";
     }
     EXPECT_GE(tools, 11);
-}
-
-// A sibling given its parent's stop is asked to stop the moment a stop is requested — not only when
-// the parent gets round to destroying it — so its grace runs beside the rest of the parent's
-// stopping (the demo's training beside its lab). The wait below only keeps a broken build from
-// hanging; it measures nothing.
-TEST(Sibling, IsAskedToStopTheMomentItsParentIs) {
-    dw::test::TempDir d;
-    std::stop_source stop;
-    dw::Sibling emulator({"dw-natnet-emulator", "--port", "0"}, d.file("emulator.log"), 0, stop.get_token());
-    ASSERT_TRUE(emulator.running()) << dw::read_file(d.file("emulator.log"));
-    stop.request_stop();
-    for (int i = 0; i < 3000 && emulator.running(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    EXPECT_FALSE(emulator.running()) << "still running 30 s after the stop request";
-    EXPECT_THROW(emulator.finish(stop.get_token()), dw::Stopped);
 }

@@ -19,6 +19,7 @@
 #include <mutex>
 #include <span>
 #include <sstream>
+#include <stop_token>
 #include <thread>
 #include <nlohmann/json.hpp>
 
@@ -1039,4 +1040,19 @@ TEST(HostileWire, ALabWithASignedButMalformedPermissionsFileSaysWhichFileAndFlie
     for (const char* p : {"stand_agent", "mocap_bridge", "recorder"})
         EXPECT_NE(r.err.find(std::string("stopped ") + p + " (status 0)"), std::string::npos) << p << "\n" << r.err;
     EXPECT_TRUE(processes_with({ns}).empty()) << "a process of the lab outlived it";
+}
+
+// A sibling given its parent's stop is asked to stop the moment a stop is requested — not only when
+// the parent gets round to destroying it — so its grace runs beside the rest of the parent's
+// stopping (the demo's training beside its lab). The wait below only keeps a broken build from
+// hanging; it measures nothing.
+TEST(Sibling, IsAskedToStopTheMomentItsParentIs) {
+    dw::test::TempDir d;
+    std::stop_source stop;
+    dw::Sibling emulator({"dw-natnet-emulator", "--port", "0"}, d.file("emulator.log"), 0, stop.get_token());
+    ASSERT_TRUE(emulator.running()) << dw::read_file(d.file("emulator.log"));
+    stop.request_stop();
+    for (int i = 0; i < 3000 && emulator.running(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    EXPECT_FALSE(emulator.running()) << "still running 30 s after the stop request";
+    EXPECT_THROW(emulator.finish(stop.get_token()), dw::Stopped);
 }
