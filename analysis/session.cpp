@@ -379,6 +379,16 @@ SessionResult explain_session(const std::vector<flight::Flight>& flights, const 
     return R;
 }
 
+std::size_t RigCandidate::flights_to_resolve(double half_width) const {
+    const auto seen = static_cast<double>(
+        std::count_if(per_flight.begin(), per_flight.end(), [](const FlightFit& f) { return f.seen(); }));
+    if (!std::isfinite(resolution()) || seen < 2 || dof < 1) return 0;
+    const double per_flight_sd = resolution() / t975(dof) * std::sqrt(seen);
+    for (std::size_t n = 2; n <= kMaxPlannedFlights; ++n)
+        if (t975(static_cast<int>(n) - 1) * per_flight_sd / std::sqrt(static_cast<double>(n)) <= half_width) return n;
+    return 0;
+}
+
 std::size_t RigCandidate::alone_count() const {
     return static_cast<std::size_t>(
         std::count_if(per_flight.begin(), per_flight.end(), [](const FlightFit& f) { return f.alone_accepted; }));

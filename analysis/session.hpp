@@ -79,7 +79,14 @@ struct RigCandidate {
     std::vector<std::string> family_alike;  // accepted alongside: members of its family the session cannot tell from it
     std::string note;
     std::size_t alone_count() const;
+    // What the session resolves: its interval's half-width; and how many flights like these would
+    // resolve `half_width` (each flight's pooled spread — its error and the spread between flights —
+    // over √n, times Student's t with n − 1 degrees of freedom), 0 where even kMaxPlannedFlights
+    // would not or there is no interval.
+    double resolution() const { return 0.5 * (hi - lo); }
+    std::size_t flights_to_resolve(double half_width) const;
 };
+inline constexpr std::size_t kMaxPlannedFlights = 1000;
 
 struct SessionFlightRow {
     std::string name;

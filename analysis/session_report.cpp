@@ -32,6 +32,12 @@ json heldout_json(const HeldOut& h) {
         {"axis", flight::kAxes[static_cast<std::size_t>(h.best_axis)]}, {"z", number(h.t)}, {"gain", number(h.gain)}};
 }
 
+// Flights like these that would resolve half what the session does (null: none would, or no interval).
+json flights_to_halve(const RigCandidate& c) {
+    const std::size_t n = c.flights_to_resolve(c.resolution() / 2);
+    return n ? json(n) : json(nullptr);
+}
+
 json candidate_json(const RigCandidate& c, const std::vector<std::string>& flights) {
     json per = json::array();
     for (std::size_t i = 0; i < c.per_flight.size(); ++i)
@@ -46,6 +52,8 @@ json candidate_json(const RigCandidate& c, const std::vector<std::string>& fligh
            {"round", c.round},
            {"value", number(c.value)},
            {"interval", {number(c.lo), number(c.hi)}},
+           {"resolution", number(c.resolution())},
+           {"flights_to_halve", flights_to_halve(c)},
            {"accepted", c.accepted},
            {"one_value", {{"q", number(c.q)}, {"limit", number(c.q_limit)}, {"dof", c.dof}, {"passed", c.one_value}}},
            {"known_sd", number(c.known_sd)},
@@ -121,6 +129,25 @@ void md_rig(std::ostringstream& md, const SessionResult& R) {
            << " |\n";
 }
 
+// What the session could have seen: each rig effect's first-round resolution, and the flights a
+// smaller one would take (a null verdict is only as good as this).
+void md_resolution(std::ostringstream& md, const SessionResult& R) {
+    md << "\n## What this session can resolve\n\n"
+       << "A rig effect smaller than its resolution (the 95 % interval's half-width, on top of the base physics) "
+          "would not be seen here. The flights' values differ by their errors and by nature (the spread between "
+          "flights): more flights like these narrow it as t(n - 1) / sqrt(n).\n\n"
+       << "| effect | resolved to ± | spread between flights | flights like these to resolve half that |\n"
+       << "|---|---|---|---|\n";
+    for (const auto& c : R.candidates) {
+        if (c.round != 1) continue;
+        const std::size_t n = c.flights_to_resolve(c.resolution() / 2);
+        const std::string& unit = c.effect.params.front().unit;
+        const std::string u = unit.empty() ? "" : " " + unit;
+        md << "| " << c.effect.name << " | " << fixed(c.resolution(), 4) << u << " | " << fixed(c.between_sd, 4) << u
+           << " | " << (n ? log::cat(n) : log::cat("more than ", kMaxPlannedFlights, " (or no interval)")) << " |\n";
+    }
+}
+
 void md_flights(std::ostringstream& md, const SessionResult& R) {
     md << "\n## Per flight\n\n"
        << "| flight | samples | f_d noise floor (N) | f_d RMS residual, before → with the rig's effects (N) | its own "
@@ -179,6 +206,7 @@ void write_session_report(const std::vector<flight::Flight>& flights, const Sess
     md << "# A session of " << R.flights.size() << " flights explained as one\n\n"
        << "**Verdict:** " << R.verdict << ".\n\n";
     md_rig(md, R);
+    md_resolution(md, R);
     md_flights(md, R);
     write_file((fs::path(dir) / "session.md").string(), md.str());
     for (std::size_t i = 0; i < R.rows.size(); ++i)

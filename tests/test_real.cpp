@@ -589,6 +589,8 @@ TEST(Session, TheSpreadsOfAnEarlierSessionAreReadBackFromItsReport) {
     ASSERT_TRUE(spreads.count("clock_offset"));
     EXPECT_DOUBLE_EQ(spreads.at("clock_offset"), clock->between_sd);
     EXPECT_GT(clock->between_sd, 0.0) << "two clocks 0.08 s apart";
+    EXPECT_NE(dw::read_file(d.file("s") + "/session.md").find("## What this session can resolve"), std::string::npos);
+    EXPECT_NE(dw::read_file(d.file("s") + "/session.json").find("\"flights_to_halve\""), std::string::npos);
     dw::write_file(d.file("bad.json"), R"({"format": "downwash-flight/1"})");
     EXPECT_NE(input_error_of([&] { dw::analysis::spreads_from(d.file("bad.json")); }).find("not a session report"),
               std::string::npos);
@@ -632,4 +634,21 @@ TEST(NoiseShares, TheHeldOutVarianceIsSharedOutAndTurbulenceLeftOutIsAFinding) {
     EXPECT_EQ(dw::analysis::turbulence_line(counted, dw::physics::counted_intensity(o.physics.prediction_noise))
                   .find("Left out"),
               std::string::npos);
+}
+
+// What a session can resolve: its interval's half-width; the flights like these that would resolve
+// a given half-width scale it by t(n - 1) / sqrt(n). Five flights resolving ±0.1 (t(4) 2.776: each
+// flight's pooled spread 0.1 / 2.776 × √5 = 0.0806) resolve ±0.1 themselves, and ±0.05 takes 13
+// (t(12) / √13 = 0.601 ≤ 0.05 / 0.0806 = 0.621 < t(11) / √12 = 0.631).
+TEST(Session, SaysWhatItCanResolveAndHowManyFlightsWouldHalveIt) {
+    dw::analysis::RigCandidate c;
+    c.per_flight.assign(5, dw::analysis::FlightFit{1.0, 0.01, false});
+    c.dof = 4;
+    c.lo = 0.9, c.hi = 1.1;
+    EXPECT_NEAR(c.resolution(), 0.1, 1e-12);
+    EXPECT_EQ(c.flights_to_resolve(0.1 + 1e-9), 5u);
+    EXPECT_EQ(c.flights_to_resolve(0.05), 13u);
+    EXPECT_EQ(c.flights_to_resolve(1e-9), 0u) << "beyond any session a lab flies";
+    c.lo = -INFINITY;
+    EXPECT_EQ(c.flights_to_resolve(0.05), 0u) << "no interval";
 }
