@@ -380,10 +380,9 @@ SessionResult explain_session(const std::vector<flight::Flight>& flights, const 
 }
 
 std::size_t RigCandidate::flights_to_resolve(double half_width) const {
-    const auto seen = static_cast<double>(
-        std::count_if(per_flight.begin(), per_flight.end(), [](const FlightFit& f) { return f.seen(); }));
-    if (!std::isfinite(resolution()) || seen < 2 || dof < 1) return 0;
-    const double per_flight_sd = resolution() / t975(dof) * std::sqrt(seen);
+    if (!std::isfinite(resolution()) || dof < 1) return 0;
+    // The interval is t(dof) × each flight's pooled spread / √(the dof + 1 flights that see it).
+    const double per_flight_sd = resolution() / t975(dof) * std::sqrt(dof + 1.0);
     for (std::size_t n = 2; n <= kMaxPlannedFlights; ++n)
         if (t975(static_cast<int>(n) - 1) * per_flight_sd / std::sqrt(static_cast<double>(n)) <= half_width) return n;
     return 0;

@@ -32,11 +32,8 @@ json heldout_json(const HeldOut& h) {
         {"axis", flight::kAxes[static_cast<std::size_t>(h.best_axis)]}, {"z", number(h.t)}, {"gain", number(h.gain)}};
 }
 
-// Flights like these that would resolve half what the session does (null: none would, or no interval).
-json flights_to_halve(const RigCandidate& c) {
-    const std::size_t n = c.flights_to_resolve(c.resolution() / 2);
-    return n ? json(n) : json(nullptr);
-}
+// Flights like these that would resolve half what the session does (0: none would, or no interval).
+std::size_t flights_to_halve(const RigCandidate& c) { return c.flights_to_resolve(c.resolution() / 2); }
 
 json candidate_json(const RigCandidate& c, const std::vector<std::string>& flights) {
     json per = json::array();
@@ -46,6 +43,7 @@ json candidate_json(const RigCandidate& c, const std::vector<std::string>& fligh
                        {"se", number(c.per_flight[i].se)},
                        {"alone_accepted", c.per_flight[i].alone_accepted}});
     const auto& p = c.effect.params.front();
+    const std::size_t halve = flights_to_halve(c);
     json j{{"effect", c.effect.name},
            {"parameter", p.name},
            {"unit", p.unit},
@@ -53,7 +51,7 @@ json candidate_json(const RigCandidate& c, const std::vector<std::string>& fligh
            {"value", number(c.value)},
            {"interval", {number(c.lo), number(c.hi)}},
            {"resolution", number(c.resolution())},
-           {"flights_to_halve", flights_to_halve(c)},
+           {"flights_to_halve", halve ? json(halve) : json(nullptr)},
            {"accepted", c.accepted},
            {"one_value", {{"q", number(c.q)}, {"limit", number(c.q_limit)}, {"dof", c.dof}, {"passed", c.one_value}}},
            {"known_sd", number(c.known_sd)},
@@ -140,7 +138,7 @@ void md_resolution(std::ostringstream& md, const SessionResult& R) {
        << "|---|---|---|---|\n";
     for (const auto& c : R.candidates) {
         if (c.round != 1) continue;
-        const std::size_t n = c.flights_to_resolve(c.resolution() / 2);
+        const std::size_t n = flights_to_halve(c);
         const std::string& unit = c.effect.params.front().unit;
         const std::string u = unit.empty() ? "" : " " + unit;
         md << "| " << c.effect.name << " | " << fixed(c.resolution(), 4) << u << " | " << fixed(c.between_sd, 4) << u

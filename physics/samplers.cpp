@@ -72,9 +72,10 @@ Samples ChipSampler::sample(const std::vector<double>& t, const RecordedWrench& 
 
 void ChipSampler::tare(Samples& s, double tare_s) const {
     const std::size_t n = tare_count(s.stamps, tare_s);
+    if (n == 0) return;  // sample() made every frame's wrench from its counts as they are
     Counts zero = Counts::Zero();
     for (std::size_t i = 0; i < n; ++i) zero += counts_[i];
-    zero /= static_cast<double>(std::max<std::size_t>(n, 1));
+    zero /= static_cast<double>(n);
     for (std::size_t i = 0; i < s.w.size(); ++i)
         s.w[i] = to_wrench6(stand_.cells_to_wrench() * ((counts_[i] - zero) / p_.counts_per_newton));
 }
